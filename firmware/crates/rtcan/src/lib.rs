@@ -1,0 +1,27 @@
+//! RTCAN: a real-time protocol on classic CAN 2.0B (docs/rtcan.md is the specification).
+//!
+//! Hard-real-time (HRT) messages go in TDMA slots reserved by the bus master; soft-real-time
+//! (SRT) messages carry their laxity in the identifier's most significant bits, so CAN's own
+//! bitwise arbitration sends the most urgent one first; non-real-time (NRT) messages use the
+//! lowest priority and are never promoted.
+//!
+//! `no_std`, no heap: it runs on an STM32F103 beside a module's application and on the host
+//! for emulation and tools.
+#![no_std]
+#![warn(missing_docs)]
+
+pub mod id;
+pub mod laxity;
+
+pub use id::{Class, FrameId, IdError, MessageId};
+pub use laxity::{Laxity, LaxityEncoding};
+
+/// The crate's test suite, compiled in for bare-metal runners (feature `selftest`).
+#[cfg(any(test, feature = "selftest"))]
+pub mod selftest {
+    pub use crate::id::tests::SUITE as ID;
+    pub use crate::laxity::tests::SUITE as LAXITY;
+
+    /// Every suite of the crate, in the order a runner should run them.
+    pub const ALL: &[&[r2p_testkit::Case]] = &[ID, LAXITY];
+}

@@ -1,0 +1,51 @@
+//! Footprint image: the shared core (Embassy executor and time, bxCAN at 1 Mbit/s, RTCAN) on an
+//! STM32F103CB and nothing else, so `make firmware` and `make bench` can report what the core
+//! costs and what is left for a module's application. It runs on any module board: it sends one
+//! NRT frame per second on CAN (PA11/PA12, the pins every R2P module core uses).
+#![no_std]
+#![no_main]
+
+use embassy_executor::Spawner;
+use embassy_stm32::can::{Can, Frame, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler};
+use embassy_stm32::peripherals::CAN;
+use embassy_stm32::{bind_interrupts, rcc, time::Hertz, Config};
+use embassy_time::Timer;
+use panic_halt as _;
+use rtcan::{FrameId, Laxity, MessageId};
+
+bind_interrupts!(struct Irqs {
+    USB_LP_CAN1_RX0 => Rx0InterruptHandler<CAN>;
+    CAN1_RX1 => Rx1InterruptHandler<CAN>;
+    CAN1_SCE => SceInterruptHandler<CAN>;
+    USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
+});
+
+/// 72 MHz SYSCLK from the 8 MHz crystal; APB1 at 36 MHz clocks bxCAN.
+fn clocks() -> Config {
+    let mut config = Config::default();
+    config.rcc.hse = Some(rcc::Hse { freq: Hertz(8_000_000), mode: rcc::HseMode::Oscillator });
+    config.rcc.pll = Some(rcc::Pll { src: rcc::PllSource::HSE, prediv: rcc::PllPreDiv::DIV1, mul: rcc::PllMul::MUL9 });
+    config.rcc.sys = rcc::Sysclk::PLL1_P;
+    config.rcc.ahb_pre = rcc::AHBPrescaler::DIV1;
+    config.rcc.apb1_pre = rcc::APBPrescaler::DIV2;
+    config.rcc.apb2_pre = rcc::APBPrescaler::DIV1;
+    config
+}
+
+#[embassy_executor::main]
+async fn main(_spawner: Spawner) {
+    let p = embassy_stm32::init(clocks());
+    let mut can = Can::new(p.CAN, p.PA11, p.PA12, Irqs);
+    can.modify_config().set_bitrate(1_000_000);
+    can.enable().await;
+
+    let id = FrameId::new(Laxity::NRT, MessageId(0x0100), 0).unwrap();
+    let mut count: u32 = 0;
+    loop {
+        if let Ok(frame) = Frame::new_extended(id.to_raw(), &count.to_le_bytes()) {
+            can.write(&frame).await;
+        }
+        count = count.wrapping_add(1);
+        Timer::after_secs(1).await;
+    }
+}

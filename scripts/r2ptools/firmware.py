@@ -1,0 +1,176 @@
+"""Builds the MCU firmware images listed in firmware/images.toml, reproducibly, and sizes them.
+
+For each image: `cargo build --release --locked` in its workspace with path prefixes remapped
+(the repository to /r2p, cargo's home to /cargo, by scripts/rustc-reproducible), so an image built from any folder by any user
+is byte-identical; then `.elf`, `.bin` and `.hex` go to firmware/images/. Flash and static RAM
+are read from the ELF's sections and checked against the image's budget.
+
+    scripts/firmware build [--out DIR] [--root DIR] [NAME ...]
+    scripts/firmware sizes              # table of the committed images
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import ROOT
+
+IMAGES_DIR = Path("firmware") / "images"
+
+
+@dataclass
+class Image:
+    name: str
+    workspace: str
+    package: str
+    mcu: str
+    target: str
+    mcu_flash: int
+    mcu_ram: int
+    budget_flash: int
+    budget_ram: int
+
+
+def manifest(root: Path = ROOT) -> list[Image]:
+    data = tomllib.loads((root / "firmware" / "images.toml").read_text())
+    out = []
+    for i in data.get("image", []):
+        mcu = data["mcu"][i["mcu"]]
+        out.append(Image(i["name"], i["workspace"], i["package"], i["mcu"], mcu["target"],
+                         mcu["flash"], mcu["ram"], i["budget_flash"], i["budget_ram"]))
+    return out
+
+
+def cargo_home() -> Path:
+    return Path(os.environ.get("CARGO_HOME", Path.home() / ".cargo")).resolve()
+
+
+def reproducible_env(root: Path) -> dict[str, str]:
+    """Environment for a build whose output does not depend on where the sources are."""
+    env = dict(os.environ)
+    env["RUSTC_WRAPPER"] = str(ROOT / "scripts" / "rustc-reproducible")
+    env["R2P_ROOT"] = str(root.resolve())
+    env["R2P_CARGO_HOME"] = str(cargo_home())
+    for var in ("RUSTFLAGS", "CARGO_ENCODED_RUSTFLAGS", "CARGO_BUILD_RUSTFLAGS"):
+        env.pop(var, None)
+    return env
+
+
+@dataclass
+class Size:
+    flash: int   # bytes of flash: code, read-only data and the initial values of .data
+    ram: int     # bytes of static RAM: .data + .bss (+ uninit); the stack is the rest
+
+
+def size_of(elf: Path) -> Size:
+    """Reads allocated sections from the ELF (arm-none-eabi-size -A)."""
+    out = subprocess.run(["arm-none-eabi-size", "-A", str(elf)], capture_output=True, text=True, check=True).stdout
+    flash = ram = 0
+    for line in out.splitlines():
+        parts = line.split()
+        if len(parts) != 3 or not parts[1].isdigit():
+            continue
+        name, size = parts[0], int(parts[1])
+        if name in (".vector_table", ".text", ".rodata"):
+            flash += size
+        elif name == ".data":
+            flash += size
+            ram += size
+        elif name in (".bss", ".uninit"):
+            ram += size
+    return Size(flash, ram)
+
+
+def build(img: Image, root: Path, out: Path) -> Size:
+    ws = root / "firmware" / img.workspace
+    # A target dir of its own: cargo's fingerprints ignore RUSTC_WRAPPER, so a plain `cargo build`
+    # in the same dir would otherwise be reused as if it had been remapped.
+    target_dir = ws / "target" / "reproducible"
+    subprocess.run(["cargo", "build", "--release", "--locked", "-p", img.package,
+                    "--target-dir", str(target_dir)], cwd=ws, env=reproducible_env(root), check=True)
+    elf = target_dir / img.target / "release" / img.package
+    out.mkdir(parents=True, exist_ok=True)
+    dst = out / f"{img.name}.elf"
+    shutil.copyfile(elf, dst)
+    subprocess.run(["arm-none-eabi-objcopy", "-O", "binary", str(dst), str(out / f"{img.name}.bin")], check=True)
+    subprocess.run(["arm-none-eabi-objcopy", "-O", "ihex", str(dst), str(out / f"{img.name}.hex")], check=True)
+    return size_of(dst)
+
+
+def over_budget(img: Image, s: Size) -> list[str]:
+    errs = []
+    if s.flash > img.budget_flash:
+        errs.append(f"{img.name}: flash {s.flash} B exceeds its budget of {img.budget_flash} B "
+                    f"(firmware/images.toml): shrink the image or raise the budget with a reason")
+    if s.ram > img.budget_ram:
+        errs.append(f"{img.name}: static RAM {s.ram} B exceeds its budget of {img.budget_ram} B "
+                    f"(firmware/images.toml): shrink the image or raise the budget with a reason")
+    return errs
+
+
+def table(rows: list[tuple[Image, Size | None]]) -> str:
+    lines = [f"{'image':<18} {'MCU':<12} {'flash used':>22} {'static RAM':>20}  budget (flash/RAM)"]
+    for img, s in rows:
+        if s is None:
+            lines.append(f"{img.name:<18} {img.mcu:<12} {'not built':>22}")
+            continue
+        fl = f"{s.flash/1024:6.1f} / {img.mcu_flash//1024} KiB {100*s.flash/img.mcu_flash:4.1f}%"
+        ra = f"{s.ram/1024:5.1f} / {img.mcu_ram//1024} KiB {100*s.ram/img.mcu_ram:4.1f}%"
+        ok = "ok" if not over_budget(img, s) else "OVER"
+        lines.append(f"{img.name:<18} {img.mcu:<12} {fl:>22} {ra:>20}  "
+                     f"{img.budget_flash//1024}/{img.budget_ram//1024} KiB {ok}")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="firmware", description="Build and size R2P firmware images.")
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    b = sub.add_parser("build", help="build images into firmware/images (or --out)")
+    b.add_argument("names", nargs="*", help="image names from firmware/images.toml (default: all)")
+    b.add_argument("--root", type=Path, default=ROOT, help="repository to build from (default: this one)")
+    b.add_argument("--out", type=Path, help="where to put the images (default: ROOT/firmware/images)")
+    sub.add_parser("sizes", help="size table of the images in firmware/images")
+    args = ap.parse_args(argv)
+
+    if args.cmd == "sizes":
+        rows = []
+        for img in manifest():
+            elf = ROOT / IMAGES_DIR / f"{img.name}.elf"
+            rows.append((img, size_of(elf) if elf.exists() else None))
+        print(table(rows))
+        return 0
+
+    root = args.root.resolve()
+    imgs = manifest(root)
+    unknown = set(args.names) - {i.name for i in imgs}
+    if unknown:
+        print(f"firmware: no image named {', '.join(sorted(unknown))} in firmware/images.toml; "
+              f"known: {', '.join(i.name for i in imgs)}", file=sys.stderr)
+        return 2
+    out = (args.out or root / IMAGES_DIR).resolve()
+    rows, errors = [], []
+    for img in imgs:
+        if args.names and img.name not in args.names:
+            continue
+        try:
+            s = build(img, root, out)
+        except subprocess.CalledProcessError as e:
+            print(f"firmware: building {img.name} failed: `{' '.join(map(str, e.cmd))}` exited "
+                  f"{e.returncode} in firmware/{img.workspace}; cargo's message is above", file=sys.stderr)
+            return 1
+        rows.append((img, s))
+        errors += over_budget(img, s)
+    print(table(rows))
+    for e in errors:
+        print(f"firmware: {e}", file=sys.stderr)
+    return 1 if errors else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,78 @@
+"""Runs the core crates' test suites as Cortex-M3 images under QEMU (lm3s6965evb).
+
+Each binary of firmware/targets/qemu runs one crate's `selftest` suites and exits through
+semihosting: status 0 when all passed, 1 on the first failure. `-icount` makes the runs
+deterministic (instruction-counted virtual time). Usage:
+
+    scripts/qemu-test [IMAGE ...]     # default: every image except deliberate-failure
+"""
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+from . import ROOT
+from .results import libtest
+
+WORKSPACE = ROOT / "firmware" / "targets" / "qemu"
+TARGET = "thumbv7m-none-eabi"
+# Exists to prove that a failure fails the run (tests/test_qemu_runner.py); not part of the suite.
+DELIBERATE_FAILURE = "deliberate-failure"
+TIMEOUT_S = 60
+
+
+def qemu_command(image: Path) -> list[str]:
+    """The command line the workspace's cargo runner uses, read from its config."""
+    config = tomllib.loads((WORKSPACE / ".cargo" / "config.toml").read_text())
+    return config["target"][TARGET]["runner"].split() + [str(image)]
+
+
+def images() -> list[str]:
+    return sorted(p.stem for p in (WORKSPACE / "src" / "bin").glob("*.rs"))
+
+
+def build(profile: str = "dev") -> Path:
+    subprocess.run(["cargo", "build", "--locked", "--bins", "--profile", profile], cwd=WORKSPACE, check=True)
+    return WORKSPACE / "target" / TARGET / ("debug" if profile == "dev" else profile)
+
+
+def run_image(path: Path) -> tuple[int, str]:
+    """Runs one image; returns QEMU's exit status and everything it printed."""
+    try:
+        p = subprocess.run(qemu_command(path), capture_output=True, text=True, timeout=TIMEOUT_S)
+    except subprocess.TimeoutExpired as e:
+        out = (e.stdout or b"").decode(errors="replace") if isinstance(e.stdout, bytes) else (e.stdout or "")
+        return 124, out + f"\nqemu-test: {path.name} did not exit within {TIMEOUT_S} s (hung or looping)\n"
+    # QEMU prints "Timer with period zero, disabling" for the lm3s6965's unused timers: noise.
+    err = "".join(l for l in p.stderr.splitlines(True) if "Timer with period zero" not in l)
+    return p.returncode, p.stdout + err
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="qemu-test", description=__doc__.splitlines()[0])
+    ap.add_argument("images", nargs="*", help="image names (files in firmware/targets/qemu/src/bin)")
+    args = ap.parse_args(argv)
+    known = images()
+    chosen = args.images or [i for i in known if i != DELIBERATE_FAILURE]
+    unknown = [i for i in chosen if i not in known]
+    if unknown:
+        print(f"qemu-test: no image {', '.join(unknown)} in {WORKSPACE / 'src/bin'}; "
+              f"images are: {', '.join(known)}", file=sys.stderr)
+        return 2
+    outdir = build()
+    failed = 0
+    for name in chosen:
+        rc, out = run_image(outdir / name)
+        sys.stdout.write(out)
+        counts = libtest(out)
+        if rc != 0 or counts.failed or counts.total == 0:
+            failed += 1
+            print(f"qemu-test: image {name} FAILED (qemu exit status {rc})")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
