@@ -7,6 +7,7 @@ are read from the ELF's sections and checked against the image's budget.
 
     scripts/firmware build [--out DIR] [--root DIR] [NAME ...]
     scripts/firmware sizes              # table of the committed images
+    scripts/firmware verify             # rebuild in another folder, compare with the committed
 """
 from __future__ import annotations
 
@@ -92,6 +93,11 @@ def build(img: Image, root: Path, out: Path) -> Size:
     # A target dir of its own: cargo's fingerprints ignore RUSTC_WRAPPER, so a plain `cargo build`
     # in the same dir would otherwise be reused as if it had been remapped.
     target_dir = ws / "target" / "reproducible"
+    # embassy-stm32's build script runs rustfmt on the code it generates, and rustfmt takes the
+    # first rustfmt.toml found above the file: pin it here, or a rustfmt.toml in any folder
+    # above the checkout would change the image's line tables.
+    target_dir.mkdir(parents=True, exist_ok=True)
+    (target_dir / "rustfmt.toml").write_text("# Written by scripts/firmware: rustfmt defaults for generated code.\n")
     subprocess.run(["cargo", "build", "--release", "--locked", "-p", img.package,
                     "--target-dir", str(target_dir)], cwd=ws, env=reproducible_env(root), check=True)
     elf = target_dir / img.target / "release" / img.package
@@ -112,6 +118,42 @@ def over_budget(img: Image, s: Size) -> list[str]:
         errs.append(f"{img.name}: static RAM {s.ram} B exceeds its budget of {img.budget_ram} B "
                     f"(firmware/images.toml): shrink the image or raise the budget with a reason")
     return errs
+
+
+# Where `verify` rebuilds: another folder, so a path leaking into an image shows up as a
+# difference. It persists (and keeps its cargo target dirs) so that reruns are incremental.
+VERIFY_COPY = ROOT / ".cache" / "reproducible-copy"
+COPIED = ["rust-toolchain.toml", "rustfmt.toml", "firmware"]
+
+
+def sync_copy(src: Path, dst: Path) -> None:
+    """Mirrors the firmware sources into dst, keeping dst's cargo target dirs, and file mtimes
+    so that cargo rebuilds only what changed."""
+    dst.mkdir(parents=True, exist_ok=True)
+    subprocess.run(["rsync", "-a", "--delete", "--exclude", "target/", "--exclude", "/firmware/images/",
+                    *[str(src / n) for n in COPIED], f"{dst}/"], check=True)
+
+
+def verify(names: list[str] | None = None) -> list[str]:
+    """Rebuilds the images from a copy of the sources in another folder; returns the committed
+    files that differ from the rebuild (empty when everything regenerates byte for byte)."""
+    sync_copy(ROOT, VERIFY_COPY)
+    out = VERIFY_COPY / "rebuilt-images"
+    if out.exists():
+        shutil.rmtree(out)
+    for img in manifest(VERIFY_COPY):
+        if names and img.name not in names:
+            continue
+        build(img, VERIFY_COPY, out)
+    diffs = []
+    committed = ROOT / IMAGES_DIR
+    for f in sorted(out.iterdir()):
+        c = committed / f.name
+        if not c.exists():
+            diffs.append(f"{IMAGES_DIR / f.name}: not committed (run `make firmware` and commit it)")
+        elif c.read_bytes() != f.read_bytes():
+            diffs.append(f"{IMAGES_DIR / f.name}: differs from a rebuild in {out}")
+    return diffs
 
 
 def table(rows: list[tuple[Image, Size | None]]) -> str:
@@ -136,6 +178,7 @@ def main(argv: list[str] | None = None) -> int:
     b.add_argument("--root", type=Path, default=ROOT, help="repository to build from (default: this one)")
     b.add_argument("--out", type=Path, help="where to put the images (default: ROOT/firmware/images)")
     sub.add_parser("sizes", help="size table of the images in firmware/images")
+    sub.add_parser("verify", help="rebuild from another folder; fail unless identical to the committed images")
     args = ap.parse_args(argv)
 
     if args.cmd == "sizes":
@@ -144,6 +187,18 @@ def main(argv: list[str] | None = None) -> int:
             elf = ROOT / IMAGES_DIR / f"{img.name}.elf"
             rows.append((img, size_of(elf) if elf.exists() else None))
         print(table(rows))
+        return 0
+
+    if args.cmd == "verify":
+        diffs = verify()
+        for d in diffs:
+            print(f"firmware verify: {d}", file=sys.stderr)
+        if diffs:
+            print("firmware verify: committed images are stale or not reproducible: run `make firmware`, "
+                  "commit firmware/images, and if they still differ look for a path or date in the image",
+                  file=sys.stderr)
+            return 1
+        print(f"firmware verify: all {len(manifest())} images regenerate byte for byte from another folder")
         return 0
 
     root = args.root.resolve()

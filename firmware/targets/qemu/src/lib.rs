@@ -13,15 +13,14 @@ use r2p_testkit::Case;
 static PASSED: AtomicUsize = AtomicUsize::new(0);
 
 fn out() -> hio::HostStream {
-    hio::hstdout().unwrap_or_else(|_| debug::exit(debug::EXIT_FAILURE).into_never())
+    hio::hstdout().unwrap_or_else(|_| exit(debug::EXIT_FAILURE))
 }
 
-trait NeverExt {
-    fn into_never(self) -> !;
-}
-impl NeverExt for () {
-    fn into_never(self) -> ! {
-        loop {}
+/// Ends the QEMU process with `status`; semihosting never returns from it.
+fn exit(status: debug::ExitStatus) -> ! {
+    debug::exit(status);
+    loop {
+        cortex_m::asm::wfi();
     }
 }
 
@@ -37,19 +36,14 @@ pub fn run(image: &str, suites: &[&[Case]]) -> ! {
         let _ = writeln!(o, "ok");
     }
     let _ = writeln!(o, "\ntest result: ok. {} passed; 0 failed", PASSED.load(Ordering::Relaxed));
-    debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    exit(debug::EXIT_SUCCESS)
 }
 
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
     let mut o = out();
     let _ = writeln!(o, "FAILED\n\n{}", info);
-    let _ = writeln!(
-        o,
-        "\ntest result: FAILED. {} passed; 1 failed",
-        PASSED.load(Ordering::Relaxed)
-    );
-    debug::exit(debug::EXIT_FAILURE);
-    loop {}
+    let _ =
+        writeln!(o, "\ntest result: FAILED. {} passed; 1 failed", PASSED.load(Ordering::Relaxed));
+    exit(debug::EXIT_FAILURE)
 }

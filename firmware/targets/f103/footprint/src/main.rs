@@ -6,7 +6,9 @@
 #![no_main]
 
 use embassy_executor::Spawner;
-use embassy_stm32::can::{Can, Frame, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler};
+use embassy_stm32::can::{
+    Can, Frame, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
+};
 use embassy_stm32::peripherals::CAN;
 use embassy_stm32::{bind_interrupts, rcc, time::Hertz, Config};
 use embassy_time::Timer;
@@ -24,7 +26,11 @@ bind_interrupts!(struct Irqs {
 fn clocks() -> Config {
     let mut config = Config::default();
     config.rcc.hse = Some(rcc::Hse { freq: Hertz(8_000_000), mode: rcc::HseMode::Oscillator });
-    config.rcc.pll = Some(rcc::Pll { src: rcc::PllSource::HSE, prediv: rcc::PllPreDiv::DIV1, mul: rcc::PllMul::MUL9 });
+    config.rcc.pll = Some(rcc::Pll {
+        src: rcc::PllSource::HSE,
+        prediv: rcc::PllPreDiv::DIV1,
+        mul: rcc::PllMul::MUL9,
+    });
     config.rcc.sys = rcc::Sysclk::PLL1_P;
     config.rcc.ahb_pre = rcc::AHBPrescaler::DIV1;
     config.rcc.apb1_pre = rcc::APBPrescaler::DIV2;

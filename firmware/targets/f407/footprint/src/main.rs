@@ -5,7 +5,9 @@
 #![no_main]
 
 use embassy_executor::Spawner;
-use embassy_stm32::can::{Can, Frame, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler};
+use embassy_stm32::can::{
+    Can, Frame, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
+};
 use embassy_stm32::peripherals::CAN1;
 use embassy_stm32::{bind_interrupts, rcc, time::Hertz, Config};
 use embassy_time::Timer;
