@@ -65,27 +65,27 @@ def reproducible_env(root: Path) -> dict[str, str]:
 
 @dataclass
 class Size:
-    flash: int   # bytes of flash: code, read-only data and the initial values of .data
-    ram: int     # bytes of static RAM: .data + .bss (+ uninit); the stack is the rest
+    flash: int   # bytes of flash the image spans: code, read-only data, .data's initial values, padding
+    ram: int     # bytes of static RAM: .data + .bss (+ uninit); the stack is what is left
 
 
 def size_of(elf: Path) -> Size:
-    """Reads allocated sections from the ELF (arm-none-eabi-size -A)."""
-    out = subprocess.run(["arm-none-eabi-size", "-A", str(elf)], capture_output=True, text=True, check=True).stdout
-    flash = ram = 0
+    """Reads the ELF's program headers: flash is the span of the loaded bytes (what the .bin holds
+    and the programmer writes), static RAM the memory size of the segments that live in RAM."""
+    out = subprocess.run(["arm-none-eabi-readelf", "-lW", str(elf)], capture_output=True, text=True,
+                         check=True).stdout
+    lo, hi, ram = None, 0, 0
     for line in out.splitlines():
         parts = line.split()
-        if len(parts) != 3 or not parts[1].isdigit():
+        if not parts or parts[0] != "LOAD":
             continue
-        name, size = parts[0], int(parts[1])
-        if name in (".vector_table", ".text", ".rodata"):
-            flash += size
-        elif name == ".data":
-            flash += size
-            ram += size
-        elif name in (".bss", ".uninit"):
-            ram += size
-    return Size(flash, ram)
+        vaddr, paddr, filesz, memsz = (int(x, 16) for x in parts[2:6])
+        if filesz:
+            lo = paddr if lo is None else min(lo, paddr)
+            hi = max(hi, paddr + filesz)
+        if vaddr >= 0x2000_0000 or 0x1000_0000 <= vaddr < 0x1001_0000:  # SRAM; the F4's CCM RAM
+            ram += memsz
+    return Size(hi - (lo or 0) if lo is not None else 0, ram)
 
 
 def build(img: Image, root: Path, out: Path) -> Size:

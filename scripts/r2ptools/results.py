@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 # libtest (cargo test) and our QEMU runner both close with this line.
 _LIBTEST = re.compile(r"^test result: (ok|FAILED)\. (\d+) passed; (\d+) failed(?:; (\d+) ignored)?", re.M)
-# pytest's last line, e.g. "==== 3 passed, 1 failed, 2 skipped in 1.2s ====".
-_PYTEST = re.compile(r"^=+ (.*?) in [\d.]+s", re.M)
+# pytest's last line, e.g. "==== 3 passed, 1 failed, 2 skipped in 1.2s ====" (bare with -q).
+_PYTEST = re.compile(r"^(?:=+ )?(\d+ \w+(?:, \d+ \w+)*) in [\d.]+s", re.M)
 
 
 @dataclass

@@ -1,0 +1,30 @@
+# R2P — the two commands a newcomer needs are `make` and `make test`; both set up the machine
+# first (scripts/setup: seconds when nothing changed). `make help` lists every target.
+.DEFAULT_GOAL := all
+SHELL := /bin/bash
+PY := scripts/py
+
+.PHONY: all setup firmware check test help clean
+
+all: setup ## Set up if needed, build every artifact into its place, print a summary table
+	@$(PY) -m r2ptools.build
+
+setup: ## Install or update tools: apt (KiCad 9.0.8, OpenSCAD, QEMU…), Rust targets, Python venv
+	@t0=$$(date +%s); scripts/setup; rc=$$?; mkdir -p .setup; \
+	  echo $$(( $$(date +%s) - t0 )) > .setup/last-seconds; exit $$rc
+
+firmware: setup ## Build the firmware images into firmware/images and print flash/RAM use
+	@scripts/firmware build
+
+check: setup ## Lint all Rust (warnings denied); prove committed images regenerate byte for byte
+	@scripts/lint
+	@scripts/firmware verify
+
+test: setup ## Run every test (Rust, QEMU Cortex-M3, lint, pytest) with one summary
+	@scripts/run-tests
+
+help: ## List the targets
+	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -E 's/^([a-z-]+):.*## (.*)/  make \1\t\2/' | expand -t 20
+
+clean: ## Remove build outputs (cargo target dirs, caches); keeps committed artifacts and the venv
+	rm -rf firmware/target firmware/targets/*/target .cache

@@ -1,0 +1,43 @@
+"""What a newcomer relies on finding: the folder map, a licence per folder, `make help`."""
+import re
+
+from conftest import ROOT, run
+
+FOLDERS = {
+    # folder: words its licence statement must contain
+    "hardware": "CERN-OHL-S-2.0",
+    "enclosures": "CERN-OHL-S-2.0",
+    "bom": "CC-BY-4.0",
+    "firmware": "MIT OR Apache-2.0",
+    "scripts": "MIT OR Apache-2.0",
+    "tests": "MIT OR Apache-2.0",
+    "docs": "CC-BY-4.0",
+}
+
+
+def test_every_top_level_folder_has_a_readme_and_states_its_licence():
+    for folder, spdx in FOLDERS.items():
+        assert (ROOT / folder / "README.md").is_file(), f"{folder}/README.md"
+        licence = (ROOT / folder / "LICENSE.md").read_text()
+        assert f"SPDX-License-Identifier: {spdx}" in licence, folder
+
+
+def test_every_module_has_its_hardware_folder():
+    for module in ("psu", "motor", "imu", "proximity", "gateway"):
+        assert (ROOT / "hardware" / module / "README.md").is_file(), module
+
+
+def test_readme_gives_exactly_the_two_commands():
+    readme = (ROOT / "README.md").read_text()
+    block = re.search(r"```sh\n(.*?)```", readme, re.S)
+    assert block and block.group(1).split("\n")[:2] == ["make", "make test"]
+
+
+def test_make_help_lists_every_target_with_one_line():
+    p = run(["make", "--no-print-directory", "help"])
+    assert p.returncode == 0
+    listed = [l.split()[1] for l in p.stdout.splitlines() if l.startswith("  make ")]
+    phony = re.search(r"^\.PHONY:(.*)$", (ROOT / "Makefile").read_text(), re.M).group(1).split()
+    assert sorted(listed) == sorted(phony)
+    for line in p.stdout.splitlines():
+        assert len(line.split(None, 2)) == 3, f"target without a description: {line}"
