@@ -10,18 +10,33 @@
 #![no_std]
 #![warn(missing_docs)]
 
+pub mod controller;
+pub mod cycle;
+pub mod failover;
+pub mod fragment;
+pub mod frame;
 pub mod id;
 pub mod laxity;
+pub mod schedule;
+pub mod srt;
 
+pub use controller::{CanController, Micros};
+pub use frame::Frame;
 pub use id::{Class, FrameId, IdError, MessageId};
 pub use laxity::{Laxity, LaxityEncoding};
 
 /// The crate's test suite, compiled in for bare-metal runners (feature `selftest`).
 #[cfg(any(test, feature = "selftest"))]
 pub mod selftest {
-    pub use crate::id::tests::SUITE as ID;
-    pub use crate::laxity::tests::SUITE as LAXITY;
-
     /// Every suite of the crate, in the order a runner should run them.
-    pub const ALL: &[&[r2p_testkit::Case]] = &[ID, LAXITY];
+    pub const ALL: &[&[r2p_testkit::Case]] = &[
+        crate::id::tests::SUITE,
+        crate::laxity::tests::SUITE,
+        crate::frame::tests::SUITE,
+        crate::fragment::tests::SUITE,
+        crate::srt::tests::SUITE,
+        crate::cycle::tests::SUITE,
+        crate::schedule::tests::SUITE,
+        crate::failover::tests::SUITE,
+    ];
 }

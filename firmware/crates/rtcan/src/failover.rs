@@ -1,0 +1,6 @@
+//! Master failover. (being written)
+
+#[cfg(any(test, feature = "selftest"))]
+pub(crate) mod tests {
+    r2p_testkit::suite! {}
+}

@@ -1,0 +1,6 @@
+//! The SRT transmit queue. (being written)
+
+#[cfg(any(test, feature = "selftest"))]
+pub(crate) mod tests {
+    r2p_testkit::suite! {}
+}
