@@ -7,13 +7,14 @@
 
 use embassy_executor::Spawner;
 use embassy_stm32::can::{
-    Can, Frame, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
+    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
 };
 use embassy_stm32::peripherals::CAN;
-use embassy_stm32::{bind_interrupts, rcc, time::Hertz, Config};
+use embassy_stm32::{bind_interrupts, pac, rcc, time::Hertz, Config};
 use embassy_time::Timer;
 use panic_halt as _;
-use rtcan::{FrameId, Laxity, MessageId};
+use rtcan::{CanController, Frame, FrameId, Laxity, MessageId};
+use rtcan_bxcan::BxCan;
 
 bind_interrupts!(struct Irqs {
     USB_LP_CAN1_RX0 => Rx0InterruptHandler<CAN>;
@@ -44,13 +45,15 @@ async fn main(_spawner: Spawner) {
     let mut can = Can::new(p.CAN, p.PA11, p.PA12, Irqs);
     can.modify_config().set_bitrate(1_000_000);
     can.enable().await;
+    let mut can = BxCan::new(can, pac::CAN);
 
     let id = FrameId::new(Laxity::NRT, MessageId(0x0100), 0).unwrap();
     let mut count: u32 = 0;
     loop {
-        if let Ok(frame) = Frame::new_extended(id.to_raw(), &count.to_le_bytes()) {
-            can.write(&frame).await;
+        if let Ok(frame) = Frame::new(id, &count.to_le_bytes()) {
+            let _ = can.try_transmit(&frame);
         }
+        while can.try_receive().is_some() {}
         count = count.wrapping_add(1);
         Timer::after_secs(1).await;
     }
