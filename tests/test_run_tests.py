@@ -54,4 +54,4 @@ def test_passing_stage_passes_and_counts():
 def test_unknown_stage_is_named():
     p = run(DRIVER + ["--only", "rust,typo"])
     assert p.returncode == 2
-    assert "unknown stage typo" in p.stdout and "stages are: rust, lint, qemu, pytest" in p.stdout
+    assert "unknown stage typo" in p.stdout and "stages are: rust, lint, qemu, fuzz, pytest" in p.stdout

@@ -62,6 +62,8 @@ def stages(args: argparse.Namespace) -> list[Stage]:
         Stage("qemu", "core suites on an emulated Cortex-M3",
               [py, "-m", "r2ptools.qemu", *args.qemu_images], ROOT, results.libtest,
               {"PYTHONPATH": scripts}),
+        Stage("fuzz", "fuzz targets, bounded runs with a fixed seed (arbitrary input never panics)",
+              [py, "-m", "r2ptools.fuzz"], ROOT, results.libtest, {"PYTHONPATH": scripts}),
         Stage("pytest", "scripts, checks and end-to-end tests",
               [py, "-m", "pytest", "-q", "-rs", "-p", "no:cacheprovider", str(args.pytest_path)], ROOT,
               results.pytest, {"PYTHONPATH": scripts}),
