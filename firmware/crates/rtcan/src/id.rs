@@ -181,3 +181,82 @@ pub(crate) mod tests {
         }
     }
 }
+
+/// The shared vectors every implementation must pass (tests/vectors/rtcan/identifier.json).
+#[cfg(test)]
+mod vectors {
+    use super::*;
+    use serde::Deserialize;
+    use std::{string::String, vec::Vec};
+
+    #[derive(Deserialize)]
+    struct Case {
+        raw: String,
+        laxity: u8,
+        class: String,
+        message_id: String,
+        fragment: u8,
+        sync_cycle: Option<u8>,
+    }
+
+    #[derive(Deserialize)]
+    struct Vectors {
+        valid: Vec<Case>,
+        invalid: Vec<String>,
+    }
+
+    fn hex(s: &str) -> u32 {
+        u32::from_str_radix(s.trim_start_matches("0x"), 16).unwrap()
+    }
+
+    #[test]
+    fn identifier_vectors() {
+        let v: Vectors =
+            serde_json::from_str(include_str!("../../../../tests/vectors/rtcan/identifier.json"))
+                .unwrap();
+        assert!(v.valid.len() >= 10);
+        for c in &v.valid {
+            let id = FrameId::from_raw(hex(&c.raw)).unwrap();
+            assert_eq!(id.laxity.code(), c.laxity, "{}", c.raw);
+            assert_eq!(id.message, MessageId(hex(&c.message_id) as u16), "{}", c.raw);
+            assert_eq!(id.fragment, c.fragment, "{}", c.raw);
+            let class = match id.class() {
+                Class::Hrt => "HRT",
+                Class::Srt => "SRT",
+                Class::Nrt => "NRT",
+            };
+            assert_eq!(class, c.class, "{}", c.raw);
+            assert_eq!(id.sync_cycle(), c.sync_cycle, "{}", c.raw);
+            let rebuilt =
+                FrameId::new(Laxity::from_code(c.laxity), id.message, c.fragment).unwrap();
+            assert_eq!(rebuilt.to_raw(), hex(&c.raw));
+        }
+        for raw in &v.invalid {
+            assert_eq!(FrameId::from_raw(hex(raw)), Err(IdError::NotExtended(hex(raw))));
+        }
+    }
+}
+
+#[cfg(test)]
+mod proptests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn fields_roundtrip(laxity in 0u8..64, message in any::<u16>(), fragment in 0u8..=MAX_FRAGMENT) {
+            let id = FrameId::new(Laxity::from_code(laxity), MessageId(message), fragment).unwrap();
+            let back = FrameId::from_raw(id.to_raw()).unwrap();
+            prop_assert_eq!(back, id);
+            prop_assert!(id.to_raw() <= EXTENDED_ID_MAX);
+        }
+
+        #[test]
+        fn any_u32_decodes_or_is_rejected(raw in any::<u32>()) {
+            match FrameId::from_raw(raw) {
+                Ok(id) => prop_assert_eq!(id.to_raw(), raw),
+                Err(e) => prop_assert_eq!(e, IdError::NotExtended(raw)),
+            }
+        }
+    }
+}

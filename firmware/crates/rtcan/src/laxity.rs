@@ -181,3 +181,49 @@ pub(crate) mod tests {
         }
     }
 }
+
+/// The shared vectors every implementation must pass (tests/vectors/rtcan/laxity.json).
+#[cfg(test)]
+mod vectors {
+    use super::*;
+    use serde::Deserialize;
+    use std::{string::String, vec::Vec};
+
+    #[derive(Deserialize)]
+    struct Case {
+        tick_us: u32,
+        remaining_us: u32,
+        linear: Option<u8>,
+        logarithmic: Option<u8>,
+    }
+
+    #[derive(Deserialize)]
+    struct Vectors {
+        log_thresholds: Vec<u32>,
+        cases: Vec<Case>,
+    }
+
+    #[test]
+    fn laxity_vectors() {
+        let v: Vectors =
+            serde_json::from_str(include_str!("../../../../tests/vectors/rtcan/laxity.json"))
+                .unwrap();
+        assert_eq!(v.log_thresholds[1..], LOG_THRESHOLDS[1..]);
+        for c in &v.cases {
+            let lin = LaxityEncoding::Linear { tick_us: c.tick_us };
+            let log = LaxityEncoding::Logarithmic { tick_us: c.tick_us };
+            assert_eq!(
+                lin.encode(c.remaining_us).map(Laxity::code),
+                c.linear,
+                "{:?}",
+                c.remaining_us
+            );
+            assert_eq!(
+                log.encode(c.remaining_us).map(Laxity::code),
+                c.logarithmic,
+                "{:?}",
+                c.remaining_us
+            );
+        }
+    }
+}

@@ -10,6 +10,10 @@
 #![no_std]
 #![warn(missing_docs)]
 
+// Host tests (vectors, property tests) use std; the library itself never does.
+#[cfg(test)]
+extern crate std;
+
 pub mod controller;
 pub mod cycle;
 pub mod failover;
