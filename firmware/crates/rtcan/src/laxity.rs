@@ -187,7 +187,7 @@ pub(crate) mod tests {
 mod vectors {
     use super::*;
     use serde::Deserialize;
-    use std::{string::String, vec::Vec};
+    use std::vec::Vec;
 
     #[derive(Deserialize)]
     struct Case {
