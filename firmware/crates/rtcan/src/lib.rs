@@ -25,9 +25,11 @@ pub mod schedule;
 pub mod srt;
 
 pub use controller::{CanController, Micros};
+pub use fragment::{fragments, Expect, Reassembler, ReassemblyStats};
 pub use frame::Frame;
 pub use id::{Class, FrameId, IdError, MessageId};
 pub use laxity::{Laxity, LaxityEncoding};
+pub use srt::{Missed, TxQueue, Urgency};
 
 /// The crate's test suite, compiled in for bare-metal runners (feature `selftest`).
 #[cfg(any(test, feature = "selftest"))]
