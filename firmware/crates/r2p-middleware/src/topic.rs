@@ -1,0 +1,318 @@
+//! Named topics: a message pool plus the list of subscribers that published messages go to.
+
+use core::cell::RefCell;
+
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::blocking_mutex::Mutex;
+
+use crate::pool::{Msg, Pool, RawPool};
+use crate::publisher::Publisher;
+use crate::Error;
+
+/// Where a topic delivers its messages: a local [`Subscriber`](crate::Subscriber) queue, a
+/// [`Callback`](crate::Callback), or — later — a remote subscriber that hands the message to
+/// the RTCAN transport.
+///
+/// This is the plug-in point for remote proxies: the topic calls [`deliver`](Sink::deliver)
+/// once per published message, in the publisher's context, and must never be blocked by it.
+pub trait Sink<'a, T>: Sync {
+    /// Takes one handle to a just-published message. Returns `false` if the sink had no room
+    /// (the message is missed by this sink only; the handle is dropped). Must not block.
+    fn deliver(&self, msg: Msg<'a, T>) -> bool;
+
+    /// How many messages the sink queues: the remote publisher of a topic buffers as many as
+    /// the longest queue any subscriber asked for.
+    fn queue_len(&self) -> usize;
+
+    /// How many pool slots the sink may keep at once (queued plus being processed); the topic
+    /// refuses a subscription that would exceed its pool (see [`pool_size`](crate::pool_size)).
+    fn reserved_slots(&self) -> usize;
+}
+
+/// What a management protocol or transport needs to know about a topic without its type.
+pub trait TopicInfo: Sync {
+    /// The topic's name, as subscribers and remote modules ask for it.
+    fn name(&self) -> &'static str;
+    /// Size of one message in bytes (what the transport fragments).
+    fn message_size(&self) -> usize;
+    /// Number of slots in the topic's pool.
+    fn capacity(&self) -> usize;
+    /// Number of pool slots free now.
+    fn free_slots(&self) -> usize;
+    /// Slots promised to subscribers and publishers so far.
+    fn reserved_slots(&self) -> usize;
+    /// Number of subscribers (local, callback and remote).
+    fn subscriber_count(&self) -> usize;
+    /// The longest subscriber queue: the length a remote publisher of this topic must buffer.
+    fn max_queue_len(&self) -> usize;
+}
+
+/// The typed face of a topic that publishers use, erasing its pool and list sizes.
+pub(crate) trait TopicCore<'a, T>: TopicInfo {
+    fn pool(&self) -> &dyn RawPool<T>;
+    /// Calls `f` with each subscriber, outside the topic's lock (a callback may publish).
+    fn for_each_sink(&self, f: &mut dyn FnMut(&'a dyn Sink<'a, T>));
+    fn reserve_publisher(&self) -> Result<(), Error>;
+}
+
+struct Links<'a, T, const SUBS: usize> {
+    sinks: [Option<&'a dyn Sink<'a, T>>; SUBS],
+    count: usize,
+    reserved: usize,
+}
+
+/// A named topic of messages of type `T`, with a pool of `SLOTS` messages and room for `SUBS`
+/// subscribers. Declare it `static` (its constructor is `const`); size the pool with
+/// [`pool_size`](crate::pool_size).
+///
+/// Publishers of the topic share its pool; every published message goes, by reference, to
+/// every subscriber.
+pub struct Topic<'a, T, const SLOTS: usize, const SUBS: usize> {
+    name: &'static str,
+    pool: Pool<T, SLOTS>,
+    links: Mutex<CriticalSectionRawMutex, RefCell<Links<'a, T, SUBS>>>,
+}
+
+impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a, T, SLOTS, SUBS> {
+    /// A topic called `name` whose pool slots all start as `init` (usually a zeroed message).
+    pub const fn new(name: &'static str, init: T) -> Self {
+        Topic {
+            name,
+            pool: Pool::new(init),
+            links: Mutex::new(RefCell::new(Links { sinks: [None; SUBS], count: 0, reserved: 0 })),
+        }
+    }
+
+    /// Adds a subscriber; from now on it gets a handle to every published message.
+    ///
+    /// Fails, changing nothing, if the sink is already subscribed, the topic has `SUBS`
+    /// subscribers, or the pool could not keep the promise of the sizing rule with it.
+    pub fn subscribe(&self, sink: &'a dyn Sink<'a, T>) -> Result<(), Error> {
+        self.links.lock(|l| {
+            let mut l = l.borrow_mut();
+            let count = l.count;
+            if l.sinks[..count].iter().flatten().any(|s| core::ptr::addr_eq(*s, sink)) {
+                return Err(Error::AlreadySubscribed);
+            }
+            if count == SUBS {
+                return Err(Error::TooManySubscribers);
+            }
+            let needed = l.reserved + sink.reserved_slots();
+            if needed > SLOTS {
+                return Err(Error::PoolTooSmall { needed, capacity: SLOTS });
+            }
+            l.sinks[count] = Some(sink);
+            l.count += 1;
+            l.reserved = needed;
+            Ok(())
+        })
+    }
+
+    /// Registers `publisher` (made with [`Publisher::new`] on this topic): reserves the slot
+    /// its draft occupies, so the sizing rule covers it. Mirrors the paper's
+    /// `node.advertise(&pub)`.
+    pub fn advertise(&self, publisher: &Publisher<'a, T>) -> Result<(), Error> {
+        if !publisher.is_on(self) {
+            return Err(Error::WrongTopic);
+        }
+        publisher.mark_advertised()
+    }
+}
+
+impl<T, const SLOTS: usize, const SUBS: usize> TopicInfo for Topic<'_, T, SLOTS, SUBS>
+where
+    T: Copy + Send + Sync,
+{
+    fn name(&self) -> &'static str {
+        self.name
+    }
+    fn message_size(&self) -> usize {
+        core::mem::size_of::<T>()
+    }
+    fn capacity(&self) -> usize {
+        SLOTS
+    }
+    fn free_slots(&self) -> usize {
+        self.pool.free()
+    }
+    fn reserved_slots(&self) -> usize {
+        self.links.lock(|l| l.borrow().reserved)
+    }
+    fn subscriber_count(&self) -> usize {
+        self.links.lock(|l| l.borrow().count)
+    }
+    fn max_queue_len(&self) -> usize {
+        let mut max = 0;
+        self.links.lock(|l| {
+            for s in l.borrow().sinks.iter().flatten() {
+                max = max.max(s.queue_len());
+            }
+        });
+        max
+    }
+}
+
+impl<'a, T, const SLOTS: usize, const SUBS: usize> TopicCore<'a, T> for Topic<'a, T, SLOTS, SUBS>
+where
+    T: Copy + Send + Sync,
+{
+    fn pool(&self) -> &dyn RawPool<T> {
+        &self.pool
+    }
+
+    fn for_each_sink(&self, f: &mut dyn FnMut(&'a dyn Sink<'a, T>)) {
+        let (sinks, count) = self.links.lock(|l| {
+            let l = l.borrow();
+            (l.sinks, l.count)
+        });
+        for s in sinks[..count].iter().flatten() {
+            f(*s);
+        }
+    }
+
+    fn reserve_publisher(&self) -> Result<(), Error> {
+        self.links.lock(|l| {
+            let mut l = l.borrow_mut();
+            let needed = l.reserved + 1;
+            if needed > SLOTS {
+                return Err(Error::PoolTooSmall { needed, capacity: SLOTS });
+            }
+            l.reserved = needed;
+            Ok(())
+        })
+    }
+}
+
+/// A fixed-size directory of topics by name, for the management protocol and the transport
+/// (which receive names from the bus). Static, like everything else.
+pub struct Registry<'a, const N: usize> {
+    topics: Mutex<CriticalSectionRawMutex, RefCell<[Option<&'a dyn TopicInfo>; N]>>,
+}
+
+impl<'a, const N: usize> Registry<'a, N> {
+    /// An empty registry with room for `N` topics.
+    pub const fn new() -> Self {
+        Registry { topics: Mutex::new(RefCell::new([None; N])) }
+    }
+
+    /// Adds `topic`; fails if its name is taken or the registry is full.
+    pub fn register(&self, topic: &'a dyn TopicInfo) -> Result<(), Error> {
+        self.topics.lock(|t| {
+            let mut t = t.borrow_mut();
+            if t.iter().flatten().any(|x| x.name() == topic.name()) {
+                return Err(Error::DuplicateName);
+            }
+            let free = t.iter_mut().find(|x| x.is_none()).ok_or(Error::RegistryFull)?;
+            *free = Some(topic);
+            Ok(())
+        })
+    }
+
+    /// The topic called `name`, if registered.
+    pub fn find(&self, name: &str) -> Option<&'a dyn TopicInfo> {
+        self.topics.lock(|t| t.borrow().iter().flatten().find(|x| x.name() == name).copied())
+    }
+
+    /// Every registered topic, in registration order (for the management protocol's listing).
+    pub fn for_each(&self, mut f: impl FnMut(&'a dyn TopicInfo)) {
+        let topics = self.topics.lock(|t| *t.borrow());
+        topics.iter().flatten().for_each(|t| f(*t));
+    }
+}
+
+impl<const N: usize> Default for Registry<'_, N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+#[cfg(any(test, feature = "selftest"))]
+pub(crate) mod tests {
+    use super::*;
+    use crate::{pool_size, Callback, Class, Subscriber};
+
+    const NRT: Class = Class::NonRealTime;
+
+    r2p_testkit::suite! {
+        fn subscribe_enforces_the_sizing_rule() {
+            // Room for a queue of 2 (3 slots) and a queue of 1 (2 slots), not one slot more.
+            static T: Topic<'static, u32, { pool_size(&[2, 1], 0) }, 4> = Topic::new("t", 0);
+            static A: Subscriber<'static, u32, 2> = Subscriber::new();
+            static B: Subscriber<'static, u32, 1> = Subscriber::new();
+            static C: Subscriber<'static, u32, 1> = Subscriber::new();
+            static P: Publisher<'static, u32> = Publisher::new(&T, NRT);
+            T.subscribe(&A).unwrap();
+            T.subscribe(&B).unwrap();
+            assert_eq!(T.reserved_slots(), 5);
+            assert_eq!(T.subscribe(&C), Err(Error::PoolTooSmall { needed: 7, capacity: 5 }));
+            assert_eq!(T.advertise(&P), Err(Error::PoolTooSmall { needed: 6, capacity: 5 }));
+            assert_eq!(T.subscriber_count(), 2, "a refused subscription changes nothing");
+            assert_eq!(T.reserved_slots(), 5);
+        }
+
+        fn subscribe_refuses_duplicates_and_a_full_list() {
+            static T: Topic<'static, u32, 20, 2> = Topic::new("t", 0);
+            static A: Subscriber<'static, u32, 1> = Subscriber::new();
+            static B: Subscriber<'static, u32, 1> = Subscriber::new();
+            static C: Subscriber<'static, u32, 1> = Subscriber::new();
+            T.subscribe(&A).unwrap();
+            assert_eq!(T.subscribe(&A), Err(Error::AlreadySubscribed));
+            T.subscribe(&B).unwrap();
+            assert_eq!(T.subscribe(&C), Err(Error::TooManySubscribers));
+        }
+
+        fn callbacks_reserve_no_slot() {
+            fn ignore(_: &u32) {}
+            static T: Topic<'static, u32, 1, 2> = Topic::new("t", 0);
+            static CB: Callback<fn(&u32)> = Callback::new(ignore);
+            T.subscribe(&CB).unwrap();
+            assert_eq!(T.reserved_slots(), 0);
+            assert_eq!(T.max_queue_len(), 0);
+        }
+
+        fn advertise_reserves_one_slot_once_and_checks_the_topic() {
+            static T: Topic<'static, u32, 4, 1> = Topic::new("t", 0);
+            static OTHER: Topic<'static, u32, 4, 1> = Topic::new("other", 0);
+            static P: Publisher<'static, u32> = Publisher::new(&T, NRT);
+            assert_eq!(OTHER.advertise(&P), Err(Error::WrongTopic));
+            T.advertise(&P).unwrap();
+            assert_eq!(T.reserved_slots(), 1);
+            assert_eq!(T.advertise(&P), Err(Error::AlreadyAdvertised));
+            assert_eq!(T.reserved_slots(), 1);
+            assert_eq!(P.topic_name(), "t");
+        }
+
+        fn topic_info_reports_what_the_transport_needs() {
+            static T: Topic<'static, [u16; 5], 12, 3> = Topic::new("imu", [0; 5]);
+            static A: Subscriber<'static, [u16; 5], 2> = Subscriber::new();
+            static B: Subscriber<'static, [u16; 5], 6> = Subscriber::new();
+            T.subscribe(&A).unwrap();
+            T.subscribe(&B).unwrap();
+            let info: &dyn TopicInfo = &T;
+            assert_eq!(info.name(), "imu");
+            assert_eq!(info.message_size(), 10);
+            assert_eq!(info.capacity(), 12);
+            assert_eq!(info.free_slots(), 12);
+            assert_eq!(info.subscriber_count(), 2);
+            assert_eq!(info.max_queue_len(), 6, "the longest queue decides the remote buffer");
+        }
+
+        fn registry_finds_topics_by_name() {
+            static A: Topic<'static, u32, 1, 1> = Topic::new("proximity", 0);
+            static B: Topic<'static, u8, 1, 1> = Topic::new("obstacle", 0);
+            static C: Topic<'static, u8, 1, 1> = Topic::new("velocity", 0);
+            static DUP: Topic<'static, u8, 1, 1> = Topic::new("obstacle", 0);
+            static R: Registry<'static, 2> = Registry::new();
+            R.register(&A).unwrap();
+            R.register(&B).unwrap();
+            assert_eq!(R.register(&DUP), Err(Error::DuplicateName));
+            assert_eq!(R.register(&C), Err(Error::RegistryFull));
+            assert_eq!(R.find("obstacle").unwrap().message_size(), 1);
+            assert_eq!(R.find("proximity").unwrap().message_size(), 4);
+            assert!(R.find("velocity").is_none());
+            let mut n = 0;
+            R.for_each(|_| n += 1);
+            assert_eq!(n, 2);
+        }
+    }
+}
