@@ -62,7 +62,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"qemu-test: no image {', '.join(unknown)} in {WORKSPACE / 'src/bin'}; "
               f"images are: {', '.join(known)}", file=sys.stderr)
         return 2
-    outdir = build()
+    try:
+        outdir = build()
+    except subprocess.CalledProcessError as e:
+        print(f"qemu-test: building the test images failed (`{' '.join(e.cmd)}` in "
+              f"{WORKSPACE.relative_to(ROOT)} exited {e.returncode}); cargo's message is above",
+              file=sys.stderr)
+        return 1
     failed = 0
     for name in chosen:
         rc, out = run_image(outdir / name)
