@@ -4,7 +4,7 @@
 SHELL := /bin/bash
 PY := scripts/py
 
-.PHONY: all setup firmware check test help clean
+.PHONY: all setup firmware check test bench help clean
 
 all: setup ## Set up if needed, build every artifact into its place, print a summary table
 	@$(PY) -m r2ptools.build
@@ -22,6 +22,9 @@ check: setup ## Lint all Rust (warnings denied); prove committed images regenera
 
 test: setup ## Run every test (Rust, QEMU Cortex-M3, lint, pytest) with one summary
 	@scripts/run-tests
+
+bench: setup ## Benchmarks: core instructions/message on a Cortex-M3 (QEMU) and msg/s on the host vs embassy-sync, footprint
+	@scripts/bench
 
 help: ## List the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -E 's/^([a-z-]+):.*## (.*)/  make \1\t\2/' | expand -t 20

@@ -34,10 +34,12 @@ def test_runs_are_deterministic():
     assert image_output(a.stdout) == image_output(b.stdout)
 
 
-def test_default_run_skips_only_the_deliberate_failure():
+def test_default_run_runs_the_suites_and_skips_the_deliberate_failure():
     p = run(RUNNER)
     assert p.returncode == 0, p.stdout
     assert "deliberate-failure" not in p.stdout
+    for suite in ("rtcan", "middleware", "management"):
+        assert f"({suite} on cortex-m3)" in p.stdout
 
 
 def test_unknown_image_is_named_with_the_known_ones():

@@ -4,7 +4,7 @@ Each binary of firmware/targets/qemu runs one crate's `selftest` suites and exit
 semihosting: status 0 when all passed, 1 on the first failure. `-icount` makes the runs
 deterministic (instruction-counted virtual time). Usage:
 
-    scripts/qemu-test [IMAGE ...]     # default: every image except deliberate-failure
+    scripts/qemu-test [IMAGE ...]     # default: every suite image (not deliberate-failure, bench)
 """
 from __future__ import annotations
 
@@ -21,6 +21,8 @@ WORKSPACE = ROOT / "firmware" / "targets" / "qemu"
 TARGET = "thumbv7m-none-eabi"
 # Exists to prove that a failure fails the run (tests/test_qemu_runner.py); not part of the suite.
 DELIBERATE_FAILURE = "deliberate-failure"
+# Images that are not test suites: run only when named (the benchmark is run by scripts/bench).
+NOT_SUITES = {DELIBERATE_FAILURE, "bench"}
 TIMEOUT_S = 60
 
 
@@ -56,7 +58,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("images", nargs="*", help="image names (files in firmware/targets/qemu/src/bin)")
     args = ap.parse_args(argv)
     known = images()
-    chosen = args.images or [i for i in known if i != DELIBERATE_FAILURE]
+    chosen = args.images or [i for i in known if i not in NOT_SUITES]
     unknown = [i for i in chosen if i not in known]
     if unknown:
         print(f"qemu-test: no image {', '.join(unknown)} in {WORKSPACE / 'src/bin'}; "
