@@ -106,7 +106,11 @@ mod tests {
     fn both_implementations_deliver_every_message_to_every_subscriber() {
         for n in SUBSCRIBERS {
             assert_eq!(r2p_round(n, 100), expected_checksum(n, 100), "r2p, {n} subscribers");
-            assert_eq!(embassy_round(n, 100), expected_checksum(n, 100), "embassy, {n} subscribers");
+            assert_eq!(
+                embassy_round(n, 100),
+                expected_checksum(n, 100),
+                "embassy, {n} subscribers"
+            );
         }
     }
 }
