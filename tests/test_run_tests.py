@@ -17,6 +17,8 @@ def closing_line(out: str) -> str:
 def test_failing_rust_test_fails_the_run(tmp_path):
     crate = tmp_path / "crate"
     shutil.copytree(ROOT / "tests" / "fixtures" / "failing-crate", crate)
+    # Outside the repository: name the toolchain (a fresh HOME has no rustup default).
+    shutil.copy(ROOT / "rust-toolchain.toml", crate)
     p = run(DRIVER + ["--only", "rust", "--firmware-dir", str(crate)])
     assert p.returncode == 1, p.stdout
     assert "fails_on_purpose" in p.stdout
