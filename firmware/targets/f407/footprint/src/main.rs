@@ -1,6 +1,6 @@
-//! Footprint image for the gateway's STM32F407VG: the shared core (Embassy executor and time,
-//! bxCAN at 1 Mbit/s, RTCAN) and nothing else, so `make firmware` can report what is left for
-//! the gateway's Ethernet stack. Sends one NRT frame per second on CAN1 (PB8/PB9).
+//! Footprint image for the gateway's STM32F407VG: the same shared core as the F103 footprint
+//! image (executor, time, bxCAN on CAN1 at PB8/PB9, RTCAN, middleware, management) and nothing
+//! else, so `make firmware` can report what is left for the gateway's Ethernet stack.
 #![no_std]
 #![no_main]
 
@@ -12,7 +12,10 @@ use embassy_stm32::peripherals::CAN1;
 use embassy_stm32::{bind_interrupts, pac, rcc, time::Hertz, Config};
 use embassy_time::Timer;
 use panic_halt as _;
-use rtcan::{CanController, Frame, FrameId, Laxity, MessageId};
+use r2p_management::message::{Message, ModuleState, ENCODED_MAX};
+use r2p_management::{NodeId, NodeIdAllocator};
+use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
+use rtcan::{CanController, Expect, LaxityEncoding, Reassembler, TxQueue, Urgency};
 use rtcan_bxcan::BxCan;
 
 bind_interrupts!(struct Irqs {
@@ -42,21 +45,82 @@ fn clocks() -> Config {
 }
 
 #[embassy_executor::main]
-async fn main(_spawner: Spawner) {
+async fn main(spawner: Spawner) {
     let p = embassy_stm32::init(clocks());
     let mut can = Can::new(p.CAN1, p.PB8, p.PB9, Irqs);
     can.modify_config().set_bitrate(1_000_000);
     can.enable().await;
     let mut can = BxCan::new(can, pac::CAN1);
+    spawner.spawn(sensor()).unwrap();
 
-    let id = FrameId::new(Laxity::NRT, MessageId(0x0100), 0).unwrap();
-    let mut count: u32 = 0;
+    // The core's receive and transmit paths, as a module runs them.
+    let mut node = NodeIdAllocator::new(embassy_stm32::uid::uid());
+    let mut rx: Reassembler<4, 64> = Reassembler::new(20_000);
+    let mut tx: TxQueue<32> = TxQueue::new(LaxityEncoding::Logarithmic { tick_us: 100 });
+    let mut buf = [0u8; ENCODED_MAX];
+    let mut uptime_s = 0u32;
     loop {
-        if let Ok(frame) = Frame::new(id, &count.to_le_bytes()) {
-            let _ = can.try_transmit(&frame);
+        let now = embassy_time::Instant::now().as_micros();
+        while let Some(r) = can.try_receive() {
+            if let Some(msg) = rx.accept(&r.frame, r.at, Expect::Any) {
+                if let (Some((from, 0)), Ok(Message::Heartbeat { uid, .. })) =
+                    (NodeId::of(msg.id), Message::decode(msg.data))
+                {
+                    node.on_heartbeat(from, &uid);
+                }
+            }
         }
-        while can.try_receive().is_some() {}
-        count = count.wrapping_add(1);
-        Timer::after_secs(1).await;
+        rx.expire(now);
+        if let Some(m) = READINGS.try_recv() {
+            let id = node.node_id().message_id(1);
+            let bytes: [u8; 4] = m.to_le_bytes();
+            let _ = tx.push_message(id, &bytes, Urgency::Srt { deadline: now + 10_000 });
+        }
+        let heartbeat = Message::Heartbeat {
+            uid: embassy_stm32::uid::uid(),
+            name: heapless_name(),
+            state: ModuleState::Running,
+            uptime_s,
+            tx_errors: can.error_counters().tx,
+            rx_errors: can.error_counters().rx,
+            dropped: rx.stats().foreign as u16,
+        };
+        if let Ok(n) = heartbeat.encode(&mut buf) {
+            let _ = tx.push_message(node.node_id().management(), &buf[..n], Urgency::Nrt);
+        }
+        tx.expire(now, |_| {});
+        while let Some(frame) = tx.peek(now) {
+            if can.try_transmit(&frame).is_err() {
+                break;
+            }
+            tx.pop(now);
+        }
+        uptime_s = uptime_s.wrapping_add(1);
+        Timer::after_millis(100).await;
     }
+}
+
+/// A reading published locally, as a sensor node would (zero copy to its subscriber).
+static READINGS_TOPIC: Topic<'static, u32, { pool_size(&[4], 1) }, 1> = Topic::new("readings", 0);
+static READINGS_PUB: Publisher<'static, u32> =
+    Publisher::new(&READINGS_TOPIC, Class::AsyncRealTime { deadline_us: 10_000 });
+static READINGS: Subscriber<'static, u32, 4> = Subscriber::new();
+
+#[embassy_executor::task]
+async fn sensor() {
+    READINGS_TOPIC.advertise(&READINGS_PUB).unwrap();
+    READINGS_TOPIC.subscribe(&READINGS).unwrap();
+    let mut n = 0u32;
+    loop {
+        if let Some(mut m) = READINGS_PUB.try_alloc() {
+            *m = n;
+            READINGS_PUB.publish(m);
+        }
+        n = n.wrapping_add(1);
+        Timer::after_millis(10).await;
+    }
+}
+
+fn heapless_name() -> heapless::String<16> {
+    heapless::String::try_from("footprint").unwrap_or_default()
 }
