@@ -16,8 +16,9 @@ setup: ## Install or update tools: apt (KiCad 9.0.8, OpenSCAD, QEMU…), Rust ta
 firmware: setup ## Build the firmware images into firmware/images and print flash/RAM use
 	@scripts/firmware build
 
-check: setup ## Lint all Rust (warnings denied); prove committed images regenerate byte for byte
+check: setup ## Lint all Rust (warnings denied); prove committed images and generated code are current
 	@scripts/lint
+	@scripts/msggen check
 	@scripts/firmware verify
 
 test: setup ## Run every test (Rust, QEMU Cortex-M3, lint, pytest) with one summary

@@ -38,7 +38,7 @@ def test_default_run_runs_the_suites_and_skips_the_deliberate_failure():
     p = run(RUNNER)
     assert p.returncode == 0, p.stdout
     assert "deliberate-failure" not in p.stdout
-    for suite in ("rtcan", "middleware", "management"):
+    for suite in ("rtcan", "middleware", "management", "msgs"):
         assert f"({suite} on cortex-m3)" in p.stdout
 
 
