@@ -288,6 +288,8 @@ pub(crate) mod tests {
             // Two syncs lost, the third arrives: still the same master.
             assert!(f.poll(40_999).is_empty());
             assert_eq!(f.role(), Role::Slave);
+            // Even polled right before the third sync is handled, rank 0 does not take over.
+            assert!(f.poll(41_000).is_empty());
             assert!(f.on_sync(41_000, &Sync::new(11, 0, true)).is_empty());
             assert_eq!(f.takeover_at(), Some(81_000));
         }
@@ -330,6 +332,56 @@ pub(crate) mod tests {
             assert_eq!(a.start_syncing.map(|s| s.epoch), Some(!s.epoch));
         }
 
+        fn adjacent_ranks_with_worst_case_losses_never_both_master() {
+            // The master syncs every T up to cycle 9 (at 90 000) and dies. A (rank 0) hears
+            // every sync; B (rank 1) misses the last L of them and the first L of A's.
+            let mut a = Failover::new(rank(0), T, 0);
+            let mut b = Failover::new(rank(1), T, 0);
+            for c in 0..10u32 {
+                let at = c as Micros * 10_000;
+                a.on_sync(at, &Sync::new(c, 0, false));
+                if c < 10 - MAX_SYNC_LOSS {
+                    b.on_sync(at, &Sync::new(c, 0, false));
+                }
+            }
+            let mut t = 90_000;
+            let mut a_syncs = 0;
+            while t <= 300_000 {
+                let ra = a.poll(t);
+                let rb = b.poll(t);
+                assert!(rb.start_syncing.is_none(), "B took over at {} while A is master", t);
+                if ra.start_syncing.is_some() {
+                    assert_eq!(t, 130_000);
+                }
+                if a.role() == Role::Master && (t - 130_000) % 10_000 == 0 {
+                    a_syncs += 1;
+                    if a_syncs > MAX_SYNC_LOSS {
+                        b.on_sync(t, &Sync::new(a_syncs - 1, 0, true));
+                    }
+                }
+                t += 1_000;
+            }
+            assert_eq!(b.role(), Role::Slave);
+        }
+
+        fn epoch_flip_catches_a_takeover_the_counter_hides() {
+            // The old master's last sync has counter 254 at 1 000 000; the new master (which
+            // missed the last L syncs) starts L cycles later with counter 0 = 254 + 2 mod 256.
+            let mut n = Failover::new(None, T, 0);
+            let mut a = Failover::new(rank(0), T, 0);
+            for c in 240..=254u32 {
+                let at = 1_000_000 - (254 - c as Micros) * 10_000;
+                n.on_sync(at, &Sync::new(c, 0, true));
+                if c <= 254 - MAX_SYNC_LOSS {
+                    a.on_sync(at, &Sync::new(c, 0, true));
+                }
+            }
+            let start = a.poll(1_020_000).start_syncing.unwrap();
+            assert_eq!((start.cycle, start.epoch), (0, false));
+            let r = n.on_sync(1_020_000, &Sync::new(start.cycle, 0, start.epoch));
+            assert!(r.re_register);
+        }
+
         fn lower_rank_wins_a_common_silence() {
             let mut a = Failover::new(rank(0), T, 0);
             let mut b = Failover::new(rank(1), T, 0);
@@ -343,6 +395,227 @@ pub(crate) mod tests {
             assert!(r.re_register);
             assert_eq!(b.role(), Role::Slave);
             assert!(b.poll(94_999).is_empty());
+        }
+    }
+}
+
+#[cfg(test)]
+mod proptests {
+    extern crate std;
+    use super::*;
+    use proptest::prelude::*;
+    use std::vec::Vec;
+
+    const T: u32 = 10_000;
+    const STEP: Micros = 500;
+
+    struct Node {
+        f: Failover,
+        /// Boots at this time (0, or later while a master is live: a late joiner).
+        boot_at: Micros,
+        booted: bool,
+        alive: bool,
+        /// Consecutive syncs this node missed (the loss model keeps it ≤ MAX_SYNC_LOSS).
+        misses: u32,
+        /// As master: when the next sync goes out, its counter and epoch, and the mastership.
+        next_sync: Option<(Micros, u32, bool, u32)>,
+        /// The mastership this node's streams are registered with.
+        registered_with: Option<u32>,
+    }
+
+    /// A node: rank (None = never master) and boot time.
+    type Spec = (Option<u8>, Micros);
+
+    /// Deterministic bus of `specs` nodes: sync loss with probability `loss_pct` bounded by
+    /// MAX_SYNC_LOSS consecutive — for all receivers at once (`global`, CAN's consistent
+    /// broadcast) or for each receiver on its own — and the master killed `kills[j]` µs after
+    /// the j-th takeover. Within the fault hypothesis (module documentation): with
+    /// per-receiver loss a master lives at least MAX_SYNC_LOSS + 1 syncs; late joiners boot
+    /// while a master is live, and it lives until they heard it.
+    fn simulate(specs: &[Spec], global: bool, loss_pct: u64, seed: u64, kills: &[Micros]) {
+        let min_life = if global { 0 } else { MAX_SYNC_LOSS as Micros * T as Micros + STEP };
+        let mut rng = seed | 1;
+        let mut rand = move || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            rng
+        };
+        let mut nodes: Vec<Node> = specs
+            .iter()
+            .map(|&(r, boot_at)| Node {
+                f: Failover::new(r.map(|r| Rank::new(r).unwrap()), T, 0),
+                boot_at,
+                booted: false,
+                alive: false,
+                misses: 0,
+                next_sync: None,
+                registered_with: None,
+            })
+            .collect();
+        let mut last_sync_at: Micros = 0; // boot is the common reference
+        let mut last_sender: Option<usize> = None;
+        let mut masterships = 0u32;
+        let mut takeover_at: Option<Micros> = None;
+        let mut kills_done = 0;
+        let mut global_misses = 0;
+        let mut t: Micros = 0;
+        let end_margin = (MAX_TAKEOVER_CYCLES as Micros + 10) * T as Micros;
+        let mut quiet_since_last_kill: Micros = 0;
+        while quiet_since_last_kill < end_margin {
+            let live_master = nodes.iter().any(|n| n.alive && n.f.role() == Role::Master);
+            // Boot: everyone at 0; late joiners only while a master is live.
+            for n in nodes.iter_mut().filter(|n| !n.booted && t >= n.boot_at) {
+                if n.boot_at == 0 || live_master {
+                    n.f = Failover::new(n.f.rank(), T, t);
+                    n.booted = true;
+                    n.alive = true;
+                }
+            }
+            // Kill the master when its turn comes (not before every joiner heard it).
+            let joiners_heard = nodes.iter().all(|n| !n.alive || n.boot_at == 0 || n.f.synced());
+            let standbys_alive = nodes.iter().filter(|n| n.alive && n.f.rank().is_some()).count();
+            if let Some(d) = takeover_at {
+                if kills_done < kills.len()
+                    && t >= d + kills[kills_done].max(min_life)
+                    && joiners_heard
+                    && standbys_alive >= 2
+                {
+                    let m = nodes.iter().position(|n| n.alive && n.f.role() == Role::Master);
+                    if let Some(m) = m {
+                        nodes[m].alive = false;
+                        kills_done += 1;
+                        takeover_at = None;
+                    }
+                }
+            }
+            if kills_done == kills.len() {
+                quiet_since_last_kill += STEP;
+            }
+            // Time passes.
+            let best = nodes.iter().filter(|n| n.alive).filter_map(|n| n.f.rank()).min();
+            for n in nodes.iter_mut().filter(|n| n.alive) {
+                let a = n.f.poll(t);
+                if let Some(s) = a.start_syncing {
+                    assert_eq!(s.at, t);
+                    assert_eq!(n.f.rank(), best, "the best live standby takes over");
+                    masterships += 1;
+                    n.next_sync = Some((t, s.cycle, s.epoch, masterships));
+                    takeover_at = Some(t);
+                }
+                if a.re_register {
+                    assert!(a.start_syncing.is_some(), "poll re-registers only on takeover");
+                    n.registered_with = Some(masterships);
+                }
+            }
+            let alive_masters: Vec<usize> = (0..nodes.len())
+                .filter(|&i| nodes[i].alive && nodes[i].f.role() == Role::Master)
+                .collect();
+            assert!(alive_masters.len() <= 1, "two masters at {t}: {alive_masters:?}");
+            // Bound: with no live master, one must appear within the rank's takeover time.
+            if alive_masters.is_empty() {
+                if let Some(r) = best {
+                    let bound = last_sync_at + takeover_delay_us(r, T);
+                    assert!(t < bound, "no master at {t}, bound {bound} (rank {r:?})");
+                }
+            }
+            // Syncs.
+            for m in alive_masters {
+                let Some((at, cycle, epoch, ship)) = nodes[m].next_sync else { continue };
+                if at > t {
+                    continue;
+                }
+                if last_sender.is_some_and(|s| s != m) {
+                    assert!(t >= last_sync_at + T as Micros, "two masters' syncs within a cycle");
+                }
+                let sync = Sync::new(cycle, 0, epoch);
+                assert!(nodes[m].f.on_sync_sent(t, &sync, true).is_empty());
+                last_sync_at = t;
+                last_sender = Some(m);
+                nodes[m].next_sync = Some((at + T as Micros, cycle + 1, epoch, ship));
+                let lost_by_all = global_misses < MAX_SYNC_LOSS && rand() % 100 < loss_pct;
+                global_misses = if lost_by_all { global_misses + 1 } else { 0 };
+                for (i, n) in nodes.iter_mut().enumerate() {
+                    if i == m || !n.alive {
+                        continue;
+                    }
+                    let lost = if global {
+                        lost_by_all
+                    } else {
+                        n.misses < MAX_SYNC_LOSS && rand() % 100 < loss_pct
+                    };
+                    if lost {
+                        n.misses += 1;
+                        continue;
+                    }
+                    n.misses = 0;
+                    let a = n.f.on_sync(t, &sync);
+                    assert!(a.start_syncing.is_none() && !a.stop_syncing, "{a:?}");
+                    if a.re_register {
+                        n.registered_with = Some(ship);
+                    }
+                    assert_eq!(
+                        n.registered_with,
+                        Some(ship),
+                        "node {i} thinks it is registered with another master"
+                    );
+                }
+            }
+            t += STEP;
+            if t > 30_000_000 {
+                break; // every standby that boots late may be needed; stop planning kills
+            }
+        }
+        assert!(kills_done >= 1, "the first master was killed");
+    }
+
+    fn scenario() -> impl Strategy<Value = (Vec<Spec>, u64, u64, Vec<Micros>)> {
+        (2usize..=6, 0usize..=2)
+            .prop_flat_map(|(standbys, plain)| {
+                // Dense ranks (often adjacent, often including 0) are the hard cases.
+                let ranks = (0u8..=MAX_RANK - 8).prop_flat_map(move |base| {
+                    let top = (base + standbys as u8 + 2).min(MAX_RANK);
+                    proptest::sample::subsequence((base..=top).collect::<Vec<u8>>(), standbys)
+                        .prop_shuffle()
+                });
+                // Most boot at 0; some join later (in ms).
+                let boots = proptest::collection::vec(
+                    prop_oneof![3 => Just(0u64), 1 => 1u64..=1_500],
+                    standbys + plain,
+                );
+                let kills = proptest::collection::vec(0u64..=600_000, 1..standbys);
+                (ranks, Just(plain), boots, 0u64..=95, any::<u64>(), kills)
+            })
+            .prop_map(|(ranks, plain, boots, loss, seed, kills)| {
+                let mut r: Vec<Option<u8>> = ranks.into_iter().map(Some).collect();
+                r.extend(core::iter::repeat_n(None, plain));
+                // The first node always boots at 0 so that a master appears.
+                let specs = r
+                    .into_iter()
+                    .zip(boots)
+                    .enumerate()
+                    .map(|(i, (r, b))| (r, if i == 0 { 0 } else { b * 1_000 }))
+                    .collect();
+                (specs, loss, seed, kills)
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(400))]
+        #[test]
+        fn one_master_within_the_bound(
+            (specs, loss, seed, kills) in scenario(),
+            global in any::<bool>(),
+        ) {
+            simulate(&specs, global, loss, seed, &kills);
+        }
+
+        #[test]
+        fn quick_successive_deaths((specs, loss, seed, _k) in scenario(), d in 0u64..=40_000) {
+            // Each new master dies again within a few cycles, possibly before anyone heard it.
+            let standbys = specs.iter().filter(|s| s.0.is_some()).count();
+            let kills: Vec<Micros> = (1..standbys).map(|_| d).collect();
+            simulate(&specs, true, loss, seed, &kills);
         }
     }
 }
