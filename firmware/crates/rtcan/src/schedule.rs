@@ -1,6 +1,609 @@
-//! HRT scheduling on the master. (being written)
+//! HRT scheduling: admission control, phase assignment and the master's reservation calendar.
+//!
+//! An HRT stream sends one frame every `P` cycles in one slot. The master admits it, gives it a
+//! [`Phase`] — the cycle offset `o` (0 ≤ o < P) and the slot `s` — and from then on reserves
+//! slot `s` in every cycle `c` with `c mod P = o`. Each node computes its own occurrences from
+//! (period, phase) with [`next_reserved`]; only the master keeps the whole calendar
+//! ([`Scheduler`]) to build each sync's reservation mask.
+//!
+//! # Admission rule
+//! Periods are powers of two from 1 to [`MAX_PERIOD_CYCLES`] = 256 cycles. Any two such periods
+//! divide each other (a harmonic set), so two streams in the same slot collide iff their offsets
+//! agree modulo the smaller period; and 256 is the cycle counter's modulus, so every node can
+//! compute every occurrence from the sync's 8-bit counter alone (a chain like 3, 6, 12 would be
+//! harmonic too but would break at the counter's wrap). The paper's weaker rule ("not relatively
+//! prime") is not enough: periods 4 and 6 share a factor, yet offsets 0 and 2 collide in cycle 12.
+//!
+//! Capacity: a stream of period P uses 256/P of a slot's 256-cycle hyperperiod. A stream is
+//! admitted iff `Σ 256/Pᵢ + 256/P ≤ 256 · hrt_slots` (and the table has room), and a collision-free
+//! phase exists. With registrations only (no removals) the placement below guarantees that a phase
+//! exists whenever the capacity test passes, so admission is exactly the utilization test.
+//!
+//! # Placement (best-fit buddy)
+//! Bit-reversing the 8-bit cycle number maps the occurrences of (P = 2^k, o) onto one aligned
+//! block of 256/P consecutive positions, block number `rev_k(o)`; two streams collide iff their
+//! blocks overlap. Each HRT slot is thus a buddy allocator over 256 positions. The scheduler
+//! takes, over all slots, the free aligned block whose largest free enclosing aligned block is
+//! smallest (best fit); ties go to the lower slot, then the lower block number. The phase is
+//! `offset = rev_k(block)`, `slot = s`.
+
+use crate::cycle::{EPOCH_BIT, MAX_SLOTS};
+use crate::id::MessageId;
+
+/// Longest period in cycles: the cycle counter's modulus and the calendar's hyperperiod.
+pub const MAX_PERIOD_CYCLES: u32 = 256;
+/// log₂ of [`MAX_PERIOD_CYCLES`].
+pub const MAX_PERIOD_LOG2: u8 = 8;
+/// Highest slot index the scheduler can reserve.
+pub const MAX_HRT_SLOT: u8 = MAX_SLOTS - 1;
+
+/// An admissible HRT period: 2^k cycles, 0 ≤ k ≤ 8.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Period(u8);
+
+impl Period {
+    /// The period of `cycles` cycles, if it is a power of two ≤ [`MAX_PERIOD_CYCLES`].
+    pub const fn from_cycles(cycles: u32) -> Result<Self, Reject> {
+        if cycles == 0 || !cycles.is_power_of_two() || cycles > MAX_PERIOD_CYCLES {
+            return Err(Reject::NotHarmonic);
+        }
+        Ok(Period(cycles.trailing_zeros() as u8))
+    }
+
+    /// Length in cycles.
+    pub const fn cycles(self) -> u32 {
+        1 << self.0
+    }
+
+    /// log₂ of the length.
+    pub const fn log2(self) -> u8 {
+        self.0
+    }
+}
+
+/// Where a stream's occurrences are: cycles `c` with `c mod period = offset`, in slot `slot`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Phase {
+    /// Cycle offset, less than the period.
+    pub offset: u8,
+    /// Slot index, at least 1 (slot 0 is the sync slot).
+    pub slot: u8,
+}
+
+/// An admitted stream.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Reservation {
+    /// The stream's message ID (its HRT frames carry it).
+    pub stream: MessageId,
+    /// Its period.
+    pub period: Period,
+    /// Its phase.
+    pub phase: Phase,
+}
+
+/// Why a registration was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reject {
+    /// The period is not a power of two from 1 to [`MAX_PERIOD_CYCLES`] cycles.
+    NotHarmonic,
+    /// The capacity test passes, but every phase collides with an admitted stream (slots are
+    /// fragmented by earlier removals).
+    NoFreePhase,
+    /// The HRT slots' capacity (or the scheduler's table) would be exceeded.
+    Full,
+    /// The message ID is reserved for sync frames.
+    ReservedId,
+    /// The stream is already admitted with another period (remove it first).
+    Conflict,
+}
+
+/// True if a stream with `period` and `phase` sends in cycle `cycle` (only `cycle mod 256`
+/// matters, so the sync's 8-bit counter is enough).
+pub const fn occurs(period: Period, phase: Phase, cycle: u32) -> bool {
+    cycle & (period.cycles() - 1) == phase.offset as u32
+}
+
+/// The stream's first reserved (cycle, slot) at or after cycle `from`.
+pub const fn next_reserved(period: Period, phase: Phase, from: u32) -> (u32, u8) {
+    let p = period.cycles();
+    let wait = (phase.offset as u32).wrapping_sub(from) & (p - 1);
+    (from.wrapping_add(wait), phase.slot)
+}
+
+/// `k`-bit reversal of `j`.
+const fn rev(j: u32, k: u8) -> u32 {
+    if k == 0 {
+        0
+    } else {
+        (j as u8).reverse_bits() as u32 >> (8 - k)
+    }
+}
+
+/// 256 positions of one slot's hyperperiod, in bit-reversed cycle order.
+#[derive(Clone, Copy)]
+struct Occupancy([u64; 4]);
+
+impl Occupancy {
+    fn range_mask(word: usize, start: u32, len: u32) -> u64 {
+        let lo = (word as u32) * 64;
+        let s = start.max(lo);
+        let e = (start + len).min(lo + 64);
+        if s >= e {
+            0
+        } else if e - s == 64 {
+            u64::MAX
+        } else {
+            ((1u64 << (e - s)) - 1) << (s - lo)
+        }
+    }
+
+    fn is_free(&self, start: u32, len: u32) -> bool {
+        (0..4).all(|w| self.0[w] & Self::range_mask(w, start, len) == 0)
+    }
+
+    fn fill(&mut self, start: u32, len: u32) {
+        for w in 0..4 {
+            self.0[w] |= Self::range_mask(w, start, len);
+        }
+    }
+}
+
+/// The master's calendar: up to `N` admitted streams in slots `1..=hrt_slots`.
+#[derive(Clone, Debug)]
+pub struct Scheduler<const N: usize> {
+    table: [Option<Reservation>; N],
+    hrt_slots: u8,
+}
+
+impl<const N: usize> Scheduler<N> {
+    /// An empty calendar reserving only slots `1..=hrt_slots` (at most [`MAX_HRT_SLOT`]); keep
+    /// `hrt_slots` below the cycle's slot count so that SRT and NRT traffic — including the
+    /// registrations themselves — always has free slots.
+    pub const fn new(hrt_slots: u8) -> Self {
+        let hrt_slots = if hrt_slots > MAX_HRT_SLOT { MAX_HRT_SLOT } else { hrt_slots };
+        Self { table: [None; N], hrt_slots }
+    }
+
+    /// Number of slots the scheduler may reserve.
+    pub const fn hrt_slots(&self) -> u8 {
+        self.hrt_slots
+    }
+
+    /// Admitted streams.
+    pub fn iter(&self) -> impl Iterator<Item = &Reservation> {
+        self.table.iter().flatten()
+    }
+
+    /// Number of admitted streams.
+    pub fn len(&self) -> usize {
+        self.iter().count()
+    }
+
+    /// True if no stream is admitted.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The reservation of `stream`, if admitted.
+    pub fn get(&self, stream: MessageId) -> Option<&Reservation> {
+        self.iter().find(|r| r.stream == stream)
+    }
+
+    /// Used capacity in 1/256 of a slot: Σ 256 / Pᵢ.
+    pub fn utilization(&self) -> u32 {
+        self.iter().map(|r| MAX_PERIOD_CYCLES >> r.period.log2()).sum()
+    }
+
+    /// Admits `stream` with a period of `period_cycles` cycles and returns its phase.
+    /// Registering an admitted stream again with the same period returns its phase unchanged.
+    pub fn register(&mut self, stream: MessageId, period_cycles: u32) -> Result<Phase, Reject> {
+        if stream.is_reserved_for_sync() {
+            return Err(Reject::ReservedId);
+        }
+        let period = Period::from_cycles(period_cycles)?;
+        if let Some(r) = self.get(stream) {
+            return if r.period == period { Ok(r.phase) } else { Err(Reject::Conflict) };
+        }
+        let Some(free) = self.table.iter().position(Option::is_none) else {
+            return Err(Reject::Full);
+        };
+        let need = MAX_PERIOD_CYCLES >> period.log2();
+        if self.utilization() + need > MAX_PERIOD_CYCLES * self.hrt_slots as u32 {
+            return Err(Reject::Full);
+        }
+        let phase = self.place(period).ok_or(Reject::NoFreePhase)?;
+        self.table[free] = Some(Reservation { stream, period, phase });
+        Ok(phase)
+    }
+
+    /// Best-fit buddy placement (module documentation).
+    fn place(&self, period: Period) -> Option<Phase> {
+        let k = period.log2();
+        let size = MAX_PERIOD_CYCLES >> k;
+        let mut best: Option<(u32, Phase)> = None;
+        for slot in 1..=self.hrt_slots {
+            let occ = self.occupancy(slot);
+            for block in 0..(1u32 << k) {
+                if !occ.is_free(block * size, size) {
+                    continue;
+                }
+                // Largest free aligned block containing this one.
+                let (mut idx, mut len) = (block, size);
+                while len < MAX_PERIOD_CYCLES && occ.is_free((idx >> 1) * len * 2, len * 2) {
+                    idx >>= 1;
+                    len *= 2;
+                }
+                if best.is_none_or(|(b, _)| len < b) {
+                    best = Some((len, Phase { offset: rev(block, k) as u8, slot }));
+                    if len == size {
+                        return best.map(|(_, p)| p);
+                    }
+                }
+            }
+        }
+        best.map(|(_, p)| p)
+    }
+
+    fn occupancy(&self, slot: u8) -> Occupancy {
+        let mut occ = Occupancy([0; 4]);
+        for r in self.iter().filter(|r| r.phase.slot == slot) {
+            let k = r.period.log2();
+            let size = MAX_PERIOD_CYCLES >> k;
+            occ.fill(rev(r.phase.offset as u32, k) * size, size);
+        }
+        occ
+    }
+
+    /// Removes `stream`; returns its reservation if it was admitted.
+    pub fn remove(&mut self, stream: MessageId) -> Option<Reservation> {
+        let e = self.table.iter_mut().find(|e| e.is_some_and(|r| r.stream == stream))?;
+        e.take()
+    }
+
+    /// Removes every stream (a new master starts with an empty calendar).
+    pub fn clear(&mut self) {
+        self.table = [None; N];
+    }
+
+    /// The reservation mask of cycle `cycle`: bit 0 (the sync slot) and the slot of every
+    /// stream occurring in it. The sync of cycle c carries `mask(c + 1)`.
+    pub fn mask(&self, cycle: u32) -> u64 {
+        self.iter()
+            .filter(|r| occurs(r.period, r.phase, cycle))
+            .fold(EPOCH_BIT, |m, r| m | 1 << r.phase.slot)
+    }
+}
 
 #[cfg(any(test, feature = "selftest"))]
 pub(crate) mod tests {
-    r2p_testkit::suite! {}
+    use super::*;
+
+    fn p(cycles: u32) -> Period {
+        Period::from_cycles(cycles).unwrap()
+    }
+
+    fn check_no_collision<const N: usize>(s: &Scheduler<N>) {
+        for c in 0..MAX_PERIOD_CYCLES {
+            let mut m = 1u64;
+            for r in s.iter() {
+                if occurs(r.period, r.phase, c) {
+                    assert_eq!(m & (1 << r.phase.slot), 0, "collision in cycle {}", c);
+                    m |= 1 << r.phase.slot;
+                }
+            }
+            assert_eq!(s.mask(c), m);
+        }
+    }
+
+    r2p_testkit::suite! {
+        fn periods_are_powers_of_two_up_to_256() {
+            for k in 0..=8 {
+                assert_eq!(p(1 << k).cycles(), 1 << k);
+            }
+            for bad in [0, 3, 5, 6, 12, 100, 512, 1024] {
+                assert_eq!(Period::from_cycles(bad), Err(Reject::NotHarmonic));
+            }
+        }
+
+        fn next_reserved_adds_the_period() {
+            let ph = Phase { offset: 3, slot: 7 };
+            assert_eq!(next_reserved(p(4), ph, 0), (3, 7));
+            assert_eq!(next_reserved(p(4), ph, 3), (3, 7));
+            assert_eq!(next_reserved(p(4), ph, 4), (7, 7));
+            assert_eq!(next_reserved(p(8), Phase { offset: 0, slot: 1 }, 255), (256, 1));
+            // Extended counters that differ above the low byte agree on the slot.
+            assert!(occurs(p(16), Phase { offset: 5, slot: 1 }, 0x1_0015));
+            assert!(!occurs(p(16), Phase { offset: 5, slot: 1 }, 0x1_0016));
+            assert_eq!(next_reserved(p(1), Phase { offset: 0, slot: 2 }, 41), (41, 2));
+        }
+
+        fn phases_spread_like_a_buddy_allocator() {
+            let mut s = Scheduler::<8>::new(1);
+            assert_eq!(s.register(MessageId(0x100), 4), Ok(Phase { offset: 0, slot: 1 }));
+            assert_eq!(s.register(MessageId(0x101), 4), Ok(Phase { offset: 2, slot: 1 }));
+            // Period 2 still fits: offsets 1 and 3 are both free.
+            assert_eq!(s.register(MessageId(0x102), 2), Ok(Phase { offset: 1, slot: 1 }));
+            assert_eq!(s.register(MessageId(0x103), 2), Err(Reject::Full));
+            assert_eq!(s.utilization(), 256);
+            assert_eq!(s.mask(0), 0b11);
+            assert_eq!(s.mask(1), 0b11);
+            assert_eq!(s.mask(2), 0b11);
+        }
+
+        fn best_fit_fills_holes_first() {
+            let mut s = Scheduler::<8>::new(2);
+            assert_eq!(s.register(MessageId(0x100), 2), Ok(Phase { offset: 0, slot: 1 }));
+            assert_eq!(s.register(MessageId(0x101), 1), Ok(Phase { offset: 0, slot: 2 }));
+            // The half-slot hole in slot 1 is the best fit for period 4.
+            assert_eq!(s.register(MessageId(0x102), 4), Ok(Phase { offset: 1, slot: 1 }));
+            assert_eq!(s.register(MessageId(0x103), 4), Ok(Phase { offset: 3, slot: 1 }));
+            assert_eq!(s.register(MessageId(0x104), 256), Err(Reject::Full));
+        }
+
+        fn removal_frees_and_fragmentation_is_reported() {
+            let mut s = Scheduler::<8>::new(1);
+            for (id, o) in [(0x100, 0), (0x101, 2), (0x102, 1), (0x103, 3)] {
+                assert_eq!(s.register(MessageId(id), 4), Ok(Phase { offset: o, slot: 1 }));
+            }
+            assert!(s.remove(MessageId(0x100)).is_some());
+            assert!(s.remove(MessageId(0x103)).is_some());
+            assert_eq!(s.remove(MessageId(0x103)), None);
+            // Half the slot is free, but offsets 0 and 3 are not congruent mod 2.
+            assert_eq!(s.register(MessageId(0x104), 2), Err(Reject::NoFreePhase));
+            assert_eq!(s.register(MessageId(0x104), 4), Ok(Phase { offset: 0, slot: 1 }));
+            assert_eq!(s.mask(3), 0b1);
+            assert_eq!(s.mask(2), 0b11);
+        }
+
+        fn best_fit_keeps_large_holes_after_removals() {
+            let mut s = Scheduler::<8>::new(1);
+            for id in 0x100..0x104 {
+                s.register(MessageId(id), 4).unwrap();
+            }
+            // Free offsets 0 and 2 (one 128-block) and offset 3 (a 64-block).
+            for id in [0x100, 0x101, 0x103] {
+                s.remove(MessageId(id)).unwrap();
+            }
+            // Period 4 goes to the small hole (first fit would split the large one) ...
+            assert_eq!(s.register(MessageId(0x104), 4), Ok(Phase { offset: 3, slot: 1 }));
+            // ... so period 2 still fits.
+            assert_eq!(s.register(MessageId(0x105), 2), Ok(Phase { offset: 0, slot: 1 }));
+            check_no_collision(&s);
+        }
+
+        fn reregistration_is_idempotent() {
+            let mut s = Scheduler::<2>::new(4);
+            let ph = s.register(MessageId(0x200), 8).unwrap();
+            assert_eq!(s.register(MessageId(0x200), 8), Ok(ph));
+            assert_eq!(s.register(MessageId(0x200), 16), Err(Reject::Conflict));
+            assert_eq!(s.register(MessageId(0x0FF), 8), Err(Reject::ReservedId));
+            assert_eq!(s.register(MessageId(0x201), 6), Err(Reject::NotHarmonic));
+            s.register(MessageId(0x201), 8).unwrap();
+            assert_eq!(s.register(MessageId(0x202), 8), Err(Reject::Full));
+            assert_eq!(s.len(), 2);
+            s.clear();
+            assert!(s.is_empty());
+            assert_eq!(s.mask(0), 1);
+        }
+
+        fn mask_is_the_union_of_occurrences() {
+            let mut s = Scheduler::<16>::new(6);
+            let periods = [1, 2, 4, 8, 16, 32, 64, 128, 256, 2, 4, 8];
+            for (i, &per) in periods.iter().enumerate() {
+                s.register(MessageId(0x300 + i as u16), per).unwrap();
+            }
+            check_no_collision(&s);
+            for c in 0..MAX_PERIOD_CYCLES {
+                assert_eq!(s.mask(c + 256), s.mask(c));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod proptests {
+    extern crate std;
+    use super::*;
+    use proptest::prelude::*;
+    use std::vec::Vec;
+
+    const PERIODS: [u32; 13] = [0, 1, 2, 3, 4, 6, 8, 16, 32, 64, 128, 256, 512];
+
+    /// Brute force: is there any (slot, offset) free for `period`?
+    fn some_phase_free<const N: usize>(s: &Scheduler<N>, period: Period) -> bool {
+        (1..=s.hrt_slots()).any(|slot| {
+            (0..period.cycles()).any(|o| {
+                s.iter().filter(|r| r.phase.slot == slot).all(|r| {
+                    let m = period.cycles().min(r.period.cycles()) - 1;
+                    o & m != r.phase.offset as u32 & m
+                })
+            })
+        })
+    }
+
+    fn check_calendar<const N: usize>(s: &Scheduler<N>) {
+        for c in 0..MAX_PERIOD_CYCLES {
+            let mut union = 1u64;
+            for r in s.iter() {
+                if occurs(r.period, r.phase, c) {
+                    assert_eq!(union & (1 << r.phase.slot), 0, "two streams in cycle {c}");
+                    union |= 1 << r.phase.slot;
+                }
+            }
+            assert_eq!(s.mask(c), union);
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn any_sequence_keeps_streams_apart(
+            hrt_slots in 1u8..=3,
+            ops in proptest::collection::vec((any::<bool>(), 0u16..12, 0usize..PERIODS.len()), 1..60),
+        ) {
+            let mut s = Scheduler::<10>::new(hrt_slots);
+            for (reg, id, pi) in ops {
+                let stream = MessageId(0x100 + id);
+                if !reg {
+                    let before = s.get(stream).copied();
+                    prop_assert_eq!(s.remove(stream), before);
+                    prop_assert!(s.get(stream).is_none());
+                    check_calendar(&s);
+                    continue;
+                }
+                let cycles = PERIODS[pi];
+                let existing = s.get(stream).copied();
+                let util = s.utilization();
+                let cap = MAX_PERIOD_CYCLES * hrt_slots as u32;
+                let len = s.len();
+                let res = s.register(stream, cycles);
+                match (Period::from_cycles(cycles), res) {
+                    (Err(_), r) => prop_assert_eq!(r, Err(Reject::NotHarmonic)),
+                    (Ok(per), Ok(ph)) => {
+                        prop_assert!((ph.offset as u32) < per.cycles());
+                        prop_assert!(ph.slot >= 1 && ph.slot <= hrt_slots);
+                        match existing {
+                            Some(e) => prop_assert_eq!(e.phase, ph),
+                            None => prop_assert!(util + (256 >> per.log2()) <= cap),
+                        }
+                        prop_assert_eq!(s.get(stream).map(|r| r.phase), Some(ph));
+                    }
+                    (Ok(per), Err(Reject::Conflict)) => {
+                        prop_assert!(existing.is_some_and(|e| e.period != per));
+                    }
+                    (Ok(per), Err(Reject::Full)) => {
+                        prop_assert!(existing.is_none());
+                        prop_assert!(len == 10 || util + (256 >> per.log2()) > cap);
+                    }
+                    (Ok(per), Err(Reject::NoFreePhase)) => {
+                        prop_assert!(existing.is_none());
+                        prop_assert!(util + (256 >> per.log2()) <= cap);
+                        prop_assert!(!some_phase_free(&s, per));
+                    }
+                    (_, Err(e)) => prop_assert!(false, "unexpected {:?}", e),
+                }
+                check_calendar(&s);
+            }
+        }
+
+        #[test]
+        fn without_removals_admission_is_the_utilization_test(
+            hrt_slots in 1u8..=3,
+            periods in proptest::collection::vec(0u32..=8, 1..40),
+        ) {
+            let mut s = Scheduler::<64>::new(hrt_slots);
+            let mut admitted: Vec<u32> = Vec::new();
+            for (i, k) in periods.into_iter().enumerate() {
+                let need = 256 >> k;
+                let fits = admitted.iter().sum::<u32>() + need <= 256 * hrt_slots as u32;
+                let r = s.register(MessageId(0x400 + i as u16), 1 << k);
+                prop_assert_eq!(r.is_ok(), fits, "{:?}", r);
+                if r.is_ok() {
+                    admitted.push(need);
+                } else {
+                    prop_assert_eq!(r, Err(Reject::Full));
+                }
+            }
+            check_calendar(&s);
+        }
+    }
+}
+
+#[cfg(test)]
+mod vectors {
+    extern crate std;
+    use super::*;
+    use serde::Deserialize;
+    use std::{string::String, vec::Vec};
+
+    #[derive(Deserialize)]
+    struct File {
+        #[allow(dead_code)]
+        description: String,
+        cases: Vec<Case>,
+    }
+
+    #[derive(Deserialize)]
+    struct Case {
+        name: String,
+        hrt_slots: u8,
+        steps: Vec<Step>,
+    }
+
+    #[derive(Deserialize)]
+    struct Accept {
+        offset: u8,
+        slot: u8,
+    }
+
+    #[derive(Deserialize)]
+    struct Step {
+        op: String,
+        stream: Option<u16>,
+        period: Option<u32>,
+        accept: Option<Accept>,
+        reject: Option<String>,
+        removed: Option<bool>,
+        first_cycle: Option<u32>,
+        masks: Option<Vec<String>>,
+    }
+
+    #[test]
+    fn schedule_vectors() {
+        let f: File =
+            serde_json::from_str(include_str!("../../../../tests/vectors/rtcan/schedule.json"))
+                .unwrap();
+        let mut checked = 0;
+        for case in &f.cases {
+            let mut s = Scheduler::<8>::new(case.hrt_slots);
+            for (i, st) in case.steps.iter().enumerate() {
+                let at = (case.name.as_str(), i);
+                match st.op.as_str() {
+                    "register" => {
+                        let r = s.register(MessageId(st.stream.unwrap()), st.period.unwrap());
+                        match (&st.accept, &st.reject) {
+                            (Some(a), None) => {
+                                assert_eq!(
+                                    r,
+                                    Ok(Phase { offset: a.offset, slot: a.slot }),
+                                    "{at:?}"
+                                )
+                            }
+                            (None, Some(why)) => {
+                                let want = match why.as_str() {
+                                    "not_harmonic" => Reject::NotHarmonic,
+                                    "no_free_phase" => Reject::NoFreePhase,
+                                    "full" => Reject::Full,
+                                    "reserved_id" => Reject::ReservedId,
+                                    "conflict" => Reject::Conflict,
+                                    other => panic!("unknown reason {other}"),
+                                };
+                                assert_eq!(r, Err(want), "{at:?}");
+                            }
+                            _ => panic!("bad step {at:?}"),
+                        }
+                    }
+                    "remove" => assert_eq!(
+                        s.remove(MessageId(st.stream.unwrap())).is_some(),
+                        st.removed.unwrap(),
+                        "{at:?}"
+                    ),
+                    "masks" => {
+                        let first = st.first_cycle.unwrap();
+                        for (j, m) in st.masks.as_ref().unwrap().iter().enumerate() {
+                            let want = u64::from_str_radix(m.trim_start_matches("0x"), 16).unwrap();
+                            assert_eq!(
+                                s.mask(first + j as u32),
+                                want,
+                                "{at:?} cycle {}",
+                                first + j as u32
+                            );
+                        }
+                    }
+                    other => panic!("unknown op {other}"),
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 40);
+    }
 }
