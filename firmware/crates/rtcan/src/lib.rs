@@ -25,10 +25,13 @@ pub mod schedule;
 pub mod srt;
 
 pub use controller::{CanController, Micros};
+pub use cycle::{CycleConfig, SlotClock, Sync};
+pub use failover::Failover;
 pub use fragment::{fragments, Expect, Reassembler, ReassemblyStats};
 pub use frame::Frame;
 pub use id::{Class, FrameId, IdError, MessageId};
 pub use laxity::{Laxity, LaxityEncoding};
+pub use schedule::{next_reserved, Period, Phase, Scheduler};
 pub use srt::{Missed, TxQueue, Urgency};
 
 /// The crate's test suite, compiled in for bare-metal runners (feature `selftest`).
