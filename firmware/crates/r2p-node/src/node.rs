@@ -534,14 +534,15 @@ impl<
                 uid: self.config.uid,
                 name: self.name.clone(),
                 state,
-                uptime_s: ((now - boot) / 1_000_000).min(u32::MAX as u64) as u32,
+                uptime_s: (now.saturating_sub(boot) / 1_000_000).min(u32::MAX as u64) as u32,
                 tx_errors: self.errors.tx,
                 rx_errors: self.errors.rx,
                 dropped: self.dropped().min(u16::MAX as u32) as u16,
             };
             if self.send(&hb).is_ok() {
                 self.heartbeats = self.heartbeats.saturating_add(1);
-                self.next_heartbeat = now + Micros::from(self.config.heartbeat_period_us);
+                self.next_heartbeat =
+                    now.saturating_add(Micros::from(self.config.heartbeat_period_us));
             }
         }
 
@@ -615,7 +616,9 @@ impl<
                 };
                 let urgency = match e.class().deadline_us() {
                     None => Urgency::Nrt,
-                    Some(d) => Urgency::Srt { deadline: at.unwrap_or(now) + Micros::from(d) },
+                    Some(d) => {
+                        Urgency::Srt { deadline: at.unwrap_or(now).saturating_add(Micros::from(d)) }
+                    }
                 };
                 if matches!(urgency, Urgency::Srt { deadline } if deadline <= now) {
                     bump(&mut self.stats.deadline_misses);
