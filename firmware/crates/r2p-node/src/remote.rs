@@ -81,10 +81,16 @@ struct Queue<'a, T, const Q: usize> {
 /// Declare it `static` next to the topic, subscribe it to the topic (it reserves `Q + 1` pool
 /// slots, like a local subscriber with a queue of `Q`) and export it on the [`Node`](crate::Node):
 ///
-/// ```ignore
+/// ```
+/// # use r2p_middleware::{pool_size, Class, Publisher, Topic};
+/// # use r2p_node::{NoParams, Node, NodeConfig, RemoteSubscriber};
+/// # static SPEED: Topic<'static, u32, { pool_size(&[4], 1) }, 1> = Topic::new("speed", 0);
+/// # static SPEED_PUB: Publisher<'static, u32> = Publisher::new(&SPEED, Class::NonRealTime);
+/// # let mut node: Node<'static, 1, 1, 16, 2, 64> =
+/// #     Node::new(NodeConfig::new([0; 12], "sensor"), &NoParams).unwrap();
 /// static SPEED_OUT: RemoteSubscriber<'static, u32, 4> = RemoteSubscriber::new(&SPEED_PUB);
-/// SPEED.subscribe(&SPEED_OUT)?;
-/// node.export(&SPEED_OUT)?;
+/// SPEED.subscribe(&SPEED_OUT).unwrap();
+/// assert_eq!(node.export(&SPEED_OUT), Ok(1)); // stream 1: message ID = node ID << 8 | 1
 /// ```
 ///
 /// Until a remote module subscribes, published messages are not kept (`deliver` accepts and
@@ -196,11 +202,16 @@ impl<'a, T: Wire + Copy + Send + Sync, const Q: usize> Export for RemoteSubscrib
 /// through `publisher` (an ordinary [`Publisher`] of the local topic, normally
 /// [`Class::NonRealTime`]; the node only ever uses `try_alloc`, so it never waits).
 ///
-/// ```ignore
+/// ```
+/// # use r2p_middleware::{pool_size, Class, Publisher, Topic};
+/// # use r2p_node::{NoParams, Node, NodeConfig, RemotePublisher};
+/// # static SPEED: Topic<'static, u32, { pool_size(&[4], 1) }, 1> = Topic::new("speed", 0);
+/// # let mut node: Node<'static, 1, 1, 16, 2, 64> =
+/// #     Node::new(NodeConfig::new([0; 12], "motor"), &NoParams).unwrap();
 /// static SPEED_IN_PUB: Publisher<'static, u32> = Publisher::new(&SPEED, Class::NonRealTime);
 /// static SPEED_IN: RemotePublisher<'static, u32> = RemotePublisher::new(&SPEED_IN_PUB, &SPEED);
-/// SPEED.advertise(&SPEED_IN_PUB)?;
-/// node.import(&SPEED_IN)?;
+/// SPEED.advertise(&SPEED_IN_PUB).unwrap();
+/// assert_eq!(node.import(&SPEED_IN), Ok(0));
 /// ```
 pub struct RemotePublisher<'a, T> {
     publisher: &'a Publisher<'a, T>,

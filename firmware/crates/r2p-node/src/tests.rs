@@ -258,6 +258,29 @@ r2p_testkit::suite! {
         assert!(matches!(TestNode::new(config(1, "tab\t"), &NoParams), Err(NodeError::BadName)));
     }
 
+    fn with_a_clock_the_deadline_counts_from_publication() {
+        static CLOCK: AtomicU32 = AtomicU32::new(0);
+        fn clock() -> rtcan::Micros {
+            rtcan::Micros::from(CLOCK.load(Relaxed))
+        }
+        static T: Topic<'static, u8, { pool_size(&[2], 1) }, 1> = Topic::new("bump", 0);
+        static P: Publisher<'static, u8> = Publisher::new(&T, Class::AsyncRealTime { deadline_us: 3_000 });
+        static OUT: RemoteSubscriber<'static, u8, 2> = RemoteSubscriber::with_clock(&P, clock);
+        T.subscribe(&OUT).unwrap();
+        OUT.activate(2);
+        let bus = Bus::<1>::new();
+        let mut a = TestNode::new(config(1, "a"), &NoParams).unwrap();
+        a.export(&OUT).unwrap();
+        run(&bus, &mut [&mut a], 10_000);
+        CLOCK.store(10_000, Relaxed);
+        P.publish_with(|m| *m = 1).unwrap(); // published at 10 ms, due at 13 ms
+        CLOCK.store(11_000, Relaxed);
+        P.publish_with(|m| *m = 2).unwrap(); // due at 14 ms
+        a.tick(13_500); // the node only looks at 13.5 ms: the first is late, the second goes
+        assert_eq!((a.stats().deadline_misses, a.stats().queued), (1, 1));
+        assert_eq!(P.stats().deadline_misses, 1);
+    }
+
     fn a_missed_deadline_is_reported_to_the_publisher() {
         static A_T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("alarm", 0);
         static A_PUB: Publisher<'static, u32> =
