@@ -1,0 +1,51 @@
+//! The R2P node runtime: local and remote topics are one API.
+//!
+//! A module's [`Node`] connects its middleware topics to the CAN bus through RTCAN and runs
+//! the management protocol (docs/middleware.md, "Remote topics: the node runtime"):
+//!
+//! - a local topic is offered on the bus by subscribing a [`RemoteSubscriber`] to it and
+//!   [`Node::export`]ing it: while a remote module is subscribed, every publication is encoded
+//!   ([`Wire`]) and queued in the RTCAN transmit queue with the publisher's class;
+//! - a remote topic is received by [`Node::import`]ing a [`RemotePublisher`] of the local topic
+//!   of the same name: frames are reassembled, decoded and published locally, so local
+//!   subscribers cannot tell the difference;
+//! - the management protocol claims a node ID, sends heartbeats, advertises exports, asks for
+//!   imports when they are advertised (same name and type hash), answers subscription,
+//!   reboot and parameter requests ([`ParamStore`]).
+//!
+//! Sans-IO: drive it with [`Node::poll`]`(now, &mut controller)` on a module, on an emulated
+//! bus in virtual time, or in tests. `no_std`, no heap: capacities are const generics.
+#![no_std]
+#![warn(missing_docs)]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod node;
+pub mod params;
+pub mod remote;
+pub mod wire;
+
+#[cfg(test)]
+mod host_tests;
+#[cfg(any(test, feature = "selftest"))]
+mod testbus;
+#[cfg(any(test, feature = "selftest"))]
+mod tests;
+
+pub use node::{Event, ImportState, Node, NodeConfig, NodeError, NodeStats};
+pub use params::{NoParams, Param, ParamStore, RamParams};
+pub use remote::{Export, Import, ImportError, RemotePublisher, RemoteSubscriber};
+pub use wire::{Wire, WireError};
+
+/// The crate's test suite, compiled in for bare-metal runners (feature `selftest`).
+#[cfg(any(test, feature = "selftest"))]
+pub mod selftest {
+    /// Every suite of the crate, in the order a runner should run them.
+    pub const ALL: &[&[r2p_testkit::Case]] = &[
+        crate::wire::tests::SUITE,
+        crate::params::tests::SUITE,
+        crate::remote::tests::SUITE,
+        crate::tests::SUITE,
+    ];
+}

@@ -1,0 +1,157 @@
+//! Parameters reached over the bus (PARAM_GET / PARAM_SET): typed values, checked by the store.
+
+use core::cell::RefCell;
+
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::blocking_mutex::Mutex;
+use r2p_management::message::{ParamFault, Value};
+
+/// Where a module keeps its parameters. The node answers PARAM_GET and PARAM_SET through it.
+///
+/// The store decides what is valid: `set` checks the index, the value's type, writability and
+/// range, and on any error changes nothing. Methods take `&self` (use interior mutability) so
+/// the application can read its parameters while the node holds the store.
+pub trait ParamStore {
+    /// The current value of parameter `index`.
+    fn get(&self, index: u16) -> Result<Value, ParamFault>;
+    /// Checks `value` and, if valid, applies it; returns the value now held.
+    /// On error the old value stays.
+    fn set(&self, index: u16, value: Value) -> Result<Value, ParamFault>;
+}
+
+/// A module without parameters: every index is unknown.
+pub struct NoParams;
+
+impl ParamStore for NoParams {
+    fn get(&self, _index: u16) -> Result<Value, ParamFault> {
+        Err(ParamFault::UnknownIndex)
+    }
+    fn set(&self, _index: u16, _value: Value) -> Result<Value, ParamFault> {
+        Err(ParamFault::UnknownIndex)
+    }
+}
+
+/// One parameter of a [`RamParams`]: its value, range and whether the bus may set it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Param {
+    /// A name for tools and logs (not sent on the bus).
+    pub name: &'static str,
+    /// Current value; its variant is the parameter's type.
+    pub value: Value,
+    /// Smallest accepted value (same variant; ignored for `Bool`).
+    pub min: Value,
+    /// Largest accepted value (same variant; ignored for `Bool`).
+    pub max: Value,
+    /// Whether PARAM_SET may change it.
+    pub writable: bool,
+}
+
+impl Param {
+    /// A `u32` parameter in `min..=max`.
+    pub const fn u32(name: &'static str, value: u32, min: u32, max: u32) -> Self {
+        Self::new(name, Value::U32(value), Value::U32(min), Value::U32(max))
+    }
+    /// An `i32` parameter in `min..=max`.
+    pub const fn i32(name: &'static str, value: i32, min: i32, max: i32) -> Self {
+        Self::new(name, Value::I32(value), Value::I32(min), Value::I32(max))
+    }
+    /// An `f32` parameter in `min..=max` (NaN is always out of range).
+    pub const fn f32(name: &'static str, value: f32, min: f32, max: f32) -> Self {
+        Self::new(name, Value::F32(value), Value::F32(min), Value::F32(max))
+    }
+    /// A `bool` parameter.
+    pub const fn bool(name: &'static str, value: bool) -> Self {
+        Self::new(name, Value::Bool(value), Value::Bool(false), Value::Bool(true))
+    }
+    /// The same parameter, not settable over the bus.
+    pub const fn read_only(mut self) -> Self {
+        self.writable = false;
+        self
+    }
+
+    const fn new(name: &'static str, value: Value, min: Value, max: Value) -> Self {
+        Self { name, value, min, max, writable: true }
+    }
+
+    /// Whether `v` is acceptable for this parameter.
+    pub fn check(&self, v: Value) -> Result<(), ParamFault> {
+        let in_range = match (self.min, v, self.max) {
+            (Value::Bool(_), Value::Bool(_), Value::Bool(_)) => true,
+            (Value::U32(a), Value::U32(x), Value::U32(b)) => a <= x && x <= b,
+            (Value::I32(a), Value::I32(x), Value::I32(b)) => a <= x && x <= b,
+            // NaN compares false: out of range.
+            (Value::F32(a), Value::F32(x), Value::F32(b)) => a <= x && x <= b,
+            _ => return Err(ParamFault::WrongType),
+        };
+        if !self.writable {
+            Err(ParamFault::ReadOnly)
+        } else if in_range {
+            Ok(())
+        } else {
+            Err(ParamFault::OutOfRange)
+        }
+    }
+}
+
+/// `N` parameters in RAM, indexed 0..N (for tests and modules without persistence; flash
+/// persistence wraps a store like this in the module firmware).
+pub struct RamParams<const N: usize> {
+    params: Mutex<CriticalSectionRawMutex, RefCell<[Param; N]>>,
+}
+
+impl<const N: usize> RamParams<N> {
+    /// A store holding `params` (index = position).
+    pub const fn new(params: [Param; N]) -> Self {
+        Self { params: Mutex::new(RefCell::new(params)) }
+    }
+
+    /// Parameter `index`, as the application reads it.
+    pub fn param(&self, index: u16) -> Option<Param> {
+        self.params.lock(|p| p.borrow().get(usize::from(index)).copied())
+    }
+}
+
+impl<const N: usize> ParamStore for RamParams<N> {
+    fn get(&self, index: u16) -> Result<Value, ParamFault> {
+        self.param(index).map(|p| p.value).ok_or(ParamFault::UnknownIndex)
+    }
+
+    fn set(&self, index: u16, value: Value) -> Result<Value, ParamFault> {
+        self.params.lock(|p| {
+            let mut p = p.borrow_mut();
+            let param = p.get_mut(usize::from(index)).ok_or(ParamFault::UnknownIndex)?;
+            param.check(value)?;
+            param.value = value;
+            Ok(value)
+        })
+    }
+}
+
+#[cfg(any(test, feature = "selftest"))]
+pub(crate) mod tests {
+    use super::*;
+
+    r2p_testkit::suite! {
+        fn ram_params_check_type_range_and_writability() {
+            let p = RamParams::new([
+                Param::u32("rate_hz", 100, 1, 1000),
+                Param::f32("gain", 0.5, 0.0, 2.0),
+                Param::i32("offset", 0, -10, 10).read_only(),
+                Param::bool("enabled", true),
+            ]);
+            assert_eq!(p.get(0), Ok(Value::U32(100)));
+            assert_eq!(p.set(0, Value::U32(1001)), Err(ParamFault::OutOfRange));
+            assert_eq!(p.set(0, Value::I32(5)), Err(ParamFault::WrongType));
+            assert_eq!(p.get(0), Ok(Value::U32(100)), "refused values are not applied");
+            assert_eq!(p.set(0, Value::U32(1000)), Ok(Value::U32(1000)));
+            assert_eq!(p.set(1, Value::F32(f32::NAN)), Err(ParamFault::OutOfRange));
+            assert_eq!(p.set(1, Value::F32(-0.1)), Err(ParamFault::OutOfRange));
+            assert_eq!(p.set(2, Value::I32(1)), Err(ParamFault::ReadOnly));
+            assert_eq!(p.set(3, Value::Bool(false)), Ok(Value::Bool(false)));
+            assert_eq!(p.get(4), Err(ParamFault::UnknownIndex));
+            assert_eq!(p.set(4, Value::Bool(false)), Err(ParamFault::UnknownIndex));
+            assert_eq!(NoParams.get(0), Err(ParamFault::UnknownIndex));
+            assert_eq!(p.param(3).unwrap().name, "enabled");
+        }
+    }
+}
