@@ -20,6 +20,7 @@ PLOT = ROOT / "docs" / "img" / "bench-pubsub-cortex-m3.png"
 # 86 600 msg/s ≈ 830 cycles per message.
 PAPER_CYCLES_1_SUB = 72_000_000 / 86_600
 TARGET_INSN_1_SUB = 400
+FOOTPRINT_GOAL = (24 * 1024, 6 * 1024)  # RTCAN + middleware + executor on the STM32F103
 
 
 def json_lines(text: str) -> list[dict]:
@@ -95,6 +96,7 @@ def main() -> int:
             elf = ROOT / firmware.IMAGES_DIR / f"{img.name}.elf"
             rows.append((img, firmware.size_of(elf) if elf.exists() else None))
     print(firmware.table(rows))
+    print(f"goal for the F103 core: ≤ {FOOTPRINT_GOAL[0] // 1024} KiB flash, ≤ {FOOTPRINT_GOAL[1] // 1024} KiB static RAM")
 
     plot(m3)
     print(f"\nplot: {PLOT.relative_to(ROOT)}")
