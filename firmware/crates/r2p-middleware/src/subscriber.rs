@@ -1,12 +1,13 @@
 //! Subscribers: a queue of message handles to wait on or poll, or a callback run on publish.
 
-use core::cell::Cell;
-use core::future::Future;
+use core::cell::RefCell;
+use core::future::{poll_fn, Future};
+use core::task::Poll;
 
 use embassy_futures::select::{select, Either};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
-use embassy_sync::channel::Channel;
+use embassy_sync::waitqueue::WakerRegistration;
 
 use crate::pool::Msg;
 use crate::topic::Sink;
@@ -23,25 +24,88 @@ pub struct Timeout;
 /// keeps the older ones it has not read; the publisher and the other subscribers are not
 /// affected. So a subscriber sees a subsequence of the publications, in publication order.
 pub struct Subscriber<'a, T, const Q: usize> {
-    queue: Channel<CriticalSectionRawMutex, Msg<'a, T>, Q>,
-    missed: Mutex<CriticalSectionRawMutex, Cell<u32>>,
+    queue: Mutex<CriticalSectionRawMutex, RefCell<Queue<'a, T, Q>>>,
+}
+
+/// A fixed ring of message handles, the missed counter and the waiting task: all a
+/// subscriber's state, under one lock so that a delivery is one short critical section.
+struct Queue<'a, T, const Q: usize> {
+    /// `len` handles from `head` on, wrapping around; the other entries are `None`.
+    ring: [Option<Msg<'a, T>>; Q],
+    head: usize,
+    len: usize,
+    missed: u32,
+    /// The task waiting in `recv`, if any.
+    waker: WakerRegistration,
+}
+
+impl<'a, T, const Q: usize> Queue<'a, T, Q> {
+    /// Appends `msg`, or gives it back if the queue is full.
+    #[inline(always)]
+    fn push(&mut self, msg: Msg<'a, T>) -> Result<(), Msg<'a, T>> {
+        if self.len == Q {
+            return Err(msg);
+        }
+        let mut i = self.head + self.len;
+        if i >= Q {
+            i -= Q;
+        }
+        self.ring[i] = Some(msg);
+        self.len += 1;
+        Ok(())
+    }
+
+    /// Takes the oldest handle.
+    #[inline(always)]
+    fn pop(&mut self) -> Option<Msg<'a, T>> {
+        if self.len == 0 {
+            return None;
+        }
+        let msg = self.ring[self.head].take();
+        self.head = if self.head + 1 == Q { 0 } else { self.head + 1 };
+        self.len -= 1;
+        msg
+    }
 }
 
 impl<'a, T, const Q: usize> Subscriber<'a, T, Q> {
     /// An empty subscriber.
     pub const fn new() -> Self {
-        Subscriber { queue: Channel::new(), missed: Mutex::new(Cell::new(0)) }
+        Subscriber {
+            queue: Mutex::new(RefCell::new(Queue {
+                ring: [const { None }; Q],
+                head: 0,
+                len: 0,
+                missed: 0,
+                waker: WakerRegistration::new(),
+            })),
+        }
+    }
+
+    #[inline(always)]
+    fn with<R>(&self, f: impl FnOnce(&mut Queue<'a, T, Q>) -> R) -> R {
+        self.queue.lock(|q| f(&mut q.borrow_mut()))
     }
 
     /// Waits for the next message. The future is cancel-safe: drop it (for instance because a
     /// timeout or another subscriber won an `embassy_futures::select`) and no message is lost.
     pub fn recv(&self) -> impl Future<Output = Msg<'a, T>> + '_ {
-        self.queue.receive()
+        // Holds nothing between polls: a message stays queued until a poll returns it.
+        poll_fn(move |cx| {
+            self.with(|q| match q.pop() {
+                Some(msg) => Poll::Ready(msg),
+                None => {
+                    q.waker.register(cx.waker());
+                    Poll::Pending
+                }
+            })
+        })
     }
 
     /// The next message if one is queued, without waiting (polling).
+    #[inline]
     pub fn try_recv(&self) -> Option<Msg<'a, T>> {
-        self.queue.try_receive().ok()
+        self.with(Queue::pop)
     }
 
     /// Waits for the next message or until `timeout` completes, whichever is first.
@@ -58,17 +122,17 @@ impl<'a, T, const Q: usize> Subscriber<'a, T, Q> {
 
     /// Messages this subscriber missed because its queue was full.
     pub fn missed(&self) -> u32 {
-        self.missed.lock(Cell::get)
+        self.with(|q| q.missed)
     }
 
     /// Messages waiting in the queue.
     pub fn len(&self) -> usize {
-        self.queue.len()
+        self.with(|q| q.len)
     }
 
     /// Whether no message is waiting.
     pub fn is_empty(&self) -> bool {
-        self.queue.is_empty()
+        self.len() == 0
     }
 }
 
@@ -79,16 +143,21 @@ impl<T, const Q: usize> Default for Subscriber<'_, T, Q> {
 }
 
 impl<'a, T: Send + Sync, const Q: usize> Sink<'a, T> for Subscriber<'a, T, Q> {
+    #[inline]
     fn deliver(&self, msg: Msg<'a, T>) -> bool {
-        match self.queue.try_send(msg) {
-            Ok(()) => true,
-            Err(_full) => {
-                // `_full` holds the handle back; it drops here, releasing this subscriber's
-                // reference to the slot.
-                self.missed.lock(|m| m.set(m.get().wrapping_add(1)));
-                false
+        let refused = self.with(|q| match q.push(msg) {
+            Ok(()) => {
+                q.waker.wake();
+                None
             }
-        }
+            Err(msg) => {
+                q.missed = q.missed.wrapping_add(1);
+                Some(msg)
+            }
+        });
+        // A refused handle drops here, outside the lock, releasing this subscriber's
+        // reference to the slot.
+        refused.is_none()
     }
 
     fn queue_len(&self) -> usize {

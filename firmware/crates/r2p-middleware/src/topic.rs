@@ -5,8 +5,8 @@ use core::cell::RefCell;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 
-use crate::pool::{Msg, Pool, RawPool};
-use crate::publisher::Publisher;
+use crate::pool::{Msg, MsgMut, Pool, Slot};
+use crate::publisher::{Delivery, Publisher};
 use crate::Error;
 
 /// Where a topic delivers its messages: a local [`Subscriber`](crate::Subscriber) queue, a
@@ -49,9 +49,9 @@ pub trait TopicInfo: Sync {
 
 /// The typed face of a topic that publishers use, erasing its pool and list sizes.
 pub(crate) trait TopicCore<'a, T>: TopicInfo {
-    fn pool(&self) -> &dyn RawPool<T>;
-    /// Calls `f` with each subscriber, outside the topic's lock (a callback may publish).
-    fn for_each_sink(&self, f: &mut dyn FnMut(&'a dyn Sink<'a, T>));
+    /// Publishes `draft`: one handle to each subscriber, each sink called outside the topic's
+    /// lock (a callback may publish).
+    fn publish(&self, draft: MsgMut<'a, T>) -> Delivery;
     fn reserve_publisher(&self) -> Result<(), Error>;
 }
 
@@ -69,7 +69,7 @@ struct Links<'a, T, const SUBS: usize> {
 /// every subscriber.
 pub struct Topic<'a, T, const SLOTS: usize, const SUBS: usize> {
     name: &'static str,
-    pool: Pool<T, SLOTS>,
+    pool: Pool<[Slot<T>; SLOTS]>,
     links: Mutex<CriticalSectionRawMutex, RefCell<Links<'a, T, SUBS>>>,
 }
 
@@ -108,6 +108,11 @@ impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a,
         })
     }
 
+    /// The pool, without its size, for the topic's publishers.
+    pub(crate) const fn pool(&self) -> &Pool<[Slot<T>]> {
+        &self.pool
+    }
+
     /// Registers `publisher` (made with [`Publisher::new`] on this topic): reserves the slot
     /// its draft occupies, so the sizing rule covers it. Mirrors the paper's
     /// `node.advertise(&pub)`.
@@ -133,7 +138,7 @@ where
         SLOTS
     }
     fn free_slots(&self) -> usize {
-        self.pool.free()
+        self.pool().free()
     }
     fn reserved_slots(&self) -> usize {
         self.links.lock(|l| l.borrow().reserved)
@@ -156,18 +161,25 @@ impl<'a, T, const SLOTS: usize, const SUBS: usize> TopicCore<'a, T> for Topic<'a
 where
     T: Copy + Send + Sync,
 {
-    fn pool(&self) -> &dyn RawPool<T> {
-        &self.pool
-    }
-
-    fn for_each_sink(&self, f: &mut dyn FnMut(&'a dyn Sink<'a, T>)) {
+    fn publish(&self, draft: MsgMut<'a, T>) -> Delivery {
+        // The subscriber list as it is now (subscriptions only ever grow), copied so that the
+        // sinks run outside the lock.
         let (sinks, count) = self.links.lock(|l| {
             let l = l.borrow();
             (l.sinks, l.count)
         });
-        for s in sinks[..count].iter().flatten() {
-            f(*s);
+        // One handle per subscriber, counted into the slot at once: no per-subscriber clone.
+        // A sink that refuses drops its handle, which takes it off the count again; a message
+        // nobody accepted is free once the last sink has refused it.
+        let mut d = Delivery::default();
+        for (sink, msg) in sinks[..count].iter().flatten().zip(draft.share(count)) {
+            if sink.deliver(msg) {
+                d.delivered += 1;
+            } else {
+                d.missed += 1;
+            }
         }
+        d
     }
 
     fn reserve_publisher(&self) -> Result<(), Error> {
