@@ -336,11 +336,78 @@ impl<T: fmt::Debug> fmt::Debug for MsgMut<'_, T> {
 
 #[cfg(any(test, feature = "selftest"))]
 pub(crate) mod tests {
-    use crate::{Class, Publisher, Subscriber, Topic, TopicInfo};
+    use crate::{pool_size, Class, Publisher, Subscriber, Topic, TopicInfo};
+    use core::pin::pin;
+    use core::sync::atomic::Ordering;
+    use core::task::Poll;
+    use embassy_futures::poll_once;
 
     const NRT: Class = Class::NonRealTime;
 
+    /// Handles counted in the slot `m` refers to.
+    fn refs(m: &super::Msg<'_, u32>) -> u32 {
+        m.slot.refs.load(Ordering::Relaxed)
+    }
+
     r2p_testkit::suite! {
+        fn publishing_counts_exactly_one_handle_per_accepting_subscriber() {
+            static T: Topic<'static, u32, { pool_size(&[1; 4], 1) }, 4> = Topic::new("t", 0);
+            static P: Publisher<'static, u32> = Publisher::new(&T, NRT);
+            static S: [Subscriber<'static, u32, 1>; 4] = [const { Subscriber::new() }; 4];
+            T.advertise(&P).unwrap();
+            for s in &S {
+                T.subscribe(s).unwrap();
+            }
+            let d = P.publish_with(|m| *m = 1).unwrap();
+            assert_eq!((d.delivered, d.missed), (4, 0));
+            let first = S[2].try_recv().unwrap();
+            assert_eq!(refs(&first), 4, "one per subscriber, none left over by publish");
+            drop(S[3].try_recv());
+            assert_eq!(refs(&first), 3);
+            // S[0] and S[1] still queue the first message: they are full and refuse the second.
+            let d = P.publish_with(|m| *m = 2).unwrap();
+            assert_eq!((d.delivered, d.missed), (2, 2));
+            let second = S[2].try_recv().unwrap();
+            assert_eq!(*second, 2);
+            assert_eq!(refs(&second), 2, "the refused handles were dropped, not counted");
+            assert_eq!(refs(&first), 3, "the first message is untouched by the second");
+            assert_eq!(S.each_ref().map(|s| s.missed()), [1, 1, 0, 0]);
+            assert_eq!(P.stats().missed_deliveries, 2);
+            assert_eq!(T.free_slots(), T.capacity() - 2);
+            drop((first, second));
+            for s in &S {
+                while s.try_recv().is_some() {}
+            }
+            assert_eq!(T.free_slots(), T.capacity());
+        }
+
+        fn a_message_every_queue_refuses_is_free_at_once_for_a_waiting_alloc() {
+            // Not advertised: the drafts may use the whole pool.
+            static T: Topic<'static, u32, 4, 2> = Topic::new("t", 0);
+            static P: Publisher<'static, u32> = Publisher::new(&T, NRT);
+            static A: Subscriber<'static, u32, 1> = Subscriber::new();
+            static B: Subscriber<'static, u32, 1> = Subscriber::new();
+            T.subscribe(&A).unwrap();
+            T.subscribe(&B).unwrap();
+            P.publish_with(|m| *m = 1).unwrap(); // both queues full now
+            let held = [P.try_alloc().unwrap(), P.try_alloc().unwrap()];
+            let mut last = P.try_alloc().unwrap();
+            *last = 2;
+            assert_eq!(T.free_slots(), 0);
+            let mut waiting = pin!(P.alloc());
+            assert!(poll_once(waiting.as_mut()).is_pending());
+            let d = P.publish(last);
+            assert_eq!((d.delivered, d.missed), (0, 2));
+            assert_eq!(T.free_slots(), 1, "nobody took a handle: the slot is free again");
+            match poll_once(waiting.as_mut()) {
+                Poll::Ready(m) => assert_eq!(*m, 2, "the waiting alloc got that very slot"),
+                Poll::Pending => panic!("alloc still waiting after the slot was freed"),
+            }
+            assert_eq!((A.missed(), B.missed()), (1, 1));
+            assert_eq!(*A.try_recv().unwrap(), 1);
+            drop(held);
+        }
+
         fn slot_returns_to_pool_only_when_the_last_subscriber_drops_it() {
             static T: Topic<'static, u32, 5, 2> = Topic::new("t", 0);
             static P: Publisher<'static, u32> = Publisher::new(&T, NRT);

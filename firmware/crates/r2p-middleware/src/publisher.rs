@@ -419,6 +419,27 @@ mod host_tests {
     }
 
     #[test]
+    fn a_waiting_alloc_is_woken_when_every_subscriber_refuses_the_message() {
+        static T: Topic<'static, u32, 2, 1> = Topic::new("t", 0);
+        static P: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
+        static S: Subscriber<'static, u32, 1> = Subscriber::new();
+        T.subscribe(&S).unwrap();
+        P.publish_with(|m| *m = 1).unwrap(); // S is full
+        let draft = P.try_alloc().unwrap();
+        let count = Arc::new(Count(AtomicUsize::new(0)));
+        let waker = Waker::from(count.clone());
+        let mut cx = Context::from_waker(&waker);
+        let mut fut = std::pin::pin!(P.alloc());
+        assert!(fut.as_mut().poll(&mut cx).is_pending());
+        assert_eq!(P.publish(draft).missed, 1);
+        assert_eq!(count.0.load(Ordering::SeqCst), 1, "the refused message's slot woke alloc");
+        assert!(fut.as_mut().poll(&mut cx).is_ready());
+        // With nobody waiting, freeing a slot wakes nobody (and takes no lock).
+        drop(S.try_recv());
+        assert_eq!(count.0.load(Ordering::SeqCst), 1);
+    }
+
+    #[test]
     fn a_waiting_alloc_is_woken_when_a_slot_is_freed_not_before() {
         static T: Topic<'static, u32, 2, 1> = Topic::new("t", 0);
         static P: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
