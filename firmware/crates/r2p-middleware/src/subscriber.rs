@@ -1,13 +1,12 @@
 //! Subscribers: a queue of message handles to wait on or poll, or a callback run on publish.
 
-use core::cell::RefCell;
+use core::cell::Cell;
 use core::future::{poll_fn, Future};
-use core::task::Poll;
+use core::task::{Poll, Waker};
 
 use embassy_futures::select::{select, Either};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
-use embassy_sync::waitqueue::WakerRegistration;
 
 use crate::pool::Msg;
 use crate::topic::Sink;
@@ -24,46 +23,73 @@ pub struct Timeout;
 /// keeps the older ones it has not read; the publisher and the other subscribers are not
 /// affected. So a subscriber sees a subsequence of the publications, in publication order.
 pub struct Subscriber<'a, T, const Q: usize> {
-    queue: Mutex<CriticalSectionRawMutex, RefCell<Queue<'a, T, Q>>>,
+    queue: Mutex<CriticalSectionRawMutex, Queue<'a, T, Q>>,
 }
 
 /// A fixed ring of message handles, the missed counter and the waiting task: all a
 /// subscriber's state, under one lock so that a delivery is one short critical section.
+/// (`Cell`s: the lock gives shared access only, and no borrow flag is needed.)
 struct Queue<'a, T, const Q: usize> {
     /// `len` handles from `head` on, wrapping around; the other entries are `None`.
-    ring: [Option<Msg<'a, T>>; Q],
-    head: usize,
-    len: usize,
-    missed: u32,
+    ring: [Cell<Option<Msg<'a, T>>>; Q],
+    head: Cell<usize>,
+    len: Cell<usize>,
+    missed: Cell<u32>,
     /// The task waiting in `recv`, if any.
-    waker: WakerRegistration,
+    waker: Cell<Option<Waker>>,
 }
 
 impl<'a, T, const Q: usize> Queue<'a, T, Q> {
     /// Appends `msg`, or gives it back if the queue is full.
     #[inline(always)]
-    fn push(&mut self, msg: Msg<'a, T>) -> Result<(), Msg<'a, T>> {
-        if self.len == Q {
+    fn push(&self, msg: Msg<'a, T>) -> Result<(), Msg<'a, T>> {
+        let len = self.len.get();
+        if len >= Q {
             return Err(msg);
         }
-        let mut i = self.head + self.len;
+        let mut i = self.head.get() + len;
         if i >= Q {
             i -= Q;
         }
-        self.ring[i] = Some(msg);
-        self.len += 1;
+        self.ring[i].set(Some(msg));
+        self.len.set(len + 1);
         Ok(())
+    }
+
+    /// Registers the waker of a task waiting in `recv`, with embassy's `WakerRegistration`
+    /// policy: a waker for the same task is kept; one for another task replaces it, and the
+    /// task it replaced is woken so that it can register again.
+    fn register(&self, w: &Waker) {
+        match self.waker.take() {
+            Some(old) if old.will_wake(w) => self.waker.set(Some(old)),
+            old => {
+                self.waker.set(Some(w.clone()));
+                if let Some(old) = old {
+                    old.wake();
+                }
+            }
+        }
+    }
+
+    /// Wakes the task waiting in `recv`, if any.
+    #[inline(always)]
+    fn wake(&self) {
+        if let Some(w) = self.waker.take() {
+            w.wake();
+        }
     }
 
     /// Takes the oldest handle.
     #[inline(always)]
-    fn pop(&mut self) -> Option<Msg<'a, T>> {
-        if self.len == 0 {
+    fn pop(&self) -> Option<Msg<'a, T>> {
+        let len = self.len.get();
+        if len == 0 {
             return None;
         }
-        let msg = self.ring[self.head].take();
-        self.head = if self.head + 1 == Q { 0 } else { self.head + 1 };
-        self.len -= 1;
+        let head = self.head.get();
+        let msg = self.ring[head].take();
+        self.head.set(if head + 1 >= Q { 0 } else { head + 1 });
+        self.len.set(len - 1);
         msg
     }
 }
@@ -72,19 +98,19 @@ impl<'a, T, const Q: usize> Subscriber<'a, T, Q> {
     /// An empty subscriber.
     pub const fn new() -> Self {
         Subscriber {
-            queue: Mutex::new(RefCell::new(Queue {
-                ring: [const { None }; Q],
-                head: 0,
-                len: 0,
-                missed: 0,
-                waker: WakerRegistration::new(),
-            })),
+            queue: Mutex::new(Queue {
+                ring: [const { Cell::new(None) }; Q],
+                head: Cell::new(0),
+                len: Cell::new(0),
+                missed: Cell::new(0),
+                waker: Cell::new(None),
+            }),
         }
     }
 
     #[inline(always)]
-    fn with<R>(&self, f: impl FnOnce(&mut Queue<'a, T, Q>) -> R) -> R {
-        self.queue.lock(|q| f(&mut q.borrow_mut()))
+    fn with<R>(&self, f: impl FnOnce(&Queue<'a, T, Q>) -> R) -> R {
+        self.queue.lock(f)
     }
 
     /// Waits for the next message. The future is cancel-safe: drop it (for instance because a
@@ -95,7 +121,7 @@ impl<'a, T, const Q: usize> Subscriber<'a, T, Q> {
             self.with(|q| match q.pop() {
                 Some(msg) => Poll::Ready(msg),
                 None => {
-                    q.waker.register(cx.waker());
+                    q.register(cx.waker());
                     Poll::Pending
                 }
             })
@@ -122,12 +148,12 @@ impl<'a, T, const Q: usize> Subscriber<'a, T, Q> {
 
     /// Messages this subscriber missed because its queue was full.
     pub fn missed(&self) -> u32 {
-        self.with(|q| q.missed)
+        self.with(|q| q.missed.get())
     }
 
     /// Messages waiting in the queue.
     pub fn len(&self) -> usize {
-        self.with(|q| q.len)
+        self.with(|q| q.len.get())
     }
 
     /// Whether no message is waiting.
@@ -147,11 +173,11 @@ impl<'a, T: Send + Sync, const Q: usize> Sink<'a, T> for Subscriber<'a, T, Q> {
     fn deliver(&self, msg: Msg<'a, T>) -> bool {
         let refused = self.with(|q| match q.push(msg) {
             Ok(()) => {
-                q.waker.wake();
+                q.wake();
                 None
             }
             Err(msg) => {
-                q.missed = q.missed.wrapping_add(1);
+                q.missed.set(q.missed.get().wrapping_add(1));
                 Some(msg)
             }
         });
@@ -324,5 +350,51 @@ pub(crate) mod tests {
             let rest = [S.try_recv(), S.try_recv()].map(|m| *m.unwrap());
             assert_eq!(rest, [1, 5]);
         }
+    }
+}
+
+#[cfg(test)]
+mod host_tests {
+    use super::*;
+    use crate::{Class, Publisher, Topic};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    use std::task::{Context, Wake};
+
+    struct Count(AtomicUsize);
+    impl Wake for Count {
+        fn wake(self: Arc<Self>) {
+            self.0.fetch_add(1, Ordering::SeqCst);
+        }
+    }
+
+    fn counter() -> (Arc<Count>, Waker) {
+        let c = Arc::new(Count(AtomicUsize::new(0)));
+        (c.clone(), Waker::from(c))
+    }
+
+    #[test]
+    fn recv_wakes_its_task_once_per_delivery_and_hands_over_between_tasks() {
+        static T: Topic<'static, u32, 4, 1> = Topic::new("t", 0);
+        static P: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
+        static S: Subscriber<'static, u32, 2> = Subscriber::new();
+        T.subscribe(&S).unwrap();
+        let ((a, wa), (b, wb)) = (counter(), counter());
+        let mut first = std::pin::pin!(S.recv());
+        let mut second = std::pin::pin!(S.recv());
+        assert!(first.as_mut().poll(&mut Context::from_waker(&wa)).is_pending());
+        assert!(first.as_mut().poll(&mut Context::from_waker(&wa)).is_pending());
+        assert_eq!(a.0.load(Ordering::SeqCst), 0, "the same task registering again: no wake");
+        // Another task waits on the same subscriber: it takes over and the first is woken so
+        // that it can register again (embassy's WakerRegistration policy).
+        assert!(second.as_mut().poll(&mut Context::from_waker(&wb)).is_pending());
+        assert_eq!(a.0.load(Ordering::SeqCst), 1);
+        P.publish_with(|m| *m = 1).unwrap();
+        assert_eq!(b.0.load(Ordering::SeqCst), 1, "a delivery wakes the registered task");
+        P.publish_with(|m| *m = 2).unwrap();
+        assert_eq!(b.0.load(Ordering::SeqCst), 1, "woken once: the waker was consumed");
+        let got = second.as_mut().poll(&mut Context::from_waker(&wb));
+        assert!(matches!(got, Poll::Ready(ref m) if **m == 1));
+        assert_eq!(*S.try_recv().unwrap(), 2);
     }
 }
