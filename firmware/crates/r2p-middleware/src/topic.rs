@@ -1,6 +1,6 @@
 //! Named topics: a message pool plus the list of subscribers that published messages go to.
 
-use core::cell::RefCell;
+use core::cell::{Cell, RefCell};
 
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
@@ -55,10 +55,12 @@ pub(crate) trait TopicCore<'a, T>: TopicInfo {
     fn reserve_publisher(&self) -> Result<(), Error>;
 }
 
+/// The subscriber list, under the topic's lock (`Cell`s: no borrow flag to check).
 struct Links<'a, T, const SUBS: usize> {
-    sinks: [Option<&'a dyn Sink<'a, T>>; SUBS],
-    count: usize,
-    reserved: usize,
+    /// The first `count` are `Some`.
+    sinks: Cell<[Option<&'a dyn Sink<'a, T>>; SUBS]>,
+    count: Cell<usize>,
+    reserved: Cell<usize>,
 }
 
 /// A named topic of messages of type `T`, with a pool of `SLOTS` messages and room for `SUBS`
@@ -70,7 +72,7 @@ struct Links<'a, T, const SUBS: usize> {
 pub struct Topic<'a, T, const SLOTS: usize, const SUBS: usize> {
     name: &'static str,
     pool: Pool<[Slot<T>; SLOTS]>,
-    links: Mutex<CriticalSectionRawMutex, RefCell<Links<'a, T, SUBS>>>,
+    links: Mutex<CriticalSectionRawMutex, Links<'a, T, SUBS>>,
 }
 
 impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a, T, SLOTS, SUBS> {
@@ -79,7 +81,11 @@ impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a,
         Topic {
             name,
             pool: Pool::new(init),
-            links: Mutex::new(RefCell::new(Links { sinks: [None; SUBS], count: 0, reserved: 0 })),
+            links: Mutex::new(Links {
+                sinks: Cell::new([None; SUBS]),
+                count: Cell::new(0),
+                reserved: Cell::new(0),
+            }),
         }
     }
 
@@ -89,21 +95,21 @@ impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a,
     /// subscribers, or the pool could not keep the promise of the sizing rule with it.
     pub fn subscribe(&self, sink: &'a dyn Sink<'a, T>) -> Result<(), Error> {
         self.links.lock(|l| {
-            let mut l = l.borrow_mut();
-            let count = l.count;
-            if l.sinks[..count].iter().flatten().any(|s| core::ptr::addr_eq(*s, sink)) {
+            let (mut sinks, count) = (l.sinks.get(), l.count.get());
+            if sinks[..count].iter().flatten().any(|s| core::ptr::addr_eq(*s, sink)) {
                 return Err(Error::AlreadySubscribed);
             }
             if count == SUBS {
                 return Err(Error::TooManySubscribers);
             }
-            let needed = l.reserved + sink.reserved_slots();
+            let needed = l.reserved.get() + sink.reserved_slots();
             if needed > SLOTS {
                 return Err(Error::PoolTooSmall { needed, capacity: SLOTS });
             }
-            l.sinks[count] = Some(sink);
-            l.count += 1;
-            l.reserved = needed;
+            sinks[count] = Some(sink);
+            l.sinks.set(sinks);
+            l.count.set(count + 1);
+            l.reserved.set(needed);
             Ok(())
         })
     }
@@ -141,19 +147,14 @@ where
         self.pool().free()
     }
     fn reserved_slots(&self) -> usize {
-        self.links.lock(|l| l.borrow().reserved)
+        self.links.lock(|l| l.reserved.get())
     }
     fn subscriber_count(&self) -> usize {
-        self.links.lock(|l| l.borrow().count)
+        self.links.lock(|l| l.count.get())
     }
     fn max_queue_len(&self) -> usize {
-        let mut max = 0;
-        self.links.lock(|l| {
-            for s in l.borrow().sinks.iter().flatten() {
-                max = max.max(s.queue_len());
-            }
-        });
-        max
+        let sinks = self.links.lock(|l| l.sinks.get());
+        sinks.iter().flatten().map(|s| s.queue_len()).max().unwrap_or(0)
     }
 }
 
@@ -164,19 +165,19 @@ where
     fn publish(&self, draft: MsgMut<'a, T>) -> Delivery {
         // The subscriber list as it is now (subscriptions only ever grow), copied so that the
         // sinks run outside the lock.
-        let (sinks, count) = self.links.lock(|l| {
-            let l = l.borrow();
-            (l.sinks, l.count)
-        });
+        let (sinks, count) = self.links.lock(|l| (l.sinks.get(), l.count.get()));
         // One handle per subscriber, counted into the slot at once: no per-subscriber clone.
         // A sink that refuses drops its handle, which takes it off the count again; a message
         // nobody accepted is free once the last sink has refused it.
         let mut d = Delivery::default();
-        for (sink, msg) in sinks[..count].iter().flatten().zip(draft.share(count)) {
-            if sink.deliver(msg) {
-                d.delivered += 1;
-            } else {
-                d.missed += 1;
+        for (sink, msg) in sinks[..count].iter().zip(draft.share(count)) {
+            // Always `Some` below `count`; were it not, `msg` would just be released.
+            if let Some(sink) = sink {
+                if sink.deliver(msg) {
+                    d.delivered += 1;
+                } else {
+                    d.missed += 1;
+                }
             }
         }
         d
@@ -184,12 +185,11 @@ where
 
     fn reserve_publisher(&self) -> Result<(), Error> {
         self.links.lock(|l| {
-            let mut l = l.borrow_mut();
-            let needed = l.reserved + 1;
+            let needed = l.reserved.get() + 1;
             if needed > SLOTS {
                 return Err(Error::PoolTooSmall { needed, capacity: SLOTS });
             }
-            l.reserved = needed;
+            l.reserved.set(needed);
             Ok(())
         })
     }
