@@ -52,7 +52,10 @@ pub(crate) struct Slot<T> {
 // execution contexts at once: needs `T: Sync`) and `MsgMut` (exclusive `&mut T` in whatever
 // context holds the draft, after which others read it: needs `T: Send`). The state in `refs`,
 // changed only by atomic operations, guarantees that the two never overlap (module docs).
-unsafe impl<T: Send + Sync> Sync for Slot<T> {}
+// Slots are made only by `Pool::new`, which requires `T: Send + Sync`, so the impl needs no
+// bound of its own; without one, the handles are `Send + Sync` for every `T`, as they were
+// when they reached the pool through a `dyn` trait object.
+unsafe impl<T> Sync for Slot<T> {}
 
 impl<T> Slot<T> {
     #[inline(always)]
@@ -91,7 +94,7 @@ pub(crate) struct Pool<S: ?Sized> {
     slots: S,
 }
 
-impl<T: Copy, const N: usize> Pool<[Slot<T>; N]> {
+impl<T: Copy + Send + Sync, const N: usize> Pool<[Slot<T>; N]> {
     /// A pool whose slots all start as copies of `init` (so every slot is always initialised
     /// and a draft can be filled field by field, as in the paper's Listing 1).
     pub(crate) const fn new(init: T) -> Self {
