@@ -132,3 +132,22 @@ pub(crate) mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod host_tests {
+    use super::*;
+
+    /// The auto traits are part of the API: handles, publishers and subscribers are
+    /// `Send + Sync` whatever the message type (only `Topic::new` asks `T: Send + Sync`), so
+    /// generic sinks need no extra bounds to move handles between contexts.
+    #[test]
+    fn handles_publishers_and_subscribers_are_send_and_sync_for_any_message_type() {
+        fn send_sync<X: Send + Sync>() {}
+        type NotSync = core::cell::Cell<u8>;
+        send_sync::<Msg<'static, NotSync>>();
+        send_sync::<MsgMut<'static, NotSync>>();
+        send_sync::<Publisher<'static, NotSync>>();
+        send_sync::<Subscriber<'static, NotSync, 2>>();
+        send_sync::<Topic<'static, u32, 2, 1>>();
+    }
+}

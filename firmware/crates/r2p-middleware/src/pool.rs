@@ -1,22 +1,34 @@
 //! Message slots and the handles that own them: the crate's only `unsafe` code.
 //!
-//! A topic's `Pool` is a fixed array of message slots. Each slot is in one of three states,
-//! kept in a table behind a critical-section mutex:
+//! A topic's `Pool` is a fixed array of message slots. Each slot carries its state in one
+//! atomic word, `refs`:
 //!
-//! - **free**: nobody refers to it; `take` may hand it out;
-//! - **writing**: exactly one [`MsgMut`] (a draft being filled by a publisher) refers to it;
-//! - **shared(n)**: `n > 0` [`Msg`] handles refer to it and nobody writes it.
+//! - **free** (`FREE`): nobody refers to it; `take` may hand it out;
+//! - **writing** (`WRITING`): exactly one [`MsgMut`] (a draft being filled by a publisher)
+//!   refers to it;
+//! - **shared(n)** (`1 ≤ n < WRITING`): `n` [`Msg`] handles refer to it and nobody writes it.
 //!
-//! The slot data lives in `UnsafeCell`s outside the mutex so that a message can be read and
-//! written in place (zero copy) without holding a lock. The state machine is what makes the
-//! three `unsafe` blocks below sound: a `&mut T` exists only through the single `MsgMut` of a
+//! The transitions are atomic read-modify-writes (on a Cortex-M3, `LDREX`/`STREX`; no
+//! critical section): `take` moves free → writing with a compare-and-swap, so one slot goes
+//! to one draft; publishing stores the number of handles it is about to hand out, once;
+//! `Msg::clone` adds one; dropping a handle subtracts one, and the handle that brings the
+//! count to zero has freed the slot (like `Arc`). The count is exactly the number of live
+//! handles at every moment, so a slot is free only when nobody can reach it.
+//!
+//! The slot data lives in `UnsafeCell`s beside the counts so that a message can be read and
+//! written in place (zero copy) without a lock. The state machine is what makes the three
+//! `unsafe` dereferences below sound: a `&mut T` exists only through the single `MsgMut` of a
 //! *writing* slot, `&T`s only through `Msg`s of a *shared* slot, and a slot becomes *free*
-//! only when its last handle is dropped, so the two kinds of access never overlap.
+//! only when its last handle is dropped, so the two kinds of access never overlap. Memory
+//! ordering: every release is a `Release` RMW and `take`'s compare-and-swap is `Acquire`, so
+//! all reads through the handles of a slot happen before the next draft of it is written; the
+//! written draft reaches subscribers through their queues' locks.
 
 use core::cell::{RefCell, UnsafeCell};
 use core::fmt;
-use core::mem::MaybeUninit;
+use core::mem::{ManuallyDrop, MaybeUninit};
 use core::ops::{Deref, DerefMut};
+use core::sync::atomic::{fence, AtomicBool, AtomicU32, Ordering};
 use core::task::Context;
 
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
@@ -25,132 +37,131 @@ use embassy_sync::waitqueue::WakerRegistration;
 
 use crate::publisher::Publisher;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum SlotState {
-    Free,
-    Writing,
-    Shared(u32),
-}
+/// `refs` of a free slot.
+const FREE: u32 = 0;
+/// `refs` of a slot held by a draft; also the bound on the number of handles of a message.
+const WRITING: u32 = u32::MAX;
 
-struct State<const N: usize> {
-    slots: [SlotState; N],
-    free: usize,
-    /// The non-real-time publisher waiting in `alloc` for a slot, if any.
-    waiter: WakerRegistration,
-}
-
-/// The type-erased face of a [`Pool`], so handles need not carry its size.
-///
-/// Every method takes a slot index that the caller owns in the state the method expects;
-/// violating that is a bug in this crate and panics (it never corrupts memory).
-pub(crate) trait RawPool<T>: Sync {
-    /// Free → writing; `None` if no slot is free (then registers `cx`'s waker, if given).
-    fn take(&self, cx: Option<&mut Context<'_>>) -> Option<usize>;
-    /// Writing → shared(1): the draft becomes a published message.
-    fn share(&self, index: usize);
-    /// Shared(n) → shared(n + 1): one more handle.
-    fn retain(&self, index: usize);
-    /// Shared(n) → shared(n - 1), or free when n was 1; writing → free (unpublished draft).
-    fn release(&self, index: usize);
-    /// Where slot `index`'s message lives.
-    fn slot(&self, index: usize) -> *mut T;
-    /// Number of free slots now.
-    fn free(&self) -> usize;
-}
-
-/// `N` message slots of type `T`, every one initialised, plus their state table.
-pub(crate) struct Pool<T, const N: usize> {
-    state: Mutex<CriticalSectionRawMutex, RefCell<State<N>>>,
-    data: [UnsafeCell<MaybeUninit<T>>; N],
+/// One message and its state (see the module docs).
+pub(crate) struct Slot<T> {
+    refs: AtomicU32,
+    data: UnsafeCell<MaybeUninit<T>>,
 }
 
 // SAFETY: the slot data is reached only through `Msg` (shared `&T`, possibly from several
 // execution contexts at once: needs `T: Sync`) and `MsgMut` (exclusive `&mut T` in whatever
-// context holds the draft, after which others read it: needs `T: Send`). The state table,
-// updated under a critical section, guarantees that the two never overlap (module docs).
-unsafe impl<T: Send + Sync, const N: usize> Sync for Pool<T, N> {}
+// context holds the draft, after which others read it: needs `T: Send`). The state in `refs`,
+// changed only by atomic operations, guarantees that the two never overlap (module docs).
+// Slots are made only by `Pool::new`, which requires `T: Send + Sync`, so the impl needs no
+// bound of its own; without one, the handles are `Send + Sync` for every `T`, as they were
+// when they reached the pool through a `dyn` trait object.
+unsafe impl<T> Sync for Slot<T> {}
 
-impl<T: Copy, const N: usize> Pool<T, N> {
+impl<T> Slot<T> {
+    #[inline(always)]
+    fn ptr(&self) -> *mut T {
+        // `MaybeUninit<T>` is `repr(transparent)`: a pointer to it is a pointer to the `T`.
+        self.data.get().cast::<T>()
+    }
+
+    /// Drops `n ≥ 1` handles at once; `true` if they were the last (the slot is free now).
+    #[inline(always)]
+    fn release(&self, n: u32) -> bool {
+        let before = self.refs.fetch_sub(n, Ordering::Release);
+        if before == n {
+            return true;
+        }
+        // Only a bug in this crate can get here (a handle outliving its count): stop before
+        // anything reads or writes the slot. (A free slot that wrapped to `WRITING` is never
+        // handed out again, so the pool is not corrupted further.)
+        assert!(before > n && before != WRITING, "release: slot is already free");
+        false
+    }
+}
+
+/// The non-real-time publisher waiting in `alloc` for a slot, if any.
+struct Waiter {
+    /// Set (under the lock) when a waker is registered: lets a release that frees a slot skip
+    /// the lock when nobody waits, which is the normal case.
+    waiting: AtomicBool,
+    waker: Mutex<CriticalSectionRawMutex, RefCell<WakerRegistration>>,
+}
+
+/// A pool of message slots: `Pool<[Slot<T>; N]>` in a topic, seen as `Pool<[Slot<T>]>` by
+/// publishers and handles, so they need not carry its size.
+pub(crate) struct Pool<S: ?Sized> {
+    waiter: Waiter,
+    slots: S,
+}
+
+impl<T: Copy + Send + Sync, const N: usize> Pool<[Slot<T>; N]> {
     /// A pool whose slots all start as copies of `init` (so every slot is always initialised
     /// and a draft can be filled field by field, as in the paper's Listing 1).
     pub(crate) const fn new(init: T) -> Self {
-        let mut data = [const { UnsafeCell::new(MaybeUninit::uninit()) }; N];
+        let mut slots = [const {
+            Slot { refs: AtomicU32::new(FREE), data: UnsafeCell::new(MaybeUninit::uninit()) }
+        }; N];
         let mut i = 0;
         while i < N {
-            data[i] = UnsafeCell::new(MaybeUninit::new(init));
+            slots[i].data = UnsafeCell::new(MaybeUninit::new(init));
             i += 1;
         }
         Pool {
-            state: Mutex::new(RefCell::new(State {
-                slots: [SlotState::Free; N],
-                free: N,
-                waiter: WakerRegistration::new(),
-            })),
-            data,
+            waiter: Waiter {
+                waiting: AtomicBool::new(false),
+                waker: Mutex::new(RefCell::new(WakerRegistration::new())),
+            },
+            slots,
         }
     }
 }
 
-impl<T, const N: usize> Pool<T, N> {
-    fn with<R>(&self, f: impl FnOnce(&mut State<N>) -> R) -> R {
-        self.state.lock(|s| f(&mut s.borrow_mut()))
-    }
-}
-
-impl<T: Send + Sync, const N: usize> RawPool<T> for Pool<T, N> {
-    fn take(&self, cx: Option<&mut Context<'_>>) -> Option<usize> {
-        self.with(|s| match s.slots.iter().position(|&x| x == SlotState::Free) {
-            Some(i) => {
-                s.slots[i] = SlotState::Writing;
-                s.free -= 1;
-                Some(i)
-            }
-            None => {
-                if let Some(cx) = cx {
-                    s.waiter.register(cx.waker());
-                }
-                None
-            }
+impl<T> Pool<[Slot<T>]> {
+    /// Free → writing for the first free slot, if any.
+    #[inline]
+    fn try_take(&self) -> Option<&Slot<T>> {
+        self.slots.iter().find(|s| {
+            s.refs.load(Ordering::Relaxed) == FREE
+                && s.refs
+                    .compare_exchange(FREE, WRITING, Ordering::Acquire, Ordering::Relaxed)
+                    .is_ok()
         })
     }
 
-    fn share(&self, index: usize) {
-        self.with(|s| {
-            assert_eq!(s.slots[index], SlotState::Writing, "share: slot not being written");
-            s.slots[index] = SlotState::Shared(1);
-        })
+    /// Free → writing; `None` if no slot is free (then registers `cx`'s waker, if given, to be
+    /// woken when one is freed).
+    #[inline]
+    fn take(&self, cx: Option<&mut Context<'_>>) -> Option<&Slot<T>> {
+        if let Some(slot) = self.try_take() {
+            return Some(slot);
+        }
+        let cx = cx?;
+        self.waiter.waker.lock(|w| {
+            w.borrow_mut().register(cx.waker());
+            self.waiter.waiting.store(true, Ordering::Relaxed);
+        });
+        // Pairs with the fence in `freed`: either that release sees `waiting` and wakes us,
+        // or we see the slot it freed now (store-buffering with sequentially consistent
+        // fences: the two cannot both miss).
+        fence(Ordering::SeqCst);
+        self.try_take()
     }
 
-    fn retain(&self, index: usize) {
-        self.with(|s| match s.slots[index] {
-            SlotState::Shared(n) => {
-                s.slots[index] = SlotState::Shared(n.checked_add(1).expect("too many handles"))
-            }
-            other => panic!("retain: slot {index} is {other:?}"),
-        })
+    /// Called after a slot became free: wakes the waiting `alloc`, if any.
+    #[inline]
+    fn freed(&self) {
+        fence(Ordering::SeqCst);
+        if self.waiter.waiting.load(Ordering::Relaxed) {
+            self.waiter.waker.lock(|w| {
+                self.waiter.waiting.store(false, Ordering::Relaxed);
+                w.borrow_mut().wake();
+            });
+        }
     }
 
-    fn release(&self, index: usize) {
-        self.with(|s| {
-            s.slots[index] = match s.slots[index] {
-                SlotState::Shared(n) if n > 1 => SlotState::Shared(n - 1),
-                SlotState::Shared(_) | SlotState::Writing => {
-                    s.free += 1;
-                    s.waiter.wake();
-                    SlotState::Free
-                }
-                SlotState::Free => panic!("release: slot {index} is already free"),
-            }
-        })
-    }
-
-    fn slot(&self, index: usize) -> *mut T {
-        // `MaybeUninit<T>` is `repr(transparent)`: a pointer to it is a pointer to the `T`.
-        self.data[index].get().cast::<T>()
-    }
-
-    fn free(&self) -> usize {
-        self.with(|s| s.free)
+    /// Number of free slots now.
+    pub(crate) fn free(&self) -> usize {
+        self.slots.iter().filter(|s| s.refs.load(Ordering::Relaxed) == FREE).count()
     }
 }
 
@@ -161,14 +172,14 @@ impl<T: Send + Sync, const N: usize> RawPool<T> for Pool<T, N> {
 /// hand). `Clone` adds a handle (and keeps the slot out of the pool a little longer: see the
 /// sizing rule in [`pool_size`](crate::pool_size)).
 pub struct Msg<'a, T> {
-    pool: &'a dyn RawPool<T>,
+    slot: &'a Slot<T>,
     origin: &'a Publisher<'a, T>,
-    index: usize,
 }
 
 impl<'a, T> Msg<'a, T> {
     /// The publisher that published this message: a remote subscriber (the transport) reads
     /// its [`Class`](crate::Class) for the deadline and reports misses back to it.
+    #[inline]
     pub fn publisher(&self) -> &'a Publisher<'a, T> {
         self.origin
     }
@@ -176,24 +187,32 @@ impl<'a, T> Msg<'a, T> {
 
 impl<T> Deref for Msg<'_, T> {
     type Target = T;
+    #[inline(always)]
     fn deref(&self) -> &T {
         // SAFETY: this handle keeps the slot *shared* (count ≥ 1) for as long as the returned
         // borrow of `self` lives; a shared slot is never written (only a *writing* slot has a
         // `MsgMut`) and every slot was initialised by `Pool::new`.
-        unsafe { &*self.pool.slot(self.index) }
+        unsafe { &*self.slot.ptr() }
     }
 }
 
 impl<T> Clone for Msg<'_, T> {
+    #[inline]
     fn clone(&self) -> Self {
-        self.pool.retain(self.index);
-        Msg { pool: self.pool, origin: self.origin, index: self.index }
+        // Relaxed, as for `Arc`: the new handle comes from an existing one, so the slot is
+        // already shared and stays so.
+        let before = self.slot.refs.fetch_add(1, Ordering::Relaxed);
+        assert!(before != FREE && before < WRITING - 1, "too many handles");
+        Msg { slot: self.slot, origin: self.origin }
     }
 }
 
 impl<T> Drop for Msg<'_, T> {
+    #[inline]
     fn drop(&mut self) {
-        self.pool.release(self.index);
+        if self.slot.release(1) {
+            self.origin.pool().freed();
+        }
     }
 }
 
@@ -203,62 +222,112 @@ impl<T: fmt::Debug> fmt::Debug for Msg<'_, T> {
     }
 }
 
+/// The handles of a message being published: exactly as many as the count `share` set.
+///
+/// Each `next()` hands out one of them (nothing to count: the slot's count already includes
+/// it); dropping the iterator early (a sink panicked) releases the ones not handed out.
+pub(crate) struct Shares<'a, T> {
+    slot: &'a Slot<T>,
+    origin: &'a Publisher<'a, T>,
+    left: u32,
+}
+
+impl<'a, T> Iterator for Shares<'a, T> {
+    type Item = Msg<'a, T>;
+    #[inline(always)]
+    fn next(&mut self) -> Option<Msg<'a, T>> {
+        if self.left == 0 {
+            return None;
+        }
+        self.left -= 1;
+        Some(Msg { slot: self.slot, origin: self.origin })
+    }
+}
+
+impl<T> Drop for Shares<'_, T> {
+    #[inline(always)]
+    fn drop(&mut self) {
+        if self.left > 0 && self.slot.release(self.left) {
+            self.origin.pool().freed();
+        }
+    }
+}
+
 /// A message being written: exclusive access to one pool slot, from `alloc` to `publish`.
 ///
 /// The slot holds whatever message last used it (every slot starts as the topic's initial
 /// value): overwrite every field, or assign a whole value with `*draft = value`. Dropping a
 /// draft without publishing it returns the slot to the pool.
 pub struct MsgMut<'a, T> {
-    pool: &'a dyn RawPool<T>,
+    slot: &'a Slot<T>,
     origin: &'a Publisher<'a, T>,
-    index: usize,
 }
 
 impl<'a, T> MsgMut<'a, T> {
-    /// Claims a free slot of `pool` for `origin`; `None` if the pool is empty.
-    pub(crate) fn take(
-        pool: &'a dyn RawPool<T>,
-        origin: &'a Publisher<'a, T>,
-        cx: Option<&mut Context<'_>>,
-    ) -> Option<Self> {
-        pool.take(cx).map(|index| MsgMut { pool, origin, index })
+    /// Claims a free slot of `origin`'s pool; `None` if the pool is empty (then `cx`'s waker,
+    /// if given, is woken when a slot is freed).
+    #[inline]
+    pub(crate) fn take(origin: &'a Publisher<'a, T>, cx: Option<&mut Context<'_>>) -> Option<Self> {
+        origin.pool().take(cx).map(|slot| MsgMut { slot, origin })
     }
 
     /// The publisher this draft belongs to.
+    #[inline(always)]
     pub(crate) fn origin(&self) -> &'a Publisher<'a, T> {
         self.origin
     }
 
-    /// Turns the draft into the first handle of the published message.
-    pub(crate) fn share(self) -> Msg<'a, T> {
-        let this = core::mem::ManuallyDrop::new(self);
-        this.pool.share(this.index);
-        Msg { pool: this.pool, origin: this.origin, index: this.index }
+    /// Publishes the draft as `n` handles: writing → shared(n) (or free if `n` is 0), in one
+    /// store; the caller hands each handle to one subscriber.
+    ///
+    /// # Panics
+    /// If `n` is `u32::MAX` or more (far beyond any topic's subscriber list).
+    #[inline]
+    pub(crate) fn share(self, n: usize) -> Shares<'a, T> {
+        let this = ManuallyDrop::new(self);
+        let (slot, origin) = (this.slot, this.origin);
+        let n = match u32::try_from(n) {
+            Ok(n) if n < WRITING => n,
+            _ => panic!("too many handles"),
+        };
+        if n == 0 {
+            slot.refs.store(FREE, Ordering::Release);
+            origin.pool().freed();
+        } else {
+            // Release: with the subscribers' queue locks, orders the draft's writes before
+            // any read through a handle.
+            slot.refs.store(n, Ordering::Release);
+        }
+        Shares { slot, origin, left: n }
     }
 }
 
 impl<T> Deref for MsgMut<'_, T> {
     type Target = T;
+    #[inline(always)]
     fn deref(&self) -> &T {
         // SAFETY: the slot is *writing* and this draft is its only handle (see `deref_mut`);
         // the shared borrow of `self` excludes a concurrent `&mut` through it.
-        unsafe { &*self.pool.slot(self.index) }
+        unsafe { &*self.slot.ptr() }
     }
 }
 
 impl<T> DerefMut for MsgMut<'_, T> {
+    #[inline(always)]
     fn deref_mut(&mut self) -> &mut T {
-        // SAFETY: `take` moved the slot from *free* to *writing* under the pool's lock and gave
-        // it to this one `MsgMut` (not `Clone`); no `Msg` exists for a writing slot, and the
-        // slot leaves *writing* only by consuming this draft (`share`) or dropping it. So the
-        // `&mut` borrow of `self` is the only access to the slot while it lives.
-        unsafe { &mut *self.pool.slot(self.index) }
+        // SAFETY: `take` moved the slot from *free* to *writing* with a compare-and-swap and
+        // gave it to this one `MsgMut` (not `Clone`); no `Msg` exists for a writing slot, and
+        // the slot leaves *writing* only by consuming this draft (`share`) or dropping it. So
+        // the `&mut` borrow of `self` is the only access to the slot while it lives.
+        unsafe { &mut *self.slot.ptr() }
     }
 }
 
 impl<T> Drop for MsgMut<'_, T> {
     fn drop(&mut self) {
-        self.pool.release(self.index);
+        let before = self.slot.refs.swap(FREE, Ordering::Release);
+        assert_eq!(before, WRITING, "draft of a slot not being written");
+        self.origin.pool().freed();
     }
 }
 
@@ -270,11 +339,78 @@ impl<T: fmt::Debug> fmt::Debug for MsgMut<'_, T> {
 
 #[cfg(any(test, feature = "selftest"))]
 pub(crate) mod tests {
-    use crate::{Class, Publisher, Subscriber, Topic, TopicInfo};
+    use crate::{pool_size, Class, Publisher, Subscriber, Topic, TopicInfo};
+    use core::pin::pin;
+    use core::sync::atomic::Ordering;
+    use core::task::Poll;
+    use embassy_futures::poll_once;
 
     const NRT: Class = Class::NonRealTime;
 
+    /// Handles counted in the slot `m` refers to.
+    fn refs(m: &super::Msg<'_, u32>) -> u32 {
+        m.slot.refs.load(Ordering::Relaxed)
+    }
+
     r2p_testkit::suite! {
+        fn publishing_counts_exactly_one_handle_per_accepting_subscriber() {
+            static T: Topic<'static, u32, { pool_size(&[1; 4], 1) }, 4> = Topic::new("t", 0);
+            static P: Publisher<'static, u32> = Publisher::new(&T, NRT);
+            static S: [Subscriber<'static, u32, 1>; 4] = [const { Subscriber::new() }; 4];
+            T.advertise(&P).unwrap();
+            for s in &S {
+                T.subscribe(s).unwrap();
+            }
+            let d = P.publish_with(|m| *m = 1).unwrap();
+            assert_eq!((d.delivered, d.missed), (4, 0));
+            let first = S[2].try_recv().unwrap();
+            assert_eq!(refs(&first), 4, "one per subscriber, none left over by publish");
+            drop(S[3].try_recv());
+            assert_eq!(refs(&first), 3);
+            // S[0] and S[1] still queue the first message: they are full and refuse the second.
+            let d = P.publish_with(|m| *m = 2).unwrap();
+            assert_eq!((d.delivered, d.missed), (2, 2));
+            let second = S[2].try_recv().unwrap();
+            assert_eq!(*second, 2);
+            assert_eq!(refs(&second), 2, "the refused handles were dropped, not counted");
+            assert_eq!(refs(&first), 3, "the first message is untouched by the second");
+            assert_eq!(S.each_ref().map(|s| s.missed()), [1, 1, 0, 0]);
+            assert_eq!(P.stats().missed_deliveries, 2);
+            assert_eq!(T.free_slots(), T.capacity() - 2);
+            drop((first, second));
+            for s in &S {
+                while s.try_recv().is_some() {}
+            }
+            assert_eq!(T.free_slots(), T.capacity());
+        }
+
+        fn a_message_every_queue_refuses_is_free_at_once_for_a_waiting_alloc() {
+            // Not advertised: the drafts may use the whole pool.
+            static T: Topic<'static, u32, 4, 2> = Topic::new("t", 0);
+            static P: Publisher<'static, u32> = Publisher::new(&T, NRT);
+            static A: Subscriber<'static, u32, 1> = Subscriber::new();
+            static B: Subscriber<'static, u32, 1> = Subscriber::new();
+            T.subscribe(&A).unwrap();
+            T.subscribe(&B).unwrap();
+            P.publish_with(|m| *m = 1).unwrap(); // both queues full now
+            let held = [P.try_alloc().unwrap(), P.try_alloc().unwrap()];
+            let mut last = P.try_alloc().unwrap();
+            *last = 2;
+            assert_eq!(T.free_slots(), 0);
+            let mut waiting = pin!(P.alloc());
+            assert!(poll_once(waiting.as_mut()).is_pending());
+            let d = P.publish(last);
+            assert_eq!((d.delivered, d.missed), (0, 2));
+            assert_eq!(T.free_slots(), 1, "nobody took a handle: the slot is free again");
+            match poll_once(waiting.as_mut()) {
+                Poll::Ready(m) => assert_eq!(*m, 2, "the waiting alloc got that very slot"),
+                Poll::Pending => panic!("alloc still waiting after the slot was freed"),
+            }
+            assert_eq!((A.missed(), B.missed()), (1, 1));
+            assert_eq!(*A.try_recv().unwrap(), 1);
+            drop(held);
+        }
+
         fn slot_returns_to_pool_only_when_the_last_subscriber_drops_it() {
             static T: Topic<'static, u32, 5, 2> = Topic::new("t", 0);
             static P: Publisher<'static, u32> = Publisher::new(&T, NRT);
@@ -369,32 +505,65 @@ pub(crate) mod tests {
 #[cfg(test)]
 mod host_tests {
     use super::*;
+    use crate::{Callback, Class, Subscriber, Topic, TopicInfo};
 
     #[test]
     #[should_panic(expected = "already free")]
     fn releasing_a_free_slot_panics_instead_of_corrupting_the_pool() {
-        let pool: Pool<u32, 2> = Pool::new(0);
-        let i = pool.take(None).unwrap();
-        pool.release(i);
-        pool.release(i);
+        let pool: Pool<[Slot<u32>; 2]> = Pool::new(0);
+        let pool: &Pool<[Slot<u32>]> = &pool;
+        let slot = pool.take(None).unwrap();
+        slot.refs.store(1, Ordering::Relaxed);
+        assert!(slot.release(1), "the last handle frees the slot");
+        slot.release(1);
     }
 
     #[test]
     #[should_panic(expected = "not being written")]
-    fn sharing_a_slot_twice_panics() {
-        let pool: Pool<u32, 2> = Pool::new(0);
-        let i = pool.take(None).unwrap();
-        pool.share(i);
-        pool.share(i);
+    fn dropping_a_draft_of_a_shared_slot_panics() {
+        static T: Topic<'static, u32, 2, 1> = Topic::new("t", 0);
+        static P: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
+        let draft = P.try_alloc().unwrap();
+        let slot = draft.slot;
+        drop(draft.share(1)); // nobody took the handle: released, the slot is free again
+        slot.refs.store(1, Ordering::Relaxed); // pretend a handle exists
+        drop(MsgMut { slot, origin: &P });
     }
 
     #[test]
     fn take_hands_out_each_slot_once() {
-        let pool: Pool<u32, 3> = Pool::new(0);
-        let mut got = [pool.take(None), pool.take(None), pool.take(None)].map(Option::unwrap);
+        let pool: Pool<[Slot<u32>; 3]> = Pool::new(0);
+        let pool: &Pool<[Slot<u32>]> = &pool;
+        let mut got = [pool.take(None), pool.take(None), pool.take(None)]
+            .map(|s| s.unwrap() as *const Slot<u32> as usize);
         got.sort();
-        assert_eq!(got, [0, 1, 2]);
-        assert_eq!(pool.take(None), None);
+        got.windows(2).for_each(|w| assert_ne!(w[0], w[1]));
+        assert!(pool.take(None).is_none());
         assert_eq!(pool.free(), 0);
+    }
+
+    #[test]
+    fn a_panicking_sink_leaves_the_count_exact() {
+        // A callback that panics mid-publish: the handles not yet handed out are released when
+        // the unwinding drops them, so the slot is neither leaked nor freed early.
+        fn boom(_: &u32) {
+            panic!("callback failed");
+        }
+        static T: Topic<'static, u32, 4, 3> = Topic::new("t", 0);
+        static P: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
+        static A: Subscriber<'static, u32, 1> = Subscriber::new();
+        static CB: Callback<fn(&u32)> = Callback::new(boom);
+        static B: Subscriber<'static, u32, 1> = Subscriber::new();
+        T.subscribe(&A).unwrap();
+        T.subscribe(&CB).unwrap();
+        T.subscribe(&B).unwrap();
+        let r = std::panic::catch_unwind(|| P.publish_with(|m| *m = 5));
+        assert!(r.is_err());
+        let a = A.try_recv().expect("A got its handle before the panic");
+        assert!(B.try_recv().is_none(), "B's handle was never handed out");
+        assert_eq!(a.slot.refs.load(Ordering::Relaxed), 1, "only A's handle is counted");
+        assert_eq!(T.free_slots(), 3);
+        drop(a);
+        assert_eq!(T.free_slots(), 4);
     }
 }

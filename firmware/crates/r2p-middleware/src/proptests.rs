@@ -16,15 +16,15 @@ const SUBS: usize = 8;
 type T = Topic<'static, u32, SLOTS, SUBS>;
 
 /// A subscriber of any queue length, behind one type.
-trait AnySub: Sync {
-    fn try_recv(&self) -> Option<Msg<'static, u32>>;
+trait AnySub<M = u32>: Sync {
+    fn try_recv(&self) -> Option<Msg<'static, M>>;
     fn missed(&self) -> u32;
     fn len(&self) -> usize;
-    fn sink(&'static self) -> &'static dyn Sink<'static, u32>;
+    fn sink(&'static self) -> &'static dyn Sink<'static, M>;
 }
 
-impl<const Q: usize> AnySub for Subscriber<'static, u32, Q> {
-    fn try_recv(&self) -> Option<Msg<'static, u32>> {
+impl<M: Send + Sync, const Q: usize> AnySub<M> for Subscriber<'static, M, Q> {
+    fn try_recv(&self) -> Option<Msg<'static, M>> {
         Subscriber::try_recv(self)
     }
     fn missed(&self) -> u32 {
@@ -33,7 +33,7 @@ impl<const Q: usize> AnySub for Subscriber<'static, u32, Q> {
     fn len(&self) -> usize {
         Subscriber::len(self)
     }
-    fn sink(&'static self) -> &'static dyn Sink<'static, u32> {
+    fn sink(&'static self) -> &'static dyn Sink<'static, M> {
         self
     }
 }
@@ -212,4 +212,82 @@ proptest! {
         prop_assert!(all.iter().all(Option::is_some));
         prop_assert!(publisher.try_alloc().is_none());
     }
+}
+
+/// Real concurrency on the host: two publishers and three consuming threads on one topic. The
+/// slot counts are atomics touched from every thread at once; nothing may be lost, freed twice
+/// or reordered per publisher, and every slot is back at the end.
+#[test]
+fn threads_publishing_and_receiving_at_once_lose_no_slot() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::thread;
+
+    static TOPIC: Topic<'static, (u32, u32), { pool_size(&[2, 3, 4], 2) }, 3> =
+        Topic::new("threads", (0, 0));
+    static P: [Publisher<'static, (u32, u32)>; 2] =
+        [Publisher::new(&TOPIC, Class::NonRealTime), Publisher::new(&TOPIC, Class::NonRealTime)];
+    static A: Subscriber<'static, (u32, u32), 2> = Subscriber::new();
+    static B: Subscriber<'static, (u32, u32), 3> = Subscriber::new();
+    static C: Subscriber<'static, (u32, u32), 4> = Subscriber::new();
+    static DONE: AtomicBool = AtomicBool::new(false);
+    const N: u32 = 20_000;
+    for p in &P {
+        TOPIC.advertise(p).unwrap();
+    }
+    let subs: [&'static dyn AnySub<(u32, u32)>; 3] = [&A, &B, &C];
+    for s in subs {
+        TOPIC.subscribe(s.sink()).unwrap();
+    }
+
+    let consumers: Vec<_> = subs
+        .into_iter()
+        .map(|s| {
+            thread::spawn(move || {
+                let mut last = [None::<u32>; 2];
+                let mut got = 0u32;
+                let mut kept = None; // one message in hand, as the sizing rule allows
+                loop {
+                    let done = DONE.load(Ordering::Acquire);
+                    match s.try_recv() {
+                        Some(m) => {
+                            let (p, seq) = *m;
+                            let p = p as usize;
+                            assert!(last[p].is_none_or(|l| l < seq), "publisher {p} reordered");
+                            last[p] = Some(seq);
+                            got += 1;
+                            if seq % 3 == 0 {
+                                kept = Some(m.clone()); // a clone replacing the held one
+                            }
+                        }
+                        None if done => break,
+                        None => thread::yield_now(),
+                    }
+                }
+                drop(kept);
+                got
+            })
+        })
+        .collect();
+    let publishers: Vec<_> = (0..2u32)
+        .map(|id| {
+            thread::spawn(move || {
+                let p = &P[id as usize];
+                let mut delivered = 0;
+                for seq in 0..N {
+                    let mut m = embassy_futures::block_on(p.alloc());
+                    *m = (id, seq);
+                    delivered += p.publish(m).delivered as u32;
+                }
+                delivered
+            })
+        })
+        .collect();
+    let delivered: u32 = publishers.into_iter().map(|t| t.join().unwrap()).sum();
+    DONE.store(true, Ordering::Release);
+    let received: u32 = consumers.into_iter().map(|t| t.join().unwrap()).sum();
+    assert_eq!(received, delivered, "every accepted handle reached its subscriber");
+    let missed: u32 = P.iter().map(|p| p.stats().missed_deliveries).sum();
+    assert_eq!(delivered + missed, 2 * N * 3);
+    assert_eq!(missed, A.missed() + B.missed() + C.missed());
+    assert_eq!(TOPIC.free_slots(), TOPIC.capacity(), "every slot came back");
 }

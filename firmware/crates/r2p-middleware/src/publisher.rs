@@ -2,13 +2,14 @@
 
 use core::cell::Cell;
 use core::future::{poll_fn, Future};
+use core::sync::atomic::{AtomicU32, Ordering};
 use core::task::Poll;
 
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::signal::Signal;
 
-use crate::pool::{MsgMut, RawPool};
+use crate::pool::{MsgMut, Pool, Slot};
 use crate::topic::{Topic, TopicCore};
 use crate::Error;
 
@@ -80,18 +81,32 @@ pub struct Delivery {
     pub missed: usize,
 }
 
-#[derive(Clone, Copy)]
-struct Inner {
-    stats: PublisherStats,
-    advertised: bool,
+/// The counters of [`PublisherStats`], each an atomic so that publishing takes no lock for
+/// them.
+struct Counters {
+    published: AtomicU32,
+    missed_deliveries: AtomicU32,
+    pool_empty: AtomicU32,
+    deadline_misses: AtomicU32,
+}
+
+impl Counters {
+    /// Adds `n` to `counter`, wrapping as the counters always have.
+    #[inline(always)]
+    fn add(counter: &AtomicU32, n: u32) {
+        counter.fetch_add(n, Ordering::Relaxed);
+    }
 }
 
 /// A typed publisher on one topic. Declare it `static` next to its topic, then
 /// [`Topic::advertise`] it; all methods take `&self`, so a node and the transport can share it.
 pub struct Publisher<'a, T> {
     topic: &'a dyn TopicCore<'a, T>,
+    /// The topic's pool, reached without a virtual call (allocation and release).
+    pool: &'a Pool<[Slot<T>]>,
     class: Class,
-    inner: Mutex<CriticalSectionRawMutex, Cell<Inner>>,
+    counters: Counters,
+    advertised: Mutex<CriticalSectionRawMutex, Cell<bool>>,
     fault: Signal<CriticalSectionRawMutex, Fault>,
 }
 
@@ -103,32 +118,25 @@ impl<'a, T: Copy + Send + Sync + 'a> Publisher<'a, T> {
     ) -> Self {
         Publisher {
             topic,
+            pool: topic.pool(),
             class,
-            inner: Mutex::new(Cell::new(Inner {
-                stats: PublisherStats {
-                    published: 0,
-                    missed_deliveries: 0,
-                    pool_empty: 0,
-                    deadline_misses: 0,
-                },
-                advertised: false,
-            })),
+            counters: Counters {
+                published: AtomicU32::new(0),
+                missed_deliveries: AtomicU32::new(0),
+                pool_empty: AtomicU32::new(0),
+                deadline_misses: AtomicU32::new(0),
+            },
+            advertised: Mutex::new(Cell::new(false)),
             fault: Signal::new(),
         }
     }
 }
 
 impl<'a, T> Publisher<'a, T> {
-    fn pool(&self) -> &'a dyn RawPool<T> {
-        self.topic.pool()
-    }
-
-    fn update(&self, f: impl FnOnce(&mut Inner)) {
-        self.inner.lock(|c| {
-            let mut i = c.get();
-            f(&mut i);
-            c.set(i);
-        })
+    /// The pool of the topic this publisher publishes on.
+    #[inline(always)]
+    pub(crate) fn pool(&self) -> &'a Pool<[Slot<T>]> {
+        self.pool
     }
 
     pub(crate) fn is_on<const SLOTS: usize, const SUBS: usize>(
@@ -140,14 +148,12 @@ impl<'a, T> Publisher<'a, T> {
 
     pub(crate) fn mark_advertised(&self) -> Result<(), Error> {
         // Lock order: publisher, then topic (nothing takes them the other way round).
-        self.inner.lock(|c| {
-            let mut i = c.get();
-            if i.advertised {
+        self.advertised.lock(|a| {
+            if a.get() {
                 return Err(Error::AlreadyAdvertised);
             }
             self.topic.reserve_publisher()?;
-            i.advertised = true;
-            c.set(i);
+            a.set(true);
             Ok(())
         })
     }
@@ -162,9 +168,16 @@ impl<'a, T> Publisher<'a, T> {
         self.class
     }
 
-    /// A snapshot of the counters.
+    /// A snapshot of the counters (each read atomically; a publication that runs meanwhile
+    /// may show in some and not yet in others).
     pub fn stats(&self) -> PublisherStats {
-        self.inner.lock(|c| c.get().stats)
+        let c = &self.counters;
+        PublisherStats {
+            published: c.published.load(Ordering::Relaxed),
+            missed_deliveries: c.missed_deliveries.load(Ordering::Relaxed),
+            pool_empty: c.pool_empty.load(Ordering::Relaxed),
+            deadline_misses: c.deadline_misses.load(Ordering::Relaxed),
+        }
     }
 
     /// Non-real-time allocation: waits until a slot is free, then returns a draft.
@@ -172,8 +185,7 @@ impl<'a, T> Publisher<'a, T> {
     /// The future is cancel-safe (dropping it takes nothing). If several tasks wait on one
     /// topic they take turns being woken; real-time code uses [`try_alloc`](Self::try_alloc).
     pub fn alloc(&'a self) -> impl Future<Output = MsgMut<'a, T>> + 'a {
-        let pool = self.pool();
-        poll_fn(move |cx| match MsgMut::take(pool, self, Some(cx)) {
+        poll_fn(move |cx| match MsgMut::take(self, Some(cx)) {
             Some(m) => Poll::Ready(m),
             None => Poll::Pending,
         })
@@ -182,9 +194,9 @@ impl<'a, T> Publisher<'a, T> {
     /// Real-time allocation: a draft, or `None` at once when the pool is empty — which is
     /// counted ([`PublisherStats::pool_empty`]) and signalled ([`Fault::PoolEmpty`]).
     pub fn try_alloc(&'a self) -> Option<MsgMut<'a, T>> {
-        let m = MsgMut::take(self.pool(), self, None);
+        let m = MsgMut::take(self, None);
         if m.is_none() {
-            self.update(|i| i.stats.pool_empty = i.stats.pool_empty.wrapping_add(1));
+            Counters::add(&self.counters.pool_empty, 1);
             self.fault.signal(Fault::PoolEmpty);
         }
         m
@@ -197,20 +209,11 @@ impl<'a, T> Publisher<'a, T> {
     /// If `draft` was allocated by another publisher.
     pub fn publish(&self, draft: MsgMut<'a, T>) -> Delivery {
         assert!(core::ptr::eq(draft.origin(), self), "draft allocated by another publisher");
-        let msg = draft.share();
-        let mut d = Delivery::default();
-        self.topic.for_each_sink(&mut |s| {
-            if s.deliver(msg.clone()) {
-                d.delivered += 1;
-            } else {
-                d.missed += 1;
-            }
-        });
-        drop(msg);
-        self.update(|i| {
-            i.stats.published = i.stats.published.wrapping_add(1);
-            i.stats.missed_deliveries = i.stats.missed_deliveries.wrapping_add(d.missed as u32);
-        });
+        let d = self.topic.publish(draft);
+        Counters::add(&self.counters.published, 1);
+        if d.missed > 0 {
+            Counters::add(&self.counters.missed_deliveries, d.missed as u32);
+        }
         d
     }
 
@@ -225,7 +228,7 @@ impl<'a, T> Publisher<'a, T> {
     /// Called by the transport when one of this publisher's messages missed its deadline:
     /// counted and signalled to the node ([`Fault::DeadlineMiss`]).
     pub fn report_deadline_miss(&self) {
-        self.update(|i| i.stats.deadline_misses = i.stats.deadline_misses.wrapping_add(1));
+        Counters::add(&self.counters.deadline_misses, 1);
         self.fault.signal(Fault::DeadlineMiss);
     }
 
@@ -413,6 +416,27 @@ mod host_tests {
         static Q: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
         let m = P.try_alloc().unwrap();
         Q.publish(m);
+    }
+
+    #[test]
+    fn a_waiting_alloc_is_woken_when_every_subscriber_refuses_the_message() {
+        static T: Topic<'static, u32, 2, 1> = Topic::new("t", 0);
+        static P: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
+        static S: Subscriber<'static, u32, 1> = Subscriber::new();
+        T.subscribe(&S).unwrap();
+        P.publish_with(|m| *m = 1).unwrap(); // S is full
+        let draft = P.try_alloc().unwrap();
+        let count = Arc::new(Count(AtomicUsize::new(0)));
+        let waker = Waker::from(count.clone());
+        let mut cx = Context::from_waker(&waker);
+        let mut fut = std::pin::pin!(P.alloc());
+        assert!(fut.as_mut().poll(&mut cx).is_pending());
+        assert_eq!(P.publish(draft).missed, 1);
+        assert_eq!(count.0.load(Ordering::SeqCst), 1, "the refused message's slot woke alloc");
+        assert!(fut.as_mut().poll(&mut cx).is_ready());
+        // With nobody waiting, freeing a slot wakes nobody (and takes no lock).
+        drop(S.try_recv());
+        assert_eq!(count.0.load(Ordering::SeqCst), 1);
     }
 
     #[test]

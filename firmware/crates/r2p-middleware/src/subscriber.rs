@@ -1,12 +1,12 @@
 //! Subscribers: a queue of message handles to wait on or poll, or a callback run on publish.
 
 use core::cell::Cell;
-use core::future::Future;
+use core::future::{poll_fn, Future};
+use core::task::{Poll, Waker};
 
 use embassy_futures::select::{select, Either};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
-use embassy_sync::channel::Channel;
 
 use crate::pool::Msg;
 use crate::topic::Sink;
@@ -23,25 +23,115 @@ pub struct Timeout;
 /// keeps the older ones it has not read; the publisher and the other subscribers are not
 /// affected. So a subscriber sees a subsequence of the publications, in publication order.
 pub struct Subscriber<'a, T, const Q: usize> {
-    queue: Channel<CriticalSectionRawMutex, Msg<'a, T>, Q>,
-    missed: Mutex<CriticalSectionRawMutex, Cell<u32>>,
+    queue: Mutex<CriticalSectionRawMutex, Queue<'a, T, Q>>,
+}
+
+/// A fixed ring of message handles, the missed counter and the waiting task: all a
+/// subscriber's state, under one lock so that a delivery is one short critical section.
+/// (`Cell`s: the lock gives shared access only, and no borrow flag is needed.)
+struct Queue<'a, T, const Q: usize> {
+    /// `len` handles from `head` on, wrapping around; the other entries are `None`.
+    ring: [Cell<Option<Msg<'a, T>>>; Q],
+    head: Cell<usize>,
+    len: Cell<usize>,
+    missed: Cell<u32>,
+    /// The task waiting in `recv`, if any.
+    waker: Cell<Option<Waker>>,
+}
+
+impl<'a, T, const Q: usize> Queue<'a, T, Q> {
+    /// Appends `msg`, or gives it back if the queue is full.
+    #[inline(always)]
+    fn push(&self, msg: Msg<'a, T>) -> Result<(), Msg<'a, T>> {
+        let len = self.len.get();
+        if len >= Q {
+            return Err(msg);
+        }
+        let mut i = self.head.get() + len;
+        if i >= Q {
+            i -= Q;
+        }
+        self.ring[i].set(Some(msg));
+        self.len.set(len + 1);
+        Ok(())
+    }
+
+    /// Registers the waker of a task waiting in `recv`, with embassy's `WakerRegistration`
+    /// policy: a waker for the same task is kept; one for another task replaces it, and the
+    /// task it replaced is woken so that it can register again.
+    fn register(&self, w: &Waker) {
+        match self.waker.take() {
+            Some(old) if old.will_wake(w) => self.waker.set(Some(old)),
+            old => {
+                self.waker.set(Some(w.clone()));
+                if let Some(old) = old {
+                    old.wake();
+                }
+            }
+        }
+    }
+
+    /// Wakes the task waiting in `recv`, if any.
+    #[inline(always)]
+    fn wake(&self) {
+        if let Some(w) = self.waker.take() {
+            w.wake();
+        }
+    }
+
+    /// Takes the oldest handle.
+    #[inline(always)]
+    fn pop(&self) -> Option<Msg<'a, T>> {
+        let len = self.len.get();
+        if len == 0 {
+            return None;
+        }
+        let head = self.head.get();
+        let msg = self.ring[head].take();
+        self.head.set(if head + 1 >= Q { 0 } else { head + 1 });
+        self.len.set(len - 1);
+        msg
+    }
 }
 
 impl<'a, T, const Q: usize> Subscriber<'a, T, Q> {
     /// An empty subscriber.
     pub const fn new() -> Self {
-        Subscriber { queue: Channel::new(), missed: Mutex::new(Cell::new(0)) }
+        Subscriber {
+            queue: Mutex::new(Queue {
+                ring: [const { Cell::new(None) }; Q],
+                head: Cell::new(0),
+                len: Cell::new(0),
+                missed: Cell::new(0),
+                waker: Cell::new(None),
+            }),
+        }
+    }
+
+    #[inline(always)]
+    fn with<R>(&self, f: impl FnOnce(&Queue<'a, T, Q>) -> R) -> R {
+        self.queue.lock(f)
     }
 
     /// Waits for the next message. The future is cancel-safe: drop it (for instance because a
     /// timeout or another subscriber won an `embassy_futures::select`) and no message is lost.
     pub fn recv(&self) -> impl Future<Output = Msg<'a, T>> + '_ {
-        self.queue.receive()
+        // Holds nothing between polls: a message stays queued until a poll returns it.
+        poll_fn(move |cx| {
+            self.with(|q| match q.pop() {
+                Some(msg) => Poll::Ready(msg),
+                None => {
+                    q.register(cx.waker());
+                    Poll::Pending
+                }
+            })
+        })
     }
 
     /// The next message if one is queued, without waiting (polling).
+    #[inline]
     pub fn try_recv(&self) -> Option<Msg<'a, T>> {
-        self.queue.try_receive().ok()
+        self.with(Queue::pop)
     }
 
     /// Waits for the next message or until `timeout` completes, whichever is first.
@@ -58,17 +148,17 @@ impl<'a, T, const Q: usize> Subscriber<'a, T, Q> {
 
     /// Messages this subscriber missed because its queue was full.
     pub fn missed(&self) -> u32 {
-        self.missed.lock(Cell::get)
+        self.with(|q| q.missed.get())
     }
 
     /// Messages waiting in the queue.
     pub fn len(&self) -> usize {
-        self.queue.len()
+        self.with(|q| q.len.get())
     }
 
     /// Whether no message is waiting.
     pub fn is_empty(&self) -> bool {
-        self.queue.is_empty()
+        self.len() == 0
     }
 }
 
@@ -79,16 +169,21 @@ impl<T, const Q: usize> Default for Subscriber<'_, T, Q> {
 }
 
 impl<'a, T: Send + Sync, const Q: usize> Sink<'a, T> for Subscriber<'a, T, Q> {
+    #[inline]
     fn deliver(&self, msg: Msg<'a, T>) -> bool {
-        match self.queue.try_send(msg) {
-            Ok(()) => true,
-            Err(_full) => {
-                // `_full` holds the handle back; it drops here, releasing this subscriber's
-                // reference to the slot.
-                self.missed.lock(|m| m.set(m.get().wrapping_add(1)));
-                false
+        let refused = self.with(|q| match q.push(msg) {
+            Ok(()) => {
+                q.wake();
+                None
             }
-        }
+            Err(msg) => {
+                q.missed.set(q.missed.get().wrapping_add(1));
+                Some(msg)
+            }
+        });
+        // A refused handle drops here, outside the lock, releasing this subscriber's
+        // reference to the slot.
+        refused.is_none()
     }
 
     fn queue_len(&self) -> usize {
@@ -255,5 +350,51 @@ pub(crate) mod tests {
             let rest = [S.try_recv(), S.try_recv()].map(|m| *m.unwrap());
             assert_eq!(rest, [1, 5]);
         }
+    }
+}
+
+#[cfg(test)]
+mod host_tests {
+    use super::*;
+    use crate::{Class, Publisher, Topic};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    use std::task::{Context, Wake};
+
+    struct Count(AtomicUsize);
+    impl Wake for Count {
+        fn wake(self: Arc<Self>) {
+            self.0.fetch_add(1, Ordering::SeqCst);
+        }
+    }
+
+    fn counter() -> (Arc<Count>, Waker) {
+        let c = Arc::new(Count(AtomicUsize::new(0)));
+        (c.clone(), Waker::from(c))
+    }
+
+    #[test]
+    fn recv_wakes_its_task_once_per_delivery_and_hands_over_between_tasks() {
+        static T: Topic<'static, u32, 4, 1> = Topic::new("t", 0);
+        static P: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
+        static S: Subscriber<'static, u32, 2> = Subscriber::new();
+        T.subscribe(&S).unwrap();
+        let ((a, wa), (b, wb)) = (counter(), counter());
+        let mut first = std::pin::pin!(S.recv());
+        let mut second = std::pin::pin!(S.recv());
+        assert!(first.as_mut().poll(&mut Context::from_waker(&wa)).is_pending());
+        assert!(first.as_mut().poll(&mut Context::from_waker(&wa)).is_pending());
+        assert_eq!(a.0.load(Ordering::SeqCst), 0, "the same task registering again: no wake");
+        // Another task waits on the same subscriber: it takes over and the first is woken so
+        // that it can register again (embassy's WakerRegistration policy).
+        assert!(second.as_mut().poll(&mut Context::from_waker(&wb)).is_pending());
+        assert_eq!(a.0.load(Ordering::SeqCst), 1);
+        P.publish_with(|m| *m = 1).unwrap();
+        assert_eq!(b.0.load(Ordering::SeqCst), 1, "a delivery wakes the registered task");
+        P.publish_with(|m| *m = 2).unwrap();
+        assert_eq!(b.0.load(Ordering::SeqCst), 1, "woken once: the waker was consumed");
+        let got = second.as_mut().poll(&mut Context::from_waker(&wb));
+        assert!(matches!(got, Poll::Ready(ref m) if **m == 1));
+        assert_eq!(*S.try_recv().unwrap(), 2);
     }
 }

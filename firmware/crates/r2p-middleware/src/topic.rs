@@ -1,12 +1,12 @@
 //! Named topics: a message pool plus the list of subscribers that published messages go to.
 
-use core::cell::RefCell;
+use core::cell::{Cell, RefCell};
 
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 
-use crate::pool::{Msg, Pool, RawPool};
-use crate::publisher::Publisher;
+use crate::pool::{Msg, MsgMut, Pool, Slot};
+use crate::publisher::{Delivery, Publisher};
 use crate::Error;
 
 /// Where a topic delivers its messages: a local [`Subscriber`](crate::Subscriber) queue, a
@@ -49,16 +49,18 @@ pub trait TopicInfo: Sync {
 
 /// The typed face of a topic that publishers use, erasing its pool and list sizes.
 pub(crate) trait TopicCore<'a, T>: TopicInfo {
-    fn pool(&self) -> &dyn RawPool<T>;
-    /// Calls `f` with each subscriber, outside the topic's lock (a callback may publish).
-    fn for_each_sink(&self, f: &mut dyn FnMut(&'a dyn Sink<'a, T>));
+    /// Publishes `draft`: one handle to each subscriber, each sink called outside the topic's
+    /// lock (a callback may publish).
+    fn publish(&self, draft: MsgMut<'a, T>) -> Delivery;
     fn reserve_publisher(&self) -> Result<(), Error>;
 }
 
+/// The subscriber list, under the topic's lock (`Cell`s: no borrow flag to check).
 struct Links<'a, T, const SUBS: usize> {
-    sinks: [Option<&'a dyn Sink<'a, T>>; SUBS],
-    count: usize,
-    reserved: usize,
+    /// The first `count` are `Some`.
+    sinks: Cell<[Option<&'a dyn Sink<'a, T>>; SUBS]>,
+    count: Cell<usize>,
+    reserved: Cell<usize>,
 }
 
 /// A named topic of messages of type `T`, with a pool of `SLOTS` messages and room for `SUBS`
@@ -69,8 +71,8 @@ struct Links<'a, T, const SUBS: usize> {
 /// every subscriber.
 pub struct Topic<'a, T, const SLOTS: usize, const SUBS: usize> {
     name: &'static str,
-    pool: Pool<T, SLOTS>,
-    links: Mutex<CriticalSectionRawMutex, RefCell<Links<'a, T, SUBS>>>,
+    pool: Pool<[Slot<T>; SLOTS]>,
+    links: Mutex<CriticalSectionRawMutex, Links<'a, T, SUBS>>,
 }
 
 impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a, T, SLOTS, SUBS> {
@@ -79,7 +81,11 @@ impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a,
         Topic {
             name,
             pool: Pool::new(init),
-            links: Mutex::new(RefCell::new(Links { sinks: [None; SUBS], count: 0, reserved: 0 })),
+            links: Mutex::new(Links {
+                sinks: Cell::new([None; SUBS]),
+                count: Cell::new(0),
+                reserved: Cell::new(0),
+            }),
         }
     }
 
@@ -89,23 +95,28 @@ impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a,
     /// subscribers, or the pool could not keep the promise of the sizing rule with it.
     pub fn subscribe(&self, sink: &'a dyn Sink<'a, T>) -> Result<(), Error> {
         self.links.lock(|l| {
-            let mut l = l.borrow_mut();
-            let count = l.count;
-            if l.sinks[..count].iter().flatten().any(|s| core::ptr::addr_eq(*s, sink)) {
+            let (mut sinks, count) = (l.sinks.get(), l.count.get());
+            if sinks[..count].iter().flatten().any(|s| core::ptr::addr_eq(*s, sink)) {
                 return Err(Error::AlreadySubscribed);
             }
             if count == SUBS {
                 return Err(Error::TooManySubscribers);
             }
-            let needed = l.reserved + sink.reserved_slots();
+            let needed = l.reserved.get() + sink.reserved_slots();
             if needed > SLOTS {
                 return Err(Error::PoolTooSmall { needed, capacity: SLOTS });
             }
-            l.sinks[count] = Some(sink);
-            l.count += 1;
-            l.reserved = needed;
+            sinks[count] = Some(sink);
+            l.sinks.set(sinks);
+            l.count.set(count + 1);
+            l.reserved.set(needed);
             Ok(())
         })
+    }
+
+    /// The pool, without its size, for the topic's publishers.
+    pub(crate) const fn pool(&self) -> &Pool<[Slot<T>]> {
+        &self.pool
     }
 
     /// Registers `publisher` (made with [`Publisher::new`] on this topic): reserves the slot
@@ -133,22 +144,17 @@ where
         SLOTS
     }
     fn free_slots(&self) -> usize {
-        self.pool.free()
+        self.pool().free()
     }
     fn reserved_slots(&self) -> usize {
-        self.links.lock(|l| l.borrow().reserved)
+        self.links.lock(|l| l.reserved.get())
     }
     fn subscriber_count(&self) -> usize {
-        self.links.lock(|l| l.borrow().count)
+        self.links.lock(|l| l.count.get())
     }
     fn max_queue_len(&self) -> usize {
-        let mut max = 0;
-        self.links.lock(|l| {
-            for s in l.borrow().sinks.iter().flatten() {
-                max = max.max(s.queue_len());
-            }
-        });
-        max
+        let sinks = self.links.lock(|l| l.sinks.get());
+        sinks.iter().flatten().map(|s| s.queue_len()).max().unwrap_or(0)
     }
 }
 
@@ -156,28 +162,34 @@ impl<'a, T, const SLOTS: usize, const SUBS: usize> TopicCore<'a, T> for Topic<'a
 where
     T: Copy + Send + Sync,
 {
-    fn pool(&self) -> &dyn RawPool<T> {
-        &self.pool
-    }
-
-    fn for_each_sink(&self, f: &mut dyn FnMut(&'a dyn Sink<'a, T>)) {
-        let (sinks, count) = self.links.lock(|l| {
-            let l = l.borrow();
-            (l.sinks, l.count)
-        });
-        for s in sinks[..count].iter().flatten() {
-            f(*s);
+    fn publish(&self, draft: MsgMut<'a, T>) -> Delivery {
+        // The subscriber list as it is now (subscriptions only ever grow), copied so that the
+        // sinks run outside the lock.
+        let (sinks, count) = self.links.lock(|l| (l.sinks.get(), l.count.get()));
+        // One handle per subscriber, counted into the slot at once: no per-subscriber clone.
+        // A sink that refuses drops its handle, which takes it off the count again; a message
+        // nobody accepted is free once the last sink has refused it.
+        let mut d = Delivery::default();
+        for (sink, msg) in sinks[..count].iter().zip(draft.share(count)) {
+            // Always `Some` below `count`; were it not, `msg` would just be released.
+            if let Some(sink) = sink {
+                if sink.deliver(msg) {
+                    d.delivered += 1;
+                } else {
+                    d.missed += 1;
+                }
+            }
         }
+        d
     }
 
     fn reserve_publisher(&self) -> Result<(), Error> {
         self.links.lock(|l| {
-            let mut l = l.borrow_mut();
-            let needed = l.reserved + 1;
+            let needed = l.reserved.get() + 1;
             if needed > SLOTS {
                 return Err(Error::PoolTooSmall { needed, capacity: SLOTS });
             }
-            l.reserved = needed;
+            l.reserved.set(needed);
             Ok(())
         })
     }
