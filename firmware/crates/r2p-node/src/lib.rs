@@ -29,11 +29,15 @@ pub mod wire;
 #[cfg(test)]
 mod host_tests;
 #[cfg(any(test, feature = "selftest"))]
+mod tdma_tests;
+#[cfg(any(test, feature = "selftest"))]
 mod testbus;
 #[cfg(any(test, feature = "selftest"))]
 mod tests;
 
-pub use node::{Event, ImportState, Node, NodeConfig, NodeError, NodeStats};
+pub use node::{
+    Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats, SlotController,
+};
 pub use params::{NoParams, Param, ParamStore, RamParams};
 pub use remote::{Export, Import, ImportError, RemotePublisher, RemoteSubscriber};
 pub use wire::{Wire, WireError};
@@ -47,5 +51,6 @@ pub mod selftest {
         crate::params::tests::SUITE,
         crate::remote::tests::SUITE,
         crate::tests::SUITE,
+        crate::tdma_tests::SUITE,
     ];
 }
