@@ -91,6 +91,7 @@ impl<const PORTS: usize> Bus<PORTS> {
         }
     }
 
+    #[cfg_attr(not(test), allow(dead_code))] // used by the host tests only
     /// Powers module `me` off (it neither sends nor receives; what it had pending is lost) or
     /// on again.
     pub fn power(&self, me: usize, on: bool) {
