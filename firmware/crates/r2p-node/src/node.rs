@@ -647,14 +647,23 @@ impl<
 
     /// Takes one received frame: management messages are reassembled and handled, subscribed
     /// streams reassembled and published locally, everything else counted and dropped.
+    ///
+    /// Unslotted mode: sync frames are counted (and checked) but not followed, HRT
+    /// registrations are ignored. [`slot_tick`](Self::slot_tick) takes the received frames
+    /// itself and follows the cycle (so a node that only polls links none of the cycle's code).
     pub fn on_frame(&mut self, r: &Received) {
+        self.receive::<false>(r);
+    }
+
+    fn receive<const CYCLE: bool>(&mut self, r: &Received) {
         bump(&mut self.stats.frames_received);
         self.start(r.at);
         let id = r.frame.id();
         if id.sync_cycle().is_some() {
             bump(&mut self.stats.sync_frames);
             match Sync::from_frame(&r.frame) {
-                Ok(sync) => self.on_sync(r.at, &sync),
+                Ok(sync) if CYCLE => self.on_sync(r.at, &sync),
+                Ok(_) => {}
                 Err(_) => bump(&mut self.stats.bad_syncs),
             }
             return;
@@ -669,6 +678,11 @@ impl<
                 Some(m) => Message::decode(m.data),
             };
             match decoded {
+                Ok(msg @ (Message::HrtRequest { .. } | Message::HrtGrant { .. })) => {
+                    if CYCLE {
+                        self.on_hrt_management(from, msg);
+                    }
+                }
                 Ok(msg) => self.on_management(from, msg, r.at),
                 Err(_) => bump(&mut self.stats.malformed),
             }
@@ -977,56 +991,6 @@ impl<
                     _ => bump(&mut self.stats.unexpected), // not a stream of the publisher
                 }
             }
-            Message::HrtRequest { message_id, period_cycles, frames } if self.master.is_some() => {
-                let message = MessageId(message_id);
-                let granted = match NodeId::of(message) {
-                    Some((owner, index)) if owner == from && index != MANAGEMENT_INDEX => {
-                        if frames != 1 {
-                            Err(HrtResult::TooManyFrames)
-                        } else {
-                            self.scheduler
-                                .register(message, u32::from(period_cycles))
-                                .map_err(hrt_result)
-                        }
-                    }
-                    _ => Err(HrtResult::Conflict),
-                };
-                let (offset, slot, result) = match granted {
-                    Ok(p) => (p.offset, p.slot, HrtResult::Ok),
-                    Err(r) => (0, 0, r),
-                };
-                let _ = self.send(&Message::HrtGrant {
-                    message_id,
-                    period_cycles,
-                    offset,
-                    slot,
-                    result,
-                });
-            }
-            Message::HrtGrant { message_id, period_cycles, offset, slot, result } => {
-                let Some((owner, index)) = NodeId::of(MessageId(message_id)) else {
-                    bump(&mut self.stats.unexpected);
-                    return;
-                };
-                if owner != me {
-                    return; // another node's grant
-                }
-                let i = usize::from(index).wrapping_sub(1);
-                let asked = self.exports.get(i).and_then(|e| e.hrt).is_some_and(|h| {
-                    matches!(h.state, HrtState::Requested { .. })
-                        && h.period.cycles() == u32::from(period_cycles)
-                });
-                let slots = self.config.cycle.slots;
-                let valid = result != HrtResult::Ok
-                    || (u32::from(offset) < u32::from(period_cycles) && slot > 0 && slot < slots);
-                if !asked || !valid {
-                    bump(&mut self.stats.unexpected);
-                    return;
-                }
-                let r =
-                    if result == HrtResult::Ok { Ok(Phase { offset, slot }) } else { Err(result) };
-                self.on_grant(i, r);
-            }
             Message::ParamGet { target, index } if for_me(target) => {
                 let reply = match self.params.get(index) {
                     Ok(value) => Message::ParamValue { index, value },
@@ -1094,7 +1058,7 @@ impl<
             Inflight::Sync | Inflight::None => {}
         }
         while let Some(r) = can.try_receive() {
-            self.on_frame(&r);
+            self.receive::<true>(&r);
         }
         self.errors = can.error_counters();
         self.tick(now);
@@ -1164,6 +1128,64 @@ impl<
         match self.master {
             Some(m) => by_clock.min(m.next_sync.max(now)),
             None => by_clock,
+        }
+    }
+
+    /// HRT_REQUEST (answered as master) and HRT_GRANT (for this node's streams).
+    fn on_hrt_management(&mut self, from: NodeId, msg: Message) {
+        let me = self.ids.node_id();
+        match msg {
+            Message::HrtRequest { message_id, period_cycles, frames } if self.master.is_some() => {
+                let message = MessageId(message_id);
+                let granted = match NodeId::of(message) {
+                    Some((owner, index)) if owner == from && index != MANAGEMENT_INDEX => {
+                        if frames != 1 {
+                            Err(HrtResult::TooManyFrames)
+                        } else {
+                            self.scheduler
+                                .register(message, u32::from(period_cycles))
+                                .map_err(hrt_result)
+                        }
+                    }
+                    _ => Err(HrtResult::Conflict),
+                };
+                let (offset, slot, result) = match granted {
+                    Ok(p) => (p.offset, p.slot, HrtResult::Ok),
+                    Err(r) => (0, 0, r),
+                };
+                let _ = self.send(&Message::HrtGrant {
+                    message_id,
+                    period_cycles,
+                    offset,
+                    slot,
+                    result,
+                });
+            }
+            Message::HrtGrant { message_id, period_cycles, offset, slot, result } => {
+                let Some((owner, index)) = NodeId::of(MessageId(message_id)) else {
+                    bump(&mut self.stats.unexpected);
+                    return;
+                };
+                if owner != me {
+                    return; // another node's grant
+                }
+                let i = usize::from(index).wrapping_sub(1);
+                let asked = self.exports.get(i).and_then(|e| e.hrt).is_some_and(|h| {
+                    matches!(h.state, HrtState::Requested { .. })
+                        && h.period.cycles() == u32::from(period_cycles)
+                });
+                let slots = self.config.cycle.slots;
+                let valid = result != HrtResult::Ok
+                    || (u32::from(offset) < u32::from(period_cycles) && slot > 0 && slot < slots);
+                if !asked || !valid {
+                    bump(&mut self.stats.unexpected);
+                    return;
+                }
+                let r =
+                    if result == HrtResult::Ok { Ok(Phase { offset, slot }) } else { Err(result) };
+                self.on_grant(i, r);
+            }
+            _ => {}
         }
     }
 
