@@ -11,10 +11,15 @@
 //!   subscribers cannot tell the difference;
 //! - the management protocol claims a node ID, sends heartbeats, advertises exports, asks for
 //!   imports when they are advertised (same name and type hash), answers subscription,
-//!   reboot and parameter requests ([`ParamStore`]).
+//!   reboot and parameter requests ([`ParamStore`]);
+//! - HRT streams (`Class::SyncRealTime`) get a slot of the TDMA cycle from the bus master
+//!   (HRT_REQUEST / HRT_GRANT); the node follows the master's syncs, takes over as master when
+//!   its rank says so, and sends each frame in its slot ([`Node::slot_tick`]).
 //!
-//! Sans-IO: drive it with [`Node::poll`]`(now, &mut controller)` on a module, on an emulated
-//! bus in virtual time, or in tests. `no_std`, no heap: capacities are const generics.
+//! Sans-IO: on a bus with a TDMA cycle the slot timer drives it with
+//! [`Node::slot_tick`]`(now, &mut controller)`; without one, [`Node::poll`]`(now, &mut
+//! controller)` (module documentation of [`node`]). On a module, on an emulated bus in virtual
+//! time, or in tests. `no_std`, no heap: capacities are const generics.
 #![no_std]
 #![warn(missing_docs)]
 

@@ -1020,8 +1020,8 @@ impl<
     }
 }
 
-/// The TDMA cycle (docs/middleware.md, "Remote topics: the node runtime", "HRT and the slot
-/// policy").
+/// The TDMA cycle (docs/middleware.md, "Remote topics: the node runtime", "The TDMA cycle
+/// and HRT streams").
 impl<
         'a,
         const EXPORTS: usize,
