@@ -1079,7 +1079,10 @@ impl<
                 }
                 let cycle_us = Micros::from(self.config.cycle.cycle_us);
                 m.cycle = m.cycle.wrapping_add(1);
-                m.next_sync = (m.next_sync + cycle_us).max(now + 1);
+                m.next_sync += cycle_us;
+                if m.next_sync <= now {
+                    m.next_sync = now + cycle_us; // the timer was late by a cycle: restart
+                }
                 self.master = Some(m);
                 let a = self.failover.on_sync_sent(now, &sync, ok);
                 self.apply(a);
