@@ -86,6 +86,9 @@ r2p_testkit::suite! {
         assert_eq!((a.stats().hrt_sent, a.stats().hrt_missed), (8, 0));
         assert_eq!(A_PUB.stats().deadline_misses, 0);
         assert!(m.stats().syncs_sent > 30);
+        // The slot timer's next boundary: one slot on (the bus's time is a slot boundary).
+        let now = bus.now.get();
+        assert_eq!((a.next_slot_at(now), b.next_slot_at(now + 100)), (now + 250, now + 250));
         assert_eq!(bus.overflow.get(), 0);
     }
 
