@@ -29,6 +29,10 @@ pub mod ty {
     pub const SUBSCRIBE_REQUEST: u8 = 0x22;
     /// [`super::Message::SubscribeResponse`]
     pub const SUBSCRIBE_RESPONSE: u8 = 0x23;
+    /// [`super::Message::HrtRequest`]
+    pub const HRT_REQUEST: u8 = 0x24;
+    /// [`super::Message::HrtGrant`]
+    pub const HRT_GRANT: u8 = 0x25;
     /// [`super::Message::ParamGet`]
     pub const PARAM_GET: u8 = 0x41;
     /// [`super::Message::ParamSet`]
@@ -82,6 +86,24 @@ pub enum SubscribeResult {
     TypeMismatch = 2,
     /// The master could not reserve an HRT slot for the stream.
     NoSlot = 3,
+}
+
+/// The master's answer to an HRT reservation request (`rtcan::schedule::Reject`, on the wire).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum HrtResult {
+    /// Admitted: the grant carries the phase.
+    Ok = 0,
+    /// The HRT slots' capacity (or the master's table) would be exceeded.
+    Full = 1,
+    /// The period is not a power of two from 1 to 256 cycles.
+    NotHarmonic = 2,
+    /// Capacity is left, but every phase collides (slots fragmented by removals).
+    NoFreePhase = 3,
+    /// The stream is admitted with another period, or its message ID is not the sender's.
+    Conflict = 4,
+    /// Messages of more frames than the master reserves per occurrence (one, for now).
+    TooManyFrames = 5,
 }
 
 /// Why a parameter request failed.
@@ -172,6 +194,30 @@ pub enum Message {
         result: SubscribeResult,
         /// The stream's message ID.
         message_id: u16,
+    },
+    /// Asks the bus master (whoever it is: there is no target) to reserve HRT slots for the
+    /// sender's stream `message_id`: `frames` frames every `period_cycles` cycles.
+    HrtRequest {
+        /// The stream (a stream of the sender: `sender << 8 | index`).
+        message_id: u16,
+        /// Period in communication cycles (a power of two, at most 256).
+        period_cycles: u16,
+        /// Frames per message.
+        frames: u8,
+    },
+    /// The master's answer on its own management stream: the stream may send in slot `slot` of
+    /// every cycle c with c mod `period_cycles` = `offset` (when `result` is `Ok`).
+    HrtGrant {
+        /// The stream asked for.
+        message_id: u16,
+        /// Its period in cycles, as asked.
+        period_cycles: u16,
+        /// Cycle offset, less than the period (0 when refused).
+        offset: u8,
+        /// Slot index, at least 1 (0 when refused).
+        slot: u8,
+        /// Outcome.
+        result: HrtResult,
     },
     /// Reads parameter `index` of `target`.
     ParamGet {
@@ -328,6 +374,8 @@ impl Message {
             Message::Advertise { .. } => ty::ADVERTISE,
             Message::SubscribeRequest { .. } => ty::SUBSCRIBE_REQUEST,
             Message::SubscribeResponse { .. } => ty::SUBSCRIBE_RESPONSE,
+            Message::HrtRequest { .. } => ty::HRT_REQUEST,
+            Message::HrtGrant { .. } => ty::HRT_GRANT,
             Message::ParamGet { .. } => ty::PARAM_GET,
             Message::ParamSet { .. } => ty::PARAM_SET,
             Message::ParamValue { .. } => ty::PARAM_VALUE,
@@ -381,6 +429,18 @@ impl Message {
                 w.str(topic)?;
                 w.u8(*result as u8)?;
                 w.u16(*message_id)?;
+            }
+            Message::HrtRequest { message_id, period_cycles, frames } => {
+                w.u16(*message_id)?;
+                w.u16(*period_cycles)?;
+                w.u8(*frames)?;
+            }
+            Message::HrtGrant { message_id, period_cycles, offset, slot, result } => {
+                w.u16(*message_id)?;
+                w.u16(*period_cycles)?;
+                w.u8(*offset)?;
+                w.u8(*slot)?;
+                w.u8(*result as u8)?;
             }
             Message::ParamGet { target, index } => {
                 w.u8(*target)?;
@@ -465,6 +525,25 @@ impl Message {
                 };
                 Message::SubscribeResponse { target, topic, result, message_id: r.u16()? }
             }
+            ty::HRT_REQUEST => Message::HrtRequest {
+                message_id: r.u16()?,
+                period_cycles: r.u16()?,
+                frames: r.u8()?,
+            },
+            ty::HRT_GRANT => {
+                let (message_id, period_cycles, offset, slot) =
+                    (r.u16()?, r.u16()?, r.u8()?, r.u8()?);
+                let result = match r.u8()? {
+                    0 => HrtResult::Ok,
+                    1 => HrtResult::Full,
+                    2 => HrtResult::NotHarmonic,
+                    3 => HrtResult::NoFreePhase,
+                    4 => HrtResult::Conflict,
+                    5 => HrtResult::TooManyFrames,
+                    other => return Err(DecodeError::BadValue(other)),
+                };
+                Message::HrtGrant { message_id, period_cycles, offset, slot, result }
+            }
             ty::PARAM_GET => Message::ParamGet { target: r.u8()?, index: r.u16()? },
             ty::PARAM_SET => {
                 Message::ParamSet { target: r.u8()?, index: r.u16()?, value: r.value()? }
@@ -495,7 +574,7 @@ impl Message {
 pub(crate) mod tests {
     use super::*;
 
-    pub(crate) fn samples() -> [Message; 9] {
+    pub(crate) fn samples() -> [Message; 11] {
         [
             Message::Heartbeat {
                 uid: [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12],
@@ -525,6 +604,14 @@ pub(crate) mod tests {
                 topic: String::try_from("proximity").unwrap(),
                 result: SubscribeResult::Ok,
                 message_id: 0x1203,
+            },
+            Message::HrtRequest { message_id: 0x1201, period_cycles: 2, frames: 1 },
+            Message::HrtGrant {
+                message_id: 0x1201,
+                period_cycles: 2,
+                offset: 1,
+                slot: 3,
+                result: HrtResult::Ok,
             },
             Message::ParamGet { target: 3, index: 9 },
             Message::ParamSet { target: 3, index: 9, value: Value::F32(0.25) },
@@ -582,6 +669,31 @@ pub(crate) mod tests {
                 Message::decode(&[ty::PARAM_VALUE, 0, 0, 7, 0, 0, 0, 0]),
                 Err(DecodeError::BadValue(7))
             );
+        }
+
+        fn hrt_layout_matches_spec() {
+            let mut buf = [0u8; ENCODED_MAX];
+            let request = Message::HrtRequest { message_id: 0x1201, period_cycles: 2, frames: 1 };
+            let n = request.encode(&mut buf).unwrap();
+            assert_eq!(&buf[..n], &[0x24, 0x01, 0x12, 0x02, 0x00, 0x01]);
+            let grant = Message::HrtGrant {
+                message_id: 0x1201,
+                period_cycles: 4,
+                offset: 3,
+                slot: 7,
+                result: HrtResult::Ok,
+            };
+            let n = grant.encode(&mut buf).unwrap();
+            assert_eq!(&buf[..n], &[0x25, 0x01, 0x12, 0x04, 0x00, 3, 7, 0]);
+            assert_eq!(
+                Message::decode(&[0x25, 0x01, 0x12, 0x04, 0x00, 0, 0, 6]),
+                Err(DecodeError::BadValue(6))
+            );
+            let full = [0x25, 0x01, 0x12, 0x04, 0x00, 0, 0, 1];
+            assert!(matches!(
+                Message::decode(&full),
+                Ok(Message::HrtGrant { result: HrtResult::Full, .. })
+            ));
         }
 
         fn small_buffers_are_refused_not_overrun() {

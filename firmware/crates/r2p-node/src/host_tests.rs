@@ -363,3 +363,183 @@ fn a_rebooted_peer_gets_the_advertisements_again() {
     assert!(advertised(&mut a, &mut bus, ModuleState::Starting, 4), "it rebooted");
     assert_eq!(a.peer_count(), 1);
 }
+
+mod tdma {
+    //! The TDMA cycle on the slotted loopback bus, in virtual time.
+
+    use super::*;
+    use crate::node::HrtState;
+    use crate::tdma_tests::{tdma, CYCLE, CYCLE_US};
+    use crate::testbus::{run_slots, Bus, TestNode};
+    use rtcan::failover::{Role, RANK_STEP_CYCLES, TAKEOVER_BASE_CYCLES};
+
+    /// The phase HRT export `export` of `n` was granted, if it was.
+    fn granted(n: &TestNode<'_>, export: usize) -> Option<rtcan::Phase> {
+        match n.hrt_state(export) {
+            Some(HrtState::Granted { phase }) => Some(phase),
+            _ => None,
+        }
+    }
+
+    #[test]
+    fn srt_and_nrt_traffic_never_uses_a_reserved_slot() {
+        // A: an HRT stream every cycle and a busy SRT stream; B subscribes to both; M is master.
+        static H: Topic<'static, u16, { pool_size(&[2], 1) }, 1> = Topic::new("torque", 0);
+        static HP: Publisher<'static, u16> =
+            Publisher::new(&H, Class::SyncRealTime { period_us: 4_000 });
+        static HO: RemoteSubscriber<'static, u16, 2> = RemoteSubscriber::new(&HP);
+        static S: Topic<'static, [u32; 4], { pool_size(&[8], 1) }, 1> = Topic::new("scan", [0; 4]);
+        static SP: Publisher<'static, [u32; 4]> =
+            Publisher::new(&S, Class::AsyncRealTime { deadline_us: 20_000 });
+        static SO: RemoteSubscriber<'static, [u32; 4], 8> = RemoteSubscriber::new(&SP);
+        static BH: Topic<'static, u16, { pool_size(&[4], 1) }, 1> = Topic::new("torque", 0);
+        static BHP: Publisher<'static, u16> = Publisher::new(&BH, Class::NonRealTime);
+        static BHI: RemotePublisher<'static, u16> = RemotePublisher::new(&BHP, &BH);
+        static BHS: Subscriber<'static, u16, 4> = Subscriber::new();
+        static BS: Topic<'static, [u32; 4], { pool_size(&[8], 1) }, 1> = Topic::new("scan", [0; 4]);
+        static BSP: Publisher<'static, [u32; 4]> = Publisher::new(&BS, Class::NonRealTime);
+        static BSI: RemotePublisher<'static, [u32; 4]> = RemotePublisher::new(&BSP, &BS);
+        static BSS: Subscriber<'static, [u32; 4], 8> = Subscriber::new();
+        H.subscribe(&HO).unwrap();
+        S.subscribe(&SO).unwrap();
+        BH.subscribe(&BHS).unwrap();
+        BS.subscribe(&BSS).unwrap();
+
+        let bus = Bus::<3>::slotted(CYCLE);
+        let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
+        let mut a = TestNode::new(tdma(2, "a", Some(1)), &NoParams).unwrap();
+        let mut b = TestNode::new(tdma(3, "b", None), &NoParams).unwrap();
+        a.export(&HO).unwrap();
+        a.export(&SO).unwrap();
+        b.import(&BHI).unwrap();
+        b.import(&BSI).unwrap();
+        run_slots(&bus, &mut [&mut m, &mut a, &mut b], 150_000);
+        assert!(granted(&a, 0).is_some());
+        assert!(matches!(b.import_state(1), Some(ImportState::Subscribed { .. })));
+
+        // Every cycle: one HRT message and two 16-byte SRT messages (3 frames each) — about
+        // half of the free slots — while heartbeats keep going.
+        let (mut torque, mut scans) = (Vec::new(), Vec::new());
+        for k in 0..100u32 {
+            HP.publish_with(|v| *v = k as u16).unwrap();
+            SP.publish_with(|v| *v = [k; 4]).unwrap();
+            SP.publish_with(|v| *v = [k + 1000; 4]).unwrap();
+            let until = bus.now.get() + CYCLE_US;
+            run_slots(&bus, &mut [&mut m, &mut a, &mut b], until);
+            torque.extend(core::iter::from_fn(|| BHS.try_recv()).map(|v| *v));
+            scans.extend(core::iter::from_fn(|| BSS.try_recv()).map(|v| v[0]));
+        }
+        run_slots(&bus, &mut [&mut m, &mut a, &mut b], bus.now.get() + 10 * CYCLE_US);
+        scans.extend(core::iter::from_fn(|| BSS.try_recv()).map(|v| v[0]));
+        assert_eq!(torque, (0..100).collect::<Vec<u16>>());
+        let want: Vec<u32> = (0..100).flat_map(|k| [k, k + 1000]).collect();
+        assert_eq!(scans, want, "every SRT message, in order, none lost to arbitration");
+        assert_eq!(bus.violations(), 0);
+        assert_eq!(a.stats().deadline_misses, 0);
+        assert!(a.stats().slot_retries > 0, "arbitration was lost sometimes and retried");
+        // The HRT stream kept its slot every cycle: no jitter.
+        let log = bus.hrt_log();
+        assert!(log.len() >= 20);
+        for w in log.windows(2) {
+            assert_eq!((w[1].at - w[0].at, w[1].slot), (CYCLE_US, w[0].slot));
+        }
+    }
+
+    #[test]
+    fn a_standby_takes_over_when_the_master_dies_and_hrt_resumes() {
+        static H: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("setpoint", 0);
+        static HP: Publisher<'static, u32> =
+            Publisher::new(&H, Class::SyncRealTime { period_us: 8_000 });
+        static HO: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&HP);
+        static BH: Topic<'static, u32, { pool_size(&[4], 1) }, 1> = Topic::new("setpoint", 0);
+        static BHP: Publisher<'static, u32> = Publisher::new(&BH, Class::NonRealTime);
+        static BHI: RemotePublisher<'static, u32> = RemotePublisher::new(&BHP, &BH);
+        static BHS: Subscriber<'static, u32, 4> = Subscriber::new();
+        H.subscribe(&HO).unwrap();
+        BH.subscribe(&BHS).unwrap();
+
+        // M (rank 0) is master; B (rank 1, the HRT subscriber) is the standby; A publishes.
+        let bus = Bus::<3>::slotted(CYCLE);
+        let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
+        let mut a = TestNode::new(tdma(2, "a", None), &NoParams).unwrap();
+        let mut b = TestNode::new(tdma(3, "b", Some(1)), &NoParams).unwrap();
+        a.export(&HO).unwrap();
+        b.import(&BHI).unwrap();
+        run_slots(&bus, &mut [&mut m, &mut a, &mut b], 150_000);
+        assert_eq!(m.role(), Role::Master);
+        assert!(granted(&a, 0).is_some());
+        let publish = |k: u32, bus: &Bus<3>, nodes: &mut [&mut TestNode<'_>]| {
+            HP.publish_with(|v| *v = k).unwrap();
+            run_slots(bus, nodes, bus.now.get() + 2 * CYCLE_US);
+            core::iter::from_fn(|| BHS.try_recv()).map(|v| *v).collect::<Vec<u32>>()
+        };
+        for k in 0..3 {
+            assert_eq!(publish(k, &bus, &mut [&mut m, &mut a, &mut b]), [k]);
+        }
+
+        // The master is powered off right after a sync.
+        let syncs = m.stats().syncs_sent;
+        while m.stats().syncs_sent == syncs {
+            run_slots(&bus, &mut [&mut m, &mut a, &mut b], bus.now.get() + 250);
+        }
+        let last_sync = bus.now.get() - 250;
+        bus.power(0, false);
+        let bound = Micros::from(TAKEOVER_BASE_CYCLES + RANK_STEP_CYCLES) * CYCLE_US;
+        while b.role() != Role::Master {
+            assert!(bus.now.get() - last_sync <= bound, "no takeover within the bound");
+            run_slots(&bus, &mut [&mut m, &mut a, &mut b], bus.now.get() + 250);
+        }
+        let took_over = bus.now.get() - 250 - last_sync;
+        assert_eq!(took_over, bound, "rank 1: (4 + 5) cycles after the last sync");
+        assert_eq!(a.role(), Role::Slave);
+
+        // A re-registers with B; HRT traffic resumes on the new master's calendar.
+        run_slots(&bus, &mut [&mut m, &mut a, &mut b], bus.now.get() + 100_000);
+        let phase = granted(&a, 0).expect("re-registered");
+        assert!(b.stats().syncs_sent > 20);
+        bus.clear_hrt_log();
+        let mut got = Vec::new();
+        for k in 10..16 {
+            got.extend(publish(k, &bus, &mut [&mut m, &mut a, &mut b]));
+        }
+        assert_eq!(got, (10..16).collect::<Vec<u32>>());
+        let log = bus.hrt_log();
+        assert_eq!(log.len(), 6);
+        for w in log.windows(2) {
+            assert_eq!((w[1].at - w[0].at, w[1].slot), (2 * CYCLE_US, phase.slot));
+        }
+        assert_eq!(bus.violations(), 0);
+        assert!(matches!(b.import_state(0), Some(ImportState::Subscribed { .. })));
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+
+        /// Arbitrary frames with sync identifiers (any length, any counter, any epoch) thrown at a
+        /// running cycle: counted, never fatal; the bus keeps a master and the node keeps sending.
+        #[test]
+        fn garbage_syncs_are_counted_not_fatal(
+            junk in prop::collection::vec((any::<u8>(), prop::collection::vec(any::<u8>(), 0..=8), 0u32..400), 1..20)
+        ) {
+            let bus = Bus::<2>::slotted(CYCLE);
+            let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
+            let mut s = TestNode::new(tdma(2, "s", Some(1)), &NoParams).unwrap();
+            run_slots(&bus, &mut [&mut m, &mut s], 40_000);
+            let mut bad = 0;
+            for (cycle, data, gap) in &junk {
+                if data.len() != 8 {
+                    bad += 1;
+                }
+                bus.inject(Frame::new(FrameId::sync(u32::from(*cycle)), data).unwrap());
+                run_slots(&bus, &mut [&mut m, &mut s], bus.now.get() + u64::from(*gap) * 250);
+            }
+            prop_assert_eq!(s.stats().bad_syncs, bad);
+            run_slots(&bus, &mut [&mut m, &mut s], bus.now.get() + 200_000);
+            let roles = [m.role(), s.role()];
+            prop_assert_eq!(roles.iter().filter(|r| **r == Role::Master).count(), 1);
+            let sent = m.stats().frames_sent + s.stats().frames_sent;
+            run_slots(&bus, &mut [&mut m, &mut s], bus.now.get() + 100_000);
+            prop_assert!(m.stats().frames_sent + s.stats().frames_sent > sent, "still talking");
+        }
+    }
+}

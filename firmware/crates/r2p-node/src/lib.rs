@@ -11,10 +11,15 @@
 //!   subscribers cannot tell the difference;
 //! - the management protocol claims a node ID, sends heartbeats, advertises exports, asks for
 //!   imports when they are advertised (same name and type hash), answers subscription,
-//!   reboot and parameter requests ([`ParamStore`]).
+//!   reboot and parameter requests ([`ParamStore`]);
+//! - HRT streams (`Class::SyncRealTime`) get a slot of the TDMA cycle from the bus master
+//!   (HRT_REQUEST / HRT_GRANT); the node follows the master's syncs, takes over as master when
+//!   its rank says so, and sends each frame in its slot ([`Node::slot_tick`]).
 //!
-//! Sans-IO: drive it with [`Node::poll`]`(now, &mut controller)` on a module, on an emulated
-//! bus in virtual time, or in tests. `no_std`, no heap: capacities are const generics.
+//! Sans-IO: on a bus with a TDMA cycle the slot timer drives it with
+//! [`Node::slot_tick`]`(now, &mut controller)`; without one, [`Node::poll`]`(now, &mut
+//! controller)` (module documentation of [`node`]). On a module, on an emulated bus in virtual
+//! time, or in tests. `no_std`, no heap: capacities are const generics.
 #![no_std]
 #![warn(missing_docs)]
 
@@ -29,11 +34,15 @@ pub mod wire;
 #[cfg(test)]
 mod host_tests;
 #[cfg(any(test, feature = "selftest"))]
+mod tdma_tests;
+#[cfg(any(test, feature = "selftest"))]
 mod testbus;
 #[cfg(any(test, feature = "selftest"))]
 mod tests;
 
-pub use node::{Event, ImportState, Node, NodeConfig, NodeError, NodeStats};
+pub use node::{
+    Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats, SlotController,
+};
 pub use params::{NoParams, Param, ParamStore, RamParams};
 pub use remote::{Export, Import, ImportError, RemotePublisher, RemoteSubscriber};
 pub use wire::{Wire, WireError};
@@ -47,5 +56,6 @@ pub mod selftest {
         crate::params::tests::SUITE,
         crate::remote::tests::SUITE,
         crate::tests::SUITE,
+        crate::tdma_tests::SUITE,
     ];
 }

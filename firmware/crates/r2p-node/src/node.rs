@@ -1,22 +1,37 @@
 //! The node runtime: one module's end of the bus (docs/middleware.md, "Remote topics: the node
 //! runtime").
 //!
-//! Sans-IO: [`Node`] never reads a clock or touches hardware. Drive it with
-//! [`Node::poll`]`(now, &mut controller)` — or its three parts [`Node::on_frame`],
-//! [`Node::tick`] and [`Node::transmit`] — from a task on a module, from an emulated bus in
-//! virtual time, or from a test.
+//! Sans-IO: [`Node`] never reads a clock or touches hardware. Two ways to drive it:
+//!
+//! - **TDMA** (a bus with a master: HRT streams, reserved slots): the slot timer calls
+//!   [`Node::slot_tick`]`(now, &mut controller)` at every slot boundary
+//!   ([`Node::next_slot_at`] says when). The node tracks the master's syncs, takes over as
+//!   master when its rank says so, sends syncs as master, loads its HRT frames in their
+//!   reserved slots and at most one SRT/NRT frame per free slot.
+//! - **Unslotted** (a bus without TDMA cycle: no HRT, no node with a rank driving a cycle):
+//!   [`Node::poll`]`(now, &mut controller)` — or its three parts [`Node::on_frame`],
+//!   [`Node::tick`] and [`Node::transmit`] — hands every queued frame to the controller at
+//!   once.
+//!
+//! Either from a task on a module, from an emulated bus in virtual time, or from a test. All
+//! nodes of one bus use the same way; a node never mixes them.
 
 use heapless::{Deque, String, Vec};
 use r2p_management::message::{
-    is_name_char, is_topic_char, BusClass, Message, ModuleState, ParamFault, SubscribeResult,
-    Value, ENCODED_MAX, NAME_MAX, TOPIC_MAX, UID_LEN,
+    is_name_char, is_topic_char, BusClass, HrtResult, Message, ModuleState, ParamFault,
+    SubscribeResult, Value, ENCODED_MAX, NAME_MAX, TOPIC_MAX, UID_LEN,
 };
 use r2p_management::{NodeId, NodeIdAllocator, MANAGEMENT_INDEX};
 use r2p_middleware::Class;
 use rtcan::controller::{ErrorCounters, Received};
+use rtcan::cycle::{ClockState, ConfigError, SYNC_SLOT};
+use rtcan::failover::{sync_timeout_us, Actions, Rank, Role};
 use rtcan::fragment::{frame_count, MAX_MESSAGE_LEN};
+use rtcan::frame::MAX_PAYLOAD;
+use rtcan::schedule::{occurs, Reject};
 use rtcan::{
-    CanController, Expect, LaxityEncoding, MessageId, Micros, Reassembler, ReassemblyStats,
+    CanController, CycleConfig, Expect, Failover, Frame, FrameId, Laxity, LaxityEncoding,
+    MessageId, Micros, Period, Phase, Reassembler, ReassemblyStats, Scheduler, SlotClock, Sync,
     TxQueue, Urgency,
 };
 
@@ -27,6 +42,21 @@ use crate::remote::{Export, Import, ImportError};
 pub const STARTING_HEARTBEATS: u32 = 2;
 /// Events kept until the application takes them ([`Node::next_event`]).
 pub const EVENT_QUEUE: usize = 8;
+/// HRT streams a node's calendar holds when it is master ([`Scheduler`] capacity).
+pub const MASTER_STREAMS: usize = 16;
+
+/// A CAN controller the slot timer drives: the RTCAN contract plus the outcome of an abort.
+///
+/// At each slot boundary the node aborts what is still pending; it must know whether the
+/// SRT/NRT frame it loaded at the slot's start went out (remove it from the queue) or lost
+/// arbitration to another node's (keep it, send it in a later free slot). bxCAN's abort
+/// request tells (`Can::abort` returns true if a frame was aborted).
+pub trait SlotController: CanController {
+    /// Aborts the frames still waiting in transmit mailboxes, as
+    /// [`CanController::abort_pending`], and returns how many were aborted (0: everything
+    /// loaded since the last call went out).
+    fn abort_pending_count(&mut self) -> usize;
+}
 
 /// What a node is and how it paces the protocol.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -43,11 +73,22 @@ pub struct NodeConfig {
     pub reassembly_timeout_us: u32,
     /// How SRT laxity is encoded in identifiers (the same on the whole bus).
     pub laxity: LaxityEncoding,
+    /// The communication cycle (the same on the whole bus).
+    pub cycle: CycleConfig,
+    /// Master rank 0…15 (0 takes over first) for modules that may become bus master; `None`
+    /// for the others. By convention the power-supply module is rank 0 (its firmware sets
+    /// `rank: Some(0)`); other standbys take 1, 2, …; the default is `None`.
+    pub rank: Option<u8>,
+    /// Slots 1…`hrt_slots` the node reserves for HRT streams when it is master; the others
+    /// stay free for SRT/NRT traffic (including HRT registrations). Keep it below the cycle's
+    /// slot count, the same on every node with a rank.
+    pub hrt_slots: u8,
 }
 
 impl NodeConfig {
     /// Defaults: heartbeat every 100 ms, subscription retried after 300 ms, reassembly timeout
-    /// 20 ms, logarithmic laxity with 100 µs ticks.
+    /// 20 ms, logarithmic laxity with 100 µs ticks, the default cycle (10 ms, 60 slots), no
+    /// rank, slots 1…30 for HRT.
     pub const fn new(uid: [u8; UID_LEN], name: &'static str) -> Self {
         Self {
             uid,
@@ -56,6 +97,9 @@ impl NodeConfig {
             request_timeout_us: 300_000,
             reassembly_timeout_us: 20_000,
             laxity: LaxityEncoding::Logarithmic { tick_us: 100 },
+            cycle: CycleConfig::DEFAULT,
+            rank: None,
+            hrt_slots: 30,
         }
     }
 }
@@ -78,9 +122,18 @@ pub enum NodeError {
         /// The largest size the node takes.
         max: usize,
     },
-    /// Synchronous real-time (HRT) publishers need the TDMA slot timer, which does not exist
-    /// yet: export them with `Class::AsyncRealTime { deadline_us: period }` meanwhile.
-    HrtNotDriven,
+    /// A synchronous real-time (HRT) publisher's period is not a power of two (1…256) of
+    /// communication cycles.
+    HrtPeriod {
+        /// The publisher's period.
+        period_us: u32,
+        /// The cycle's length.
+        cycle_us: u32,
+    },
+    /// The rank is above 15 (`rtcan::failover::MAX_RANK`).
+    BadRank,
+    /// The cycle configuration is invalid (slots too short, bit rate, slot count).
+    BadCycle(ConfigError),
     /// The transmit queue is full: the management message was not queued.
     TxFull,
 }
@@ -115,6 +168,28 @@ pub enum ImportState {
         /// Why.
         result: SubscribeResult,
     },
+}
+
+/// Where an HRT export's reservation stands ([`Node::hrt_state`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtState {
+    /// No remote subscriber yet: nothing reserved.
+    Idle,
+    /// To be asked for at the next slot (first subscriber, or re-registration after a master
+    /// change or a node-ID move) once a master is heard.
+    Wanted,
+    /// Asked the master at `since`; asked again every `request_timeout_us`.
+    Requested {
+        /// When the request was (last) queued.
+        since: Micros,
+    },
+    /// Sending in slot `phase.slot` of the cycles c with c mod period = `phase.offset`.
+    Granted {
+        /// The reserved phase.
+        phase: Phase,
+    },
+    /// The master refused (the subscriber got `NoSlot`); a new subscription asks again.
+    Refused(HrtResult),
 }
 
 /// Something the application may act on, taken with [`Node::next_event`].
@@ -187,8 +262,21 @@ pub enum Event {
 pub struct NodeStats {
     /// Frames given to [`Node::on_frame`].
     pub frames_received: u32,
-    /// Sync frames (ignored until the TDMA cycle is driven).
+    /// Sync frames received (well-formed or not).
     pub sync_frames: u32,
+    /// Frames with a sync identifier that are not a sync (payload not 8 bytes). Dropped.
+    pub bad_syncs: u32,
+    /// Syncs this node sent as master.
+    pub syncs_sent: u32,
+    /// HRT frames sent in their reserved slots.
+    pub hrt_sent: u32,
+    /// HRT occurrences missed: the frame could not be loaded or was still pending at the slot's
+    /// end (reported to the publisher as a deadline miss).
+    pub hrt_missed: u32,
+    /// SRT/NRT frames that lost their free slot's arbitration (aborted, sent later).
+    pub slot_retries: u32,
+    /// HRT reservations the master refused to this node.
+    pub hrt_refused: u32,
     /// Frames that are neither on a management stream nor on a subscribed stream: other
     /// modules' traffic, or garbage. Dropped.
     pub unknown_frames: u32,
@@ -246,6 +334,35 @@ impl NodeSet {
 struct ExportSlot<'a> {
     export: &'a dyn Export,
     advertise: bool,
+    hrt: Option<HrtStream>,
+}
+
+#[derive(Clone, Copy)]
+struct HrtStream {
+    period: Period,
+    state: HrtState,
+    /// A subscriber waiting for the reservation before it is answered (others ask again).
+    waiting: Option<(NodeId, u8)>,
+}
+
+/// The cycle this node runs as master.
+#[derive(Clone, Copy)]
+struct MasterCycle {
+    cycle: u32,
+    next_sync: Micros,
+    epoch: bool,
+}
+
+/// What the node loaded into the controller at the current slot's start.
+#[derive(Clone, Copy)]
+enum Inflight {
+    None,
+    Sync,
+    Hrt(usize),
+    /// The head of the transmit queue as peeked at `at`.
+    Queued {
+        at: Micros,
+    },
 }
 
 struct ImportSlot<'a> {
@@ -291,6 +408,13 @@ pub struct Node<
     reboot: bool,
     events: Deque<Event, EVENT_QUEUE>,
     stats: NodeStats,
+    clock: SlotClock,
+    failover: Failover,
+    scheduler: Scheduler<MASTER_STREAMS>,
+    master: Option<MasterCycle>,
+    inflight: Inflight,
+    /// Last sync heard or sent (boot time before the first).
+    last_sync: Micros,
 }
 
 impl<
@@ -314,6 +438,11 @@ impl<
             return Err(NodeError::BadName);
         }
         let name = String::try_from(config.name).map_err(|_| NodeError::BadName)?;
+        config.cycle.validate().map_err(NodeError::BadCycle)?;
+        let rank = match config.rank {
+            None => None,
+            Some(r) => Some(Rank::new(r).ok_or(NodeError::BadRank)?),
+        };
         Ok(Self {
             config,
             name,
@@ -334,21 +463,44 @@ impl<
             reboot: false,
             events: Deque::new(),
             stats: NodeStats::default(),
+            clock: SlotClock::new(config.cycle),
+            failover: Failover::new(rank, config.cycle.cycle_us, 0),
+            scheduler: Scheduler::new(config.hrt_slots),
+            master: None,
+            inflight: Inflight::None,
+            last_sync: 0,
         })
     }
 
     /// Offers a local topic on the bus through its remote subscriber; returns its stream index
     /// (1…): the stream's message ID is `node ID << 8 | index`. It is advertised at the next
     /// [`tick`](Self::tick).
+    ///
+    /// A `Class::SyncRealTime { period_us }` publisher becomes an HRT stream: its period must
+    /// be a power of two (1…256) of cycles ([`NodeError::HrtPeriod`]) and its messages must fit
+    /// one frame (8 bytes). Its slot is asked of the master when the first remote module
+    /// subscribes; it is sent only by [`slot_tick`](Self::slot_tick).
     pub fn export(&mut self, export: &'a dyn Export) -> Result<u8, NodeError> {
         check_topic(export.topic())?;
         let max = self.max_export_size();
         if export.size() > max {
             return Err(NodeError::TooLarge { size: export.size(), max });
         }
-        if matches!(export.class(), Class::SyncRealTime { .. }) {
-            return Err(NodeError::HrtNotDriven);
-        }
+        let hrt = match export.class() {
+            Class::SyncRealTime { period_us } => {
+                let cycle_us = self.config.cycle.cycle_us;
+                let bad = NodeError::HrtPeriod { period_us, cycle_us };
+                if cycle_us == 0 || period_us % cycle_us != 0 {
+                    return Err(bad);
+                }
+                let period = Period::from_cycles(period_us / cycle_us).map_err(|_| bad)?;
+                if export.size() > MAX_PAYLOAD {
+                    return Err(NodeError::TooLarge { size: export.size(), max: MAX_PAYLOAD });
+                }
+                Some(HrtStream { period, state: HrtState::Idle, waiting: None })
+            }
+            _ => None,
+        };
         if self.exports.iter().any(|e| e.export.topic() == export.topic()) {
             return Err(NodeError::DuplicateTopic);
         }
@@ -356,7 +508,7 @@ impl<
             return Err(NodeError::TooMany);
         }
         self.exports
-            .push(ExportSlot { export, advertise: true })
+            .push(ExportSlot { export, advertise: true, hrt })
             .map_err(|_| NodeError::TooMany)?;
         Ok(self.exports.len() as u8)
     }
@@ -404,6 +556,21 @@ impl<
         self.imports.get(import).map(|i| i.state)
     }
 
+    /// Where HRT export `export`'s reservation stands (`None` for other exports).
+    pub fn hrt_state(&self, export: usize) -> Option<HrtState> {
+        self.exports.get(export).and_then(|e| e.hrt).map(|h| h.state)
+    }
+
+    /// This node's role in the cycle (master, standby candidate or slave).
+    pub fn role(&self) -> Role {
+        self.failover.role()
+    }
+
+    /// The node's view of the cycle.
+    pub fn clock(&self) -> &SlotClock {
+        &self.clock
+    }
+
     /// Number of distinct nodes heard from.
     pub fn peer_count(&self) -> usize {
         self.peers.len()
@@ -447,7 +614,7 @@ impl<
             r.bad_length,
         ]
         .iter()
-        .fold(0u32, |a, &b| a.saturating_add(b))
+        .fold(s.bad_syncs, |a, &b| a.saturating_add(b))
     }
 
     /// Asks `target` (or every node: 255) to reboot.
@@ -480,11 +647,25 @@ impl<
 
     /// Takes one received frame: management messages are reassembled and handled, subscribed
     /// streams reassembled and published locally, everything else counted and dropped.
+    ///
+    /// Unslotted mode: sync frames are counted (and checked) but not followed, HRT
+    /// registrations are ignored. [`slot_tick`](Self::slot_tick) takes the received frames
+    /// itself and follows the cycle (so a node that only polls links none of the cycle's code).
     pub fn on_frame(&mut self, r: &Received) {
+        self.receive::<false>(r);
+    }
+
+    fn receive<const CYCLE: bool>(&mut self, r: &Received) {
         bump(&mut self.stats.frames_received);
+        self.start(r.at);
         let id = r.frame.id();
         if id.sync_cycle().is_some() {
             bump(&mut self.stats.sync_frames);
+            match Sync::from_frame(&r.frame) {
+                Ok(sync) if CYCLE => self.on_sync(r.at, &sync),
+                Ok(_) => {}
+                Err(_) => bump(&mut self.stats.bad_syncs),
+            }
             return;
         }
         let Some((from, index)) = NodeId::of(id.message) else {
@@ -497,6 +678,11 @@ impl<
                 Some(m) => Message::decode(m.data),
             };
             match decoded {
+                Ok(msg @ (Message::HrtRequest { .. } | Message::HrtGrant { .. })) => {
+                    if CYCLE {
+                        self.on_hrt_management(from, msg);
+                    }
+                }
                 Ok(msg) => self.on_management(from, msg, r.at),
                 Err(_) => bump(&mut self.stats.malformed),
             }
@@ -521,7 +707,7 @@ impl<
     /// Runs the protocol at time `now`: heartbeat, pending advertisements, subscription
     /// retries, encoding of published messages into the transmit queue, deadline expiry.
     pub fn tick(&mut self, now: Micros) {
-        let boot = *self.boot.get_or_insert(now);
+        let boot = self.start(now);
         self.rx.expire(now);
 
         if now >= self.next_heartbeat {
@@ -603,8 +789,8 @@ impl<
         let mut buf = [0u8; BUF];
         for (i, slot) in self.exports.iter().enumerate() {
             let e = slot.export;
-            if e.active_len() == 0 {
-                continue;
+            if e.active_len() == 0 || slot.hrt.is_some() {
+                continue; // HRT streams go in their reserved slots (`slot_tick`)
             }
             let frames = frame_count(e.size()).unwrap_or(usize::MAX);
             let message = me.message_id(i as u8 + 1);
@@ -635,9 +821,9 @@ impl<
 
     fn advertisement(&self, i: usize) -> Message {
         let e = self.exports[i].export;
-        let class = match e.class() {
-            Class::AsyncRealTime { deadline_us } => BusClass::Srt { deadline_us },
-            // SyncRealTime is refused by `export`; NonRealTime:
+        let class = match (e.class(), self.exports[i].hrt) {
+            (_, Some(h)) => BusClass::Hrt { period_cycles: h.period.cycles() as u16 },
+            (Class::AsyncRealTime { deadline_us }, _) => BusClass::Srt { deadline_us },
             _ => BusClass::Nrt,
         };
         Message::Advertise {
@@ -697,6 +883,7 @@ impl<
                 }
                 if let Some(new) = self.ids.on_heartbeat(from, &uid) {
                     self.readvertise();
+                    self.re_register(); // the streams' message IDs changed
                     self.next_heartbeat = now; // claim the new ID at once
                     self.event(Event::NodeIdChanged(new));
                 }
@@ -756,6 +943,16 @@ impl<
                         (SubscribeResult::TypeMismatch, 0)
                     }
                     Some(i) => {
+                        if let Some(h) = self.exports[i].hrt.as_mut() {
+                            if !matches!(h.state, HrtState::Granted { .. }) {
+                                // Answered when the master grants or refuses the slot.
+                                h.waiting = Some((from, queue_len));
+                                if matches!(h.state, HrtState::Idle | HrtState::Refused(_)) {
+                                    h.state = HrtState::Wanted;
+                                }
+                                return;
+                            }
+                        }
                         self.exports[i].export.activate(queue_len);
                         self.event(Event::RemoteSubscriber { export: i, from, queue_len });
                         (SubscribeResult::Ok, me.message_id(i as u8 + 1).0)
@@ -820,6 +1017,347 @@ impl<
             // Requests for other nodes and answers to other nodes' requests: bus traffic.
             _ => {}
         }
+    }
+}
+
+/// The TDMA cycle (docs/middleware.md, "Remote topics: the node runtime", "The TDMA cycle
+/// and HRT streams").
+impl<
+        'a,
+        const EXPORTS: usize,
+        const IMPORTS: usize,
+        const TXQ: usize,
+        const RX: usize,
+        const BUF: usize,
+    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF>
+{
+    /// The slot timer: call at every slot boundary ([`next_slot_at`](Self::next_slot_at)), with
+    /// `now` the boundary's time. In order:
+    ///
+    /// 1. the previous slot is over: abort what is still pending; an SRT/NRT frame that went
+    ///    out leaves the queue, one that lost arbitration stays for a later free slot, an HRT
+    ///    frame still pending is a missed occurrence;
+    /// 2. take received frames (syncs feed the [`SlotClock`] and the failover state machine);
+    /// 3. the protocol's timers ([`tick`](Self::tick)), master takeover, HRT registrations;
+    /// 4. as master, at a cycle's start: send the sync with the next cycle's reservations;
+    /// 5. load this slot's frame: in slot 0 nothing (the sync's); in a reserved slot this
+    ///    node's HRT frame if the slot is its stream's, else nothing; in a free slot the most
+    ///    urgent SRT/NRT frame. Without a cycle (no sync heard for `sync_timeout_us`, or none
+    ///    since boot for that long) every slot is free.
+    pub fn slot_tick<C: SlotController + ?Sized>(&mut self, now: Micros, can: &mut C) {
+        self.start(now);
+        let aborted = can.abort_pending_count();
+        match core::mem::replace(&mut self.inflight, Inflight::None) {
+            Inflight::Queued { at } if aborted == 0 => {
+                self.tx.pop(at);
+                bump(&mut self.stats.frames_sent);
+            }
+            Inflight::Queued { .. } => bump(&mut self.stats.slot_retries),
+            Inflight::Hrt(_) if aborted == 0 => bump(&mut self.stats.hrt_sent),
+            Inflight::Hrt(i) => self.hrt_miss(i),
+            Inflight::Sync | Inflight::None => {}
+        }
+        while let Some(r) = can.try_receive() {
+            self.receive::<true>(&r);
+        }
+        self.errors = can.error_counters();
+        self.tick(now);
+        let a = self.failover.poll(now);
+        self.apply(a);
+        self.register_hrt(now);
+
+        if let Some(mut m) = self.master {
+            if now >= m.next_sync {
+                let sync =
+                    Sync::new(m.cycle, self.scheduler.mask(m.cycle.wrapping_add(1)), m.epoch);
+                let ok = can.try_transmit(&sync.to_frame()).is_ok();
+                if ok {
+                    self.clock.on_sync(now, &sync);
+                    self.last_sync = now;
+                    bump(&mut self.stats.syncs_sent);
+                    self.inflight = Inflight::Sync;
+                }
+                let cycle_us = Micros::from(self.config.cycle.cycle_us);
+                m.cycle = m.cycle.wrapping_add(1);
+                m.next_sync += cycle_us;
+                if m.next_sync <= now {
+                    m.next_sync = now + cycle_us; // the timer was late by a cycle: restart
+                }
+                self.master = Some(m);
+                let a = self.failover.on_sync_sent(now, &sync, ok);
+                self.apply(a);
+            }
+        }
+        if !matches!(self.inflight, Inflight::None) {
+            return;
+        }
+
+        match self.clock.state(now) {
+            ClockState::Running(p) if p.slot == SYNC_SLOT => {}
+            ClockState::Running(p) if self.clock.mask(p.cycle) & (1 << p.slot) != 0 => {
+                let mine = self.exports.iter().position(|e| {
+                    e.hrt.is_some_and(|h| match h.state {
+                        HrtState::Granted { phase } => {
+                            phase.slot == p.slot && occurs(h.period, phase, p.cycle)
+                        }
+                        _ => false,
+                    })
+                });
+                if let Some(i) = mine {
+                    self.send_hrt(i, can);
+                }
+            }
+            ClockState::Running(_) => self.send_queued(now, can),
+            ClockState::Unsynced | ClockState::Lost => {
+                let quiet = now.saturating_sub(self.last_sync);
+                if quiet >= sync_timeout_us(self.config.cycle.cycle_us) {
+                    self.send_queued(now, can); // no cycle on the bus: every slot is free
+                }
+            }
+        }
+    }
+
+    /// When the slot timer should call [`slot_tick`](Self::slot_tick) next: the next slot
+    /// boundary of the cycle as this node's clock sees it (as master: of its own cycle), or one
+    /// nominal slot later while no cycle runs.
+    pub fn next_slot_at(&self, now: Micros) -> Micros {
+        let slot_us = Micros::from(self.config.cycle.slot_us().max(1));
+        let by_clock = match self.clock.state(now) {
+            ClockState::Running(p) => {
+                self.clock.slot_start(p.cycle, p.slot + 1).unwrap_or(now + slot_us)
+            }
+            _ => now + slot_us,
+        };
+        match self.master {
+            Some(m) => by_clock.min(m.next_sync.max(now)),
+            None => by_clock,
+        }
+    }
+
+    /// HRT_REQUEST (answered as master) and HRT_GRANT (for this node's streams).
+    fn on_hrt_management(&mut self, from: NodeId, msg: Message) {
+        let me = self.ids.node_id();
+        match msg {
+            Message::HrtRequest { message_id, period_cycles, frames } if self.master.is_some() => {
+                let message = MessageId(message_id);
+                let granted = match NodeId::of(message) {
+                    Some((owner, index)) if owner == from && index != MANAGEMENT_INDEX => {
+                        if frames != 1 {
+                            Err(HrtResult::TooManyFrames)
+                        } else {
+                            self.scheduler
+                                .register(message, u32::from(period_cycles))
+                                .map_err(hrt_result)
+                        }
+                    }
+                    _ => Err(HrtResult::Conflict),
+                };
+                let (offset, slot, result) = match granted {
+                    Ok(p) => (p.offset, p.slot, HrtResult::Ok),
+                    Err(r) => (0, 0, r),
+                };
+                let _ = self.send(&Message::HrtGrant {
+                    message_id,
+                    period_cycles,
+                    offset,
+                    slot,
+                    result,
+                });
+            }
+            Message::HrtGrant { message_id, period_cycles, offset, slot, result } => {
+                let Some((owner, index)) = NodeId::of(MessageId(message_id)) else {
+                    bump(&mut self.stats.unexpected);
+                    return;
+                };
+                if owner != me {
+                    return; // another node's grant
+                }
+                let i = usize::from(index).wrapping_sub(1);
+                let asked = self.exports.get(i).and_then(|e| e.hrt).is_some_and(|h| {
+                    matches!(h.state, HrtState::Requested { .. })
+                        && h.period.cycles() == u32::from(period_cycles)
+                });
+                let slots = self.config.cycle.slots;
+                let valid = result != HrtResult::Ok
+                    || (u32::from(offset) < u32::from(period_cycles) && slot > 0 && slot < slots);
+                if !asked || !valid {
+                    bump(&mut self.stats.unexpected);
+                    return;
+                }
+                let r =
+                    if result == HrtResult::Ok { Ok(Phase { offset, slot }) } else { Err(result) };
+                self.on_grant(i, r);
+            }
+            _ => {}
+        }
+    }
+
+    /// Boot time, set by the first call that tells the time.
+    fn start(&mut self, now: Micros) -> Micros {
+        if let Some(b) = self.boot {
+            return b;
+        }
+        self.boot = Some(now);
+        self.last_sync = now;
+        self.failover = Failover::new(self.failover.rank(), self.config.cycle.cycle_us, now);
+        now
+    }
+
+    fn on_sync(&mut self, at: Micros, sync: &Sync) {
+        self.clock.on_sync(at, sync);
+        self.last_sync = at;
+        let a = self.failover.on_sync(at, sync);
+        self.apply(a);
+    }
+
+    fn apply(&mut self, a: Actions) {
+        if let Some(s) = a.start_syncing {
+            self.master = Some(MasterCycle { cycle: s.cycle, next_sync: s.at, epoch: s.epoch });
+            self.scheduler.clear();
+            self.clock.reset();
+        }
+        if a.stop_syncing {
+            self.master = None;
+        }
+        if a.re_register {
+            self.re_register();
+        }
+    }
+
+    /// The calendar holding this node's reservations is gone (new master, new epoch) or their
+    /// message IDs changed: ask again.
+    fn re_register(&mut self) {
+        for e in self.exports.iter_mut() {
+            if let Some(h) = e.hrt.as_mut() {
+                if matches!(h.state, HrtState::Granted { .. } | HrtState::Requested { .. }) {
+                    h.state = HrtState::Wanted;
+                }
+            }
+        }
+    }
+
+    /// Asks for the reservations that are wanted (or whose request timed out) while a master
+    /// is heard; as master, registers them in its own calendar.
+    fn register_hrt(&mut self, now: Micros) {
+        if self.master.is_none() && !(self.failover.synced() && self.clock.hrt_allowed(now)) {
+            return;
+        }
+        let timeout = Micros::from(self.config.request_timeout_us);
+        let me = self.ids.node_id();
+        for i in 0..self.exports.len() {
+            let Some(h) = self.exports[i].hrt else { continue };
+            let due = match h.state {
+                HrtState::Wanted => true,
+                HrtState::Requested { since } => now.saturating_sub(since) >= timeout,
+                _ => false,
+            };
+            if !due {
+                continue;
+            }
+            let message = me.message_id(i as u8 + 1);
+            let cycles = h.period.cycles();
+            if self.master.is_some() {
+                let r = self.scheduler.register(message, cycles).map_err(hrt_result);
+                self.exports[i].hrt =
+                    Some(HrtStream { state: HrtState::Requested { since: now }, ..h });
+                self.on_grant(i, r);
+            } else {
+                let msg = Message::HrtRequest {
+                    message_id: message.0,
+                    period_cycles: cycles as u16,
+                    frames: 1,
+                };
+                if self.send(&msg).is_err() {
+                    break; // retried at the next slot
+                }
+                self.exports[i].hrt =
+                    Some(HrtStream { state: HrtState::Requested { since: now }, ..h });
+            }
+        }
+    }
+
+    /// The master answered HRT export `i`'s request; answers the subscriber waiting for it.
+    fn on_grant(&mut self, i: usize, r: Result<Phase, HrtResult>) {
+        let Some(mut h) = self.exports[i].hrt else { return };
+        let waiting = h.waiting.take();
+        let e = self.exports[i].export;
+        let me = self.ids.node_id();
+        let (state, result, message_id) = match r {
+            Ok(phase) => {
+                (HrtState::Granted { phase }, SubscribeResult::Ok, me.message_id(i as u8 + 1).0)
+            }
+            Err(res) => {
+                bump(&mut self.stats.hrt_refused);
+                (HrtState::Refused(res), SubscribeResult::NoSlot, 0)
+            }
+        };
+        h.state = state;
+        self.exports[i].hrt = Some(h);
+        let Some((from, queue_len)) = waiting else { return };
+        if result == SubscribeResult::Ok {
+            e.activate(queue_len);
+            self.event(Event::RemoteSubscriber { export: i, from, queue_len });
+        }
+        let _ = self.send(&Message::SubscribeResponse {
+            target: from.get(),
+            topic: String::try_from(e.topic()).unwrap_or_default(),
+            result,
+            message_id,
+        });
+    }
+
+    /// Loads HRT export `i`'s newest message in its reserved slot; older ones missed their
+    /// deadline (each occurrence carries one message: the implicit deadline is the period).
+    fn send_hrt<C: CanController + ?Sized>(&mut self, i: usize, can: &mut C) {
+        let e = self.exports[i].export;
+        let id = FrameId {
+            laxity: Laxity::HRT,
+            message: self.ids.node_id().message_id(i as u8 + 1),
+            fragment: 0,
+        };
+        let mut buf = [0u8; MAX_PAYLOAD];
+        let mut frame = None;
+        while let Some(encoded) = e.pop_encoded(&mut buf) {
+            if frame.is_some() {
+                bump(&mut self.stats.deadline_misses);
+                e.report_deadline_miss(); // superseded by a newer message
+            }
+            match encoded.ok().and_then(|(n, _)| Frame::new(id, &buf[..n]).ok()) {
+                Some(f) => frame = Some(f),
+                None => bump(&mut self.stats.bad_payloads),
+            }
+        }
+        let Some(frame) = frame else { return };
+        if can.try_transmit(&frame).is_ok() {
+            bump(&mut self.stats.queued);
+            self.inflight = Inflight::Hrt(i);
+        } else {
+            self.hrt_miss(i);
+        }
+    }
+
+    fn hrt_miss(&mut self, i: usize) {
+        bump(&mut self.stats.hrt_missed);
+        bump(&mut self.stats.deadline_misses);
+        self.exports[i].export.report_deadline_miss();
+    }
+
+    /// Loads the most urgent SRT/NRT frame (one per free slot).
+    fn send_queued<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
+        if let Some(frame) = self.tx.peek(now) {
+            if can.try_transmit(&frame).is_ok() {
+                self.inflight = Inflight::Queued { at: now };
+            }
+        }
+    }
+}
+
+fn hrt_result(r: Reject) -> HrtResult {
+    match r {
+        Reject::NotHarmonic => HrtResult::NotHarmonic,
+        Reject::NoFreePhase => HrtResult::NoFreePhase,
+        Reject::Full => HrtResult::Full,
+        Reject::ReservedId | Reject::Conflict => HrtResult::Conflict,
     }
 }
 

@@ -220,7 +220,7 @@ r2p_testkit::suite! {
         });
         run(&bus, &mut [&mut a], 10_000);
         let s = a.stats();
-        assert_eq!(s.sync_frames, 1);
+        assert_eq!((s.sync_frames, s.bad_syncs), (1, 1), "an empty sync is counted, not fatal");
         assert_eq!(s.unknown_frames, 3);
         assert_eq!(s.malformed, 3);
         assert_eq!(s.unexpected, 1);
@@ -237,8 +237,14 @@ r2p_testkit::suite! {
 
     fn hrt_and_invalid_exports_are_refused_explicitly() {
         static T: Topic<'static, u32, 8, 4> = Topic::new("setpoint", 0);
+        // Not a power of two of the default 10 ms cycle.
         static HRT: Publisher<'static, u32> = Publisher::new(&T, Class::SyncRealTime { period_us: 5_000 });
         static HRT_OUT: RemoteSubscriber<'static, u32, 1> = RemoteSubscriber::new(&HRT);
+        static HRT3: Publisher<'static, u32> = Publisher::new(&T, Class::SyncRealTime { period_us: 30_000 });
+        static HRT3_OUT: RemoteSubscriber<'static, u32, 1> = RemoteSubscriber::new(&HRT3);
+        static LONG: Topic<'static, [u8; 9], 2, 1> = Topic::new("long", [0; 9]);
+        static LONG_PUB: Publisher<'static, [u8; 9]> = Publisher::new(&LONG, Class::SyncRealTime { period_us: 20_000 });
+        static LONG_OUT: RemoteSubscriber<'static, [u8; 9], 1> = RemoteSubscriber::new(&LONG_PUB);
         static NRT: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
         static NRT_OUT: RemoteSubscriber<'static, u32, 1> = RemoteSubscriber::new(&NRT);
         static BIG: Topic<'static, [u8; 65], 2, 1> = Topic::new("big", [0; 65]);
@@ -248,7 +254,12 @@ r2p_testkit::suite! {
         static BAD_PUB: Publisher<'static, u8> = Publisher::new(&BAD, Class::NonRealTime);
         static BAD_OUT: RemoteSubscriber<'static, u8, 1> = RemoteSubscriber::new(&BAD_PUB);
         let mut a = TestNode::new(config(1, "a"), &NoParams).unwrap();
-        assert_eq!(a.export(&HRT_OUT), Err(NodeError::HrtNotDriven));
+        assert_eq!(a.export(&HRT_OUT), Err(NodeError::HrtPeriod { period_us: 5_000, cycle_us: 10_000 }));
+        assert_eq!(a.export(&HRT3_OUT), Err(NodeError::HrtPeriod { period_us: 30_000, cycle_us: 10_000 }));
+        assert_eq!(a.export(&LONG_OUT), Err(NodeError::TooLarge { size: 9, max: 8 }), "HRT: one frame");
+        assert!(matches!(TestNode::new(NodeConfig { rank: Some(16), ..config(1, "a") }, &NoParams), Err(NodeError::BadRank)));
+        let short = rtcan::CycleConfig { slots: 64, ..rtcan::CycleConfig::DEFAULT };
+        assert!(matches!(TestNode::new(NodeConfig { cycle: short, ..config(1, "a") }, &NoParams), Err(NodeError::BadCycle(_))));
         assert_eq!(a.export(&BIG_OUT), Err(NodeError::TooLarge { size: 65, max: 64 }));
         assert_eq!(a.export(&BAD_OUT), Err(NodeError::BadTopicName));
         assert_eq!(a.export(&NRT_OUT), Ok(1));

@@ -1,0 +1,132 @@
+//! Behaviour suite of the TDMA cycle: a master and two modules on the slotted loopback bus, in
+//! virtual time (host and QEMU).
+
+use r2p_management::message::{HrtResult, SubscribeResult};
+use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
+use rtcan::failover::Role;
+use rtcan::{CycleConfig, Frame, FrameId, Micros};
+
+use crate::node::{HrtState, ImportState, NodeConfig};
+use crate::testbus::{run_slots, uid, Bus, TestNode};
+use crate::{NoParams, RemotePublisher, RemoteSubscriber};
+
+/// 4 ms cycles of 16 slots of 250 µs (250 bit times at 1 Mbit/s).
+pub const CYCLE: CycleConfig = CycleConfig { bit_rate: 1_000_000, cycle_us: 4_000, slots: 16 };
+pub const CYCLE_US: Micros = 4_000;
+
+/// A node on the TDMA bus: fast protocol timers, the test cycle, two HRT slots as master.
+pub fn tdma(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
+    NodeConfig {
+        heartbeat_period_us: 20_000,
+        request_timeout_us: 30_000,
+        cycle: CYCLE,
+        rank,
+        hrt_slots: 2,
+        ..NodeConfig::new(uid(n), name)
+    }
+}
+
+r2p_testkit::suite! {
+    fn an_hrt_topic_reaches_the_subscriber_in_its_slot_every_second_cycle() {
+        // A publishes `setpoint` every 2 cycles (8 ms, HRT); B subscribes; M is the master.
+        static A_T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("setpoint", 0);
+        static A_PUB: Publisher<'static, u32> = Publisher::new(&A_T, Class::SyncRealTime { period_us: 8_000 });
+        static A_OUT: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&A_PUB);
+        static B_T: Topic<'static, u32, { pool_size(&[4], 1) }, 1> = Topic::new("setpoint", 0);
+        static B_PUB: Publisher<'static, u32> = Publisher::new(&B_T, Class::NonRealTime);
+        static B_IN: RemotePublisher<'static, u32> = RemotePublisher::new(&B_PUB, &B_T);
+        static B_SUB: Subscriber<'static, u32, 4> = Subscriber::new();
+        A_T.advertise(&A_PUB).unwrap();
+        A_T.subscribe(&A_OUT).unwrap();
+        B_T.advertise(&B_PUB).unwrap();
+        B_T.subscribe(&B_SUB).unwrap();
+
+        let bus = Bus::<3>::slotted(CYCLE);
+        let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
+        let mut a = TestNode::new(tdma(2, "motor", None), &NoParams).unwrap();
+        let mut b = TestNode::new(tdma(3, "control", None), &NoParams).unwrap();
+        assert_eq!(a.export(&A_OUT), Ok(1));
+        assert_eq!(b.import(&B_IN), Ok(0));
+        assert_eq!(a.hrt_state(0), Some(HrtState::Idle), "no subscriber yet: nothing reserved");
+        run_slots(&bus, &mut [&mut m, &mut a, &mut b], 150_000);
+
+        assert_eq!((m.role(), a.role(), b.role()), (Role::Master, Role::Slave, Role::Slave));
+        let Some(HrtState::Granted { phase }) = a.hrt_state(0) else {
+            panic!("not granted: {:?}", a.hrt_state(0))
+        };
+        assert!(phase.offset < 2 && (1..=2).contains(&phase.slot));
+        let message = a.node_id().message_id(1);
+        assert_eq!(b.import_state(0), Some(ImportState::Subscribed { from: a.node_id(), message }));
+
+        // A garbage sync (wrong length) on the way: counted, not fatal.
+        bus.inject(Frame::new(FrameId::sync(3), &[1, 2, 3]).unwrap());
+        bus.clear_hrt_log();
+        let mut got: heapless::Vec<u32, 8> = heapless::Vec::new();
+        for k in 0..8u32 {
+            A_PUB.publish_with(|v| *v = k).unwrap();
+            let until = bus.now.get() + 2 * CYCLE_US;
+            run_slots(&bus, &mut [&mut m, &mut a, &mut b], until);
+            got.extend(core::iter::from_fn(|| B_SUB.try_recv()).map(|v| *v));
+        }
+        assert_eq!(got.as_slice(), &[0, 1, 2, 3, 4, 5, 6, 7]);
+        let log = bus.hrt_log();
+        assert_eq!(log.len(), 8);
+        for (k, seen) in log.iter().enumerate() {
+            assert_eq!((seen.message, seen.first, seen.slot), (message, k as u8, phase.slot));
+            assert_eq!(seen.cycle % 2, u32::from(phase.offset), "in the granted cycles");
+        }
+        for w in log.windows(2) {
+            // Zero jitter in slot terms: exactly one period apart, at the slot's start.
+            assert_eq!((w[1].at - w[0].at, w[1].cycle - w[0].cycle), (2 * CYCLE_US, 2));
+        }
+        assert_eq!(bus.violations(), 0, "nothing but HRT in reserved slots, no HRT elsewhere");
+        for n in [&m, &a, &b] {
+            assert_eq!(n.stats().bad_syncs, 1);
+        }
+        assert_eq!((a.stats().hrt_sent, a.stats().hrt_missed), (8, 0));
+        assert_eq!(A_PUB.stats().deadline_misses, 0);
+        assert!(m.stats().syncs_sent > 30);
+        // The slot timer's next boundary: one slot on (the bus's time is a slot boundary).
+        let now = bus.now.get();
+        assert_eq!((a.next_slot_at(now), b.next_slot_at(now + 100)), (now + 250, now + 250));
+        assert_eq!(bus.overflow.get(), 0);
+    }
+
+    fn a_stream_the_master_cannot_admit_yields_no_slot() {
+        // One HRT slot on the master; A offers two streams of 1 cycle: the second does not fit.
+        static T1: Topic<'static, u8, { pool_size(&[1], 1) }, 1> = Topic::new("fast1", 0);
+        static P1: Publisher<'static, u8> = Publisher::new(&T1, Class::SyncRealTime { period_us: 4_000 });
+        static O1: RemoteSubscriber<'static, u8, 1> = RemoteSubscriber::new(&P1);
+        static T2: Topic<'static, u8, { pool_size(&[1], 1) }, 1> = Topic::new("fast2", 0);
+        static P2: Publisher<'static, u8> = Publisher::new(&T2, Class::SyncRealTime { period_us: 4_000 });
+        static O2: RemoteSubscriber<'static, u8, 1> = RemoteSubscriber::new(&P2);
+        static L1: Topic<'static, u8, { pool_size(&[1], 1) }, 1> = Topic::new("fast1", 0);
+        static LP1: Publisher<'static, u8> = Publisher::new(&L1, Class::NonRealTime);
+        static I1: RemotePublisher<'static, u8> = RemotePublisher::new(&LP1, &L1);
+        static L2: Topic<'static, u8, { pool_size(&[1], 1) }, 1> = Topic::new("fast2", 0);
+        static LP2: Publisher<'static, u8> = Publisher::new(&L2, Class::NonRealTime);
+        static I2: RemotePublisher<'static, u8> = RemotePublisher::new(&LP2, &L2);
+        T1.subscribe(&O1).unwrap();
+        T2.subscribe(&O2).unwrap();
+
+        let bus = Bus::<3>::slotted(CYCLE);
+        let mut m = TestNode::new(NodeConfig { hrt_slots: 1, ..tdma(1, "psu", Some(0)) }, &NoParams).unwrap();
+        let mut a = TestNode::new(tdma(2, "a", None), &NoParams).unwrap();
+        let mut b = TestNode::new(tdma(3, "b", None), &NoParams).unwrap();
+        a.export(&O1).unwrap();
+        a.export(&O2).unwrap();
+        b.import(&I1).unwrap();
+        b.import(&I2).unwrap();
+        run_slots(&bus, &mut [&mut m, &mut a, &mut b], 200_000);
+
+        let states = [b.import_state(0), b.import_state(1)];
+        let from = a.node_id();
+        let refused = Some(ImportState::Refused { from, result: SubscribeResult::NoSlot });
+        assert!(states.contains(&refused), "{:?}", states);
+        assert!(states.iter().any(|s| matches!(s, Some(ImportState::Subscribed { .. }))));
+        let hrt = [a.hrt_state(0), a.hrt_state(1)];
+        assert!(hrt.contains(&Some(HrtState::Refused(HrtResult::Full))), "{:?}", hrt);
+        assert_eq!(a.stats().hrt_refused, 1);
+        assert_eq!(bus.violations(), 0);
+    }
+}
