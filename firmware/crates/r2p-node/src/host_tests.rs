@@ -50,7 +50,9 @@ impl CanController for Loopback {
         self.wires.borrow_mut().inboxes[self.me].pop_front()
     }
     fn set_filters(&mut self, _: &[Filter]) {}
-    fn abort_pending(&mut self) {}
+    fn abort_pending(&mut self) -> usize {
+        0
+    }
     fn bus_state(&self) -> BusState {
         BusState::ErrorActive
     }

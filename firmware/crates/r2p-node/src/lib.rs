@@ -40,9 +40,7 @@ mod testbus;
 #[cfg(any(test, feature = "selftest"))]
 mod tests;
 
-pub use node::{
-    Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats, SlotController,
-};
+pub use node::{Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats};
 pub use params::{NoParams, Param, ParamStore, RamParams};
 pub use remote::{Export, Import, ImportError, RemotePublisher, RemoteSubscriber};
 pub use wire::{Wire, WireError};

@@ -45,19 +45,6 @@ pub const EVENT_QUEUE: usize = 8;
 /// HRT streams a node's calendar holds when it is master ([`Scheduler`] capacity).
 pub const MASTER_STREAMS: usize = 16;
 
-/// A CAN controller the slot timer drives: the RTCAN contract plus the outcome of an abort.
-///
-/// At each slot boundary the node aborts what is still pending; it must know whether the
-/// SRT/NRT frame it loaded at the slot's start went out (remove it from the queue) or lost
-/// arbitration to another node's (keep it, send it in a later free slot). bxCAN's abort
-/// request tells (`Can::abort` returns true if a frame was aborted).
-pub trait SlotController: CanController {
-    /// Aborts the frames still waiting in transmit mailboxes, as
-    /// [`CanController::abort_pending`], and returns how many were aborted (0: everything
-    /// loaded since the last call went out).
-    fn abort_pending_count(&mut self) -> usize;
-}
-
 /// What a node is and how it paces the protocol.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct NodeConfig {
@@ -1044,9 +1031,9 @@ impl<
     ///    node's HRT frame if the slot is its stream's, else nothing; in a free slot the most
     ///    urgent SRT/NRT frame. Without a cycle (no sync heard for `sync_timeout_us`, or none
     ///    since boot for that long) every slot is free.
-    pub fn slot_tick<C: SlotController + ?Sized>(&mut self, now: Micros, can: &mut C) {
+    pub fn slot_tick<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
         self.start(now);
-        let aborted = can.abort_pending_count();
+        let aborted = can.abort_pending();
         match core::mem::replace(&mut self.inflight, Inflight::None) {
             Inflight::Queued { at } if aborted == 0 => {
                 self.tx.pop(at);

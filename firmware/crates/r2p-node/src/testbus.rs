@@ -17,7 +17,7 @@ use heapless::{Deque, Vec};
 use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError};
 use rtcan::{CanController, CycleConfig, Frame, Laxity, MessageId, Micros, Sync};
 
-use crate::{Node, SlotController};
+use crate::Node;
 
 /// Frames a port can hold before the bus drops (and counts) more.
 pub const DEPTH: usize = 48;
@@ -237,23 +237,17 @@ impl<const PORTS: usize> CanController for Port<'_, PORTS> {
         self.bus.queues.borrow_mut()[self.me].pop_front()
     }
     fn set_filters(&mut self, _filters: &[Filter]) {}
-    fn abort_pending(&mut self) {
-        self.abort_pending_count();
+    fn abort_pending(&mut self) -> usize {
+        let mut boxes = self.bus.mailboxes.borrow_mut();
+        let n = boxes[self.me].len();
+        boxes[self.me].clear();
+        n
     }
     fn bus_state(&self) -> BusState {
         BusState::ErrorActive
     }
     fn error_counters(&self) -> ErrorCounters {
         ErrorCounters::default()
-    }
-}
-
-impl<const PORTS: usize> SlotController for Port<'_, PORTS> {
-    fn abort_pending_count(&mut self) -> usize {
-        let mut boxes = self.bus.mailboxes.borrow_mut();
-        let n = boxes[self.me].len();
-        boxes[self.me].clear();
-        n
     }
 }
 

@@ -94,10 +94,11 @@ impl CanController for BxCan<'_> {
         }
     }
 
-    fn abort_pending(&mut self) {
-        for mb in [can::Mailbox::Mailbox0, can::Mailbox::Mailbox1, can::Mailbox::Mailbox2] {
-            self.can.abort(mb);
-        }
+    fn abort_pending(&mut self) -> usize {
+        [can::Mailbox::Mailbox0, can::Mailbox::Mailbox1, can::Mailbox::Mailbox2]
+            .into_iter()
+            .filter(|&mb| self.can.abort(mb))
+            .count()
     }
 
     fn bus_state(&self) -> BusState {

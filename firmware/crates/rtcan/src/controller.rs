@@ -79,8 +79,10 @@ pub trait CanController {
     fn set_filters(&mut self, filters: &[Filter]);
 
     /// Aborts frames still waiting in transmit mailboxes (an HRT frame that missed its slot
-    /// must not go out in someone else's).
-    fn abort_pending(&mut self);
+    /// must not go out in someone else's) and returns how many it aborted: 0 means every frame
+    /// loaded since the last call went out, which is how the slot timer learns whether its
+    /// SRT/NRT frame won arbitration or must be retried in a later free slot.
+    fn abort_pending(&mut self) -> usize;
 
     /// The fault confinement state.
     fn bus_state(&self) -> BusState;
