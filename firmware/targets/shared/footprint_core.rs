@@ -4,13 +4,27 @@
 //! A sensor task publishes `readings` (SRT, 10 ms deadline) to a local subscriber and, through
 //! the node runtime, to any module that subscribes over the bus; a remote `setpoint` topic is
 //! imported and consumed locally; the node claims its node ID, sends heartbeats, advertises,
-//! answers subscriptions and parameter requests. It is a measurement, not a product.
+//! answers subscriptions and parameter requests. Nodes are tasks with priorities: the bus runs
+//! on an interrupt executor (preempting everything in thread mode), the sensor and consumer
+//! nodes on the thread-mode executor. It is a measurement, not a product.
 
-use embassy_executor::Spawner;
+use embassy_executor::{InterruptExecutor, Spawner};
+use embassy_stm32::interrupt;
+use embassy_stm32::interrupt::{InterruptExt, Priority};
 use embassy_time::{Instant, Timer};
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use r2p_node::{Node, NodeConfig, Param, RamParams, RemotePublisher, RemoteSubscriber};
-use rtcan::CanController;
+use rtcan_bxcan::BxCan;
+
+/// The high-priority executor the bus runs on, woken through an interrupt no peripheral of
+/// the module uses (USART3 exists on both the F103CB and the F407VG).
+static BUS_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
+
+#[interrupt]
+unsafe fn USART3() {
+    // SAFETY: the interrupt is reserved for this executor (started in `run`).
+    unsafe { BUS_EXECUTOR.on_interrupt() }
+}
 
 static READINGS: Topic<'static, u32, { pool_size(&[4, 4], 1) }, 2> = Topic::new("readings", 0);
 static READINGS_PUB: Publisher<'static, u32> =
@@ -50,22 +64,28 @@ async fn consumer() {
     }
 }
 
-/// Wires the topics, starts the tasks and runs the node on `can` forever.
-pub async fn run(spawner: Spawner, can: &mut impl CanController, uid: [u8; 12]) -> ! {
-    READINGS.advertise(&READINGS_PUB).unwrap();
-    READINGS.subscribe(&READINGS_LOCAL).unwrap();
-    READINGS.subscribe(&READINGS_OUT).unwrap();
-    SETPOINT.advertise(&SETPOINT_PUB).unwrap();
-    SETPOINT.subscribe(&SETPOINT_SUB).unwrap();
-    spawner.spawn(sensor()).unwrap();
-    spawner.spawn(consumer()).unwrap();
-
+/// The bus: the node runtime polled every millisecond at interrupt priority.
+#[embassy_executor::task]
+async fn bus(mut can: BxCan<'static>, uid: [u8; 12]) {
     let mut node: Node<'static, 2, 2, 32, 4, 64> =
         Node::new(NodeConfig::new(uid, "footprint"), &PARAMS).unwrap();
     node.export(&READINGS_OUT).unwrap();
     node.import(&SETPOINT_IN).unwrap();
     loop {
-        node.poll(Instant::now().as_micros(), can);
+        node.poll(Instant::now().as_micros(), &mut can);
         Timer::after_millis(1).await;
     }
+}
+
+/// Wires the topics and starts the nodes: the bus at interrupt priority, the rest in thread mode.
+pub fn run(spawner: Spawner, can: BxCan<'static>, uid: [u8; 12]) {
+    READINGS.advertise(&READINGS_PUB).unwrap();
+    READINGS.subscribe(&READINGS_LOCAL).unwrap();
+    READINGS.subscribe(&READINGS_OUT).unwrap();
+    SETPOINT.advertise(&SETPOINT_PUB).unwrap();
+    SETPOINT.subscribe(&SETPOINT_SUB).unwrap();
+    interrupt::USART3.set_priority(Priority::P6);
+    BUS_EXECUTOR.start(interrupt::USART3).spawn(bus(can, uid)).unwrap();
+    spawner.spawn(sensor()).unwrap();
+    spawner.spawn(consumer()).unwrap();
 }

@@ -46,6 +46,6 @@ async fn main(spawner: Spawner) {
     let mut can = Can::new(p.CAN, p.PA11, p.PA12, Irqs);
     can.modify_config().set_bitrate(1_000_000);
     can.enable().await;
-    let mut can = BxCan::new(can, pac::CAN);
-    footprint_core::run(spawner, &mut can, embassy_stm32::uid::uid()).await
+    let can = BxCan::new(can, pac::CAN);
+    footprint_core::run(spawner, can, embassy_stm32::uid::uid());
 }

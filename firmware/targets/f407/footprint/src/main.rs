@@ -48,6 +48,6 @@ async fn main(spawner: Spawner) {
     let mut can = Can::new(p.CAN1, p.PB8, p.PB9, Irqs);
     can.modify_config().set_bitrate(1_000_000);
     can.enable().await;
-    let mut can = BxCan::new(can, pac::CAN1);
-    footprint_core::run(spawner, &mut can, embassy_stm32::uid::uid()).await
+    let can = BxCan::new(can, pac::CAN1);
+    footprint_core::run(spawner, can, embassy_stm32::uid::uid());
 }
