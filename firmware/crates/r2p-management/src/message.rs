@@ -466,6 +466,8 @@ impl Message {
     }
 
     /// Reads a message; every byte must be accounted for.
+    // Not inlined into the node's receive path: one copy, its result built in place (smaller).
+    #[inline(never)]
     pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
         let mut r = Reader { bytes };
         let ty = r.u8().map_err(|_| DecodeError::Empty)?;
