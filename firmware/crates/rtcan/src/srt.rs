@@ -72,8 +72,14 @@ struct Entry {
 }
 
 impl Entry {
-    const FREE: Entry =
-        Entry { frame: Frame::EMPTY, next: NIL, urgency: Urgency::Nrt, order: 0, group: 0 };
+    /// An unused entry (all zeros, so a new queue is cleared, not copied).
+    const UNUSED: Entry = Entry {
+        frame: Frame::EMPTY,
+        next: 0,
+        urgency: Urgency::Srt { deadline: 0 },
+        order: 0,
+        group: 0,
+    };
 
     /// Sort key: SRT before NRT, SRT by `order`; ties keep push order (insertion is stable).
     fn key(&self) -> (bool, Micros) {
@@ -93,10 +99,12 @@ impl Entry {
 /// The entries stay where they were pushed and are linked in queue order, so pushing, sending
 /// and expiring never move the others (no `memmove` on a microcontroller).
 pub struct TxQueue<const N: usize> {
-    /// Entry storage: the queued entries are linked from `head`, the free ones from `free`.
+    /// Entry storage: the queued entries are linked from `head`, the freed ones from `free`;
+    /// `entries[fresh..]` were never used.
     entries: [Entry; N],
     head: u16,
     free: u16,
+    fresh: u16,
     len: usize,
     encoding: LaxityEncoding,
     next_group: u32,
@@ -107,14 +115,16 @@ impl<const N: usize> TxQueue<N> {
     /// An empty queue that encodes SRT laxity with `encoding`.
     pub const fn new(encoding: LaxityEncoding) -> Self {
         const { assert!(N < NIL as usize, "a TxQueue holds fewer than 65 535 frames") };
-        let mut entries = [Entry::FREE; N];
-        let mut i = 0;
-        while i + 1 < N {
-            entries[i].next = (i + 1) as u16;
-            i += 1;
+        Self {
+            entries: [Entry::UNUSED; N],
+            head: NIL,
+            free: NIL,
+            fresh: 0,
+            len: 0,
+            encoding,
+            next_group: 0,
+            missed: 0,
         }
-        let free = if N == 0 { NIL } else { 0 };
-        Self { entries, head: NIL, free, len: 0, encoding, next_group: 0, missed: 0 }
     }
 
     /// Frames queued.
@@ -285,9 +295,14 @@ impl<const N: usize> TxQueue<N> {
     /// Queues `e` in a free entry right after `prev`; returns its index. The caller checked
     /// that there is room.
     fn link_after(&mut self, prev: u16, mut e: Entry) -> u16 {
-        let i = self.free;
-        let Some(slot) = self.entries.get(usize::from(i)) else { return prev };
-        self.free = slot.next;
+        let i = match self.entries.get(usize::from(self.free)) {
+            Some(freed) => core::mem::replace(&mut self.free, freed.next),
+            None if usize::from(self.fresh) < N => {
+                self.fresh += 1;
+                self.fresh - 1
+            }
+            None => return prev,
+        };
         e.next = *self.link(prev);
         *self.link(prev) = i;
         self.entries[usize::from(i)] = e;
