@@ -293,6 +293,21 @@ pub struct NodeStats {
     pub events_lost: u32,
 }
 
+/// `us / 1_000_000`, saturated to `u32`, without the 64-bit division routine (about 1 KiB on a
+/// Cortex-M3): `⌊us / 10⁶⌋ = ⌊⌊us / 64⌋ / 15 625⌋`, the second by long division in 16-bit
+/// digits so every step fits the hardware's 32-bit divide.
+fn whole_seconds(us: Micros) -> u32 {
+    const D: u32 = 15_625;
+    let x = us >> 6;
+    let (mut q, mut r) = (0u64, 0u32);
+    for shift in [48, 32, 16, 0] {
+        let cur = (r << 16) | ((x >> shift) as u32 & 0xFFFF);
+        q = (q << 16) | u64::from(cur / D);
+        r = cur % D;
+    }
+    u32::try_from(q).unwrap_or(u32::MAX)
+}
+
 fn bump(c: &mut u32) {
     *c = c.saturating_add(1);
 }
@@ -707,7 +722,7 @@ impl<
                 uid: self.config.uid,
                 name: self.name.clone(),
                 state,
-                uptime_s: (now.saturating_sub(boot) / 1_000_000).min(u32::MAX as u64) as u32,
+                uptime_s: whole_seconds(now.saturating_sub(boot)),
                 tx_errors: self.errors.tx,
                 rx_errors: self.errors.rx,
                 dropped: self.dropped().min(u16::MAX as u32) as u16,
@@ -1353,5 +1368,32 @@ fn check_topic(name: &str) -> Result<(), NodeError> {
         Err(NodeError::BadTopicName)
     } else {
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod whole_seconds_tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn edges() {
+        for us in [0, 1, 999_999, 1_000_000, 1_000_001, 63, 64, 15_625 * 64 - 1] {
+            assert_eq!(u64::from(whole_seconds(us)), us / 1_000_000);
+        }
+        let max = u64::from(u32::MAX) * 1_000_000;
+        assert_eq!(whole_seconds(max + 999_999), u32::MAX);
+        assert_eq!(whole_seconds(max - 1), u32::MAX - 1);
+        assert_eq!(whole_seconds(max + 1_000_000), u32::MAX);
+        assert_eq!(whole_seconds(u64::MAX), u32::MAX);
+    }
+
+    proptest! {
+        #[test]
+        fn matches_division(us in any::<u64>(), small in 0u64..(1 << 40)) {
+            for x in [us, small] {
+                prop_assert_eq!(whole_seconds(x), (x / 1_000_000).min(u64::from(u32::MAX)) as u32);
+            }
+        }
     }
 }

@@ -29,6 +29,9 @@ impl From<IdError> for FrameError {
 }
 
 impl Frame {
+    /// An empty frame with identifier 0 (fills unused storage).
+    pub(crate) const EMPTY: Frame = Frame { id: FrameId::sync(0), len: 0, data: [0; MAX_PAYLOAD] };
+
     /// A frame with identifier `id` and `payload` (at most 8 bytes).
     pub fn new(id: FrameId, payload: &[u8]) -> Result<Self, FrameError> {
         if payload.len() > MAX_PAYLOAD {

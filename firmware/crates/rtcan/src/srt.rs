@@ -56,9 +56,14 @@ pub enum PushError {
     Fragment(FragmentError),
 }
 
+/// End of a list of entries.
+const NIL: u16 = u16::MAX;
+
 #[derive(Clone, Copy)]
 struct Entry {
     frame: Frame,
+    /// The following entry: in queue order while queued, in the free list otherwise.
+    next: u16,
     urgency: Urgency,
     /// EDF sort key of an SRT entry: its deadline, or later to stay behind its own stream.
     order: Micros,
@@ -67,11 +72,20 @@ struct Entry {
 }
 
 impl Entry {
+    /// An unused entry (all zeros, so a new queue is cleared, not copied).
+    const UNUSED: Entry = Entry {
+        frame: Frame::EMPTY,
+        next: 0,
+        urgency: Urgency::Srt { deadline: 0 },
+        order: 0,
+        group: 0,
+    };
+
     /// Sort key: SRT before NRT, SRT by `order`; ties keep push order (insertion is stable).
-    fn key(&self) -> (u8, Micros) {
+    fn key(&self) -> (bool, Micros) {
         match self.urgency {
-            Urgency::Srt { .. } => (0, self.order),
-            Urgency::Nrt => (1, 0),
+            Urgency::Srt { .. } => (false, self.order),
+            Urgency::Nrt => (true, 0),
         }
     }
 
@@ -81,9 +95,16 @@ impl Entry {
 }
 
 /// A fixed-capacity queue of up to `N` frames waiting for a free slot.
+///
+/// The entries stay where they were pushed and are linked in queue order, so pushing, sending
+/// and expiring never move the others (no `memmove` on a microcontroller).
 pub struct TxQueue<const N: usize> {
-    /// `entries[..len]` are `Some`, sorted by key, stable.
-    entries: [Option<Entry>; N],
+    /// Entry storage: the queued entries are linked from `head`, the freed ones from `free`;
+    /// `entries[fresh..]` were never used.
+    entries: [Entry; N],
+    head: u16,
+    free: u16,
+    fresh: u16,
     len: usize,
     encoding: LaxityEncoding,
     next_group: u32,
@@ -93,7 +114,17 @@ pub struct TxQueue<const N: usize> {
 impl<const N: usize> TxQueue<N> {
     /// An empty queue that encodes SRT laxity with `encoding`.
     pub const fn new(encoding: LaxityEncoding) -> Self {
-        Self { entries: [None; N], len: 0, encoding, next_group: 0, missed: 0 }
+        const { assert!(N < NIL as usize, "a TxQueue holds fewer than 65 535 frames") };
+        Self {
+            entries: [Entry::UNUSED; N],
+            head: NIL,
+            free: NIL,
+            fresh: 0,
+            len: 0,
+            encoding,
+            next_group: 0,
+            missed: 0,
+        }
     }
 
     /// Frames queued.
@@ -124,7 +155,9 @@ impl<const N: usize> TxQueue<N> {
         }
         let order = self.order_for(frame.id().message, urgency);
         let group = self.take_group();
-        self.insert(Entry { frame, urgency, order, group });
+        let e = Entry { frame, next: NIL, urgency, order, group };
+        let prev = self.insertion_point(e.key());
+        self.link_after(prev, e);
         Ok(())
     }
 
@@ -145,8 +178,12 @@ impl<const N: usize> TxQueue<N> {
         let frames = fragments(template, payload).map_err(PushError::Fragment)?;
         let order = self.order_for(message, urgency);
         let group = self.take_group();
+        let mut e = Entry { frame: Frame::EMPTY, next: NIL, urgency, order, group };
+        // Every fragment has the same key: each goes right after the one before.
+        let mut prev = self.insertion_point(e.key());
         for frame in frames {
-            self.insert(Entry { frame, urgency, order, group });
+            e.frame = frame;
+            prev = self.link_after(prev, e);
         }
         Ok(())
     }
@@ -155,32 +192,31 @@ impl<const N: usize> TxQueue<N> {
     /// skipped (they wait for [`TxQueue::expire`]). [`TxQueue::pop`] with the same `now` takes
     /// this same frame.
     pub fn peek(&self, now: Micros) -> Option<Frame> {
-        let i = self.next_index(now)?;
-        self.entries[i].map(|e| self.stamped(&e, now))
+        let (_, i) = self.next_index(now)?;
+        Some(self.stamped(&self.entries[usize::from(i)], now))
     }
 
     /// Takes the frame to send next at time `now`, with its laxity for `now`.
     pub fn pop(&mut self, now: Micros) -> Option<Frame> {
-        let i = self.next_index(now)?;
-        let e = self.entries[i]?;
-        self.entries.copy_within(i + 1..self.len, i);
-        self.len -= 1;
-        self.entries[self.len] = None;
+        let (prev, i) = self.next_index(now)?;
+        let e = self.unlink(prev, i);
         Some(self.stamped(&e, now))
     }
 
     /// Removes every entry whose deadline is at or before `now` and calls `report` once per
     /// message they belonged to, in queue order; returns the number of frames removed.
     pub fn expire(&mut self, now: Micros, mut report: impl FnMut(Missed)) -> usize {
-        let mut kept = 0;
+        let mut removed = 0;
         let mut pending: Option<(u32, Missed)> = None;
-        for i in 0..self.len {
-            let Some(e) = self.entries[i] else { continue };
+        let (mut prev, mut cur) = (NIL, self.head);
+        while let Some(e) = self.entries.get(usize::from(cur)).copied() {
             if !e.expired(now) {
-                self.entries[kept] = Some(e);
-                kept += 1;
+                (prev, cur) = (cur, e.next);
                 continue;
             }
+            self.unlink(prev, cur);
+            cur = e.next;
+            removed += 1;
             match &mut pending {
                 Some((group, m)) if *group == e.group => m.frames += 1,
                 _ => {
@@ -201,11 +237,6 @@ impl<const N: usize> TxQueue<N> {
             self.missed = self.missed.saturating_add(1);
             report(m);
         }
-        let removed = self.len - kept;
-        for slot in &mut self.entries[kept..self.len] {
-            *slot = None;
-        }
-        self.len = kept;
         removed
     }
 
@@ -215,36 +246,90 @@ impl<const N: usize> TxQueue<N> {
         g
     }
 
+    /// The queued entries in queue order.
+    fn queued(&self) -> impl Iterator<Item = (u16, &Entry)> + '_ {
+        let mut cur = self.head;
+        core::iter::from_fn(move || {
+            let i = cur;
+            let e = self.entries.get(usize::from(i))?;
+            cur = e.next;
+            Some((i, e))
+        })
+    }
+
     /// EDF key for a new SRT message of stream `message`: its deadline, but not before any
     /// queued SRT entry of the same stream (so it cannot overtake it).
     fn order_for(&self, message: MessageId, urgency: Urgency) -> Micros {
         match urgency {
             Urgency::Nrt => 0,
-            Urgency::Srt { deadline } => self.entries[..self.len]
-                .iter()
-                .flatten()
-                .filter(|e| {
+            Urgency::Srt { deadline } => self
+                .queued()
+                .filter(|(_, e)| {
                     matches!(e.urgency, Urgency::Srt { .. }) && e.frame.id().message == message
                 })
-                .fold(deadline, |acc, e| acc.max(e.order)),
+                .fold(deadline, |acc, (_, e)| acc.max(e.order)),
         }
     }
 
-    /// Inserts after every entry with a key less than or equal to `e`'s (stable). The caller
-    /// checked that there is room.
-    fn insert(&mut self, e: Entry) {
-        if self.len >= N {
-            return;
+    /// The last entry with a key less than or equal to `key` (a new entry goes after it, which
+    /// keeps equal keys in push order), or `NIL` if the new entry goes first.
+    fn insertion_point(&self, key: (bool, Micros)) -> u16 {
+        let mut prev = NIL;
+        for (i, e) in self.queued() {
+            if e.key() > key {
+                break;
+            }
+            prev = i;
         }
-        let key = e.key();
-        let pos = self.entries[..self.len].partition_point(|x| x.is_some_and(|x| x.key() <= key));
-        self.entries.copy_within(pos..self.len, pos + 1);
-        self.entries[pos] = Some(e);
+        prev
+    }
+
+    /// The link that points at the entry after `prev` (`head` if `prev` is `NIL`).
+    fn link(&mut self, prev: u16) -> &mut u16 {
+        match self.entries.get_mut(usize::from(prev)) {
+            Some(e) => &mut e.next,
+            None => &mut self.head,
+        }
+    }
+
+    /// Queues `e` in a free entry right after `prev`; returns its index. The caller checked
+    /// that there is room.
+    fn link_after(&mut self, prev: u16, mut e: Entry) -> u16 {
+        let i = match self.entries.get(usize::from(self.free)) {
+            Some(freed) => core::mem::replace(&mut self.free, freed.next),
+            None if usize::from(self.fresh) < N => {
+                self.fresh += 1;
+                self.fresh - 1
+            }
+            None => return prev,
+        };
+        e.next = *self.link(prev);
+        *self.link(prev) = i;
+        self.entries[usize::from(i)] = e;
         self.len += 1;
+        i
     }
 
-    fn next_index(&self, now: Micros) -> Option<usize> {
-        self.entries[..self.len].iter().position(|e| e.is_some_and(|e| !e.expired(now)))
+    /// Takes queued entry `i` (which follows `prev`) out of the queue and returns it.
+    fn unlink(&mut self, prev: u16, i: u16) -> Entry {
+        let e = self.entries[usize::from(i)];
+        *self.link(prev) = e.next;
+        self.entries[usize::from(i)].next = self.free;
+        self.free = i;
+        self.len -= 1;
+        e
+    }
+
+    /// The first entry not expired at `now`, and the entry before it.
+    fn next_index(&self, now: Micros) -> Option<(u16, u16)> {
+        let mut prev = NIL;
+        for (i, e) in self.queued() {
+            if !e.expired(now) {
+                return Some((prev, i));
+            }
+            prev = i;
+        }
+        None
     }
 
     /// The entry's frame with the laxity it has at `now` (not expired).
