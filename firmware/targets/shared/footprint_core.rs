@@ -5,8 +5,8 @@
 //! the node runtime, to any module that subscribes over the bus; a remote `setpoint` topic is
 //! imported and consumed locally; the node claims its node ID, sends heartbeats, advertises,
 //! answers subscriptions and parameter requests. Nodes are tasks with priorities: the bus runs
-//! on an interrupt executor (preempting everything in thread mode), the sensor and consumer
-//! nodes on the thread-mode executor. It is a measurement, not a product.
+//! on an interrupt executor (preempting everything in thread mode), the sensor node on the
+//! thread-mode executor. It is a measurement, not a product.
 
 use embassy_executor::{InterruptExecutor, Spawner};
 use embassy_stm32::interrupt;
@@ -42,25 +42,23 @@ static PARAMS: RamParams<2> = RamParams::new([
     Param::u32("gain_milli", 1000, 0, 10_000),
 ]);
 
+/// A thread-mode node: publishes a reading every 10 ms and consumes what it subscribed to
+/// (its own readings locally, setpoints from the bus).
 #[embassy_executor::task]
 async fn sensor() {
     let mut n = 0u32;
+    let mut sum = 0u32;
     loop {
         READINGS_PUB.publish_with(|m| *m = n);
         n = n.wrapping_add(1);
-        Timer::after_millis(10).await;
-    }
-}
-
-#[embassy_executor::task]
-async fn consumer() {
-    let mut sum = 0u32;
-    loop {
-        let r = READINGS_LOCAL.recv().await;
-        sum = sum.wrapping_add(*r);
+        while let Some(r) = READINGS_LOCAL.try_recv() {
+            sum = sum.wrapping_add(*r);
+        }
         if let Some(s) = SETPOINT_SUB.try_recv() {
             sum = sum.wrapping_add(*s as u32);
         }
+        core::hint::black_box(sum);
+        Timer::after_millis(10).await;
     }
 }
 
@@ -87,5 +85,4 @@ pub fn run(spawner: Spawner, can: BxCan<'static>, uid: [u8; 12]) {
     interrupt::USART3.set_priority(Priority::P6);
     BUS_EXECUTOR.start(interrupt::USART3).spawn(bus(can, uid)).unwrap();
     spawner.spawn(sensor()).unwrap();
-    spawner.spawn(consumer()).unwrap();
 }
