@@ -224,8 +224,9 @@ fn serve_client(stream: TcpStream, ctx: Ctx) -> io::Result<()> {
                         continue;
                     }
                     Ok(Command::Send(frame)) => {
-                        ctx.hub.send(me, frame);
+                        // Count first, so that whoever receives the frame sees it counted.
                         ctx.stats.frames_in.fetch_add(1, Ordering::Relaxed);
+                        ctx.hub.send(me, frame);
                         continue;
                     }
                     Err(e) => Err(e.to_string()),
