@@ -1,0 +1,16 @@
+//! Lets real CAN tools join R2P's emulated bus over TCP on the host (no SocketCAN needed):
+//!
+//! - [`hub`]: the [`Hub`] trait participants talk to and [`BroadcastHub`], an in-memory bus;
+//! - [`server`]: a socketcand-protocol server ([`socketcand`] is its wire format), which
+//!   python-can's `socketcand` interface and socketcand clients connect to;
+//! - [`candump`]: candump log files, read by `canplayer`, `log2asc` and `can.LogReader`.
+
+pub mod candump;
+pub mod frame;
+pub mod hub;
+pub mod server;
+pub mod socketcand;
+
+pub use frame::{CanFrame, FrameError, Stamped};
+pub use hub::{BroadcastHub, Hub, ParticipantId, Subscription};
+pub use server::{Config, Server};

@@ -1,0 +1,336 @@
+//! `r2p-canlink`: runs an in-memory CAN hub with a socketcand server so that CAN tools
+//! (python-can's `socketcand` interface, socketcand clients) can join it. See `--help`.
+
+use std::fs::File;
+use std::io::{self, BufWriter, Read};
+use std::net::SocketAddr;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::{self, JoinHandle};
+use std::time::{Duration, Instant};
+
+use r2p_canlink::candump::LogWriter;
+use r2p_canlink::hub::DEFAULT_QUEUE;
+use r2p_canlink::server::DEFAULT_ADDR;
+use r2p_canlink::{BroadcastHub, CanFrame, Config, Hub, Server};
+
+const HELP: &str = "\
+r2p-canlink: lets CAN tools join R2P's emulated bus over TCP (no SocketCAN needed)
+
+USAGE:
+    r2p-canlink serve [--socketcand ADDR] [--channel NAME] [--log FILE]
+                      [--heartbeat ID:PERIOD_MS]... [--queue N] [--no-stdin]
+    r2p-canlink --help
+
+serve runs an in-memory CAN bus with a socketcand-protocol server on it. Every client and
+in-process participant sees every other's frames.
+
+OPTIONS:
+    --socketcand ADDR      listen on ADDR only [default: 127.0.0.1:29536]
+    --channel NAME         the bus name clients open [default: vcan0]
+    --log FILE             append every frame to FILE as a candump log
+                           (readable by canplayer, log2asc and python-can's can.LogReader)
+    --heartbeat ID:MS      publish a frame with identifier ID (hex; extended if written with
+                           8 digits or above 7FF) every MS milliseconds, carrying a 32-bit
+                           big-endian counter (repeatable)
+    --queue N              frames queued per client before it loses frames [default: 1024]
+    --no-stdin             do not stop when standard input closes
+
+Stops on SIGTERM, SIGINT or when standard input closes (unless it is /dev/null or --no-stdin).
+
+EXAMPLE (python-can):
+    can.Bus(interface=\"socketcand\", host=\"127.0.0.1\", port=29536, channel=\"vcan0\")
+";
+
+struct Heartbeat {
+    frame_id: u32,
+    extended: bool,
+    period: Duration,
+}
+
+struct Options {
+    addr: SocketAddr,
+    channel: String,
+    log: Option<String>,
+    heartbeats: Vec<Heartbeat>,
+    queue: usize,
+    watch_stdin: bool,
+}
+
+fn parse_heartbeat(s: &str) -> Result<Heartbeat, String> {
+    let bad = || format!("--heartbeat {s}: expected ID:PERIOD_MS, e.g. 1ABC0000:100");
+    let (id, ms) = s.split_once(':').ok_or_else(bad)?;
+    let digits = id.trim_start_matches("0x");
+    let frame_id = u32::from_str_radix(digits, 16).map_err(|_| bad())?;
+    let extended = digits.len() == 8 || frame_id > 0x7FF;
+    CanFrame::new(frame_id, extended, &[]).map_err(|e| format!("--heartbeat {s}: {e}"))?;
+    let ms: u64 = ms.parse().map_err(|_| bad())?;
+    if ms == 0 {
+        return Err(format!("--heartbeat {s}: the period must be at least 1 ms"));
+    }
+    Ok(Heartbeat { frame_id, extended, period: Duration::from_millis(ms) })
+}
+
+fn parse_args(args: &[String]) -> Result<Options, String> {
+    let mut opts = Options {
+        addr: DEFAULT_ADDR.parse().expect("default address"),
+        channel: "vcan0".into(),
+        log: None,
+        heartbeats: Vec::new(),
+        queue: DEFAULT_QUEUE,
+        watch_stdin: true,
+    };
+    let mut it = args.iter();
+    match it.next().map(String::as_str) {
+        Some("serve") => {}
+        Some(other) => return Err(format!("unknown command {other} (try --help)")),
+        None => return Err("missing command (try --help)".into()),
+    }
+    while let Some(arg) = it.next() {
+        let mut value = || it.next().cloned().ok_or_else(|| format!("{arg} needs a value"));
+        match arg.as_str() {
+            "--socketcand" => {
+                let v = value()?;
+                opts.addr = v.parse().map_err(|_| {
+                    format!("--socketcand {v}: expected IP:PORT, e.g. 127.0.0.1:29536")
+                })?;
+            }
+            "--channel" => {
+                let v = value()?;
+                if v.is_empty() || v.contains(|c: char| c.is_whitespace() || c == '<' || c == '>') {
+                    return Err(format!("--channel {v:?}: not a bus name"));
+                }
+                opts.channel = v;
+            }
+            "--log" => opts.log = Some(value()?),
+            "--heartbeat" => opts.heartbeats.push(parse_heartbeat(&value()?)?),
+            "--queue" => {
+                let v = value()?;
+                opts.queue = v
+                    .parse()
+                    .ok()
+                    .filter(|&n| n > 0)
+                    .ok_or(format!("--queue {v}: expected a positive number"))?;
+            }
+            "--no-stdin" => opts.watch_stdin = false,
+            other => return Err(format!("unknown option {other} (try --help)")),
+        }
+    }
+    Ok(opts)
+}
+
+#[cfg(unix)]
+mod signals {
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    pub static STOP: AtomicBool = AtomicBool::new(false);
+
+    extern "C" fn on_signal(_: i32) {
+        STOP.store(true, Ordering::SeqCst);
+    }
+
+    extern "C" {
+        fn signal(signum: i32, handler: extern "C" fn(i32)) -> usize;
+    }
+
+    const SIGINT: i32 = 2;
+    const SIGTERM: i32 = 15;
+
+    pub fn install() {
+        // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
+        unsafe {
+            signal(SIGINT, on_signal);
+            signal(SIGTERM, on_signal);
+        }
+    }
+
+    pub fn received() -> bool {
+        STOP.load(Ordering::SeqCst)
+    }
+}
+
+#[cfg(not(unix))]
+mod signals {
+    pub fn install() {}
+    pub fn received() -> bool {
+        false
+    }
+}
+
+fn stdin_is_null() -> bool {
+    std::fs::read_link("/proc/self/fd/0").is_ok_and(|p| p == std::path::Path::new("/dev/null"))
+}
+
+fn watch_stdin(closed: Arc<AtomicBool>) {
+    thread::spawn(move || {
+        let mut buf = [0u8; 256];
+        let mut stdin = io::stdin();
+        loop {
+            match stdin.read(&mut buf) {
+                Ok(0) => break,
+                Ok(_) => {}
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(_) => break,
+            }
+        }
+        closed.store(true, Ordering::SeqCst);
+    });
+}
+
+fn spawn_heartbeat(hub: Arc<BroadcastHub>, hb: Heartbeat, stop: Arc<AtomicBool>) -> JoinHandle<()> {
+    thread::spawn(move || {
+        let me = hub.join();
+        let mut counter: u32 = 0;
+        let mut next = Instant::now();
+        while !stop.load(Ordering::SeqCst) {
+            let frame = CanFrame::new(hb.frame_id, hb.extended, &counter.to_be_bytes())
+                .expect("checked id");
+            hub.send(me, frame);
+            counter = counter.wrapping_add(1);
+            next += hb.period;
+            // Sleep in short steps so that stopping is prompt.
+            while !stop.load(Ordering::SeqCst) {
+                let now = Instant::now();
+                if now >= next {
+                    break;
+                }
+                thread::sleep((next - now).min(Duration::from_millis(50)));
+            }
+        }
+    })
+}
+
+fn spawn_logger(
+    hub: Arc<BroadcastHub>,
+    file: File,
+    channel: String,
+    stop: Arc<AtomicBool>,
+    queue: usize,
+) -> JoinHandle<io::Result<u64>> {
+    let sub = hub.subscribe(hub.join(), queue.max(DEFAULT_QUEUE));
+    thread::spawn(move || {
+        let mut log = LogWriter::new(BufWriter::new(file), &channel);
+        loop {
+            match sub.recv_timeout(Duration::from_millis(100)) {
+                Ok(s) => {
+                    log.write(&s)?;
+                    while let Ok(s) = sub.try_recv() {
+                        log.write(&s)?;
+                    }
+                    log.flush()?;
+                }
+                Err(_) if stop.load(Ordering::SeqCst) => break,
+                Err(_) => {}
+            }
+        }
+        while let Ok(s) = sub.try_recv() {
+            log.write(&s)?;
+        }
+        log.flush()?;
+        Ok(sub.dropped())
+    })
+}
+
+fn serve(opts: Options) -> Result<(), String> {
+    signals::install();
+    let hub = Arc::new(BroadcastHub::new());
+    let stop = Arc::new(AtomicBool::new(false));
+
+    let logger = match &opts.log {
+        Some(path) => {
+            let file = File::options()
+                .create(true)
+                .append(true)
+                .open(path)
+                .map_err(|e| format!("cannot open log {path}: {e}"))?;
+            Some(spawn_logger(hub.clone(), file, opts.channel.clone(), stop.clone(), opts.queue))
+        }
+        None => None,
+    };
+
+    let config = Config { addr: opts.addr, channel: opts.channel.clone(), queue: opts.queue };
+    let server = match Server::start(config, hub.clone()) {
+        Ok(s) => s,
+        Err(e) => {
+            stop.store(true, Ordering::SeqCst);
+            if let Some(l) = logger {
+                let _ = l.join();
+            }
+            return Err(match e.kind() {
+                io::ErrorKind::AddrInUse => format!(
+                    "{} is already in use (another r2p-canlink or socketcand?); pick another port with --socketcand",
+                    opts.addr
+                ),
+                io::ErrorKind::AddrNotAvailable => format!("{} is not an address of this machine", opts.addr),
+                _ => format!("cannot listen on {}: {e}", opts.addr),
+            });
+        }
+    };
+    eprintln!("r2p-canlink: socketcand on {} channel {}", server.local_addr(), opts.channel);
+
+    let heartbeats: Vec<_> = opts
+        .heartbeats
+        .into_iter()
+        .map(|hb| spawn_heartbeat(hub.clone(), hb, stop.clone()))
+        .collect();
+
+    let stdin_closed = Arc::new(AtomicBool::new(false));
+    if opts.watch_stdin && !stdin_is_null() {
+        watch_stdin(stdin_closed.clone());
+    }
+    let why = loop {
+        if signals::received() {
+            break "signal";
+        }
+        if stdin_closed.load(Ordering::SeqCst) {
+            break "standard input closed";
+        }
+        thread::sleep(Duration::from_millis(50));
+    };
+
+    stop.store(true, Ordering::SeqCst);
+    for h in heartbeats {
+        let _ = h.join();
+    }
+    let stats = server.stats();
+    let (clients, frames_in, frames_out, errors) = (
+        stats.clients.load(Ordering::Relaxed),
+        stats.frames_in.load(Ordering::Relaxed),
+        stats.frames_out.load(Ordering::Relaxed),
+        stats.errors.load(Ordering::Relaxed),
+    );
+    server.shutdown();
+    let mut summary = format!(
+        "r2p-canlink: stopped ({why}): {} frames on the bus, {clients} clients, {frames_in} frames from clients, \
+         {frames_out} to clients, {errors} errors, {} frames dropped",
+        hub.sent(),
+        hub.dropped()
+    );
+    if let Some(l) = logger {
+        match l.join() {
+            Ok(Ok(_)) => {}
+            Ok(Err(e)) => return Err(format!("writing the log: {e}")),
+            Err(_) => return Err("the log writer panicked".into()),
+        }
+        summary.push_str(", log written");
+    }
+    eprintln!("{summary}");
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.is_empty() || args.iter().any(|a| a == "--help" || a == "-h") {
+        print!("{HELP}");
+        return if args.is_empty() { ExitCode::from(2) } else { ExitCode::SUCCESS };
+    }
+    let result = parse_args(&args).and_then(serve);
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("r2p-canlink: error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
