@@ -188,6 +188,8 @@ struct Node {
     babble: Option<(Frame, u64)>,
     overflows: u64,
     received: u64,
+    /// A frame of this node is on the wire (possibly on a segment it has since left).
+    sending: bool,
 }
 
 impl Node {
@@ -205,6 +207,7 @@ impl Node {
             babble: None,
             overflows: 0,
             received: 0,
+            sending: false,
         }
     }
 
@@ -235,7 +238,7 @@ impl Node {
 
     /// The request this node would arbitrate with at `t`: lowest identifier, then oldest.
     fn candidate(&self, t: u64) -> Option<(u32, u64, Source, Frame)> {
-        if !self.active() {
+        if !self.active() || self.sending {
             return None;
         }
         let boxes = self.mailboxes.iter().enumerate().filter_map(|(i, m)| {
@@ -250,7 +253,7 @@ impl Node {
     }
 
     fn earliest_request(&self) -> Option<u64> {
-        if !self.active() {
+        if !self.active() || self.sending {
             return None;
         }
         let boxes = self.mailboxes.iter().flatten().map(|m| m.loaded_at);
@@ -326,7 +329,8 @@ impl Inner {
             .filter(|n| n.segment == seg)
             .filter_map(Node::earliest_request)
             .min()?;
-        Some(first.max(s.idle_at))
+        // Never in the past: a node that left a busy segment may find an idle one.
+        Some(first.max(s.idle_at).max(self.now))
     }
 
     fn recovery_time(&self, port: usize) -> Option<u64> {
@@ -337,7 +341,8 @@ impl Inner {
             return None;
         }
         let runs = u64::from(RECOVERY_RUNS.saturating_sub(counted));
-        Some(s.recessive_since + self.bits_ns(runs * u64::from(RECOVERY_RUN_BITS)))
+        let t = s.recessive_since + self.bits_ns(runs * u64::from(RECOVERY_RUN_BITS));
+        Some(t.max(self.now))
     }
 
     /// The next thing that happens, earliest first; at equal times recoveries, then ends,
@@ -403,9 +408,11 @@ impl Inner {
         let Some(((raw_id, _, source, frame), sender)) = winner else {
             return;
         };
-        let ackers = self.nodes.iter().enumerate().any(|(p, n)| {
-            p != sender && n.segment == seg && n.active()
-        });
+        let ackers = self
+            .nodes
+            .iter()
+            .enumerate()
+            .any(|(p, n)| p != sender && n.segment == seg && n.active());
         let outcome = if !ackers {
             Outcome::Error(ErrorCause::NoAck)
         } else {
@@ -415,6 +422,7 @@ impl Inner {
                 None => Outcome::Ok(None),
             }
         };
+        self.nodes[sender].sending = true;
         let bits = FrameBits::of(&frame);
         let (to_end, total) = match outcome {
             Outcome::Ok(_) => (bits.to_eof_end(), bits.total()),
@@ -455,6 +463,7 @@ impl Inner {
 
     fn end(&mut self, seg: usize) {
         let Some(f) = self.segments[seg].busy.take() else { return };
+        self.nodes[f.sender].sending = false;
         let alive = self.nodes[f.sender].powered && self.nodes[f.sender].epoch == f.epoch;
         let outcome = if alive { f.outcome } else { Outcome::Error(ErrorCause::SenderLost) };
         let receivers: Vec<usize> = (0..self.nodes.len())

@@ -35,9 +35,7 @@ mod bus;
 mod rng;
 
 pub use bits::FrameBits;
-pub use bus::{
-    Bus, Config, ErrorCause, Event, EventKind, FaultAction, FaultRule, Port, MAILBOXES,
-};
+pub use bus::{Bus, Config, ErrorCause, Event, EventKind, FaultAction, FaultRule, Port, MAILBOXES};
 
 #[cfg(test)]
 mod tests {
