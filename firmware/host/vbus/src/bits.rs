@@ -1,0 +1,130 @@
+//! The bits of a CAN 2.0B extended data frame: CRC-15, bit stuffing and exact frame length.
+
+use rtcan::Frame;
+
+/// The CAN CRC-15 generator polynomial x¹⁵+x¹⁴+x¹⁰+x⁸+x⁷+x⁴+x³+1 (ISO 11898-1), without x¹⁵.
+pub const CRC15_POLY: u16 = 0x4599;
+/// Unstuffed tail after the CRC sequence: CRC delimiter, ACK slot, ACK delimiter, 7 EOF bits.
+pub const TAIL_BITS: u32 = 1 + 2 + 7;
+/// Intermission between frames.
+pub const INTERMISSION_BITS: u32 = 3;
+/// Error flag (active: 6 dominant bits; passive: 6 recessive).
+pub const ERROR_FLAG_BITS: u32 = 6;
+/// Error delimiter (8 recessive bits).
+pub const ERROR_DELIMITER_BITS: u32 = 8;
+/// Consecutive recessive bits a bus-off node must see 128 times to recover.
+pub const RECOVERY_RUN_BITS: u32 = 11;
+/// Recessive runs of [`RECOVERY_RUN_BITS`] needed to leave bus-off.
+pub const RECOVERY_RUNS: u32 = 128;
+
+/// CRC-15 of a bit sequence (shift register initialised to 0, as ISO 11898-1 specifies).
+pub fn crc15(bits: impl IntoIterator<Item = bool>) -> u16 {
+    let mut crc: u16 = 0;
+    for bit in bits {
+        let feedback = bit ^ (crc & 0x4000 != 0);
+        crc = (crc << 1) & 0x7fff;
+        if feedback {
+            crc ^= CRC15_POLY;
+        }
+    }
+    crc
+}
+
+fn push(bits: &mut Vec<bool>, value: u32, width: u32) {
+    for i in (0..width).rev() {
+        bits.push(value >> i & 1 == 1);
+    }
+}
+
+/// The unstuffed bits of an extended data frame from SOF to the end of the CRC sequence:
+/// SOF, base ID (11), SRR, IDE, extended ID (18), RTR, r1, r0, DLC (4), data, CRC (15).
+pub fn unstuffed_bits(raw_id: u32, data: &[u8]) -> Vec<bool> {
+    let mut bits = Vec::with_capacity(118);
+    bits.push(false); // SOF
+    push(&mut bits, raw_id >> 18 & 0x7ff, 11);
+    bits.push(true); // SRR (recessive)
+    bits.push(true); // IDE (recessive: extended)
+    push(&mut bits, raw_id & 0x3ffff, 18);
+    bits.push(false); // RTR (dominant: data frame)
+    bits.push(false); // r1
+    bits.push(false); // r0
+    push(&mut bits, data.len() as u32, 4);
+    for &byte in data {
+        push(&mut bits, u32::from(byte), 8);
+    }
+    let crc = crc15(bits.iter().copied());
+    push(&mut bits, u32::from(crc), 15);
+    bits
+}
+
+/// Stuff bits a transmitter inserts into `bits`: one after every 5 equal bits (the stuff bit
+/// itself starts the next run), including one after the CRC sequence if it ends in such a run.
+pub fn stuff_count(bits: &[bool]) -> u32 {
+    let mut count = 0;
+    let mut last = None;
+    let mut run = 0;
+    for &bit in bits {
+        if last == Some(bit) {
+            run += 1;
+        } else {
+            last = Some(bit);
+            run = 1;
+        }
+        if run == 5 {
+            count += 1;
+            last = Some(!bit);
+            run = 1;
+        }
+    }
+    count
+}
+
+/// Bit counts of one frame on the wire.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct FrameBits {
+    /// Unstuffed bits from SOF to the end of the CRC sequence.
+    pub stuffable: u32,
+    /// Stuff bits inserted in them.
+    pub stuff: u32,
+}
+
+impl FrameBits {
+    /// Counts the bits of `frame`.
+    pub fn of(frame: &Frame) -> Self {
+        Self::of_raw(frame.id().to_raw(), frame.payload())
+    }
+
+    /// Counts the bits of an extended data frame with identifier `raw_id` and `data`.
+    pub fn of_raw(raw_id: u32, data: &[u8]) -> Self {
+        let bits = unstuffed_bits(raw_id, data);
+        Self { stuffable: bits.len() as u32, stuff: stuff_count(&bits) }
+    }
+
+    /// Bits from SOF to the end of the CRC sequence, stuffing included.
+    pub const fn stuffed(&self) -> u32 {
+        self.stuffable + self.stuff
+    }
+
+    /// Bits from SOF to the end of EOF: when receivers take the frame and the sender is done.
+    pub const fn to_eof_end(&self) -> u32 {
+        self.stuffed() + TAIL_BITS
+    }
+
+    /// Bit times the frame occupies the bus, intermission included (comparable with
+    /// [`rtcan::cycle::WORST_CASE_FRAME_BITS`]).
+    pub const fn total(&self) -> u32 {
+        self.to_eof_end() + INTERMISSION_BITS
+    }
+
+    /// Bits from SOF to the end of the error delimiter when an error is signalled after the
+    /// ACK slot (a CRC error or a missing ACK): the frame up to the ACK slot, then the error
+    /// flag and delimiter.
+    pub const fn to_error_end(&self) -> u32 {
+        self.stuffed() + 2 + ERROR_FLAG_BITS + ERROR_DELIMITER_BITS
+    }
+
+    /// [`Self::to_error_end`] plus intermission.
+    pub const fn error_total(&self) -> u32 {
+        self.to_error_end() + INTERMISSION_BITS
+    }
+}
