@@ -533,7 +533,8 @@ mod tdma {
                     bad += 1;
                 }
                 bus.inject(Frame::new(FrameId::sync(u32::from(*cycle)), data).unwrap());
-                run_slots(&bus, &mut [&mut m, &mut s], bus.now.get() + u64::from(*gap) * 250);
+                // At least one slot, so the injected frame is received before the next one.
+                run_slots(&bus, &mut [&mut m, &mut s], bus.now.get() + (u64::from(*gap) + 1) * 250);
             }
             prop_assert_eq!(s.stats().bad_syncs, bad);
             run_slots(&bus, &mut [&mut m, &mut s], bus.now.get() + 200_000);
