@@ -152,7 +152,13 @@ impl<'a, N: Runtime> Sim<'a, N> {
     /// A sim on a new bus with `ports` ports (boards take some of them; the others are free for
     /// babblers or bridges) and bus configuration `config` (its seed drives every fault).
     pub fn new(ports: usize, config: Config, mode: Mode) -> Self {
-        Self { bus: Bus::new(ports, config), mode, boards: Vec::new(), now_ns: 0, stats: SimStats::default() }
+        Self {
+            bus: Bus::new(ports, config),
+            mode,
+            boards: Vec::new(),
+            now_ns: 0,
+            stats: SimStats::default(),
+        }
     }
 
     /// Adds a board: `node` on port `port`, with application step `app` (if any). Returns the
@@ -302,7 +308,8 @@ impl<'a, N: Runtime> Sim<'a, N> {
 pub fn bus_frames(bus: &Bus) -> Vec<(u64, usize, CanFrame)> {
     bus.frames()
         .map(|(t, p, f)| {
-            let frame = CanFrame::extended(f.id().to_raw(), f.payload()).expect("29-bit, ≤ 8 bytes");
+            let frame =
+                CanFrame::extended(f.id().to_raw(), f.payload()).expect("29-bit, ≤ 8 bytes");
             (t, p, frame)
         })
         .collect()
