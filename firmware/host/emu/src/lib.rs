@@ -1,0 +1,326 @@
+//! Emulated R2P boards in deterministic virtual time.
+//!
+//! A [`Sim`] owns an [`r2p_vbus::Bus`] and a set of boards. A board is a node runtime
+//! ([`r2p_node::Node`], or anything implementing [`Runtime`]) on one port of the bus, plus an
+//! application step called every millisecond of virtual time. The sim moves virtual time from
+//! event to event: the bus's next event ([`Bus::next_event`]), each board's next slot boundary
+//! ([`Node::next_slot_at`], TDMA mode) or poll period (unslotted mode), and the next
+//! application millisecond. Nothing reads a clock and every fault is drawn from the bus's seed,
+//! so the same seed and the same inputs give the same trace ([`Bus::trace_hash`]).
+//!
+//! Limitation: middleware topics are `static`s, so one process holds each static topic once.
+//! Boards are kept apart by giving each its own set of statics (distinct `static` items per
+//! board, e.g. per test); two boards must never share a topic static, or they would see each
+//! other's publications without the bus.
+//!
+//! Frames reach a node stamped with their start of frame (µs), as bxCAN's time-triggered mode
+//! stamps them ([`SimPort`]): the vbus stamps the end of EOF, and the slot clock wants the
+//! sync's start of frame.
+
+use std::io::{self, Write};
+use std::time::Duration;
+
+use r2p_canlink::candump::LogWriter;
+use r2p_canlink::{CanFrame, Stamped};
+use r2p_node::Node;
+use r2p_vbus::bits::{FrameBits, INTERMISSION_BITS};
+use r2p_vbus::{Bus, Config, Port};
+use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError};
+use rtcan::{CanController, Frame, Micros};
+
+/// Nanoseconds per microsecond.
+const NS_PER_US: u64 = 1_000;
+/// Nanoseconds per millisecond (the application step's period).
+const NS_PER_MS: u64 = 1_000_000;
+
+/// What the sim needs of a node runtime. Implemented for every [`Node`].
+pub trait Runtime {
+    /// Unslotted mode: receive, run timers, send ([`Node::poll`]).
+    fn poll(&mut self, now: Micros, can: &mut dyn CanController);
+    /// TDMA mode: the slot timer ([`Node::slot_tick`]).
+    fn slot_tick(&mut self, now: Micros, can: &mut dyn CanController);
+    /// TDMA mode: the next slot boundary ([`Node::next_slot_at`]).
+    fn next_slot_at(&self, now: Micros) -> Micros;
+}
+
+impl<const E: usize, const I: usize, const T: usize, const R: usize, const B: usize> Runtime
+    for Node<'_, E, I, T, R, B>
+{
+    fn poll(&mut self, now: Micros, can: &mut dyn CanController) {
+        Node::poll(self, now, can);
+    }
+    fn slot_tick(&mut self, now: Micros, can: &mut dyn CanController) {
+        Node::slot_tick(self, now, can);
+    }
+    fn next_slot_at(&self, now: Micros) -> Micros {
+        Node::next_slot_at(self, now)
+    }
+}
+
+/// How boards drive their nodes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// TDMA: `slot_tick` at every slot boundary the node asks for.
+    Tdma,
+    /// Unslotted: `poll` every `period_us`.
+    Poll {
+        /// Poll period in µs.
+        period_us: Micros,
+    },
+}
+
+/// A board's application step: called every millisecond of virtual time with the time (µs) and
+/// the board's node (before the node's own tick at that time).
+pub type App<'a, N> = Box<dyn FnMut(Micros, &mut N) + 'a>;
+
+/// A port of the vbus as a board's controller sees it: every received frame is stamped with
+/// its start of frame (µs) instead of the end of its EOF.
+pub struct SimPort {
+    port: Port,
+    bit_ns: u64,
+}
+
+impl SimPort {
+    /// Wraps `port` of a bus running at `bit_rate` bit/s.
+    pub fn new(port: Port, bit_rate: u32) -> Self {
+        Self { port, bit_ns: 1_000_000_000 / u64::from(bit_rate) }
+    }
+
+    /// The wrapped port.
+    pub fn port(&self) -> &Port {
+        &self.port
+    }
+}
+
+impl CanController for SimPort {
+    fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
+        self.port.try_transmit(frame)
+    }
+    fn try_receive(&mut self) -> Option<Received> {
+        let mut r = self.port.try_receive()?;
+        let bits = FrameBits::of(&r.frame).total() - INTERMISSION_BITS;
+        r.at = r.at.saturating_sub(u64::from(bits) * self.bit_ns / NS_PER_US);
+        Some(r)
+    }
+    fn set_filters(&mut self, filters: &[Filter]) {
+        self.port.set_filters(filters);
+    }
+    fn abort_pending(&mut self) -> usize {
+        self.port.abort_pending()
+    }
+    fn bus_state(&self) -> BusState {
+        self.port.bus_state()
+    }
+    fn error_counters(&self) -> ErrorCounters {
+        self.port.error_counters()
+    }
+}
+
+/// One emulated board.
+struct Board<'a, N> {
+    node: N,
+    port: SimPort,
+    app: Option<App<'a, N>>,
+    /// Next slot tick / poll, ns.
+    wake_ns: u64,
+    /// Next application step, ns.
+    app_ns: u64,
+    powered: bool,
+}
+
+/// Counters of a run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SimStats {
+    /// Distinct instants the sim stopped at.
+    pub steps: u64,
+    /// Slot ticks or polls run.
+    pub ticks: u64,
+    /// Application steps run.
+    pub app_steps: u64,
+}
+
+/// Several boards on one virtual bus, in virtual time. See the crate documentation.
+pub struct Sim<'a, N: Runtime> {
+    bus: Bus,
+    mode: Mode,
+    boards: Vec<Board<'a, N>>,
+    now_ns: u64,
+    stats: SimStats,
+}
+
+impl<'a, N: Runtime> Sim<'a, N> {
+    /// A sim on a new bus with `ports` ports (boards take some of them; the others are free for
+    /// babblers or bridges) and bus configuration `config` (its seed drives every fault).
+    pub fn new(ports: usize, config: Config, mode: Mode) -> Self {
+        Self {
+            bus: Bus::new(ports, config),
+            mode,
+            boards: Vec::new(),
+            now_ns: 0,
+            stats: SimStats::default(),
+        }
+    }
+
+    /// Adds a board: `node` on port `port`, with application step `app` (if any). Returns the
+    /// board's index. Its first tick is at the current time.
+    pub fn add_board(&mut self, node: N, port: usize, app: Option<App<'a, N>>) -> usize {
+        assert!(self.boards.iter().all(|b| b.port.port().index() != port), "port {port} taken");
+        let bit_rate = self.bus.config().bit_rate;
+        self.boards.push(Board {
+            node,
+            port: SimPort::new(self.bus.port(port), bit_rate),
+            app,
+            wake_ns: self.now_ns,
+            app_ns: self.now_ns,
+            powered: true,
+        });
+        self.boards.len() - 1
+    }
+
+    /// The bus (faults, babblers, partitions, the trace).
+    pub fn bus(&self) -> &Bus {
+        &self.bus
+    }
+
+    /// Board `i`'s node.
+    pub fn node(&self, i: usize) -> &N {
+        &self.boards[i].node
+    }
+
+    /// Board `i`'s node, mutably.
+    pub fn node_mut(&mut self, i: usize) -> &mut N {
+        &mut self.boards[i].node
+    }
+
+    /// Board `i`'s bus port index.
+    pub fn port_of(&self, i: usize) -> usize {
+        self.boards[i].port.port().index()
+    }
+
+    /// Current virtual time, ns.
+    pub fn now_ns(&self) -> u64 {
+        self.now_ns
+    }
+
+    /// Current virtual time, µs.
+    pub fn now_us(&self) -> Micros {
+        self.now_ns / NS_PER_US
+    }
+
+    /// Counters so far.
+    pub fn stats(&self) -> SimStats {
+        self.stats
+    }
+
+    /// Powers board `i` off (its port too: a frame on the wire is cut short, its controller
+    /// reset) or on again. A board powered on resumes with the node state it had (a reboot
+    /// would need a new node: not modelled).
+    pub fn power(&mut self, i: usize, on: bool) {
+        let b = &mut self.boards[i];
+        self.bus.power(b.port.port().index(), on);
+        b.powered = on;
+        b.wake_ns = b.wake_ns.max(self.now_ns);
+        b.app_ns = b.app_ns.max(self.now_ns);
+    }
+
+    /// The next instant something is due, capped at `limit_ns`.
+    fn next_due(&self, limit_ns: u64) -> u64 {
+        let bus = self.bus.next_event().map_or(u64::MAX, |t| t.max(self.now_ns));
+        self.boards
+            .iter()
+            .filter(|b| b.powered)
+            .flat_map(|b| [b.wake_ns, if b.app.is_some() { b.app_ns } else { u64::MAX }])
+            .fold(bus, u64::min)
+            .min(limit_ns)
+    }
+
+    /// Runs until virtual time `t_ns` (everything due at or before it runs).
+    pub fn run_until(&mut self, t_ns: u64) {
+        loop {
+            let t = self.next_due(t_ns).max(self.now_ns);
+            self.bus.advance_to(t);
+            self.now_ns = t;
+            self.stats.steps += 1;
+            let now_us = t / NS_PER_US;
+            let mode = self.mode;
+            for b in self.boards.iter_mut().filter(|b| b.powered) {
+                if let Some(app) = &mut b.app {
+                    if b.app_ns <= t {
+                        app(now_us, &mut b.node);
+                        b.app_ns += NS_PER_MS;
+                        self.stats.app_steps += 1;
+                    }
+                }
+            }
+            for b in self.boards.iter_mut().filter(|b| b.powered) {
+                if b.wake_ns > t {
+                    continue;
+                }
+                self.stats.ticks += 1;
+                b.wake_ns = match mode {
+                    Mode::Tdma => {
+                        b.node.slot_tick(now_us, &mut b.port);
+                        (b.node.next_slot_at(now_us) * NS_PER_US).max(t + 1)
+                    }
+                    Mode::Poll { period_us } => {
+                        b.node.poll(now_us, &mut b.port);
+                        t + period_us.max(1) * NS_PER_US
+                    }
+                };
+            }
+            if t >= t_ns {
+                // Let frames loaded at the limit start, so a later run continues identically.
+                break;
+            }
+        }
+    }
+
+    /// Runs for `dt_ns` more.
+    pub fn run_for(&mut self, dt_ns: u64) {
+        self.run_until(self.now_ns + dt_ns);
+    }
+
+    /// Runs in slices of `slice_ns` until `done(self)` or the time passes `limit_ns`; returns
+    /// whether `done` held.
+    pub fn run_while(
+        &mut self,
+        slice_ns: u64,
+        limit_ns: u64,
+        mut done: impl FnMut(&Self) -> bool,
+    ) -> bool {
+        while !done(self) {
+            if self.now_ns >= limit_ns {
+                return false;
+            }
+            self.run_for(slice_ns);
+        }
+        true
+    }
+
+    /// Writes the frames that went out on the bus as a candump log on `channel`; a frame's
+    /// time is `epoch` plus its end of frame in virtual time (µs resolution in the file).
+    pub fn write_candump<W: Write>(&self, out: W, channel: &str, epoch: Duration) -> io::Result<W> {
+        write_candump(&self.bus, out, channel, epoch)
+    }
+}
+
+/// The frames `bus` carried as canlink frames: (end of frame ns, sender port, frame).
+pub fn bus_frames(bus: &Bus) -> Vec<(u64, usize, CanFrame)> {
+    bus.frames()
+        .map(|(t, p, f)| {
+            let frame =
+                CanFrame::extended(f.id().to_raw(), f.payload()).expect("29-bit, ≤ 8 bytes");
+            (t, p, frame)
+        })
+        .collect()
+}
+
+/// Writes `bus`'s frames as a candump log (see [`Sim::write_candump`]).
+pub fn write_candump<W: Write>(bus: &Bus, out: W, channel: &str, epoch: Duration) -> io::Result<W> {
+    let mut w = LogWriter::new(out, channel);
+    for (t, _, frame) in bus_frames(bus) {
+        w.write(&Stamped { time: epoch + Duration::from_nanos(t), frame })?;
+    }
+    w.flush()?;
+    Ok(w.into_inner())
+}
