@@ -17,6 +17,9 @@
 //! stamps them ([`SimPort`]): the vbus stamps the end of EOF, and the slot clock wants the
 //! sync's start of frame.
 
+pub mod bridge;
+pub mod demo;
+
 use std::io::{self, Write};
 use std::time::Duration;
 
@@ -180,6 +183,11 @@ impl<'a, N: Runtime> Sim<'a, N> {
     /// The bus (faults, babblers, partitions, the trace).
     pub fn bus(&self) -> &Bus {
         &self.bus
+    }
+
+    /// Number of boards.
+    pub fn boards(&self) -> usize {
+        self.boards.len()
     }
 
     /// Board `i`'s node.

@@ -1,0 +1,202 @@
+//! Real-time mode: an emulated bus that real CAN tools can join.
+//!
+//! A [`Bridge`] paces a [`Sim`] against the wall clock (virtual time follows the real time
+//! elapsed since the start, advanced in steps of about 1 ms) and connects the virtual bus to an
+//! [`r2p_canlink::Hub`] (e.g. a [`r2p_canlink::BroadcastHub`] with a socketcand
+//! [`r2p_canlink::Server`] on it) as one participant:
+//!
+//! - **Virtual bus → hub.** The bridge owns a spare port of the virtual bus, a listening node
+//!   like a CAN adapter on a real bus (it acknowledges frames, and it misses a frame that
+//!   fault injection drops for it or every receiver, or that another bus segment carries). Every
+//!   frame it receives is sent to the hub as an extended (29-bit) frame. The port's receive
+//!   FIFO is drained after every sub-step short enough that it cannot overflow at full bus load
+//!   (overflows would still be counted). (The bus's event log, [`Bus::trace`], is not used:
+//!   it is copied whole on every call, which grows without bound in a long real-time run.)
+//! - **Hub → virtual bus.** Frames from the hub's other participants (socketcand clients) are
+//!   queued (at most [`BACKLOG`]) and loaded into the bridge port's own mailboxes
+//!   (`try_transmit`) at the current virtual time, so they arbitrate with the boards' frames.
+//!   Frames that find the backlog full are counted in [`BridgeStats::not_queued`]. The bridge
+//!   port does not receive its own frames, so they are not echoed back to the hub (the hub has
+//!   delivered them to the other clients already).
+//! - **Standard identifiers.** The virtual bus, like RTCAN, carries extended (29-bit) frames
+//!   only: standard-ID (11-bit) frames from tools are counted in
+//!   [`BridgeStats::standard_dropped`] and dropped, not injected.
+//!
+//! If the host cannot keep up, virtual time falls behind and catches up at the next step (the
+//! largest lag is in [`BridgeStats::max_lag_us`]); virtual time never runs ahead of real time.
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use r2p_canlink::{CanFrame, Hub, ParticipantId, Subscription};
+use r2p_vbus::bits::FrameBits;
+use r2p_vbus::{Bus, Port};
+use rtcan::{CanController, Frame};
+
+use crate::{Runtime, Sim};
+
+/// Frames from the hub waiting for a free mailbox of the bridge port.
+pub const BACKLOG: usize = 256;
+/// Real-time pacing step.
+pub const STEP: Duration = Duration::from_millis(1);
+
+/// The frame a tool sees for an RTCAN frame (29-bit extended identifier).
+pub fn to_canlink(frame: &Frame) -> CanFrame {
+    CanFrame::extended(frame.id().to_raw(), frame.payload()).expect("29-bit, ≤ 8 bytes")
+}
+
+/// The RTCAN frame for a tool's frame; `None` for a standard (11-bit) identifier, which the
+/// virtual bus does not carry.
+pub fn from_canlink(frame: &CanFrame) -> Option<Frame> {
+    if !frame.is_extended() {
+        return None;
+    }
+    Frame::from_raw(frame.id(), frame.data()).ok()
+}
+
+/// Counters of a bridge.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BridgeStats {
+    /// Frames of the virtual bus sent to the hub.
+    pub to_hub: u64,
+    /// Frames from the hub loaded into the bridge port's mailboxes.
+    pub injected: u64,
+    /// Standard-ID frames from the hub, dropped.
+    pub standard_dropped: u64,
+    /// Frames from the hub dropped because the backlog was full (or the port was bus-off).
+    pub not_queued: u64,
+    /// Largest lag of virtual time behind real time seen after a step, µs.
+    pub max_lag_us: u64,
+}
+
+/// Connects a [`Sim`]'s virtual bus to a [`Hub`] through a spare port. See the module
+/// documentation.
+pub struct Bridge {
+    bus: Bus,
+    port: Port,
+    hub: Arc<dyn Hub>,
+    me: ParticipantId,
+    sub: Subscription,
+    backlog: VecDeque<Frame>,
+    /// Longest sub-step (ns) after which the port's FIFO is drained.
+    tap_ns: u64,
+    stats: BridgeStats,
+}
+
+impl Bridge {
+    /// A bridge between `sim`'s bus, through port `port` (no board may use it), and `hub`,
+    /// receiving through a hub queue of `queue` frames.
+    pub fn new<N: Runtime>(sim: &Sim<'_, N>, port: usize, hub: Arc<dyn Hub>, queue: usize) -> Self {
+        assert!((0..sim.boards()).all(|i| sim.port_of(i) != port), "port {port} has a board");
+        let bus = sim.bus().clone();
+        let config = bus.config();
+        // At most `rx_depth - 1` shortest frames (74 bits) end within one sub-step.
+        let bit_ns = 1_000_000_000 / u64::from(config.bit_rate);
+        let shortest = u64::from(FrameBits::of(&Frame::from_raw(0, &[]).expect("empty")).total());
+        let tap_ns =
+            (config.rx_depth.saturating_sub(1).max(1) as u64 * shortest * bit_ns).min(1_000_000);
+        let me = hub.join();
+        let sub = hub.subscribe(me, queue);
+        Self {
+            port: bus.port(port),
+            bus,
+            hub,
+            me,
+            sub,
+            backlog: VecDeque::new(),
+            tap_ns,
+            stats: BridgeStats::default(),
+        }
+    }
+
+    /// The bridge's vbus port index.
+    pub fn port(&self) -> usize {
+        self.port.index()
+    }
+
+    /// Counters so far.
+    pub fn stats(&self) -> BridgeStats {
+        self.stats
+    }
+
+    /// Frames the bridge port lost to a full receive FIFO (not expected; see the module docs).
+    pub fn overflows(&self) -> u64 {
+        self.bus.overflows(self.port.index())
+    }
+
+    /// Takes the hub's frames and loads as many as the port's mailboxes hold.
+    fn inject(&mut self) {
+        while let Ok(s) = self.sub.try_recv() {
+            match from_canlink(&s.frame) {
+                None => self.stats.standard_dropped += 1,
+                Some(_) if self.backlog.len() >= BACKLOG => self.stats.not_queued += 1,
+                Some(f) => self.backlog.push_back(f),
+            }
+        }
+        while let Some(f) = self.backlog.front() {
+            match self.port.try_transmit(f) {
+                Ok(()) => {
+                    self.backlog.pop_front();
+                    self.stats.injected += 1;
+                }
+                Err(rtcan::controller::TxError::MailboxesFull) => break,
+                Err(_) => {
+                    // Bus-off or powered off: the frame cannot be queued.
+                    self.backlog.pop_front();
+                    self.stats.not_queued += 1;
+                }
+            }
+        }
+    }
+
+    /// Sends the frames the port received to the hub.
+    fn forward(&mut self) {
+        while let Some(r) = self.port.try_receive() {
+            self.hub.send(self.me, to_canlink(&r.frame));
+            self.stats.to_hub += 1;
+        }
+    }
+
+    /// Runs `sim` until virtual time `t_ns`, exchanging frames with the hub along the way.
+    pub fn run_until<N: Runtime>(&mut self, sim: &mut Sim<'_, N>, t_ns: u64) {
+        loop {
+            self.inject();
+            let next = (sim.now_ns() + self.tap_ns).min(t_ns);
+            sim.run_until(next);
+            self.forward();
+            if sim.now_ns() >= t_ns {
+                break;
+            }
+        }
+    }
+
+    /// Runs `sim` in real time from `start` (virtual time 0 = `start`) until `stop()` returns
+    /// true (checked every step) or `limit` of real time has passed (then virtual time ends at
+    /// exactly `limit`).
+    pub fn run_realtime<N: Runtime>(
+        &mut self,
+        sim: &mut Sim<'_, N>,
+        start: Instant,
+        limit: Option<Duration>,
+        mut stop: impl FnMut() -> bool,
+    ) {
+        let limit_ns = limit.map_or(u64::MAX, |l| l.as_nanos() as u64);
+        loop {
+            let target = (start.elapsed().as_nanos() as u64).min(limit_ns);
+            if target > sim.now_ns() {
+                self.run_until(sim, target);
+            }
+            let lag = (start.elapsed().as_nanos() as u64).min(limit_ns).saturating_sub(sim.now_ns());
+            self.stats.max_lag_us = self.stats.max_lag_us.max(lag / 1_000);
+            if sim.now_ns() >= limit_ns || stop() {
+                break;
+            }
+            // Sleep to the next step boundary of real time.
+            let elapsed = start.elapsed();
+            let step = STEP.as_nanos() as u64;
+            let next = Duration::from_nanos((elapsed.as_nanos() as u64 / step + 1) * step);
+            std::thread::sleep(next.saturating_sub(elapsed));
+        }
+    }
+}
