@@ -187,7 +187,8 @@ impl Bridge {
             if target > sim.now_ns() {
                 self.run_until(sim, target);
             }
-            let lag = (start.elapsed().as_nanos() as u64).min(limit_ns).saturating_sub(sim.now_ns());
+            let lag =
+                (start.elapsed().as_nanos() as u64).min(limit_ns).saturating_sub(sim.now_ns());
             self.stats.max_lag_us = self.stats.max_lag_us.max(lag / 1_000);
             if sim.now_ns() >= limit_ns || stop() {
                 break;
@@ -198,5 +199,83 @@ impl Bridge {
             let next = Duration::from_nanos((elapsed.as_nanos() as u64 / step + 1) * step);
             std::thread::sleep(next.saturating_sub(elapsed));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Mode;
+    use r2p_canlink::BroadcastHub;
+    use r2p_vbus::Config;
+    use rtcan::Micros;
+
+    /// Sends one frame per poll, counts what it receives.
+    struct Talker {
+        sent: u32,
+        got: Vec<Frame>,
+    }
+
+    impl Runtime for Talker {
+        fn poll(&mut self, _: Micros, can: &mut dyn CanController) {
+            while let Some(r) = can.try_receive() {
+                self.got.push(r.frame);
+            }
+            if can
+                .try_transmit(&Frame::from_raw(0x1234_5678, &self.sent.to_be_bytes()).unwrap())
+                .is_ok()
+            {
+                self.sent += 1;
+            }
+        }
+        fn slot_tick(&mut self, _: Micros, _: &mut dyn CanController) {}
+        fn next_slot_at(&self, now: Micros) -> Micros {
+            now + 1
+        }
+    }
+
+    #[test]
+    fn frames_cross_both_ways_and_standard_ids_are_dropped() {
+        let mut sim = Sim::new(2, Config::default(), Mode::Poll { period_us: 1_000 });
+        sim.add_board(Talker { sent: 0, got: Vec::new() }, 0, None);
+        let hub = Arc::new(BroadcastHub::new());
+        let mut bridge = Bridge::new(&sim, 1, hub.clone(), 64);
+        let tool = hub.join();
+        let rx = hub.subscribe(tool, 1024);
+        hub.send(tool, CanFrame::extended(0x1ABC_0000, &[7]).unwrap());
+        hub.send(tool, CanFrame::standard(0x123, &[1]).unwrap());
+        bridge.run_until(&mut sim, 10_000_000);
+
+        let got: Vec<_> = std::iter::from_fn(|| rx.try_recv().ok()).collect();
+        assert_eq!(got.len(), 10, "one frame per ms");
+        assert!(got.iter().all(|s| s.frame.is_extended() && s.frame.id() == 0x1234_5678));
+        assert_eq!(got[3].frame.data(), &3u32.to_be_bytes());
+        let s = bridge.stats();
+        assert_eq!((s.to_hub, s.injected, s.standard_dropped, s.not_queued), (10, 1, 1, 0));
+        assert_eq!(sim.node(0).got, vec![Frame::from_raw(0x1ABC_0000, &[7]).unwrap()]);
+        assert_eq!(bridge.overflows(), 0);
+    }
+
+    #[test]
+    fn conversions() {
+        let f = Frame::from_raw(0x1FA8_0003, &[0x11, 0]).unwrap();
+        let c = to_canlink(&f);
+        assert!(c.is_extended());
+        assert_eq!((c.id(), c.data()), (0x1FA8_0003, &[0x11, 0][..]));
+        assert_eq!(from_canlink(&c), Some(f));
+        assert_eq!(from_canlink(&CanFrame::standard(0x7FF, &[]).unwrap()), None);
+    }
+
+    #[test]
+    fn realtime_follows_the_wall_clock() {
+        let mut sim = Sim::new(2, Config::default(), Mode::Poll { period_us: 1_000 });
+        sim.add_board(Talker { sent: 0, got: Vec::new() }, 0, None);
+        let mut bridge = Bridge::new(&sim, 1, Arc::new(BroadcastHub::new()), 64);
+        let start = Instant::now();
+        bridge.run_realtime(&mut sim, start, Some(Duration::from_millis(100)), || false);
+        let wall = start.elapsed();
+        assert_eq!(sim.now_ns(), 100_000_000);
+        assert!(wall >= Duration::from_millis(100), "{wall:?}");
+        assert_eq!(bridge.stats().to_hub, 100);
     }
 }

@@ -97,8 +97,8 @@ pub fn build(seed: u64) -> Option<(Sim<'static, DemoNode>, Received)> {
 
     let (mut hk, mut sk) = (0u32, 0u32);
     let app_motor = move |now: Micros, _: &mut DemoNode| {
-        if now >= 200_000 && now % 10_000 == 0 {
-            if now % 20_000 == 0 {
+        if now >= 200_000 && now.is_multiple_of(10_000) {
+            if now.is_multiple_of(20_000) {
                 let _ = M_HP.publish_with(|v| *v = hk);
                 hk = hk.wrapping_add(1);
             }

@@ -332,8 +332,8 @@ fn main() -> ExitCode {
         print!("{HELP}");
         return if args.is_empty() { ExitCode::from(2) } else { ExitCode::SUCCESS };
     }
-    let result = parse_args(&args)
-        .and_then(|o| if o.realtime { realtime(&o) } else { virtual_time(&o) });
+    let result =
+        parse_args(&args).and_then(|o| if o.realtime { realtime(&o) } else { virtual_time(&o) });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
