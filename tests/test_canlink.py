@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import shutil
 import socket
-import subprocess
 import time
 from pathlib import Path
 
 import pytest
 
-from conftest import ROOT, run
+from conftest import ROOT, SocketcandProcess, run
 
 can = pytest.importorskip("can")
 
@@ -26,47 +25,12 @@ def binary() -> Path:
     return BINARY
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Link:
-    """A running `r2p-canlink serve`, always stopped by the `serve` fixture."""
+class Link(SocketcandProcess):
+    """A running `r2p-canlink serve` logging to `tmp/bus.log`."""
 
     def __init__(self, binary: Path, tmp: Path, *extra: str):
-        self.port = free_port()
         self.log = tmp / "bus.log"
-        self.proc = subprocess.Popen(
-            [str(binary), "serve", "--socketcand", f"127.0.0.1:{self.port}", "--log", str(self.log), *extra],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 10
-        while True:
-            assert self.proc.poll() is None, self.proc.communicate(timeout=5)
-            try:
-                socket.create_connection(("127.0.0.1", self.port), timeout=1).close()
-                break
-            except OSError:
-                assert time.monotonic() < deadline, "r2p-canlink did not start listening"
-                time.sleep(0.05)
-
-    def bus(self) -> can.BusABC:
-        return can.Bus(interface="socketcand", host="127.0.0.1", port=self.port, channel="vcan0")
-
-    def stop(self) -> str:
-        """SIGTERM; returns stderr after a clean exit."""
-        self.proc.terminate()
-        _, err = self.proc.communicate(timeout=10)
-        assert self.proc.returncode == 0, err
-        return err
-
-    def kill(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait(timeout=10)
-        for pipe in (self.proc.stdin, self.proc.stdout, self.proc.stderr):
-            pipe.close()
+        super().__init__([str(binary), "serve", "--log", str(self.log), *extra], "r2p-canlink")
 
 
 @pytest.fixture

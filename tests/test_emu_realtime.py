@@ -5,13 +5,12 @@ from __future__ import annotations
 
 import re
 import socket
-import subprocess
 import time
 from pathlib import Path
 
 import pytest
 
-from conftest import ROOT, run
+from conftest import ROOT, SocketcandProcess, free_port, run
 
 can = pytest.importorskip("can")
 
@@ -27,52 +26,17 @@ def binary() -> Path:
     return BINARY
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def decode(msg):
     """(laxity, message id, fragment) of a 29-bit RTCAN identifier."""
     i = msg.arbitration_id
     return i >> 23, (i >> 7) & 0xFFFF, i & 0x7F
 
 
-class Emu:
-    """A running `r2p-emu demo --realtime`, always killed by the `emu` fixture."""
+class Emu(SocketcandProcess):
+    """A running `r2p-emu demo --realtime`."""
 
     def __init__(self, binary: Path, *extra: str):
-        self.port = free_port()
-        self.proc = subprocess.Popen(
-            [str(binary), "demo", "--realtime", "--socketcand", f"127.0.0.1:{self.port}", *extra],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 10
-        while True:
-            assert self.proc.poll() is None, self.proc.communicate(timeout=5)
-            try:
-                socket.create_connection(("127.0.0.1", self.port), timeout=1).close()
-                break
-            except OSError:
-                assert time.monotonic() < deadline, "r2p-emu did not start listening"
-                time.sleep(0.05)
-
-    def bus(self) -> can.BusABC:
-        return can.Bus(interface="socketcand", host="127.0.0.1", port=self.port, channel="vcan0")
-
-    def stop(self) -> str:
-        """SIGTERM; returns stderr after a clean exit."""
-        self.proc.terminate()
-        _, err = self.proc.communicate(timeout=10)
-        assert self.proc.returncode == 0, err
-        return err
-
-    def kill(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait(timeout=10)
-        for pipe in (self.proc.stdin, self.proc.stdout, self.proc.stderr):
-            pipe.close()
+        super().__init__([str(binary), "demo", "--realtime", *extra], "r2p-emu")
 
 
 @pytest.fixture

@@ -3,12 +3,14 @@
 //! - [`hub`]: the [`Hub`] trait participants talk to and [`BroadcastHub`], an in-memory bus;
 //! - [`server`]: a socketcand-protocol server ([`socketcand`] is its wire format), which
 //!   python-can's `socketcand` interface and socketcand clients connect to;
-//! - [`candump`]: candump log files, read by `canplayer`, `log2asc` and `can.LogReader`.
+//! - [`candump`]: candump log files, read by `canplayer`, `log2asc` and `can.LogReader`;
+//! - [`service`]: stop conditions, logging and listen errors for programs serving the hub.
 
 pub mod candump;
 pub mod frame;
 pub mod hub;
 pub mod server;
+pub mod service;
 pub mod socketcand;
 
 pub use frame::{CanFrame, FrameError, Stamped};

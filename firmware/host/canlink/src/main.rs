@@ -2,7 +2,6 @@
 //! (python-can's `socketcand` interface, socketcand clients) can join it. See `--help`.
 
 use std::fs::File;
-use std::io::{self, BufWriter, Read};
 use std::net::SocketAddr;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -10,9 +9,9 @@ use std::sync::Arc;
 use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
 
-use r2p_canlink::candump::LogWriter;
 use r2p_canlink::hub::DEFAULT_QUEUE;
 use r2p_canlink::server::DEFAULT_ADDR;
+use r2p_canlink::service::{listen_error, spawn_logger, StopConditions};
 use r2p_canlink::{BroadcastHub, CanFrame, Config, Hub, Server};
 
 const HELP: &str = "\
@@ -120,64 +119,6 @@ fn parse_args(args: &[String]) -> Result<Options, String> {
     Ok(opts)
 }
 
-#[cfg(unix)]
-mod signals {
-    use std::sync::atomic::{AtomicBool, Ordering};
-
-    pub static STOP: AtomicBool = AtomicBool::new(false);
-
-    extern "C" fn on_signal(_: i32) {
-        STOP.store(true, Ordering::SeqCst);
-    }
-
-    extern "C" {
-        fn signal(signum: i32, handler: extern "C" fn(i32)) -> usize;
-    }
-
-    const SIGINT: i32 = 2;
-    const SIGTERM: i32 = 15;
-
-    pub fn install() {
-        // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
-        unsafe {
-            signal(SIGINT, on_signal);
-            signal(SIGTERM, on_signal);
-        }
-    }
-
-    pub fn received() -> bool {
-        STOP.load(Ordering::SeqCst)
-    }
-}
-
-#[cfg(not(unix))]
-mod signals {
-    pub fn install() {}
-    pub fn received() -> bool {
-        false
-    }
-}
-
-fn stdin_is_null() -> bool {
-    std::fs::read_link("/proc/self/fd/0").is_ok_and(|p| p == std::path::Path::new("/dev/null"))
-}
-
-fn watch_stdin(closed: Arc<AtomicBool>) {
-    thread::spawn(move || {
-        let mut buf = [0u8; 256];
-        let mut stdin = io::stdin();
-        loop {
-            match stdin.read(&mut buf) {
-                Ok(0) => break,
-                Ok(_) => {}
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(_) => break,
-            }
-        }
-        closed.store(true, Ordering::SeqCst);
-    });
-}
-
 fn spawn_heartbeat(hub: Arc<BroadcastHub>, hb: Heartbeat, stop: Arc<AtomicBool>) -> JoinHandle<()> {
     thread::spawn(move || {
         let me = hub.join();
@@ -201,39 +142,8 @@ fn spawn_heartbeat(hub: Arc<BroadcastHub>, hb: Heartbeat, stop: Arc<AtomicBool>)
     })
 }
 
-fn spawn_logger(
-    hub: Arc<BroadcastHub>,
-    file: File,
-    channel: String,
-    stop: Arc<AtomicBool>,
-    queue: usize,
-) -> JoinHandle<io::Result<u64>> {
-    let sub = hub.subscribe(hub.join(), queue.max(DEFAULT_QUEUE));
-    thread::spawn(move || {
-        let mut log = LogWriter::new(BufWriter::new(file), &channel);
-        loop {
-            match sub.recv_timeout(Duration::from_millis(100)) {
-                Ok(s) => {
-                    log.write(&s)?;
-                    while let Ok(s) = sub.try_recv() {
-                        log.write(&s)?;
-                    }
-                    log.flush()?;
-                }
-                Err(_) if stop.load(Ordering::SeqCst) => break,
-                Err(_) => {}
-            }
-        }
-        while let Ok(s) = sub.try_recv() {
-            log.write(&s)?;
-        }
-        log.flush()?;
-        Ok(sub.dropped())
-    })
-}
-
 fn serve(opts: Options) -> Result<(), String> {
-    signals::install();
+    let stop_when = StopConditions::install(opts.watch_stdin);
     let hub = Arc::new(BroadcastHub::new());
     let stop = Arc::new(AtomicBool::new(false));
 
@@ -244,7 +154,13 @@ fn serve(opts: Options) -> Result<(), String> {
                 .append(true)
                 .open(path)
                 .map_err(|e| format!("cannot open log {path}: {e}"))?;
-            Some(spawn_logger(hub.clone(), file, opts.channel.clone(), stop.clone(), opts.queue))
+            Some(spawn_logger(
+                hub.clone(),
+                file,
+                opts.channel.clone(),
+                stop.clone(),
+                opts.queue.max(DEFAULT_QUEUE),
+            ))
         }
         None => None,
     };
@@ -257,14 +173,7 @@ fn serve(opts: Options) -> Result<(), String> {
             if let Some(l) = logger {
                 let _ = l.join();
             }
-            return Err(match e.kind() {
-                io::ErrorKind::AddrInUse => format!(
-                    "{} is already in use (another r2p-canlink or socketcand?); pick another port with --socketcand",
-                    opts.addr
-                ),
-                io::ErrorKind::AddrNotAvailable => format!("{} is not an address of this machine", opts.addr),
-                _ => format!("cannot listen on {}: {e}", opts.addr),
-            });
+            return Err(listen_error(opts.addr, &e, "another r2p-canlink or socketcand"));
         }
     };
     eprintln!("r2p-canlink: socketcand on {} channel {}", server.local_addr(), opts.channel);
@@ -275,16 +184,9 @@ fn serve(opts: Options) -> Result<(), String> {
         .map(|hb| spawn_heartbeat(hub.clone(), hb, stop.clone()))
         .collect();
 
-    let stdin_closed = Arc::new(AtomicBool::new(false));
-    if opts.watch_stdin && !stdin_is_null() {
-        watch_stdin(stdin_closed.clone());
-    }
     let why = loop {
-        if signals::received() {
-            break "signal";
-        }
-        if stdin_closed.load(Ordering::SeqCst) {
-            break "standard input closed";
+        if let Some(why) = stop_when.reason() {
+            break why;
         }
         thread::sleep(Duration::from_millis(50));
     };

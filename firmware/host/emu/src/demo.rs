@@ -38,13 +38,16 @@ pub struct Received {
     pub scans: Rc<Cell<u64>>,
 }
 
-fn uid(n: u32) -> [u8; 12] {
+/// A test unique ID: `n` in the last four bytes.
+pub fn uid(n: u32) -> [u8; 12] {
     let mut u = [0u8; 12];
     u[8..].copy_from_slice(&n.to_be_bytes());
     u
 }
 
-fn tdma(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
+/// The configuration of the demo's boards (and of the tests' rigs): unique ID `n`, TDMA on
+/// [`CYCLE`], heartbeats every 20 ms, up to 4 HRT slots per cycle.
+pub fn tdma(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
     NodeConfig {
         heartbeat_period_us: 20_000,
         request_timeout_us: 30_000,

@@ -2,18 +2,17 @@
 //! candump log) or in real time with a socketcand server so that CAN tools join it. See `--help`.
 
 use std::fs::File;
-use std::io::{self, BufWriter, Read};
+use std::io::BufWriter;
 use std::net::SocketAddr;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
 
-use r2p_canlink::candump::LogWriter;
 use r2p_canlink::hub::DEFAULT_QUEUE;
 use r2p_canlink::server::DEFAULT_ADDR;
-use r2p_canlink::{BroadcastHub, Config, Hub, Server};
+use r2p_canlink::service::{listen_error, spawn_logger, StopConditions};
+use r2p_canlink::{BroadcastHub, Config, Server};
 use r2p_emu::bridge::Bridge;
 use r2p_emu::demo;
 
@@ -124,94 +123,6 @@ fn parse_args(args: &[String]) -> Result<Options, String> {
     Ok(opts)
 }
 
-#[cfg(unix)]
-mod signals {
-    use std::sync::atomic::{AtomicBool, Ordering};
-
-    pub static STOP: AtomicBool = AtomicBool::new(false);
-
-    extern "C" fn on_signal(_: i32) {
-        STOP.store(true, Ordering::SeqCst);
-    }
-
-    extern "C" {
-        fn signal(signum: i32, handler: extern "C" fn(i32)) -> usize;
-    }
-
-    const SIGINT: i32 = 2;
-    const SIGTERM: i32 = 15;
-
-    pub fn install() {
-        // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
-        unsafe {
-            signal(SIGINT, on_signal);
-            signal(SIGTERM, on_signal);
-        }
-    }
-
-    pub fn received() -> bool {
-        STOP.load(Ordering::SeqCst)
-    }
-}
-
-#[cfg(not(unix))]
-mod signals {
-    pub fn install() {}
-    pub fn received() -> bool {
-        false
-    }
-}
-
-fn stdin_is_null() -> bool {
-    std::fs::read_link("/proc/self/fd/0").is_ok_and(|p| p == std::path::Path::new("/dev/null"))
-}
-
-fn watch_stdin(closed: Arc<AtomicBool>) {
-    thread::spawn(move || {
-        let mut buf = [0u8; 256];
-        let mut stdin = io::stdin();
-        loop {
-            match stdin.read(&mut buf) {
-                Ok(0) => break,
-                Ok(_) => {}
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(_) => break,
-            }
-        }
-        closed.store(true, Ordering::SeqCst);
-    });
-}
-
-fn spawn_logger(
-    hub: Arc<BroadcastHub>,
-    file: File,
-    channel: String,
-    stop: Arc<AtomicBool>,
-) -> JoinHandle<io::Result<u64>> {
-    let sub = hub.subscribe(hub.join(), 16 * DEFAULT_QUEUE);
-    thread::spawn(move || {
-        let mut log = LogWriter::new(BufWriter::new(file), &channel);
-        loop {
-            match sub.recv_timeout(Duration::from_millis(100)) {
-                Ok(s) => {
-                    log.write(&s)?;
-                    while let Ok(s) = sub.try_recv() {
-                        log.write(&s)?;
-                    }
-                    log.flush()?;
-                }
-                Err(_) if stop.load(Ordering::SeqCst) => break,
-                Err(_) => {}
-            }
-        }
-        while let Ok(s) = sub.try_recv() {
-            log.write(&s)?;
-        }
-        log.flush()?;
-        Ok(sub.dropped())
-    })
-}
-
 fn virtual_time(opts: &Options) -> Result<(), String> {
     let (mut sim, received) = demo::build(opts.seed).ok_or("the demo robot was built already")?;
     let seconds = opts.seconds.expect("checked");
@@ -234,7 +145,7 @@ fn virtual_time(opts: &Options) -> Result<(), String> {
 }
 
 fn realtime(opts: &Options) -> Result<(), String> {
-    signals::install();
+    let stop_when = StopConditions::install(opts.watch_stdin);
     let (mut sim, received) = demo::build(opts.seed).ok_or("the demo robot was built already")?;
     let hub = Arc::new(BroadcastHub::new());
     let stop = Arc::new(AtomicBool::new(false));
@@ -246,7 +157,13 @@ fn realtime(opts: &Options) -> Result<(), String> {
                 .append(true)
                 .open(path)
                 .map_err(|e| format!("cannot open log {path}: {e}"))?;
-            Some(spawn_logger(hub.clone(), file, opts.channel.clone(), stop.clone()))
+            Some(spawn_logger(
+                hub.clone(),
+                file,
+                opts.channel.clone(),
+                stop.clone(),
+                16 * DEFAULT_QUEUE,
+            ))
         }
         None => None,
     };
@@ -258,16 +175,7 @@ fn realtime(opts: &Options) -> Result<(), String> {
             if let Some(l) = logger {
                 let _ = l.join();
             }
-            return Err(match e.kind() {
-                io::ErrorKind::AddrInUse => format!(
-                    "{} is already in use (another r2p-emu, r2p-canlink or socketcand?); pick another port with --socketcand",
-                    opts.addr
-                ),
-                io::ErrorKind::AddrNotAvailable => {
-                    format!("{} is not an address of this machine", opts.addr)
-                }
-                _ => format!("cannot listen on {}: {e}", opts.addr),
-            });
+            return Err(listen_error(opts.addr, &e, "another r2p-emu, r2p-canlink or socketcand"));
         }
     };
     eprintln!(
@@ -277,21 +185,14 @@ fn realtime(opts: &Options) -> Result<(), String> {
     );
 
     let mut bridge = Bridge::new(&sim, demo::SPARE_PORT, hub.clone(), DEFAULT_QUEUE);
-    let stdin_closed = Arc::new(AtomicBool::new(false));
-    if opts.watch_stdin && !stdin_is_null() {
-        watch_stdin(stdin_closed.clone());
-    }
     let limit = opts.seconds.map(Duration::from_secs_f64);
     let mut why = "--seconds";
-    bridge.run_realtime(&mut sim, Instant::now(), limit, || {
-        if signals::received() {
-            why = "signal";
-        } else if stdin_closed.load(Ordering::SeqCst) {
-            why = "standard input closed";
-        } else {
-            return false;
+    bridge.run_realtime(&mut sim, Instant::now(), limit, || match stop_when.reason() {
+        Some(reason) => {
+            why = reason;
+            true
         }
-        true
+        None => false,
     });
 
     stop.store(true, Ordering::SeqCst);

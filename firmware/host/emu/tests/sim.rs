@@ -5,39 +5,19 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
 
+use r2p_emu::demo::{tdma, DemoNode};
 use r2p_emu::{Mode, Sim};
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
-use r2p_node::{
-    HrtState, ImportState, NoParams, Node, NodeConfig, RemotePublisher, RemoteSubscriber,
-};
+use r2p_node::{HrtState, ImportState, NoParams, RemotePublisher, RemoteSubscriber};
 use r2p_vbus::{Config, EventKind, FaultAction, FaultRule};
 use rtcan::failover::{Role, RANK_STEP_CYCLES, TAKEOVER_BASE_CYCLES};
-use rtcan::{CycleConfig, Frame, Laxity, Micros, Sync};
+use rtcan::{Frame, Laxity, Micros, Sync};
 
-/// 10 ms cycles of 40 slots of 250 µs at 1 Mbit/s.
-const CYCLE: CycleConfig = CycleConfig { bit_rate: 1_000_000, cycle_us: 10_000, slots: 40 };
 const CYCLE_NS: u64 = 10_000_000;
 const SLOT_NS: u64 = 250_000;
 const MS: u64 = 1_000_000;
 
-type EmuNode = Node<'static, 2, 2, 32, 4, 64>;
-
-fn uid(n: u32) -> [u8; 12] {
-    let mut u = [0u8; 12];
-    u[8..].copy_from_slice(&n.to_be_bytes());
-    u
-}
-
-fn tdma(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
-    NodeConfig {
-        heartbeat_period_us: 20_000,
-        request_timeout_us: 30_000,
-        cycle: CYCLE,
-        rank,
-        hrt_slots: 4,
-        ..NodeConfig::new(uid(n), name)
-    }
-}
+type EmuNode = DemoNode;
 
 /// What a test sees of a rig: HRT values received by B with their arrival (µs), SRT values.
 #[derive(Default)]

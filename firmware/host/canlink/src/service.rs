@@ -1,0 +1,145 @@
+//! What a program serving the hub needs around the server, shared by `r2p-canlink` and
+//! `r2p-emu`: knowing when to stop (SIGINT/SIGTERM or standard input closing), a candump
+//! logger on the hub, and a clear message when the listening address cannot be used.
+
+use std::fs::File;
+use std::io::{self, BufWriter, Read};
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::{self, JoinHandle};
+use std::time::Duration;
+
+use crate::candump::LogWriter;
+use crate::hub::{BroadcastHub, Hub};
+
+#[cfg(unix)]
+mod signals {
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    static STOP: AtomicBool = AtomicBool::new(false);
+
+    extern "C" fn on_signal(_: i32) {
+        STOP.store(true, Ordering::SeqCst);
+    }
+
+    extern "C" {
+        fn signal(signum: i32, handler: extern "C" fn(i32)) -> usize;
+    }
+
+    const SIGINT: i32 = 2;
+    const SIGTERM: i32 = 15;
+
+    pub fn install() {
+        // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
+        unsafe {
+            signal(SIGINT, on_signal);
+            signal(SIGTERM, on_signal);
+        }
+    }
+
+    pub fn received() -> bool {
+        STOP.load(Ordering::SeqCst)
+    }
+}
+
+#[cfg(not(unix))]
+mod signals {
+    pub fn install() {}
+    pub fn received() -> bool {
+        false
+    }
+}
+
+/// Why a serving program stops: a signal, or its standard input closing (so a parent process
+/// that dies takes it down). Standard input is not watched when it is `/dev/null` or when the
+/// caller does not ask for it (`--no-stdin`).
+pub struct StopConditions {
+    stdin_closed: Arc<AtomicBool>,
+}
+
+impl StopConditions {
+    /// Installs the SIGINT/SIGTERM handler and, if `watch_stdin`, a thread that reads standard
+    /// input to its end.
+    pub fn install(watch_stdin: bool) -> Self {
+        signals::install();
+        let stdin_closed = Arc::new(AtomicBool::new(false));
+        if watch_stdin && !stdin_is_null() {
+            let closed = stdin_closed.clone();
+            thread::spawn(move || {
+                let mut buf = [0u8; 256];
+                let mut stdin = io::stdin();
+                loop {
+                    match stdin.read(&mut buf) {
+                        Ok(0) => break,
+                        Ok(_) => {}
+                        Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                        Err(_) => break,
+                    }
+                }
+                closed.store(true, Ordering::SeqCst);
+            });
+        }
+        Self { stdin_closed }
+    }
+
+    /// Why to stop now, if so: `"signal"` or `"standard input closed"`.
+    pub fn reason(&self) -> Option<&'static str> {
+        if signals::received() {
+            Some("signal")
+        } else if self.stdin_closed.load(Ordering::SeqCst) {
+            Some("standard input closed")
+        } else {
+            None
+        }
+    }
+}
+
+fn stdin_is_null() -> bool {
+    std::fs::read_link("/proc/self/fd/0").is_ok_and(|p| p == std::path::Path::new("/dev/null"))
+}
+
+/// Writes every frame on `hub` to `file` as a candump log until `stop` is set, then drains;
+/// joins as a participant with a queue of `queue` frames. Returns the frames it had to drop.
+pub fn spawn_logger(
+    hub: Arc<BroadcastHub>,
+    file: File,
+    channel: String,
+    stop: Arc<AtomicBool>,
+    queue: usize,
+) -> JoinHandle<io::Result<u64>> {
+    let sub = hub.subscribe(hub.join(), queue);
+    thread::spawn(move || {
+        let mut log = LogWriter::new(BufWriter::new(file), &channel);
+        loop {
+            match sub.recv_timeout(Duration::from_millis(100)) {
+                Ok(s) => {
+                    log.write(&s)?;
+                    while let Ok(s) = sub.try_recv() {
+                        log.write(&s)?;
+                    }
+                    log.flush()?;
+                }
+                Err(_) if stop.load(Ordering::SeqCst) => break,
+                Err(_) => {}
+            }
+        }
+        while let Ok(s) = sub.try_recv() {
+            log.write(&s)?;
+        }
+        log.flush()?;
+        Ok(sub.dropped())
+    })
+}
+
+/// The message for a server that cannot listen on `addr`; `others` names what else might hold
+/// the port (e.g. "another r2p-canlink or socketcand").
+pub fn listen_error(addr: SocketAddr, e: &io::Error, others: &str) -> String {
+    match e.kind() {
+        io::ErrorKind::AddrInUse => {
+            format!("{addr} is already in use ({others}?); pick another port with --socketcand")
+        }
+        io::ErrorKind::AddrNotAvailable => format!("{addr} is not an address of this machine"),
+        _ => format!("cannot listen on {addr}: {e}"),
+    }
+}
