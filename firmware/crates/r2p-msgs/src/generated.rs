@@ -46,6 +46,33 @@ impl crate::R2pMessage for Battery {
     }
 }
 
+/// Command to the power-supply module: switch its 5 V bus output on or off.
+///
+/// 1 bytes on the bus, type hash `0xC2BD8B69`; schema `firmware/msgs/BusPower.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BusPower {
+    /// true = output on (clears a latched over-current or eFuse fault), false = off (`bool`, bytes 0..1)
+    pub on: bool,
+}
+
+impl crate::R2pMessage for BusPower {
+    const NAME: &'static str = "BusPower";
+    const CANONICAL: &'static str = "BusPower:bool on";
+    const SIZE: usize = 1;
+    const TYPE_HASH: u32 = 0xC2BD_8B69;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.on);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self { on: r.get()? })
+    }
+}
+
 /// An obstacle closer than the proximity module's threshold (SRT, with a deadline).
 ///
 /// 5 bytes on the bus, type hash `0x24BEC850`; schema `firmware/msgs/Obstacle.msg`.
@@ -103,6 +130,43 @@ impl crate::R2pMessage for Proximity {
     fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
         let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
         Ok(Self { distance: r.get()?, status: r.get()? })
+    }
+}
+
+/// An event of the power-supply module (SRT, with a deadline): a protection tripped or cleared, or the 5 V bus output was switched.
+///
+/// 10 bytes on the bus, type hash `0x75857AC8`; schema `firmware/msgs/PsuEvent.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PsuEvent {
+    /// 1 = over-current, 2 = under-voltage, 3 = voltage recovered, 4 = output off, 5 = output on (`uint8`, bytes 0..1)
+    pub kind: u8,
+    /// why the output was switched (kinds 4, 5): 0 = command, 1 = over-current, 2 = eFuse fault; 0 otherwise (`uint8`, bytes 1..2)
+    pub cause: u8,
+    /// V at the battery terminals when it happened (filtered) (`float32`, bytes 2..6)
+    pub voltage: f32,
+    /// A drawn from the battery when it happened (filtered) (`float32`, bytes 6..10)
+    pub current: f32,
+}
+
+impl crate::R2pMessage for PsuEvent {
+    const NAME: &'static str = "PsuEvent";
+    const CANONICAL: &'static str =
+        "PsuEvent:uint8 kind;uint8 cause;float32 voltage;float32 current";
+    const SIZE: usize = 10;
+    const TYPE_HASH: u32 = 0x7585_7AC8;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.kind);
+        w.put(&self.cause);
+        w.put(&self.voltage);
+        w.put(&self.current);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self { kind: r.get()?, cause: r.get()?, voltage: r.get()?, current: r.get()? })
     }
 }
 
@@ -209,8 +273,10 @@ impl crate::R2pMessage for WheelState {
 /// Every generated type as (name, type hash, size), in name order.
 pub const ALL: &[(&str, u32, usize)] = &[
     ("Battery", 0x471D_E2CA, 16),
+    ("BusPower", 0xC2BD_8B69, 1),
     ("Obstacle", 0x24BE_C850, 5),
     ("Proximity", 0xA7C1_15E9, 20),
+    ("PsuEvent", 0x7585_7AC8, 10),
     ("Twist2D", 0x10F0_3E9D, 12),
     ("WheelSetpoint", 0x06AD_21EE, 5),
     ("WheelState", 0xD904_1FAF, 13),
@@ -221,8 +287,10 @@ pub const ALL: &[(&str, u32, usize)] = &[
 macro_rules! for_each_message {
     ($f:ident $(, $arg:expr)*) => {
         $f::<crate::Battery>($($arg),*);
+        $f::<crate::BusPower>($($arg),*);
         $f::<crate::Obstacle>($($arg),*);
         $f::<crate::Proximity>($($arg),*);
+        $f::<crate::PsuEvent>($($arg),*);
         $f::<crate::Twist2D>($($arg),*);
         $f::<crate::WheelSetpoint>($($arg),*);
         $f::<crate::WheelState>($($arg),*);
