@@ -46,6 +46,8 @@ impl crate::R2pMessage for Battery {
     }
 }
 
+crate::impl_wire!(Battery);
+
 /// An obstacle closer than the proximity module's threshold (SRT, with a deadline).
 ///
 /// 5 bytes on the bus, type hash `0x24BEC850`; schema `firmware/msgs/Obstacle.msg`.
@@ -76,6 +78,8 @@ impl crate::R2pMessage for Obstacle {
     }
 }
 
+crate::impl_wire!(Obstacle);
+
 /// Four range readings, published by the proximity module.
 ///
 /// 20 bytes on the bus, type hash `0xA7C115E9`; schema `firmware/msgs/Proximity.msg`.
@@ -105,6 +109,8 @@ impl crate::R2pMessage for Proximity {
         Ok(Self { distance: r.get()?, status: r.get()? })
     }
 }
+
+crate::impl_wire!(Proximity);
 
 /// Planar velocity of a robot base.
 ///
@@ -139,6 +145,8 @@ impl crate::R2pMessage for Twist2D {
     }
 }
 
+crate::impl_wire!(Twist2D);
+
 /// Setpoint for one DC motor controller.
 ///
 /// 5 bytes on the bus, type hash `0x06AD21EE`; schema `firmware/msgs/WheelSetpoint.msg`.
@@ -168,6 +176,8 @@ impl crate::R2pMessage for WheelSetpoint {
         Ok(Self { mode: r.get()?, value: r.get()? })
     }
 }
+
+crate::impl_wire!(WheelSetpoint);
 
 /// State of one DC motor controller, published every control period.
 ///
@@ -205,6 +215,8 @@ impl crate::R2pMessage for WheelState {
         Ok(Self { position: r.get()?, speed: r.get()?, current: r.get()?, faults: r.get()? })
     }
 }
+
+crate::impl_wire!(WheelState);
 
 /// Every generated type as (name, type hash, size), in name order.
 pub const ALL: &[(&str, u32, usize)] = &[
