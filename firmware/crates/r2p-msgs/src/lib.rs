@@ -412,14 +412,15 @@ mod wire_tests {
 
     #[test]
     fn every_message_is_a_node_payload_with_its_own_format() {
+        const N: usize = <Obstacle as R2pMessage>::SIZE;
         let o = Obstacle { channel: 2, distance: 0.25 };
         let mut a = [0u8; 8];
         let mut b = [0u8; 8];
-        assert_eq!(Wire::encode(&o, &mut a), Ok(Obstacle::SIZE));
-        assert_eq!(R2pMessage::encode(&o, &mut b), Ok(Obstacle::SIZE));
+        assert_eq!(Wire::encode(&o, &mut a), Ok(N));
+        assert_eq!(R2pMessage::encode(&o, &mut b), Ok(N));
         assert_eq!(a, b);
         assert_eq!(<Obstacle as Wire>::TYPE_HASH, <Obstacle as R2pMessage>::TYPE_HASH);
-        assert_eq!(<Obstacle as Wire>::decode(&a[..Obstacle::SIZE]), Ok(o));
+        assert_eq!(<Obstacle as Wire>::decode(&a[..N]), Ok(o));
         assert_eq!(<Obstacle as Wire>::decode(&a[..3]), Err(WireError::BadLength));
         assert_eq!(Wire::encode(&o, &mut a[..2]), Err(WireError::BufferTooSmall));
     }
