@@ -46,6 +46,8 @@ impl crate::R2pMessage for Battery {
     }
 }
 
+crate::impl_wire!(Battery);
+
 /// Command to the power-supply module: switch its 5 V bus output on or off.
 ///
 /// 1 bytes on the bus, type hash `0xC2BD8B69`; schema `firmware/msgs/BusPower.msg`.
@@ -72,6 +74,8 @@ impl crate::R2pMessage for BusPower {
         Ok(Self { on: r.get()? })
     }
 }
+
+crate::impl_wire!(BusPower);
 
 /// An obstacle closer than the proximity module's threshold (SRT, with a deadline).
 ///
@@ -103,6 +107,8 @@ impl crate::R2pMessage for Obstacle {
     }
 }
 
+crate::impl_wire!(Obstacle);
+
 /// Four range readings, published by the proximity module.
 ///
 /// 20 bytes on the bus, type hash `0xA7C115E9`; schema `firmware/msgs/Proximity.msg`.
@@ -132,6 +138,8 @@ impl crate::R2pMessage for Proximity {
         Ok(Self { distance: r.get()?, status: r.get()? })
     }
 }
+
+crate::impl_wire!(Proximity);
 
 /// An event of the power-supply module (SRT, with a deadline): a protection tripped or cleared, or the 5 V bus output was switched.
 ///
@@ -170,6 +178,8 @@ impl crate::R2pMessage for PsuEvent {
     }
 }
 
+crate::impl_wire!(PsuEvent);
+
 /// Planar velocity of a robot base.
 ///
 /// 12 bytes on the bus, type hash `0x10F03E9D`; schema `firmware/msgs/Twist2D.msg`.
@@ -203,6 +213,8 @@ impl crate::R2pMessage for Twist2D {
     }
 }
 
+crate::impl_wire!(Twist2D);
+
 /// Setpoint for one DC motor controller.
 ///
 /// 5 bytes on the bus, type hash `0x06AD21EE`; schema `firmware/msgs/WheelSetpoint.msg`.
@@ -232,6 +244,8 @@ impl crate::R2pMessage for WheelSetpoint {
         Ok(Self { mode: r.get()?, value: r.get()? })
     }
 }
+
+crate::impl_wire!(WheelSetpoint);
 
 /// State of one DC motor controller, published every control period.
 ///
@@ -269,6 +283,8 @@ impl crate::R2pMessage for WheelState {
         Ok(Self { position: r.get()?, speed: r.get()?, current: r.get()?, faults: r.get()? })
     }
 }
+
+crate::impl_wire!(WheelState);
 
 /// Every generated type as (name, type hash, size), in name order.
 pub const ALL: &[(&str, u32, usize)] = &[
