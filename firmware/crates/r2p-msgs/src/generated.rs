@@ -150,9 +150,9 @@ pub struct PsuEvent {
     pub kind: u8,
     /// why the output was switched (kinds 4, 5): 0 = command, 1 = over-current, 2 = eFuse fault; 0 otherwise (`uint8`, bytes 1..2)
     pub cause: u8,
-    /// V at the battery terminals when it happened (filtered) (`float32`, bytes 2..6)
+    /// V at the battery terminals, filtered (what under-voltage is judged on) (`float32`, bytes 2..6)
     pub voltage: f32,
-    /// A drawn from the battery when it happened (filtered) (`float32`, bytes 6..10)
+    /// A drawn from the battery at that step, unfiltered (what over-current is judged on) (`float32`, bytes 6..10)
     pub current: f32,
 }
 
@@ -179,6 +179,50 @@ impl crate::R2pMessage for PsuEvent {
 }
 
 crate::impl_wire!(PsuEvent);
+
+/// State of the power-supply module's 5 V bus output, published with `battery`: what a module that joins late cannot learn from the (one-off) events.
+///
+/// 7 bytes on the bus, type hash `0xDBBD3F72`; schema `firmware/msgs/PsuState.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PsuState {
+    /// the bus output is switched on (`bool`, bytes 0..1)
+    pub output_on: bool,
+    /// why it is held off until an on command: 0 = not latched, 1 = over-current, 2 = eFuse fault (`uint8`, bytes 1..2)
+    pub latched: u8,
+    /// the battery is below the under-voltage threshold (`bool`, bytes 2..3)
+    pub under_voltage: bool,
+    /// V on the bus output (filtered) (`float32`, bytes 3..7)
+    pub bus_voltage: f32,
+}
+
+impl crate::R2pMessage for PsuState {
+    const NAME: &'static str = "PsuState";
+    const CANONICAL: &'static str =
+        "PsuState:bool output_on;uint8 latched;bool under_voltage;float32 bus_voltage";
+    const SIZE: usize = 7;
+    const TYPE_HASH: u32 = 0xDBBD_3F72;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.output_on);
+        w.put(&self.latched);
+        w.put(&self.under_voltage);
+        w.put(&self.bus_voltage);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self {
+            output_on: r.get()?,
+            latched: r.get()?,
+            under_voltage: r.get()?,
+            bus_voltage: r.get()?,
+        })
+    }
+}
+
+crate::impl_wire!(PsuState);
 
 /// Planar velocity of a robot base.
 ///
@@ -293,6 +337,7 @@ pub const ALL: &[(&str, u32, usize)] = &[
     ("Obstacle", 0x24BE_C850, 5),
     ("Proximity", 0xA7C1_15E9, 20),
     ("PsuEvent", 0x7585_7AC8, 10),
+    ("PsuState", 0xDBBD_3F72, 7),
     ("Twist2D", 0x10F0_3E9D, 12),
     ("WheelSetpoint", 0x06AD_21EE, 5),
     ("WheelState", 0xD904_1FAF, 13),
@@ -307,6 +352,7 @@ macro_rules! for_each_message {
         $f::<crate::Obstacle>($($arg),*);
         $f::<crate::Proximity>($($arg),*);
         $f::<crate::PsuEvent>($($arg),*);
+        $f::<crate::PsuState>($($arg),*);
         $f::<crate::Twist2D>($($arg),*);
         $f::<crate::WheelSetpoint>($($arg),*);
         $f::<crate::WheelState>($($arg),*);
