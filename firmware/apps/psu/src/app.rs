@@ -14,7 +14,7 @@ use crate::event::{
 };
 use crate::frontend::{iin_amps, vin_volts, vout_volts};
 use crate::params::Config;
-use crate::protection::{EfuseFault, OverCurrent, Output, UnderVoltage};
+use crate::protection::{EfuseFault, Output, OverCurrent, UnderVoltage};
 
 /// What the board-support layer reads before each step.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -83,7 +83,13 @@ impl<'a> App<'a> {
     }
 
     /// Exports `battery`, `state` and `event` and imports `power` on the module's node.
-    pub fn register<const E: usize, const I: usize, const T: usize, const R: usize, const B: usize>(
+    pub fn register<
+        const E: usize,
+        const I: usize,
+        const T: usize,
+        const R: usize,
+        const B: usize,
+    >(
         &self,
         node: &mut Node<'a, E, I, T, R, B>,
     ) -> Result<(), NodeError> {
@@ -130,7 +136,8 @@ impl<'a> App<'a> {
                     self.over_current = OverCurrent::default();
                     self.efuse = EfuseFault::default();
                 }
-                event(if on { OUTPUT_ON } else { OUTPUT_OFF }, CAUSE_COMMAND).send(self.ep.event_pub);
+                event(if on { OUTPUT_ON } else { OUTPUT_OFF }, CAUSE_COMMAND)
+                    .send(self.ep.event_pub);
             }
         }
         if self.over_current.update(now_us, amps, cfg.oc_threshold_a, cfg.oc_time_us) {

@@ -36,10 +36,34 @@ pub struct Names {
 
 /// Names by `instance` parameter.
 pub const NAMES: [Names; 4] = [
-    Names { node: "psu", battery: "psu/battery", state: "psu/state", event: "psu/event", power: "psu/power" },
-    Names { node: "psu1", battery: "psu1/battery", state: "psu1/state", event: "psu1/event", power: "psu1/power" },
-    Names { node: "psu2", battery: "psu2/battery", state: "psu2/state", event: "psu2/event", power: "psu2/power" },
-    Names { node: "psu3", battery: "psu3/battery", state: "psu3/state", event: "psu3/event", power: "psu3/power" },
+    Names {
+        node: "psu",
+        battery: "psu/battery",
+        state: "psu/state",
+        event: "psu/event",
+        power: "psu/power",
+    },
+    Names {
+        node: "psu1",
+        battery: "psu1/battery",
+        state: "psu1/state",
+        event: "psu1/event",
+        power: "psu1/power",
+    },
+    Names {
+        node: "psu2",
+        battery: "psu2/battery",
+        state: "psu2/state",
+        event: "psu2/event",
+        power: "psu2/power",
+    },
+    Names {
+        node: "psu3",
+        battery: "psu3/battery",
+        state: "psu3/state",
+        event: "psu3/event",
+        power: "psu3/power",
+    },
 ];
 
 /// The names the parameters select.

@@ -27,6 +27,8 @@ pub mod protection;
 pub mod readme;
 
 #[cfg(test)]
+mod bus_tests;
+#[cfg(test)]
 mod tests;
 
 pub use app::{App, Command, Sample};

@@ -91,7 +91,12 @@ impl Rig {
 }
 
 fn sample(volts: f32, amps: f32) -> Sample {
-    Sample { vin: vin_counts(volts), iin: iin_counts(amps), vout: vout_counts(5.0), ..Sample::default() }
+    Sample {
+        vin: vin_counts(volts),
+        iin: iin_counts(amps),
+        vout: vout_counts(5.0),
+        ..Sample::default()
+    }
 }
 
 #[test]
