@@ -138,7 +138,7 @@ fn coulomb_counting_two_amps_for_thirty_minutes_is_one_amp_hour() {
     r.run(30 * 60 * 1000, sample(12.0, 2.0));
     let used = r.app.battery().charge_used;
     assert!((used - 1.0).abs() < 0.01, "within 1 %: {used} Ah");
-    // What is left is the ADC's quantisation of 2 A (620 codes = 1.99879 A).
+    // What is left is the ADC's quantisation of 2 A (621 codes = 2.0013 A).
     let expected = iin_amps(iin_counts(2.0)) * 0.5;
     assert!((used - expected).abs() < 1e-4, "{used} vs {expected}");
     let last = r.batteries.last().unwrap().1;
