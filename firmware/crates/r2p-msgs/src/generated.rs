@@ -109,6 +109,58 @@ impl crate::R2pMessage for Obstacle {
 
 crate::impl_wire!(Obstacle);
 
+/// Pose and velocity of a robot base by dead reckoning from its wheels (forward kinematics).
+///
+/// 24 bytes on the bus, type hash `0xEEDDD804`; schema `firmware/msgs/Odometry.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Odometry {
+    /// m, in the odometry frame (where the base started) (`float32`, bytes 0..4)
+    pub x: f32,
+    /// m (`float32`, bytes 4..8)
+    pub y: f32,
+    /// rad, counter-clockwise from the x axis (`float32`, bytes 8..12)
+    pub theta: f32,
+    /// m/s, base frame, forward (`float32`, bytes 12..16)
+    pub vx: f32,
+    /// m/s, base frame, left (`float32`, bytes 16..20)
+    pub vy: f32,
+    /// rad/s, counter-clockwise (`float32`, bytes 20..24)
+    pub wz: f32,
+}
+
+impl crate::R2pMessage for Odometry {
+    const NAME: &'static str = "Odometry";
+    const CANONICAL: &'static str =
+        "Odometry:float32 x;float32 y;float32 theta;float32 vx;float32 vy;float32 wz";
+    const SIZE: usize = 24;
+    const TYPE_HASH: u32 = 0xEEDD_D804;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.x);
+        w.put(&self.y);
+        w.put(&self.theta);
+        w.put(&self.vx);
+        w.put(&self.vy);
+        w.put(&self.wz);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self {
+            x: r.get()?,
+            y: r.get()?,
+            theta: r.get()?,
+            vx: r.get()?,
+            vy: r.get()?,
+            wz: r.get()?,
+        })
+    }
+}
+
+crate::impl_wire!(Odometry);
+
 /// Four range readings, published by the proximity module.
 ///
 /// 20 bytes on the bus, type hash `0xA7C115E9`; schema `firmware/msgs/Proximity.msg`.
@@ -335,6 +387,7 @@ pub const ALL: &[(&str, u32, usize)] = &[
     ("Battery", 0x471D_E2CA, 16),
     ("BusPower", 0xC2BD_8B69, 1),
     ("Obstacle", 0x24BE_C850, 5),
+    ("Odometry", 0xEEDD_D804, 24),
     ("Proximity", 0xA7C1_15E9, 20),
     ("PsuEvent", 0x7585_7AC8, 10),
     ("PsuState", 0xDBBD_3F72, 7),
@@ -350,6 +403,7 @@ macro_rules! for_each_message {
         $f::<crate::Battery>($($arg),*);
         $f::<crate::BusPower>($($arg),*);
         $f::<crate::Obstacle>($($arg),*);
+        $f::<crate::Odometry>($($arg),*);
         $f::<crate::Proximity>($($arg),*);
         $f::<crate::PsuEvent>($($arg),*);
         $f::<crate::PsuState>($($arg),*);
