@@ -9,7 +9,7 @@ pub const MIN_CURRENT_A: f32 = 0.05;
 pub const MAX_STEP_US: u64 = 1_000_000;
 
 /// Picocoulombs (µA·µs) in one ampere-hour.
-const PC_PER_AH: f64 = 3.6e15;
+const PC_PER_AH: f32 = 3.6e15;
 
 /// Charge drawn from the battery since boot (a battery is swapped with the PSU off, so boot is
 /// "declared full"). Integrated in integer µA·µs so that hours of 1 ms steps lose nothing to
@@ -28,9 +28,10 @@ impl ChargeCounter {
         self.pico_coulombs = self.pico_coulombs.saturating_add(micro_amps * dt);
     }
 
-    /// Charge used, Ah.
+    /// Charge used, Ah (the count stays exact in the integer; only this reading is rounded,
+    /// to f32's 24 bits: no f64 code on an FPU-less Cortex-M3).
     pub fn amp_hours(&self) -> f32 {
-        (self.pico_coulombs as f64 / PC_PER_AH) as f32
+        self.pico_coulombs as f32 / PC_PER_AH
     }
 }
 
