@@ -14,7 +14,7 @@ import pytest
 from conftest import ROOT, run
 
 sys.path.insert(0, str(ROOT / "tests" / "fixtures" / "pins"))
-from mksch import NC, Part, write_schematic  # noqa: E402
+from mksch import NC, WIRE, Part, write_schematic  # noqa: E402
 
 FIXTURES = ROOT / "tests" / "fixtures" / "pins" / "boards"
 CHECK = str(ROOT / "scripts" / "check-pins")
@@ -23,11 +23,12 @@ BOARD = "firmware/boards/demo.toml"
 BASE = "firmware/boards/core.toml"
 R1 = Part("R1", "Device:R", "10k", "Resistor_SMD:R_0402_1005Metric", {"1": "BOOT1", "2": "GND"})
 # The nets of a schematic that agrees with tests/fixtures/pins/boards/demo.toml. PB5 carries a
-# no-connect flag and PB10 is tied to GND: neither is a signal the firmware must list.
+# no-connect flag, PB10 is tied to GND (a net with the MCU's VSS pins), PB12 to +5V (power by its
+# name alone): none is a signal the firmware must list.
 GOOD_NETS = {"PA0": "VIN_SENSE", "PA1": "IIN_SENSE", "PA8": "PWM_A", "PB0": "BUS_EN",
              "PB1": "BUS_FAULT", "PA11": "CAN_RX", "PA12": "CAN_TX", "PA13": "SWDIO",
              "PA14": "SWCLK", "PD0": "OSC_IN", "PD1": "OSC_OUT", "PB2": "BOOT1",
-             "PC13": "LED_STATUS", "PB5": NC, "PB10": "GND"}
+             "PC13": "LED_STATUS", "PB5": NC, "PB10": "GND", "PB12": "+5V"}
 
 pytestmark = pytest.mark.skipif(shutil.which("kicad-cli") is None, reason="kicad-cli not installed")
 
@@ -85,15 +86,25 @@ def test_a_base_pin_on_another_net_names_the_base_file(tmp_path):
 def test_wired_pins_the_firmware_does_not_list(tmp_path):
     """A labelled net and an unlabelled wire to a resistor both count; NC and GND do not."""
     r2 = Part("R2", "Device:R", "1k", "Resistor_SMD:R_0402_1005Metric", {"1": "SPARE", "2": "GND"})
-    rc, problems, out = check(make_repo(tmp_path, {**GOOD_NETS, "PB6": "EXTRA", "PB7": "SPARE"},
-                                        parts=(R1, r2)))
+    rc, problems, out = check(make_repo(tmp_path, {**GOOD_NETS, "PB6": "EXTRA", "PB7": "SPARE",
+                                                   "PB8": "VBAT_SENSE"}, parts=(R1, r2)))
     assert rc == 1, out
     assert problems == [
         f"demo: PB6 is on net EXTRA in {SCH} but {BOARD} does not list PB6: add it, or leave the "
         "pin unconnected",
         f"demo: PB7 is on net SPARE in {SCH} but {BOARD} does not list PB7: add it, or leave the "
         "pin unconnected",
+        f"demo: PB8 is on net VBAT_SENSE in {SCH} but {BOARD} does not list PB8: add it, or leave the "
+        "pin unconnected",
     ]
+
+
+def test_an_unlabelled_wire_is_an_unnamed_net(tmp_path):
+    r2 = Part("R2", "Device:R", "1k", "Resistor_SMD:R_0402_1005Metric", {"1": WIRE, "2": "GND"})
+    rc, problems, out = check(make_repo(tmp_path, {**GOOD_NETS, "PB7": WIRE}, parts=(R1, r2)))
+    assert rc == 1, out
+    assert problems == [f"demo: PB7 is on an unnamed net Net-(U1-PB7) in {SCH} but {BOARD} does not "
+                        "list PB7: add it, or leave the pin unconnected"]
 
 
 def test_a_listed_signal_wired_to_the_wrong_pin_points_at_the_board_file_pin(tmp_path):
@@ -194,6 +205,19 @@ def test_symbol_pin_names_with_alternate_suffixes_are_matched_by_gpio(tmp_path):
     repo2 = make_repo(tmp_path / "b", {**GOOD_NETS, "PB2": "BOOT"}, pin_names={"PB2": "PB2/BOOT1"})
     rc, problems, _ = check(repo2)
     assert problems == [f"demo: PB2 is on net BOOT in {SCH} but {BASE} says signal BOOT1 (reserved)"]
+
+
+def test_a_gpio_on_a_supply_net_is_power_by_the_pins_on_it_whatever_its_name(tmp_path):
+    """MCU_3V3 carries the MCU's VDD pins (power_in): PB13 tied to it is not a signal."""
+    repo = make_repo(tmp_path, {**GOOD_NETS, "PB13": "MCU_3V3"}, supply={"VDD": "MCU_3V3"})
+    rc, problems, out = check(repo)
+    assert rc == 0, out
+
+
+def test_the_mcu_is_found_by_its_kicad_symbol_name_with_x_wildcards(tmp_path):
+    repo = make_repo(tmp_path, mcu_fields={})     # STM32F103CBTx, no MPN field
+    rc, _, out = check(repo)
+    assert rc == 0, out
 
 
 def test_the_mcu_is_found_by_mpn_when_value_and_symbol_differ(tmp_path):

@@ -35,8 +35,11 @@ from .stm32db import Chip, ChipDbError, load_chip
 GPIO = re.compile(r"^(P[A-K](?:1[0-5]|[0-9]))(?![0-9])")
 """A GPIO's name at the start of a symbol pin name: `PB2/BOOT1` and `PD0-OSC_IN` are PB2, PD0."""
 UNNAMED = ("unconnected-(", "Net-(")
-POWER_NAME = re.compile(r"^([+-]?\d+(\.\d+)?V\d*|[+-]?V(CC|DD|SS|EE|BAT|BUS|IN)\w*|GND\w*|"
-                        r"[AD]GND|EARTH|PE)$")
+POWER_NAME = re.compile(r"^([+-]?\d+(\.\d+)?V\d*|[+-]?(VCC|VDD|VDDA|VSS|VSSA|VEE|VBAT|VBUS)|"
+                        r"GND|[ADP]GND|GND[ADP]|EARTH)$")
+"""Power-net names (`+5V`, `+3V3`, `GND`, `VDDA`...), for nets whose only node is the MCU pin; a net
+with a power_in/power_out pin on it (the MCU's own VDD/VSS, a regulator) is power whatever its
+name. Sense nets such as VIN_SENSE or VBAT_SENSE are signals."""
 POWER_PINS = {"power_in", "power_out"}
 
 
