@@ -30,9 +30,6 @@ GOOD_NETS = {"PA0": "VIN_SENSE", "PA1": "IIN_SENSE", "PA8": "PWM_A", "PB0": "BUS
              "PA14": "SWCLK", "PD0": "OSC_IN", "PD1": "OSC_OUT", "PB2": "BOOT1",
              "PC13": "LED_STATUS", "PB5": NC, "PB10": "GND", "PB12": "+5V"}
 
-pytestmark = pytest.mark.skipif(shutil.which("kicad-cli") is None, reason="kicad-cli not installed")
-
-
 def make_repo(tmp: Path, nets: dict[str, str] = GOOD_NETS, demo_edit=None, parts=(R1,), **sch) -> Path:
     """tmp as a repository: fixture board files (demo.toml through `demo_edit`) and a schematic."""
     boards = tmp / "firmware" / "boards"

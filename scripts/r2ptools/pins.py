@@ -41,6 +41,8 @@ POWER_NAME = re.compile(r"^([+-]?\d+(\.\d+)?V\d*|[+-]?(VCC|VDD|VDDA|VSS|VSSA|VEE
 with a power_in/power_out pin on it (the MCU's own VDD/VSS, a regulator) is power whatever its
 name. Sense nets such as VIN_SENSE or VBAT_SENSE are signals."""
 POWER_PINS = {"power_in", "power_out"}
+OSCILLATOR = "RCC_OSC"
+"""Functions of crystal pins in stm32-metapac: RCC_OSC_IN/OUT (HSE), RCC_OSC32_IN/OUT (LSE)."""
 
 
 class CheckError(Exception):
@@ -155,11 +157,11 @@ def check_against_chip(board: Board, chip: Chip, root: Path) -> list[str]:
             continue
         can = chip.functions.get(pin.name, frozenset())
         if pin.mode == "oscillator":
-            osc = sorted(f for f in can if f.startswith("RCC_OSC"))
-            if not osc:
+            if not any(f.startswith(OSCILLATOR) for f in can):
+                oscillators = [p for p in chip.pins
+                               if any(f.startswith(OSCILLATOR) for f in chip.functions.get(p, ()))]
                 errors.append(f"{where}: {pin.name} (signal {pin.signal}) has mode oscillator but is "
-                              f"no oscillator pin of {chip.name} (those are: "
-                              f"{', '.join(p for p in chip.pins if any(f.startswith('RCC_OSC') for f in chip.functions.get(p, ())))})")
+                              f"no oscillator pin of {chip.name} (those are: {', '.join(oscillators)})")
             continue
         if pin.function is None:
             continue
