@@ -242,7 +242,7 @@ def modules(root: Path) -> tuple[list[str], list[str]]:
         try:
             if "module" in tomllib.loads(path.read_text()).get("board", {}):
                 with_file.append(path.stem)
-        except Exception:
+        except (OSError, tomllib.TOMLDecodeError, AttributeError):
             with_file.append(path.stem)       # unreadable: load_board will report it
     hardware = root / "hardware"
     without = sorted(d.name for d in hardware.iterdir()
