@@ -41,6 +41,9 @@ pub struct Point {
     pub offered_srt: f64,
     /// NRT part.
     pub offered_nrt: f64,
+    /// Share of the bus time RTCAN reserves: the sync slot of every cycle and the slot of every
+    /// HRT occurrence, whatever the frames in them occupy.
+    pub reserved_share: f64,
     /// Streams per class: HRT, SRT, NRT.
     pub streams: [usize; 3],
     /// Messages released.
@@ -63,12 +66,20 @@ pub fn point(setup: &Setup, policies: &[Policy]) -> Result<Point, SetupError> {
         .iter()
         .map(|&p| metrics::report(setup, &traffic, &run(setup, &traffic, p)))
         .collect();
+    let hrt_occurrences = traffic
+        .messages
+        .iter()
+        .filter(|m| is_hrt(&traffic.streams[usize::from(m.stream)].kind))
+        .count();
+    let cycles = setup.duration_us as f64 / f64::from(setup.cycle.cycle_us);
+    let slot_us = f64::from(setup.cycle.cycle_us) / f64::from(setup.cycle.slots);
     Ok(Point {
         load: setup.load,
         offered: traffic.offered_load(setup),
         offered_hrt: share(is_hrt),
         offered_srt: share(is_srt),
         offered_nrt: share(is_nrt),
+        reserved_share: (hrt_occurrences as f64 + cycles) * slot_us / setup.duration_us as f64,
         streams: [count(is_hrt), count(is_srt), count(is_nrt)],
         messages: traffic.messages.len(),
         reports,
