@@ -8,13 +8,15 @@ use std::time::Instant;
 
 use r2p_loadbench::setup::Mix;
 use r2p_loadbench::{point, Policy, Setup};
+use rtcan::LaxityEncoding;
 
 const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L2,...] [--policies P1,P2,...] [--mix HRT,SRT]
   --seed N        traffic seed (default 1)
   --seconds S     measured virtual time per load point (default 10)
   --loads ...     offered loads as fractions of 1 Mbit/s (default 0.10,0.15,...,0.95)
   --policies ...  rtcan, rtcan_oneshot, rtcan_merged, fixed (default all)
-  --mix H,S       HRT and SRT shares of the offered load, NRT the rest (default 0.3,0.5)";
+  --mix H,S       HRT and SRT shares of the offered load, NRT the rest (default 0.3,0.5)
+  --laxity E:T    SRT laxity encoding, log or linear, tick T µs (default log:100)";
 
 struct Args {
     seed: u64,
@@ -22,6 +24,7 @@ struct Args {
     loads: Vec<f64>,
     policies: Vec<Policy>,
     mix: Mix,
+    laxity: LaxityEncoding,
 }
 
 fn parse() -> Result<Args, String> {
@@ -31,6 +34,7 @@ fn parse() -> Result<Args, String> {
         loads: (2..=19).map(|k| f64::from(k) / 20.0).collect(),
         policies: Policy::ALL.to_vec(),
         mix: Setup::new(0.5, 0).mix,
+        laxity: Setup::new(0.5, 0).laxity,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -73,6 +77,20 @@ fn parse() -> Result<Args, String> {
                 let [hrt, srt] = v[..] else { return Err(bad("give two shares, HRT,SRT")) };
                 a.mix = Mix { hrt, srt };
             }
+            "--laxity" => {
+                let (kind, tick) =
+                    value.split_once(':').ok_or(bad("write log:TICK or linear:TICK"))?;
+                let tick_us = tick
+                    .parse()
+                    .ok()
+                    .filter(|&t| t > 0)
+                    .ok_or(bad("tick must be a positive integer (µs)"))?;
+                a.laxity = match kind {
+                    "log" => LaxityEncoding::Logarithmic { tick_us },
+                    "linear" => LaxityEncoding::Linear { tick_us },
+                    _ => return Err(bad("the encoding is log or linear")),
+                };
+            }
             _ => return Err(format!("unknown option {flag}")),
         }
     }
@@ -97,6 +115,7 @@ fn main() -> ExitCode {
         let setup = Setup {
             duration_us: (args.seconds * 1e6).round() as u64,
             mix: args.mix,
+            laxity: args.laxity,
             ..Setup::new(load, args.seed)
         };
         let t = Instant::now();
@@ -116,6 +135,7 @@ fn main() -> ExitCode {
         json["seed"] = args.seed.into();
         json["seconds"] = args.seconds.into();
         json["mix"] = serde_json::json!({ "hrt": args.mix.hrt, "srt": args.mix.srt });
+        json["laxity"] = format!("{:?}", args.laxity).into();
         json["wall_s"] = wall.into();
         json["events_per_s"] = (ev as f64 / wall).round().into();
         println!("{json}");
