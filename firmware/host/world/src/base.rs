@@ -177,6 +177,7 @@ impl Base {
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)] // index loops read like the formulas
 mod tests {
     use super::*;
     use crate::kinematics::Layout;
@@ -193,7 +194,12 @@ mod tests {
     }
 
     fn frictionless(m: f64, i: f64) -> BaseParams {
-        BaseParams { mass_kg: m, inertia_kg_m2: i, rolling_resistance: 0.0, rolling_smoothing: 0.005 }
+        BaseParams {
+            mass_kg: m,
+            inertia_kg_m2: i,
+            rolling_resistance: 0.0,
+            rolling_smoothing: 0.005,
+        }
     }
 
     #[test]

@@ -78,7 +78,8 @@ impl HallCurrentSensor {
 mod tests {
     use super::*;
 
-    const S: HallCurrentSensor = HallCurrentSensor { params: HallSensorParams::ACS711_15AB, vcc: 3.3 };
+    const S: HallCurrentSensor =
+        HallCurrentSensor { params: HallSensorParams::ACS711_15AB, vcc: 3.3 };
 
     #[test]
     fn zero_at_half_supply_and_datasheet_slope() {

@@ -215,10 +215,9 @@ impl Ray {
     pub fn hit_aabb(&self, min: Vec2, max: Vec2) -> Option<f64> {
         let mut t0 = 0.0_f64;
         let mut t1 = f64::INFINITY;
-        for (o, d, lo, hi) in [
-            (self.origin.x, self.dir.x, min.x, max.x),
-            (self.origin.y, self.dir.y, min.y, max.y),
-        ] {
+        for (o, d, lo, hi) in
+            [(self.origin.x, self.dir.x, min.x, max.x), (self.origin.y, self.dir.y, min.y, max.y)]
+        {
             if d == 0.0 {
                 if o < lo || o > hi {
                     return None;

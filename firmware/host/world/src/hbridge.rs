@@ -127,7 +127,10 @@ impl HBridge {
         }
         let fa = self.leg_fraction(self.input.duty_a, current);
         let fb = self.leg_fraction(self.input.duty_b, -current);
-        Terminal::Driven { volts: (fa - fb) * vs, series_ohm: 2.0 * self.params.switch_resistance_ohm }
+        Terminal::Driven {
+            volts: (fa - fb) * vs,
+            series_ohm: 2.0 * self.params.switch_resistance_ohm,
+        }
     }
 
     /// Charge drawn from the supply over a sub-step in which `terminal` drove the motor

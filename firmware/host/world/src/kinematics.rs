@@ -181,8 +181,8 @@ impl Kinematics {
             }
         }
         let mut q = [0.0; 3];
-        for i in 0..self.dof {
-            q[i] = (0..self.dof).map(|j| self.normal_inv[i][j] * atw[j]).sum();
+        for (qi, inv) in q.iter_mut().zip(&self.normal_inv).take(self.dof) {
+            *qi = inv.iter().zip(&atw).take(self.dof).map(|(m, a)| m * a).sum();
         }
         self.twist(&q)
     }

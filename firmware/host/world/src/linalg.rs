@@ -17,8 +17,9 @@ pub(crate) fn solve(m: &Mat3, b: &[f64; 3], n: usize) -> [f64; 3] {
         x.swap(c, p);
         for r in c + 1..n {
             let f = a[r][c] / a[c][c];
-            for k in c..n {
-                a[r][k] -= f * a[c][k];
+            let pivot = a[c];
+            for (v, p) in a[r].iter_mut().zip(pivot).skip(c).take(n - c) {
+                *v -= f * p;
             }
             x[r] -= f * x[c];
         }
@@ -48,6 +49,7 @@ pub(crate) fn inverse(m: &Mat3, n: usize) -> Mat3 {
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)] // index loops read like the formulas
 mod tests {
     use super::*;
 

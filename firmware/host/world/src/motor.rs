@@ -82,7 +82,8 @@ impl MotorParams {
     pub fn steady_state(&self, volts: f64, series_ohm: f64, load: f64) -> (f64, f64) {
         let r = self.resistance_ohm + series_ohm;
         let k = self.torque_constant;
-        let w = (k * volts / r - self.coulomb_friction - load) / (k * k / r + self.viscous_friction);
+        let w =
+            (k * volts / r - self.coulomb_friction - load) / (k * k / r + self.viscous_friction);
         ((volts - k * w) / r, w)
     }
 }
@@ -379,7 +380,8 @@ mod tests {
         let disc = (tr * tr - 4.0 * det).sqrt();
         let (l1, l2) = ((-tr + disc) / 2.0, (-tr - disc) / 2.0);
         let (_, w_inf) = p.steady_state(24.0, 0.0, 0.0);
-        let exact = |t: f64| w_inf * (1.0 + (l2 * (l1 * t).exp() - l1 * (l2 * t).exp()) / (l1 - l2));
+        let exact =
+            |t: f64| w_inf * (1.0 + (l2 * (l1 * t).exp() - l1 * (l2 * t).exp()) / (l1 - l2));
         let mut m = Motor::new(p);
         let n = (0.02 / h).round() as usize;
         (1..=n)

@@ -103,7 +103,9 @@ impl RangerKind {
             }
             RangerKind::MaxSonarLvEz => Beam {
                 half_angle: 15.0 * deg,
-                max_range: f64::from(ranger_curves::MAXSONAR_MAX_INCHES * ranger_curves::M_PER_INCH),
+                max_range: f64::from(
+                    ranger_curves::MAXSONAR_MAX_INCHES * ranger_curves::M_PER_INCH,
+                ),
             },
         }
     }

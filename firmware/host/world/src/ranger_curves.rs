@@ -210,11 +210,8 @@ mod tests {
             // The calibrated range ends on table points and is strictly monotonic.
             assert!(c.points.iter().any(|p| p.0 == c.min_range_m), "{}", c.name);
             assert!(c.points.iter().any(|p| p.0 == c.max_range_m), "{}", c.name);
-            let cal: Vec<_> = c
-                .points
-                .iter()
-                .filter(|p| p.0 >= c.min_range_m && p.0 <= c.max_range_m)
-                .collect();
+            let cal: Vec<_> =
+                c.points.iter().filter(|p| p.0 >= c.min_range_m && p.0 <= c.max_range_m).collect();
             let dec = cal.windows(2).all(|w| w[1].1 < w[0].1);
             let inc = cal.windows(2).all(|w| w[1].1 > w[0].1);
             assert!(dec || inc, "{}: calibrated range must be monotonic", c.name);

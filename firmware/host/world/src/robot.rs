@@ -348,7 +348,12 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
-    fn err(&self, key: impl Into<String>, problem: impl Into<String>, fix: impl Into<String>) -> RobotError {
+    fn err(
+        &self,
+        key: impl Into<String>,
+        problem: impl Into<String>,
+        fix: impl Into<String>,
+    ) -> RobotError {
         RobotError {
             file: self.file.to_path_buf(),
             line: None,
@@ -380,6 +385,11 @@ fn hint(key: &str) -> &'static str {
     }
 }
 
+/// 1-based line of byte `offset` in `text`.
+fn line_of(text: &str, offset: usize) -> usize {
+    text.as_bytes()[..offset.min(text.len())].iter().filter(|&&b| b == b'\n').count() + 1
+}
+
 /// Turns a deserialisation error into a [`RobotError`].
 fn decode_error(
     ctx: &Ctx<'_>,
@@ -388,23 +398,29 @@ fn decode_error(
 ) -> RobotError {
     let path = e.path().to_string();
     let inner = e.inner();
-    let line = inner.span().map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+    let line = inner.span().map(|s| line_of(text, s.start));
     let msg = inner.message().trim().to_string();
-    let join = |k: &str| if path.is_empty() || path == "." { k.to_string() } else { format!("{path}.{k}") };
-    let mut out = if let Some(k) = msg.strip_prefix("missing field `").and_then(|r| r.split('`').next()) {
-        ctx.err(join(k), "missing key", hint(k))
-    } else if let Some(rest) = msg.strip_prefix("unknown field `") {
-        let k = rest.split('`').next().unwrap_or_default();
-        let expected = rest.split_once(", expected ").map_or("", |x| x.1);
-        ctx.err(
-            join(k),
-            "unknown key",
-            format!("remove it or correct its spelling (expected {expected})"),
-        )
-    } else {
-        let key = if path == "." { String::new() } else { path };
-        ctx.err(key, msg, format!("see {FORMAT_DOC} for the format"))
+    // The path ends at the table holding a missing key, and at an unknown key itself.
+    let join = |k: &str| match path.as_str() {
+        "" | "." => k.to_string(),
+        p if p.ends_with(&format!(".{k}")) || p == k => p.to_string(),
+        p => format!("{p}.{k}"),
     };
+    let mut out =
+        if let Some(k) = msg.strip_prefix("missing field `").and_then(|r| r.split('`').next()) {
+            ctx.err(join(k), "missing key", hint(k))
+        } else if let Some(rest) = msg.strip_prefix("unknown field `") {
+            let k = rest.split('`').next().unwrap_or_default();
+            let expected = rest.split_once(", expected ").map_or("", |x| x.1);
+            ctx.err(
+                join(k),
+                "unknown key",
+                format!("remove it or correct its spelling (expected {expected})"),
+            )
+        } else {
+            let key = if path == "." { String::new() } else { path };
+            ctx.err(key, msg, format!("see {FORMAT_DOC} for the format"))
+        };
     out.line = line;
     out
 }
@@ -433,8 +449,9 @@ impl Robot {
     pub fn parse(text: &str, file: impl AsRef<Path>) -> Result<Robot, RobotError> {
         let ctx = Ctx { file: file.as_ref() };
         let de = toml::de::Deserializer::parse(text).map_err(|e| {
-            let mut r = ctx.err("", format!("not valid TOML: {}", e.message().trim()), "fix the syntax");
-            r.line = e.span().map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+            let mut r =
+                ctx.err("", format!("not valid TOML: {}", e.message().trim()), "fix the syntax");
+            r.line = e.span().map(|s| line_of(text, s.start));
             r
         })?;
         let doc: FileDoc =
@@ -493,7 +510,10 @@ fn validate(ctx: &Ctx<'_>, doc: FileDoc) -> Result<Robot, RobotError> {
             ));
         }
         if let Wiring::Motor { wheel, .. } = module.wiring {
-            if let Some(j) = modules.iter().position(|o| matches!(o.wiring, Wiring::Motor { wheel: w, .. } if w == wheel)) {
+            if let Some(j) = modules
+                .iter()
+                .position(|o| matches!(o.wiring, Wiring::Motor { wheel: w, .. } if w == wheel))
+            {
                 return Err(ctx.err(
                     format!("modules[{i}].wheel"),
                     format!("wheel {wheel} is already driven by modules[{j}]"),
@@ -596,9 +616,9 @@ fn validate_base(ctx: &Ctx<'_>, b: &BaseSection) -> Result<BaseSpec, RobotError>
             if b.wheel_distance_m.is_some() {
                 return Err(misplaced("wheel_distance_m", "differential"));
             }
-            let track = b
-                .track_m
-                .ok_or_else(|| missing("track_m", "differential", "the distance between its wheels"))?;
+            let track = b.track_m.ok_or_else(|| {
+                missing("track_m", "differential", "the distance between its wheels")
+            })?;
             ctx.check(track > 0.0, "base.track_m", "positive")?;
             Layout::Differential { wheel_radius: b.wheel_radius_m, track }
         }
@@ -625,11 +645,20 @@ fn validate_base(ctx: &Ctx<'_>, b: &BaseSection) -> Result<BaseSpec, RobotError>
 
 fn validate_drive(ctx: &Ctx<'_>, d: &DriveSection) -> Result<DriveSpec, RobotError> {
     let motor = MotorParams::preset(&d.motor).ok_or_else(|| {
-        let known: Vec<_> = MotorParams::PRESETS.iter().map(|p| format!("\"{}\"", p.name)).collect();
-        ctx.err("drive.motor", format!("unknown motor `{}`", d.motor), format!("use one of {}", known.join(", ")))
+        let known: Vec<_> =
+            MotorParams::PRESETS.iter().map(|p| format!("\"{}\"", p.name)).collect();
+        ctx.err(
+            "drive.motor",
+            format!("unknown motor `{}`", d.motor),
+            format!("use one of {}", known.join(", ")),
+        )
     })?;
     ctx.check(d.gear_ratio > 0.0, "drive.gear_ratio", "positive")?;
-    ctx.check(d.gear_efficiency > 0.0 && d.gear_efficiency <= 1.0, "drive.gear_efficiency", "in (0, 1]")?;
+    ctx.check(
+        d.gear_efficiency > 0.0 && d.gear_efficiency <= 1.0,
+        "drive.gear_efficiency",
+        "in (0, 1]",
+    )?;
     ctx.check(d.encoder_cpr > 0, "drive.encoder_cpr", "positive")?;
     ctx.check(d.pwm_hz > 0.0, "drive.pwm_hz", "positive")?;
     ctx.check(
@@ -707,7 +736,11 @@ fn validate_obstacle(ctx: &Ctx<'_>, i: usize, o: &ObstacleSection) -> Result<Obs
             ));
         }
         if !present && keys.contains(&k) {
-            return Err(ctx.err(key(k), "missing key", format!("a {} needs {}", o.kind, keys.join(" and "))));
+            return Err(ctx.err(
+                key(k),
+                "missing key",
+                format!("a {} needs {}", o.kind, keys.join(" and ")),
+            ));
         }
     }
     Ok(match o.kind.as_str() {
@@ -739,7 +772,11 @@ fn validate_module(
     let key = |k: &str| format!("modules[{i}].{k}");
     let kind = BoardKind::from_name(&m.kind).ok_or_else(|| {
         let known: Vec<_> = BoardKind::ALL.iter().map(|k| format!("\"{}\"", k.name())).collect();
-        ctx.err(key("kind"), format!("unknown module kind `{}`", m.kind), format!("use one of {}", known.join(", ")))
+        ctx.err(
+            key("kind"),
+            format!("unknown module kind `{}`", m.kind),
+            format!("use one of {}", known.join(", ")),
+        )
     })?;
     ctx.check(!m.name.trim().is_empty(), &key("name"), "a non-empty name")?;
     let uid = Uid::parse(&m.uid).ok_or_else(|| {
@@ -769,7 +806,11 @@ fn validate_module(
     let wiring = match kind {
         BoardKind::Psu => {
             let b = m.battery.clone().ok_or_else(|| {
-                ctx.err(key("battery"), "missing key", format!("a psu names its battery: battery = \"{battery}\""))
+                ctx.err(
+                    key("battery"),
+                    "missing key",
+                    format!("a psu names its battery: battery = \"{battery}\""),
+                )
             })?;
             if b != battery {
                 return Err(ctx.err(
@@ -784,9 +825,17 @@ fn validate_module(
         }
         BoardKind::Motor => {
             let wheel = m.wheel.ok_or_else(|| {
-                ctx.err(key("wheel"), "missing key", format!("a motor module names the wheel it drives: 0..{}", wheels - 1))
+                ctx.err(
+                    key("wheel"),
+                    "missing key",
+                    format!("a motor module names the wheel it drives: 0..{}", wheels - 1),
+                )
             })?;
-            ctx.check(wheel < wheels, &key("wheel"), &format!("a wheel index 0..{} (the base has {wheels})", wheels - 1))?;
+            ctx.check(
+                wheel < wheels,
+                &key("wheel"),
+                &format!("a wheel index 0..{} (the base has {wheels})", wheels - 1),
+            )?;
             Wiring::Motor { wheel, encoder_inverted: m.encoder_inverted.unwrap_or(false) }
         }
         BoardKind::Proximity => {
@@ -797,13 +846,27 @@ fn validate_module(
                 let rk = |k: &str| format!("modules[{i}].rangers[{j}].{k}");
                 ctx.check(r.channel < 4, &rk("channel"), "0, 1, 2 or 3")?;
                 if rangers.iter().any(|o| o.channel == r.channel) {
-                    return Err(ctx.err(rk("channel"), format!("channel {} is used twice", r.channel), "give each ranger its own channel"));
+                    return Err(ctx.err(
+                        rk("channel"),
+                        format!("channel {} is used twice", r.channel),
+                        "give each ranger its own channel",
+                    ));
                 }
                 let k = RangerKind::from_name(&r.sensor).ok_or_else(|| {
-                    let known: Vec<_> = RangerKind::ALL.iter().map(|k| format!("\"{}\"", k.name())).collect();
-                    ctx.err(rk("sensor"), format!("unknown sensor `{}`", r.sensor), format!("use one of {}", known.join(", ")))
+                    let known: Vec<_> =
+                        RangerKind::ALL.iter().map(|k| format!("\"{}\"", k.name())).collect();
+                    ctx.err(
+                        rk("sensor"),
+                        format!("unknown sensor `{}`", r.sensor),
+                        format!("use one of {}", known.join(", ")),
+                    )
                 })?;
-                rangers.push(RangerMount { channel: r.channel, kind: k, mount: r.pose.pose(), connected: r.connected });
+                rangers.push(RangerMount {
+                    channel: r.channel,
+                    kind: k,
+                    mount: r.pose.pose(),
+                    connected: r.connected,
+                });
             }
             Wiring::Proximity { rangers }
         }

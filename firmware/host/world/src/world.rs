@@ -277,7 +277,8 @@ impl World {
                     let mut channels = [None; 4];
                     for r in mounts {
                         let i = rangers.len() as u64;
-                        let first = Noise::new(robot.seed, STREAM_PHASE + i).uniform() * r.kind.period_s();
+                        let first =
+                            Noise::new(robot.seed, STREAM_PHASE + i).uniform() * r.kind.period_s();
                         let mut ranger = Ranger::new(r.kind, r.mount, first);
                         ranger.set_connected(r.connected);
                         channels[usize::from(r.channel)] = Some(rangers.len());
@@ -362,6 +363,16 @@ impl World {
         for w in &mut self.wheels {
             w.encoder.update(w.motor.angle());
         }
+        self.power_rangers();
+        let now = self.time_s();
+        for (r, n) in self.rangers.iter_mut().zip(&mut self.ranger_noise) {
+            r.update(now, &self.pose, &self.obstacles, n);
+        }
+    }
+
+    /// Powers each ranger from its board's SENSOR_PWR_EN and the bus (a bus that went down
+    /// during a step is seen at its end).
+    fn power_rangers(&mut self) {
         let now = self.time_s();
         let bus_on = self.bus_voltage() > 4.5;
         for b in &self.boards {
@@ -370,9 +381,6 @@ impl World {
                     self.rangers[*r].set_powered(*sensor_power && bus_on, now);
                 }
             }
-        }
-        for (r, n) in self.rangers.iter_mut().zip(&mut self.ranger_noise) {
-            r.update(now, &self.pose, &self.obstacles, n);
         }
     }
 
@@ -587,10 +595,11 @@ impl World {
                 }
             }
             _ => {
-                // SENSOR_PWR_EN
+                // SENSOR_PWR_EN: switches the sensors now.
                 if let Link::Proximity { sensor_power, .. } = &mut self.boards[b].link {
                     *sensor_power = high;
                 }
+                self.power_rangers();
             }
         }
         Ok(())
@@ -648,7 +657,10 @@ impl World {
                 .copied()
                 .flatten()
                 .ok_or_else(|| invalid(format!("no ranger on channel {channel}"))),
-            _ => Err(invalid(format!("is a {} board, not a proximity board", self.boards[b].kind.name()))),
+            _ => Err(invalid(format!(
+                "is a {} board, not a proximity board",
+                self.boards[b].kind.name()
+            ))),
         }
     }
 
@@ -754,13 +766,16 @@ impl World {
     /// Energy drawn from the battery's source not accounted for by storage, losses and the
     /// bus, J: integration error only (first order in the sub-step).
     pub fn energy_residual_j(&self) -> f64 {
-        self.ledger.chemical_j - (self.stored_energy_j() - self.stored_at_start_j) - self.ledger.spent_j()
+        self.ledger.chemical_j
+            - (self.stored_energy_j() - self.stored_at_start_j)
+            - self.ledger.spent_j()
     }
 
     /// A digest of the whole state (FNV-1a over its `Debug` form, which prints every float
     /// exactly): equal digests mean equal worlds, for determinism tests.
     pub fn state_digest(&self) -> u64 {
         let text = format!("{self:?}");
-        text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
+        text.bytes()
+            .fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
     }
 }
