@@ -54,12 +54,11 @@ pub struct Base {
 }
 
 /// One sub-step's solution.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Acceleration {
-    /// Generalised acceleration q̇.
+    /// Generalised acceleration q̇ (each wheel's angular acceleration is
+    /// [`Kinematics::wheel_rate`] of it).
     pub q_dot: [f64; 3],
-    /// Each wheel's angular acceleration, rad/s².
-    pub wheel_acc: Vec<f64>,
     /// Power lost to rolling resistance, W (≥ 0).
     pub rolling_loss: f64,
 }
@@ -101,15 +100,15 @@ impl Base {
         let (mut f, mut loss) = ([0.0; 3], 0.0);
         for w in kin.wheels() {
             let v = t.point_velocity(w.position);
-            let speed = v.norm();
+            let speed2 = v.dot(v);
             // F = −μN·v/√(|v|² + vs²): the sign of v, smoothed over vs.
-            let k = per_wheel / speed.hypot(p.rolling_smoothing);
+            let k = per_wheel / (speed2 + p.rolling_smoothing * p.rolling_smoothing).sqrt();
             let force = v * -k;
             let g = Self::generalised(kin, force.x, force.y, w.position.cross(force));
-            for i in 0..3 {
-                f[i] += g[i];
+            for (fi, gi) in f.iter_mut().zip(g) {
+                *fi += gi;
             }
-            loss += k * speed * speed;
+            loss += k * speed2;
         }
         (f, loss)
     }
@@ -123,32 +122,50 @@ impl Base {
         wheel_torques: &[f64],
         wheel_inertias: &[f64],
     ) -> Acceleration {
+        let (rhs, rolling_loss) = self.forces(kin, q, wheel_torques);
+        let lhs = self.mass_matrix(kin, wheel_inertias);
+        Acceleration { q_dot: linalg::solve(&lhs, &rhs, kin.dof()), rolling_loss }
+    }
+
+    /// The total mass matrix M + Σ Jk·ak·akᵀ for inertias `wheel_inertias` turning with the
+    /// wheels (it changes only with them: the world keeps its inverses).
+    pub(crate) fn mass_matrix(&self, kin: &Kinematics, wheel_inertias: &[f64]) -> Mat3 {
         let n = kin.dof();
-        let t = kin.twist(q);
-        let m = self.params.mass_kg;
         let mut lhs = self.mass;
-        let mut rhs = Self::generalised(kin, m * t.wz * t.vy, -m * t.wz * t.vx, 0.0);
-        let (roll, rolling_loss) = self.rolling(kin, &t);
-        for i in 0..n {
-            rhs[i] += roll[i];
-        }
-        for (k, (&tau, &j)) in wheel_torques.iter().zip(wheel_inertias).enumerate() {
+        for (k, &j) in wheel_inertias.iter().enumerate() {
             let a = kin.row(k);
             for r in 0..n {
-                rhs[r] += a[r] * tau;
                 for c in 0..n {
                     lhs[r][c] += j * a[r] * a[c];
                 }
             }
         }
-        let q_dot = linalg::solve(&lhs, &rhs, n);
-        let wheel_acc = (0..kin.wheel_count())
-            .map(|k| {
-                let a = kin.row(k);
-                a[0] * q_dot[0] + a[1] * q_dot[1] + a[2] * q_dot[2]
-            })
-            .collect();
-        Acceleration { q_dot, wheel_acc, rolling_loss }
+        lhs
+    }
+
+    /// The generalised force at `q` with `wheel_torques`: wheels, Coriolis, rolling
+    /// resistance; and the rolling loss, W.
+    pub(crate) fn forces(
+        &self,
+        kin: &Kinematics,
+        q: &[f64; 3],
+        wheel_torques: &[f64],
+    ) -> ([f64; 3], f64) {
+        let n = kin.dof();
+        let t = kin.twist(q);
+        let m = self.params.mass_kg;
+        let mut rhs = Self::generalised(kin, m * t.wz * t.vy, -m * t.wz * t.vx, 0.0);
+        let (roll, rolling_loss) = self.rolling(kin, &t);
+        for i in 0..n {
+            rhs[i] += roll[i];
+        }
+        for (k, &tau) in wheel_torques.iter().enumerate() {
+            let a = kin.row(k);
+            for r in 0..n {
+                rhs[r] += a[r] * tau;
+            }
+        }
+        (rhs, rolling_loss)
     }
 
     /// The inertia the base presents at the wheels, kg·m²: the matrix Mw with
@@ -212,8 +229,8 @@ mod tests {
         let expect = 3.0 * L * 0.1 / R / (0.9 + 3.0 * j * (L / R).powi(2));
         assert!(acc.q_dot[0].abs() < 1e-12 && acc.q_dot[1].abs() < 1e-12);
         assert!((acc.q_dot[2] - expect).abs() < 1e-12, "{:?} vs {expect}", acc.q_dot);
-        for w in &acc.wheel_acc {
-            assert!((w - expect * L / R).abs() < 1e-9);
+        for w in 0..3 {
+            assert!((k.wheel_rate(w, &acc.q_dot) - expect * L / R).abs() < 1e-9);
         }
     }
 

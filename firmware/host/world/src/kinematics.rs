@@ -146,6 +146,13 @@ impl Kinematics {
         self.rows[k]
     }
 
+    /// Wheel `k`'s angular speed (rad/s) at generalised velocity `q` (or its angular
+    /// acceleration at generalised acceleration `q`).
+    pub fn wheel_rate(&self, k: usize, q: &[f64; 3]) -> f64 {
+        let a = &self.rows[k];
+        a[0] * q[0] + a[1] * q[1] + a[2] * q[2]
+    }
+
     /// The body twist of generalised velocity `q`.
     pub fn twist(&self, q: &[f64; 3]) -> Twist {
         if self.dof == 3 {
