@@ -427,3 +427,43 @@ fn encoder_disconnection_freezes_the_counter() {
     assert_ne!(w.read_counter("motor1", "ENC_A").unwrap(), moving);
     assert!(w.wheel(1).motor_speed > 100.0, "the motor still turns");
 }
+
+#[test]
+fn braking_back_drives_the_gearboxes() {
+    // Spinning base, all bridges braking: the motors generate, so each gearbox passes the
+    // motor's torque to the wheel multiplied by N/η (not N·η). Check the base's angular
+    // deceleration (central difference over ±1 ms) against I_tot·ω̇z = Σ(L/r)·(N/η)·τshaft −
+    // L·Crr·m·g, with I_tot = I + 3(L/r)²(Jw + (N/η)·N·Jrotor).
+    let robot = common::triskar();
+    let mut w = World::from_robot(&robot);
+    drive(&mut w, &MOTORS, &[0.6; 3]);
+    w.step(1.0);
+    for b in MOTORS {
+        w.set_pwm(b, "PWM_AH", 0.0).unwrap();
+        w.set_pwm(b, "PWM_BH", 0.0).unwrap();
+    }
+    w.step(0.005);
+    let before = w.twist().wz;
+    w.step(0.001);
+    let now = w.twist().wz;
+    let states: Vec<_> = (0..3).map(|k| w.wheel(k)).collect();
+    w.step(0.001);
+    let acc = (w.twist().wz - before) / 0.002;
+    let p = robot.drive.motor;
+    let (n, eta) = (robot.drive.gearbox.ratio, robot.drive.gearbox.efficiency);
+    let (l, r) = (0.25, 0.05);
+    let b = &robot.base;
+    let shaft: f64 = states
+        .iter()
+        .map(|s| p.torque_constant * s.motor_current - p.friction(s.motor_speed))
+        .sum();
+    let roll = l * b.params.rolling_resistance * b.params.mass_kg * r2p_world::base::G;
+    let inertia = b.params.inertia_kg_m2
+        + 3.0 * (l / r).powi(2) * (b.wheel_inertia_kg_m2 + n / eta * n * p.rotor_inertia);
+    let expect = ((l / r) * (n / eta) * shaft - roll) / inertia;
+    assert!(now > 1.0 && acc < 0.0, "braking from {now} rad/s: {acc}");
+    // Central difference error ~ (Δt/τ)² with τ ≈ 30 ms: ≈ 0.1 %; 1 % bounds it. With N·η
+    // instead of N/η the deceleration would differ by a third.
+    assert!((acc - expect).abs() < 0.01 * expect.abs(), "{acc} vs {expect}");
+    assert!(states.iter().all(|s| s.load_torque * s.motor_speed < 0.0), "generating");
+}
