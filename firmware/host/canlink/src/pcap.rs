@@ -324,8 +324,8 @@ mod tests {
 
     #[test]
     fn bad_files_get_specific_errors() {
-        let good = write_pcap(Vec::new(), &[stamped(1, 0, CanFrame::standard(1, &[1]).unwrap())])
-            .unwrap();
+        let good =
+            write_pcap(Vec::new(), &[stamped(1, 0, CanFrame::standard(1, &[1]).unwrap())]).unwrap();
         assert_eq!(parse_pcap(&good[..10]), Err(PcapError::NoHeader));
         assert_eq!(parse_pcap(&[b'('; 40]), Err(PcapError::NotPcap(0x2828_2828)));
         let mut ng = good.clone();

@@ -133,7 +133,12 @@ pub fn replay(
 }
 
 /// Replays `frames` onto `hub` as a new participant (every other participant receives them).
-pub fn replay_into_hub(hub: &dyn Hub, frames: &[Stamped], pacing: Pacing, stop: &AtomicBool) -> usize {
+pub fn replay_into_hub(
+    hub: &dyn Hub,
+    frames: &[Stamped],
+    pacing: Pacing,
+    stop: &AtomicBool,
+) -> usize {
     let me = hub.join();
     replay(frames, pacing, stop, |f| {
         hub.send(me, *f);

@@ -181,14 +181,32 @@ mod tests {
     #[test]
     fn bus_options_go_before_or_after_the_command_and_exclude_each_other() {
         let a = Cli::try_parse_from(["r2p", "--socketcand", "h:1", "nodes"]).unwrap();
-        let b = Cli::try_parse_from(["r2p", "nodes", "--socketcand", "h:1", "--timeout", "0.5"]).unwrap();
+        let b = Cli::try_parse_from(["r2p", "nodes", "--socketcand", "h:1", "--timeout", "0.5"])
+            .unwrap();
         assert_eq!(a.bus.socketcand.as_deref(), Some("h:1"));
-        assert_eq!((b.bus.socketcand.as_deref(), b.bus.timeout), (Some("h:1"), Duration::from_millis(500)));
-        assert!(Cli::try_parse_from(["r2p", "nodes", "--socketcand", "h:1", "--socketcan", "vcan0"]).is_err());
+        assert_eq!(
+            (b.bus.socketcand.as_deref(), b.bus.timeout),
+            (Some("h:1"), Duration::from_millis(500))
+        );
+        assert!(Cli::try_parse_from([
+            "r2p",
+            "nodes",
+            "--socketcand",
+            "h:1",
+            "--socketcan",
+            "vcan0"
+        ])
+        .is_err());
         assert!(Cli::try_parse_from(["r2p", "nodes", "--timeout", "0"]).is_err());
         assert!(Cli::try_parse_from(["r2p", "nodes", "--timeout", "-1"]).is_err());
-        let p = Cli::try_parse_from(["r2p", "pub", "t", "--type", "int32", "-5"]).unwrap();
+        let p = Cli::try_parse_from(["r2p", "pub", "t", "--type", "int32", "-5", "--timeout", "2"])
+            .unwrap();
+        assert_eq!(p.bus.timeout, Duration::from_secs(2));
         assert!(matches!(p.command, Command::Pub(a) if a.values == ["-5"]));
+        let p = Cli::try_parse_from(["r2p", "param", "set", "motor", "0", "-1.5"]).unwrap();
+        assert!(
+            matches!(p.command, Command::Param(param::ParamCommand::Set { value, .. }) if value == "-1.5")
+        );
     }
 
     #[test]

@@ -265,7 +265,9 @@ pub fn report_line(r: &Report, w: &Watcher, laxity: LaxityEncoding) -> String {
                 Some(t) => {
                     let _ = write!(line, " topic {}", t.topic);
                     done.as_ref().map(|d| match t.msg_type() {
-                        Some(ty) => ty.decode(d).map_or_else(|e| format!("bad payload: {e}"), |v| v.to_string()),
+                        Some(ty) => ty
+                            .decode(d)
+                            .map_or_else(|e| format!("bad payload: {e}"), |v| v.to_string()),
                         None => format!("{} bytes of type 0x{:08X}", d.len(), t.type_hash),
                     })
                 }
@@ -302,8 +304,12 @@ pub fn report_json(r: &Report, w: &Watcher, laxity: LaxityEncoding) -> Json {
         What::Sync(s) => {
             match s {
                 Ok(s) => {
-                    let slots: Vec<u8> = (1..64).filter(|b| s.reservations & (1u64 << b) != 0).collect();
-                    o.insert("sync".into(), json!({"cycle": s.cycle, "reserved_slots": slots, "epoch": s.epoch}));
+                    let slots: Vec<u8> =
+                        (1..64).filter(|b| s.reservations & (1u64 << b) != 0).collect();
+                    o.insert(
+                        "sync".into(),
+                        json!({"cycle": s.cycle, "reserved_slots": slots, "epoch": s.epoch}),
+                    );
                 }
                 Err(n) => {
                     o.insert("error".into(), json!(format!("bad sync: {n} bytes")));
@@ -390,7 +396,10 @@ mod tests {
     fn syncs_and_topics_are_decoded() {
         let mut w = Watcher::new();
         let sync = Sync::new(0x45, 0b110, false).to_frame();
-        let s = Stamped { time: Duration::from_micros(5), frame: CanFrame::extended(sync.id().to_raw(), sync.payload()).unwrap() };
+        let s = Stamped {
+            time: Duration::from_micros(5),
+            frame: CanFrame::extended(sync.id().to_raw(), sync.payload()).unwrap(),
+        };
         let line = report_line(&w.feed(&s), &w, LOG);
         assert_eq!(
             line,
@@ -401,7 +410,11 @@ mod tests {
         assert_eq!(j["sync"]["reserved_slots"], json!([1, 2]));
 
         let ty = MsgType::by_name("Obstacle").unwrap();
-        for f in management(0x20, &advertise("obstacle", &ty, 1, BusClass::Srt { deadline_us: 5_000 }), 0) {
+        for f in management(
+            0x20,
+            &advertise("obstacle", &ty, 1, BusClass::Srt { deadline_us: 5_000 }),
+            0,
+        ) {
             let line = report_line(&w.feed(&f), &w, LOG);
             if line.contains('|') {
                 assert!(line.ends_with(
@@ -430,9 +443,20 @@ mod tests {
             heartbeat("x", 1),
             Message::Reboot { target: 255 },
             Message::SubscribeRequest { target: 2, topic: t("scan"), type_hash: 7, queue_len: 4 },
-            Message::SubscribeResponse { target: 9, topic: t("scan"), result: SubscribeResult::TypeMismatch, message_id: 0 },
+            Message::SubscribeResponse {
+                target: 9,
+                topic: t("scan"),
+                result: SubscribeResult::TypeMismatch,
+                message_id: 0,
+            },
             Message::HrtRequest { message_id: 0x201, period_cycles: 2, frames: 1 },
-            Message::HrtGrant { message_id: 0x201, period_cycles: 2, offset: 1, slot: 3, result: HrtResult::Ok },
+            Message::HrtGrant {
+                message_id: 0x201,
+                period_cycles: 2,
+                offset: 1,
+                slot: 3,
+                result: HrtResult::Ok,
+            },
             Message::ParamGet { target: 1, index: 4 },
             Message::ParamSet { target: 1, index: 4, value: Value::F32(1.5) },
             Message::ParamValue { index: 4, value: Value::I32(-3) },

@@ -68,7 +68,12 @@ fn line(t: &TopicInfo, bytes: &[u8], json: bool) -> String {
 }
 
 /// Runs `r2p echo`.
-pub fn run(args: &EchoArgs, bus: &BusArgs, mut s: Session, out: &mut dyn Write) -> Result<(), CliError> {
+pub fn run(
+    args: &EchoArgs,
+    bus: &BusArgs,
+    mut s: Session,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
     if s.is_trace() {
         return from_trace(args, bus, s, out);
     }
@@ -129,7 +134,12 @@ pub fn run(args: &EchoArgs, bus: &BusArgs, mut s: Session, out: &mut dyn Write) 
 }
 
 /// `r2p echo` over a trace: the topic's messages as recorded.
-fn from_trace(args: &EchoArgs, bus: &BusArgs, mut s: Session, out: &mut dyn Write) -> Result<(), CliError> {
+fn from_trace(
+    args: &EchoArgs,
+    bus: &BusArgs,
+    mut s: Session,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
     let mut shown = 0u64;
     while !s.ended() {
         for r in s.step(Duration::ZERO)? {

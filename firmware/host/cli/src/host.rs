@@ -19,7 +19,7 @@ use r2p_canlink::CanFrame;
 use r2p_management::message::{Message, Value, UID_LEN};
 use r2p_management::NodeId;
 use r2p_middleware::{Class, Delivery};
-use r2p_node::{Event, Export, Import, ImportError, Node, NodeConfig, NoParams, WireError};
+use r2p_node::{Event, Export, Import, ImportError, NoParams, Node, NodeConfig, WireError};
 use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError};
 use rtcan::{CanController, Frame, Micros};
 
@@ -247,7 +247,10 @@ impl HostNode {
 
     /// Messages received on the import since the last call, oldest first.
     pub fn take_messages(&mut self) -> Vec<Vec<u8>> {
-        self.import.as_ref().map(|(i, _)| i.got.borrow_mut().drain(..).collect()).unwrap_or_default()
+        self.import
+            .as_ref()
+            .map(|(i, _)| i.got.borrow_mut().drain(..).collect())
+            .unwrap_or_default()
     }
 
     /// Offers `topic` of type `ty` on the bus with `class` (advertised at the next step).
@@ -302,11 +305,17 @@ impl HostNode {
     /// advertisement completes (before the node reads that same advertisement), then queues
     /// the frame for the node.
     fn take(&mut self, report: &Report) {
-        if let What::Management { node, done: Some(Ok(Message::Advertise { topic, type_hash, size, index, class })) } =
-            &report.what
+        if let What::Management {
+            node,
+            done: Some(Ok(Message::Advertise { topic, type_hash, size, index, class })),
+        } = &report.what
         {
             let wanted = self.want.as_deref() == Some(topic.as_str());
-            if wanted && self.import.is_none() && self.import_error.is_none() && *node != self.node_id().get() {
+            if wanted
+                && self.import.is_none()
+                && self.import_error.is_none()
+                && *node != self.node_id().get()
+            {
                 let info = TopicInfo {
                     topic: topic.to_string(),
                     node: *node,
@@ -416,9 +425,14 @@ impl Session {
         self.host.as_mut()
     }
 
-    /// Sends a raw frame (not through the host node).
-    pub fn send(&mut self, frame: &CanFrame) -> Result<(), CliError> {
-        self.link.send(frame)
+    /// Lets the host node send what it has queued (at most `limit`), so that leaving does not
+    /// cut a message short: modules would count its first frames as dropped.
+    pub fn flush(&mut self, limit: std::time::Duration) -> Result<(), CliError> {
+        let start = Instant::now();
+        while self.host.as_ref().is_some_and(|h| h.tx_pending() > 0) && start.elapsed() < limit {
+            self.step(std::time::Duration::from_millis(1))?;
+        }
+        Ok(())
     }
 
     /// Waits up to `wait` for frames, decodes every frame that came (at most [`BATCH`]), lets
@@ -458,6 +472,15 @@ impl Session {
     }
 }
 
+/// How long a session that joined the bus keeps sending its queue when it ends.
+const FLUSH_ON_EXIT: std::time::Duration = std::time::Duration::from_millis(300);
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        let _ = self.flush(FLUSH_ON_EXIT);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -471,12 +494,17 @@ mod tests {
 
     /// A module on the hub: a real node with an exported `u32` topic and two parameters,
     /// polled every millisecond on its own thread, publishing 1, 2, 3… every 5 ms.
-    fn spawn_module(hub: Arc<BroadcastHub>, stop: Arc<std::sync::atomic::AtomicBool>) -> std::thread::JoinHandle<()> {
+    fn spawn_module(
+        hub: Arc<BroadcastHub>,
+        stop: Arc<std::sync::atomic::AtomicBool>,
+    ) -> std::thread::JoinHandle<()> {
         static SPEED: Topic<'static, u32, { pool_size(&[8], 1) }, 1> = Topic::new("speed", 0);
         static SPEED_PUB: Publisher<'static, u32> = Publisher::new(&SPEED, Class::NonRealTime);
         static SPEED_OUT: RemoteSubscriber<'static, u32, 8> = RemoteSubscriber::new(&SPEED_PUB);
-        static PARAMS: RamParams<2> =
-            RamParams::new([Param::u32("rate_hz", 100, 1, 1000), Param::f32("gain", 0.5, 0.0, 2.0)]);
+        static PARAMS: RamParams<2> = RamParams::new([
+            Param::u32("rate_hz", 100, 1, 1000),
+            Param::f32("gain", 0.5, 0.0, 2.0),
+        ]);
         std::thread::spawn(move || {
             SPEED.subscribe(&SPEED_OUT).unwrap();
             let mut uid = [0u8; 12];
@@ -497,7 +525,13 @@ mod tests {
                     n += 1;
                     SPEED_PUB.publish_with(|v| *v = n);
                 }
-                let mut ctl = Controller { link: &mut link, rx: &mut rx, budget: usize::MAX, sent: 0, error: None };
+                let mut ctl = Controller {
+                    link: &mut link,
+                    rx: &mut rx,
+                    budget: usize::MAX,
+                    sent: 0,
+                    error: None,
+                };
                 node.poll(start.elapsed().as_micros() as u64, &mut ctl);
                 std::thread::sleep(Duration::from_millis(1));
             }
@@ -536,7 +570,9 @@ mod tests {
         let values: Vec<u64> = got
             .iter()
             .map(|b| match ty.decode(b).unwrap() {
-                crate::types::Decoded::Plain(crate::types::Value::One(crate::types::Scalar::U(v))) => v,
+                crate::types::Decoded::Plain(crate::types::Value::One(
+                    crate::types::Scalar::U(v),
+                )) => v,
                 other => panic!("{other:?}"),
             })
             .collect();
@@ -557,8 +593,14 @@ mod tests {
             }
             answers.len() == 2
         }));
-        assert_eq!(answers[0], Event::ParamValue { from: sensor, index: 1, value: Value::F32(0.5) });
-        assert_eq!(answers[1], Event::ParamError { from: sensor, index: 0, fault: ParamFault::OutOfRange });
+        assert_eq!(
+            answers[0],
+            Event::ParamValue { from: sensor, index: 1, value: Value::F32(0.5) }
+        );
+        assert_eq!(
+            answers[1],
+            Event::ParamError { from: sensor, index: 0, fault: ParamFault::OutOfRange }
+        );
         stop.store(true, std::sync::atomic::Ordering::SeqCst);
         module.join().unwrap();
     }

@@ -142,8 +142,7 @@ pub struct TraceLink {
 impl TraceLink {
     /// Reads `path` (a candump log or a pcap file).
     pub fn open(path: &Path) -> Result<Self, CliError> {
-        let (_, frames) =
-            read_trace(path).map_err(|e| CliError::new(format!("--trace: {e}")))?;
+        let (_, frames) = read_trace(path).map_err(|e| CliError::new(format!("--trace: {e}")))?;
         Ok(Self::new(path.display().to_string(), frames))
     }
 

@@ -55,9 +55,10 @@ fn node_row(n: &NodeInfo) -> Vec<String> {
 
 /// The `nodes` table (header first).
 pub fn nodes_table(w: &Watcher) -> Vec<String> {
-    let mut rows = vec![["NODE", "NAME", "UNIQUE ID", "STATE", "UPTIME", "TX_ERR", "RX_ERR", "DROPPED"]
-        .map(String::from)
-        .to_vec()];
+    let mut rows =
+        vec![["NODE", "NAME", "UNIQUE ID", "STATE", "UPTIME", "TX_ERR", "RX_ERR", "DROPPED"]
+            .map(String::from)
+            .to_vec()];
     rows.extend(w.nodes().map(node_row));
     table(&rows)
 }
@@ -70,7 +71,11 @@ pub fn nodes(bus: &BusArgs, mut s: Session, out: &mut dyn Write) -> Result<(), C
         return Err(CliError::new(format!(
             "no heartbeat heard on {} {} ({} frames seen): no module is running there{}",
             s.describe(),
-            if s.is_trace() { "in the whole trace".to_string() } else { format!("within {:?}", bus.timeout) },
+            if s.is_trace() {
+                "in the whole trace".to_string()
+            } else {
+                format!("within {:?}", bus.timeout)
+            },
             w.frames(),
             if s.is_trace() { "" } else { ", or it needs longer (--timeout)" }
         )));
@@ -133,7 +138,11 @@ pub fn topics(bus: &BusArgs, mut s: Session, out: &mut dyn Write) -> Result<(), 
         return Err(CliError::new(format!(
             "no topic advertised on {} {} ({} nodes heard)",
             s.describe(),
-            if s.is_trace() { "in the whole trace".to_string() } else { format!("within {:?}", bus.timeout) },
+            if s.is_trace() {
+                "in the whole trace".to_string()
+            } else {
+                format!("within {:?}", bus.timeout)
+            },
             w.nodes().count()
         )));
     }
@@ -178,8 +187,21 @@ mod tests {
         for f in management(1, &heartbeat("psu", 1), 0)
             .into_iter()
             .chain(management(2, &heartbeat("motor", 2), 1_000))
-            .chain(management(2, &advertise("scan", &scan, 2, BusClass::Srt { deadline_us: 20_000 }), 2_000))
-            .chain(management(2, &advertise("setpoint", &MsgType::by_name("uint32").unwrap(), 1, BusClass::Hrt { period_cycles: 2 }), 3_000))
+            .chain(management(
+                2,
+                &advertise("scan", &scan, 2, BusClass::Srt { deadline_us: 20_000 }),
+                2_000,
+            ))
+            .chain(management(
+                2,
+                &advertise(
+                    "setpoint",
+                    &MsgType::by_name("uint32").unwrap(),
+                    1,
+                    BusClass::Hrt { period_cycles: 2 },
+                ),
+                3_000,
+            ))
         {
             w.feed(&f);
         }

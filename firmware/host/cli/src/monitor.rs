@@ -80,7 +80,8 @@ pub fn run(
     if args.announce {
         s.join()?;
     }
-    let mut recorder = args.write.as_deref().map(|p| Recorder::create(p, &bus.channel)).transpose()?;
+    let mut recorder =
+        args.write.as_deref().map(|p| Recorder::create(p, &bus.channel)).transpose()?;
     let start = Instant::now();
     let mut shown = 0u64;
     loop {

@@ -34,7 +34,7 @@ pub enum ParamCommand {
         index: u16,
         /// The value: typed (u32:5, i32:-3, f32:1.5, bool:true) or bare (5, 1.5, true), read
         /// in the type the parameter has now
-        #[arg(allow_hyphen_values = true)]
+        #[arg(allow_negative_numbers = true)]
         value: String,
     },
 }
@@ -154,7 +154,12 @@ fn refused(s: &Session, target: NodeId, what: &str, index: u16, fault: ParamFaul
 }
 
 /// Runs `r2p param get|set`.
-pub fn run(cmd: &ParamCommand, bus: &BusArgs, mut s: Session, out: &mut dyn Write) -> Result<(), CliError> {
+pub fn run(
+    cmd: &ParamCommand,
+    bus: &BusArgs,
+    mut s: Session,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
     let (node, index) = match cmd {
         ParamCommand::Get { node, index } | ParamCommand::Set { node, index, .. } => (node, *index),
     };
@@ -164,16 +169,18 @@ pub fn run(cmd: &ParamCommand, bus: &BusArgs, mut s: Session, out: &mut dyn Writ
     };
     s.join()?;
     let target = resolve(node, bus, &mut s)?;
-    let get = |s: &mut Session| {
-        ask(s, bus, target, index, "PARAM_GET", |h| h.get_param(target, index))
-    };
+    let get =
+        |s: &mut Session| ask(s, bus, target, index, "PARAM_GET", |h| h.get_param(target, index));
     let value = match cmd {
-        ParamCommand::Get { .. } => get(&mut s)?.map_err(|f| refused(&s, target, "PARAM_GET", index, f))?,
+        ParamCommand::Get { .. } => {
+            get(&mut s)?.map_err(|f| refused(&s, target, "PARAM_GET", index, f))?
+        }
         ParamCommand::Set { value: text, .. } => {
             let value = match typed {
                 Some(v) => v,
                 None => {
-                    let now = get(&mut s)?.map_err(|f| refused(&s, target, "PARAM_GET", index, f))?;
+                    let now =
+                        get(&mut s)?.map_err(|f| refused(&s, target, "PARAM_GET", index, f))?;
                     parse_like(text, now).map_err(CliError::new)?
                 }
             };

@@ -22,7 +22,7 @@ pub struct PubArgs {
     pub topic: String,
     /// The message: field=value … for a message type (arrays as v1,v2,…; fields left out are
     /// 0), or one value (v1,v2,… for an array) for a primitive type
-    #[arg(allow_hyphen_values = true, value_name = "FIELD=VALUE")]
+    #[arg(allow_negative_numbers = true, value_name = "FIELD=VALUE")]
     pub values: Vec<String>,
     /// The message type (Obstacle, uint32, float32[4], …) [default: the type the topic is
     /// advertised with on the bus]
@@ -40,10 +40,17 @@ pub struct PubArgs {
 }
 
 /// Runs `r2p pub`.
-pub fn run(args: &PubArgs, bus: &BusArgs, mut s: Session, _out: &mut dyn Write) -> Result<(), CliError> {
+pub fn run(
+    args: &PubArgs,
+    bus: &BusArgs,
+    mut s: Session,
+    _out: &mut dyn Write,
+) -> Result<(), CliError> {
     let period = match args.rate {
         None => None,
-        Some(hz) if hz.is_finite() && hz > 0.0 && hz <= 1000.0 => Some(Duration::from_secs_f64(1.0 / hz)),
+        Some(hz) if hz.is_finite() && hz > 0.0 && hz <= 1000.0 => {
+            Some(Duration::from_secs_f64(1.0 / hz))
+        }
         Some(hz) => return Err(CliError::new(format!("--rate {hz}: expected 0 < HZ ≤ 1000"))),
     };
     // With --type the message is checked before anything goes on the bus.
@@ -110,7 +117,11 @@ pub fn run(args: &PubArgs, bus: &BusArgs, mut s: Session, _out: &mut dyn Write) 
         ty.name,
         args.topic,
         if names.is_empty() { "none yet".to_string() } else { names.join(", ") },
-        if skipped > 0 { format!("; {skipped} not sent (no subscriber yet)") } else { String::new() },
+        if skipped > 0 {
+            format!("; {skipped} not sent (no subscriber yet)")
+        } else {
+            String::new()
+        },
         if misses > 0 { format!("; {misses} missed their deadline") } else { String::new() },
     );
     Ok(())

@@ -68,9 +68,8 @@ pub fn format_send(f: &CanFrame) -> String {
 }
 
 fn resolve(addr: &str) -> Result<SocketAddr, CliError> {
-    let bad = || {
-        CliError::new(format!("--socketcand {addr}: expected HOST:PORT, e.g. 127.0.0.1:29536"))
-    };
+    let bad =
+        || CliError::new(format!("--socketcand {addr}: expected HOST:PORT, e.g. 127.0.0.1:29536"));
     if !addr.contains(':') {
         return Err(bad());
     }
@@ -144,7 +143,14 @@ impl Client {
                      bus name it serves with --channel"
                 ))),
                 Ok(m) => Err(not_socketcand(&format!("answered {m:?} to {step}"))),
-                Err(e) => Err(not_socketcand(&format!("{e} after connecting, waiting for {want}"))),
+                Err(e) if e.kind() == io::ErrorKind::TimedOut => Err(not_socketcand(&format!(
+                    "no {want} within {} s",
+                    HANDSHAKE_TIMEOUT.as_secs()
+                ))),
+                Err(e) => Err(CliError::new(format!(
+                    "socketcand at {addr} closed the connection before answering {step} ({e}); \
+                     is it shutting down?"
+                ))),
             }
         };
         expect(&mut stream, "< hi >", "connecting")?;
@@ -237,17 +243,23 @@ mod tests {
         let s = parse_frame("< frame 012 1.5  >").unwrap();
         assert_eq!(s.frame, CanFrame::standard(0x12, &[]).unwrap());
         assert!(parse_frame("< frame 0000007 1.0 00 >").unwrap().frame.is_extended());
-        for bad in ["< frame 1 >", "< frame XYZ 1.0 >", "< frame 123 1.0 0 >", "< ok >", "< frame 123 x >"] {
+        for bad in
+            ["< frame 1 >", "< frame XYZ 1.0 >", "< frame 123 1.0 0 >", "< ok >", "< frame 123 x >"]
+        {
             assert!(parse_frame(bad).is_none(), "{bad}");
         }
-        assert_eq!(format_send(&CanFrame::extended(0x1F, &[1, 0xAB]).unwrap()), "< send 0000001F 2 01 AB >");
+        assert_eq!(
+            format_send(&CanFrame::extended(0x1F, &[1, 0xAB]).unwrap()),
+            "< send 0000001F 2 01 AB >"
+        );
         assert_eq!(format_send(&CanFrame::standard(0x7FF, &[]).unwrap()), "< send 7FF 0 >");
     }
 
     #[test]
     fn talks_to_the_canlink_server_both_ways() {
         let hub = Arc::new(BroadcastHub::new());
-        let server = Server::start(Config::new("127.0.0.1:0".parse().unwrap()), hub.clone()).unwrap();
+        let server =
+            Server::start(Config::new("127.0.0.1:0".parse().unwrap()), hub.clone()).unwrap();
         let addr = server.local_addr().to_string();
         let mut c = Client::connect(&addr, "vcan0").unwrap();
         let me = hub.join();

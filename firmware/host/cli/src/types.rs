@@ -436,17 +436,35 @@ fn parse_canonical(text: &str) -> Option<(String, Vec<Field>)> {
 impl MsgType {
     fn generated(g: &Generated) -> MsgType {
         let (name, fields) = parse_canonical(g.canonical).expect("generated canonical text");
-        MsgType { name, hash: g.hash, size: g.size, shape: Shape::Struct(fields), check: Some(g.check) }
+        MsgType {
+            name,
+            hash: g.hash,
+            size: g.size,
+            shape: Shape::Struct(fields),
+            check: Some(g.check),
+        }
     }
 
     fn plain(prim: Prim, len: Option<usize>) -> MsgType {
         let field = Field { name: String::new(), prim, len };
         let hash = len.map_or(prim.wire_hash(), |n| prim.array_hash(n));
-        MsgType { name: field.type_name(), hash, size: field.size(), shape: Shape::Plain(field), check: None }
+        MsgType {
+            name: field.type_name(),
+            hash,
+            size: field.size(),
+            shape: Shape::Plain(field),
+            check: None,
+        }
     }
 
     fn empty() -> MsgType {
-        MsgType { name: "empty".into(), hash: <() as Wire>::TYPE_HASH, size: 0, shape: Shape::Empty, check: None }
+        MsgType {
+            name: "empty".into(),
+            hash: <() as Wire>::TYPE_HASH,
+            size: 0,
+            shape: Shape::Empty,
+            check: None,
+        }
     }
 
     /// The type a topic advertised with `hash` and `size` has, if the CLI knows it.
@@ -458,7 +476,7 @@ impl MsgType {
             return (hash == <() as Wire>::TYPE_HASH).then(MsgType::empty);
         }
         Prim::ALL.into_iter().find_map(|p| {
-            if size % p.size() != 0 {
+            if !size.is_multiple_of(p.size()) {
                 return None;
             }
             let n = size / p.size();
@@ -509,7 +527,10 @@ impl MsgType {
             Shape::Empty => Ok(Decoded::Empty),
             Shape::Plain(f) => {
                 if f.prim == Prim::Bool && bytes.iter().any(|&b| b > 1) {
-                    return Err(format!("not a valid {}: a bool byte is neither 0 nor 1", self.name));
+                    return Err(format!(
+                        "not a valid {}: a bool byte is neither 0 nor 1",
+                        self.name
+                    ));
                 }
                 read(f).map(Decoded::Plain)
             }
@@ -563,10 +584,18 @@ impl MsgType {
                 let mut given: Vec<Option<Vec<&str>>> = vec![None; fields.len()];
                 for a in args {
                     let (name, value) = a.split_once('=').ok_or_else(|| {
-                        format!("{a:?} is not field=value ({} fields: {})", self.name, self.describe_fields())
+                        format!(
+                            "{a:?} is not field=value ({} fields: {})",
+                            self.name,
+                            self.describe_fields()
+                        )
                     })?;
                     let i = fields.iter().position(|f| f.name == name).ok_or_else(|| {
-                        format!("{} has no field {name:?}; its fields: {}", self.name, self.describe_fields())
+                        format!(
+                            "{} has no field {name:?}; its fields: {}",
+                            self.name,
+                            self.describe_fields()
+                        )
                     })?;
                     if given[i].is_some() {
                         return Err(format!("field {name} given twice"));
@@ -727,12 +756,20 @@ mod tests {
     #[test]
     fn malformed_fields_are_refused_with_the_reason() {
         let t = MsgType::by_name("WheelSetpoint").unwrap();
-        assert_eq!(t.encode_args(&["mode=1".into(), "value=2.5".into()]).unwrap(), [1, 0, 0, 0x20, 0x40]);
-        assert_eq!(t.encode_args(&["value=1".into()]).unwrap(), [0, 0, 0, 0x80, 0x3F], "mode defaults to 0");
+        assert_eq!(
+            t.encode_args(&["mode=1".into(), "value=2.5".into()]).unwrap(),
+            [1, 0, 0, 0x20, 0x40]
+        );
+        assert_eq!(
+            t.encode_args(&["value=1".into()]).unwrap(),
+            [0, 0, 0, 0x80, 0x3F],
+            "mode defaults to 0"
+        );
         let err = |t: &MsgType, a: &[&str]| {
             t.encode_args(&a.iter().map(|s| s.to_string()).collect::<Vec<_>>()).unwrap_err()
         };
-        assert!(err(&t, &["speed=1"]).contains("no field \"speed\"; its fields: mode=uint8 value=float32"));
+        assert!(err(&t, &["speed=1"])
+            .contains("no field \"speed\"; its fields: mode=uint8 value=float32"));
         assert!(err(&t, &["mode=256"]).contains("field mode: 256 does not fit uint8 (0 to 255)"));
         assert!(err(&t, &["mode=-1"]).contains("does not fit uint8"));
         assert!(err(&t, &["mode=x"]).contains("\"x\" is not an integer"));

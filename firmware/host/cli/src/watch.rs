@@ -10,7 +10,7 @@ use r2p_canlink::{CanFrame, Stamped};
 use r2p_management::message::{BusClass, Message, ModuleState, UID_LEN};
 use r2p_management::{DecodeError, NodeId, MANAGEMENT_INDEX};
 use rtcan::cycle::SyncError;
-use rtcan::{Expect, Frame, FrameId, MessageId, Reassembler, Sync};
+use rtcan::{Expect, Frame, FrameId, Reassembler, Sync};
 
 use crate::types::MsgType;
 
@@ -127,6 +127,8 @@ pub struct Watcher {
     rx: Box<Reassembler<STREAMS, { r2p_msgs::MAX_SIZE }>>,
     nodes: BTreeMap<u8, NodeInfo>,
     topics: BTreeMap<u16, TopicInfo>,
+    /// Each topic name's latest advertisement (its message ID).
+    latest: BTreeMap<String, u16>,
     frames: u64,
 }
 
@@ -143,6 +145,7 @@ impl Watcher {
             rx: Box::new(Reassembler::new(REASSEMBLY_TIMEOUT_US)),
             nodes: BTreeMap::new(),
             topics: BTreeMap::new(),
+            latest: BTreeMap::new(),
             frames: 0,
         }
     }
@@ -164,7 +167,7 @@ impl Watcher {
 
     /// The latest advertisement of `topic` (the one imports follow).
     pub fn topic(&self, topic: &str) -> Option<&TopicInfo> {
-        self.topics.values().filter(|t| t.topic == topic).last()
+        self.latest.get(topic).and_then(|m| self.topics.get(m))
     }
 
     /// Frames seen.
@@ -201,10 +204,8 @@ impl Watcher {
             match NodeId::of(id.message) {
                 None => What::Reserved,
                 Some((node, MANAGEMENT_INDEX)) => {
-                    let done = self
-                        .rx
-                        .accept(&frame, at, Expect::Any)
-                        .map(|m| Message::decode(m.data));
+                    let done =
+                        self.rx.accept(&frame, at, Expect::Any).map(|m| Message::decode(m.data));
                     if let Some(Ok(msg)) = &done {
                         self.learn(node.get(), msg, s.time);
                     }
@@ -253,7 +254,8 @@ impl Watcher {
                     size: *size,
                     class: *class,
                 };
-                self.topics.insert(MessageId(info.message()).0, info);
+                self.latest.insert(info.topic.clone(), info.message());
+                self.topics.insert(info.message(), info);
             }
             _ => {}
         }
@@ -320,7 +322,9 @@ pub(crate) mod tests {
         let frames = management(2, &heartbeat("motor", 2), 1_000);
         assert_eq!(frames.len(), 4, "a 5-character name's heartbeat is 4 frames");
         let reports: Vec<_> = frames.iter().map(|f| w.feed(f)).collect();
-        assert!(reports[..3].iter().all(|r| matches!(r.what, What::Management { node: 2, done: None })));
+        assert!(reports[..3]
+            .iter()
+            .all(|r| matches!(r.what, What::Management { node: 2, done: None })));
         assert!(matches!(&reports[3].what, What::Management { node: 2, done: Some(Ok(_)) }));
         let n = w.node(2).unwrap();
         assert_eq!((n.name.as_str(), n.uptime_s, n.dropped, n.heartbeats), ("motor", 7, 3, 1));
@@ -334,6 +338,16 @@ pub(crate) mod tests {
         }
         let t = w.topic("scan").unwrap();
         assert_eq!((t.message(), t.type_name().as_str()), (0x0202, "uint32[4]"));
+        // A later advertiser of the name is the one imports follow, whatever its node ID.
+        for f in management(1, &adv, 6_000).into_iter().chain(management(2, &adv, 7_000)) {
+            w.feed(&f);
+        }
+        assert_eq!(w.topic("scan").unwrap().node, 2);
+        for f in management(1, &adv, 8_000) {
+            w.feed(&f);
+        }
+        assert_eq!(w.topic("scan").unwrap().node, 1);
+        assert_eq!(w.topics().count(), 2);
 
         // The topic's frames are now reassembled and named.
         let payload: Vec<u8> = (1..=16).collect();
@@ -376,7 +390,10 @@ pub(crate) mod tests {
         let id = FrameId::new(Laxity::NRT, NodeId::new(5).unwrap().management(), 0).unwrap();
         let f = CanFrame::extended(id.to_raw(), &[0x7F, 1]).unwrap();
         let r = w.feed(&Stamped { time: Duration::ZERO, frame: f });
-        assert_eq!(r.what, What::Management { node: 5, done: Some(Err(DecodeError::UnknownType(0x7F))) });
+        assert_eq!(
+            r.what,
+            What::Management { node: 5, done: Some(Err(DecodeError::UnknownType(0x7F))) }
+        );
         assert_eq!(w.nodes().count(), 0);
     }
 }
