@@ -8,8 +8,8 @@ use clap::{Args, Parser, Subcommand};
 use rtcan::LaxityEncoding;
 
 use crate::error::CliError;
-use crate::host::Session;
 use crate::link::{Link, SocketcandLink, TraceLink};
+use crate::session::Session;
 use crate::{echo, listing, monitor, param, publish, traces};
 
 /// socketcand's address when no bus is named: where `r2p-emu demo --realtime` and

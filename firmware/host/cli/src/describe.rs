@@ -72,7 +72,8 @@ pub fn class_text(c: BusClass) -> String {
     }
 }
 
-fn class_json(c: BusClass) -> Json {
+/// A bus class as JSON: `{"class": "SRT", "deadline_us": 20000}`.
+pub fn class_json(c: BusClass) -> Json {
     match c {
         BusClass::Hrt { period_cycles } => json!({"class": "HRT", "period_cycles": period_cycles}),
         BusClass::Srt { deadline_us } => json!({"class": "SRT", "deadline_us": deadline_us}),

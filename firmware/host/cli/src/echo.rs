@@ -12,8 +12,8 @@ use serde_json::json;
 use crate::cli::{emit, BusArgs};
 use crate::describe::{hex, result_name};
 use crate::error::CliError;
-use crate::host::Session;
 use crate::listing::sorted_topics;
+use crate::session::Session;
 use crate::watch::{TopicInfo, Watcher, What};
 
 /// `r2p echo` options.

@@ -10,6 +10,7 @@
 //!
 //! The node is polled (unslotted): a tool reached over TCP cannot keep a TDMA slot, so its
 //! NRT frames go out when the bus lets them, like an SRT/NRT frame that lost arbitration.
+//! [`crate::session::Session`] drives it.
 
 use std::cell::{Cell, RefCell};
 use std::collections::VecDeque;
@@ -304,7 +305,7 @@ impl HostNode {
     /// Takes a frame the watcher has decoded into `report`: makes the wanted import when its
     /// advertisement completes (before the node reads that same advertisement), then queues
     /// the frame for the node.
-    fn take(&mut self, report: &Report) {
+    pub(crate) fn take(&mut self, report: &Report) {
         if let What::Management {
             node,
             done: Some(Ok(Message::Advertise { topic, type_hash, size, index, class })),
@@ -348,7 +349,7 @@ impl HostNode {
 
     /// Runs the node: takes the queued frames, runs its timers, sends up to `budget` frames.
     /// Returns how many it sent.
-    fn poll(&mut self, link: &mut dyn Link, budget: usize) -> Result<usize, CliError> {
+    pub(crate) fn poll(&mut self, link: &mut dyn Link, budget: usize) -> Result<usize, CliError> {
         let now = self.now();
         let mut ctl = Controller { link, rx: &mut self.rx, budget, sent: 0, error: None };
         self.node.poll(now, &mut ctl);
@@ -360,131 +361,11 @@ impl HostNode {
     }
 }
 
-/// A link, the watcher decoding everything on it, and (once joined) the host node.
-pub struct Session {
-    link: Box<dyn Link>,
-    watch: crate::watch::Watcher,
-    host: Option<HostNode>,
-    start: Instant,
-    last_tx: Option<Instant>,
-    ended: bool,
-}
-
-/// Frames taken per step at most (then the node runs).
-const BATCH: usize = 256;
-
-impl Session {
-    /// A session on `link`; nothing is sent until [`Session::join`].
-    pub fn new(link: Box<dyn Link>) -> Self {
-        Self {
-            link,
-            watch: crate::watch::Watcher::new(),
-            host: None,
-            start: Instant::now(),
-            last_tx: None,
-            ended: false,
-        }
-    }
-
-    /// What the link is.
-    pub fn describe(&self) -> String {
-        self.link.describe()
-    }
-
-    /// True if reading a trace back.
-    pub fn is_trace(&self) -> bool {
-        self.link.is_trace()
-    }
-
-    /// True once a trace has no more frames.
-    pub fn ended(&self) -> bool {
-        self.ended
-    }
-
-    /// The watcher.
-    pub fn watcher(&self) -> &crate::watch::Watcher {
-        &self.watch
-    }
-
-    /// Puts the host node on the bus (it heartbeats at once, so modules re-advertise to it).
-    pub fn join(&mut self) -> Result<&mut HostNode, CliError> {
-        if self.link.is_trace() {
-            return Err(CliError::new(format!(
-                "this command needs a live bus, not the {}: use --socketcand or --socketcan",
-                self.link.describe()
-            )));
-        }
-        if self.host.is_none() {
-            self.host = Some(HostNode::new(self.start)?);
-        }
-        Ok(self.host.as_mut().expect("just made"))
-    }
-
-    /// The host node, once joined.
-    pub fn host(&mut self) -> Option<&mut HostNode> {
-        self.host.as_mut()
-    }
-
-    /// Lets the host node send what it has queued (at most `limit`), so that leaving does not
-    /// cut a message short: modules would count its first frames as dropped.
-    pub fn flush(&mut self, limit: std::time::Duration) -> Result<(), CliError> {
-        let start = Instant::now();
-        while self.host.as_ref().is_some_and(|h| h.tx_pending() > 0) && start.elapsed() < limit {
-            self.step(std::time::Duration::from_millis(1))?;
-        }
-        Ok(())
-    }
-
-    /// Waits up to `wait` for frames, decodes every frame that came (at most [`BATCH`]), lets
-    /// the host node take them and run, and returns the decoded frames.
-    pub fn step(&mut self, wait: std::time::Duration) -> Result<Vec<Report>, CliError> {
-        let mut reports = Vec::new();
-        let mut timeout = wait;
-        while reports.len() < BATCH {
-            match self.link.recv(timeout)? {
-                crate::link::Recv::Frame(s) => {
-                    let r = self.watch.feed(&s);
-                    if let Some(h) = &mut self.host {
-                        h.take(&r);
-                    }
-                    reports.push(r);
-                    timeout = std::time::Duration::ZERO;
-                }
-                crate::link::Recv::Timeout => break,
-                crate::link::Recv::End => {
-                    self.ended = true;
-                    break;
-                }
-            }
-        }
-        if let Some(h) = &mut self.host {
-            let gap = self.link.tx_gap();
-            let budget = if gap.is_zero() {
-                usize::MAX
-            } else {
-                usize::from(self.last_tx.is_none_or(|t| t.elapsed() >= gap))
-            };
-            if h.poll(self.link.as_mut(), budget)? > 0 {
-                self.last_tx = Some(Instant::now());
-            }
-        }
-        Ok(reports)
-    }
-}
-
-/// How long a session that joined the bus keeps sending its queue when it ends.
-const FLUSH_ON_EXIT: std::time::Duration = std::time::Duration::from_millis(300);
-
-impl Drop for Session {
-    fn drop(&mut self) {
-        let _ = self.flush(FLUSH_ON_EXIT);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::link::HubLink;
+    use crate::session::Session;
     use r2p_canlink::{BroadcastHub, Hub};
     use r2p_management::message::ParamFault;
     use r2p_middleware::{pool_size, Publisher, Topic};
@@ -603,14 +484,5 @@ mod tests {
         );
         stop.store(true, std::sync::atomic::Ordering::SeqCst);
         module.join().unwrap();
-    }
-
-    #[test]
-    fn a_trace_cannot_be_joined() {
-        let link = crate::link::TraceLink::new("t.log".into(), Vec::new());
-        let mut s = Session::new(Box::new(link));
-        let e = s.join().err().unwrap();
-        assert!(e.to_string().contains("needs a live bus, not the trace t.log"), "{e}");
-        assert!(s.step(Duration::ZERO).unwrap().is_empty() && s.ended());
     }
 }

@@ -6,7 +6,7 @@
 //! - [`watch`]: a passive decoder of the bus (RTCAN identifiers, management messages,
 //!   advertised topics, nodes), and [`describe`]: its lines and JSON;
 //! - [`host`]: a real `r2p_node::Node` on the host, with an import and an export whose type
-//!   is learnt at run time, and the [`host::Session`] that drives it;
+//!   is learnt at run time, and the [`session::Session`] that drives it beside the watcher;
 //! - [`types`]: the message types, found by type hash, decoded and encoded;
 //! - the commands: [`monitor`], [`listing`] (`nodes`, `topics`), [`echo`], [`publish`]
 //!   (`pub`), [`param`], [`traces`] (`replay`, `convert`); [`cli`] parses the command line.
@@ -21,6 +21,7 @@ pub mod listing;
 pub mod monitor;
 pub mod param;
 pub mod publish;
+pub mod session;
 pub mod socketcand;
 pub mod traces;
 pub mod types;

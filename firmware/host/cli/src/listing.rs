@@ -6,9 +6,9 @@ use std::time::{Duration, Instant};
 use serde_json::json;
 
 use crate::cli::{emit, BusArgs};
-use crate::describe::{class_text, hex, state_name};
+use crate::describe::{class_json, class_text, hex, state_name};
 use crate::error::CliError;
-use crate::host::Session;
+use crate::session::Session;
 use crate::watch::{NodeInfo, TopicInfo, Watcher};
 
 /// Steps `s` for `d` (a live bus) or to its end (a trace).
@@ -148,20 +148,11 @@ pub fn topics(bus: &BusArgs, mut s: Session, out: &mut dyn Write) -> Result<(), 
     }
     if bus.json {
         for t in &topics {
-            let class = match t.class {
-                r2p_management::message::BusClass::Hrt { period_cycles } => {
-                    json!({"class": "HRT", "period_cycles": period_cycles})
-                }
-                r2p_management::message::BusClass::Srt { deadline_us } => {
-                    json!({"class": "SRT", "deadline_us": deadline_us})
-                }
-                r2p_management::message::BusClass::Nrt => json!({"class": "NRT"}),
-            };
             let j = json!({
                 "topic": t.topic, "type": t.type_name(), "type_hash": t.type_hash,
                 "size": t.size, "node": t.node,
                 "node_name": w.node(t.node).map(|n| n.name.clone()),
-                "message_id": t.message(), "class": class,
+                "message_id": t.message(), "class": class_json(t.class),
             });
             emit(out, &j.to_string())?;
         }

@@ -15,7 +15,7 @@ use rtcan::LaxityEncoding;
 use crate::cli::{emit, parse_laxity, parse_seconds, BusArgs};
 use crate::describe::{report_json, report_line};
 use crate::error::CliError;
-use crate::host::Session;
+use crate::session::Session;
 
 /// `r2p monitor` options.
 #[derive(Args, Debug)]

@@ -13,7 +13,7 @@ use serde_json::json;
 use crate::cli::{emit, BusArgs};
 use crate::describe::{fault_name, value_json};
 use crate::error::CliError;
-use crate::host::Session;
+use crate::session::Session;
 use crate::types::{Prim, Scalar};
 
 /// `r2p param` subcommands.

@@ -12,7 +12,7 @@ use r2p_node::Event;
 
 use crate::cli::BusArgs;
 use crate::error::CliError;
-use crate::host::Session;
+use crate::session::Session;
 use crate::types::MsgType;
 
 /// `r2p pub` options.
