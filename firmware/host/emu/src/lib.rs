@@ -17,8 +17,10 @@
 //! stamps them ([`SimPort`]): the vbus stamps the end of EOF, and the slot clock wants the
 //! sync's start of frame.
 
+pub mod boards;
 pub mod bridge;
 pub mod demo;
+pub mod robot;
 pub mod serve;
 
 use std::io::{self, Write};

@@ -1,0 +1,141 @@
+//! Board-support layers of the emulated modules: where the MCU reads its ADC, timers and pins,
+//! these read the world; where it drives its outputs, these drive the world. Everything else
+//! (node runtime, parameters, application) is the module's firmware crate, unchanged.
+//!
+//! Adding a module kind: write its `boot` function here (read the signals its board file names
+//! from the world into the application's `Sample`, apply its `Command`), and give the world a
+//! model of what the board is wired to (firmware/host/world).
+
+mod gateway;
+mod motor;
+mod params;
+mod proximity;
+mod psu;
+
+use std::cell::RefCell;
+use std::rc::Rc;
+
+use r2p_module::leds::Status;
+use r2p_module::FlashParams;
+use r2p_node::node::STARTING_HEARTBEATS;
+use r2p_node::{NodeConfig, ParamStore};
+use r2p_world::robot::{Module, Robot};
+use r2p_world::World;
+use rtcan::cycle::ClockState;
+use rtcan::failover::Role;
+use rtcan::{CycleConfig, Micros};
+
+pub use gateway::gateway;
+pub use motor::motor;
+pub use params::store_params;
+pub use proximity::proximity;
+pub use psu::psu;
+
+use crate::robot::{BoardFlash, BoardNode};
+use crate::App;
+
+/// What the robot-level application computed, for tests, plots and tools.
+#[derive(Clone, Debug, Default)]
+pub struct Probe {
+    /// Odometry pose (x m, y m, θ rad), as the gateway's base controller integrates it.
+    pub odometry: (f32, f32, f32),
+    /// The command sent to the wheels after obstacle avoidance (vx, vy, ωz).
+    pub command: (f32, f32, f32),
+    /// Setpoints that found no room in the publisher's pool.
+    pub setpoints_dropped: u32,
+}
+
+/// What a board's boot needs.
+pub struct Ctx<'r> {
+    /// The module in the robot file.
+    pub module: &'r Module,
+    /// The robot.
+    pub robot: &'r Robot,
+    /// The bus's TDMA cycle.
+    pub cycle: CycleConfig,
+    /// The world.
+    pub world: Rc<RefCell<World>>,
+    /// The board's parameter flash.
+    pub flash: Rc<RefCell<BoardFlash>>,
+    /// Virtual time of this boot, µs.
+    pub boot_us: Micros,
+    /// Where the gateway reports what it computes.
+    pub probe: Rc<RefCell<Probe>>,
+}
+
+/// A booted board: its node and its 1 kHz application step.
+pub type Booted = (BoardNode, App<'static, BoardNode>);
+
+fn leak<T>(x: T) -> &'static T {
+    Box::leak(Box::new(x))
+}
+
+/// Parameters from the board's flash, as the MCU's boot loads them.
+fn load_params<const N: usize>(
+    defaults: [r2p_node::Param; N],
+    flash: &Rc<RefCell<BoardFlash>>,
+) -> Result<&'static FlashParams<N>, String> {
+    let params = leak(FlashParams::new(defaults, 0));
+    params.load(&mut *flash.borrow_mut()).map_err(|e| format!("reading parameters: {e:?}"))?;
+    Ok(params)
+}
+
+/// Writes parameters set over the bus to the board's flash (the MCU does it from its
+/// application task, as here).
+fn persist<const N: usize>(params: &FlashParams<N>, flash: &RefCell<BoardFlash>) {
+    if params.is_dirty() {
+        // A failed write stays dirty and is retried next step, as on the MCU.
+        let _ = params.commit(&mut *flash.borrow_mut());
+    }
+}
+
+/// The node with the module's configuration on the robot's cycle.
+fn node(
+    config: NodeConfig,
+    ctx: &Ctx<'_>,
+    params: &'static dyn ParamStore,
+) -> Result<BoardNode, String> {
+    let name: &'static str = Box::leak(ctx.module.name.clone().into_boxed_str());
+    let config = NodeConfig { uid: ctx.module.uid.0, name, cycle: ctx.cycle, ..config };
+    BoardNode::new(config, params).map_err(|e| format!("node: {e:?}"))
+}
+
+/// The node's state as the status LEDs show it, computed as the MCU's module core does.
+struct Leds {
+    running_after_us: Micros,
+    frames: u32,
+    last_frame_at: Option<Micros>,
+}
+
+impl Leds {
+    fn new(ctx: &Ctx<'_>, node: &BoardNode) -> Self {
+        let _ = node;
+        let heartbeat = u64::from(NodeConfig::new([0; 12], "").heartbeat_period_us);
+        Self {
+            running_after_us: ctx.boot_us + u64::from(STARTING_HEARTBEATS) * heartbeat,
+            frames: 0,
+            last_frame_at: None,
+        }
+    }
+
+    fn status(&mut self, now: Micros, node: &BoardNode, storage_fault: bool) -> Status {
+        let received = node.stats().frames_received;
+        if received != self.frames {
+            (self.frames, self.last_frame_at) = (received, Some(now));
+        }
+        Status {
+            running: now >= self.running_after_us,
+            synced: node.role() == Role::Master
+                || matches!(node.clock().state(now), ClockState::Running(_)),
+            traffic: self.last_frame_at.is_some_and(|t| now - t < 1_000_000),
+            fault: false,
+            storage_fault,
+        }
+    }
+}
+
+/// Reads an ADC channel of `board`; the signal comes from the module's board file, so a
+/// missing one is a bug of this layer.
+fn adc(w: &mut World, board: &str, signal: &str) -> u16 {
+    w.read_adc(board, signal).unwrap_or_else(|e| panic!("{e}"))
+}

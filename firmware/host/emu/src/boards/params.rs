@@ -1,0 +1,88 @@
+//! A robot file's `[modules.params]`, stored in a board's flash before its first boot.
+
+use r2p_management::message::{ParamFault, Value};
+use r2p_module::FlashParams;
+use r2p_node::{Param, ParamStore};
+use r2p_world::kinematics::Layout;
+use r2p_world::robot::{BoardKind, Module, ParamValue, Robot, Wiring};
+
+use crate::robot::BoardFlash;
+
+/// Stores `module`'s parameters from the robot file (and, for the gateway's base controller,
+/// the base geometry of the robot) in `flash`. Errors name the parameter and what is valid.
+pub fn store_params(module: &Module, robot: &Robot, flash: &mut BoardFlash) -> Result<(), String> {
+    let mut values = module.params.clone();
+    if module.kind() == BoardKind::Gateway {
+        values = base_geometry(robot, values);
+    }
+    let r = match module.kind() {
+        BoardKind::Psu => store(r2p_app_psu::params::DEFAULTS, &values, flash),
+        BoardKind::Proximity => store(r2p_app_proximity::params::DEFAULTS, &values, flash),
+        BoardKind::Motor => store(r2p_app_motor::params::DEFAULTS, &values, flash),
+        BoardKind::Gateway => store(r2p_app_base::params::DEFAULTS, &values, flash),
+    };
+    r.map_err(|e| format!("{} ({}): {e}", module.name, robot.file.display()))
+}
+
+/// The base controller's geometry follows the robot's base unless the file sets it.
+fn base_geometry(robot: &Robot, mut values: Vec<(String, ParamValue)>) -> Vec<(String, ParamValue)> {
+    let mut add = |name: &str, v: f64| {
+        if !values.iter().any(|(n, _)| n == name) {
+            values.push((name.into(), ParamValue::Float(v)));
+        }
+    };
+    if let Layout::Omni { wheel_radius, wheel_distance, angles } = &robot.base.layout {
+        add("wheel_radius_m", *wheel_radius);
+        add("base_radius_m", *wheel_distance);
+        add("first_wheel_deg", angles[0].to_degrees());
+    }
+    for m in &robot.modules {
+        if let Wiring::Proximity { rangers } = &m.wiring {
+            for r in rangers.iter().filter(|r| r.channel < 4) {
+                add(&format!("channel{}_deg", r.channel), r.mount.theta.to_degrees());
+            }
+        }
+    }
+    values
+}
+
+fn store<const N: usize>(
+    defaults: [Param; N],
+    values: &[(String, ParamValue)],
+    flash: &mut BoardFlash,
+) -> Result<(), String> {
+    let params = FlashParams::new(defaults, 0);
+    params.load(flash).map_err(|e| format!("reading parameters: {e:?}"))?;
+    for (name, v) in values {
+        let Some(i) = defaults.iter().position(|p| p.name == name) else {
+            let known: Vec<&str> = defaults.iter().map(|p| p.name).collect();
+            return Err(format!("no parameter `{name}`: the module has {}", known.join(", ")));
+        };
+        let p = defaults[i];
+        let value = match (p.value, *v) {
+            (Value::Bool(_), ParamValue::Bool(b)) => Value::Bool(b),
+            (Value::U32(_), ParamValue::Int(n)) if n >= 0 && n <= i64::from(u32::MAX) => {
+                Value::U32(n as u32)
+            }
+            (Value::I32(_), ParamValue::Int(n)) if i32::try_from(n).is_ok() => Value::I32(n as i32),
+            (Value::F32(_), ParamValue::Float(f)) => Value::F32(f as f32),
+            (Value::F32(_), ParamValue::Int(n)) => Value::F32(n as f32),
+            _ => return Err(format!("`{name}` = {v:?}: expected {}", describe(&p))),
+        };
+        params.set(i as u16, value).map_err(|e| match e {
+            ParamFault::OutOfRange => format!("`{name}` = {v:?} is out of range: {}", describe(&p)),
+            other => format!("`{name}`: {other:?}"),
+        })?;
+    }
+    params.commit(flash).map_err(|e| format!("writing parameters: {e:?}"))?;
+    Ok(())
+}
+
+fn describe(p: &Param) -> String {
+    match (p.min, p.max) {
+        (Value::U32(a), Value::U32(b)) => format!("an integer in {a}..={b}"),
+        (Value::I32(a), Value::I32(b)) => format!("an integer in {a}..={b}"),
+        (Value::F32(a), Value::F32(b)) => format!("a number in {a}..={b}"),
+        _ => "true or false".into(),
+    }
+}
