@@ -143,7 +143,7 @@ def rust_source(types: dict[str, msgs.MsgType]) -> str:
                 "        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;",
                 "        Ok(Self {"]
         out += [f"            {_rust_ident(t, f)}: r.get()?," for f in t.fields]
-        out += ["        })", "    }", "}", ""]
+        out += ["        })", "    }", "}", "", f"crate::impl_wire!({t.name});", ""]
     out += ["/// Every generated type as (name, type hash, size), in name order.",
             "pub const ALL: &[(&str, u32, usize)] = &["]
     out += [f"    ({json.dumps(t.name)}, {_hex32(t.type_hash)}, {t.size})," for t in types.values()]

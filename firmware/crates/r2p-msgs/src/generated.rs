@@ -46,6 +46,8 @@ impl crate::R2pMessage for Battery {
     }
 }
 
+crate::impl_wire!(Battery);
+
 /// Command: clear a module's latched faults (those whose cause is gone; a cause still present latches again at once).
 ///
 /// 1 bytes on the bus, type hash `0x9688B902`; schema `firmware/msgs/FaultClear.msg`.
@@ -72,6 +74,8 @@ impl crate::R2pMessage for FaultClear {
         Ok(Self { mask: r.get()? })
     }
 }
+
+crate::impl_wire!(FaultClear);
 
 /// Event of a DC motor controller: a fault latched, or latched faults were cleared. Sent SRT when it happens; the same bits are in every WheelState.faults.
 ///
@@ -106,6 +110,8 @@ impl crate::R2pMessage for MotorFault {
     }
 }
 
+crate::impl_wire!(MotorFault);
+
 /// An obstacle closer than the proximity module's threshold (SRT, with a deadline).
 ///
 /// 5 bytes on the bus, type hash `0x24BEC850`; schema `firmware/msgs/Obstacle.msg`.
@@ -136,6 +142,8 @@ impl crate::R2pMessage for Obstacle {
     }
 }
 
+crate::impl_wire!(Obstacle);
+
 /// Four range readings, published by the proximity module.
 ///
 /// 20 bytes on the bus, type hash `0xA7C115E9`; schema `firmware/msgs/Proximity.msg`.
@@ -165,6 +173,8 @@ impl crate::R2pMessage for Proximity {
         Ok(Self { distance: r.get()?, status: r.get()? })
     }
 }
+
+crate::impl_wire!(Proximity);
 
 /// Planar velocity of a robot base.
 ///
@@ -199,6 +209,8 @@ impl crate::R2pMessage for Twist2D {
     }
 }
 
+crate::impl_wire!(Twist2D);
+
 /// Setpoint for one DC motor controller.
 ///
 /// 5 bytes on the bus, type hash `0x06AD21EE`; schema `firmware/msgs/WheelSetpoint.msg`.
@@ -228,6 +240,8 @@ impl crate::R2pMessage for WheelSetpoint {
         Ok(Self { mode: r.get()?, value: r.get()? })
     }
 }
+
+crate::impl_wire!(WheelSetpoint);
 
 /// State of one DC motor controller, published periodically (its `publish_hz` parameter).
 ///
@@ -265,6 +279,8 @@ impl crate::R2pMessage for WheelState {
         Ok(Self { position: r.get()?, speed: r.get()?, current: r.get()?, faults: r.get()? })
     }
 }
+
+crate::impl_wire!(WheelState);
 
 /// Every generated type as (name, type hash, size), in name order.
 pub const ALL: &[(&str, u32, usize)] = &[

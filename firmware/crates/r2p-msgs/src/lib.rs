@@ -21,6 +21,29 @@
 #[cfg(test)]
 extern crate std;
 
+/// Makes a generated type a node-runtime payload ([`r2p_node::Wire`]): a topic of any message
+/// type can be exported and imported over the bus, with the message's own wire format and type
+/// hash (the generated code invokes it once per type).
+macro_rules! impl_wire {
+    ($t:ty) => {
+        impl r2p_node::Wire for $t {
+            const SIZE: usize = <$t as $crate::R2pMessage>::SIZE;
+            const TYPE_HASH: u32 = <$t as $crate::R2pMessage>::TYPE_HASH;
+            fn encode(&self, buf: &mut [u8]) -> Result<usize, r2p_node::WireError> {
+                $crate::R2pMessage::encode(self, buf)
+                    .map_err(|_| r2p_node::WireError::BufferTooSmall)
+            }
+            fn decode(bytes: &[u8]) -> Result<Self, r2p_node::WireError> {
+                <$t as $crate::R2pMessage>::decode(bytes).map_err(|e| match e {
+                    $crate::DecodeError::WrongSize { .. } => r2p_node::WireError::BadLength,
+                    _ => r2p_node::WireError::BadValue,
+                })
+            }
+        }
+    };
+}
+pub(crate) use impl_wire;
+
 mod generated;
 pub use generated::*;
 
@@ -379,5 +402,26 @@ mod proptests {
         fn any_other_length_is_refused(len in 0usize..MAX_SIZE + 8) {
             for_each_message!(other_lengths_refused, len);
         }
+    }
+}
+
+#[cfg(test)]
+mod wire_tests {
+    use crate::{Obstacle, R2pMessage};
+    use r2p_node::{Wire, WireError};
+
+    #[test]
+    fn every_message_is_a_node_payload_with_its_own_format() {
+        const N: usize = <Obstacle as R2pMessage>::SIZE;
+        let o = Obstacle { channel: 2, distance: 0.25 };
+        let mut a = [0u8; 8];
+        let mut b = [0u8; 8];
+        assert_eq!(Wire::encode(&o, &mut a), Ok(N));
+        assert_eq!(R2pMessage::encode(&o, &mut b), Ok(N));
+        assert_eq!(a, b);
+        assert_eq!(<Obstacle as Wire>::TYPE_HASH, <Obstacle as R2pMessage>::TYPE_HASH);
+        assert_eq!(<Obstacle as Wire>::decode(&a[..N]), Ok(o));
+        assert_eq!(<Obstacle as Wire>::decode(&a[..3]), Err(WireError::BadLength));
+        assert_eq!(Wire::encode(&o, &mut a[..2]), Err(WireError::BufferTooSmall));
     }
 }

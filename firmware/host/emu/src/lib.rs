@@ -60,6 +60,18 @@ impl<const E: usize, const I: usize, const T: usize, const R: usize, const B: us
     }
 }
 
+impl<R: Runtime + ?Sized> Runtime for Box<R> {
+    fn poll(&mut self, now: Micros, can: &mut dyn CanController) {
+        (**self).poll(now, can);
+    }
+    fn slot_tick(&mut self, now: Micros, can: &mut dyn CanController) {
+        (**self).slot_tick(now, can);
+    }
+    fn next_slot_at(&self, now: Micros) -> Micros {
+        (**self).next_slot_at(now)
+    }
+}
+
 /// How boards drive their nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
@@ -142,11 +154,18 @@ pub struct SimStats {
     pub app_steps: u64,
 }
 
+/// The world's step: called every millisecond of virtual time with the time (µs), before the
+/// boards' application steps at that time (so they sample the world as it is then).
+pub type WorldStep<'a> = Box<dyn FnMut(Micros) + 'a>;
+
 /// Several boards on one virtual bus, in virtual time. See the crate documentation.
 pub struct Sim<'a, N: Runtime> {
     bus: Bus,
     mode: Mode,
     boards: Vec<Board<'a, N>>,
+    world: Option<WorldStep<'a>>,
+    /// Next world step, ns.
+    world_ns: u64,
     now_ns: u64,
     stats: SimStats,
 }
@@ -159,6 +178,8 @@ impl<'a, N: Runtime> Sim<'a, N> {
             bus: Bus::new(ports, config),
             mode,
             boards: Vec::new(),
+            world: None,
+            world_ns: 0,
             now_ns: 0,
             stats: SimStats::default(),
         }
@@ -178,6 +199,32 @@ impl<'a, N: Runtime> Sim<'a, N> {
             powered: true,
         });
         self.boards.len() - 1
+    }
+
+    /// Steps `world` every millisecond from now on, before the boards' applications.
+    pub fn set_world(&mut self, world: WorldStep<'a>) {
+        self.world = Some(world);
+        self.world_ns = self.now_ns;
+    }
+
+    /// Reboots board `i` with a new `node` and application (the firmware starts again from
+    /// reset: RAM state is gone, whatever the builder keeps, such as flash, stays). Its
+    /// controller is reset as by a power cycle.
+    pub fn reboot(&mut self, i: usize, node: N, app: Option<App<'a, N>>) {
+        let port = self.boards[i].port.port().index();
+        self.bus.power(port, false);
+        self.bus.power(port, true);
+        let b = &mut self.boards[i];
+        b.node = node;
+        b.app = app;
+        b.powered = true;
+        b.wake_ns = self.now_ns;
+        b.app_ns = self.now_ns;
+    }
+
+    /// Whether board `i` is powered.
+    pub fn is_powered(&self, i: usize) -> bool {
+        self.boards[i].powered
     }
 
     /// The bus (faults, babblers, partitions, the trace).
@@ -239,6 +286,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
             .filter(|b| b.powered)
             .flat_map(|b| [b.wake_ns, if b.app.is_some() { b.app_ns } else { u64::MAX }])
             .fold(bus, u64::min)
+            .min(if self.world.is_some() { self.world_ns } else { u64::MAX })
             .min(limit_ns)
     }
 
@@ -251,6 +299,12 @@ impl<'a, N: Runtime> Sim<'a, N> {
             self.stats.steps += 1;
             let now_us = t / NS_PER_US;
             let mode = self.mode;
+            if let Some(world) = &mut self.world {
+                if self.world_ns <= t {
+                    world(now_us);
+                    self.world_ns += NS_PER_MS;
+                }
+            }
             for b in self.boards.iter_mut().filter(|b| b.powered) {
                 if let Some(app) = &mut b.app {
                     if b.app_ns <= t {

@@ -1,0 +1,22 @@
+//! What every R2P module application shares, `no_std` and without a HAL so the same code runs
+//! on the MCU and on an emulated board:
+//!
+//! - [`FlashParams`]: the module's parameters, set over the bus and kept in flash across
+//!   reboots (an append-only log in two erase pages, power-loss safe);
+//! - [`RamFlash`]: a NOR flash in RAM with the real part's rules (erase to `0xFF`, program only
+//!   erased bytes), for emulated boards and tests, with a power cut at a chosen byte;
+//! - [`filters`]: median and first-order low-pass filters for sensor channels;
+//! - [`leds`]: the status LED patterns every module shows the same way.
+#![no_std]
+#![warn(missing_docs)]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod filters;
+pub mod flash_params;
+pub mod leds;
+pub mod ram_flash;
+
+pub use flash_params::{CommitReport, FlashParams, LoadReport};
+pub use ram_flash::RamFlash;
