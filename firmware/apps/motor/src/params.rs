@@ -21,6 +21,16 @@ macro_rules! params {
         /// How many parameters the module has.
         pub const COUNT: usize = [$($idx),*].len();
 
+        // The table's order is the index order: DEFAULTS[i] is parameter i.
+        const _: () = {
+            let order: [u16; COUNT] = [$($idx),*];
+            let mut i = 0;
+            while i < COUNT {
+                assert!(order[i] as usize == i, "parameter indices must be 0, 1, 2, … in table order");
+                i += 1;
+            }
+        };
+
         /// Every parameter with its default and range, in index order: the table a
         /// `RamParams` or the flash store is built from.
         pub const DEFAULTS: [Param; COUNT] = [ $( Param::$ty(stringify!($field), $def, $min, $max), )* ];
@@ -58,39 +68,41 @@ params! {
         "Rate of `state`.";
     2 WATCHDOG_MS watchdog_ms: u32 = 250, 20, 10_000, "ms",
         "A setpoint must arrive within this time once the first one came, or the motor stops (fault bit 2).";
-    3 CURRENT_KP current_kp: f32 = 0.6, 0.0, 50.0, "V/A",
+    3 CURRENT_KP current_kp: f32 = 0.03, 0.0, 50.0, "V/A",
         "Current loop (1 kHz) proportional gain.";
-    4 CURRENT_KI current_ki: f32 = 400.0, 0.0, 20_000.0, "V/(A·s)",
+    4 CURRENT_KI current_ki: f32 = 300.0, 0.0, 20_000.0, "V/(A·s)",
         "Current loop integral gain.";
-    5 SPEED_KP speed_kp: f32 = 1.2, 0.0, 100.0, "A/(rad/s)",
+    5 SPEED_KP speed_kp: f32 = 1.5, 0.0, 100.0, "A/(rad/s)",
         "Speed loop (200 Hz) proportional gain, output-shaft speed.";
-    6 SPEED_KI speed_ki: f32 = 12.0, 0.0, 10_000.0, "A/rad",
+    6 SPEED_KI speed_ki: f32 = 35.0, 0.0, 10_000.0, "A/rad",
         "Speed loop integral gain.";
-    7 POSITION_KP position_kp: f32 = 12.0, 0.0, 1_000.0, "(rad/s)/rad",
+    7 SPEED_WEIGHT speed_weight: f32 = 0.4, 0.0, 1.0, "",
+        "Share of the speed setpoint in the speed loop's proportional term (1: plain PI; less: less overshoot on setpoint steps, same disturbance rejection).";
+    8 POSITION_KP position_kp: f32 = 16.0, 0.0, 1_000.0, "(rad/s)/rad",
         "Position loop (200 Hz) gain: speed setpoint per rad of error.";
-    8 MAX_SPEED max_speed: f32 = 30.0, 0.1, 1_000.0, "rad/s",
+    9 MAX_SPEED max_speed: f32 = 30.0, 0.1, 1_000.0, "rad/s",
         "Output-shaft speed limit of the speed and position modes.";
-    9 CURRENT_LIMIT current_limit: f32 = 10.0, 0.1, 20.0, "A",
+    10 CURRENT_LIMIT current_limit: f32 = 10.0, 0.1, 20.0, "A",
         "Clamps the current setpoint in every mode (module rating: 20 A continuous).";
-    10 TRIP_CURRENT trip_current: f32 = 25.0, 1.0, 30.0, "A",
+    11 TRIP_CURRENT trip_current: f32 = 25.0, 1.0, 30.0, "A",
         "Over-current trip threshold on the measured current (keep above `current_limit`).";
-    11 TRIP_MS trip_ms: u32 = 5, 1, 100, "ms",
+    12 TRIP_MS trip_ms: u32 = 5, 1, 100, "ms",
         "How long the current must stay above `trip_current` to trip (fault bit 0).";
-    12 ENCODER_CPR encoder_cpr: u32 = 2_000, 4, 1_000_000, "counts/rev",
+    13 ENCODER_CPR encoder_cpr: u32 = 2_000, 4, 1_000_000, "counts/rev",
         "Encoder counts per motor revolution (quadrature edges: 4 × lines).";
-    13 GEAR_RATIO gear_ratio: f32 = 19.0, 0.01, 10_000.0, "",
+    14 GEAR_RATIO gear_ratio: f32 = 19.0, 0.01, 10_000.0, "",
         "Motor revolutions per output-shaft revolution.";
-    14 HALL_MV_PER_A hall_mv_per_a: f32 = 45.0, 5.0, 500.0, "mV/A",
+    15 HALL_MV_PER_A hall_mv_per_a: f32 = 45.0, 5.0, 500.0, "mV/A",
         "Hall current sensor sensitivity (ACS711KEXLT-31AB-T at 3.3 V: 45).";
-    15 TORQUE_CONSTANT torque_constant: f32 = 0.035, 0.001, 10.0, "N·m/A",
+    16 TORQUE_CONSTANT torque_constant: f32 = 0.035, 0.001, 10.0, "N·m/A",
         "Motor torque constant (= back-EMF constant in V·s/rad): torque setpoints and back-EMF feed-forward.";
-    16 MOTOR_RESISTANCE motor_resistance: f32 = 0.6, 0.01, 100.0, "Ω",
+    17 MOTOR_RESISTANCE motor_resistance: f32 = 0.6, 0.01, 100.0, "Ω",
         "Motor terminal resistance: the encoder-loss check estimates back-EMF with it.";
-    17 ENCODER_TIMEOUT_MS encoder_timeout_ms: u32 = 100, 10, 5_000, "ms",
+    18 ENCODER_TIMEOUT_MS encoder_timeout_ms: u32 = 100, 10, 5_000, "ms",
         "Driving with back-EMF above `encoder_emf_v` and no encoder edge for this long: encoder loss (fault bit 1).";
-    18 ENCODER_EMF_V encoder_emf_v: f32 = 3.0, 0.5, 50.0, "V",
+    19 ENCODER_EMF_V encoder_emf_v: f32 = 3.0, 0.5, 50.0, "V",
         "Back-EMF (duty × VMOT − R × I) above which the motor must be turning.";
-    19 DUTY_LIMIT duty_limit: f32 = 0.95, 0.05, 1.0, "",
+    20 DUTY_LIMIT duty_limit: f32 = 0.95, 0.05, 1.0, "",
         "Largest |duty| the current loop commands.";
 }
 
@@ -149,12 +161,12 @@ mod tests {
 
     #[test]
     fn the_table_is_in_index_order_and_defaults_are_in_range() {
-        assert_eq!(index::DUTY_LIMIT as usize, COUNT - 1);
+        let store = RamParams::new(DEFAULTS);
         for (i, p) in DEFAULTS.iter().enumerate() {
             assert_eq!(p.check(p.value), Ok(()), "{} default out of its own range", p.name);
-            let store = RamParams::new(DEFAULTS);
             assert_eq!(store.get(i as u16), Ok(p.value));
         }
+        assert_eq!(DEFAULTS[usize::from(index::DUTY_LIMIT)].name, "duty_limit");
         assert_eq!(Config::load(&RamParams::new(DEFAULTS)), Config::DEFAULT);
     }
 
