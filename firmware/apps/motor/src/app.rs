@@ -294,8 +294,11 @@ impl<'a> App<'a> {
         let slot = (self.steps % u64::from(OUTER_DIVIDER)) as usize;
         let count = self.encoder.count();
         let old = core::mem::replace(&mut self.counts[slot], count);
-        self.window_speed =
-            if self.steps < u64::from(OUTER_DIVIDER) { 0.0 } else { self.scale.speed(old, count, OUTER_DT_S) };
+        self.window_speed = if self.steps < u64::from(OUTER_DIVIDER) {
+            0.0
+        } else {
+            self.scale.speed(old, count, OUTER_DT_S)
+        };
     }
 
     fn take_clear_commands(&mut self) {
@@ -364,7 +367,8 @@ impl<'a> App<'a> {
         // not. A stalled motor has no back-EMF (duty × VMOT ≈ R × I), so a stall is no encoder
         // loss.
         let emf = self.applied_duty * self.m.vbus - cfg.motor_resistance * self.m.current;
-        let driving = self.applied_duty.abs() >= ENCODER_CHECK_DUTY && emf.abs() > cfg.encoder_emf_v;
+        let driving =
+            self.applied_duty.abs() >= ENCODER_CHECK_DUTY && emf.abs() > cfg.encoder_emf_v;
         let still = self.last_edge_us;
         let hold = u64::from(cfg.encoder_timeout_ms) * 1000;
         if self.encoder_loss.check(driving, now_us, hold) && now_us.saturating_sub(still) >= hold {
@@ -403,7 +407,8 @@ impl<'a> App<'a> {
         }
         let sp = if self.faults.any(Faults::WATCHDOG) {
             let since = self.stop_since.unwrap_or(now_us);
-            if self.m.speed.abs() < STOPPED_SPEED || now_us.saturating_sub(since) >= STOP_TIMEOUT_US {
+            if self.m.speed.abs() < STOPPED_SPEED || now_us.saturating_sub(since) >= STOP_TIMEOUT_US
+            {
                 self.braked = true;
             }
             if self.braked {

@@ -31,9 +31,8 @@ impl Faults {
         (Self::CURRENT_SENSOR, "current sensor zero out of range", "bridge disabled"),
     ];
     /// The faults after which the bridge is switched off (coasting): all but the watchdog.
-    pub const DISABLING: Self = Self(
-        Self::OVER_CURRENT.0 | Self::ENCODER_LOSS.0 | Self::DRIVER.0 | Self::CURRENT_SENSOR.0,
-    );
+    pub const DISABLING: Self =
+        Self(Self::OVER_CURRENT.0 | Self::ENCODER_LOSS.0 | Self::DRIVER.0 | Self::CURRENT_SENSOR.0);
 
     /// Whether any bit of `other` is set.
     pub const fn any(self, other: Self) -> bool {

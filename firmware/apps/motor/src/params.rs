@@ -103,7 +103,7 @@ params! {
     19 ENCODER_EMF_V encoder_emf_v: f32 = 3.0, 0.5, 50.0, "V",
         "Back-EMF (duty × VMOT − R × I) above which the motor must be turning.";
     20 DUTY_LIMIT duty_limit: f32 = 0.95, 0.05, 1.0, "",
-        "Largest |duty| the current loop commands.";
+        "Largest duty magnitude the current loop commands.";
 }
 
 /// The store's value as a Rust type.

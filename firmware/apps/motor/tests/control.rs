@@ -26,7 +26,9 @@ fn speed_step_rises_within_40_ms_without_overshoot() {
     let mut out = Vec::new();
     r.hold(SPEED, 10.0, 400, |r| out.push(r.speed()));
     let (rise, overshoot, settled) = step_metrics(&out, 10.0);
-    println!("10 rad/s step: rise {rise} ms, overshoot {overshoot:.2} %, within 2 % after {settled} ms");
+    println!(
+        "10 rad/s step: rise {rise} ms, overshoot {overshoot:.2} %, within 2 % after {settled} ms"
+    );
     assert!(rise <= 40, "rise time {rise} ms");
     assert!(overshoot <= 3.0, "overshoot {overshoot:.2} %");
     assert!(settled <= 100, "settled after {settled} ms");
@@ -50,7 +52,8 @@ fn a_large_step_is_paced_by_the_current_limit_and_the_current_stays_within_it() 
     // And back down through zero to −20 rad/s.
     let mut back = Vec::new();
     r.hold(SPEED, -20.0, 400, |r| back.push(r.speed() + 20.0));
-    let (rise, overshoot, _) = step_metrics(&back.iter().map(|w| -(w - 40.0)).collect::<Vec<_>>(), 40.0);
+    let (rise, overshoot, _) =
+        step_metrics(&back.iter().map(|w| -(w - 40.0)).collect::<Vec<_>>(), 40.0);
     assert!(rise <= 130 && overshoot <= 3.0, "reverse: {rise} ms, {overshoot:.2} %");
     assert!((r.speed() + 20.0).abs() < 0.2);
 }

@@ -16,6 +16,9 @@ pub use motor::Motor;
 /// One millisecond.
 pub const MS: u64 = 1_000;
 
+/// Changes a sample at a time (µs): fault injection.
+pub type Tamper = Box<dyn FnMut(u64, &mut Sample)>;
+
 pub struct Rig {
     pub app: App<'static>,
     pub ep: Endpoints<'static>,
@@ -26,7 +29,7 @@ pub struct Rig {
     pub states: &'static Subscriber<'static, WheelState, 2>,
     pub events: &'static Subscriber<'static, MotorFault, 2>,
     /// Fault injection: changes the sample the motor gives at `now_us`.
-    pub tamper: Box<dyn FnMut(u64, &mut Sample)>,
+    pub tamper: Tamper,
 }
 
 fn leak<T>(v: T) -> &'static T {
