@@ -1,4 +1,4 @@
-//! Two motor controllers and a gateway on a virtual CAN bus (r2p-vbus), in one process: the
+//! Two motor controllers and a gateway on a loopback CAN bus, in one process: the
 //! boards' topics are their own, setpoints and states cross the bus, and parameters are set
 //! (or refused) over it.
 
@@ -13,9 +13,61 @@ use r2p_msgs::{WheelSetpoint, WheelState};
 use r2p_node::{
     Event, NoParams, Node, NodeConfig, ParamStore, RamParams, RemotePublisher, RemoteSubscriber,
 };
-use r2p_vbus::{Bus, Config, Port};
 use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError};
 use rtcan::{CanController, Frame};
+use std::cell::{Cell, RefCell};
+use std::collections::VecDeque;
+use std::rc::Rc;
+
+/// A loopback CAN bus: a frame one port sends reaches every other port at once, in the order
+/// it was sent (the FIFO order the node asks of its controller), stamped with the bus's time.
+#[derive(Clone, Default)]
+struct Bus {
+    queues: Rc<RefCell<Vec<VecDeque<Received>>>>,
+    now: Rc<Cell<u64>>,
+}
+
+impl Bus {
+    fn new(ports: usize) -> Self {
+        let bus = Self::default();
+        bus.queues.borrow_mut().resize(ports, VecDeque::new());
+        bus
+    }
+
+    fn port(&self, me: usize) -> Port {
+        Port { bus: self.clone(), me }
+    }
+}
+
+struct Port {
+    bus: Bus,
+    me: usize,
+}
+
+impl CanController for Port {
+    fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
+        let at = self.bus.now.get();
+        for (i, q) in self.bus.queues.borrow_mut().iter_mut().enumerate() {
+            if i != self.me {
+                q.push_back(Received { frame: *frame, at });
+            }
+        }
+        Ok(())
+    }
+    fn try_receive(&mut self) -> Option<Received> {
+        self.bus.queues.borrow_mut()[self.me].pop_front()
+    }
+    fn set_filters(&mut self, _: &[Filter]) {}
+    fn abort_pending(&mut self) -> usize {
+        0
+    }
+    fn bus_state(&self) -> BusState {
+        BusState::ErrorActive
+    }
+    fn error_counters(&self) -> ErrorCounters {
+        ErrorCounters::default()
+    }
+}
 
 type BoardNode = Node<'static, 4, 4, 32, 4, 64>;
 
@@ -29,44 +81,12 @@ fn uid(n: u32) -> [u8; 12] {
     u
 }
 
-/// A vbus port that sends in FIFO order, as the node requires of its controller (bxCAN with
-/// TXFP = 1): it takes a frame only when nothing is pending (the vbus's mailboxes otherwise
-/// compete by identifier, and an RTCAN message's later fragments have lower identifiers).
-struct Fifo(Port);
-
-impl CanController for Fifo {
-    fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
-        if self.0.pending() > 0 {
-            return Err(TxError::MailboxesFull);
-        }
-        self.0.try_transmit(frame)
-    }
-    fn try_receive(&mut self) -> Option<Received> {
-        self.0.try_receive()
-    }
-    fn set_filters(&mut self, filters: &[Filter]) {
-        self.0.set_filters(filters);
-    }
-    fn abort_pending(&mut self) -> usize {
-        self.0.abort_pending()
-    }
-    fn bus_state(&self) -> BusState {
-        self.0.bus_state()
-    }
-    fn error_counters(&self) -> ErrorCounters {
-        self.0.error_counters()
-    }
-}
-
-/// Node polls per millisecond (one frame per poll at most: 10 000 frames/s per node).
-const POLLS_PER_MS: u64 = 10;
-
 struct Board {
     app: App<'static>,
     node: BoardNode,
     params: &'static RamParams<COUNT>,
     motor: Motor,
-    port: Fifo,
+    port: Port,
 }
 
 impl Board {
@@ -78,7 +98,7 @@ impl Board {
         let mut node =
             Node::new(NodeConfig::new(uid(port as u32 + 1), names.node), params).unwrap();
         app.register(&mut node).unwrap();
-        Self { app, node, params, motor: Motor::default(), port: Fifo(bus.port(port)) }
+        Self { app, node, params, motor: Motor::default(), port: bus.port(port) }
     }
 
     fn step(&mut self, now_us: u64) {
@@ -114,26 +134,23 @@ fn wheel(gw: &mut Node<'static, 4, 4, 32, 4, 64>, name: &Names) -> Wheel {
 
 #[test]
 fn a_gateway_drives_two_motors_over_the_bus_and_parameters_are_range_checked() {
-    let bus = Bus::new(3, Config::default());
+    let bus = Bus::new(3);
     let mut boards = [Board::new(&bus, 0, 1), Board::new(&bus, 1, 3)];
     assert_eq!(boards[1].app.names().state, "motor3/state");
     let mut gw: BoardNode = Node::new(NodeConfig::new(uid(9), "gateway"), leak(NoParams)).unwrap();
     let wheels = [wheel(&mut gw, &Names::of(1)), wheel(&mut gw, &Names::of(3))];
-    let mut gw_port = Fifo(bus.port(2));
+    let mut gw_port = bus.port(2);
     let targets = [6.0f32, -9.0];
     let mut counts = [[0u32; 3]; 2]; // states received per wheel in three windows
     let mut last = [WheelState::default(); 2];
     let mut answers = Vec::new();
     for ms in 0..3000u64 {
         let now = ms * 1000;
-        for k in 0..POLLS_PER_MS {
-            let t = now + k * 1000 / POLLS_PER_MS;
-            bus.advance_to(t * 1000);
-            for b in boards.iter_mut() {
-                b.node.poll(t, &mut b.port);
-            }
-            gw.poll(t, &mut gw_port);
+        bus.now.set(now);
+        for b in boards.iter_mut() {
+            b.node.poll(now, &mut b.port);
         }
+        gw.poll(now, &mut gw_port);
         for b in boards.iter_mut() {
             b.step(now);
         }
