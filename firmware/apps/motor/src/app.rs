@@ -165,11 +165,7 @@ impl<'a> App<'a> {
         &self,
         node: &mut Node<'a, E, I, T, R, B>,
     ) -> Result<(), NodeError> {
-        node.export(self.ep.state_out)?;
-        node.export(self.ep.fault_out)?;
-        node.import(self.ep.setpoint_in)?;
-        node.import(self.ep.clear_in)?;
-        Ok(())
+        self.ep.register(node)
     }
 
     /// One control step at `now_us` (every 1 ms): measurements, bus commands, the 200 Hz loops

@@ -20,7 +20,7 @@
 
 use r2p_middleware::{pool_size, Publisher, Subscriber, Topic};
 use r2p_msgs::{FaultClear, MotorFault, WheelSetpoint, WheelState};
-use r2p_node::{RemotePublisher, RemoteSubscriber};
+use r2p_node::{Node, NodeError, RemotePublisher, RemoteSubscriber};
 
 use crate::names::Names;
 
@@ -228,6 +228,26 @@ impl<'a> Endpoints<'a> {
         self.state.subscribe(self.state_out)?;
         self.fault.advertise(self.fault_pub)?;
         self.fault.subscribe(self.fault_out)
+    }
+
+    /// Exports `state` and `fault` and imports `setpoint` and `clear_faults` on `node` (what
+    /// [`App::register`](crate::App::register) does; usable where the node and the application
+    /// are built in different tasks).
+    pub fn register<
+        const E: usize,
+        const I: usize,
+        const T: usize,
+        const R: usize,
+        const B: usize,
+    >(
+        &self,
+        node: &mut Node<'a, E, I, T, R, B>,
+    ) -> Result<(), NodeError> {
+        node.export(self.state_out)?;
+        node.export(self.fault_out)?;
+        node.import(self.setpoint_in)?;
+        node.import(self.clear_in)?;
+        Ok(())
     }
 }
 
