@@ -53,8 +53,21 @@ bind_interrupts!(struct Irqs {
     ADC1_2 => adc::InterruptHandler<ADC1>;
 });
 
-/// Where the parameters live: the last two erase pages of flash (params.x keeps the image out).
-const PARAMS_OFFSET: u32 = (FLASH_SIZE - 2 * MAX_ERASE_SIZE) as u32;
+/// Flash kept for the parameters at its end (build.rs; its linker script keeps the image out).
+const PARAMS_BYTES: usize = parse(env!("R2P_PARAMS_BYTES"));
+const _: () = assert!(PARAMS_BYTES == 2 * MAX_ERASE_SIZE, "FlashParams uses two erase pages");
+/// Where the parameters live: the last two erase pages of flash.
+const PARAMS_OFFSET: u32 = (FLASH_SIZE - PARAMS_BYTES) as u32;
+
+/// A decimal number at compile time.
+const fn parse(s: &str) -> usize {
+    let (b, mut i, mut n) = (s.as_bytes(), 0, 0);
+    while i < b.len() {
+        n = n * 10 + (b[i] - b'0') as usize;
+        i += 1;
+    }
+    n
+}
 /// CAN bit rate (the R2P bus, docs/bus.md).
 const CAN_BIT_RATE: u32 = 1_000_000;
 
