@@ -11,7 +11,7 @@ use crate::endpoints::Endpoints;
 use crate::faults::{Faults, Persistence};
 use crate::frontend;
 use crate::names::Names;
-use crate::params::{Config, COUNT};
+use crate::params::{index, Config, COUNT};
 
 /// Current-sensor samples averaged for its zero at start-up (and after its fault is cleared),
 /// with the bridge off.
@@ -250,9 +250,12 @@ impl<'a> App<'a> {
     }
 
     fn refresh_one_param(&mut self) {
-        self.cfg.reload(self.params, self.next_param);
-        self.next_param = (self.next_param + 1) % COUNT as u16;
-        self.scale = Scale::new(self.cfg.encoder_cpr, self.cfg.gear_ratio);
+        let i = self.next_param;
+        self.cfg.reload(self.params, i);
+        self.next_param = (i + 1) % COUNT as u16;
+        if i == index::ENCODER_CPR || i == index::GEAR_RATIO {
+            self.scale = Scale::new(self.cfg.encoder_cpr, self.cfg.gear_ratio);
+        }
     }
 
     fn measure(&mut self, now_us: u64, s: &Sample) {

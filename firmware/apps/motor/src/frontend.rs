@@ -29,6 +29,7 @@ pub const VMOT_RATIO: f32 =
     (VMOT_DIVIDER_TOP_OHM + VMOT_DIVIDER_BOTTOM_OHM) / VMOT_DIVIDER_BOTTOM_OHM;
 
 const MV_PER_COUNT: f32 = VREF_MV / ADC_COUNTS as f32;
+const VMOT_V_PER_COUNT: f32 = MV_PER_COUNT * VMOT_RATIO / 1000.0;
 
 /// Motor current, A, from the sensor's ADC counts, the calibrated zero (counts) and the
 /// sensitivity (mV/A). Positive current drives the motor forward (positive duty).
@@ -38,7 +39,7 @@ pub fn amps(counts: u16, zero: f32, mv_per_a: f32) -> f32 {
 
 /// Motor supply, V, from VMOT_SENSE's ADC counts.
 pub fn vmot_volts(counts: u16) -> f32 {
-    f32::from(counts) * MV_PER_COUNT * VMOT_RATIO / 1000.0
+    f32::from(counts) * VMOT_V_PER_COUNT
 }
 
 /// The ADC counts the current sensor gives for `amps` with zero at `zero` counts (rounded,
@@ -49,7 +50,7 @@ pub fn current_counts(amps: f32, zero: f32, mv_per_a: f32) -> u16 {
 
 /// The ADC counts VMOT_SENSE gives for a motor supply of `volts` (rounded, clipped).
 pub fn vmot_counts(volts: f32) -> u16 {
-    to_counts(volts * 1000.0 / VMOT_RATIO / MV_PER_COUNT)
+    to_counts(volts / VMOT_V_PER_COUNT)
 }
 
 fn to_counts(x: f32) -> u16 {
