@@ -12,7 +12,7 @@ fn the_readme_section_matches_the_code() {
     };
     let start = a + BEGIN.len() + 1;
     let fresh = render();
-    if std::env::var_os("R2P_BLESS").is_some() {
+    if std::env::var_os("R2P_BLESS").is_some_and(|v| v == "1") {
         let new = format!("{}{}{}", &text[..start], fresh, &text[b..]);
         std::fs::write(&path, new).unwrap();
         return;
