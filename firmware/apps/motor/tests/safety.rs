@@ -222,7 +222,7 @@ fn leds_show_calibration_running_bus_and_faults() {
     let mut r = Rig::new();
     let node_up = Status { running: true, synced: true, ..Default::default() };
     r.tamper = Box::new(move |_, s| s.status = node_up);
-    // Start at 100 ms: while calibrating (64 ms) the status LED blinks fast (5 Hz: dark from
+    // Start at 100 ms: while calibrating (64 samples) the status LED blinks fast (5 Hz: dark from
     // 100 to 199 ms) even though the node runs, where the slow blink would be lit; the bus LED
     // follows the sync.
     r.now_us = 100 * MS;
@@ -230,9 +230,10 @@ fn leds_show_calibration_running_bus_and_faults() {
     for _ in 0..900 {
         lit.push(r.step().leds);
     }
-    assert!(lit[..64].iter().all(|l| !l[0] && l[1] && !l[2]), "calibrating: fast blink");
+    // (The 64th sample completes the calibration in its own step.)
+    assert!(lit[..63].iter().all(|l| !l[0] && l[1] && !l[2]), "calibrating: fast blink");
     // Calibrated and running: slow blink, lit 0–499 ms, dark 500–999 ms of each second.
-    assert!(lit[64..400].iter().all(|l| l[0]) && lit[400..900].iter().all(|l| !l[0]));
+    assert!(lit[63..400].iter().all(|l| l[0]) && lit[400..900].iter().all(|l| !l[0]));
     // A latched fault lights the fault LED.
     r.send(SPEED, 1.0);
     r.run_ms(300);
