@@ -6,12 +6,18 @@ measured in the same run (never pass/fail on timing: that is what tests are not 
    binary gives the same counts). Plotted to docs/img/bench-pubsub-cortex-m3.png.
 2. The same round trip on the host, messages per second (varies with the machine).
 3. Footprint of the core images (flash and static RAM) against their budgets.
+4. RTCAN under load (the paper's Fig. 8, extended): the same seeded traffic offered at 10–95 %
+   of 1 Mbit/s to RTCAN (as the firmware runs it, and two what-ifs) and to plain fixed-priority
+   CAN on the virtual bus, in virtual time (deterministic). Tabulated with the issue's goals and
+   plotted to docs/img/rtcan-load-*.png (docs/rtcan.md, "Under load").
 """
 from __future__ import annotations
 
 import json
 import subprocess
 import sys
+
+from pathlib import Path
 
 from . import ROOT, firmware, qemu
 
@@ -63,10 +69,183 @@ def plot(rows: list[dict]) -> None:
     plt.close(fig)
 
 
+# --- 4. RTCAN under load -------------------------------------------------------------------
+
+LOAD_IMG = ROOT / "docs" / "img"
+LOAD_PLOTS = ("srt-miss", "latency", "hrt-jitter")
+# Policy in the JSON → label and line style in tables and plots; "fixed" is the baseline.
+POLICIES = {
+    "rtcan": ("RTCAN (firmware)", "o-"),
+    "rtcan_oneshot": ("RTCAN one-shot (what-if)", "v--"),
+    "rtcan_merged": ("RTCAN merged windows (what-if)", "^--"),
+    "fixed": ("fixed-priority CAN (baseline)", "s-"),
+}
+GOAL_LOAD = 0.90
+GOAL_MISS = 0.001
+
+
+def rtcan_load(args: list[str] | None = None) -> tuple[list[dict], dict]:
+    """Runs the sweep (`r2p-loadbench`); returns the load points and the simulation's speed."""
+    p = subprocess.run(["cargo", "run", "-q", "--release", "--locked", "-p", "r2p-loadbench", "--",
+                        *(args or [])],
+                       cwd=ROOT / "firmware", capture_output=True, text=True, check=True)
+    rows = json_lines(p.stdout)
+    points = [r for r in rows if r["bench"] == "rtcan_load"]
+    sim = next(r for r in rows if r["bench"] == "rtcan_load_sim")
+    return points, sim
+
+
+def by_policy(point: dict) -> dict[str, dict]:
+    return {r["policy"]: r for r in point["reports"]}
+
+
+def _pct(x: float | None, digits: int = 2) -> str:
+    return "—" if x is None else f"{100 * x:.{digits}f}"
+
+
+def _us(x: float | None) -> str:
+    return "—" if x is None else f"{x:,.0f}"
+
+
+def load_tables(points: list[dict]) -> str:
+    """The SRT and HRT tables, RTCAN against fixed priority (ratios: RTCAN / fixed)."""
+    pols = [p for p in POLICIES if p in by_policy(points[0])]
+    short = {"rtcan": "rtcan", "rtcan_oneshot": "1-shot", "rtcan_merged": "merged", "fixed": "fixed"}
+    out = ["SRT: deadline-miss ratio (%), latency release → end of frame (µs, delivered messages)"]
+    head = f"{'load':>5} {'offered':>7} |" + "".join(f"{short[p]:>8}" for p in pols)
+    head += f" | {'rtcan/fixed':>11} | {'p50 rtcan':>9} {'fixed':>6} | {'p95 rtcan':>9} {'fixed':>6}"
+    head += f" | {'p99.9 rtcan':>11} {'fixed':>6}"
+    out.append(head)
+    for pt in points:
+        r = by_policy(pt)
+        rt, fx = r["rtcan"], r["fixed"]
+        a, b = rt["srt_miss_ratio"], fx["srt_miss_ratio"]
+        ratio = f"{a / b:.1f}" if b else ("∞" if a else "0 = 0")
+        line = f"{pt['load']:>5.2f} {100 * pt['offered']:>6.2f}% |"
+        line += "".join(f"{_pct(r[p]['srt_miss_ratio']):>8}" for p in pols)
+        line += f" | {ratio:>11}"
+        for q, w in (("srt_p50_us", 9), ("srt_p95_us", 9), ("srt_p999_us", 11)):
+            line += f" | {_us(rt[q]):>{w}} {_us(fx[q]):>6}"
+        out.append(line)
+    out.append("")
+    out.append("HRT: on-time (within period, %), max start jitter (µs, vs slot start; fixed: vs "
+               "release), in own slot (%); bus utilisation (%); RTCAN reserved share (%)")
+    head = f"{'load':>5} | {'on-time':>7} |" + "".join(f"{'jit ' + short[p]:>12}" for p in pols)
+    head += " |" + "".join(f"{'slot ' + short[p]:>12}" for p in pols if p != "fixed")
+    head += " |" + "".join(f"{'util ' + short[p]:>12}" for p in pols) + f" | {'reserved':>8}"
+    out.append(head)
+    for pt in points:
+        r = by_policy(pt)
+        on_time = min(r[p]["hrt_on_time"] for p in pols)
+        line = f"{pt['load']:>5.2f} | {_pct(on_time, 1):>7} |"
+        line += "".join(f"{r[p]['hrt_jitter_max_us']:>12.0f}" for p in pols)
+        line += " |" + "".join(f"{_pct(r[p]['hrt_in_slot'], 1):>12}" for p in pols if p != "fixed")
+        line += " |" + "".join(f"{_pct(r[p]['utilisation'], 1):>12}" for p in pols)
+        line += f" | {_pct(pt['reserved_share'], 1):>8}"
+        out.append(line)
+    return "\n".join(out)
+
+
+def load_goals(points: list[dict]) -> list[tuple[str, bool, str]]:
+    """The issue's goals for each RTCAN policy: (goal, holds, detail)."""
+    goals = []
+    for p in (p for p in POLICIES if p != "fixed" and p in by_policy(points[0])):
+        name = POLICIES[p][0]
+        hrt = sum(by_policy(pt)[p]["hrt_missed"] for pt in points)
+        goals.append((f"{name}: 0 HRT misses at every load", hrt == 0, f"{hrt} missed"))
+        worse = [pt["load"] for pt in points
+                 if by_policy(pt)[p]["srt_miss_ratio"] > by_policy(pt)["fixed"]["srt_miss_ratio"]]
+        detail = "never above fixed" if not worse else "above fixed at " + ", ".join(
+            f"{100 * x:.0f} %" for x in worse)
+        goals.append((f"{name}: SRT misses not above fixed priority at every load", not worse, detail))
+        at = [pt for pt in points if abs(pt["load"] - GOAL_LOAD) < 1e-9]
+        if at:
+            miss = by_policy(at[0])[p]["srt_miss_ratio"]
+            goals.append((f"{name}: SRT misses ≤ {100 * GOAL_MISS:.1f} % at {100 * GOAL_LOAD:.0f} % load",
+                          miss <= GOAL_MISS, f"{100 * miss:.2f} %"))
+    return goals
+
+
+def plot_load(points: list[dict], outdir: Path = LOAD_IMG) -> list[Path]:
+    """The three figures of docs/rtcan.md; same points, same bytes."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    pols = [p for p in POLICIES if p in by_policy(points[0])]
+    x = [100 * pt["load"] for pt in points]
+    col = lambda p, key: [by_policy(pt)[p][key] for pt in points]  # noqa: E731
+    outdir.mkdir(parents=True, exist_ok=True)
+    paths = [outdir / f"rtcan-load-{name}.png" for name in LOAD_PLOTS]
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=100)
+    for p in pols:
+        ax.plot(x, [100 * v for v in col(p, "srt_miss_ratio")], POLICIES[p][1], ms=4, label=POLICIES[p][0])
+    ax.set_yscale("symlog", linthresh=0.01)
+    ax.axhline(100 * GOAL_MISS, color="red", ls=":", lw=0.8, label="goal at 90 %: 0.1 %")
+    ax.axvline(100 * GOAL_LOAD, color="grey", ls=":", lw=0.8)
+    ax.set_xlabel("offered load (% of 1 Mbit/s, bits on the wire)")
+    ax.set_ylabel("SRT deadline misses (%)")
+    ax.set_title("SRT deadline misses vs offered load (8 nodes, deadlines 2–20 ms)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(paths[0], metadata={"Software": None})
+    plt.close(fig)
+
+    fig, axes = plt.subplots(1, 3, figsize=(10.5, 3.6), dpi=100, sharey=True)
+    for ax, (key, title) in zip(axes, (("srt_p50_us", "median"), ("srt_p95_us", "95th percentile"),
+                                       ("srt_p999_us", "99.9th percentile"))):
+        for p in pols:
+            ax.plot(x, [float("nan") if v is None else v / 1000 for v in col(p, key)], POLICIES[p][1],
+                    ms=3, label=POLICIES[p][0])
+        ax.set_yscale("log")
+        ax.set_title(f"SRT latency, {title}", fontsize=9)
+        ax.set_xlabel("offered load (%)")
+        ax.grid(alpha=0.3, which="both")
+    axes[0].set_ylabel("release → end of last frame (ms)")
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(paths[1], metadata={"Software": None})
+    plt.close(fig)
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9.6, 3.6), dpi=100)
+    for p in pols:
+        ax1.plot(x, col(p, "hrt_jitter_max_us"), POLICIES[p][1], ms=3, label=POLICIES[p][0])
+        if p != "fixed":
+            ax2.plot(x, [100 * v for v in col(p, "hrt_in_slot")], POLICIES[p][1], ms=3,
+                     label=POLICIES[p][0])
+    ax1.set_yscale("symlog", linthresh=1)
+    ax1.set_ylabel("max |start − nominal start| (µs)")
+    ax1.set_title("HRT start jitter (RTCAN: vs slot start)", fontsize=9)
+    ax2.set_ylabel("HRT frames inside their slot (%)")
+    ax2.set_title("HRT frames entirely inside their reserved slot", fontsize=9)
+    for ax in (ax1, ax2):
+        ax.set_xlabel("offered load (%)")
+        ax.grid(alpha=0.3, which="both")
+    ax1.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(paths[2], metadata={"Software": None})
+    plt.close(fig)
+    return paths
+
+
+def report_load(points: list[dict], sim: dict) -> None:
+    print("\n=== RTCAN under load: same traffic, RTCAN vs fixed-priority CAN (virtual bus, "
+          f"{points[0]['seconds']:g} s per point, seed {points[0]['seed']})")
+    print(load_tables(points))
+    print("\ngoals (issue 5):")
+    for goal, ok, detail in load_goals(points):
+        print(f"  [{'holds' if ok else 'FAILS'}] {goal}: {detail}")
+    print(f"simulation: {sim['events']:,} events in {sim['wall_s']:.1f} s = {sim['events_per_s']:,.0f} "
+          f"events/s, {sim['virtual_s']:.0f} s of bus time ({sim['realtime_ratio']:.0f}× real time) "
+          f"over {sim['runs']} runs")
+
+
 def main() -> int:
     try:
         m3 = cortex_m3()
         hs = host()
+        load_points, load_sim = rtcan_load()
     except (RuntimeError, subprocess.CalledProcessError) as e:
         print(f"bench: {e}", file=sys.stderr)
         return 1
@@ -100,6 +279,10 @@ def main() -> int:
 
     plot(m3)
     print(f"\nplot: {PLOT.relative_to(ROOT)}")
+
+    report_load(load_points, load_sim)
+    for path in plot_load(load_points):
+        print(f"plot: {path.relative_to(ROOT)}")
     return 0
 
 

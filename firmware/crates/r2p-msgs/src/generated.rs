@@ -48,6 +48,35 @@ impl crate::R2pMessage for Battery {
 
 crate::impl_wire!(Battery);
 
+/// Command to the power-supply module: switch its 5 V bus output on or off.
+///
+/// 1 bytes on the bus, type hash `0xC2BD8B69`; schema `firmware/msgs/BusPower.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BusPower {
+    /// true = output on (clears a latched over-current or eFuse fault), false = off (`bool`, bytes 0..1)
+    pub on: bool,
+}
+
+impl crate::R2pMessage for BusPower {
+    const NAME: &'static str = "BusPower";
+    const CANONICAL: &'static str = "BusPower:bool on";
+    const SIZE: usize = 1;
+    const TYPE_HASH: u32 = 0xC2BD_8B69;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.on);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self { on: r.get()? })
+    }
+}
+
+crate::impl_wire!(BusPower);
+
 /// Command: clear a module's latched faults (those whose cause is gone; a cause still present latches again at once).
 ///
 /// 1 bytes on the bus, type hash `0x9688B902`; schema `firmware/msgs/FaultClear.msg`.
@@ -144,6 +173,58 @@ impl crate::R2pMessage for Obstacle {
 
 crate::impl_wire!(Obstacle);
 
+/// Pose and velocity of a robot base by dead reckoning from its wheels (forward kinematics).
+///
+/// 24 bytes on the bus, type hash `0xEEDDD804`; schema `firmware/msgs/Odometry.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Odometry {
+    /// m, in the odometry frame (where the base started) (`float32`, bytes 0..4)
+    pub x: f32,
+    /// m (`float32`, bytes 4..8)
+    pub y: f32,
+    /// rad, counter-clockwise from the x axis (`float32`, bytes 8..12)
+    pub theta: f32,
+    /// m/s, base frame, forward (`float32`, bytes 12..16)
+    pub vx: f32,
+    /// m/s, base frame, left (`float32`, bytes 16..20)
+    pub vy: f32,
+    /// rad/s, counter-clockwise (`float32`, bytes 20..24)
+    pub wz: f32,
+}
+
+impl crate::R2pMessage for Odometry {
+    const NAME: &'static str = "Odometry";
+    const CANONICAL: &'static str =
+        "Odometry:float32 x;float32 y;float32 theta;float32 vx;float32 vy;float32 wz";
+    const SIZE: usize = 24;
+    const TYPE_HASH: u32 = 0xEEDD_D804;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.x);
+        w.put(&self.y);
+        w.put(&self.theta);
+        w.put(&self.vx);
+        w.put(&self.vy);
+        w.put(&self.wz);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self {
+            x: r.get()?,
+            y: r.get()?,
+            theta: r.get()?,
+            vx: r.get()?,
+            vy: r.get()?,
+            wz: r.get()?,
+        })
+    }
+}
+
+crate::impl_wire!(Odometry);
+
 /// Four range readings, published by the proximity module.
 ///
 /// 20 bytes on the bus, type hash `0xA7C115E9`; schema `firmware/msgs/Proximity.msg`.
@@ -175,6 +256,89 @@ impl crate::R2pMessage for Proximity {
 }
 
 crate::impl_wire!(Proximity);
+
+/// An event of the power-supply module (SRT, with a deadline): a protection tripped or cleared, or the 5 V bus output was switched.
+///
+/// 10 bytes on the bus, type hash `0x75857AC8`; schema `firmware/msgs/PsuEvent.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PsuEvent {
+    /// 1 = over-current, 2 = under-voltage, 3 = voltage recovered, 4 = output off, 5 = output on (`uint8`, bytes 0..1)
+    pub kind: u8,
+    /// why the output was switched (kinds 4, 5): 0 = command, 1 = over-current, 2 = eFuse fault; 0 otherwise (`uint8`, bytes 1..2)
+    pub cause: u8,
+    /// V at the battery terminals, filtered (what under-voltage is judged on) (`float32`, bytes 2..6)
+    pub voltage: f32,
+    /// A drawn from the battery at that step, unfiltered (what over-current is judged on) (`float32`, bytes 6..10)
+    pub current: f32,
+}
+
+impl crate::R2pMessage for PsuEvent {
+    const NAME: &'static str = "PsuEvent";
+    const CANONICAL: &'static str =
+        "PsuEvent:uint8 kind;uint8 cause;float32 voltage;float32 current";
+    const SIZE: usize = 10;
+    const TYPE_HASH: u32 = 0x7585_7AC8;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.kind);
+        w.put(&self.cause);
+        w.put(&self.voltage);
+        w.put(&self.current);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self { kind: r.get()?, cause: r.get()?, voltage: r.get()?, current: r.get()? })
+    }
+}
+
+crate::impl_wire!(PsuEvent);
+
+/// State of the power-supply module's 5 V bus output, published with `battery`: what a module that joins late cannot learn from the (one-off) events.
+///
+/// 7 bytes on the bus, type hash `0xDBBD3F72`; schema `firmware/msgs/PsuState.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PsuState {
+    /// the bus output is switched on (`bool`, bytes 0..1)
+    pub output_on: bool,
+    /// why it is held off until an on command: 0 = not latched, 1 = over-current, 2 = eFuse fault (`uint8`, bytes 1..2)
+    pub latched: u8,
+    /// the battery is below the under-voltage threshold (`bool`, bytes 2..3)
+    pub under_voltage: bool,
+    /// V on the bus output (filtered) (`float32`, bytes 3..7)
+    pub bus_voltage: f32,
+}
+
+impl crate::R2pMessage for PsuState {
+    const NAME: &'static str = "PsuState";
+    const CANONICAL: &'static str =
+        "PsuState:bool output_on;uint8 latched;bool under_voltage;float32 bus_voltage";
+    const SIZE: usize = 7;
+    const TYPE_HASH: u32 = 0xDBBD_3F72;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.output_on);
+        w.put(&self.latched);
+        w.put(&self.under_voltage);
+        w.put(&self.bus_voltage);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self {
+            output_on: r.get()?,
+            latched: r.get()?,
+            under_voltage: r.get()?,
+            bus_voltage: r.get()?,
+        })
+    }
+}
+
+crate::impl_wire!(PsuState);
 
 /// Planar velocity of a robot base.
 ///
@@ -285,10 +449,14 @@ crate::impl_wire!(WheelState);
 /// Every generated type as (name, type hash, size), in name order.
 pub const ALL: &[(&str, u32, usize)] = &[
     ("Battery", 0x471D_E2CA, 16),
+    ("BusPower", 0xC2BD_8B69, 1),
     ("FaultClear", 0x9688_B902, 1),
     ("MotorFault", 0x2D53_828B, 6),
     ("Obstacle", 0x24BE_C850, 5),
+    ("Odometry", 0xEEDD_D804, 24),
     ("Proximity", 0xA7C1_15E9, 20),
+    ("PsuEvent", 0x7585_7AC8, 10),
+    ("PsuState", 0xDBBD_3F72, 7),
     ("Twist2D", 0x10F0_3E9D, 12),
     ("WheelSetpoint", 0x06AD_21EE, 5),
     ("WheelState", 0xD904_1FAF, 13),
@@ -299,10 +467,14 @@ pub const ALL: &[(&str, u32, usize)] = &[
 macro_rules! for_each_message {
     ($f:ident $(, $arg:expr)*) => {
         $f::<crate::Battery>($($arg),*);
+        $f::<crate::BusPower>($($arg),*);
         $f::<crate::FaultClear>($($arg),*);
         $f::<crate::MotorFault>($($arg),*);
         $f::<crate::Obstacle>($($arg),*);
+        $f::<crate::Odometry>($($arg),*);
         $f::<crate::Proximity>($($arg),*);
+        $f::<crate::PsuEvent>($($arg),*);
+        $f::<crate::PsuState>($($arg),*);
         $f::<crate::Twist2D>($($arg),*);
         $f::<crate::WheelSetpoint>($($arg),*);
         $f::<crate::WheelState>($($arg),*);

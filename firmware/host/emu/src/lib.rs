@@ -19,6 +19,7 @@
 
 pub mod bridge;
 pub mod demo;
+pub mod serve;
 
 use std::io::{self, Write};
 use std::time::Duration;

@@ -1,20 +1,11 @@
 //! `r2p-emu`: runs the built-in demo robot on the emulated bus, in virtual time (a deterministic
 //! candump log) or in real time with a socketcand server so that CAN tools join it. See `--help`.
 
-use std::fs::File;
-use std::io::BufWriter;
 use std::net::SocketAddr;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-use std::time::{Duration, Instant};
 
-use r2p_canlink::hub::DEFAULT_QUEUE;
 use r2p_canlink::server::DEFAULT_ADDR;
-use r2p_canlink::service::{listen_error, spawn_logger, StopConditions};
-use r2p_canlink::{BroadcastHub, Config, Server};
-use r2p_emu::bridge::Bridge;
-use r2p_emu::demo;
+use r2p_emu::{demo, serve};
 
 const HELP: &str = "\
 r2p-emu: runs emulated R2P boards on a virtual CAN bus
@@ -54,8 +45,6 @@ EXAMPLE (python-can):
 ";
 
 /// Start of the virtual-time log's timestamps.
-const EPOCH_S: u64 = 1_700_000_000;
-
 struct Options {
     realtime: bool,
     addr: SocketAddr,
@@ -127,16 +116,10 @@ fn virtual_time(opts: &Options) -> Result<(), String> {
     let (mut sim, received) = demo::build(opts.seed).ok_or("the demo robot was built already")?;
     let seconds = opts.seconds.expect("checked");
     let path = opts.log.as_deref().expect("checked");
-    let file = File::create(path).map_err(|e| format!("cannot create log {path}: {e}"))?;
-    let wall = Instant::now();
-    sim.run_until((seconds * 1e9) as u64);
-    let out = sim
-        .write_candump(BufWriter::new(file), &opts.channel, Duration::from_secs(EPOCH_S))
-        .map_err(|e| format!("writing the log: {e}"))?;
-    drop(out);
+    let took = serve::run_virtual(&mut sim, seconds, path, &opts.channel)?;
     eprintln!(
         "r2p-emu: {seconds} s of virtual time in {:.3} s: {} frames on the bus, {} setpoints and {} scans received by control, log written to {path}",
-        wall.elapsed().as_secs_f64(),
+        took.as_secs_f64(),
         sim.bus().frames().count(),
         received.setpoints.get(),
         received.scans.get()
@@ -145,85 +128,20 @@ fn virtual_time(opts: &Options) -> Result<(), String> {
 }
 
 fn realtime(opts: &Options) -> Result<(), String> {
-    let stop_when = StopConditions::install(opts.watch_stdin);
     let (mut sim, received) = demo::build(opts.seed).ok_or("the demo robot was built already")?;
-    let hub = Arc::new(BroadcastHub::new());
-    let stop = Arc::new(AtomicBool::new(false));
-
-    let logger = match &opts.log {
-        Some(path) => {
-            let file = File::options()
-                .create(true)
-                .append(true)
-                .open(path)
-                .map_err(|e| format!("cannot open log {path}: {e}"))?;
-            Some(spawn_logger(
-                hub.clone(),
-                file,
-                opts.channel.clone(),
-                stop.clone(),
-                16 * DEFAULT_QUEUE,
-            ))
-        }
-        None => None,
+    let serve = serve::Serve {
+        addr: opts.addr,
+        channel: opts.channel.clone(),
+        log: opts.log.clone(),
+        seconds: opts.seconds,
+        watch_stdin: opts.watch_stdin,
     };
-    let config = Config { addr: opts.addr, channel: opts.channel.clone(), queue: DEFAULT_QUEUE };
-    let server = match Server::start(config, hub.clone()) {
-        Ok(s) => s,
-        Err(e) => {
-            stop.store(true, Ordering::SeqCst);
-            if let Some(l) = logger {
-                let _ = l.join();
-            }
-            return Err(listen_error(opts.addr, &e, "another r2p-emu, r2p-canlink or socketcand"));
-        }
-    };
+    let summary = serve::run_realtime(&mut sim, demo::SPARE_PORT, "demo robot", &serve)?;
     eprintln!(
-        "r2p-emu: demo robot in real time, socketcand on {} channel {}",
-        server.local_addr(),
-        opts.channel
-    );
-
-    let mut bridge = Bridge::new(&sim, demo::SPARE_PORT, hub.clone(), DEFAULT_QUEUE);
-    let limit = opts.seconds.map(Duration::from_secs_f64);
-    let mut why = "--seconds";
-    bridge.run_realtime(&mut sim, Instant::now(), limit, || match stop_when.reason() {
-        Some(reason) => {
-            why = reason;
-            true
-        }
-        None => false,
-    });
-
-    stop.store(true, Ordering::SeqCst);
-    let clients = server.stats().clients.load(Ordering::Relaxed);
-    server.shutdown();
-    let s = bridge.stats();
-    // The frames the bridge port actually sent on the virtual bus (one pass over the log).
-    let on_bus = sim.bus().frames().filter(|f| f.1 == bridge.port()).count();
-    let mut summary = format!(
-        "r2p-emu: stopped ({why}) at {:.3} s of virtual time: {} frames to tools, {} injected from tools \
-         ({on_bus} sent on the virtual bus), {} standard-ID frames dropped, {} not queued, \
-         {} tap overflows, {clients} clients, max lag {} us, {} setpoints and {} scans received by control",
-        sim.now_ns() as f64 / 1e9,
-        s.to_hub,
-        s.injected,
-        s.standard_dropped,
-        s.not_queued,
-        bridge.overflows(),
-        s.max_lag_us,
+        "{summary}, {} setpoints and {} scans received by control",
         received.setpoints.get(),
         received.scans.get()
     );
-    if let Some(l) = logger {
-        match l.join() {
-            Ok(Ok(_)) => {}
-            Ok(Err(e)) => return Err(format!("writing the log: {e}")),
-            Err(_) => return Err("the log writer panicked".into()),
-        }
-        summary.push_str(", log written");
-    }
-    eprintln!("{summary}");
     Ok(())
 }
 

@@ -90,7 +90,14 @@ macro_rules! rig {
         sim.add_board(m, 0, None);
         sim.add_board(a, 1, Some(Box::new(app_a)));
         sim.add_board(b, 2, Some(Box::new(app_b)));
-        (sim, seen, &A_SP)
+        // B as it comes out of reset: a new node with the same imports.
+        let reboot_b: Box<dyn Fn() -> EmuNode> = Box::new(|| {
+            let mut b = EmuNode::new(tdma(3, "control", Some(1)), &NoParams).unwrap();
+            b.import(&B_HI).unwrap();
+            b.import(&B_SI).unwrap();
+            b
+        });
+        (sim, seen, &A_SP, reboot_b)
     }};
 }
 
@@ -160,7 +167,7 @@ fn granted(sim: &Sim<'static, EmuNode>) -> rtcan::Phase {
 
 #[test]
 fn hrt_arrives_every_20_ms_in_its_slot_and_srt_meets_its_deadline() {
-    let (mut sim, seen, srt_pub) = rig!(1);
+    let (mut sim, seen, srt_pub, _) = rig!(1);
     let wall = Instant::now();
     sim.run_until(2_200 * MS);
     let elapsed = wall.elapsed();
@@ -201,7 +208,7 @@ fn hrt_arrives_every_20_ms_in_its_slot_and_srt_meets_its_deadline() {
 
 #[test]
 fn same_seed_same_trace_other_fault_seed_differs() {
-    let run = |(mut sim, _seen, _p): (Sim<'static, EmuNode>, Rc<RefCell<Seen>>, _)| {
+    let run = |(mut sim, _seen, _p, _r): (Sim<'static, EmuNode>, Rc<RefCell<Seen>>, _, _)| {
         // A probabilistic fault: the generator (the seed) decides which frames are corrupted.
         sim.bus().inject(FaultRule::new(FaultAction::Corrupt).probability_ppm(20_000));
         sim.run_until(500 * MS);
@@ -216,7 +223,7 @@ fn same_seed_same_trace_other_fault_seed_differs() {
 
 #[test]
 fn the_standby_takes_over_within_the_bound_and_hrt_resumes() {
-    let (mut sim, seen, _) = rig!(2);
+    let (mut sim, seen, _, _) = rig!(2);
     sim.run_until(500 * MS);
     let phase = granted(&sim);
     assert_eq!(sim.node(0).role(), Role::Master);
@@ -256,7 +263,7 @@ fn the_standby_takes_over_within_the_bound_and_hrt_resumes() {
 
 #[test]
 fn a_babbler_does_not_move_hrt_and_dropped_frames_are_counted() {
-    let (mut sim, seen, srt_pub) = rig!(3);
+    let (mut sim, seen, srt_pub, _) = rig!(3);
     sim.run_until(400 * MS);
     let phase = granted(&sim);
 
@@ -299,7 +306,7 @@ fn a_babbler_does_not_move_hrt_and_dropped_frames_are_counted() {
 
 #[test]
 fn the_trace_round_trips_through_a_candump_log() {
-    let (mut sim, _seen, _) = rig!(4);
+    let (mut sim, _seen, _, _) = rig!(4);
     sim.run_until(300 * MS);
     let epoch = Duration::from_secs(1_700_000_000);
     let log = sim.write_candump(Vec::new(), "vcan0", epoch).unwrap();
@@ -313,4 +320,33 @@ fn the_trace_round_trips_through_a_candump_log() {
         assert!(r.frame.is_extended());
         assert_eq!(r.time, epoch + Duration::from_micros(t / 1_000));
     }
+}
+
+#[test]
+fn a_rebooted_board_rejoins_and_resubscribes() {
+    let (mut sim, seen, _, reboot_b) = rig!(4);
+    sim.run_until(600 * MS);
+    let before = seen.borrow().hrt.len();
+    assert!(before >= 15, "B receives before the reboot: {before}");
+
+    // B crashes (powered off for 300 ms), then boots from reset: new node, same firmware.
+    sim.power(2, false);
+    sim.run_for(300 * MS);
+    let gap_end = seen.borrow().hrt.len();
+    assert_eq!(gap_end, before, "nothing arrives while B is off");
+    sim.reboot(2, reboot_b(), None);
+    let t_boot = sim.now_ns();
+    let resumed = sim.run_while(MS, t_boot + 1_000 * MS, |s| {
+        matches!(s.node(2).import_state(0), Some(ImportState::Subscribed { .. }))
+            && matches!(s.node(2).import_state(1), Some(ImportState::Subscribed { .. }))
+    });
+    assert!(resumed, "B resubscribed to both topics within a second of booting");
+    println!("resubscribed {} ms after boot", (sim.now_ns() - t_boot) / MS);
+    // Both streams reach it again (no application runs after the reboot: count what the
+    // node publishes locally): in 200 ms, 10 setpoints (HRT, 20 ms) and 20 scans (SRT, 10 ms).
+    let published = sim.node(2).stats().published;
+    sim.run_for(200 * MS);
+    let got = sim.node(2).stats().published - published;
+    assert!((29..=31).contains(&got), "{got} messages in 200 ms");
+    assert!(sim.node(2).peer_count() >= 2, "B sees the other boards again");
 }

@@ -1,0 +1,264 @@
+//! The base controller's step: IK, obstacle avoidance, odometry.
+
+use libm::{cosf, sinf};
+use r2p_management::message::Value;
+use r2p_msgs::{Odometry, Twist2D, WheelSetpoint};
+use r2p_node::{Export, Import, Node, NodeError, ParamStore};
+
+use crate::kinematics::Omni3;
+use crate::params as p;
+
+/// Speed mode of [`WheelSetpoint`].
+const MODE_SPEED: u8 = 1;
+
+/// The application's view of its topics (see `Endpoints`).
+pub struct Ends<'a> {
+    cmd: &'a r2p_middleware::Subscriber<'a, Twist2D, 2>,
+    obstacle: &'a r2p_middleware::Subscriber<'a, r2p_msgs::Obstacle, 4>,
+    states: [&'a r2p_middleware::Subscriber<'a, r2p_msgs::WheelState, 2>; 3],
+    setpoints: [&'a r2p_middleware::Publisher<'a, WheelSetpoint>; 3],
+    odom: &'a r2p_middleware::Publisher<'a, Odometry>,
+    exports: [&'a dyn Export; 4],
+    imports: [&'a dyn Import; 5],
+}
+
+/// The base controller.
+pub struct App<'a> {
+    ends: Ends<'a>,
+    params: &'a dyn ParamStore,
+    cmd: Twist2D,
+    cmd_at_us: Option<u64>,
+    /// Unit vector towards the last obstacle and until when it blocks.
+    blocked: Option<(f32, f32, u64)>,
+    wheels: [f32; 3],
+    pose: (f32, f32, f32),
+    velocity: (f32, f32, f32),
+    next_ik_us: u64,
+    next_odom_us: u64,
+    last_odom_us: Option<u64>,
+    /// Setpoints the pool had no room for (the bus is behind).
+    pub dropped: u32,
+}
+
+fn f32_of(params: &dyn ParamStore, i: u16) -> f32 {
+    match params.get(i) {
+        Ok(Value::F32(v)) => v,
+        _ => crate::params::DEFAULTS[usize::from(i)].value_f32(),
+    }
+}
+
+fn u32_of(params: &dyn ParamStore, i: u16) -> u32 {
+    match params.get(i) {
+        Ok(Value::U32(v)) => v,
+        _ => match crate::params::DEFAULTS[usize::from(i)].value {
+            Value::U32(v) => v,
+            _ => 1,
+        },
+    }
+}
+
+trait ParamF32 {
+    fn value_f32(&self) -> f32;
+}
+
+impl ParamF32 for r2p_node::Param {
+    fn value_f32(&self) -> f32 {
+        match self.value {
+            Value::F32(v) => v,
+            _ => 0.0,
+        }
+    }
+}
+
+impl<'a> App<'a> {
+    /// The application over `ends` with parameters from `params` (read every step, so a
+    /// PARAM_SET applies at once).
+    #[cfg(any(test, feature = "std"))]
+    pub fn new(ends: crate::Endpoints<'a>, params: &'a dyn ParamStore) -> Self {
+        let ends = Ends {
+            cmd: ends.cmd,
+            obstacle: ends.obstacle,
+            states: ends.states,
+            setpoints: ends.setpoints,
+            odom: ends.odom,
+            exports: ends.exports,
+            imports: ends.imports,
+        };
+        Self {
+            ends,
+            params,
+            cmd: Twist2D::default(),
+            cmd_at_us: None,
+            blocked: None,
+            wheels: [0.0; 3],
+            pose: (0.0, 0.0, 0.0),
+            velocity: (0.0, 0.0, 0.0),
+            next_ik_us: 0,
+            next_odom_us: 0,
+            last_odom_us: None,
+            dropped: 0,
+        }
+    }
+
+    /// Exports the setpoints and odometry, imports the command, obstacles and wheel states.
+    pub fn register<
+        const E: usize,
+        const I: usize,
+        const T: usize,
+        const R: usize,
+        const B: usize,
+    >(
+        &self,
+        node: &mut Node<'a, E, I, T, R, B>,
+    ) -> Result<(), NodeError> {
+        for e in self.ends.exports {
+            node.export(e)?;
+        }
+        for i in self.ends.imports {
+            node.import(i)?;
+        }
+        Ok(())
+    }
+
+    fn geometry(&self) -> Omni3 {
+        Omni3 {
+            wheel_radius: f32_of(self.params, p::WHEEL_RADIUS),
+            base_radius: f32_of(self.params, p::BASE_RADIUS),
+            first_wheel: f32_of(self.params, p::FIRST_WHEEL_DEG).to_radians(),
+        }
+    }
+
+    /// The command after obstacle avoidance (what the wheels are asked for).
+    pub fn command(&self, now_us: u64) -> Twist2D {
+        let timeout = u64::from(u32_of(self.params, p::CMD_TIMEOUT_MS)) * 1000;
+        let mut c = match self.cmd_at_us {
+            Some(t) if now_us.saturating_sub(t) <= timeout => self.cmd,
+            _ => return Twist2D::default(),
+        };
+        if let Some((ux, uy, until)) = self.blocked {
+            let towards = c.vx * ux + c.vy * uy;
+            if now_us < until && towards > 0.0 {
+                // Listing 2's avoidCollision: keep the motion along the obstacle, drop the
+                // part heading into it.
+                c.vx -= towards * ux;
+                c.vy -= towards * uy;
+            }
+        }
+        c
+    }
+
+    /// Pose (x, y, θ) by odometry.
+    pub fn pose(&self) -> (f32, f32, f32) {
+        self.pose
+    }
+
+    /// One step at `now_us` (every millisecond).
+    pub fn step(&mut self, now_us: u64) {
+        while let Some(c) = self.ends.cmd.try_recv() {
+            self.cmd = *c;
+            self.cmd_at_us = Some(now_us);
+        }
+        while let Some(o) = self.ends.obstacle.try_recv() {
+            if o.distance.is_finite() && o.distance < f32_of(self.params, p::STOP_DISTANCE) {
+                let ch = u16::from(o.channel.min(3));
+                let a = f32_of(self.params, p::CHANNEL0_DEG + ch).to_radians();
+                let hold = u64::from(u32_of(self.params, p::OBSTACLE_HOLD_MS)) * 1000;
+                self.blocked = Some((cosf(a), sinf(a), now_us + hold));
+            }
+        }
+        for (i, s) in self.ends.states.iter().enumerate() {
+            while let Some(m) = s.try_recv() {
+                self.wheels[i] = m.speed;
+            }
+        }
+        if now_us >= self.next_ik_us {
+            let period = 1_000_000 / u64::from(u32_of(self.params, p::IK_RATE_HZ).max(1));
+            self.next_ik_us = now_us - now_us % period + period;
+            let c = self.command(now_us);
+            let w = self.geometry().inverse(c.vx, c.vy, c.wz);
+            for (publisher, value) in self.ends.setpoints.iter().zip(w) {
+                if publisher
+                    .publish_with(|m| *m = WheelSetpoint { mode: MODE_SPEED, value })
+                    .is_none()
+                {
+                    self.dropped += 1;
+                }
+            }
+        }
+        self.integrate(now_us);
+        if now_us >= self.next_odom_us {
+            let period = 1_000_000 / u64::from(u32_of(self.params, p::ODOM_RATE_HZ).max(1));
+            self.next_odom_us = now_us - now_us % period + period;
+            let (x, y, theta) = self.pose;
+            let (vx, vy, wz) = self.velocity;
+            let _ = self.ends.odom.publish_with(|m| *m = Odometry { x, y, theta, vx, vy, wz });
+        }
+    }
+
+    fn integrate(&mut self, now_us: u64) {
+        let dt = match self.last_odom_us.replace(now_us) {
+            Some(t) => (now_us - t) as f32 * 1e-6,
+            None => return,
+        };
+        let (vx, vy, wz) = self.geometry().forward(self.wheels);
+        self.velocity = (vx, vy, wz);
+        let (x, y, th) = self.pose;
+        // Midpoint heading: exact for constant velocity over the step to second order.
+        let mid = th + 0.5 * wz * dt;
+        let (s, c) = (sinf(mid), cosf(mid));
+        self.pose = (x + (c * vx - s * vy) * dt, y + (s * vx + c * vy) * dt, th + wz * dt);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::endpoints::{Endpoints, Names};
+    use r2p_node::RamParams;
+    use std::boxed::Box;
+
+    fn rig() -> (App<'static>, &'static RamParams<12>) {
+        let params: &'static RamParams<12> = Box::leak(Box::new(RamParams::new(p::DEFAULTS)));
+        let ends = Endpoints::leak(Names::TRISKAR2, 10_000);
+        (App::new(ends, params), params)
+    }
+
+    #[test]
+    fn a_command_holds_until_it_times_out() {
+        let (mut app, _) = rig();
+        app.cmd = Twist2D { vx: 0.5, vy: 0.0, wz: 0.0 };
+        app.cmd_at_us = Some(0);
+        let c = app.command(100_000);
+        assert_eq!((c.vx, c.vy), (0.5, 0.0));
+        assert_eq!(app.command(600_001).vx, 0.0, "older than cmd_timeout_ms: stop");
+    }
+
+    #[test]
+    fn an_obstacle_ahead_removes_only_the_motion_towards_it() {
+        let (mut app, _) = rig();
+        app.cmd = Twist2D { vx: 0.4, vy: 0.3, wz: 0.2 };
+        app.cmd_at_us = Some(0);
+        app.blocked = Some((1.0, 0.0, 300_000)); // channel 0 faces +x
+        let c = app.command(1_000);
+        assert!(c.vx.abs() < 1e-6 && (c.vy - 0.3).abs() < 1e-6 && (c.wz - 0.2).abs() < 1e-6);
+        app.cmd = Twist2D { vx: -0.4, vy: 0.0, wz: 0.0 };
+        assert_eq!(app.command(1_000).vx, -0.4, "backing away is allowed");
+        app.cmd = Twist2D { vx: 0.4, vy: 0.0, wz: 0.0 };
+        assert_eq!(app.command(300_001).vx, 0.4, "the hold expired");
+    }
+
+    #[test]
+    fn odometry_integrates_a_circle() {
+        let (mut app, _) = rig();
+        let g = app.geometry();
+        // Drive a circle: 0.5 m/s forward, 1 rad/s: radius 0.5 m, back home after 2π s.
+        app.wheels = g.inverse(0.5, 0.0, 1.0);
+        let steps = (2.0 * core::f64::consts::PI * 1000.0).round() as u64;
+        for t in 0..=steps {
+            app.integrate(t * 1000);
+        }
+        let (x, y, th) = app.pose();
+        assert!(x.abs() < 0.01 && y.abs() < 0.01, "back at the start: {x} {y}");
+        assert!((th - 2.0 * core::f32::consts::PI).abs() < 0.01, "{th}");
+    }
+}

@@ -1,0 +1,46 @@
+//! The base controller's parameters (index = position in [`DEFAULTS`]).
+
+use r2p_node::Param;
+
+/// Wheel radius, m.
+pub const WHEEL_RADIUS: u16 = 0;
+/// Centre-to-wheel distance, m.
+pub const BASE_RADIUS: u16 = 1;
+/// Angle of wheel 0 from the x axis, degrees.
+pub const FIRST_WHEEL_DEG: u16 = 2;
+/// Inverse-kinematics (setpoint) rate, Hz.
+pub const IK_RATE_HZ: u16 = 3;
+/// A `cmd_vel` older than this stops the base, ms.
+pub const CMD_TIMEOUT_MS: u16 = 4;
+/// Obstacles nearer than this block motion towards them, m.
+pub const STOP_DISTANCE: u16 = 5;
+/// How long an obstacle event keeps blocking, ms.
+pub const OBSTACLE_HOLD_MS: u16 = 6;
+/// Direction of proximity channel 0 from the x axis, degrees (channels 1–3 follow at `+90°`
+/// steps unless set).
+pub const CHANNEL0_DEG: u16 = 7;
+/// Direction of proximity channel 1, degrees.
+pub const CHANNEL1_DEG: u16 = 8;
+/// Direction of proximity channel 2, degrees.
+pub const CHANNEL2_DEG: u16 = 9;
+/// Direction of proximity channel 3, degrees.
+pub const CHANNEL3_DEG: u16 = 10;
+/// Odometry publication rate, Hz.
+pub const ODOM_RATE_HZ: u16 = 11;
+
+/// Defaults and ranges. Geometry defaults are the Triskar2's (60 cm base; wheels at 30°,
+/// 150°, 270°).
+pub const DEFAULTS: [Param; 12] = [
+    Param::f32("wheel_radius_m", 0.06, 0.01, 0.5),
+    Param::f32("base_radius_m", 0.25, 0.02, 2.0),
+    Param::f32("first_wheel_deg", 30.0, -360.0, 360.0),
+    Param::u32("ik_rate_hz", 100, 10, 500),
+    Param::u32("cmd_timeout_ms", 500, 20, 10_000),
+    Param::f32("stop_distance_m", 0.35, 0.05, 2.0),
+    Param::u32("obstacle_hold_ms", 300, 10, 5_000),
+    Param::f32("channel0_deg", 0.0, -360.0, 360.0),
+    Param::f32("channel1_deg", 90.0, -360.0, 360.0),
+    Param::f32("channel2_deg", 180.0, -360.0, 360.0),
+    Param::f32("channel3_deg", 270.0, -360.0, 360.0),
+    Param::u32("odom_rate_hz", 20, 1, 200),
+];

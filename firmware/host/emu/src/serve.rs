@@ -1,0 +1,140 @@
+//! Running a sim for users: in virtual time into a candump log, or in real time behind a
+//! socketcand server (shared by `r2p-emu demo` and `r2p sim`).
+
+use std::fs::File;
+use std::io::BufWriter;
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use r2p_canlink::hub::DEFAULT_QUEUE;
+use r2p_canlink::service::{listen_error, spawn_logger, StopConditions};
+use r2p_canlink::{BroadcastHub, Config, Server};
+
+use crate::bridge::Bridge;
+use crate::{Runtime, Sim};
+
+/// Candump logs of virtual-time runs are stamped from this Unix time.
+pub const EPOCH_S: u64 = 1_700_000_000;
+
+/// How to serve a sim in real time.
+#[derive(Clone, Debug)]
+pub struct Serve {
+    /// socketcand listening address.
+    pub addr: SocketAddr,
+    /// Bus name clients open and logs name.
+    pub channel: String,
+    /// Append every frame the hub carries to this candump log.
+    pub log: Option<String>,
+    /// Stop after this many seconds.
+    pub seconds: Option<f64>,
+    /// Stop when standard input closes.
+    pub watch_stdin: bool,
+}
+
+/// Runs `seconds` of virtual time as fast as possible and writes the bus's frames to `path`
+/// as a candump log on `channel`. Returns the wall time taken.
+pub fn run_virtual<N: Runtime>(
+    sim: &mut Sim<'_, N>,
+    seconds: f64,
+    path: &str,
+    channel: &str,
+) -> Result<Duration, String> {
+    let file = File::create(path).map_err(|e| format!("cannot create log {path}: {e}"))?;
+    let wall = Instant::now();
+    sim.run_until((seconds * 1e9) as u64);
+    let took = wall.elapsed();
+    let out = sim
+        .write_candump(BufWriter::new(file), channel, Duration::from_secs(EPOCH_S))
+        .map_err(|e| format!("writing the log: {e}"))?;
+    drop(out);
+    Ok(took)
+}
+
+/// Runs `sim` against the wall clock with a socketcand server on `opts.addr`; tools' frames
+/// enter the bus through `spare_port`. `what` names the robot in messages. Returns the summary
+/// line (why it stopped, counters) once it stops.
+pub fn run_realtime<N: Runtime>(
+    sim: &mut Sim<'_, N>,
+    spare_port: usize,
+    what: &str,
+    opts: &Serve,
+) -> Result<String, String> {
+    let stop_when = StopConditions::install(opts.watch_stdin);
+    let hub = Arc::new(BroadcastHub::new());
+    let stop = Arc::new(AtomicBool::new(false));
+
+    let logger = match &opts.log {
+        Some(path) => {
+            let file = File::options()
+                .create(true)
+                .append(true)
+                .open(path)
+                .map_err(|e| format!("cannot open log {path}: {e}"))?;
+            Some(spawn_logger(
+                hub.clone(),
+                file,
+                opts.channel.clone(),
+                stop.clone(),
+                16 * DEFAULT_QUEUE,
+            ))
+        }
+        None => None,
+    };
+    let config = Config { addr: opts.addr, channel: opts.channel.clone(), queue: DEFAULT_QUEUE };
+    let server = match Server::start(config, hub.clone()) {
+        Ok(s) => s,
+        Err(e) => {
+            stop.store(true, Ordering::SeqCst);
+            if let Some(l) = logger {
+                let _ = l.join();
+            }
+            return Err(listen_error(opts.addr, &e, "another r2p-emu, r2p-canlink or socketcand"));
+        }
+    };
+    eprintln!(
+        "r2p-emu: {what} in real time, socketcand on {} channel {}",
+        server.local_addr(),
+        opts.channel
+    );
+
+    let mut bridge = Bridge::new(sim, spare_port, hub.clone(), DEFAULT_QUEUE);
+    let limit = opts.seconds.map(Duration::from_secs_f64);
+    let mut why = "--seconds";
+    bridge.run_realtime(sim, Instant::now(), limit, || match stop_when.reason() {
+        Some(reason) => {
+            why = reason;
+            true
+        }
+        None => false,
+    });
+
+    stop.store(true, Ordering::SeqCst);
+    let clients = server.stats().clients.load(Ordering::Relaxed);
+    server.shutdown();
+    let s = bridge.stats();
+    // The frames the bridge port actually sent on the virtual bus (one pass over the log).
+    let on_bus = sim.bus().frames().filter(|f| f.1 == bridge.port()).count();
+    let mut summary = format!(
+        "r2p-emu: stopped ({why}) at {:.3} s of virtual time: {} frames to tools, {} injected from tools \
+         ({on_bus} sent on the virtual bus), {} standard-ID frames dropped, {} not queued, \
+         {} tap overflows, {clients} clients, max lag {} us",
+        sim.now_ns() as f64 / 1e9,
+        s.to_hub,
+        s.injected,
+        s.standard_dropped,
+        s.not_queued,
+        bridge.overflows(),
+        s.max_lag_us,
+    );
+    if let Some(l) = logger {
+        match l.join() {
+            Ok(Ok(_)) => {}
+            Ok(Err(e)) => return Err(format!("writing the log: {e}")),
+            Err(_) => return Err("the log writer panicked".into()),
+        }
+        summary.push_str(", log written");
+    }
+    Ok(summary)
+}

@@ -1,0 +1,132 @@
+//! Runs one protocol over a load point's traffic on a fresh virtual bus, in virtual time.
+
+use r2p_emu::SimPort;
+use r2p_vbus::{Bus, Config, Event, EventKind};
+
+use crate::fixed_node::FixedNode;
+use crate::record::{Counters, Sent};
+use crate::rtcan_node::{RtcanNode, Transmit};
+use crate::setup::Setup;
+use crate::traffic::Traffic;
+
+/// How the nodes get frames onto the bus.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Policy {
+    /// RTCAN as the node runtime runs it (controllers retransmit automatically).
+    Rtcan,
+    /// What-if: RTCAN with one-shot transmission of queued frames ([`Transmit::OneShot`]).
+    RtcanOneShot,
+    /// What-if: RTCAN with free slots merged into arbitration windows ([`Transmit::Merged`]).
+    RtcanMerged,
+    /// Plain fixed-priority CAN, rate-monotonic identifiers: the baseline.
+    Fixed,
+}
+
+impl Policy {
+    /// Every policy, in report order.
+    pub const ALL: [Policy; 4] =
+        [Policy::Rtcan, Policy::RtcanOneShot, Policy::RtcanMerged, Policy::Fixed];
+
+    /// Its name in reports.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Policy::Rtcan => "rtcan",
+            Policy::RtcanOneShot => "rtcan_oneshot",
+            Policy::RtcanMerged => "rtcan_merged",
+            Policy::Fixed => "fixed",
+        }
+    }
+
+    /// The policy called `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|p| p.name() == name)
+    }
+}
+
+/// What a run produced: the bus's event log and each node's account of it.
+pub struct Run {
+    /// The policy.
+    pub policy: Policy,
+    /// The bus's event log.
+    pub trace: Vec<Event>,
+    /// Per node: the frames its port sent, in order (matches the log's `Sent` events).
+    pub sent: Vec<Vec<Sent>>,
+    /// The nodes' counters, summed.
+    pub counters: Counters,
+    /// Simulation events: node activations, frames on the bus (start and end), releases.
+    pub events: u64,
+}
+
+/// Runs `policy` over `traffic`.
+pub fn run(setup: &Setup, traffic: &Traffic, policy: Policy) -> Run {
+    let config = Config { bit_rate: setup.cycle.bit_rate, rx_depth: 8, seed: setup.seed };
+    let bus = Bus::new(setup.nodes, config);
+    let stop_ns = setup.stop_us() * 1_000;
+    let (sent, counters): (Vec<Vec<Sent>>, Vec<Counters>) = match policy {
+        Policy::Rtcan | Policy::RtcanOneShot | Policy::RtcanMerged => {
+            let mode = match policy {
+                Policy::RtcanOneShot => Transmit::OneShot,
+                Policy::RtcanMerged => Transmit::Merged,
+                _ => Transmit::Retransmit,
+            };
+            let mut nodes: Vec<RtcanNode> = (0..setup.nodes)
+                .map(|i| {
+                    let port = SimPort::new(bus.port(i), setup.cycle.bit_rate);
+                    RtcanNode::new(traffic, setup, i, port, mode)
+                })
+                .collect();
+            loop {
+                // Slot timers; in merged mode also every bus event (a frame's end frees the
+                // node's mailbox for its next frame).
+                let wake = nodes.iter().map(|n| n.next_wake() * 1_000).min().expect("nodes");
+                let bus_due = if mode == Transmit::Merged { bus.next_event() } else { None };
+                let t = bus_due.map_or(wake, |b| b.min(wake));
+                if t > stop_ns {
+                    break;
+                }
+                bus.advance_to(t);
+                let now = t / 1_000;
+                for node in nodes.iter_mut() {
+                    if node.next_wake() * 1_000 <= t {
+                        node.wake(now);
+                    }
+                }
+                match mode {
+                    Transmit::OneShot => {
+                        bus.advance_to(t); // the slot's arbitration
+                        nodes.iter_mut().for_each(RtcanNode::withdraw_if_lost);
+                    }
+                    Transmit::Merged => nodes.iter_mut().for_each(|n| n.on_bus_event(now)),
+                    Transmit::Retransmit => {}
+                }
+            }
+            nodes.into_iter().map(|n| (n.sent, n.counters)).unzip()
+        }
+        Policy::Fixed => {
+            let mut nodes: Vec<FixedNode> =
+                (0..setup.nodes).map(|i| FixedNode::new(traffic, setup, i, bus.port(i))).collect();
+            let mut releases = traffic.messages.iter().map(|m| m.release_us * 1_000).peekable();
+            loop {
+                while releases.next_if(|&r| r < bus.now()).is_some() {}
+                let next_release = releases.peek().copied().unwrap_or(u64::MAX);
+                let t = bus.next_event().map_or(next_release, |b| b.min(next_release));
+                if t > stop_ns {
+                    break;
+                }
+                bus.advance_to(t);
+                while releases.next_if(|&r| r <= t).is_some() {}
+                nodes.iter_mut().for_each(|n| n.service(t));
+                if bus.next_event() == Some(t) {
+                    bus.advance_to(t); // frames loaded now start now
+                }
+            }
+            nodes.into_iter().map(|n| (n.sent, n.counters)).unzip()
+        }
+    };
+    let trace = bus.trace();
+    let mut total = Counters::default();
+    counters.into_iter().for_each(|c| total += c);
+    let frames = trace.iter().filter(|e| matches!(e.kind, EventKind::Sent { .. })).count() as u64;
+    let events = total.activations + 2 * frames + traffic.messages.len() as u64;
+    Run { policy, trace, sent, counters: total, events }
+}

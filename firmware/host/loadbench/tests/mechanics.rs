@@ -1,0 +1,163 @@
+//! The experiment's mechanics: determinism, the offered-load generator, and what the protocols
+//! must do at the extremes of the sweep. Behaviour only: no wall-clock timing is asserted.
+
+use r2p_loadbench::metrics::deliveries;
+use r2p_loadbench::traffic::Kind;
+use r2p_loadbench::{point, run, Policy, Setup, SetupError, Traffic};
+use r2p_vbus::{EventKind, FrameBits};
+
+/// A short load point (debug builds run these tests).
+fn short(load: f64, seed: u64, duration_us: u64) -> Setup {
+    Setup { duration_us, ..Setup::new(load, seed) }
+}
+
+#[test]
+fn the_same_seed_gives_the_same_results() {
+    let setup = short(0.7, 7, 300_000);
+    let a = point(&setup, &Policy::ALL).unwrap();
+    let b = point(&setup, &Policy::ALL).unwrap();
+    assert_eq!(a, b);
+    let traffic = Traffic::generate(&setup).unwrap();
+    for policy in Policy::ALL {
+        let (x, y) = (run(&setup, &traffic, policy), run(&setup, &traffic, policy));
+        assert_eq!(x.trace, y.trace, "{policy:?}: bus logs differ");
+    }
+}
+
+#[test]
+fn another_seed_gives_other_traffic() {
+    let a = Traffic::generate(&short(0.5, 1, 200_000)).unwrap();
+    let b = Traffic::generate(&short(0.5, 2, 200_000)).unwrap();
+    assert_ne!(a.messages, b.messages);
+}
+
+#[test]
+fn the_generator_reaches_the_requested_load_within_one_percent() {
+    for load in [0.1, 0.3, 0.5, 0.7, 0.9, 0.95] {
+        let setup = short(load, 3, 1_000_000);
+        let t = Traffic::generate(&setup).unwrap();
+        let offered = t.offered_load(&setup);
+        assert!((offered - load).abs() <= 0.01 * load, "asked {load}, offered {offered}");
+        // Every class is present and the shares add up.
+        let share = |f: fn(&Kind) -> bool| t.offered_bits_of(f) as f64 / setup.capacity_bits();
+        let hrt = share(|k| matches!(k, Kind::Hrt { .. }));
+        let srt = share(|k| matches!(k, Kind::Srt { .. }));
+        let nrt = share(|k| matches!(k, Kind::Nrt));
+        assert!(hrt > 0.0 && srt > 0.0 && nrt > 0.0, "{load}: {hrt} {srt} {nrt}");
+        assert!((hrt + srt + nrt - offered).abs() < 1e-9);
+    }
+}
+
+#[test]
+fn offered_bits_are_the_bits_the_bus_carries() {
+    // At light load the baseline sends every frame once: the bus's own bit count of them
+    // (stuffing, intermission) is exactly what the generator offered.
+    let setup = short(0.1, 4, 500_000);
+    let traffic = Traffic::generate(&setup).unwrap();
+    let r = run(&setup, &traffic, Policy::Fixed);
+    let on_wire: u64 = r
+        .trace
+        .iter()
+        .filter_map(|e| match e.kind {
+            EventKind::Sent { frame, .. } => Some(u64::from(FrameBits::of(&frame).total())),
+            _ => None,
+        })
+        .sum();
+    assert_eq!(on_wire, traffic.offered_bits);
+}
+
+#[test]
+fn hrt_messages_are_released_at_their_reserved_slot() {
+    let setup = short(0.6, 5, 200_000);
+    let t = Traffic::generate(&setup).unwrap();
+    let mut seen = 0;
+    for m in &t.messages {
+        let Kind::Hrt { period, phase } = t.streams[usize::from(m.stream)].kind else { continue };
+        let slot_start = u64::from(m.cycle) * u64::from(setup.cycle.cycle_us)
+            + u64::from(setup.cycle.slot_offset_us(phase.slot));
+        assert_eq!(m.release_us, slot_start);
+        assert_eq!(m.cycle % period.cycles(), u32::from(phase.offset));
+        seen += 1;
+    }
+    assert!(seen > 100);
+}
+
+#[test]
+fn at_light_load_nothing_misses() {
+    let p = point(&short(0.1, 6, 1_000_000), &Policy::ALL).unwrap();
+    for r in &p.reports {
+        assert_eq!(r.hrt_missed, 0, "{}", r.policy);
+        if r.policy == "rtcan" {
+            continue; // automatic retransmission: see the next tests
+        }
+        assert_eq!((r.srt_missed, r.nrt_delivered), (0, 1.0), "{}", r.policy);
+        if r.policy != "fixed" {
+            assert_eq!(r.hrt_in_slot, Some(1.0), "{}", r.policy);
+            assert_eq!(r.hrt_jitter_max_us, 0.0, "{}", r.policy);
+        }
+    }
+    // The baseline has no slots: an HRT frame waits for the frame on the wire.
+    let fixed = p.reports.iter().find(|r| r.policy == "fixed").unwrap();
+    assert!(fixed.hrt_jitter_max_us > 0.0);
+}
+
+#[test]
+fn reserved_slots_stay_isolated_when_losers_do_not_retransmit() {
+    let p = point(&short(0.95, 8, 500_000), &[Policy::RtcanOneShot, Policy::RtcanMerged]).unwrap();
+    for r in &p.reports {
+        assert_eq!(r.hrt_in_slot, Some(1.0), "{}", r.policy);
+        assert_eq!(r.hrt_jitter_max_us, 0.0, "{}", r.policy);
+        assert_eq!(r.counters.resyncs, 0, "{}", r.policy);
+    }
+}
+
+#[test]
+fn automatic_retransmission_pushes_frames_into_the_next_slot() {
+    // As bxCAN by default: a frame that lost a free slot's arbitration goes out after the
+    // winner, past its slot, delaying reserved slots and syncs (the slaves re-phase).
+    let p = point(&short(0.5, 9, 500_000), &[Policy::Rtcan, Policy::RtcanOneShot]).unwrap();
+    let (rt, one) = (&p.reports[0], &p.reports[1]);
+    assert!(rt.hrt_in_slot.unwrap() < 1.0 && rt.hrt_jitter_max_us > 0.0);
+    assert!(rt.counters.resyncs > 0);
+    assert!(rt.srt_missed > one.srt_missed);
+}
+
+#[test]
+fn fixed_priority_at_95_percent_misses_low_priority_srt_deadlines() {
+    let setup = short(0.95, 10, 1_000_000);
+    let traffic = Traffic::generate(&setup).unwrap();
+    let r = run(&setup, &traffic, Policy::Fixed);
+    let del = deliveries(&traffic, &r);
+    let mut misses_by_rank = vec![0u32; 64];
+    let mut srt_ranks = Vec::new();
+    for (m, d) in traffic.messages.iter().zip(&del) {
+        let s = &traffic.streams[usize::from(m.stream)];
+        let Kind::Srt { deadline_us, .. } = s.kind else { continue };
+        srt_ranks.push(s.rank);
+        let deadline_ns = (m.release_us + u64::from(deadline_us)) * 1_000;
+        if d.frames < m.frames || d.end_ns > deadline_ns {
+            misses_by_rank[usize::from(s.rank)] += 1;
+        }
+    }
+    srt_ranks.sort_unstable();
+    srt_ranks.dedup();
+    let missed: u32 = misses_by_rank.iter().sum();
+    assert!(missed > 0, "fixed priority met every deadline at 95 %");
+    // Misses fall on the low priorities: none in the most urgent stream, most of them in the
+    // less urgent half of the SRT streams.
+    let (high, low) = srt_ranks.split_at(srt_ranks.len() / 2);
+    let sum = |ranks: &[u8]| ranks.iter().map(|&k| misses_by_rank[usize::from(k)]).sum::<u32>();
+    assert_eq!(misses_by_rank[usize::from(high[0])], 0, "{misses_by_rank:?}");
+    assert!(sum(low) > 2 * sum(high), "{misses_by_rank:?}");
+}
+
+#[test]
+fn a_bad_setup_is_refused_with_the_reason() {
+    let e = Traffic::generate(&Setup::new(1.5, 0)).unwrap_err();
+    assert_eq!(e, SetupError::Load(1.5));
+    assert!(e.to_string().contains("outside (0, 1]"));
+    let e = Traffic::generate(&Setup { nodes: 1, ..Setup::new(0.5, 0) }).unwrap_err();
+    assert_eq!(e, SetupError::Nodes(1));
+    let e = Traffic::generate(&Setup { srt_deadline_us: (5_000, 1_000), ..Setup::new(0.5, 0) });
+    assert_eq!(e.unwrap_err(), SetupError::Deadlines((5_000, 1_000)));
+}

@@ -1,0 +1,126 @@
+//! Default firmware of the R2P proximity module (STM32F103CB): the application of
+//! `r2p-app-proximity` on the board's four analog sensor inputs, the sensors' power switch,
+//! the status LEDs, bxCAN and parameters in flash. Pins come only from the board file
+//! (firmware/boards/proximity.toml) through the generated `board` module.
+#![no_std]
+#![no_main]
+
+use embassy_executor::Spawner;
+use embassy_stm32::adc::{self, Adc, SampleTime};
+use embassy_stm32::can::{
+    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
+};
+use embassy_stm32::flash::{Blocking, Flash};
+use embassy_stm32::gpio::Output;
+use embassy_stm32::peripherals::{ADC1, CAN, PA0, PA1, PA2, PA3};
+use embassy_stm32::{bind_interrupts, pac, Peri};
+use embassy_time::{Duration, Instant, Ticker};
+use panic_halt as _;
+use r2p_app_proximity::{params, App, Sample, Storage};
+use r2p_module::FlashParams;
+use rtcan_bxcan::BxCan;
+
+mod board {
+    include!(concat!(env!("OUT_DIR"), "/board.rs"));
+}
+
+use module_core::{drive, ModuleNode};
+
+bind_interrupts!(struct Irqs {
+    USB_LP_CAN1_RX0 => Rx0InterruptHandler<CAN>;
+    CAN1_RX1 => Rx1InterruptHandler<CAN>;
+    CAN1_SCE => SceInterruptHandler<CAN>;
+    USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
+    ADC1_2 => adc::InterruptHandler<ADC1>;
+});
+
+static PARAMS: FlashParams<{ params::COUNT }> =
+    FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
+static ENDPOINTS: Storage = Storage::new();
+
+/// ADC sample time: 239.5 cycles at 12 MHz (20 µs), for the inputs' 100 kΩ pull-down and
+/// whatever a sensor's output impedance adds.
+const SAMPLE_TIME: SampleTime = SampleTime::CYCLES239_5;
+
+/// The board's I/O the application step reads and drives.
+struct Io {
+    adc: Adc<'static, ADC1>,
+    ch0: Peri<'static, PA0>,
+    ch1: Peri<'static, PA1>,
+    ch2: Peri<'static, PA2>,
+    ch3: Peri<'static, PA3>,
+    sensor_power: Output<'static>,
+    leds: [Output<'static>; 3],
+}
+
+/// The application: one step per millisecond in thread mode (four conversions, ~90 µs);
+/// parameters persisted every 100 ms when changed.
+#[embassy_executor::task]
+async fn run(mut app: App<'static>, mut io: Io, mut flash: Flash<'static, Blocking>) {
+    let mut ticker = Ticker::every(Duration::from_millis(1));
+    let mut step = 0u32;
+    loop {
+        let now = Instant::now().as_micros();
+        let adc = [
+            io.adc.read(&mut io.ch0, SAMPLE_TIME).await,
+            io.adc.read(&mut io.ch1, SAMPLE_TIME).await,
+            io.adc.read(&mut io.ch2, SAMPLE_TIME).await,
+            io.adc.read(&mut io.ch3, SAMPLE_TIME).await,
+        ];
+        let c = app.step(now, &Sample { adc, status: module_core::led_status() });
+        drive(&mut io.sensor_power, c.sensor_power, board::SENSOR_PWR_EN_ACTIVE_LOW);
+        let [status, bus, fault] = &mut io.leds;
+        drive(status, c.led_status, board::LED_STATUS_ACTIVE_LOW);
+        drive(bus, c.led_bus, board::LED_BUS_ACTIVE_LOW);
+        drive(fault, c.led_fault, board::LED_FAULT_ACTIVE_LOW);
+        step = step.wrapping_add(1);
+        if step.is_multiple_of(100) {
+            module_core::persist(&PARAMS, &mut flash);
+        }
+        ticker.next().await;
+    }
+}
+
+#[embassy_executor::main]
+async fn main(spawner: Spawner) {
+    let pll_mul = const { module_core::pll_mul(board::HSE_HZ, board::SYSCLK_HZ) };
+    let p = embassy_stm32::init(module_core::clocks(board::HSE_HZ, pll_mul));
+    let mut pins = board::take_pins!(p);
+
+    // Outputs first: the sensors' supply and the LEDs take their boot levels at once.
+    let sensor_power = board::sensor_pwr_en(pins.sensor_pwr_en);
+    let leds = [
+        board::led_status(pins.led_status),
+        board::led_bus(pins.led_bus),
+        board::led_fault(pins.led_fault),
+    ];
+    module_core::analog(&mut pins.prox_ch0);
+    module_core::analog(&mut pins.prox_ch1);
+    module_core::analog(&mut pins.prox_ch2);
+    module_core::analog(&mut pins.prox_ch3);
+    let io = Io {
+        adc: Adc::new(p.ADC1),
+        ch0: pins.prox_ch0,
+        ch1: pins.prox_ch1,
+        ch2: pins.prox_ch2,
+        ch3: pins.prox_ch3,
+        sensor_power,
+        leds,
+    };
+
+    // The bus controller before the application and its node, so that neither lives across
+    // this await (and in `main`'s future).
+    let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
+    can.modify_config().set_bitrate(1_000_000);
+    can.enable().await;
+
+    let mut flash = Flash::new_blocking(p.FLASH);
+    module_core::load_params(&PARAMS, &mut flash);
+    let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
+    let config = r2p_app_proximity::node_config(embassy_stm32::uid::uid(), &PARAMS);
+    let mut node = ModuleNode::new(config, &PARAMS).unwrap();
+    app.register(&mut node).unwrap();
+    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN));
+
+    spawner.spawn(run(app, io, flash)).unwrap();
+}

@@ -1,0 +1,179 @@
+//! `module_core`: what every R2P module image on the STM32F103 shares (the library of this
+//! package, used by the `psu` and `proximity` images): clocks from the board file, the node on
+//! an interrupt executor driven by the TDMA slot timer, parameters in the last two flash pages,
+//! the node's state for the status LEDs, reboot on request.
+//!
+//! Nodes are tasks with priorities, as in the footprint image (targets/shared/footprint_core.rs):
+//! the bus runs on an interrupt executor that preempts the application's 1 kHz step in thread
+//! mode.
+#![no_std]
+
+use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+
+use embassy_executor::InterruptExecutor;
+use embassy_stm32::flash::{Blocking, Flash};
+use embassy_stm32::gpio::{Flex, Level, Output, Pin};
+use embassy_stm32::interrupt;
+use embassy_stm32::interrupt::{InterruptExt, Priority};
+use embassy_stm32::{rcc, time::Hertz, Config, Peri};
+use embassy_time::{Instant, Timer};
+use r2p_module::{leds, FlashParams};
+use r2p_node::node::STARTING_HEARTBEATS;
+use r2p_node::{Node, NodeConfig};
+use rtcan::cycle::ClockState;
+use rtcan::failover::Role;
+use rtcan_bxcan::BxCan;
+use static_cell::StaticCell;
+
+mod flash_layout;
+pub use flash_layout::PARAMS_BASE;
+
+/// The node of a module image: up to 4 exports and 2 imports, 32 queued frames, 4 streams in
+/// reassembly, messages up to 64 bytes.
+pub type ModuleNode = Node<'static, 4, 2, 32, 4, 64>;
+
+/// The PLL multiplier that makes `sysclk_hz` from `hse_hz` (the F1's PLL multiplies by
+/// 2…16); evaluated at compile time from the board constants (`const { pll_mul(..) }`), so a
+/// board file with an impossible clock fails to build.
+pub const fn pll_mul(hse_hz: u32, sysclk_hz: u32) -> u32 {
+    let mul = sysclk_hz / hse_hz;
+    assert!(
+        mul * hse_hz == sysclk_hz && mul >= 2 && mul <= 16,
+        "board file: sysclk_hz must be 2..16 times hse_hz"
+    );
+    assert!(sysclk_hz <= 72_000_000, "board file: the F103 runs at most 72 MHz");
+    mul
+}
+
+/// Clocks from the board file's constants: SYSCLK = `pll_mul` × the crystal; APB1 at half
+/// (bxCAN, ≤ 36 MHz), APB2 at full speed, the ADC at APB2 / 6 (12 MHz at 72 MHz, ≤ 14 MHz).
+pub fn clocks(hse_hz: u32, pll_mul: u32) -> Config {
+    let mut config = Config::default();
+    config.rcc.hse = Some(rcc::Hse { freq: Hertz(hse_hz), mode: rcc::HseMode::Oscillator });
+    config.rcc.pll = Some(rcc::Pll {
+        src: rcc::PllSource::HSE,
+        prediv: rcc::PllPreDiv::DIV1,
+        mul: rcc::PllMul::from_bits((pll_mul - 2) as u8),
+    });
+    config.rcc.sys = rcc::Sysclk::PLL1_P;
+    config.rcc.ahb_pre = rcc::AHBPrescaler::DIV1;
+    config.rcc.apb1_pre = rcc::APBPrescaler::DIV2;
+    config.rcc.apb2_pre = rcc::APBPrescaler::DIV1;
+    config.rcc.adc_pre = rcc::ADCPrescaler::DIV6;
+    config
+}
+
+/// The high-priority executor the bus runs on, woken through an interrupt no module uses.
+static BUS_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
+
+#[interrupt]
+unsafe fn USART3() {
+    // SAFETY: the interrupt is reserved for this executor (started in `start_bus`).
+    unsafe { BUS_EXECUTOR.on_interrupt() }
+}
+
+const RUNNING: u8 = 1;
+const SYNCED: u8 = 2;
+const TRAFFIC: u8 = 4;
+const STORAGE_FAULT: u8 = 8;
+
+/// The node's state for the LEDs, written by the bus task, read by the application's step.
+static LED_INPUTS: AtomicU8 = AtomicU8::new(0);
+/// A REBOOT request arrived: the application's task persists parameters, then resets.
+static REBOOT: AtomicBool = AtomicBool::new(false);
+
+/// The node's state as the status LEDs show it (the application adds its faults).
+pub fn led_status() -> leds::Status {
+    let b = LED_INPUTS.load(Ordering::Relaxed);
+    leds::Status {
+        running: b & RUNNING != 0,
+        synced: b & SYNCED != 0,
+        traffic: b & TRAFFIC != 0,
+        fault: false,
+        storage_fault: b & STORAGE_FAULT != 0,
+    }
+}
+
+/// Where the node lives: a static, so that the bus task's future holds a pointer rather than
+/// the node (an `async fn`'s arguments are stored twice in its future; the node is ~3 KB).
+static NODE: StaticCell<ModuleNode> = StaticCell::new();
+
+/// The node, handed once from `main` to the bus task on the interrupt executor.
+struct BusNode(&'static mut ModuleNode);
+
+// SAFETY: a `Node` is not `Send` only because it holds `&dyn ParamStore`, `&dyn Export` and
+// `&dyn Import`, trait objects without a `Sync` bound. What they point to is `Sync` in fact:
+// statics (`FlashParams`, `RemoteSubscriber`, `RemotePublisher`) whose state sits behind
+// critical-section mutexes. After the hand-over only the bus task uses the node.
+unsafe impl Send for BusNode {}
+
+/// The bus: the node driven by the TDMA slot timer at interrupt priority (a rank-0 PSU sends
+/// the syncs; every other module follows them, as every node of a bus with a cycle must).
+#[embassy_executor::task]
+async fn bus(node: BusNode, mut can: BxCan<'static>, running_after_us: u64) {
+    let node = node.0;
+    let (mut frames, mut last_frame_at) = (0u32, None::<u64>);
+    loop {
+        let now = Instant::now().as_micros();
+        node.slot_tick(now, &mut can);
+        // Parameters are persisted from the store's dirty flags, not from these events.
+        while node.next_event().is_some() {}
+        if node.take_reboot_request() {
+            REBOOT.store(true, Ordering::Relaxed);
+        }
+        let received = node.stats().frames_received;
+        if received != frames {
+            (frames, last_frame_at) = (received, Some(now));
+        }
+        let synced = node.role() == Role::Master
+            || matches!(node.clock().state(now), ClockState::Running(_));
+        let traffic = last_frame_at.is_some_and(|t| now - t < 1_000_000);
+        let mut bits = 0;
+        for (on, bit) in [(now >= running_after_us, RUNNING), (synced, SYNCED), (traffic, TRAFFIC)]
+        {
+            if on {
+                bits |= bit;
+            }
+        }
+        LED_INPUTS.fetch_and(STORAGE_FAULT, Ordering::Relaxed);
+        LED_INPUTS.fetch_or(bits, Ordering::Relaxed);
+        Timer::at(Instant::from_micros(node.next_slot_at(now))).await;
+    }
+}
+
+/// Starts the node on the bus executor.
+pub fn start_bus(node: ModuleNode, config: &NodeConfig, can: BxCan<'static>) {
+    let running_after_us = u64::from(STARTING_HEARTBEATS) * u64::from(config.heartbeat_period_us);
+    interrupt::USART3.set_priority(Priority::P6);
+    let node = BusNode(NODE.init(node));
+    BUS_EXECUTOR.start(interrupt::USART3).spawn(bus(node, can, running_after_us)).unwrap();
+}
+
+/// Loads the parameters from flash (defaults where nothing valid is stored).
+pub fn load_params<const N: usize>(params: &FlashParams<N>, flash: &mut Flash<'static, Blocking>) {
+    if params.load(flash).is_err() {
+        LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
+    }
+}
+
+/// From the application's task: stores changed parameters (a page erase, when the log is
+/// full, stalls the CPU ~20 ms) and resets if a reboot was requested.
+pub fn persist<const N: usize>(params: &FlashParams<N>, flash: &mut Flash<'static, Blocking>) {
+    if params.is_dirty() && params.commit(flash).is_err() {
+        LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
+    }
+    if REBOOT.load(Ordering::Relaxed) {
+        cortex_m::peripheral::SCB::sys_reset();
+    }
+}
+
+/// Puts a pin in analog mode (the board file's `analog`; embassy's F1 ADC leaves pins as
+/// floating inputs): dropping a `Flex` leaves its pin disconnected, which is analog on the F1.
+pub fn analog(pin: &mut Peri<'static, impl Pin>) {
+    drop(Flex::new(pin.reborrow()));
+}
+
+/// Drives an output to its logical level (`on`), given the board file's `active`.
+pub fn drive(out: &mut Output<'static>, on: bool, active_low: bool) {
+    out.set_level(Level::from(on != active_low));
+}

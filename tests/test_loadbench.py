@@ -1,0 +1,104 @@
+"""RTCAN under load (`make bench`, section 4): the sweep's output, the goal summary and the
+plots. Behaviour only; the numbers themselves are reported by the bench, not asserted."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from conftest import ROOT, run
+
+FIRMWARE = ROOT / "firmware"
+BIN = FIRMWARE / "target" / "debug" / "r2p-loadbench"
+ARGS = ["--loads", "0.2,0.9", "--seconds", "0.3", "--seed", "5"]
+WALL_CLOCK = {"wall_s", "events_per_s", "realtime_ratio"}
+
+
+@pytest.fixture(scope="module")
+def loadbench() -> None:
+    p = run(["cargo", "build", "-q", "-p", "r2p-loadbench"], cwd=FIRMWARE, timeout=600)
+    assert p.returncode == 0, p.stdout
+
+
+def sweep(*args: str) -> tuple[list[dict], dict]:
+    from r2ptools import bench
+    p = run([str(BIN), *args], cwd=FIRMWARE)
+    assert p.returncode == 0, p.stdout
+    rows = bench.json_lines(p.stdout)
+    return [r for r in rows if r["bench"] == "rtcan_load"], rows[-1]
+
+
+def strip_clock(rows: list[dict]) -> list[dict]:
+    return [{k: v for k, v in r.items() if k not in WALL_CLOCK} for r in rows]
+
+
+def test_one_report_per_policy_and_load(loadbench):
+    points, sim = sweep(*ARGS)
+    assert [p["load"] for p in points] == [0.2, 0.9]
+    for p in points:
+        assert [r["policy"] for r in p["reports"]] == ["rtcan", "rtcan_oneshot", "rtcan_merged", "fixed"]
+        assert abs(p["offered"] - p["load"]) <= 0.01 * p["load"]
+        for r in p["reports"]:
+            assert r["srt_messages"] > 0 and r["hrt_messages"] > 0
+            assert 0 <= r["srt_miss_ratio"] <= 1 and 0 < r["utilisation"] < 1
+    assert sim["bench"] == "rtcan_load_sim" and sim["runs"] == 8 and sim["events"] > 0
+
+
+def test_same_seed_same_numbers_across_processes(loadbench):
+    a, sa = sweep(*ARGS)
+    b, sb = sweep(*ARGS)
+    assert strip_clock(a) == strip_clock(b)
+    assert sa["events"] == sb["events"]
+    c, _ = sweep(*ARGS[:-1], "6")
+    assert strip_clock(c) != strip_clock(a)
+
+
+def test_plots_regenerate_byte_for_byte(loadbench, tmp_path):
+    from r2ptools import bench
+    points, _ = sweep(*ARGS)
+    first = bench.plot_load(points, tmp_path / "a")
+    second = bench.plot_load(json.loads(json.dumps(points)), tmp_path / "b")
+    assert [p.name for p in first] == ["rtcan-load-srt-miss.png", "rtcan-load-latency.png",
+                                       "rtcan-load-hrt-jitter.png"]
+    for x, y in zip(first, second):
+        assert x.read_bytes() == y.read_bytes(), x.name
+        assert b"tEXt" not in x.read_bytes()  # no software/date stamp
+
+
+def _point(load: float, rtcan_miss: float, fixed_miss: float, hrt_missed: int = 0) -> dict:
+    def report(policy: str, miss: float) -> dict:
+        return {"policy": policy, "srt_miss_ratio": miss, "hrt_missed": hrt_missed if policy == "rtcan" else 0}
+    return {"load": load, "reports": [report("rtcan", rtcan_miss), report("fixed", fixed_miss)]}
+
+
+def test_goal_summary_says_where_a_goal_fails():
+    from r2ptools import bench
+    goals = bench.load_goals([_point(0.5, 0.0, 0.001), _point(0.9, 0.002, 0.001, hrt_missed=3)])
+    by_goal = {g: (ok, detail) for g, ok, detail in goals}
+    name = bench.POLICIES["rtcan"][0]
+    assert by_goal[f"{name}: 0 HRT misses at every load"] == (False, "3 missed")
+    assert by_goal[f"{name}: SRT misses not above fixed priority at every load"] == (False, "above fixed at 90 %")
+    assert by_goal[f"{name}: SRT misses ≤ 0.1 % at 90 % load"] == (False, "0.20 %")
+    ok = {g: ok for g, ok, _ in bench.load_goals([_point(0.9, 0.0005, 0.001)])}
+    assert all(ok.values())
+
+
+def test_tables_show_ratios_against_fixed_priority(loadbench):
+    from r2ptools import bench
+    points, _ = sweep(*ARGS)
+    text = bench.load_tables(points)
+    assert "rtcan/fixed" in text and "reserved" in text
+    assert len(text.splitlines()) == 2 + len(points) + 1 + 2 + len(points)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--loads", "1.5"], "outside (0, 1]"),
+    (["--policies", "edf"], 'unknown policy "edf"'),
+    (["--seconds", "0"], "must be in (0, 3600]"),
+    (["--mix", "0.5"], "give two shares"),
+    (["--frobnicate", "1"], "unknown option --frobnicate"),
+])
+def test_bad_arguments_are_refused_with_the_reason(loadbench, args, message):
+    p = run([str(BIN), *args], cwd=FIRMWARE)
+    assert p.returncode != 0
+    assert message in p.stdout
