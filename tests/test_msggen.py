@@ -144,7 +144,7 @@ def test_types_over_one_frame_are_refused_for_dbc(tmp_path):
     assert p.returncode == 2
     assert ("--assign motor1/state=WheelState@0x3101: WheelState is 13 bytes: RTCAN sends it as 2 "
             "frames, and a DBC message is one CAN frame of at most 8 bytes") in p.stdout
-    assert "types that fit: Obstacle (5 B), WheelSetpoint (5 B)" in p.stdout
+    assert "types that fit: BusPower (1 B), Obstacle (5 B), PsuState (7 B), WheelSetpoint (5 B)" in p.stdout
     assert not (tmp_path / "x.dbc").exists() and "Traceback" not in p.stdout
     toml = tmp_path / "a.toml"
     toml.write_text('[streams]\n"psu/battery" = { type = "Battery", id = 0x1001 }\n')
@@ -207,12 +207,13 @@ def test_generated_rust_for_unusual_schemas_compiles_and_passes_the_crate_tests(
     """Keyword field names, bools, every primitive, arrays over 32: the crate's own suite
     (roundtrip, sizes, hashes) runs over them, in a copy of the crate outside the repository."""
     ws = tmp_path / "ws"
-    for crate in ("r2p-msgs", "r2p-testkit"):
+    # r2p-msgs and what it builds on (its types are node-runtime payloads).
+    for crate in ("r2p-msgs", "r2p-testkit", "r2p-node", "r2p-management", "r2p-middleware", "rtcan"):
         shutil.copytree(ROOT / "firmware" / "crates" / crate, ws / "crates" / crate,
                         ignore=shutil.ignore_patterns("target"))
     shutil.copy(ROOT / "firmware" / "Cargo.lock", ws / "Cargo.lock")
     workspace = (ROOT / "firmware" / "Cargo.toml").read_text()
-    (ws / "Cargo.toml").write_text(workspace.replace('members = ["crates/*", "host/*"]', 'members = ["crates/*"]')
+    (ws / "Cargo.toml").write_text(workspace.replace('members = ["crates/*", "apps/*", "host/*"]', 'members = ["crates/*"]')
                                    .replace('exclude = ["targets", "fuzz", "crates/rtcan-bxcan"]', ""))
     msg_dir = tmp_path / "msgs"
     shutil.copytree(ROOT / "firmware" / "msgs", msg_dir)
@@ -226,4 +227,4 @@ def test_generated_rust_for_unusual_schemas_compiles_and_passes_the_crate_tests(
     p = run(["cargo", "test", "--offline", "-q", "-p", "r2p-msgs", "--lib"], cwd=ws,
             env={"RUSTUP_TOOLCHAIN": toolchain, "CARGO_TARGET_DIR": str(ROOT / "firmware" / "target")})
     assert p.returncode == 0, p.stdout[-3000:]
-    assert "test result: ok. 7 passed" in p.stdout
+    assert "test result: ok. 8 passed" in p.stdout

@@ -2,11 +2,11 @@
 //! with cortex-m-rt's script (embassy-stm32's `memory-x` feature provides memory.x), and adds a
 //! linker check that the image ends below the parameter pages.
 
-include!("src/flash_layout.rs");
+include!("../module-core/src/flash_layout.rs");
 
 fn main() {
     r2p_boardgen::build("../../../boards/psu.toml");
-    println!("cargo:rerun-if-changed=src/flash_layout.rs");
+    println!("cargo:rerun-if-changed=../module-core/src/flash_layout.rs");
     let out = std::env::var("OUT_DIR").expect("OUT_DIR");
     let check = format!(
         "ASSERT(__sidata + (__edata - __sdata) <= ORIGIN(FLASH) + {PARAMS_BASE:#x}, \

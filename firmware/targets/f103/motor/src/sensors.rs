@@ -2,7 +2,7 @@
 //! motor supply on ADC1.
 
 use embassy_stm32::adc::{Adc, SampleTime};
-use embassy_stm32::gpio::{AfioRemap, Flex};
+use embassy_stm32::gpio::AfioRemap;
 use embassy_stm32::peripherals::{ADC1, PA0, PA1, PA6, PA7, TIM3};
 use embassy_stm32::timer::qei::{Config, Qei};
 use embassy_stm32::timer::{Ch1, Ch2};
@@ -20,17 +20,8 @@ pub struct Sensors {
     qei: Qei<'static, TIM3>,
 }
 
-/// An analog pin in analog mode (embassy's F1 ADC driver leaves it a floating input).
-fn analog<P: embassy_stm32::gpio::Pin>(mut pin: Peri<'static, P>) -> Peri<'static, P> {
-    let mut f = Flex::new(pin.reborrow());
-    f.set_as_analog();
-    // Dropping the Flex would disconnect the pin again; the ADC keeps using it.
-    core::mem::forget(f);
-    pin
-}
-
 impl Sensors {
-    /// ADC1 on MOTOR_CURRENT and VMOT_SENSE, TIM3 in encoder mode (both edges of both
+    /// ADC1 on MOTOR_CURRENT and VMOT_SENSE (already in analog mode), TIM3 in encoder mode (both edges of both
     /// channels: 4 counts per line) on ENC_A and ENC_B.
     pub fn new(
         adc: Peri<'static, ADC1>,
@@ -42,8 +33,8 @@ impl Sensors {
     ) -> Self {
         Self {
             adc: Adc::new(adc),
-            current: analog(current),
-            vmot: analog(vmot),
+            current,
+            vmot,
             qei: Qei::new::<Ch1, Ch2, AfioRemap<0>>(tim, enc_a, enc_b, Config::default()),
         }
     }

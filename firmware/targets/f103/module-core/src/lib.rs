@@ -1,5 +1,5 @@
-//! `module_core`: what every R2P module image on the STM32F103 shares (the library of this
-//! package, used by the `psu` and `proximity` images): clocks from the board file, the node on
+//! `module_core`: what every R2P module image on the STM32F103 shares (used by the psu,
+//! proximity and motor images): clocks from the board file, the node on
 //! an interrupt executor driven by the TDMA slot timer, parameters in the last two flash pages,
 //! the node's state for the status LEDs, reboot on request.
 //!

@@ -1,0 +1,41 @@
+//! Deterministic physical model of an R2P robot, feeding the simulated peripherals of
+//! emulated boards: brushed DC motors behind H-bridges with encoders and Hall current
+//! sensors, a wheeled base (three-wheel omni or differential) with its rigid-body dynamics, a
+//! battery discharging under the motors' load, the PSU's 5 V bus, and IR/ultrasonic rangers
+//! seeing 2-D obstacles through their datasheet transfer curves.
+//!
+//! A [`Robot`] is read from a robot file (`robots/*.toml`, format in `robots/README.md`);
+//! [`World::from_robot`] builds its world; [`World::advance_ns`] steps it in virtual time;
+//! boards read and drive it by the signal names of their HAL board files
+//! ([`World::read_adc`], [`World::read_counter`], [`World::set_pwm`], [`World::set_output`],
+//! [`World::read_input`]). Same robot file, seed and calls → same state, bit for bit: no
+//! clock is read and all noise comes from seeded streams.
+//!
+//! One model per module, each documenting its equations, integrator and assumptions, each
+//! with tests against analytic results. `ranger_curves` is `no_std`-clean so that the
+//! proximity firmware can share the datasheet curves.
+
+pub mod adc;
+pub mod base;
+pub mod battery;
+pub mod boards;
+pub mod current_sensor;
+pub mod encoder;
+pub mod frontends;
+pub mod geometry;
+pub mod hbridge;
+pub mod kinematics;
+mod linalg;
+pub mod motor;
+pub mod noise;
+pub mod obstacles;
+pub mod psu;
+pub mod ranger;
+pub mod ranger_curves;
+pub mod robot;
+pub mod world;
+
+pub use boards::{BoardKind, SignalKind};
+pub use geometry::{Pose, Twist, Vec2};
+pub use robot::{Robot, RobotError, Uid};
+pub use world::{IoError, World};

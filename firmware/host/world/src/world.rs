@@ -1,0 +1,813 @@
+//! The world: a robot's physics and its boards' view of it, stepped in virtual time.
+//!
+//! [`World::advance_ns`] (or [`World::step`]) runs fixed sub-steps of at most
+//! [`DEFAULT_SUBSTEP_NS`] (50 µs) with the inputs held (zero-order hold, as timer compare
+//! registers and GPIOs hold them between the firmware's writes). Each sub-step:
+//!
+//! 1. the battery's terminal voltage from the loads at the start of the sub-step (motor
+//!    bridges, and the PSU's converter as a constant-power load);
+//! 2. each H-bridge's terminal voltage, each winding current (exact exponential step);
+//! 3. the coupled mechanics of base, wheels and rotors ([`Base::accelerate`]), the pose;
+//! 4. the charge drawn from the battery, and the energy books.
+//!
+//! After the sub-steps, the encoders follow their shafts and the rangers take the
+//! measurements that fell due. Inputs take effect at the next sub-step; outputs (ADC counts,
+//! counters, levels) are those at the end of the last one. ADC reads draw noise from a
+//! stream per signal, so one board reading more often leaves the others' noise untouched.
+//! Nothing reads a clock, no output depends on hash order: the same robot file, seed and
+//! sequence of calls give the same state ([`World::state_digest`]).
+
+use std::fmt;
+
+use crate::base::{Acceleration, Base};
+use crate::battery::Battery;
+use crate::boards::{BoardKind, SignalKind};
+use crate::encoder::Encoder;
+use crate::frontends;
+use crate::geometry::{Pose, Twist};
+use crate::hbridge::{HBridge, HBridgeInput};
+use crate::kinematics::Kinematics;
+use crate::linalg::{self, Mat3};
+use crate::motor::{Gearbox, Motor, Terminal};
+use crate::noise::Noise;
+use crate::obstacles::Obstacles;
+use crate::psu::{supply_voltage, Psu, PsuParams};
+use crate::ranger::Ranger;
+use crate::robot::{Robot, Uid, Wiring};
+
+/// Longest sub-step, ns: 50 µs, one PWM period. The electrical step is exact for any length
+/// and the coupled mechanics' fastest pole is ~20 s⁻¹ (see `motor.rs`), so this costs
+/// ~0.1 % of accuracy in transients; halving it halves that (the energy test shows it).
+pub const DEFAULT_SUBSTEP_NS: u64 = 50_000;
+
+/// Gate-driver under-voltage lockout: below this supply the bridge turns off and DRV_FAULT
+/// is asserted (assumed, typical of 12–36 V gate drivers).
+pub const DRIVER_UVLO_V: f64 = 6.0;
+
+/// Up to this many wheels the inverse mass matrices are cached (2^n of them).
+const MASS_CACHE_WHEELS: usize = 8;
+
+/// Noise stream numbers: per board signal, per ranger measurement, per ranger phase.
+const STREAM_BOARD: u64 = 1;
+const STREAM_RANGER: u64 = 10_000;
+const STREAM_PHASE: u64 = 20_000;
+
+/// A wheel and its drive train.
+#[derive(Clone, Debug)]
+struct Wheel {
+    motor: Motor,
+    gearbox: Gearbox,
+    bridge: HBridge,
+    encoder: Encoder,
+    fault_injected: bool,
+    wheel_inertia: f64,
+    angle: f64,
+    speed: f64,
+    load_torque: f64,
+    motoring: bool,
+    supply_current: f64,
+}
+
+/// What a board is connected to.
+#[derive(Clone, Debug)]
+enum Link {
+    Psu,
+    Motor { wheel: usize },
+    Proximity { channels: [Option<usize>; 4], sensor_power: bool },
+    Gateway,
+}
+
+#[derive(Clone, Debug)]
+struct Board {
+    name: String,
+    kind: BoardKind,
+    uid: Uid,
+    link: Link,
+    /// One stream per signal of the kind's table.
+    noise: Vec<Noise>,
+}
+
+/// A board as the world knows it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BoardInfo<'a> {
+    /// Module name.
+    pub name: &'a str,
+    /// Module kind.
+    pub kind: BoardKind,
+    /// 96-bit unique ID.
+    pub uid: Uid,
+}
+
+/// A wheel's drive train at the end of the last step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WheelState {
+    /// Winding current, A.
+    pub motor_current: f64,
+    /// Motor shaft speed, rad/s.
+    pub motor_speed: f64,
+    /// Motor shaft angle, rad (unwrapped).
+    pub motor_angle: f64,
+    /// Wheel speed, rad/s.
+    pub wheel_speed: f64,
+    /// Wheel angle, rad (unwrapped).
+    pub wheel_angle: f64,
+    /// Load torque at the motor shaft: the motor's torque not spent on its own rotor, i.e.
+    /// what the gearbox passes on to the wheel and the base, N·m.
+    pub load_torque: f64,
+    /// Current drawn by the bridge from the supply, A (average of the last sub-step).
+    pub supply_current: f64,
+    /// Encoder timer register.
+    pub encoder_count: u16,
+    /// H-bridge inputs.
+    pub bridge: HBridgeInput,
+    /// Whether the driver is faulted (its outputs off).
+    pub driver_fault: bool,
+}
+
+/// Energy and charge flows since the start, for conservation checks. Every term is ≥ 0
+/// except `chemical_j` (negative while charging).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EnergyLedger {
+    /// Drawn from the battery's open-circuit source, ∫OCV·I dt, J.
+    pub chemical_j: f64,
+    /// Lost in the battery's internal resistance, J.
+    pub battery_loss_j: f64,
+    /// Taken by the PSU's converter (bus load and conversion loss), J.
+    pub bus_j: f64,
+    /// Lost in windings and bridge switches (I²R), J.
+    pub conduction_loss_j: f64,
+    /// Lost in bridge diodes while coasting, J.
+    pub diode_loss_j: f64,
+    /// Lost to motor friction, J.
+    pub friction_loss_j: f64,
+    /// Lost in gearboxes, J.
+    pub gear_loss_j: f64,
+    /// Lost to rolling resistance, J.
+    pub rolling_loss_j: f64,
+    /// Charge drawn by the motor bridges, C.
+    pub motor_charge_c: f64,
+    /// Charge drawn by the PSU's converter, C.
+    pub bus_charge_c: f64,
+}
+
+impl EnergyLedger {
+    /// Sum of the losses and the bus's consumption, J.
+    pub fn spent_j(&self) -> f64 {
+        self.battery_loss_j
+            + self.bus_j
+            + self.conduction_loss_j
+            + self.diode_loss_j
+            + self.friction_loss_j
+            + self.gear_loss_j
+            + self.rolling_loss_j
+    }
+}
+
+/// A board I/O request the world cannot serve.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum IoError {
+    /// No board of that name.
+    UnknownBoard {
+        /// The name asked for.
+        board: String,
+        /// The boards there are.
+        known: Vec<String>,
+    },
+    /// The board has no such signal of that kind.
+    UnknownSignal {
+        /// Board name.
+        board: String,
+        /// Its kind.
+        kind: BoardKind,
+        /// The signal asked for.
+        signal: String,
+        /// What it was asked as.
+        wanted: SignalKind,
+        /// The board's signals of that kind.
+        known: Vec<&'static str>,
+    },
+    /// The request does not apply to this board or value.
+    Invalid {
+        /// Board name.
+        board: String,
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+impl fmt::Display for IoError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            IoError::UnknownBoard { board, known } => {
+                write!(f, "no board `{board}` in this world (boards: {})", known.join(", "))
+            }
+            IoError::UnknownSignal { board, kind, signal, wanted, known } => {
+                let list = if known.is_empty() { "none".to_string() } else { known.join(", ") };
+                write!(
+                    f,
+                    "board `{board}` ({}) has no {} `{signal}` ({}s: {list})",
+                    kind.name(),
+                    wanted.describe(),
+                    wanted.describe()
+                )
+            }
+            IoError::Invalid { board, problem } => write!(f, "board `{board}`: {problem}"),
+        }
+    }
+}
+
+impl std::error::Error for IoError {}
+
+/// A robot's physics and its boards' peripherals. See the module documentation.
+#[derive(Clone, Debug)]
+pub struct World {
+    time_ns: u64,
+    substep_ns: u64,
+    kin: Kinematics,
+    base: Base,
+    pose: Pose,
+    q: [f64; 3],
+    wheels: Vec<Wheel>,
+    battery: Battery,
+    supply_v: f64,
+    psu: Option<Psu>,
+    bus_base_load_a: f64,
+    rangers: Vec<Ranger>,
+    ranger_noise: Vec<Noise>,
+    obstacles: Obstacles,
+    boards: Vec<Board>,
+    ledger: EnergyLedger,
+    stored_at_start_j: f64,
+    /// Per-wheel torques and inertias of a sub-step (kept to avoid allocating per step).
+    scratch: (Vec<f64>, Vec<f64>),
+    /// Inverse mass matrices by which gearboxes are motoring (bit k: wheel k), computed
+    /// when first needed: the mass matrix depends only on that.
+    mass_inv: Vec<Option<Mat3>>,
+}
+
+impl World {
+    /// The world of `robot`, at rest at its initial pose, at time 0.
+    pub fn from_robot(robot: &Robot) -> World {
+        let kin = Kinematics::new(robot.base.layout.clone());
+        let base = Base::new(robot.base.params, &kin);
+        let d = &robot.drive;
+        let mut wheels: Vec<Wheel> = (0..kin.wheel_count())
+            .map(|_| Wheel {
+                motor: Motor::new(d.motor),
+                gearbox: d.gearbox,
+                bridge: HBridge::new(d.bridge),
+                encoder: Encoder::new(d.encoder_cpr, 0.0),
+                fault_injected: false,
+                wheel_inertia: robot.base.wheel_inertia_kg_m2,
+                angle: 0.0,
+                speed: 0.0,
+                load_torque: 0.0,
+                motoring: true,
+                supply_current: 0.0,
+            })
+            .collect();
+        let battery = Battery::new(robot.battery.params, robot.battery.initial_soc);
+        let mut psu = None;
+        let mut bus_base_load_a = 0.0;
+        let mut rangers = Vec::new();
+        let mut ranger_noise = Vec::new();
+        let mut boards = Vec::new();
+        for (bi, m) in robot.modules.iter().enumerate() {
+            let kind = m.kind();
+            let link = match &m.wiring {
+                Wiring::Psu { bus_load_a, .. } => {
+                    psu = Some(Psu::new(PsuParams::R2P));
+                    bus_base_load_a = *bus_load_a;
+                    Link::Psu
+                }
+                Wiring::Motor { wheel, encoder_inverted } => {
+                    wheels[*wheel].encoder.inverted = *encoder_inverted;
+                    Link::Motor { wheel: *wheel }
+                }
+                Wiring::Proximity { rangers: mounts } => {
+                    let mut channels = [None; 4];
+                    for r in mounts {
+                        let i = rangers.len() as u64;
+                        let first =
+                            Noise::new(robot.seed, STREAM_PHASE + i).uniform() * r.kind.period_s();
+                        let mut ranger = Ranger::new(r.kind, r.mount, first);
+                        ranger.set_connected(r.connected);
+                        channels[usize::from(r.channel)] = Some(rangers.len());
+                        rangers.push(ranger);
+                        ranger_noise.push(Noise::new(robot.seed, STREAM_RANGER + i));
+                    }
+                    Link::Proximity { channels, sensor_power: true }
+                }
+                Wiring::Gateway => Link::Gateway,
+            };
+            let noise = (0..kind.signals().len())
+                .map(|s| Noise::new(robot.seed, STREAM_BOARD + 64 * bi as u64 + s as u64))
+                .collect();
+            boards.push(Board { name: m.name.clone(), kind, uid: m.uid, link, noise });
+        }
+        let supply_v = battery.ocv();
+        let mut w = World {
+            time_ns: 0,
+            substep_ns: DEFAULT_SUBSTEP_NS,
+            kin,
+            base,
+            pose: robot.initial_pose,
+            q: [0.0; 3],
+            wheels: std::mem::take(&mut wheels),
+            battery,
+            supply_v,
+            psu,
+            bus_base_load_a,
+            rangers,
+            ranger_noise,
+            obstacles: Obstacles::new(robot.obstacles.clone()),
+            boards,
+            ledger: EnergyLedger::default(),
+            stored_at_start_j: 0.0,
+            scratch: (Vec::new(), Vec::new()),
+            mass_inv: Vec::new(),
+        };
+        // The sensors have been running before time 0: each starts with a measurement.
+        for (r, n) in w.rangers.iter_mut().zip(&mut w.ranger_noise) {
+            r.prime(&w.pose, &w.obstacles, n);
+        }
+        w.stored_at_start_j = w.stored_energy_j();
+        w
+    }
+
+    // ----- Time ------------------------------------------------------------------------
+
+    /// Virtual time, ns.
+    pub fn time_ns(&self) -> u64 {
+        self.time_ns
+    }
+
+    /// Virtual time, s.
+    pub fn time_s(&self) -> f64 {
+        self.time_ns as f64 * 1e-9
+    }
+
+    /// Sets the longest sub-step (ns, ≥ 1); the default is [`DEFAULT_SUBSTEP_NS`].
+    pub fn set_substep_ns(&mut self, ns: u64) {
+        self.substep_ns = ns.max(1);
+    }
+
+    /// Advances by `dt_s` seconds (rounded to the nanosecond).
+    pub fn step(&mut self, dt_s: f64) {
+        self.advance_ns((dt_s * 1e9).round().max(0.0) as u64);
+    }
+
+    /// Advances to virtual time `t_ns` (no-op if already there or past).
+    pub fn advance_to_ns(&mut self, t_ns: u64) {
+        self.advance_ns(t_ns.saturating_sub(self.time_ns));
+    }
+
+    /// Advances by `dt_ns` in equal sub-steps of at most the sub-step length.
+    pub fn advance_ns(&mut self, dt_ns: u64) {
+        if dt_ns == 0 {
+            return;
+        }
+        let n = dt_ns.div_ceil(self.substep_ns);
+        let h = dt_ns as f64 * 1e-9 / n as f64;
+        for _ in 0..n {
+            self.substep(h);
+        }
+        self.time_ns += dt_ns;
+        for w in &mut self.wheels {
+            w.encoder.update(w.motor.angle());
+        }
+        self.power_rangers();
+        let now = self.time_s();
+        for (r, n) in self.rangers.iter_mut().zip(&mut self.ranger_noise) {
+            r.update(now, &self.pose, &self.obstacles, n);
+        }
+    }
+
+    /// Powers each ranger from its board's SENSOR_PWR_EN and the bus (a bus that went down
+    /// during a step is seen at its end).
+    fn power_rangers(&mut self) {
+        let now = self.time_s();
+        let bus_on = self.bus_voltage() > 4.5;
+        for b in &self.boards {
+            if let Link::Proximity { channels, sensor_power } = &b.link {
+                for r in channels.iter().flatten() {
+                    self.rangers[*r].set_powered(*sensor_power && bus_on, now);
+                }
+            }
+        }
+    }
+
+    /// Current drawn from the 5 V bus, A: the modules' own plus powered rangers.
+    pub fn bus_load_a(&self) -> f64 {
+        let sensors: f64 =
+            self.rangers.iter().filter(|r| r.powered()).map(|r| r.kind.supply_current_a()).sum();
+        self.bus_base_load_a + sensors
+    }
+
+    fn substep(&mut self, h: f64) {
+        let ocv = self.battery.ocv();
+        let rb = self.battery.params.internal_resistance_ohm;
+        // 1. Supply voltage from the loads now.
+        let mut motor_a = 0.0;
+        for w in &mut self.wheels {
+            w.bridge.fault = w.fault_injected || self.supply_v < DRIVER_UVLO_V;
+            let i = w.motor.current();
+            motor_a += match w.bridge.terminal(1.0, i) {
+                Terminal::Driven { volts, .. } => volts * i,
+                Terminal::Open { .. } => -i.abs(),
+            };
+        }
+        let load_a = self.bus_load_a();
+        let (v, power) = match &mut self.psu {
+            Some(psu) => {
+                psu.check_load(load_a);
+                let want = psu.input_power(load_a);
+                let min = psu.params.min_input_v;
+                match supply_voltage(ocv, rb, motor_a, want).filter(|&v| v >= min) {
+                    Some(v) => {
+                        psu.set_input_ok(true);
+                        (v, want)
+                    }
+                    None => {
+                        psu.set_input_ok(false);
+                        ((ocv - rb * motor_a).max(0.0), 0.0)
+                    }
+                }
+            }
+            None => ((ocv - rb * motor_a).max(0.0), 0.0),
+        };
+        self.supply_v = v;
+        // 2. Bridges and windings.
+        let mut charge = 0.0;
+        for w in &mut self.wheels {
+            let term = w.bridge.terminal(v, w.motor.current());
+            let e = w.motor.update_current(term, h);
+            let q = w.bridge.supply_charge(term, v, &e);
+            w.supply_current = q / h;
+            charge += q;
+            self.ledger.conduction_loss_j += e.resistance * e.i2t;
+            self.ledger.diode_loss_j += v * q - e.energy_in;
+        }
+        // 3. Mechanics: wheel torques through the gearboxes, inertias turning with each wheel.
+        let (torques, inertias) = &mut self.scratch;
+        torques.clear();
+        inertias.clear();
+        let mut mask = 0usize;
+        for (k, w) in self.wheels.iter().enumerate() {
+            let f = w.gearbox.torque_factor(w.motoring);
+            torques.push(f * w.motor.shaft_torque());
+            inertias.push(w.wheel_inertia + f * w.gearbox.ratio * w.motor.params.rotor_inertia);
+            mask |= usize::from(w.motoring) << k.min(usize::BITS as usize - 1);
+        }
+        let (rhs, rolling_loss) = self.base.forces(&self.kin, &self.q, torques);
+        let dof = self.kin.dof();
+        let q_dot = if self.wheels.len() <= MASS_CACHE_WHEELS {
+            if self.mass_inv.is_empty() {
+                self.mass_inv = vec![None; 1 << self.wheels.len()];
+            }
+            let inv = *self.mass_inv[mask].get_or_insert_with(|| {
+                linalg::inverse(&self.base.mass_matrix(&self.kin, inertias), dof)
+            });
+            let mut x = [0.0; 3];
+            for (xi, row) in x.iter_mut().zip(&inv).take(dof) {
+                *xi = row.iter().zip(&rhs).take(dof).map(|(m, r)| m * r).sum();
+            }
+            x
+        } else {
+            linalg::solve(&self.base.mass_matrix(&self.kin, inertias), &rhs, dof)
+        };
+        let acc = Acceleration { q_dot, rolling_loss };
+        for (q, a) in self.q.iter_mut().zip(acc.q_dot) {
+            *q += h * a;
+        }
+        self.pose.integrate(&self.kin.twist(&self.q), h);
+        for (k, w) in self.wheels.iter_mut().enumerate() {
+            let n = w.gearbox.ratio;
+            let p = &w.motor.params;
+            let shaft = w.motor.shaft_torque();
+            let friction = p.friction(w.motor.speed());
+            let eta = w.gearbox.torque_factor(w.motoring) / n;
+            w.speed = self.kin.wheel_rate(k, &self.q);
+            w.angle += h * w.speed;
+            let wm = n * w.speed;
+            w.load_torque = shaft - p.rotor_inertia * n * self.kin.wheel_rate(k, &acc.q_dot);
+            self.ledger.friction_loss_j += friction * wm * h;
+            self.ledger.gear_loss_j += (1.0 - eta) * w.load_torque * wm * h;
+            w.motoring = w.load_torque * wm >= 0.0;
+            w.motor.set_mechanical(wm, n * w.angle);
+        }
+        self.ledger.rolling_loss_j += acc.rolling_loss * h;
+        // 4. Battery.
+        let bus_charge = if v > 0.0 { power / v * h } else { 0.0 };
+        let total = charge + bus_charge;
+        self.battery.draw(total, h);
+        self.ledger.chemical_j += ocv * total;
+        self.ledger.battery_loss_j += rb * total * total / h;
+        self.ledger.bus_j += power * h;
+        self.ledger.motor_charge_c += charge;
+        self.ledger.bus_charge_c += bus_charge;
+    }
+
+    // ----- Board I/O -------------------------------------------------------------------
+
+    /// The boards, in robot-file order.
+    pub fn boards(&self) -> impl Iterator<Item = BoardInfo<'_>> {
+        self.boards.iter().map(|b| BoardInfo { name: &b.name, kind: b.kind, uid: b.uid })
+    }
+
+    fn board_index(&self, board: &str) -> Result<usize, IoError> {
+        self.boards.iter().position(|b| b.name == board).ok_or_else(|| IoError::UnknownBoard {
+            board: board.to_string(),
+            known: self.boards.iter().map(|b| b.name.clone()).collect(),
+        })
+    }
+
+    fn signal(&self, b: usize, signal: &str, wanted: SignalKind) -> Result<usize, IoError> {
+        let board = &self.boards[b];
+        board.kind.signal_index(signal, wanted).ok_or_else(|| IoError::UnknownSignal {
+            board: board.name.clone(),
+            kind: board.kind,
+            signal: signal.to_string(),
+            wanted,
+            known: board.kind.signal_names(wanted),
+        })
+    }
+
+    fn wheel_of(&self, b: usize) -> Result<usize, IoError> {
+        match self.boards[b].link {
+            Link::Motor { wheel } => Ok(wheel),
+            _ => Err(IoError::Invalid {
+                board: self.boards[b].name.clone(),
+                problem: format!("is a {} board, not a motor board", self.boards[b].kind.name()),
+            }),
+        }
+    }
+
+    /// Voltage on an analog pin (noise-free: the Hall sensor's and the ADC's noise left out,
+    /// a ranger's held output with its measurement noise).
+    pub fn pin_volts(&self, board: &str, signal: &str) -> Result<f64, IoError> {
+        let b = self.board_index(board)?;
+        let s = self.signal(b, signal, SignalKind::Analog)?;
+        Ok(self.analog(b, s, None))
+    }
+
+    /// What the board's ADC reads on `signal` now, counts (0..4095), with noise.
+    pub fn read_adc(&mut self, board: &str, signal: &str) -> Result<u16, IoError> {
+        let b = self.board_index(board)?;
+        let s = self.signal(b, signal, SignalKind::Analog)?;
+        let mut noise = self.boards[b].noise[s].clone();
+        let v = self.analog(b, s, Some(&mut noise));
+        let code = frontends::ADC.convert(v, &mut noise);
+        self.boards[b].noise[s] = noise;
+        Ok(code)
+    }
+
+    fn analog(&self, b: usize, s: usize, noise: Option<&mut Noise>) -> f64 {
+        let board = &self.boards[b];
+        let name = board.kind.signals()[s].name;
+        match (&board.link, name) {
+            (Link::Psu, "VIN_SENSE") => frontends::VIN_SENSE.output(self.supply_v),
+            (Link::Psu, "IIN_SENSE") => frontends::iin_sense(self.battery.current()),
+            (Link::Psu, "VOUT_SENSE") => frontends::VOUT_SENSE.output(self.bus_voltage()),
+            (Link::Motor { wheel }, "MOTOR_CURRENT") => {
+                let i = self.wheels[*wheel].motor.current();
+                match noise {
+                    Some(n) => frontends::MOTOR_CURRENT.output(i, n),
+                    None => frontends::MOTOR_CURRENT.output_ideal(i),
+                }
+            }
+            (Link::Motor { .. }, "VMOT_SENSE") => frontends::VMOT_SENSE.output(self.supply_v),
+            (Link::Proximity { channels, .. }, ch) => {
+                let c = usize::from(ch.as_bytes()[ch.len() - 1] - b'0');
+                channels[c].map_or(0.0, |r| self.rangers[r].output_v())
+            }
+            _ => unreachable!("signal table and analog sources disagree on {name}"),
+        }
+    }
+
+    /// The encoder timer register of the board's counter `signal` (`ENC_A`).
+    pub fn read_counter(&self, board: &str, signal: &str) -> Result<u16, IoError> {
+        let b = self.board_index(board)?;
+        self.signal(b, signal, SignalKind::Counter)?;
+        Ok(self.wheels[self.wheel_of(b)?].encoder.hardware_count())
+    }
+
+    /// Sets the duty (0..1, clamped) of the PWM output `signal` (`PWM_AH`: leg A, `PWM_BH`:
+    /// leg B; each leg's low side is its complement).
+    pub fn set_pwm(&mut self, board: &str, signal: &str, duty: f64) -> Result<(), IoError> {
+        let b = self.board_index(board)?;
+        let s = self.signal(b, signal, SignalKind::Pwm)?;
+        if duty.is_nan() {
+            return Err(IoError::Invalid {
+                board: board.to_string(),
+                problem: format!("duty for {signal} is NaN"),
+            });
+        }
+        let w = self.wheel_of(b)?;
+        let input = &mut self.wheels[w].bridge.input;
+        match self.boards[b].kind.signals()[s].name {
+            "PWM_AH" => input.duty_a = duty.clamp(0.0, 1.0),
+            _ => input.duty_b = duty.clamp(0.0, 1.0),
+        }
+        Ok(())
+    }
+
+    /// Drives the digital output `signal` to level `high`.
+    pub fn set_output(&mut self, board: &str, signal: &str, high: bool) -> Result<(), IoError> {
+        let b = self.board_index(board)?;
+        let s = self.signal(b, signal, SignalKind::Output)?;
+        match self.boards[b].kind.signals()[s].name {
+            "DRV_EN" => {
+                let w = self.wheel_of(b)?;
+                self.wheels[w].bridge.input.enabled = high;
+            }
+            "BUS_EN" => {
+                if let Some(p) = &mut self.psu {
+                    p.set_enabled(high);
+                }
+            }
+            _ => {
+                // SENSOR_PWR_EN: switches the sensors now.
+                if let Link::Proximity { sensor_power, .. } = &mut self.boards[b].link {
+                    *sensor_power = high;
+                }
+                self.power_rangers();
+            }
+        }
+        Ok(())
+    }
+
+    /// The level on the digital input `signal`.
+    pub fn read_input(&self, board: &str, signal: &str) -> Result<bool, IoError> {
+        let b = self.board_index(board)?;
+        let s = self.signal(b, signal, SignalKind::Input)?;
+        Ok(match self.boards[b].kind.signals()[s].name {
+            // Active low: high while there is no fault.
+            "DRV_FAULT" => !self.wheels[self.wheel_of(b)?].bridge.fault,
+            _ => !self.psu.as_ref().is_some_and(|p| p.tripped()), // BUS_FAULT
+        })
+    }
+
+    // ----- Faults ----------------------------------------------------------------------
+
+    /// Connects or disconnects the encoder of motor board `board`.
+    pub fn set_encoder_connected(&mut self, board: &str, connected: bool) -> Result<(), IoError> {
+        let b = self.board_index(board)?;
+        let w = self.wheel_of(b)?;
+        self.wheels[w].encoder.set_connected(connected);
+        Ok(())
+    }
+
+    /// Injects (or clears) a driver fault on motor board `board`: the bridge turns off and
+    /// DRV_FAULT goes low.
+    pub fn set_driver_fault(&mut self, board: &str, fault: bool) -> Result<(), IoError> {
+        let b = self.board_index(board)?;
+        let w = self.wheel_of(b)?;
+        self.wheels[w].fault_injected = fault;
+        self.wheels[w].bridge.fault = fault || self.supply_v < DRIVER_UVLO_V;
+        Ok(())
+    }
+
+    /// Connects or disconnects the ranger on `channel` of proximity board `board`.
+    pub fn set_ranger_connected(
+        &mut self,
+        board: &str,
+        channel: usize,
+        connected: bool,
+    ) -> Result<(), IoError> {
+        let r = self.ranger_index(board, channel)?;
+        self.rangers[r].set_connected(connected);
+        Ok(())
+    }
+
+    fn ranger_index(&self, board: &str, channel: usize) -> Result<usize, IoError> {
+        let b = self.board_index(board)?;
+        let invalid = |problem: String| IoError::Invalid { board: board.to_string(), problem };
+        match &self.boards[b].link {
+            Link::Proximity { channels, .. } => channels
+                .get(channel)
+                .copied()
+                .flatten()
+                .ok_or_else(|| invalid(format!("no ranger on channel {channel}"))),
+            _ => Err(invalid(format!(
+                "is a {} board, not a proximity board",
+                self.boards[b].kind.name()
+            ))),
+        }
+    }
+
+    /// Sets the modules' own load on the 5 V bus, A (rangers are added to it).
+    pub fn set_bus_load_a(&mut self, amps: f64) {
+        self.bus_base_load_a = amps.max(0.0);
+    }
+
+    /// Moves the base to `pose`, at rest (tests and scenario set-up).
+    pub fn set_pose(&mut self, pose: Pose) {
+        self.pose = pose;
+        self.q = [0.0; 3];
+        for w in &mut self.wheels {
+            w.speed = 0.0;
+            let angle = w.motor.angle();
+            w.motor.set_mechanical(0.0, angle);
+        }
+    }
+
+    // ----- State -----------------------------------------------------------------------
+
+    /// The base's pose.
+    pub fn pose(&self) -> Pose {
+        self.pose
+    }
+
+    /// The base's velocity (body frame).
+    pub fn twist(&self) -> Twist {
+        self.kin.twist(&self.q)
+    }
+
+    /// The base's kinematics.
+    pub fn kinematics(&self) -> &Kinematics {
+        &self.kin
+    }
+
+    /// Number of wheels.
+    pub fn wheel_count(&self) -> usize {
+        self.wheels.len()
+    }
+
+    /// Wheel `k`'s drive train.
+    pub fn wheel(&self, k: usize) -> WheelState {
+        let w = &self.wheels[k];
+        WheelState {
+            motor_current: w.motor.current(),
+            motor_speed: w.motor.speed(),
+            motor_angle: w.motor.angle(),
+            wheel_speed: w.speed,
+            wheel_angle: w.angle,
+            load_torque: w.load_torque,
+            supply_current: w.supply_current,
+            encoder_count: w.encoder.hardware_count(),
+            bridge: w.bridge.input,
+            driver_fault: w.bridge.fault,
+        }
+    }
+
+    /// The battery.
+    pub fn battery(&self) -> &Battery {
+        &self.battery
+    }
+
+    /// Battery terminal voltage at the last sub-step (the motors' supply), V.
+    pub fn supply_voltage(&self) -> f64 {
+        self.supply_v
+    }
+
+    /// The 5 V bus voltage (5 V without a PSU module: an external supply), V.
+    pub fn bus_voltage(&self) -> f64 {
+        self.psu.as_ref().map_or(PsuParams::R2P.bus_voltage_v, Psu::bus_voltage)
+    }
+
+    /// The ranger on `channel` of proximity board `board`.
+    pub fn ranger(&self, board: &str, channel: usize) -> Result<&Ranger, IoError> {
+        Ok(&self.rangers[self.ranger_index(board, channel)?])
+    }
+
+    /// The obstacles.
+    pub fn obstacles(&self) -> &Obstacles {
+        &self.obstacles
+    }
+
+    /// Energy and charge flows since the start.
+    pub fn energy(&self) -> EnergyLedger {
+        self.ledger
+    }
+
+    /// Energy stored now: kinetic (base, wheels, rotors) and magnetic (windings), J.
+    pub fn stored_energy_j(&self) -> f64 {
+        let wheels: f64 = self
+            .wheels
+            .iter()
+            .map(|w| {
+                0.5 * w.wheel_inertia * w.speed * w.speed
+                    + 0.5 * w.motor.params.rotor_inertia * w.motor.speed() * w.motor.speed()
+                    + w.motor.magnetic_energy()
+            })
+            .sum();
+        self.base.kinetic_energy(&self.q) + wheels
+    }
+
+    /// Energy drawn from the battery's source not accounted for by storage, losses and the
+    /// bus, J: integration error only (first order in the sub-step).
+    pub fn energy_residual_j(&self) -> f64 {
+        self.ledger.chemical_j
+            - (self.stored_energy_j() - self.stored_at_start_j)
+            - self.ledger.spent_j()
+    }
+
+    /// A digest of the whole state (FNV-1a over its `Debug` form, which prints every float
+    /// exactly): equal digests mean equal worlds, for determinism tests.
+    pub fn state_digest(&self) -> u64 {
+        let text = format!("{self:?}");
+        text.bytes()
+            .fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
+    }
+}
