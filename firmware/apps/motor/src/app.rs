@@ -32,7 +32,7 @@ pub const ENCODER_CHECK_DUTY: f32 = 0.1;
 pub struct Sample {
     /// TIM3's counter (encoder mode, counting both edges of ENC_A and ENC_B).
     pub encoder_count: u16,
-    /// MOTOR_CURRENT, ADC counts (12 bit), sampled in the middle of the PWM period.
+    /// MOTOR_CURRENT, ADC counts (12 bit).
     pub current_adc: u16,
     /// VMOT_SENSE, ADC counts (12 bit).
     pub vmot_adc: u16,
@@ -129,7 +129,7 @@ impl<'a> App<'a> {
             ep: endpoints,
             params,
             cfg,
-            scale: Scale::new(cfg.encoder_cpr, cfg.gear_ratio),
+            scale: Scale::new(cfg.encoder_lines, cfg.gear_ratio),
             next_param: 0,
             steps: 0,
             encoder: Encoder::new(),
@@ -253,8 +253,8 @@ impl<'a> App<'a> {
         let i = self.next_param;
         self.cfg.reload(self.params, i);
         self.next_param = (i + 1) % COUNT as u16;
-        if i == index::ENCODER_CPR || i == index::GEAR_RATIO {
-            self.scale = Scale::new(self.cfg.encoder_cpr, self.cfg.gear_ratio);
+        if i == index::ENCODER_LINES || i == index::GEAR_RATIO {
+            self.scale = Scale::new(self.cfg.encoder_lines, self.cfg.gear_ratio);
         }
     }
 

@@ -193,9 +193,9 @@ mod tests {
         assert_eq!(c.speed_ref(), -cfg.max_speed, "the speed limit clamps too");
         c.outer(&cfg, Setpoint::Position(1000.0), &m);
         assert_eq!(c.current_ref(), cfg.current_limit);
-        // 1 N·m at the output = 1 / (0.035 × 19) = 1.504 A.
+        // 1 N·m at the output = 1 / (0.0302 × 15) = 2.208 A.
         c.outer(&cfg, Setpoint::Torque(1.0), &m);
-        assert!((c.current_ref() - 1.503_759).abs() < 1e-5);
+        assert!((c.current_ref() - 2.207_506).abs() < 1e-5);
     }
 
     #[test]
@@ -203,8 +203,8 @@ mod tests {
         let cfg = Config::DEFAULT;
         let mut c = Cascade::new();
         let m = Measured { vbus: 24.0, speed_now: 10.0, ..Default::default() };
-        // No current error: the duty is the back-EMF feed-forward, 0.035 × 19 × 10 / 24.
-        assert!((c.inner(&cfg, &m) - 0.277_083).abs() < 1e-5);
+        // No current error: the duty is the back-EMF feed-forward, 0.0302 × 15 × 10 / 24.
+        assert!((c.inner(&cfg, &m) - 0.188_75).abs() < 1e-5);
         c.outer(&cfg, Setpoint::Torque(100.0), &Measured { vbus: 24.0, ..m });
         for _ in 0..100 {
             assert!(c.inner(&cfg, &m) <= cfg.duty_limit);

@@ -37,8 +37,8 @@ impl Encoder {
     }
 }
 
-/// Counts to output-shaft radians: `encoder_cpr` counts per motor revolution (quadrature
-/// edges, 4 × the lines) through a `gear_ratio`:1 gearbox.
+/// Counts to output-shaft radians: an encoder of `lines` per motor revolution (4 counts per
+/// line: both edges of both channels) through a `gear_ratio`:1 gearbox.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scale {
     /// Output-shaft radians per count.
@@ -46,14 +46,14 @@ pub struct Scale {
 }
 
 impl Scale {
-    /// The scale of an encoder with `cpr` counts per motor revolution and a gearbox of
+    /// The scale of an encoder with `lines` per motor revolution and a gearbox of
     /// `gear_ratio` motor revolutions per output revolution.
-    pub fn new(cpr: u32, gear_ratio: f32) -> Self {
-        Self { rad_per_count: core::f32::consts::TAU / (cpr as f32 * gear_ratio) }
+    pub fn new(lines: u32, gear_ratio: f32) -> Self {
+        Self { rad_per_count: core::f32::consts::TAU / (4.0 * lines as f32 * gear_ratio) }
     }
 
     /// Output-shaft position of `count`, rad. f32 keeps about one count of resolution up to
-    /// 2^24 counts (440 output revolutions at 2000 counts × 19:1), a fraction of a degree beyond.
+    /// 2^24 counts (560 output revolutions at 2000 counts × 15:1), a fraction of a degree beyond.
     pub fn position(&self, count: i32) -> f32 {
         count as f32 * self.rad_per_count
     }

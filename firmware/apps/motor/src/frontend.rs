@@ -1,29 +1,29 @@
 //! The analog front end: ADC counts to amperes and volts, and back (for emulated boards).
 //!
 //! **Must match hardware/motor schematic** (and the world model's constants in
-//! firmware/host/world): the Hall-effect current sensor, the motor-supply divider and the ADC
-//! reference. The Hall sensor's sensitivity is also a parameter (`hall_mv_per_a`) so another
+//! firmware/host/world/src/frontends.rs: `MOTOR_CURRENT`, `VMOT_SENSE`): the Hall-effect current
+//! sensor, the motor-supply divider and the ADC reference. The Hall sensor's sensitivity is also a parameter (`hall_mv_per_a`) so another
 //! sensor variant needs no new firmware; its zero is calibrated at start-up.
 
 /// ADC resolution: 12 bits, one count = `VREF_MV / ADC_COUNTS` (STM32F1 ADC, right aligned).
 pub const ADC_COUNTS: u16 = 4096;
 /// ADC reference (VDDA = VREF+ = the 3.3 V rail on the F103CB in LQFP-48), mV.
 pub const VREF_MV: f32 = 3300.0;
-/// Hall sensor fitted: Allegro ACS711KEXLT-31AB-T, ±31 A, supplied from the same 3.3 V rail
+/// Hall sensor fitted: Allegro ACS711KEXLT-15AB, ±15.5 A, supplied from the same 3.3 V rail
 /// as VDDA (ratiometric: its zero and gain track the ADC reference).
-pub const HALL_SENSOR: &str = "ACS711KEXLT-31AB-T";
+pub const HALL_SENSOR: &str = "ACS711KEXLT-15AB";
 /// Its sensitivity at 3.3 V, mV/A: the default of the `hall_mv_per_a` parameter.
-pub const HALL_MV_PER_A: f32 = 45.0;
+pub const HALL_MV_PER_A: f32 = 90.0;
 /// Its output at 0 A is VCC/2: mid-scale, in ADC counts.
 pub const HALL_ZERO_COUNTS: u16 = ADC_COUNTS / 2;
-/// Largest distance of the calibrated zero from mid-scale (±120 mV, ±2.7 A: the sensor's
+/// Largest distance of the calibrated zero from mid-scale (±120 mV, ±1.3 A: the sensor's
 /// zero error is ±1.5 % of VCC): further away, the sensor is missing or broken.
 pub const HALL_ZERO_TOLERANCE: u16 = 150;
-/// Motor-supply divider VMOT → VMOT_SENSE: 100 kΩ over 8.2 kΩ (36 V → 2.73 V, full scale
-/// 43.5 V).
+/// Motor-supply divider VMOT → VMOT_SENSE: 100 kΩ over 10 kΩ (÷11: 24 V → 2.18 V, full scale
+/// 36.3 V, the module's maximum supply).
 pub const VMOT_DIVIDER_TOP_OHM: f32 = 100_000.0;
 /// Lower resistor of the VMOT divider.
-pub const VMOT_DIVIDER_BOTTOM_OHM: f32 = 8_200.0;
+pub const VMOT_DIVIDER_BOTTOM_OHM: f32 = 10_000.0;
 /// VMOT / VMOT_SENSE.
 pub const VMOT_RATIO: f32 =
     (VMOT_DIVIDER_TOP_OHM + VMOT_DIVIDER_BOTTOM_OHM) / VMOT_DIVIDER_BOTTOM_OHM;
@@ -65,16 +65,16 @@ mod tests {
 
     #[test]
     fn conversions_invert_each_other_within_one_count() {
-        for a in [-30.0f32, -10.0, -0.5, 0.0, 0.5, 10.0, 30.0] {
+        for a in [-15.0f32, -10.0, -0.5, 0.0, 0.5, 10.0, 15.0] {
             let c = current_counts(a, 2048.0, HALL_MV_PER_A);
-            assert!((amps(c, 2048.0, HALL_MV_PER_A) - a).abs() <= 0.5 * MV_PER_COUNT / 45.0 + 1e-5);
+            assert!((amps(c, 2048.0, HALL_MV_PER_A) - a).abs() <= 0.5 * MV_PER_COUNT / 90.0 + 1e-5);
         }
-        // 24 V → 24 / 13.195 = 1.819 V → 2258 counts.
-        assert_eq!(vmot_counts(24.0), 2258);
-        assert!((vmot_volts(2258) - 24.0).abs() < 0.011);
-        // One count of current is 0.806 mV / 45 mV/A = 17.9 mA.
-        assert!((amps(2049, 2048.0, 45.0) - 0.017_903).abs() < 1e-6);
-        assert_eq!(current_counts(1000.0, 2048.0, 45.0), 4095, "clipped at full scale");
-        assert_eq!(current_counts(-1000.0, 2048.0, 45.0), 0);
+        // 24 V → 24 / 11 = 2.182 V → 2708 counts (as the world model's ADC reads it).
+        assert_eq!(vmot_counts(24.0), 2708);
+        assert!((vmot_volts(2708) - 24.0).abs() < 0.01);
+        // One count of current is 0.806 mV / 90 mV/A = 8.95 mA.
+        assert!((amps(2049, 2048.0, 90.0) - 0.008_951).abs() < 1e-6);
+        assert_eq!(current_counts(1000.0, 2048.0, 90.0), 4095, "clipped at full scale");
+        assert_eq!(current_counts(-1000.0, 2048.0, 90.0), 0);
     }
 }

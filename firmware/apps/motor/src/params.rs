@@ -72,31 +72,31 @@ params! {
         "Current loop (1 kHz) proportional gain.";
     4 CURRENT_KI current_ki: f32 = 300.0, 0.0, 20_000.0, "V/(A·s)",
         "Current loop integral gain.";
-    5 SPEED_KP speed_kp: f32 = 1.5, 0.0, 100.0, "A/(rad/s)",
+    5 SPEED_KP speed_kp: f32 = 2.6, 0.0, 100.0, "A/(rad/s)",
         "Speed loop (200 Hz) proportional gain, output-shaft speed.";
-    6 SPEED_KI speed_ki: f32 = 35.0, 0.0, 10_000.0, "A/rad",
+    6 SPEED_KI speed_ki: f32 = 80.0, 0.0, 10_000.0, "A/rad",
         "Speed loop integral gain.";
-    7 SPEED_WEIGHT speed_weight: f32 = 0.4, 0.0, 1.0, "",
+    7 SPEED_WEIGHT speed_weight: f32 = 0.3, 0.0, 1.0, "",
         "Share of the speed setpoint in the speed loop's proportional term (1: plain PI; less: less overshoot on setpoint steps, same disturbance rejection).";
     8 POSITION_KP position_kp: f32 = 16.0, 0.0, 1_000.0, "(rad/s)/rad",
         "Position loop (200 Hz) gain: speed setpoint per rad of error.";
-    9 MAX_SPEED max_speed: f32 = 30.0, 0.1, 1_000.0, "rad/s",
+    9 MAX_SPEED max_speed: f32 = 50.0, 0.1, 1_000.0, "rad/s",
         "Output-shaft speed limit of the speed and position modes.";
-    10 CURRENT_LIMIT current_limit: f32 = 10.0, 0.1, 20.0, "A",
-        "Clamps the current setpoint in every mode (module rating: 20 A continuous).";
-    11 TRIP_CURRENT trip_current: f32 = 25.0, 1.0, 30.0, "A",
+    10 CURRENT_LIMIT current_limit: f32 = 10.0, 0.1, 15.0, "A",
+        "Clamps the current setpoint in every mode (the current sensor reads up to ±15.5 A).";
+    11 TRIP_CURRENT trip_current: f32 = 14.0, 1.0, 15.0, "A",
         "Over-current trip threshold on the measured current (keep above `current_limit`).";
     12 TRIP_MS trip_ms: u32 = 5, 1, 100, "ms",
         "How long the current must stay above `trip_current` to trip (fault bit 0).";
-    13 ENCODER_CPR encoder_cpr: u32 = 2_000, 4, 1_000_000, "counts/rev",
-        "Encoder counts per motor revolution (quadrature edges: 4 × lines).";
-    14 GEAR_RATIO gear_ratio: f32 = 19.0, 0.01, 10_000.0, "",
+    13 ENCODER_LINES encoder_lines: u32 = 500, 1, 250_000, "lines/rev",
+        "Encoder lines per motor revolution (TIM3 counts 4 edges per line).";
+    14 GEAR_RATIO gear_ratio: f32 = 15.0, 0.01, 10_000.0, "",
         "Motor revolutions per output-shaft revolution.";
-    15 HALL_MV_PER_A hall_mv_per_a: f32 = 45.0, 5.0, 500.0, "mV/A",
-        "Hall current sensor sensitivity (ACS711KEXLT-31AB-T at 3.3 V: 45).";
-    16 TORQUE_CONSTANT torque_constant: f32 = 0.035, 0.001, 10.0, "N·m/A",
-        "Motor torque constant (= back-EMF constant in V·s/rad): torque setpoints and back-EMF feed-forward.";
-    17 MOTOR_RESISTANCE motor_resistance: f32 = 0.6, 0.01, 100.0, "Ω",
+    15 HALL_MV_PER_A hall_mv_per_a: f32 = 90.0, 5.0, 500.0, "mV/A",
+        "Hall current sensor sensitivity (ACS711KEXLT-15AB at 3.3 V: 90).";
+    16 TORQUE_CONSTANT torque_constant: f32 = 0.0302, 0.001, 10.0, "N·m/A",
+        "Motor torque constant (= back-EMF constant in V·s/rad): torque setpoints (gearbox losses not compensated) and back-EMF feed-forward.";
+    17 MOTOR_RESISTANCE motor_resistance: f32 = 0.611, 0.01, 100.0, "Ω",
         "Motor terminal resistance: the encoder-loss check estimates back-EMF with it.";
     18 ENCODER_TIMEOUT_MS encoder_timeout_ms: u32 = 100, 10, 5_000, "ms",
         "Driving with back-EMF above `encoder_emf_v` and no encoder edge for this long: encoder loss (fault bit 1).";

@@ -202,7 +202,7 @@ fn a_gateway_drives_two_motors_over_the_bus_and_parameters_are_range_checked() {
             && matches!(e, Event::ParamError { fault: ParamFault::OutOfRange, .. })),
         "{answers:?}"
     );
-    assert_eq!(boards[0].params.get(index::SPEED_KP), Ok(Value::F32(1.5)));
+    assert_eq!(boards[0].params.get(index::SPEED_KP), Ok(Value::F32(2.6)));
     assert!(answers.iter().any(|(i, e)| *i == index::PUBLISH_HZ
         && matches!(e, Event::ParamValue { value: Value::U32(50), .. })));
     for b in &boards {

@@ -21,7 +21,7 @@ fn step_metrics(out: &[f64], target: f64) -> (usize, f64, usize) {
 }
 
 #[test]
-fn speed_step_rises_within_40_ms_without_overshoot() {
+fn speed_step_rises_within_50_ms_without_overshoot() {
     let mut r = Rig::calibrated();
     let mut out = Vec::new();
     r.hold(SPEED, 10.0, 400, |r| out.push(r.speed()));
@@ -29,7 +29,9 @@ fn speed_step_rises_within_40_ms_without_overshoot() {
     println!(
         "10 rad/s step: rise {rise} ms, overshoot {overshoot:.2} %, within 2 % after {settled} ms"
     );
-    assert!(rise <= 40, "rise time {rise} ms");
+    // At the 10 A limit the output accelerates at k·I/(J·N) = 252 rad/s²: 10 → 90 % takes at
+    // least 32 ms.
+    assert!((32..=50).contains(&rise), "rise time {rise} ms");
     assert!(overshoot <= 3.0, "overshoot {overshoot:.2} %");
     assert!(settled <= 100, "settled after {settled} ms");
     let w = r.app.measured().speed;
@@ -44,9 +46,9 @@ fn a_large_step_is_paced_by_the_current_limit_and_the_current_stays_within_it() 
     r.hold(SPEED, 20.0, 400, |r| out.push(r.speed()));
     let (rise, overshoot, settled) = step_metrics(&out, 20.0);
     println!("20 rad/s step: rise {rise} ms, overshoot {overshoot:.2} %, within 2 % after {settled} ms, peak {:.2} A", r.motor.peak_current);
-    // At 10 A the motor accelerates the output at k·I/(J·N) = 368 rad/s²: 10 → 90 % of
-    // 20 rad/s takes at least 43 ms.
-    assert!((43..=70).contains(&rise), "rise time {rise} ms");
+    // At 10 A the motor accelerates the output at 252 rad/s²: 10 → 90 % of 20 rad/s takes at
+    // least 63 ms.
+    assert!((63..=90).contains(&rise), "rise time {rise} ms");
     assert!(overshoot <= 3.0, "overshoot {overshoot:.2} %");
     assert!(r.motor.peak_current <= 10.5, "peak current {:.2} A", r.motor.peak_current);
     // And back down through zero to −20 rad/s.
@@ -54,7 +56,8 @@ fn a_large_step_is_paced_by_the_current_limit_and_the_current_stays_within_it() 
     r.hold(SPEED, -20.0, 400, |r| back.push(r.speed() + 20.0));
     let (rise, overshoot, _) =
         step_metrics(&back.iter().map(|w| -(w - 40.0)).collect::<Vec<_>>(), 40.0);
-    assert!(rise <= 130 && overshoot <= 3.0, "reverse: {rise} ms, {overshoot:.2} %");
+    // 32 rad/s of the 40 rad/s swing at 252 rad/s²: at least 127 ms.
+    assert!(rise <= 160 && overshoot <= 3.0, "reverse: {rise} ms, {overshoot:.2} %");
     assert!((r.speed() + 20.0).abs() < 0.2);
 }
 
@@ -68,7 +71,7 @@ fn position_is_held_against_a_load_step() {
     assert!(t90 <= 150, "reaches 0.9 rad after {t90} ms");
     assert!(peak <= 1.005, "overshoot to {peak:.4} rad");
     assert!((out[499] - 1.0).abs() < 0.002, "{}", out[499]);
-    // A 2 N·m load (3 A at the motor) steps on and stays.
+    // A 2 N·m load (4.4 A at the motor) steps on and stays.
     r.motor.load = 2.0;
     let mut dev = Vec::new();
     r.hold(POSITION, 1.0, 500, |r| dev.push(r.motor.output_position() - 1.0));
@@ -79,17 +82,17 @@ fn position_is_held_against_a_load_step() {
     assert!(back <= 250, "back within 5 mrad after {back} ms");
     assert!(dev[499].abs() < 0.001, "no steady-state error: {}", dev[499]);
     let i = r.app.measured().current;
-    assert!((i - 3.0).abs() < 0.2, "holding the load takes 2 / (0.035 × 19) = 3.0 A: {i}");
+    assert!((i - 4.42).abs() < 0.2, "holding the load takes 2 / (0.0302 × 15) = 4.42 A: {i}");
 }
 
 #[test]
 fn position_moves_across_many_timer_wraps() {
     let mut r = Rig::calibrated();
-    // 20 rad = 121 000 counts: the 16-bit timer wraps twice on the way.
+    // 20 rad = 95 500 counts: the 16-bit timer wraps on the way (and back on the return).
     r.hold(POSITION, 20.0, 1500, |_| {});
     assert!((r.motor.output_position() - 20.0).abs() < 0.002, "{}", r.motor.output_position());
     assert!((r.app.measured().position - 20.0).abs() < 0.002);
-    assert!(r.app.encoder_count() > 120_000);
+    assert!(r.app.encoder_count() > 95_000);
     r.hold(POSITION, -5.0, 1500, |_| {});
     assert!((r.motor.output_position() + 5.0).abs() < 0.002, "{}", r.motor.output_position());
 }
@@ -98,11 +101,11 @@ fn position_moves_across_many_timer_wraps() {
 fn torque_setpoints_become_current() {
     let mut r = Rig::calibrated();
     r.motor.stalled = true;
-    // 1 N·m at the output = 1 / (0.035 × 19) = 1.504 A.
+    // 1 N·m at the output = 1 / (0.0302 × 15) = 2.208 A.
     r.hold(TORQUE, 1.0, 200, |_| {});
-    assert!((r.motor.i - 1.504).abs() < 0.05, "{}", r.motor.i);
+    assert!((r.motor.i - 2.208).abs() < 0.05, "{}", r.motor.i);
     r.hold(TORQUE, -2.0, 200, |_| {});
-    assert!((r.motor.i + 3.008).abs() < 0.05, "{}", r.motor.i);
+    assert!((r.motor.i + 4.415).abs() < 0.05, "{}", r.motor.i);
     // Beyond the limit: the limit.
     r.hold(TORQUE, 50.0, 200, |_| {});
     assert!((r.motor.i - 10.0).abs() < 0.1, "{}", r.motor.i);

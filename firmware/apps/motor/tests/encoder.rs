@@ -41,7 +41,7 @@ fn the_32_bit_count_wraps_and_speed_stays_right_across_it() {
     enc.update(0);
     let mut raw = 0u16;
     let mut prev = enc.count();
-    let scale = Scale::new(2000, 19.0);
+    let scale = Scale::new(500, 19.0);
     // 70 000 steps of +32 000 counts: 2.24e9 counts, past i32::MAX.
     for _ in 0..70_000 {
         raw = raw.wrapping_add(32_000);
@@ -55,8 +55,8 @@ fn the_32_bit_count_wraps_and_speed_stays_right_across_it() {
 
 #[test]
 fn scale_gives_output_shaft_radians() {
-    let s = Scale::new(2000, 19.0);
-    // One output revolution is 2000 × 19 counts.
+    let s = Scale::new(500, 19.0);
+    // One output revolution is 4 × 500 × 19 counts.
     assert!((s.position(38_000) - core::f32::consts::TAU).abs() < 1e-5);
     assert!((s.position(-19_000) + core::f32::consts::PI).abs() < 1e-5);
     // 190 counts in 5 ms: 1/200 rev in 5 ms = 6.283 rad/s.

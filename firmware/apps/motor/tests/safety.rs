@@ -77,14 +77,14 @@ fn the_watchdog_waits_for_the_first_setpoint() {
 
 #[test]
 fn over_current_trips_after_trip_ms_and_stays_off_until_cleared() {
+    // Idle (bridge off), so that the controller does not react to the injected readings: the
+    // sensor reads 15 A (above the 14 A trip) for 4 ms, then from 10 ms on for good.
     let mut r = Rig::calibrated();
-    r.hold(SPEED, 5.0, 200, |_| {});
-    // The sensor reads 26 A (above the 25 A trip) from now on, for 4 ms then for good.
     let from = r.now_us;
     r.tamper = Box::new(move |now, s| {
         let t = now - from;
         if !(4 * MS..10 * MS).contains(&t) {
-            s.current_adc = r2p_app_motor::frontend::current_counts(26.0, 2048.0, 45.0);
+            s.current_adc = r2p_app_motor::frontend::current_counts(15.0, 2048.0, 90.0);
         }
     });
     let mut tripped = None;
@@ -101,7 +101,7 @@ fn over_current_trips_after_trip_ms_and_stays_off_until_cleared() {
     let e = r.take_events();
     assert_eq!(e.len(), 1);
     assert_eq!((e[0].raised, e[0].faults), (Faults::OVER_CURRENT.0, Faults::OVER_CURRENT.0));
-    assert!((e[0].current - 26.0).abs() < 0.05, "{}", e[0].current);
+    assert!((e[0].current - 15.0).abs() < 0.02, "{}", e[0].current);
     r.tamper = Box::new(|_, _| {});
     r.hold(SPEED, 5.0, 100, |r| assert!(!r.last.bridge_enable, "latched: the bridge stays off"));
     r.clear(ALL);

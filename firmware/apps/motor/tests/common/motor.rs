@@ -1,11 +1,13 @@
 //! A brushed DC motor behind an H-bridge, with a gearbox, a quadrature encoder and the Hall
-//! current sensor, simulated in f64 with 10 µs steps (its electrical time constant is 0.33 ms).
+//! current sensor, simulated in f64 with 10 µs steps (its electrical time constant is 0.19 ms).
 //!
-//! Reference motor: a 24 V, ~70 W gear motor like Triskar2's (paper §5): R = 0.6 Ω,
-//! L = 0.2 mH, k = 0.035 N·m/A (= V·s/rad), 19:1 gearbox, 500-line encoder (2000 counts per
-//! motor revolution), inertia at the motor shaft 5e-5 kg·m² (rotor plus the reflected share of
-//! a 20 kg robot), viscous friction 2e-5 N·m·s/rad. No-load output speed 24 / 0.035 / 19 =
-//! 36 rad/s; stall current 40 A (so the current limit matters).
+//! Triskar2's drive as the world model (firmware/host/world, robots/triskar2.toml) has it:
+//! maxon RE 35 24 V (R = 0.611 Ω, L = 0.119 mH, k = 0.0302 N·m/A, no-load current 0.137 A
+//! split into viscous and Coulomb friction), 15:1 gearbox (taken lossless here), 500-line
+//! encoder (2000 counts per motor turn), 24 V. Inertia at the motor shaft 8e-5 kg·m²
+//! (assumed: the rotor's 6.5e-6 plus a third of the 20 kg base at a 5 cm wheel through 15:1).
+//! No-load output speed 24 / 0.0302 / 15 = 53 rad/s; stall current 39 A (so the current limit
+//! matters).
 
 use r2p_app_motor::frontend;
 use r2p_app_motor::{Command, Sample};
@@ -18,8 +20,10 @@ pub struct Motor {
     pub k: f64,
     pub j: f64,
     pub b: f64,
+    /// Coulomb (brush) friction, N·m, smoothed over ±0.5 rad/s as the world model does.
+    pub coulomb: f64,
     pub gear: f64,
-    pub cpr: f64,
+    pub counts_per_rev: f64,
     pub vbus: f64,
     /// Load torque at the output shaft, N·m (opposes positive rotation when positive).
     pub load: f64,
@@ -41,13 +45,14 @@ pub struct Motor {
 impl Default for Motor {
     fn default() -> Self {
         Self {
-            r: 0.6,
-            l: 0.2e-3,
-            k: 0.035,
-            j: 5e-5,
-            b: 2e-5,
-            gear: 19.0,
-            cpr: 2000.0,
+            r: 0.611,
+            l: 0.119e-3,
+            k: 0.0302,
+            j: 8e-5,
+            b: 0.0302 * 0.137 / 2.0 / 792.0,
+            coulomb: 0.0302 * 0.137 / 2.0,
+            gear: 15.0,
+            counts_per_rev: 2000.0,
             vbus: 24.0,
             load: 0.0,
             stalled: false,
@@ -64,7 +69,7 @@ impl Default for Motor {
 
 impl Motor {
     pub fn count(&self) -> u16 {
-        ((self.theta / TAU * self.cpr).floor() as i64) as u16
+        ((self.theta / TAU * self.counts_per_rev).floor() as i64) as u16
     }
 
     pub fn sample(&mut self) -> Sample {
@@ -114,7 +119,8 @@ impl Motor {
             if self.stalled {
                 self.w = 0.0;
             } else {
-                let torque = self.k * self.i - self.b * self.w - self.load / self.gear;
+                let friction = self.b * self.w + self.coulomb * (self.w / 0.5).tanh();
+                let torque = self.k * self.i - friction - self.load / self.gear;
                 self.w += H * torque / self.j;
             }
             self.theta += H * self.w;
