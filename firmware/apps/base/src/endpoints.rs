@@ -39,6 +39,9 @@ impl Names {
 pub struct Endpoints<'a> {
     /// `cmd_vel` as received.
     pub cmd: &'a Subscriber<'a, Twist2D, 2>,
+    /// Publishes `cmd_vel` on this board (a gateway's ROS bridge, an emulator's teleop script);
+    /// the bus's publishers arrive through the import.
+    pub cmd_local: &'a Publisher<'a, Twist2D>,
     /// Obstacle events as received.
     pub obstacle: &'a Subscriber<'a, Obstacle, 4>,
     /// Wheel states as received.
@@ -57,7 +60,7 @@ fn leak<T>(x: T) -> &'static T {
     Box::leak(Box::new(x))
 }
 
-/// A topic received from the bus: (local subscriber, the node's import).
+/// A topic received from the bus: (local subscriber, the node's import, the local publisher).
 macro_rules! incoming {
     ($ty:ty, $name:expr, $q:literal) => {{
         let topic: &'static Topic<'static, $ty, { pool_size(&[$q], 1) }, 1> =
@@ -67,7 +70,7 @@ macro_rules! incoming {
         let sub: &'static Subscriber<'static, $ty, $q> = leak(Subscriber::new());
         topic.subscribe(sub).expect("a new topic has room for a subscriber");
         let import: &'static dyn Import = leak(RemotePublisher::new(publisher, topic));
-        (sub, import)
+        (sub, import, publisher)
     }};
 }
 
@@ -90,8 +93,8 @@ impl Endpoints<'static> {
     /// `ik_period_us`.
     pub fn leak(names: Names, ik_period_us: u32) -> Self {
         let hrt = Class::SyncRealTime { period_us: ik_period_us };
-        let (cmd, cmd_in) = incoming!(Twist2D, names.cmd_vel, 2);
-        let (obstacle, obstacle_in) = incoming!(Obstacle, names.obstacle, 4);
+        let (cmd, cmd_in, cmd_local) = incoming!(Twist2D, names.cmd_vel, 2);
+        let (obstacle, obstacle_in, _) = incoming!(Obstacle, names.obstacle, 4);
         let s0 = incoming!(WheelState, names.states[0], 2);
         let s1 = incoming!(WheelState, names.states[1], 2);
         let s2 = incoming!(WheelState, names.states[2], 2);
@@ -101,6 +104,7 @@ impl Endpoints<'static> {
         let odom = outgoing!(Odometry, names.odom, Class::NonRealTime, 2);
         Endpoints {
             cmd,
+            cmd_local,
             obstacle,
             states: [s0.0, s1.0, s2.0],
             setpoints: [p0.0, p1.0, p2.0],

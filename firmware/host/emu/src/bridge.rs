@@ -134,7 +134,13 @@ impl Bridge {
                 Some(f) => self.backlog.push_back(f),
             }
         }
+        // One frame in the mailboxes at a time: the port sends its lowest identifier first,
+        // and a message's later fragments have lower identifiers, so loading several would
+        // reorder them (a SocketCAN interface also sends a socket's frames in order).
         while let Some(f) = self.backlog.front() {
+            if self.port.pending() > 0 {
+                break;
+            }
             match self.port.try_transmit(f) {
                 Ok(()) => {
                     self.backlog.pop_front();
@@ -254,6 +260,25 @@ mod tests {
         assert_eq!((s.to_hub, s.injected, s.standard_dropped, s.not_queued), (10, 1, 1, 0));
         assert_eq!(sim.node(0).got, vec![Frame::from_raw(0x1ABC_0000, &[7]).unwrap()]);
         assert_eq!(bridge.overflows(), 0);
+    }
+
+    #[test]
+    fn a_tools_fragments_reach_the_bus_in_the_order_sent() {
+        // A message's fragments count down: later fragments have lower identifiers and would
+        // win arbitration against earlier ones if loaded together.
+        let mut sim = Sim::new(2, Config::default(), Mode::Poll { period_us: 1_000 });
+        sim.add_board(Talker { sent: 0, got: Vec::new() }, 0, None);
+        let hub = Arc::new(BroadcastHub::new());
+        let mut bridge = Bridge::new(&sim, 1, hub.clone(), 64);
+        let tool = hub.join();
+        let ids = [0x1FA8_0003u32, 0x1FA8_0002, 0x1FA8_0001, 0x1FA8_0000];
+        for id in ids {
+            hub.send(tool, CanFrame::extended(id, &[1, 2]).unwrap());
+        }
+        bridge.run_until(&mut sim, 10_000_000);
+        let from_tool: Vec<u32> =
+            sim.bus().frames().filter(|f| f.1 == 1).map(|f| f.2.id().to_raw()).collect();
+        assert_eq!(from_tool, ids);
     }
 
     #[test]

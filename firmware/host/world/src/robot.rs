@@ -162,6 +162,18 @@ pub enum Wiring {
     Gateway,
 }
 
+/// A parameter value as a robot file gives it (the emulator checks it against the module's
+/// parameter table: name, type and range).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ParamValue {
+    /// `true` / `false`.
+    Bool(bool),
+    /// An integer.
+    Int(i64),
+    /// A number with a fraction.
+    Float(f64),
+}
+
 /// One module on the bus.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Module {
@@ -171,6 +183,22 @@ pub struct Module {
     pub uid: Uid,
     /// What it is wired to.
     pub wiring: Wiring,
+    /// Parameters stored in the module's flash before it boots (`[modules.params]`), by name.
+    pub params: Vec<(String, ParamValue)>,
+}
+
+/// A velocity command the teleoperator sends from `at_s` on (`[[teleop]]`): what a user's
+/// joystick or ROS would publish on `cmd_vel`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TeleopStep {
+    /// From this time on, s.
+    pub at_s: f64,
+    /// Forward, m/s.
+    pub vx: f64,
+    /// Left, m/s.
+    pub vy: f64,
+    /// Counter-clockwise, rad/s.
+    pub wz: f64,
 }
 
 impl Module {
@@ -210,6 +238,8 @@ pub struct Robot {
     pub obstacles: Vec<Obstacle>,
     /// Modules, in file order.
     pub modules: Vec<Module>,
+    /// Velocity commands over time, in time order.
+    pub teleop: Vec<TeleopStep>,
 }
 
 // ----- The file as written -------------------------------------------------------------
@@ -225,6 +255,20 @@ struct FileDoc {
     #[serde(default)]
     obstacles: Vec<ObstacleSection>,
     modules: Vec<ModuleSection>,
+    #[serde(default)]
+    teleop: Vec<TeleopSection>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TeleopSection {
+    at_s: f64,
+    #[serde(default)]
+    vx: f64,
+    #[serde(default)]
+    vy: f64,
+    #[serde(default)]
+    wz: f64,
 }
 
 #[derive(Deserialize)]
@@ -323,6 +367,8 @@ struct ModuleSection {
     battery: Option<String>,
     bus_load_a: Option<f64>,
     rangers: Option<Vec<RangerSection>>,
+    #[serde(default)]
+    params: std::collections::BTreeMap<String, toml::Value>,
 }
 
 #[derive(Deserialize)]
@@ -532,6 +578,18 @@ fn validate(ctx: &Ctx<'_>, doc: FileDoc) -> Result<Robot, RobotError> {
             ));
         }
     }
+    let mut teleop = Vec::new();
+    for (i, t) in doc.teleop.iter().enumerate() {
+        let at = format!("teleop[{i}]");
+        ctx.check(t.at_s.is_finite() && t.at_s >= 0.0, &format!("{at}.at_s"), "a time ≥ 0 s")?;
+        if let Some(prev) = teleop.last().map(|p: &TeleopStep| p.at_s) {
+            ctx.check(t.at_s > prev, &format!("{at}.at_s"), "times in increasing order")?;
+        }
+        for (k, v) in [("vx", t.vx), ("vy", t.vy), ("wz", t.wz)] {
+            ctx.check(v.is_finite() && v.abs() <= 10.0, &format!("{at}.{k}"), "-10..=10")?;
+        }
+        teleop.push(TeleopStep { at_s: t.at_s, vx: t.vx, vy: t.vy, wz: t.wz });
+    }
     let psus = modules.iter().filter(|m| m.kind() == BoardKind::Psu).count();
     if psus != 1 {
         return Err(ctx.err(
@@ -552,6 +610,7 @@ fn validate(ctx: &Ctx<'_>, doc: FileDoc) -> Result<Robot, RobotError> {
         battery,
         obstacles,
         modules,
+        teleop,
     })
 }
 
@@ -872,7 +931,23 @@ fn validate_module(
         }
         BoardKind::Gateway => Wiring::Gateway,
     };
-    Ok(Module { name: m.name.clone(), uid, wiring })
+    let mut params = Vec::new();
+    for (name, v) in &m.params {
+        let value = match v {
+            toml::Value::Boolean(b) => ParamValue::Bool(*b),
+            toml::Value::Integer(n) => ParamValue::Int(*n),
+            toml::Value::Float(f) => ParamValue::Float(*f),
+            other => {
+                return Err(ctx.err(
+                    key(&format!("params.{name}")),
+                    format!("a {} is not a parameter value", other.type_str()),
+                    "give a boolean, an integer or a number",
+                ))
+            }
+        };
+        params.push((name.clone(), value));
+    }
+    Ok(Module { name: m.name.clone(), uid, wiring, params })
 }
 
 #[cfg(test)]

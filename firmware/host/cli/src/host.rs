@@ -1,0 +1,488 @@
+//! The CLI as a module on the bus: a real [`r2p_node::Node`] runs on the host, so `echo`
+//! subscribes, `pub` publishes and `param` asks exactly as a module's firmware does (node ID
+//! claim, heartbeats, ADVERTISE / SUBSCRIBE_REQUEST, PARAM_GET / PARAM_SET).
+//!
+//! A module's topics are typed statics; the CLI learns a topic's type only at run time, from
+//! its advertisement. So the local ends of its import and export are [`DynImport`] and
+//! [`DynExport`], which implement the node's type-erased `Import` and `Export` traits with
+//! the advertised type hash and size and hand over raw bytes (decoded and encoded by
+//! [`crate::types`]).
+//!
+//! The node is polled (unslotted): a tool reached over TCP cannot keep a TDMA slot, so its
+//! NRT frames go out when the bus lets them, like an SRT/NRT frame that lost arbitration.
+//! [`crate::session::Session`] drives it.
+
+use std::cell::{Cell, RefCell};
+use std::collections::VecDeque;
+use std::time::{Instant, SystemTime, UNIX_EPOCH};
+
+use r2p_canlink::CanFrame;
+use r2p_management::message::{Message, Value, UID_LEN};
+use r2p_management::NodeId;
+use r2p_middleware::{Class, Delivery};
+use r2p_node::{Event, Export, Import, ImportError, NoParams, Node, NodeConfig, WireError};
+use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError};
+use rtcan::{CanController, Frame, Micros};
+
+use crate::error::CliError;
+use crate::link::Link;
+use crate::types::MsgType;
+use crate::watch::{Report, TopicInfo, What};
+
+/// The largest message (one RTCAN message).
+const BUF: usize = r2p_msgs::MAX_SIZE;
+/// The host node: one export, one import, room for a whole 1 KiB message in the transmit
+/// queue (plus a management message), 16 streams reassembled at once.
+pub type CliNode = Node<'static, 1, 1, { BUF / 8 + 8 }, 16, BUF>;
+
+/// The name the CLI's node gives in its heartbeats.
+pub const NODE_NAME: &str = "r2p-cli";
+/// Messages an import keeps for the CLI (and the queue length it asks publishers for).
+pub const QUEUE: usize = 64;
+
+/// A unique ID for this run: `r2p\0`, the process ID and the clock's nanoseconds, so that two
+/// tools started together claim different node IDs.
+fn run_uid() -> [u8; UID_LEN] {
+    let mut uid = [0u8; UID_LEN];
+    uid[..3].copy_from_slice(b"r2p");
+    uid[4..8].copy_from_slice(&std::process::id().to_be_bytes());
+    let nanos = SystemTime::now().duration_since(UNIX_EPOCH).unwrap_or_default().subsec_nanos();
+    uid[8..].copy_from_slice(&nanos.to_be_bytes());
+    uid
+}
+
+/// The local end of an import: keeps every message's bytes for the CLI.
+pub struct DynImport {
+    topic: &'static str,
+    hash: u32,
+    size: usize,
+    got: RefCell<VecDeque<Vec<u8>>>,
+}
+
+impl Import for DynImport {
+    fn topic(&self) -> &'static str {
+        self.topic
+    }
+    fn type_hash(&self) -> u32 {
+        self.hash
+    }
+    fn size(&self) -> usize {
+        self.size
+    }
+    fn queue_len(&self) -> usize {
+        QUEUE
+    }
+    fn publish_bytes(&self, bytes: &[u8]) -> Result<Delivery, ImportError> {
+        if bytes.len() != self.size {
+            return Err(ImportError::Decode(WireError::BadLength));
+        }
+        let mut q = self.got.borrow_mut();
+        if q.len() >= QUEUE {
+            return Err(ImportError::PoolEmpty);
+        }
+        q.push_back(bytes.to_vec());
+        Ok(Delivery { delivered: 1, missed: 0 })
+    }
+}
+
+/// The local end of an export: messages the CLI publishes, as bytes.
+pub struct DynExport {
+    topic: &'static str,
+    hash: u32,
+    size: usize,
+    class: Class,
+    active: Cell<usize>,
+    queue: RefCell<VecDeque<Vec<u8>>>,
+    misses: Cell<u32>,
+}
+
+impl DynExport {
+    /// Queues a message for the bus; false if nobody is subscribed or the queue is full.
+    fn publish(&self, bytes: Vec<u8>) -> bool {
+        let mut q = self.queue.borrow_mut();
+        if self.active.get() == 0 || q.len() >= self.active.get() {
+            return false;
+        }
+        q.push_back(bytes);
+        true
+    }
+}
+
+impl Export for DynExport {
+    fn topic(&self) -> &'static str {
+        self.topic
+    }
+    fn type_hash(&self) -> u32 {
+        self.hash
+    }
+    fn size(&self) -> usize {
+        self.size
+    }
+    fn class(&self) -> Class {
+        self.class
+    }
+    fn activate(&self, queue_len: u8) {
+        let asked = usize::from(queue_len).clamp(1, QUEUE);
+        self.active.set(self.active.get().max(asked));
+    }
+    fn active_len(&self) -> usize {
+        self.active.get()
+    }
+    fn pending(&self) -> usize {
+        self.queue.borrow().len()
+    }
+    fn pop_encoded(&self, buf: &mut [u8]) -> Option<Result<(usize, Option<Micros>), WireError>> {
+        let bytes = self.queue.borrow_mut().pop_front()?;
+        Some(match buf.get_mut(..bytes.len()) {
+            Some(out) => {
+                out.copy_from_slice(&bytes);
+                Ok((bytes.len(), None))
+            }
+            None => Err(WireError::BufferTooSmall),
+        })
+    }
+    fn report_deadline_miss(&self) {
+        self.misses.set(self.misses.get() + 1);
+    }
+}
+
+/// The link as the node's CAN controller: frames it received this step, and sending with a
+/// budget (see [`Link::tx_gap`]).
+struct Controller<'l> {
+    link: &'l mut dyn Link,
+    rx: &'l mut VecDeque<Received>,
+    budget: usize,
+    sent: usize,
+    error: Option<CliError>,
+}
+
+impl CanController for Controller<'_> {
+    fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
+        if self.sent >= self.budget || self.error.is_some() {
+            return Err(TxError::MailboxesFull);
+        }
+        let f = CanFrame::extended(frame.id().to_raw(), frame.payload()).expect("an RTCAN frame");
+        match self.link.send(&f) {
+            Ok(()) => {
+                self.sent += 1;
+                Ok(())
+            }
+            Err(e) => {
+                self.error = Some(e);
+                Err(TxError::MailboxesFull)
+            }
+        }
+    }
+    fn try_receive(&mut self) -> Option<Received> {
+        self.rx.pop_front()
+    }
+    fn set_filters(&mut self, _filters: &[Filter]) {}
+    fn abort_pending(&mut self) -> usize {
+        0 // frames go to the link at once: nothing is ever pending
+    }
+    fn bus_state(&self) -> BusState {
+        BusState::ErrorActive
+    }
+    fn error_counters(&self) -> ErrorCounters {
+        ErrorCounters::default()
+    }
+}
+
+/// The CLI's node and its dynamic import and export.
+pub struct HostNode {
+    node: Box<CliNode>,
+    start: Instant,
+    rx: VecDeque<Received>,
+    want: Option<String>,
+    import: Option<(&'static DynImport, TopicInfo)>,
+    import_error: Option<CliError>,
+    export: Option<&'static DynExport>,
+    events: VecDeque<Event>,
+}
+
+fn leak_name(s: &str) -> &'static str {
+    Box::leak(s.to_string().into_boxed_str())
+}
+
+impl HostNode {
+    /// A node called [`NODE_NAME`] with a unique ID for this run; `start` is its time zero.
+    pub fn new(start: Instant) -> Result<Self, CliError> {
+        let config = NodeConfig::new(run_uid(), NODE_NAME);
+        let node = CliNode::new(config, &NoParams)
+            .map_err(|e| CliError::new(format!("cannot start the host node: {e:?}")))?;
+        Ok(Self {
+            node: Box::new(node),
+            start,
+            rx: VecDeque::new(),
+            want: None,
+            import: None,
+            import_error: None,
+            export: None,
+            events: VecDeque::new(),
+        })
+    }
+
+    /// The node ID it holds now.
+    pub fn node_id(&self) -> NodeId {
+        self.node.node_id()
+    }
+
+    fn now(&self) -> Micros {
+        self.start.elapsed().as_micros() as Micros
+    }
+
+    /// Subscribes to `topic` as soon as a module advertises it, with the advertised type.
+    pub fn want_import(&mut self, topic: &str) {
+        self.want = Some(topic.to_string());
+    }
+
+    /// The advertisement the import was made for, once made.
+    pub fn imported(&self) -> Option<&TopicInfo> {
+        self.import.as_ref().map(|(_, t)| t)
+    }
+
+    /// Why the import could not be made, if it could not.
+    pub fn import_error(&self) -> Option<&CliError> {
+        self.import_error.as_ref()
+    }
+
+    /// Messages received on the import since the last call, oldest first.
+    pub fn take_messages(&mut self) -> Vec<Vec<u8>> {
+        self.import
+            .as_ref()
+            .map(|(i, _)| i.got.borrow_mut().drain(..).collect())
+            .unwrap_or_default()
+    }
+
+    /// Offers `topic` of type `ty` on the bus with `class` (advertised at the next step).
+    pub fn export(&mut self, topic: &str, ty: &MsgType, class: Class) -> Result<(), CliError> {
+        let e: &'static DynExport = Box::leak(Box::new(DynExport {
+            topic: leak_name(topic),
+            hash: ty.hash,
+            size: ty.size,
+            class,
+            active: Cell::new(0),
+            queue: RefCell::new(VecDeque::new()),
+            misses: Cell::new(0),
+        }));
+        self.node
+            .export(e)
+            .map_err(|err| CliError::new(format!("cannot publish {topic:?}: {err:?}")))?;
+        self.export = Some(e);
+        Ok(())
+    }
+
+    /// Queues a message on the export; false if nobody subscribed yet or the queue is full.
+    pub fn publish(&self, bytes: Vec<u8>) -> bool {
+        self.export.is_some_and(|e| e.publish(bytes))
+    }
+
+    /// Deadline misses of published SRT messages.
+    pub fn deadline_misses(&self) -> u32 {
+        self.export.map_or(0, |e| e.misses.get())
+    }
+
+    /// Frames and messages not yet handed to the link.
+    pub fn tx_pending(&self) -> usize {
+        self.node.tx_pending() + self.export.map_or(0, |e| e.pending())
+    }
+
+    /// Asks `target` for parameter `index` (answer: an event).
+    pub fn get_param(&mut self, target: NodeId, index: u16) -> Result<(), CliError> {
+        self.node.get_param(target, index).map_err(|e| CliError::new(format!("{e:?}")))
+    }
+
+    /// Asks `target` to set parameter `index` (answer: an event).
+    pub fn set_param(&mut self, target: NodeId, index: u16, value: Value) -> Result<(), CliError> {
+        self.node.set_param(target, index, value).map_err(|e| CliError::new(format!("{e:?}")))
+    }
+
+    /// The next event of the node (subscriptions, parameter answers), oldest first.
+    pub fn next_event(&mut self) -> Option<Event> {
+        self.events.pop_front()
+    }
+
+    /// Takes a frame the watcher has decoded into `report`: makes the wanted import when its
+    /// advertisement completes (before the node reads that same advertisement), then queues
+    /// the frame for the node.
+    pub(crate) fn take(&mut self, report: &Report) {
+        if let What::Management {
+            node,
+            done: Some(Ok(Message::Advertise { topic, type_hash, size, index, class })),
+        } = &report.what
+        {
+            let wanted = self.want.as_deref() == Some(topic.as_str());
+            if wanted
+                && self.import.is_none()
+                && self.import_error.is_none()
+                && *node != self.node_id().get()
+            {
+                let info = TopicInfo {
+                    topic: topic.to_string(),
+                    node: *node,
+                    index: *index,
+                    type_hash: *type_hash,
+                    size: *size,
+                    class: *class,
+                };
+                let i: &'static DynImport = Box::leak(Box::new(DynImport {
+                    topic: leak_name(topic),
+                    hash: *type_hash,
+                    size: usize::from(*size),
+                    got: RefCell::new(VecDeque::new()),
+                }));
+                match self.node.import(i) {
+                    Ok(_) => self.import = Some((i, info)),
+                    Err(e) => {
+                        self.import_error =
+                            Some(CliError::new(format!("cannot subscribe to {topic:?}: {e:?}")))
+                    }
+                }
+            }
+        }
+        if report.frame.is_extended() {
+            if let Ok(frame) = Frame::from_raw(report.frame.id(), report.frame.data()) {
+                self.rx.push_back(Received { frame, at: self.now() });
+            }
+        }
+    }
+
+    /// Runs the node: takes the queued frames, runs its timers, sends up to `budget` frames.
+    /// Returns how many it sent.
+    pub(crate) fn poll(&mut self, link: &mut dyn Link, budget: usize) -> Result<usize, CliError> {
+        let now = self.now();
+        let mut ctl = Controller { link, rx: &mut self.rx, budget, sent: 0, error: None };
+        self.node.poll(now, &mut ctl);
+        let (sent, error) = (ctl.sent, ctl.error);
+        while let Some(e) = self.node.next_event() {
+            self.events.push_back(e);
+        }
+        error.map_or(Ok(sent), Err)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::HubLink;
+    use crate::session::Session;
+    use r2p_canlink::{BroadcastHub, Hub};
+    use r2p_management::message::ParamFault;
+    use r2p_middleware::{pool_size, Publisher, Topic};
+    use r2p_node::{Param, RamParams, RemoteSubscriber};
+    use std::sync::Arc;
+    use std::time::Duration;
+
+    /// A module on the hub: a real node with an exported `u32` topic and two parameters,
+    /// polled every millisecond on its own thread, publishing 1, 2, 3… every 5 ms.
+    fn spawn_module(
+        hub: Arc<BroadcastHub>,
+        stop: Arc<std::sync::atomic::AtomicBool>,
+    ) -> std::thread::JoinHandle<()> {
+        static SPEED: Topic<'static, u32, { pool_size(&[8], 1) }, 1> = Topic::new("speed", 0);
+        static SPEED_PUB: Publisher<'static, u32> = Publisher::new(&SPEED, Class::NonRealTime);
+        static SPEED_OUT: RemoteSubscriber<'static, u32, 8> = RemoteSubscriber::new(&SPEED_PUB);
+        static PARAMS: RamParams<2> = RamParams::new([
+            Param::u32("rate_hz", 100, 1, 1000),
+            Param::f32("gain", 0.5, 0.0, 2.0),
+        ]);
+        std::thread::spawn(move || {
+            SPEED.subscribe(&SPEED_OUT).unwrap();
+            let mut uid = [0u8; 12];
+            uid[11] = 0x42;
+            let mut node: Node<'static, 1, 1, 32, 4, 64> =
+                Node::new(NodeConfig::new(uid, "sensor"), &PARAMS).unwrap();
+            node.export(&SPEED_OUT).unwrap();
+            let mut link = HubLink::join(hub, 1024);
+            let start = Instant::now();
+            let mut n = 0u32;
+            let mut rx = VecDeque::new();
+            while !stop.load(std::sync::atomic::Ordering::SeqCst) {
+                while let Ok(crate::link::Recv::Frame(s)) = link.recv(Duration::ZERO) {
+                    let frame = Frame::from_raw(s.frame.id(), s.frame.data()).unwrap();
+                    rx.push_back(Received { frame, at: start.elapsed().as_micros() as u64 });
+                }
+                if start.elapsed().as_millis() as u32 / 5 > n {
+                    n += 1;
+                    SPEED_PUB.publish_with(|v| *v = n);
+                }
+                let mut ctl = Controller {
+                    link: &mut link,
+                    rx: &mut rx,
+                    budget: usize::MAX,
+                    sent: 0,
+                    error: None,
+                };
+                node.poll(start.elapsed().as_micros() as u64, &mut ctl);
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        })
+    }
+
+    /// Steps `s` until `done` or 5 s pass.
+    fn until(s: &mut Session, mut done: impl FnMut(&mut Session) -> bool) -> bool {
+        let t0 = Instant::now();
+        while t0.elapsed() < Duration::from_secs(5) {
+            s.step(Duration::from_millis(1)).unwrap();
+            if done(s) {
+                return true;
+            }
+        }
+        false
+    }
+
+    #[test]
+    fn the_host_node_subscribes_by_advertised_type_and_reads_parameters() {
+        let hub = Arc::new(BroadcastHub::new());
+        let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let module = spawn_module(hub.clone(), stop.clone());
+        let mut s = Session::new(Box::new(HubLink::join(hub.clone() as Arc<dyn Hub>, 4096)));
+        s.join().unwrap().want_import("speed");
+
+        // Joining makes the module re-advertise; the import follows the advertised type.
+        let mut got = Vec::new();
+        assert!(until(&mut s, |s| {
+            got.extend(s.host().unwrap().take_messages());
+            got.len() >= 3
+        }));
+        let info = s.host().unwrap().imported().unwrap().clone();
+        assert_eq!((info.topic.as_str(), info.type_name().as_str()), ("speed", "uint32"));
+        let ty = info.msg_type().unwrap();
+        let values: Vec<u64> = got
+            .iter()
+            .map(|b| match ty.decode(b).unwrap() {
+                crate::types::Decoded::Plain(crate::types::Value::One(
+                    crate::types::Scalar::U(v),
+                )) => v,
+                other => panic!("{other:?}"),
+            })
+            .collect();
+        assert!(values.windows(2).all(|w| w[1] == w[0] + 1), "consecutive: {values:?}");
+
+        // Parameters: a value, and a refusal with its fault.
+        assert!(until(&mut s, |s| s.watcher().nodes().any(|n| n.name == "sensor")));
+        let sensor = s.watcher().nodes().find(|n| n.name == "sensor").unwrap().id;
+        let sensor = NodeId::new(sensor).unwrap();
+        s.host().unwrap().get_param(sensor, 1).unwrap();
+        s.host().unwrap().set_param(sensor, 0, Value::U32(5000)).unwrap();
+        let mut answers = Vec::new();
+        assert!(until(&mut s, |s| {
+            while let Some(e) = s.host().unwrap().next_event() {
+                if matches!(e, Event::ParamValue { .. } | Event::ParamError { .. }) {
+                    answers.push(e);
+                }
+            }
+            answers.len() == 2
+        }));
+        assert_eq!(
+            answers[0],
+            Event::ParamValue { from: sensor, index: 1, value: Value::F32(0.5) }
+        );
+        assert_eq!(
+            answers[1],
+            Event::ParamError { from: sensor, index: 0, fault: ParamFault::OutOfRange }
+        );
+        stop.store(true, std::sync::atomic::Ordering::SeqCst);
+        module.join().unwrap();
+    }
+}

@@ -1,0 +1,30 @@
+//! `r2p`, the R2P host tool: watches and talks to an R2P robot's CAN bus — a real one through
+//! SocketCAN, an emulated one (or any socketcand server) over TCP, or a recorded trace.
+//!
+//! - [`link`]: where frames come from ([`socketcand`] client, SocketCAN, an in-process hub,
+//!   a trace);
+//! - [`watch`]: a passive decoder of the bus (RTCAN identifiers, management messages,
+//!   advertised topics, nodes), and [`describe`]: its lines and JSON;
+//! - [`host`]: a real `r2p_node::Node` on the host, with an import and an export whose type
+//!   is learnt at run time, and the [`session::Session`] that drives it beside the watcher;
+//! - [`types`]: the message types, found by type hash, decoded and encoded;
+//! - the commands: [`monitor`], [`listing`] (`nodes`, `topics`), [`echo`], [`publish`]
+//!   (`pub`), [`param`], [`traces`] (`replay`, `convert`); [`cli`] parses the command line.
+
+pub mod cli;
+pub mod describe;
+pub mod echo;
+pub mod error;
+pub mod host;
+pub mod link;
+pub mod listing;
+pub mod monitor;
+pub mod param;
+pub mod publish;
+pub mod session;
+pub mod socketcand;
+pub mod traces;
+pub mod types;
+pub mod watch;
+
+pub use error::CliError;
