@@ -77,6 +77,70 @@ impl crate::R2pMessage for BusPower {
 
 crate::impl_wire!(BusPower);
 
+/// Command: clear a module's latched faults (those whose cause is gone; a cause still present latches again at once).
+///
+/// 1 bytes on the bus, type hash `0x9688B902`; schema `firmware/msgs/FaultClear.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FaultClear {
+    /// fault bits to clear (0xFF: all) (`uint8`, bytes 0..1)
+    pub mask: u8,
+}
+
+impl crate::R2pMessage for FaultClear {
+    const NAME: &'static str = "FaultClear";
+    const CANONICAL: &'static str = "FaultClear:uint8 mask";
+    const SIZE: usize = 1;
+    const TYPE_HASH: u32 = 0x9688_B902;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.mask);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self { mask: r.get()? })
+    }
+}
+
+crate::impl_wire!(FaultClear);
+
+/// Event of a DC motor controller: a fault latched, or latched faults were cleared. Sent SRT when it happens; the same bits are in every WheelState.faults.
+///
+/// 6 bytes on the bus, type hash `0x2D53828B`; schema `firmware/msgs/MotorFault.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MotorFault {
+    /// every fault latched now (WheelState.faults bits) (`uint8`, bytes 0..1)
+    pub faults: u8,
+    /// bits that latched with this event (0: a clear command cleared some) (`uint8`, bytes 1..2)
+    pub raised: u8,
+    /// A measured when the event happened (`float32`, bytes 2..6)
+    pub current: f32,
+}
+
+impl crate::R2pMessage for MotorFault {
+    const NAME: &'static str = "MotorFault";
+    const CANONICAL: &'static str = "MotorFault:uint8 faults;uint8 raised;float32 current";
+    const SIZE: usize = 6;
+    const TYPE_HASH: u32 = 0x2D53_828B;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.faults);
+        w.put(&self.raised);
+        w.put(&self.current);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self { faults: r.get()?, raised: r.get()?, current: r.get()? })
+    }
+}
+
+crate::impl_wire!(MotorFault);
+
 /// An obstacle closer than the proximity module's threshold (SRT, with a deadline).
 ///
 /// 5 bytes on the bus, type hash `0x24BEC850`; schema `firmware/msgs/Obstacle.msg`.
@@ -343,7 +407,7 @@ impl crate::R2pMessage for WheelSetpoint {
 
 crate::impl_wire!(WheelSetpoint);
 
-/// State of one DC motor controller, published every control period.
+/// State of one DC motor controller, published periodically (its `publish_hz` parameter).
 ///
 /// 13 bytes on the bus, type hash `0xD9041FAF`; schema `firmware/msgs/WheelState.msg`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -354,7 +418,7 @@ pub struct WheelState {
     pub speed: f32,
     /// A through the motor (`float32`, bytes 8..12)
     pub current: f32,
-    /// bit 0 over-current, bit 1 encoder loss, bit 2 watchdog (latched until cleared) (`uint8`, bytes 12..13)
+    /// bit 0 over-current, 1 encoder loss, 2 watchdog, 3 driver fault, 4 current sensor (latched until cleared) (`uint8`, bytes 12..13)
     pub faults: u8,
 }
 
@@ -386,6 +450,8 @@ crate::impl_wire!(WheelState);
 pub const ALL: &[(&str, u32, usize)] = &[
     ("Battery", 0x471D_E2CA, 16),
     ("BusPower", 0xC2BD_8B69, 1),
+    ("FaultClear", 0x9688_B902, 1),
+    ("MotorFault", 0x2D53_828B, 6),
     ("Obstacle", 0x24BE_C850, 5),
     ("Odometry", 0xEEDD_D804, 24),
     ("Proximity", 0xA7C1_15E9, 20),
@@ -402,6 +468,8 @@ macro_rules! for_each_message {
     ($f:ident $(, $arg:expr)*) => {
         $f::<crate::Battery>($($arg),*);
         $f::<crate::BusPower>($($arg),*);
+        $f::<crate::FaultClear>($($arg),*);
+        $f::<crate::MotorFault>($($arg),*);
         $f::<crate::Obstacle>($($arg),*);
         $f::<crate::Odometry>($($arg),*);
         $f::<crate::Proximity>($($arg),*);

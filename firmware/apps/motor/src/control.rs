@@ -1,0 +1,214 @@
+//! The cascaded controller: position (P) → speed (PI) at 200 Hz → current (PI) at 1 kHz →
+//! H-bridge duty.
+//!
+//! Units are the output shaft's (after the gearbox) for position, speed and torque, the motor's
+//! for current and voltage. Arithmetic is `f32`: the F103 has no FPU, so each operation is a
+//! soft-float call (50–100 instructions), and a whole step costs 2 500–4 000 instructions
+//! (README: about 5 % of the 1 ms period at 72 MHz). That leaves ample room, and `f32` keeps the
+//! units, the parameters and the messages (all `float32`) free of the scaling mistakes fixed
+//! point would invite.
+//!
+//! The position loop is P only: the speed loop's integrator already removes a constant load's
+//! error (a steady position needs zero speed error on average, which the integrator enforces),
+//! and an integrator in the position loop would add overshoot for nothing.
+
+use r2p_msgs::WheelSetpoint;
+
+use crate::params::Config;
+use crate::pi::{Gains, Pi};
+
+/// Period of the current loop, s.
+pub const INNER_DT_S: f32 = 0.001;
+/// Current-loop steps per speed/position-loop step (200 Hz).
+pub const OUTER_DIVIDER: u32 = 5;
+/// Period of the speed and position loops, s.
+pub const OUTER_DT_S: f32 = INNER_DT_S * OUTER_DIVIDER as f32;
+/// Below this motor supply (V) duty is computed as if it were this much (no division by ~0).
+pub const VBUS_MIN: f32 = 3.0;
+
+/// What the motor is asked to do (output shaft).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Setpoint {
+    /// Torque, N·m.
+    Torque(f32),
+    /// Speed, rad/s.
+    Speed(f32),
+    /// Position, rad.
+    Position(f32),
+}
+
+impl Setpoint {
+    /// `WheelSetpoint.mode` of a torque setpoint.
+    pub const MODE_TORQUE: u8 = 0;
+    /// `WheelSetpoint.mode` of a speed setpoint.
+    pub const MODE_SPEED: u8 = 1;
+    /// `WheelSetpoint.mode` of a position setpoint.
+    pub const MODE_POSITION: u8 = 2;
+
+    /// The setpoint a message asks for; `None` for an unknown mode or a value that is not a
+    /// finite number (the message is ignored, and does not feed the watchdog).
+    pub fn from_msg(m: &WheelSetpoint) -> Option<Self> {
+        if !m.value.is_finite() {
+            return None;
+        }
+        match m.mode {
+            Self::MODE_TORQUE => Some(Self::Torque(m.value)),
+            Self::MODE_SPEED => Some(Self::Speed(m.value)),
+            Self::MODE_POSITION => Some(Self::Position(m.value)),
+            _ => None,
+        }
+    }
+
+    fn mode(self) -> u8 {
+        match self {
+            Self::Torque(_) => Self::MODE_TORQUE,
+            Self::Speed(_) => Self::MODE_SPEED,
+            Self::Position(_) => Self::MODE_POSITION,
+        }
+    }
+}
+
+/// The measurements the loops use.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Measured {
+    /// Output-shaft position, rad.
+    pub position: f32,
+    /// Output-shaft speed, rad/s (filtered, updated at 200 Hz): the speed loop's.
+    pub speed: f32,
+    /// Output-shaft speed over the last 5 ms, rad/s, updated every step: the back-EMF
+    /// feed-forward's (a feed-forward updated at 200 Hz would kick the current every 5 ms).
+    pub speed_now: f32,
+    /// Motor current, A (this step's sample).
+    pub current: f32,
+    /// Motor supply, V.
+    pub vbus: f32,
+}
+
+/// The three loops' state.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Cascade {
+    speed_pi: Pi,
+    current_pi: Pi,
+    current_ref: f32,
+    speed_ref: f32,
+    mode: Option<u8>,
+}
+
+impl Cascade {
+    /// Loops at rest.
+    pub const fn new() -> Self {
+        Self {
+            speed_pi: Pi::new(),
+            current_pi: Pi::new(),
+            current_ref: 0.0,
+            speed_ref: 0.0,
+            mode: None,
+        }
+    }
+
+    /// Empties the integrators and zeroes the setpoints (the bridge went off).
+    pub fn reset(&mut self) {
+        *self = Self::new();
+    }
+
+    /// The current setpoint, A (within ± `current_limit`).
+    pub fn current_ref(&self) -> f32 {
+        self.current_ref
+    }
+
+    /// The speed setpoint of the speed loop, rad/s (speed and position modes).
+    pub fn speed_ref(&self) -> f32 {
+        self.speed_ref
+    }
+
+    /// The 200 Hz step: `sp` and the measurements give the current setpoint.
+    pub fn outer(&mut self, cfg: &Config, sp: Setpoint, m: &Measured) {
+        if self.mode != Some(sp.mode()) {
+            // Bumpless: the speed loop starts from the current the motor is getting.
+            self.speed_pi.preset(self.current_ref);
+            self.mode = Some(sp.mode());
+        }
+        let limit = cfg.current_limit;
+        match sp {
+            Setpoint::Torque(t) => {
+                let amps = t / (cfg.torque_constant * cfg.gear_ratio);
+                self.current_ref = amps.clamp(-limit, limit);
+                self.speed_ref = m.speed;
+                self.speed_pi.preset(self.current_ref);
+            }
+            Setpoint::Speed(w) => self.speed_loop(cfg, w, m),
+            Setpoint::Position(x) => self.speed_loop(cfg, cfg.position_kp * (x - m.position), m),
+        }
+    }
+
+    fn speed_loop(&mut self, cfg: &Config, w: f32, m: &Measured) {
+        let max = cfg.max_speed;
+        self.speed_ref = w.clamp(-max, max);
+        let gains = Gains { kp: cfg.speed_kp, ki: cfg.speed_ki };
+        let limit = cfg.current_limit;
+        let err = self.speed_ref - m.speed;
+        let p_err = cfg.speed_weight * self.speed_ref - m.speed;
+        self.current_ref =
+            self.speed_pi.step_weighted(gains, err, p_err, OUTER_DT_S, 0.0, -limit, limit);
+    }
+
+    /// The 1 kHz step: the duty (−`duty_limit`..`duty_limit`) that drives the current to its
+    /// setpoint. The voltage is computed first (gains in V/A, independent of the supply), with
+    /// the back-EMF as feed-forward, then divided by the measured supply.
+    pub fn inner(&mut self, cfg: &Config, m: &Measured) -> f32 {
+        let vbus = m.vbus.max(VBUS_MIN);
+        let vmax = cfg.duty_limit * vbus;
+        let emf = cfg.torque_constant * cfg.gear_ratio * m.speed_now;
+        let gains = Gains { kp: cfg.current_kp, ki: cfg.current_ki };
+        let err = self.current_ref - m.current;
+        let v = self.current_pi.step(gains, err, INNER_DT_S, emf, -vmax, vmax);
+        v / vbus
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn setpoint_messages_map_to_modes_and_bad_ones_are_refused() {
+        let sp = |mode, value| Setpoint::from_msg(&WheelSetpoint { mode, value });
+        assert_eq!(sp(0, 0.5), Some(Setpoint::Torque(0.5)));
+        assert_eq!(sp(1, -3.0), Some(Setpoint::Speed(-3.0)));
+        assert_eq!(sp(2, 6.0), Some(Setpoint::Position(6.0)));
+        assert_eq!(sp(3, 1.0), None);
+        assert_eq!(sp(1, f32::NAN), None);
+        assert_eq!(sp(2, f32::INFINITY), None);
+    }
+
+    #[test]
+    fn the_current_limit_clamps_every_mode() {
+        let cfg = Config::DEFAULT;
+        let m = Measured { vbus: 24.0, ..Default::default() };
+        let mut c = Cascade::new();
+        c.outer(&cfg, Setpoint::Torque(100.0), &m);
+        assert_eq!(c.current_ref(), cfg.current_limit);
+        c.outer(&cfg, Setpoint::Speed(-1000.0), &m);
+        assert_eq!(c.current_ref(), -cfg.current_limit);
+        assert_eq!(c.speed_ref(), -cfg.max_speed, "the speed limit clamps too");
+        c.outer(&cfg, Setpoint::Position(1000.0), &m);
+        assert_eq!(c.current_ref(), cfg.current_limit);
+        // 1 N·m at the output = 1 / (0.0302 × 15) = 2.208 A.
+        c.outer(&cfg, Setpoint::Torque(1.0), &m);
+        assert!((c.current_ref() - 2.207_506).abs() < 1e-5);
+    }
+
+    #[test]
+    fn duty_is_voltage_over_supply_within_the_duty_limit() {
+        let cfg = Config::DEFAULT;
+        let mut c = Cascade::new();
+        let m = Measured { vbus: 24.0, speed_now: 10.0, ..Default::default() };
+        // No current error: the duty is the back-EMF feed-forward, 0.0302 × 15 × 10 / 24.
+        assert!((c.inner(&cfg, &m) - 0.188_75).abs() < 1e-5);
+        c.outer(&cfg, Setpoint::Torque(100.0), &Measured { vbus: 24.0, ..m });
+        for _ in 0..100 {
+            assert!(c.inner(&cfg, &m) <= cfg.duty_limit);
+        }
+        assert_eq!(c.inner(&cfg, &m), cfg.duty_limit);
+    }
+}

@@ -1,0 +1,153 @@
+//! Default firmware of the R2P DC motor controller (STM32F103CB): the application of
+//! `r2p-app-motor` (firmware/apps/motor) on the H-bridge (TIM1), the encoder (TIM3), the Hall
+//! current sensor and the motor supply (ADC1), the status LEDs, bxCAN and parameters in flash.
+//! Pins come only from the board file (firmware/boards/motor.toml) through the generated
+//! `board` module.
+//!
+//! Priorities: the control step runs on an interrupt executor of its own (USART2's vector) above
+//! the bus's (module_core, USART3), so bus traffic never delays the current loop; thread mode
+//! stores parameters, only while the bridge is off (a page erase stalls the CPU for ~20 ms,
+//! control loop included), and reboots on request (likewise deferred until the bridge is off:
+//! the module never resets with the motor driven).
+#![no_std]
+#![no_main]
+
+mod bridge;
+mod sensors;
+
+mod board {
+    include!(concat!(env!("OUT_DIR"), "/board.rs"));
+}
+
+use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
+
+use embassy_executor::{InterruptExecutor, Spawner};
+use embassy_stm32::adc;
+use embassy_stm32::can::{
+    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
+};
+use embassy_stm32::flash::Flash;
+use embassy_stm32::gpio::Output;
+use embassy_stm32::interrupt;
+use embassy_stm32::interrupt::{InterruptExt, Priority};
+use embassy_stm32::peripherals::{ADC1, CAN};
+use embassy_stm32::{bind_interrupts, pac};
+use embassy_time::{Duration, Instant, Ticker, Timer};
+use module_core::{drive, ModuleNode};
+use panic_halt as _;
+use r2p_app_motor::{params, App, Endpoints, Names, Sample};
+use r2p_module::FlashParams;
+use r2p_node::NodeConfig;
+use rtcan_bxcan::BxCan;
+
+use bridge::Bridge;
+use sensors::Sensors;
+
+bind_interrupts!(struct Irqs {
+    USB_LP_CAN1_RX0 => Rx0InterruptHandler<CAN>;
+    CAN1_RX1 => Rx1InterruptHandler<CAN>;
+    CAN1_SCE => SceInterruptHandler<CAN>;
+    USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
+    ADC1_2 => adc::InterruptHandler<ADC1>;
+});
+
+static PARAMS: FlashParams<{ params::COUNT }> =
+    FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
+
+/// The control loop's executor: above the bus's (P6), below the hardware's interrupts.
+static CONTROL_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
+const CONTROL_PRIORITY: Priority = Priority::P5;
+
+#[interrupt]
+unsafe fn USART2() {
+    // SAFETY: the interrupt is reserved for this executor (started in `main`).
+    unsafe { CONTROL_EXECUTOR.on_interrupt() }
+}
+
+/// The bridge is driven: no flash erase, no reset now.
+static BRIDGE_ON: AtomicBool = AtomicBool::new(false);
+
+/// The 1 kHz control step. The application is built here, from its endpoints, so that what
+/// crosses to this executor is `Send`.
+#[embassy_executor::task]
+async fn control(
+    ep: Endpoints<'static>,
+    mut sensors: Sensors,
+    mut bridge: Bridge,
+    mut leds: [Output<'static>; 3],
+) {
+    let mut app = App::new(ep, &PARAMS);
+    let mut ticker = Ticker::every(Duration::from_millis(1));
+    loop {
+        ticker.next().await;
+        let now = Instant::now().as_micros();
+        let (encoder_count, current_adc, vmot_adc) = sensors.read().await;
+        let sample = Sample {
+            encoder_count,
+            current_adc,
+            vmot_adc,
+            driver_fault: bridge::take_break_flag(),
+            status: module_core::led_status(),
+        };
+        let cmd = app.step(now, &sample);
+        bridge.apply(&cmd);
+        BRIDGE_ON.store(cmd.bridge_enable, Relaxed);
+        let [status, bus, fault] = &mut leds;
+        drive(status, cmd.leds[0], board::LED_STATUS_ACTIVE_LOW);
+        drive(bus, cmd.leds[1], board::LED_BUS_ACTIVE_LOW);
+        drive(fault, cmd.leds[2], board::LED_FAULT_ACTIVE_LOW);
+    }
+}
+
+#[embassy_executor::main]
+async fn main(_spawner: Spawner) {
+    let pll_mul = const { module_core::pll_mul(board::HSE_HZ, board::SYSCLK_HZ) };
+    let p = embassy_stm32::init(module_core::clocks(board::HSE_HZ, pll_mul));
+    let mut pins = board::take_pins!(p);
+
+    // Outputs first: the driver stays disabled and the LEDs take their boot levels at once.
+    let drv_en = board::drv_en(pins.drv_en);
+    let leds = [
+        board::led_status(pins.led_status),
+        board::led_bus(pins.led_bus),
+        board::led_fault(pins.led_fault),
+    ];
+    let bridge = Bridge::new(
+        p.TIM1,
+        bridge::Pins {
+            ah: pins.pwm_ah,
+            al: pins.pwm_al,
+            bh: pins.pwm_bh,
+            bl: pins.pwm_bl,
+            fault: pins.drv_fault,
+            enable: drv_en,
+        },
+    );
+    module_core::analog(&mut pins.motor_current);
+    module_core::analog(&mut pins.vmot_sense);
+    let sensors =
+        Sensors::new(p.ADC1, pins.motor_current, pins.vmot_sense, p.TIM3, pins.enc_a, pins.enc_b);
+
+    let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
+    can.modify_config().set_bitrate(1_000_000);
+    can.enable().await;
+
+    let mut flash = Flash::new_blocking(p.FLASH);
+    module_core::load_params(&PARAMS, &mut flash);
+    let names = Names::from_params(&PARAMS);
+    let ep = r2p_app_motor::endpoints!(names);
+    let config = NodeConfig::new(embassy_stm32::uid::uid(), names.node);
+    let mut node = ModuleNode::new(config, &PARAMS).expect("valid node configuration");
+    ep.register(&mut node).expect("room for the motor's topics on its node");
+    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN));
+
+    interrupt::USART2.set_priority(CONTROL_PRIORITY);
+    CONTROL_EXECUTOR.start(interrupt::USART2).spawn(control(ep, sensors, bridge, leds)).unwrap();
+
+    loop {
+        Timer::after_millis(100).await;
+        if !BRIDGE_ON.load(Relaxed) {
+            module_core::persist(&PARAMS, &mut flash);
+        }
+    }
+}
