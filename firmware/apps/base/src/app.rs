@@ -15,11 +15,12 @@ const MODE_SPEED: u8 = 1;
 pub struct Ends<'a> {
     cmd: &'a r2p_middleware::Subscriber<'a, Twist2D, 2>,
     obstacle: &'a r2p_middleware::Subscriber<'a, r2p_msgs::Obstacle, 4>,
+    ranges: &'a r2p_middleware::Subscriber<'a, r2p_msgs::Proximity, 2>,
     states: [&'a r2p_middleware::Subscriber<'a, r2p_msgs::WheelState, 2>; 3],
     setpoints: [&'a r2p_middleware::Publisher<'a, WheelSetpoint>; 3],
     odom: &'a r2p_middleware::Publisher<'a, Odometry>,
     exports: [&'a dyn Export; 4],
-    imports: [&'a dyn Import; 5],
+    imports: [&'a dyn Import; 6],
 }
 
 /// The base controller.
@@ -28,8 +29,8 @@ pub struct App<'a> {
     params: &'a dyn ParamStore,
     cmd: Twist2D,
     cmd_at_us: Option<u64>,
-    /// Unit vector towards the last obstacle and until when it blocks.
-    blocked: Option<(f32, f32, u64)>,
+    /// Per proximity channel: until when an obstacle in its direction blocks motion.
+    blocked: [u64; 4],
     wheels: [f32; 3],
     pose: (f32, f32, f32),
     velocity: (f32, f32, f32),
@@ -78,6 +79,7 @@ impl<'a> App<'a> {
         let ends = Ends {
             cmd: ends.cmd,
             obstacle: ends.obstacle,
+            ranges: ends.ranges,
             states: ends.states,
             setpoints: ends.setpoints,
             odom: ends.odom,
@@ -89,7 +91,7 @@ impl<'a> App<'a> {
             params,
             cmd: Twist2D::default(),
             cmd_at_us: None,
-            blocked: None,
+            blocked: [0; 4],
             wheels: [0.0; 3],
             pose: (0.0, 0.0, 0.0),
             velocity: (0.0, 0.0, 0.0),
@@ -135,9 +137,14 @@ impl<'a> App<'a> {
             Some(t) if now_us.saturating_sub(t) <= timeout => self.cmd,
             _ => return Twist2D::default(),
         };
-        if let Some((ux, uy, until)) = self.blocked {
+        for (ch, until) in self.blocked.iter().enumerate() {
+            if now_us >= *until {
+                continue;
+            }
+            let a = f32_of(self.params, p::CHANNEL0_DEG + ch as u16).to_radians();
+            let (ux, uy) = (cosf(a), sinf(a));
             let towards = c.vx * ux + c.vy * uy;
-            if now_us < until && towards > 0.0 {
+            if towards > 0.0 {
                 // Listing 2's avoidCollision: keep the motion along the obstacle, drop the
                 // part heading into it.
                 c.vx -= towards * ux;
@@ -158,12 +165,20 @@ impl<'a> App<'a> {
             self.cmd = *c;
             self.cmd_at_us = Some(now_us);
         }
+        let stop = f32_of(self.params, p::STOP_DISTANCE);
+        let until = now_us + u64::from(u32_of(self.params, p::OBSTACLE_HOLD_MS)) * 1000;
+        // The event reacts at once (soft real time); the periodic ranges keep the block while
+        // the obstacle stays (the event is not repeated).
         while let Some(o) = self.ends.obstacle.try_recv() {
-            if o.distance.is_finite() && o.distance < f32_of(self.params, p::STOP_DISTANCE) {
-                let ch = u16::from(o.channel.min(3));
-                let a = f32_of(self.params, p::CHANNEL0_DEG + ch).to_radians();
-                let hold = u64::from(u32_of(self.params, p::OBSTACLE_HOLD_MS)) * 1000;
-                self.blocked = Some((cosf(a), sinf(a), now_us + hold));
+            if o.distance.is_finite() && o.distance < stop {
+                self.blocked[usize::from(o.channel.min(3))] = until;
+            }
+        }
+        while let Some(r) = self.ends.ranges.try_recv() {
+            for ch in 0..4 {
+                if r.status[ch] == 0 && r.distance[ch].is_finite() && r.distance[ch] < stop {
+                    self.blocked[ch] = until;
+                }
             }
         }
         for (i, s) in self.ends.states.iter().enumerate() {
@@ -238,7 +253,7 @@ mod tests {
         let (mut app, _) = rig();
         app.cmd = Twist2D { vx: 0.4, vy: 0.3, wz: 0.2 };
         app.cmd_at_us = Some(0);
-        app.blocked = Some((1.0, 0.0, 300_000)); // channel 0 faces +x
+        app.blocked[0] = 300_000; // channel 0 faces +x
         let c = app.command(1_000);
         assert!(c.vx.abs() < 1e-6 && (c.vy - 0.3).abs() < 1e-6 && (c.wz - 0.2).abs() < 1e-6);
         app.cmd = Twist2D { vx: -0.4, vy: 0.0, wz: 0.0 };

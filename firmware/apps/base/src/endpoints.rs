@@ -4,7 +4,7 @@
 use std::boxed::Box;
 
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
-use r2p_msgs::{Obstacle, Odometry, Twist2D, WheelSetpoint, WheelState};
+use r2p_msgs::{Obstacle, Odometry, Proximity, Twist2D, WheelSetpoint, WheelState};
 use r2p_node::{Export, Import, RemotePublisher, RemoteSubscriber};
 
 /// Topic names the base controller uses (the motors' and the proximity module's names depend
@@ -15,6 +15,8 @@ pub struct Names {
     pub cmd_vel: &'static str,
     /// Obstacle events in.
     pub obstacle: &'static str,
+    /// The proximity module's periodic ranges in.
+    pub ranges: &'static str,
     /// Each wheel's state in.
     pub states: [&'static str; 3],
     /// Each wheel's setpoint out.
@@ -28,6 +30,7 @@ impl Names {
     pub const TRISKAR2: Names = Names {
         cmd_vel: "cmd_vel",
         obstacle: "proximity/obstacle",
+        ranges: "proximity/ranges",
         states: ["motor0/state", "motor1/state", "motor2/state"],
         setpoints: ["motor0/setpoint", "motor1/setpoint", "motor2/setpoint"],
         odom: "odom",
@@ -44,6 +47,8 @@ pub struct Endpoints<'a> {
     pub cmd_local: &'a Publisher<'a, Twist2D>,
     /// Obstacle events as received.
     pub obstacle: &'a Subscriber<'a, Obstacle, 4>,
+    /// Ranges as received.
+    pub ranges: &'a Subscriber<'a, Proximity, 2>,
     /// Wheel states as received.
     pub states: [&'a Subscriber<'a, WheelState, 2>; 3],
     /// Wheel setpoints (hard real time, one per IK period).
@@ -53,7 +58,7 @@ pub struct Endpoints<'a> {
     /// What the node exports.
     pub exports: [&'a dyn Export; 4],
     /// What the node imports.
-    pub imports: [&'a dyn Import; 5],
+    pub imports: [&'a dyn Import; 6],
 }
 
 fn leak<T>(x: T) -> &'static T {
@@ -95,6 +100,7 @@ impl Endpoints<'static> {
         let hrt = Class::SyncRealTime { period_us: ik_period_us };
         let (cmd, cmd_in, cmd_local) = incoming!(Twist2D, names.cmd_vel, 2);
         let (obstacle, obstacle_in, _) = incoming!(Obstacle, names.obstacle, 4);
+        let (ranges, ranges_in, _) = incoming!(Proximity, names.ranges, 2);
         let s0 = incoming!(WheelState, names.states[0], 2);
         let s1 = incoming!(WheelState, names.states[1], 2);
         let s2 = incoming!(WheelState, names.states[2], 2);
@@ -106,11 +112,12 @@ impl Endpoints<'static> {
             cmd,
             cmd_local,
             obstacle,
+            ranges,
             states: [s0.0, s1.0, s2.0],
             setpoints: [p0.0, p1.0, p2.0],
             odom: odom.0,
             exports: [p0.1, p1.1, p2.1, odom.1],
-            imports: [cmd_in, obstacle_in, s0.1, s1.1, s2.1],
+            imports: [cmd_in, obstacle_in, ranges_in, s0.1, s1.1, s2.1],
         }
     }
 }

@@ -36,7 +36,7 @@ pub const DEFAULTS: [Param; 12] = [
     Param::f32("first_wheel_deg", 30.0, -360.0, 360.0),
     Param::u32("ik_rate_hz", 100, 10, 500),
     Param::u32("cmd_timeout_ms", 500, 20, 10_000),
-    Param::f32("stop_distance_m", 0.35, 0.05, 2.0),
+    Param::f32("stop_distance_m", 0.45, 0.05, 2.0),
     Param::u32("obstacle_hold_ms", 300, 10, 5_000),
     Param::f32("channel0_deg", 0.0, -360.0, 360.0),
     Param::f32("channel1_deg", 90.0, -360.0, 360.0),

@@ -17,7 +17,8 @@ use std::rc::Rc;
 use r2p_module::RamFlash;
 use r2p_node::Node;
 use r2p_vbus::Config;
-use r2p_world::robot::{BoardKind, Module, Robot};
+use r2p_world::robot::{Module, Robot};
+use r2p_world::BoardKind;
 use r2p_world::World;
 use rtcan::CycleConfig;
 
@@ -25,7 +26,7 @@ use crate::boards::{self, Probe};
 use crate::{App, Mode, Sim};
 
 /// Every emulated board's node runtime: room for each module's topics.
-pub type BoardNode = Node<'static, 8, 8, 32, 4, 64>;
+pub type BoardNode = Node<'static, 8, 8, 64, 16, 64>;
 
 /// A board's parameter flash: two 1 KiB pages, as the F103's last two.
 pub type BoardFlash = RamFlash<2048, 1024>;

@@ -9,7 +9,7 @@ use r2p_msgs::Twist2D;
 use r2p_node::{NodeConfig, ParamStore};
 use r2p_world::robot::Wiring;
 
-use super::{leak, load_params, node, persist, Booted, Ctx};
+use super::{load_params, node, persist, Booted, Ctx};
 
 /// Period of the teleop script's `cmd_vel` (a joystick's rate).
 const TELEOP_PERIOD_US: u64 = 50_000;
@@ -57,6 +57,7 @@ fn names(ctx: &Ctx<'_>) -> Result<Names, String> {
     let mut states = [""; 3];
     let mut setpoints = [""; 3];
     let mut obstacle = "proximity/obstacle";
+    let mut ranges = "proximity/ranges";
     for m in &ctx.robot.modules {
         let instance = m
             .params
@@ -73,7 +74,8 @@ fn names(ctx: &Ctx<'_>) -> Result<Names, String> {
                 setpoints[*wheel] = n.setpoint;
             }
             Wiring::Proximity { .. } => {
-                obstacle = r2p_app_proximity::NAMES[(instance as usize).min(3)].obstacle;
+                let n = r2p_app_proximity::NAMES[(instance as usize).min(3)];
+                (obstacle, ranges) = (n.obstacle, n.ranges);
             }
             _ => {}
         }
@@ -81,6 +83,5 @@ fn names(ctx: &Ctx<'_>) -> Result<Names, String> {
     if states.contains(&"") {
         return Err("the base controller drives three wheels: wheels 0, 1 and 2 need a motor".into());
     }
-    let _ = leak(());
-    Ok(Names { cmd_vel: "cmd_vel", obstacle, states, setpoints, odom: "odom" })
+    Ok(Names { cmd_vel: "cmd_vel", obstacle, ranges, states, setpoints, odom: "odom" })
 }

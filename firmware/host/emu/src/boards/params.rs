@@ -4,7 +4,9 @@ use r2p_management::message::{ParamFault, Value};
 use r2p_module::FlashParams;
 use r2p_node::{Param, ParamStore};
 use r2p_world::kinematics::Layout;
-use r2p_world::robot::{BoardKind, Module, ParamValue, Robot, Wiring};
+use r2p_world::ranger::RangerKind;
+use r2p_world::robot::{Module, ParamValue, RangerMount, Robot, Wiring};
+use r2p_world::BoardKind;
 
 use crate::robot::BoardFlash;
 
@@ -14,6 +16,10 @@ pub fn store_params(module: &Module, robot: &Robot, flash: &mut BoardFlash) -> R
     let mut values = module.params.clone();
     if module.kind() == BoardKind::Gateway {
         values = base_geometry(robot, values);
+    }
+    if let Wiring::Proximity { rangers } = &module.wiring {
+        check_sensor_types(rangers, &values)
+            .map_err(|e| format!("{} ({}): {e}", module.name, robot.file.display()))?;
     }
     let r = match module.kind() {
         BoardKind::Psu => store(r2p_app_psu::params::DEFAULTS, &values, flash),
@@ -44,6 +50,36 @@ fn base_geometry(robot: &Robot, mut values: Vec<(String, ParamValue)>) -> Vec<(S
         }
     }
     values
+}
+
+/// The proximity firmware reads each channel with the curve its `sensorN` parameter names: a
+/// ranger of another type would give wrong distances, so the robot file must agree.
+fn check_sensor_types(rangers: &[RangerMount], values: &[(String, ParamValue)]) -> Result<(), String> {
+    for r in rangers.iter().filter(|r| r.channel < 4) {
+        let want = match r.kind {
+            RangerKind::Gp2y0a21 => 1,
+            RangerKind::Gp2y0a02 => 2,
+            RangerKind::MaxSonarLvEz => 3,
+        };
+        let key = format!("sensor{}", r.channel);
+        let default = match r2p_app_proximity::params::DEFAULTS[2 + usize::from(r.channel)].value {
+            Value::U32(v) => i64::from(v),
+            _ => 0,
+        };
+        let set = values.iter().find(|(n, _)| *n == key).map_or(default, |(_, v)| match v {
+            ParamValue::Int(i) => *i,
+            _ => -1,
+        });
+        if set != want {
+            return Err(format!(
+                "channel {} has a {} plugged in but the firmware's `{key}` is {set}: \
+                 set {key} = {want} in the module's params",
+                r.channel,
+                r.kind.name()
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn store<const N: usize>(
