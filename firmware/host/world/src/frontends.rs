@@ -43,7 +43,7 @@ pub const ADC: Adc = Adc::STM32F103;
 /// the PSU's 36 V maximum input.
 pub const VIN_SENSE: Divider = Divider { top_ohm: 100e3, bottom_ohm: 10e3 };
 
-/// PSU `IIN_SENSE`: battery current through a 5 mΩ low-side shunt...
+/// PSU `IIN_SENSE`: the PSU's input current (from the battery) through a 5 mΩ low-side shunt...
 pub const IIN_SHUNT_OHM: f64 = 0.005;
 /// ...amplified 50 V/V (0.25 V/A, 13.2 A full scale). Unidirectional: a charging (negative)
 /// current reads 0 V.

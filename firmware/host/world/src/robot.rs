@@ -138,7 +138,8 @@ pub struct RangerMount {
 /// What a module is wired to.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Wiring {
-    /// PSU: its input on the battery (its shunt carries the whole battery current), its
+    /// PSU: its input on the battery (its shunt carries its own input current; the motor
+    /// drivers take their supply from the battery directly, as docs/bus.md requires), its
     /// output the bus.
     Psu {
         /// Battery name.

@@ -230,6 +230,8 @@ pub struct World {
     wheels: Vec<Wheel>,
     battery: Battery,
     supply_v: f64,
+    /// The PSU's input current from the battery, A (what its shunt measures).
+    psu_input_a: f64,
     psu: Option<Psu>,
     bus_base_load_a: f64,
     rangers: Vec<Ranger>,
@@ -316,6 +318,7 @@ impl World {
             wheels: std::mem::take(&mut wheels),
             battery,
             supply_v,
+            psu_input_a: 0.0,
             psu,
             bus_base_load_a,
             rangers,
@@ -437,6 +440,7 @@ impl World {
             None => ((ocv - rb * motor_a).max(0.0), 0.0),
         };
         self.supply_v = v;
+        self.psu_input_a = if v > 0.0 { power / v } else { 0.0 };
         // 2. Bridges and windings.
         let mut charge = 0.0;
         for w in &mut self.wheels {
@@ -567,7 +571,7 @@ impl World {
         let name = board.kind.signals()[s].name;
         match (&board.link, name) {
             (Link::Psu, "VIN_SENSE") => frontends::VIN_SENSE.output(self.supply_v),
-            (Link::Psu, "IIN_SENSE") => frontends::iin_sense(self.battery.current()),
+            (Link::Psu, "IIN_SENSE") => frontends::iin_sense(self.psu_input_a),
             (Link::Psu, "VOUT_SENSE") => frontends::VOUT_SENSE.output(self.bus_voltage()),
             (Link::Motor { wheel }, "MOTOR_CURRENT") => {
                 let i = self.wheels[*wheel].motor.current();
@@ -759,6 +763,11 @@ impl World {
     /// Battery terminal voltage at the last sub-step (the motors' supply), V.
     pub fn supply_voltage(&self) -> f64 {
         self.supply_v
+    }
+
+    /// The PSU's input current from the battery (what its shunt measures), A.
+    pub fn psu_input_current(&self) -> f64 {
+        self.psu_input_a
     }
 
     /// The 5 V bus voltage (5 V without a PSU module: an external supply), V.

@@ -59,14 +59,10 @@ fn names(ctx: &Ctx<'_>) -> Result<Names, String> {
     let mut obstacle = "proximity/obstacle";
     let mut ranges = "proximity/ranges";
     for m in &ctx.robot.modules {
-        let instance = m
-            .params
-            .iter()
-            .find(|(n, _)| n == "instance")
-            .map_or(0, |(_, v)| match v {
-                r2p_world::robot::ParamValue::Int(i) => *i as u32,
-                _ => 0,
-            });
+        let instance = m.params.iter().find(|(n, _)| n == "instance").map_or(0, |(_, v)| match v {
+            r2p_world::robot::ParamValue::Int(i) => *i as u32,
+            _ => 0,
+        });
         match &m.wiring {
             Wiring::Motor { wheel, .. } if *wheel < 3 => {
                 let n = r2p_app_motor::Names::of(instance);
@@ -81,7 +77,9 @@ fn names(ctx: &Ctx<'_>) -> Result<Names, String> {
         }
     }
     if states.contains(&"") {
-        return Err("the base controller drives three wheels: wheels 0, 1 and 2 need a motor".into());
+        return Err(
+            "the base controller drives three wheels: wheels 0, 1 and 2 need a motor".into()
+        );
     }
     Ok(Names { cmd_vel: "cmd_vel", obstacle, ranges, states, setpoints, odom: "odom" })
 }

@@ -31,7 +31,10 @@ pub fn store_params(module: &Module, robot: &Robot, flash: &mut BoardFlash) -> R
 }
 
 /// The base controller's geometry follows the robot's base unless the file sets it.
-fn base_geometry(robot: &Robot, mut values: Vec<(String, ParamValue)>) -> Vec<(String, ParamValue)> {
+fn base_geometry(
+    robot: &Robot,
+    mut values: Vec<(String, ParamValue)>,
+) -> Vec<(String, ParamValue)> {
     let mut add = |name: &str, v: f64| {
         if !values.iter().any(|(n, _)| n == name) {
             values.push((name.into(), ParamValue::Float(v)));
@@ -54,7 +57,10 @@ fn base_geometry(robot: &Robot, mut values: Vec<(String, ParamValue)>) -> Vec<(S
 
 /// The proximity firmware reads each channel with the curve its `sensorN` parameter names: a
 /// ranger of another type would give wrong distances, so the robot file must agree.
-fn check_sensor_types(rangers: &[RangerMount], values: &[(String, ParamValue)]) -> Result<(), String> {
+fn check_sensor_types(
+    rangers: &[RangerMount],
+    values: &[(String, ParamValue)],
+) -> Result<(), String> {
     for r in rangers.iter().filter(|r| r.channel < 4) {
         let want = match r.kind {
             RangerKind::Gp2y0a21 => 1,
