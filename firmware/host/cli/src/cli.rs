@@ -10,7 +10,7 @@ use rtcan::LaxityEncoding;
 use crate::error::CliError;
 use crate::link::{Link, SocketcandLink, TraceLink};
 use crate::session::Session;
-use crate::{echo, listing, monitor, param, publish, traces};
+use crate::{echo, listing, monitor, param, publish, sim, traces};
 
 /// socketcand's address when no bus is named: where `r2p-emu demo --realtime` and
 /// `r2p-canlink serve` listen by default.
@@ -28,7 +28,9 @@ heartbeats, subscriptions); monitor and nodes only listen.";
 
 const EXAMPLES: &str = "\
 Examples:
-  r2p-emu demo --realtime &          # an emulated robot on socketcand 127.0.0.1:29536
+  r2p sim robots/triskar2.toml --realtime &   # the Triskar2 on socketcand 127.0.0.1:29536
+  r2p sim robots/triskar2.toml --seconds 10 --log run.pcap
+  r2p-emu demo --realtime &          # a three-board demo on socketcand 127.0.0.1:29536
   r2p nodes                          # psu, motor, control
   r2p topics
   r2p echo scan --count 3
@@ -98,10 +100,10 @@ pub enum Command {
     Replay(traces::ReplayArgs),
     /// Convert a trace between candump log and pcap (by the output's extension)
     Convert(traces::ConvertArgs),
-    // `r2p sim ROBOT_FILE [--realtime] [--socketcand ADDR | --socketcan IFACE]` (run a robot
-    // file on an emulated bus) goes here: `Sim(sim::SimArgs)`, dispatched in `run`. To watch
-    // the emulated bus in the same process, give the other commands a `link::HubLink` on the
-    // sim's hub.
+    /// Run a robot file on emulated boards: in virtual time into a trace (--seconds, --log), or
+    /// in real time (--realtime) serving socketcand on --socketcand's address and, with
+    /// --socketcan IFACE, bridging to a kernel CAN interface
+    Sim(sim::SimArgs),
 }
 
 /// Parses a positive number of seconds.
@@ -152,6 +154,7 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Echo(args) => echo::run(&args, bus, Session::new(open_link(bus)?), out),
         Command::Pub(args) => publish::run(&args, bus, Session::new(open_link(bus)?), out),
         Command::Param(cmd) => param::run(&cmd, bus, Session::new(open_link(bus)?), out),
+        Command::Sim(args) => sim::run(&args, bus, out),
     }
 }
 

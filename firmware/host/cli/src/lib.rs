@@ -22,6 +22,7 @@ pub mod monitor;
 pub mod param;
 pub mod publish;
 pub mod session;
+pub mod sim;
 pub mod socketcand;
 pub mod traces;
 pub mod types;

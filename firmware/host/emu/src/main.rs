@@ -135,6 +135,7 @@ fn realtime(opts: &Options) -> Result<(), String> {
         log: opts.log.clone(),
         seconds: opts.seconds,
         watch_stdin: opts.watch_stdin,
+        socketcan: None,
     };
     let summary = serve::run_realtime(&mut sim, demo::SPARE_PORT, "demo robot", &serve)?;
     eprintln!(

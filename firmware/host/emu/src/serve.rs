@@ -9,8 +9,10 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use r2p_canlink::hub::DEFAULT_QUEUE;
+use r2p_canlink::pcap::write_pcap;
 use r2p_canlink::service::{listen_error, spawn_logger, StopConditions};
-use r2p_canlink::{BroadcastHub, Config, Server};
+use r2p_canlink::socketcan::SocketCanBridge;
+use r2p_canlink::{BroadcastHub, Config, Server, Stamped};
 
 use crate::bridge::Bridge;
 use crate::{Runtime, Sim};
@@ -31,10 +33,13 @@ pub struct Serve {
     pub seconds: Option<f64>,
     /// Stop when standard input closes.
     pub watch_stdin: bool,
+    /// Also bridge the bus to this kernel CAN interface (SocketCAN, Linux).
+    pub socketcan: Option<String>,
 }
 
-/// Runs `seconds` of virtual time as fast as possible and writes the bus's frames to `path`
-/// as a candump log on `channel`. Returns the wall time taken.
+/// Runs `seconds` of virtual time as fast as possible and writes the bus's frames to `path`:
+/// a pcap file (SocketCAN link type, for Wireshark) if it ends in `.pcap`, a candump log on
+/// `channel` otherwise. Returns the wall time taken.
 pub fn run_virtual<N: Runtime>(
     sim: &mut Sim<'_, N>,
     seconds: f64,
@@ -45,10 +50,19 @@ pub fn run_virtual<N: Runtime>(
     let wall = Instant::now();
     sim.run_until((seconds * 1e9) as u64);
     let took = wall.elapsed();
-    let out = sim
-        .write_candump(BufWriter::new(file), channel, Duration::from_secs(EPOCH_S))
-        .map_err(|e| format!("writing the log: {e}"))?;
-    drop(out);
+    if path.ends_with(".pcap") {
+        let frames: Vec<Stamped> = crate::bus_frames(sim.bus())
+            .into_iter()
+            .map(|(t, _, frame)| Stamped {
+                time: Duration::from_secs(EPOCH_S) + Duration::from_nanos(t),
+                frame,
+            })
+            .collect();
+        write_pcap(BufWriter::new(file), &frames).map_err(|e| format!("writing {path}: {e}"))?;
+    } else {
+        sim.write_candump(BufWriter::new(file), channel, Duration::from_secs(EPOCH_S))
+            .map_err(|e| format!("writing the log: {e}"))?;
+    }
     Ok(took)
 }
 
@@ -80,6 +94,13 @@ pub fn run_realtime<N: Runtime>(
                 16 * DEFAULT_QUEUE,
             ))
         }
+        None => None,
+    };
+    let kernel_can = match &opts.socketcan {
+        Some(iface) => Some(
+            SocketCanBridge::start(iface, hub.clone(), DEFAULT_QUEUE)
+                .map_err(|e| format!("--socketcan {iface}: {e}"))?,
+        ),
         None => None,
     };
     let config = Config { addr: opts.addr, channel: opts.channel.clone(), queue: DEFAULT_QUEUE };
@@ -135,6 +156,10 @@ pub fn run_realtime<N: Runtime>(
             Err(_) => return Err("the log writer panicked".into()),
         }
         summary.push_str(", log written");
+    }
+    if let Some(b) = kernel_can {
+        b.stop();
+        summary.push_str(" (SocketCAN bridged)");
     }
     Ok(summary)
 }

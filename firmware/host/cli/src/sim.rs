@@ -1,0 +1,89 @@
+//! `r2p sim`: runs a robot file on emulated boards — in virtual time into a trace, or in real
+//! time behind a socketcand server (and a SocketCAN interface) so that tools join the robot.
+
+use std::io::Write;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use clap::Args;
+use r2p_emu::robot::EmuRobot;
+use r2p_emu::serve::{self, Serve};
+
+use crate::cli::{emit, parse_seconds, BusArgs, DEFAULT_SOCKETCAND};
+use crate::error::CliError;
+
+/// `r2p sim` options.
+#[derive(Args, Debug)]
+pub struct SimArgs {
+    /// Robot file describing the modules, their wiring and the world (e.g. robots/triskar2.toml)
+    pub robot: PathBuf,
+    /// Pace virtual time against the wall clock and serve the bus: socketcand on --socketcand's
+    /// address (default 127.0.0.1:29536) and, with --socketcan IFACE, a kernel CAN interface
+    #[arg(long)]
+    pub realtime: bool,
+    /// Stop after this many seconds (of virtual time, or of real time with --realtime);
+    /// required without --realtime
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub seconds: Option<Duration>,
+    /// Write the bus's frames to FILE: pcap (Wireshark) if it ends in .pcap, else a candump log
+    #[arg(long, value_name = "FILE")]
+    pub log: Option<PathBuf>,
+    /// Override the robot file's seed (sensor noise and bus faults)
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// With --realtime: keep running when standard input closes
+    #[arg(long)]
+    pub no_stdin: bool,
+}
+
+/// Runs `r2p sim`.
+pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let mut robot =
+        r2p_world::Robot::load(&args.robot).map_err(|e| CliError::new(e.to_string()))?;
+    if let Some(seed) = args.seed {
+        robot.seed = seed;
+    }
+    let name = robot.name.clone();
+    let mut r = EmuRobot::build(robot).map_err(CliError::new)?;
+    let log = args.log.as_ref().map(|p| p.display().to_string());
+    if !args.realtime {
+        let (Some(seconds), Some(path)) = (args.seconds, log.as_deref()) else {
+            return Err(CliError::new(
+                "without --realtime, give --seconds N and --log FILE (the run goes as fast as it can into the trace)",
+            ));
+        };
+        let wall = serve::run_virtual(&mut r.sim, seconds.as_secs_f64(), path, &bus.channel)
+            .map_err(CliError::new)?;
+        let p = r.world.borrow().pose();
+        emit(
+            out,
+            &format!(
+                "r2p sim: {name}: {:.1} s of virtual time in {:.2} s ({:.0}x real time), {} frames written to {path}; base at x {:.3} m, y {:.3} m, heading {:.1}°",
+                seconds.as_secs_f64(),
+                wall.as_secs_f64(),
+                seconds.as_secs_f64() / wall.as_secs_f64().max(1e-9),
+                r.sim.bus().frames().count(),
+                p.x,
+                p.y,
+                p.theta.to_degrees()
+            ),
+        )?;
+        return Ok(());
+    }
+    let addr = bus.socketcand.as_deref().unwrap_or(DEFAULT_SOCKETCAND);
+    let addr: SocketAddr = addr.parse().map_err(|_| {
+        CliError::new(format!("--socketcand {addr}: expected IP:PORT, e.g. 127.0.0.1:29536"))
+    })?;
+    let opts = Serve {
+        addr,
+        channel: bus.channel.clone(),
+        log,
+        seconds: args.seconds.map(|d| d.as_secs_f64()),
+        watch_stdin: !args.no_stdin,
+        socketcan: bus.socketcan.clone(),
+    };
+    let spare = r.spare_port();
+    let summary = serve::run_realtime(&mut r.sim, spare, &name, &opts).map_err(CliError::new)?;
+    emit(out, &summary.replacen("r2p-emu:", "r2p sim:", 1))
+}
