@@ -14,6 +14,8 @@ measured in the same run (never pass/fail on timing: that is what tests are not 
 from __future__ import annotations
 
 import json
+import shutil
+import tempfile
 import subprocess
 import sys
 
@@ -241,11 +243,46 @@ def report_load(points: list[dict], sim: dict) -> None:
           f"over {sim['runs']} runs")
 
 
+SIM_GOAL = 50.0      # × real time, issue 5
+SIM_SECONDS = 30
+
+
+def triskar2(runs: int = 3) -> list[dict]:
+    """The Triskar2 robot file in deterministic virtual time on one core (taskset -c 0):
+    `runs` runs of SIM_SECONDS each, JSON summaries from `r2p sim --json`."""
+    subprocess.run(["cargo", "build", "-q", "--release", "--locked", "-p", "r2p-cli"],
+                   cwd=ROOT / "firmware", check=True)
+    r2p = ROOT / "firmware" / "target" / "release" / "r2p"
+    pin = ["taskset", "-c", "0"] if shutil.which("taskset") else []
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for i in range(runs):
+            p = subprocess.run([*pin, str(r2p), "--json", "sim", str(ROOT / "robots" / "triskar2.toml"),
+                                "--seconds", str(SIM_SECONDS), "--log", f"{tmp}/run{i}.log"],
+                               capture_output=True, text=True, check=True)
+            rows += json_lines(p.stdout)
+    return rows
+
+
+def report_triskar2(rows: list[dict]) -> None:
+    rows = sorted(rows, key=lambda r: r["ratio"])
+    mid = rows[len(rows) // 2]
+    print(f"\n=== Triskar2 emulated in virtual time (6 boards + world, robots/triskar2.toml), one core")
+    print(f"{'run':>4} {'virtual s':>9} {'wall s':>7} {'× real time':>12} {'events/s':>12} {'frames':>7}")
+    for i, r in enumerate(rows):
+        print(f"{i:>4} {r['virtual_s']:>9.0f} {r['wall_s']:>7.3f} {r['ratio']:>12.0f} "
+              f"{r['events_per_s']:>12,.0f} {r['frames']:>7}")
+    verdict = "holds" if mid["ratio"] >= SIM_GOAL else "FAILS"
+    print(f"median {mid['ratio']:.0f}× real time (goal ≥ {SIM_GOAL:.0f}×: {verdict}), "
+          f"{mid['events_per_s']:,.0f} events/s (frames, slot ticks, application and world steps)")
+
+
 def main() -> int:
     try:
         m3 = cortex_m3()
         hs = host()
         load_points, load_sim = rtcan_load()
+        sim_rows = triskar2()
     except (RuntimeError, subprocess.CalledProcessError) as e:
         print(f"bench: {e}", file=sys.stderr)
         return 1
@@ -283,6 +320,7 @@ def main() -> int:
     report_load(load_points, load_sim)
     for path in plot_load(load_points):
         print(f"plot: {path.relative_to(ROOT)}")
+    report_triskar2(sim_rows)
     return 0
 
 

@@ -56,6 +56,21 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
         let wall = serve::run_virtual(&mut r.sim, seconds.as_secs_f64(), path, &bus.channel)
             .map_err(CliError::new)?;
         let p = r.world.borrow().pose();
+        let (virt, wall_s) = (seconds.as_secs_f64(), wall.as_secs_f64().max(1e-9));
+        if bus.json {
+            // Events the run processed: frames on the bus, node slot ticks, application steps
+            // and world steps (one per millisecond).
+            let st = r.sim.stats();
+            let frames = r.sim.bus().frames().count() as u64;
+            let world_steps = (virt * 1000.0) as u64;
+            let events = frames + st.ticks + st.app_steps + world_steps;
+            let line = serde_json::json!({
+                "robot": name, "virtual_s": virt, "wall_s": wall_s, "ratio": virt / wall_s,
+                "frames": frames, "ticks": st.ticks, "app_steps": st.app_steps,
+                "world_steps": world_steps, "events": events, "events_per_s": events as f64 / wall_s,
+            });
+            return emit(out, &line.to_string());
+        }
         emit(
             out,
             &format!(
