@@ -264,6 +264,49 @@ def triskar2(runs: int = 3) -> list[dict]:
     return rows
 
 
+TRAJECTORY_PLOT = ROOT / "docs" / "img" / "triskar2-trajectory.png"
+
+
+def plot_trajectory(seconds: int = 10) -> Path:
+    """The Triskar2's teleop script on emulated boards: true path, odometry, obstacles."""
+    import csv
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.patches as mp
+    import matplotlib.pyplot as plt
+    r2p = ROOT / "firmware" / "target" / "release" / "r2p"
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([str(r2p), "sim", str(ROOT / "robots" / "triskar2.toml"), "--seconds", str(seconds),
+                        "--log", f"{tmp}/run.log", "--trajectory", f"{tmp}/t.csv"],
+                       capture_output=True, text=True, check=True)
+        rows = list(csv.DictReader(open(f"{tmp}/t.csv")))
+    x = [float(r["x_m"]) for r in rows]
+    y = [float(r["y_m"]) for r in rows]
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=100)
+    ax.add_patch(mp.Rectangle((1.0, -0.3), 0.4, 0.6, color="0.6", label="obstacles"))
+    ax.add_patch(mp.Circle((-0.9, 0.0), 0.1, color="0.6"))
+    ax.plot(x, y, "-", lw=2, label="base (world model)")
+    ax.plot([float(r["odom_x_m"]) for r in rows], [float(r["odom_y_m"]) for r in rows], "--",
+            lw=1.2, label="odometry (gateway, from the motors' states)")
+    for r in rows[::10]:
+        import math
+        th = float(r["theta_rad"])
+        ax.arrow(float(r["x_m"]), float(r["y_m"]), 0.12 * math.cos(th), 0.12 * math.sin(th),
+                 head_width=0.03, color="C3", alpha=0.6)
+    ax.set_aspect("equal")
+    ax.set_xlim(-1.2, 1.6)
+    ax.set_ylim(-0.6, 0.6)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(f"Triskar2, {seconds} s of robots/triskar2.toml's teleop script on emulated boards", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(TRAJECTORY_PLOT, metadata={"Software": None})
+    plt.close(fig)
+    return TRAJECTORY_PLOT
+
+
 def report_triskar2(rows: list[dict]) -> None:
     rows = sorted(rows, key=lambda r: r["ratio"])
     mid = rows[len(rows) // 2]
@@ -321,6 +364,7 @@ def main() -> int:
     for path in plot_load(load_points):
         print(f"plot: {path.relative_to(ROOT)}")
     report_triskar2(sim_rows)
+    print(f"plot: {plot_trajectory().relative_to(ROOT)}")
     return 0
 
 

@@ -35,6 +35,10 @@ pub struct SimArgs {
     /// With --realtime: keep running when standard input closes
     #[arg(long)]
     pub no_stdin: bool,
+    /// Without --realtime: also write the base's true pose, its odometry and the command every
+    /// 50 ms to FILE (CSV), for plots
+    #[arg(long, value_name = "FILE")]
+    pub trajectory: Option<PathBuf>,
 }
 
 /// Runs `r2p sim`.
@@ -53,6 +57,9 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
                 "without --realtime, give --seconds N and --log FILE (the run goes as fast as it can into the trace)",
             ));
         };
+        if let Some(csv) = &args.trajectory {
+            write_trajectory(&mut r, seconds, csv)?;
+        }
         let wall = serve::run_virtual(&mut r.sim, seconds.as_secs_f64(), path, &bus.channel)
             .map_err(CliError::new)?;
         let p = r.world.borrow().pose();
@@ -101,4 +108,36 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
     let spare = r.spare_port();
     let summary = serve::run_realtime(&mut r.sim, spare, &name, &opts).map_err(CliError::new)?;
     emit(out, &summary.replacen("r2p-emu:", "r2p sim:", 1))
+}
+
+/// Runs `r` for `seconds` in 50 ms slices, writing the base's pose (world and odometry) and the
+/// command after obstacle avoidance as CSV. The trace that follows covers the same run.
+fn write_trajectory(r: &mut EmuRobot, seconds: Duration, csv: &PathBuf) -> Result<(), CliError> {
+    let mut text = String::from(
+        "t_s,x_m,y_m,theta_rad,odom_x_m,odom_y_m,odom_theta_rad,cmd_vx,cmd_vy,cmd_wz\n",
+    );
+    let end = seconds.as_nanos() as u64;
+    let mut t = 0;
+    while t < end {
+        t = (t + 50_000_000).min(end);
+        r.sim.run_until(t);
+        let p = r.world.borrow().pose();
+        let pr = r.probe.borrow();
+        let (o, c) = (pr.odometry, pr.command);
+        text.push_str(&format!(
+            "{:.3},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.3},{:.3},{:.3}\n",
+            t as f64 / 1e9,
+            p.x,
+            p.y,
+            p.theta,
+            o.0,
+            o.1,
+            o.2,
+            c.0,
+            c.1,
+            c.2
+        ));
+    }
+    std::fs::write(csv, text)
+        .map_err(|e| CliError::new(format!("cannot write {}: {e}", csv.display())))
 }
