@@ -115,7 +115,7 @@ def test_monitor_decodes_syncs_and_heartbeats(demo):
     scans = [line for line in lines if " SRT lax=" in line]
     assert scans and all(re.search(r"SRT lax=\d+\(>=[\d.]+(ms|us)\) msg=[0-9A-F]{2}02 frag=[01] ", s) for s in scans)
 
-    j = [json.loads(line) for line in r2p(demo, "monitor", "--count", "300", "--json", "--announce").stdout.splitlines()]
+    j = [json.loads(line) for line in r2p(demo, "monitor", "--count", "1200", "--json", "--announce").stdout.splitlines()]
     assert any(f["kind"] == "sync" and f["laxity"] == 0 and "cycle" in f["sync"] for f in j)
     hb = [f["management"] for f in j if f.get("management", {}).get("type") == "HEARTBEAT"]
     assert {h["name"] for h in hb} == DEMO_NODES

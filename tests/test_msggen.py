@@ -144,7 +144,7 @@ def test_types_over_one_frame_are_refused_for_dbc(tmp_path):
     assert p.returncode == 2
     assert ("--assign motor1/state=WheelState@0x3101: WheelState is 13 bytes: RTCAN sends it as 2 "
             "frames, and a DBC message is one CAN frame of at most 8 bytes") in p.stdout
-    assert "types that fit: BusPower (1 B), Obstacle (5 B), PsuState (7 B), WheelSetpoint (5 B)" in p.stdout
+    assert "types that fit: BusPower (1 B), FaultClear (1 B), MotorFault (6 B), Obstacle (5 B), PsuState (7 B), WheelSetpoint (5 B)" in p.stdout
     assert not (tmp_path / "x.dbc").exists() and "Traceback" not in p.stdout
     toml = tmp_path / "a.toml"
     toml.write_text('[streams]\n"psu/battery" = { type = "Battery", id = 0x1001 }\n')

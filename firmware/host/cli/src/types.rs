@@ -402,8 +402,20 @@ macro_rules! generated {
 }
 
 /// Every generated type (a test checks this against `r2p_msgs::ALL`).
-const GENERATED: &[Generated] =
-    generated!(Battery, Obstacle, Proximity, Twist2D, WheelSetpoint, WheelState);
+const GENERATED: &[Generated] = generated!(
+    Battery,
+    BusPower,
+    FaultClear,
+    MotorFault,
+    Obstacle,
+    Odometry,
+    Proximity,
+    PsuEvent,
+    PsuState,
+    Twist2D,
+    WheelSetpoint,
+    WheelState
+);
 
 /// Largest message (one RTCAN message).
 pub const MAX_SIZE: usize = r2p_msgs::MAX_SIZE;
