@@ -255,12 +255,21 @@ def triskar2(runs: int = 3) -> list[dict]:
     r2p = ROOT / "firmware" / "target" / "release" / "r2p"
     pin = ["taskset", "-c", "0"] if shutil.which("taskset") else []
     rows = []
+    import resource
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(runs):
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
             p = subprocess.run([*pin, str(r2p), "--json", "sim", str(ROOT / "robots" / "triskar2.toml"),
                                 "--seconds", str(SIM_SECONDS), "--log", f"{tmp}/run{i}.log"],
                                capture_output=True, text=True, check=True)
-            rows += json_lines(p.stdout)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            # CPU time of the run (user + system): what one core spends, whatever else the
+            # machine runs; the wall time includes waiting for the core.
+            cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+            for r in json_lines(p.stdout):
+                r["cpu_s"] = cpu
+                r["cpu_ratio"] = r["virtual_s"] / max(cpu, 1e-9)
+                rows.append(r)
     return rows
 
 
@@ -308,16 +317,19 @@ def plot_trajectory(seconds: int = 10) -> Path:
 
 
 def report_triskar2(rows: list[dict]) -> None:
-    rows = sorted(rows, key=lambda r: r["ratio"])
+    rows = sorted(rows, key=lambda r: r["cpu_ratio"])
     mid = rows[len(rows) // 2]
     print(f"\n=== Triskar2 emulated in virtual time (6 boards + world, robots/triskar2.toml), one core")
-    print(f"{'run':>4} {'virtual s':>9} {'wall s':>7} {'× real time':>12} {'events/s':>12} {'frames':>7}")
+    print(f"{'run':>4} {'virtual s':>9} {'CPU s':>6} {'× real (CPU)':>12} {'wall s':>7} {'× real (wall)':>13} "
+          f"{'events/CPU s':>13} {'frames':>7}")
     for i, r in enumerate(rows):
-        print(f"{i:>4} {r['virtual_s']:>9.0f} {r['wall_s']:>7.3f} {r['ratio']:>12.0f} "
-              f"{r['events_per_s']:>12,.0f} {r['frames']:>7}")
-    verdict = "holds" if mid["ratio"] >= SIM_GOAL else "FAILS"
-    print(f"median {mid['ratio']:.0f}× real time (goal ≥ {SIM_GOAL:.0f}×: {verdict}), "
-          f"{mid['events_per_s']:,.0f} events/s (frames, slot ticks, application and world steps)")
+        print(f"{i:>4} {r['virtual_s']:>9.0f} {r['cpu_s']:>6.2f} {r['cpu_ratio']:>12.0f} {r['wall_s']:>7.3f} "
+              f"{r['ratio']:>13.0f} {r['events'] / max(r['cpu_s'], 1e-9):>13,.0f} {r['frames']:>7}")
+    verdict = "holds" if mid["cpu_ratio"] >= SIM_GOAL else "FAILS"
+    print(f"median {mid['cpu_ratio']:.0f}× real time per CPU second (goal ≥ {SIM_GOAL:.0f}× on one core: {verdict}); "
+          f"wall-clock {mid['ratio']:.0f}× on this machine now; "
+          f"{mid['events'] / max(mid['cpu_s'], 1e-9):,.0f} events per CPU second "
+          "(frames, slot ticks, application and world steps)")
 
 
 def main() -> int:
