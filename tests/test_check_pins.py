@@ -54,6 +54,18 @@ def test_agreeing_board_file_and_schematic_pass(tmp_path):
     assert "check-pins: demo: ok (13 pins agree)" in out
 
 
+def test_a_net_that_reaches_nothing_but_the_mcu_is_not_wired(tmp_path):
+    # A label on an unused pin connects nothing: fine. A used pin whose net reaches nothing
+    # else is as good as unconnected.
+    nets = {**GOOD_NETS, "PB7": "SPARE_LABEL"}
+    rc, problems, out = check(make_repo(tmp_path, nets, lone=("SPARE_LABEL", "BUS_EN")))
+    assert rc == 1, out
+    assert problems == [
+        f"demo: PB0 is on net BUS_EN in {SCH}, which reaches nothing else, but {BOARD} says signal "
+        "BUS_EN (output): wire the net to its circuit",
+    ]
+
+
 def test_swapped_pins_are_reported_on_both_pins_with_the_net_and_both_files(tmp_path):
     nets = {**GOOD_NETS, "PA0": "IIN_SENSE", "PA1": "VIN_SENSE"}
     rc, problems, out = check(make_repo(tmp_path, nets))

@@ -57,6 +57,8 @@ class Net:
     name: str
     unnamed: bool
     power: bool
+    lone: bool = False
+    """Only the MCU pin is on it: a label that reaches nothing else connects nothing."""
 
 
 @dataclass
@@ -130,7 +132,7 @@ def mcu_nets(netlist: Path, mcu: str, where: str) -> McuNets:
             pin_name = names.get(node.get("pin")) or node.get("pinfunction", "")
             gpio = GPIO.match(pin_name)
             if gpio:
-                result.gpio[gpio.group(1)] = Net(name, unnamed, power)
+                result.gpio[gpio.group(1)] = Net(name, unnamed, power, lone=len(nodes) == 1)
     if not result.gpio:
         raise CheckError(f"{where}: {ref} has no pins named like PA0: is it the MCU?")
     return result
@@ -203,6 +205,9 @@ def check_against_schematic(board: Board, nets: McuNets, schematic: str, root: P
         elif net.unnamed and net.name.startswith("unconnected-("):
             errors.append(f"{pin.name} is unconnected in {schematic} but {where} says signal "
                           f"{pin.describe()}")
+        elif net.lone and not net.power:
+            errors.append(f"{pin.name} is on net {net.name} in {schematic}, which reaches nothing else, "
+                          f"but {where} says signal {pin.describe()}: wire the net to its circuit")
         elif net.name != pin.signal or net.unnamed:
             on = nets.pins_on(pin.signal)
             hint = f"; net {pin.signal} is on {', '.join(on)}" if on else ""
@@ -210,7 +215,7 @@ def check_against_schematic(board: Board, nets: McuNets, schematic: str, root: P
             errors.append(f"{pin.name} is on {kind}{net.name} in {schematic} but {where} says signal "
                           f"{pin.describe()}{hint}")
     for name, net in sorted(nets.gpio.items(), key=lambda kv: _pin_order(kv[0])):
-        if name in board.pins or net.power or net.name.startswith("unconnected-("):
+        if name in board.pins or net.power or net.lone or net.name.startswith("unconnected-("):
             continue
         listed = [p for p in board.pins.values() if p.signal == net.name]
         hint = f"; {display(listed[0].source, root)} puts {net.name} on {listed[0].name}" if listed else ""
