@@ -12,6 +12,7 @@ FOLDERS = {
     "scripts": "MIT OR Apache-2.0",
     "tests": "MIT OR Apache-2.0",
     "docs": "CC-BY-4.0",
+    "robots": "MIT OR Apache-2.0",
 }
 
 
@@ -20,6 +21,15 @@ def test_every_top_level_folder_has_a_readme_and_states_its_licence():
         assert (ROOT / folder / "README.md").is_file(), f"{folder}/README.md"
         licence = (ROOT / folder / "LICENSE.md").read_text()
         assert f"SPDX-License-Identifier: {spdx}" in licence, folder
+
+
+def test_every_top_level_folder_is_in_the_map():
+    # A new top-level folder needs a README, a licence and a row in the README's folder table.
+    readme = (ROOT / "README.md").read_text()
+    for d in ROOT.iterdir():
+        if d.is_dir() and not d.name.startswith(".") and d.name != "LICENSES":
+            assert d.name in FOLDERS, f"{d.name}/ is not in tests/test_layout.py's FOLDERS"
+            assert f"[`{d.name}/`]({d.name}/)" in readme, f"{d.name}/ is not in README.md's folder table"
 
 
 def test_every_module_has_its_hardware_folder():
