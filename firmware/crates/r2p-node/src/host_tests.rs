@@ -11,7 +11,7 @@ use r2p_management::message::{Message, ModuleState};
 use r2p_management::node_id::initial_node_id;
 use r2p_management::NodeId;
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
-use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError};
+use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxResult};
 use rtcan::id::EXTENDED_ID_MAX;
 use rtcan::{fragments, CanController, Frame, FrameId, Laxity, MessageId, Micros};
 
@@ -32,6 +32,8 @@ struct Wires {
 struct Loopback {
     wires: Rc<RefCell<Wires>>,
     me: usize,
+    /// Every frame goes out at once: its result is `Sent` (the last `TX_RESULTS` are kept).
+    results: VecDeque<TxResult>,
 }
 
 impl CanController for Loopback {
@@ -44,7 +46,15 @@ impl CanController for Loopback {
                 q.push_back(Received { frame: *frame, at });
             }
         }
+        if self.results.len() == rtcan::controller::TX_RESULTS {
+            self.results.pop_front();
+        }
+        self.results.push_back(TxResult { id: frame.id(), outcome: rtcan::TxOutcome::Sent });
         Ok(())
+    }
+    fn set_tx_mode(&mut self, _: TxMode) {}
+    fn take_tx_result(&mut self) -> Option<TxResult> {
+        self.results.pop_front()
     }
     fn try_receive(&mut self) -> Option<Received> {
         self.wires.borrow_mut().inboxes[self.me].pop_front()
@@ -70,7 +80,9 @@ impl VecBus {
     fn new(n: usize) -> Self {
         let wires = Rc::new(RefCell::new(Wires::default()));
         wires.borrow_mut().inboxes = (0..n).map(|_| VecDeque::new()).collect();
-        let ports = (0..n).map(|me| Loopback { wires: wires.clone(), me }).collect();
+        let ports = (0..n)
+            .map(|me| Loopback { wires: wires.clone(), me, results: VecDeque::new() })
+            .collect();
         Self { wires, ports }
     }
 

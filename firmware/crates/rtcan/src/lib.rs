@@ -24,7 +24,7 @@ pub mod laxity;
 pub mod schedule;
 pub mod srt;
 
-pub use controller::{CanController, Micros};
+pub use controller::{CanController, Micros, TxMode, TxOutcome, TxResult};
 pub use cycle::{CycleConfig, SlotClock, Sync};
 pub use failover::Failover;
 pub use fragment::{fragments, Expect, Reassembler, ReassemblyStats};
