@@ -32,7 +32,7 @@ pub use frame::Frame;
 pub use id::{Class, FrameId, IdError, MessageId};
 pub use laxity::{Laxity, LaxityEncoding};
 pub use schedule::{next_reserved, Period, Phase, Scheduler};
-pub use srt::{Missed, TxQueue, Urgency};
+pub use srt::{Missed, Ticket, TxQueue, Urgency};
 
 /// The crate's test suite, compiled in for bare-metal runners (feature `selftest`).
 #[cfg(any(test, feature = "selftest"))]
