@@ -787,6 +787,11 @@ impl<
 
     /// Moves published messages from the remote subscribers into the transmit queue, as far
     /// as it has room for whole messages (the rest wait in the remote subscriber's queue).
+    ///
+    /// NRT messages leave half the queue free ([`nrt_reserve`]): under overload NRT frames
+    /// cannot leave, and without a reserve a backlog of them would fill the queue and keep an
+    /// SRT message out of it — out of arbitration — until it expired (docs/rtcan.md, "Under
+    /// load").
     fn drain_exports(&mut self, now: Micros) {
         let me = self.ids.node_id();
         let mut buf = [0u8; BUF];
@@ -796,8 +801,10 @@ impl<
                 continue; // HRT streams go in their reserved slots (`slot_tick`)
             }
             let frames = frame_count(e.size()).unwrap_or(usize::MAX);
+            let reserve =
+                if e.class().deadline_us().is_none() { nrt_reserve(TXQ, frames) } else { 0 };
             let message = me.message_id(i as u8 + 1);
-            while e.pending() > 0 && self.tx.free() >= frames {
+            while e.pending() > 0 && self.tx.free() >= frames.saturating_add(reserve) {
                 let Some(encoded) = e.pop_encoded(&mut buf) else { break };
                 let Ok((n, at)) = encoded else {
                     bump(&mut self.stats.bad_payloads);
@@ -1059,7 +1066,7 @@ impl<
                 return;
             }
         }
-        for done in self.slot_tx.settle(can).into_iter().flatten() {
+        for done in self.slot_tx.settle(now, can, &self.tx).into_iter().flatten() {
             self.on_done(done);
         }
         while let Some(r) = can.try_receive() {
@@ -1140,8 +1147,11 @@ impl<
 
     /// A loaded frame's fate (step 1 of [`slot_tick`](Self::slot_tick)).
     fn on_done(&mut self, done: Done<usize>) {
+        if done.is_retry(self.slot_tx.policy()) {
+            bump(&mut self.stats.slot_retries);
+        }
         match done {
-            Done::Slotted { what: Slotted::Hrt(_), outcome: TxOutcome::Sent } => {
+            Done::Slotted { what: Slotted::Hrt(_), outcome: TxOutcome::Sent, .. } => {
                 bump(&mut self.stats.hrt_sent)
             }
             Done::Slotted { what: Slotted::Hrt(i), .. } => self.hrt_miss(i),
@@ -1150,11 +1160,7 @@ impl<
                 self.tx.remove(ticket);
                 bump(&mut self.stats.frames_sent);
             }
-            // Withdrawn at a boundary inside a merged window: loaded again at once.
-            Done::Queued { outcome: TxOutcome::Aborted, late: false, .. }
-                if self.slot_tx.policy() == FreeSlots::Merged => {}
             Done::Queued { late, .. } => {
-                bump(&mut self.stats.slot_retries);
                 if late {
                     bump(&mut self.stats.late_withdrawals);
                 }
@@ -1395,6 +1401,18 @@ impl<
     }
 }
 
+/// Frames of a `txq`-frame transmit queue an NRT message of `frames` frames must leave free
+/// for SRT messages: half the queue, less if the message could not enter an empty queue then.
+pub const fn nrt_reserve(txq: usize, frames: usize) -> usize {
+    let half = txq / 2;
+    let room = txq.saturating_sub(frames);
+    if half < room {
+        half
+    } else {
+        room
+    }
+}
+
 fn hrt_result(r: Reject) -> HrtResult {
     match r {
         Reject::NotHarmonic => HrtResult::NotHarmonic,
@@ -1434,6 +1452,25 @@ mod whole_seconds_tests {
         fn matches_division(us in any::<u64>(), small in 0u64..(1 << 40)) {
             for x in [us, small] {
                 prop_assert_eq!(whole_seconds(x), (x / 1_000_000).min(u64::from(u32::MAX)) as u32);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod nrt_reserve_tests {
+    use super::nrt_reserve;
+
+    #[test]
+    fn half_the_queue_unless_the_message_could_never_enter() {
+        assert_eq!(nrt_reserve(32, 2), 16);
+        assert_eq!(nrt_reserve(32, 8), 16);
+        // A message of 6 frames in an 8-frame queue enters an empty queue: reserve 2, not 4.
+        assert_eq!(nrt_reserve(8, 6), 2);
+        assert_eq!(nrt_reserve(8, 8), 0);
+        for txq in 8..64 {
+            for frames in 1..=txq {
+                assert!(frames + nrt_reserve(txq, frames) <= txq, "{txq} {frames}");
             }
         }
     }

@@ -51,6 +51,8 @@ pub enum Done<T> {
     Slotted {
         /// Which.
         what: Slotted<T>,
+        /// Its identifier.
+        id: FrameId,
         /// Its outcome.
         outcome: TxOutcome,
     },
@@ -59,11 +61,28 @@ pub enum Done<T> {
     Queued {
         /// The frame in the transmit queue.
         ticket: Ticket,
+        /// Its identifier as loaded (laxity of that time).
+        id: FrameId,
         /// Its outcome.
         outcome: TxOutcome,
         /// It was withdrawn at its window's latest start (the bus was busy until then).
         late: bool,
     },
+}
+
+impl<T> Done<T> {
+    /// A queued frame that did not go out in its window and went back to the queue: it lost a
+    /// one-shot arbitration, ended in an error or was withdrawn at its latest start — not one
+    /// withdrawn at a boundary inside a merged window to be loaded again at once.
+    pub fn is_retry(&self, policy: FreeSlots) -> bool {
+        match *self {
+            Done::Queued { outcome: TxOutcome::Sent, .. } | Done::Slotted { .. } => false,
+            Done::Queued { outcome: TxOutcome::Aborted, late: false, .. } => {
+                policy == FreeSlots::Single
+            }
+            Done::Queued { .. } => true,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -124,39 +143,50 @@ impl<T: Copy> SlotTx<T> {
         }
     }
 
-    /// At a slot boundary: withdraws what has not started (a queued frame in a merged window
-    /// is loaded again at once, with its laxity for now) and takes the controller's results.
-    /// Returns what became of the loaded frames; a frame still on the wire stays loaded.
-    pub fn settle<C: CanController + ?Sized>(&mut self, can: &mut C) -> [Option<Done<T>>; 2] {
+    /// At slot boundary `now`: withdraws what has not started and takes the controller's
+    /// results. Returns what became of the loaded frames, in the order they finished; a frame
+    /// on the wire stays loaded. Inside a merged window, a queued frame that is still the
+    /// queue's head with the same laxity code is left loaded (withdrawing it while it is in an
+    /// arbitration would cost it its retry); otherwise it is withdrawn, to be loaded again
+    /// with the more urgent frame or code.
+    pub fn settle<C: CanController + ?Sized, const N: usize>(
+        &mut self,
+        now: Micros,
+        can: &mut C,
+        tx: &TxQueue<N>,
+    ) -> [Option<Done<T>>; 2] {
         let mut done = [None, None];
         if self.slotted.is_none() && self.queued.is_none() {
             return done;
         }
-        can.abort_pending();
+        let inside = self.policy == FreeSlots::Merged && self.window.is_some_and(|w| now < w.end);
+        let head = if inside { tx.peek_ticket(now) } else { None };
+        let current = matches!((self.queued, head), (Some(q), Some((t, f))) if q == (t, f.id()));
+        if !current || self.slotted.is_some() {
+            can.abort_pending();
+        }
+        let mut n = 0;
         while let Some(r) = can.take_tx_result() {
-            match (self.slotted, self.queued) {
+            let d = match (self.slotted, self.queued) {
                 (Some((what, id)), _) if id == r.id => {
                     self.slotted = None;
-                    done[0] = Some(Done::Slotted { what, outcome: r.outcome });
+                    Done::Slotted { what, id, outcome: r.outcome }
                 }
                 (_, Some((ticket, id))) if id == r.id => {
                     self.queued = None;
                     let late = self.late && r.outcome == TxOutcome::Aborted;
-                    done[1] = Some(Done::Queued { ticket, outcome: r.outcome, late });
+                    Done::Queued { ticket, id, outcome: r.outcome, late }
                 }
-                _ => {} // a frame of an earlier mode of use (unslotted): nothing to do
-            }
+                _ => continue, // a frame of an earlier mode of use (unslotted): nothing to do
+            };
+            done[n] = Some(d);
+            n += 1;
         }
         if self.queued.is_none() {
             self.window = None;
             self.late = false;
         }
         done
-    }
-
-    /// A queued frame is still loaded (on the wire at the last boundary).
-    pub fn queued_busy(&self) -> bool {
-        self.queued.is_some()
     }
 
     /// Switches the controller to `mode` if it is not there yet.

@@ -400,3 +400,51 @@ fn a_frame_the_bus_kept_waiting_at_a_merged_window_end_is_withdrawn_too() {
     assert!(o.late >= 60, "{o:?}");
     assert!(o.delivered_all && o.deadline_misses == 0, "{o:?}");
 }
+
+#[test]
+fn an_nrt_backlog_never_keeps_an_srt_message_out_of_the_queue() {
+    // A offers a log (NRT, 16 bytes: 2 frames) before its scan (SRT, 6 ms): a drain that
+    // served exports in order until the queue is full would let a 30-message log backlog (60
+    // frames, 15 ms of one frame per slot) keep the scan out of the queue, past its deadline.
+    static L: Topic<'static, [u32; 4], { pool_size(&[32], 1) }, 1> = Topic::new("log", [0; 4]);
+    static LP: Publisher<'static, [u32; 4]> = Publisher::new(&L, Class::NonRealTime);
+    static LO: RemoteSubscriber<'static, [u32; 4], 32> = RemoteSubscriber::new(&LP);
+    static S: Topic<'static, [u32; 4], { pool_size(&[4], 1) }, 1> = Topic::new("scan", [0; 4]);
+    static SP: Publisher<'static, [u32; 4]> =
+        Publisher::new(&S, Class::AsyncRealTime { deadline_us: SRT_DEADLINE_US });
+    static SO: RemoteSubscriber<'static, [u32; 4], 4> = RemoteSubscriber::new(&SP);
+    static ML: Topic<'static, [u32; 4], { pool_size(&[32], 1) }, 1> = Topic::new("log", [0; 4]);
+    static MLP: Publisher<'static, [u32; 4]> = Publisher::new(&ML, Class::NonRealTime);
+    static MLI: RemotePublisher<'static, [u32; 4]> = RemotePublisher::new(&MLP, &ML);
+    static MLS: Subscriber<'static, [u32; 4], 32> = Subscriber::new();
+    static MS: Topic<'static, [u32; 4], { pool_size(&[4], 1) }, 1> = Topic::new("scan", [0; 4]);
+    static MSP: Publisher<'static, [u32; 4]> = Publisher::new(&MS, Class::NonRealTime);
+    static MSI: RemotePublisher<'static, [u32; 4]> = RemotePublisher::new(&MSP, &MS);
+    static MSS: Subscriber<'static, [u32; 4], 4> = Subscriber::new();
+    L.subscribe(&LO).unwrap();
+    S.subscribe(&SO).unwrap();
+    ML.subscribe(&MLS).unwrap();
+    MS.subscribe(&MSS).unwrap();
+    let single = FreeSlots::Single;
+    let mut m = VNode::new(config(1, "psu", Some(0), single), &NoParams).unwrap();
+    let mut a = VNode::new(config(2, "a", None, single), &NoParams).unwrap();
+    a.export(&LO).unwrap();
+    a.export(&SO).unwrap();
+    m.import(&MLI).unwrap();
+    m.import(&MSI).unwrap();
+    let mut rig = Rig::new(2, 2);
+    rig.run(&mut [&mut m, &mut a], 200_000);
+    assert!(matches!(m.import_state(1), Some(ImportState::Subscribed { .. })));
+
+    let t = rig.bus.now() / 1_000 + 1;
+    for k in 0..30 {
+        LP.publish_with(|v| *v = [k; 4]).unwrap();
+    }
+    SP.publish_with(|v| *v = [7; 4]).unwrap();
+    rig.run(&mut [&mut m, &mut a], t + Micros::from(SRT_DEADLINE_US));
+    assert_eq!(MSS.try_recv().map(|v| v[0]), Some(7), "the scan arrived by its deadline");
+    rig.run(&mut [&mut m, &mut a], t + 30_000);
+    assert_eq!(a.stats().deadline_misses, 0);
+    let logs = core::iter::from_fn(|| MLS.try_recv()).count();
+    assert_eq!(logs, 30, "the log backlog still goes out, after");
+}

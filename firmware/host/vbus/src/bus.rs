@@ -324,7 +324,9 @@ enum Due {
     Withdraw(usize),
 }
 
-/// A one-shot frame that lost arbitration, withdrawn at the end of the bit where it lost.
+/// A frame that is losing arbitration: until the end of the bit where it loses, it is on the
+/// wire (an abort request cannot take it back); then it is withdrawn if it was sent one-shot
+/// or its abort was requested meanwhile, else it waits for the next idle.
 #[derive(Clone, Copy, Debug)]
 struct Withdrawal {
     at: u64,
@@ -332,6 +334,7 @@ struct Withdrawal {
     mailbox: usize,
     seq: u64,
     start: u64,
+    withdraw: bool,
 }
 
 struct Inner {
@@ -440,6 +443,9 @@ impl Inner {
 
     fn withdraw(&mut self, i: usize) {
         let w = self.withdrawals.remove(i);
+        if !w.withdraw {
+            return;
+        }
         let n = &mut self.nodes[w.port];
         let frame = n.mailboxes[w.mailbox].filter(|m| m.seq == w.seq).map(|m| m.frame);
         if let Some(frame) = frame {
@@ -465,13 +471,13 @@ impl Inner {
         let Some(((raw_id, _, source, frame), sender)) = winner else {
             return;
         };
-        // One-shot losers leave at the bit where they lose; the others wait for the next idle.
+        // Losers send until the bit where they lose; one-shot ones are withdrawn then, the
+        // others wait for the next idle.
         for &((id, _, src, _), p) in &candidates {
-            if let (Source::Mailbox(mailbox, seq), true) =
-                (src, p != sender && self.nodes[p].tx_mode == TxMode::OneShot)
-            {
+            if let (Source::Mailbox(mailbox, seq), true) = (src, p != sender) {
                 let at = t + self.bits_ns(arbitration_loss_bits(raw_id, id).into());
-                self.withdrawals.push(Withdrawal { at, port: p, mailbox, seq, start: t });
+                let withdraw = self.nodes[p].tx_mode == TxMode::OneShot;
+                self.withdrawals.push(Withdrawal { at, port: p, mailbox, seq, start: t, withdraw });
             }
         }
         let ackers = self
@@ -871,23 +877,29 @@ impl CanController for Port {
 
     /// Frees the mailboxes not on the wire (results [`TxOutcome::Aborted`], oldest first). A
     /// frame on the wire is left to finish and not counted; if it fails it is not retried (its
-    /// result: [`TxOutcome::Error`]), as bxCAN's abort request behaves.
+    /// result: [`TxOutcome::Error`]), as bxCAN's abort request behaves. So is a frame still in
+    /// the arbitration it is losing: it is withdrawn at the bit where it loses
+    /// ([`TxOutcome::LostArbitration`]).
     fn abort_pending(&mut self) -> usize {
         let mut g = lock(&self.inner);
         let me = self.index;
-        let mut on_wire = None;
+        let mut on_wire = Vec::new();
         for s in g.segments.iter_mut() {
             if let Some(f) = &mut s.busy {
                 if let (true, Source::Mailbox(i, seq)) = (f.sender == me, f.source) {
                     f.aborted = true;
-                    on_wire = Some((i, seq));
+                    on_wire.push((i, seq));
                 }
             }
+        }
+        for w in g.withdrawals.iter_mut().filter(|w| w.port == me) {
+            w.withdraw = true;
+            on_wire.push((w.mailbox, w.seq));
         }
         let n = &mut g.nodes[me];
         let mut waiting: Vec<(u64, usize)> = (0..MAILBOXES)
             .filter_map(|i| n.mailboxes[i].map(|m| (m.seq, i)))
-            .filter(|&(seq, i)| on_wire != Some((i, seq)))
+            .filter(|&(seq, i)| !on_wire.contains(&(i, seq)))
             .collect();
         waiting.sort_unstable();
         for &(seq, i) in &waiting {

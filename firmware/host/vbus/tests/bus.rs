@@ -210,10 +210,14 @@ fn abort_pending_counts_frames_not_on_the_wire() {
     let mut p1 = bus.port(1);
     p1.try_transmit(&frame(0x2, &[])).unwrap();
     p1.try_transmit(&frame(0x3, &[])).unwrap();
-    bus.step(); // port 0 wins
-    assert_eq!(p1.abort_pending(), 2);
-    let aborted = |id| TxResult { id: FrameId::from_raw(id).unwrap(), outcome: TxOutcome::Aborted };
-    assert_eq!(results(&mut p1), [aborted(0x2), aborted(0x3)]);
+    bus.step(); // start of frame: port 0 will win
+                // 0x3 waits in a mailbox; 0x2 is sending its identifier until the bit where it loses.
+    assert_eq!(p1.abort_pending(), 1);
+    let result = |id, outcome| TxResult { id: FrameId::from_raw(id).unwrap(), outcome };
+    assert_eq!(results(&mut p1), [result(0x3, TxOutcome::Aborted)]);
+    let loses = u64::from(r2p_vbus::bits::arbitration_loss_bits(0x1, 0x2)) * 1_000;
+    assert_eq!(bus.step(), Some(loses));
+    assert_eq!(results(&mut p1), [result(0x2, TxOutcome::LostArbitration)], "not retried");
     let mut p0 = bus.port(0);
     assert_eq!(p0.abort_pending(), 0, "on the wire");
     assert_eq!(p0.take_tx_result(), None, "no result before its end");
