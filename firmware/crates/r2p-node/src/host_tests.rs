@@ -421,7 +421,8 @@ mod tdma {
         BS.subscribe(&BSS).unwrap();
 
         // One frame per free slot, one-shot: what this bus models (it carries one frame per
-        // slot); merged windows are tested on the virtual bus (`vbus_tdma`).
+        // slot); merged windows are tested on the virtual bus (r2p-vbus's
+        // `tests/node_slot_policy.rs`).
         let single =
             |n, name, rank| NodeConfig { free_slots: FreeSlots::Single, ..tdma(n, name, rank) };
         let bus = Bus::<3>::slotted(CYCLE);

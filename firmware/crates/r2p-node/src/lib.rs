@@ -40,8 +40,6 @@ mod tdma_tests;
 mod testbus;
 #[cfg(any(test, feature = "selftest"))]
 mod tests;
-#[cfg(test)]
-mod vbus_tests;
 
 pub use node::{Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats};
 pub use params::{NoParams, Param, ParamStore, RamParams};

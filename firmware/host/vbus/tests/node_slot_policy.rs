@@ -1,26 +1,27 @@
-//! Host-only: real nodes on the virtual CAN bus (`r2p-vbus`: frame times to the bit,
-//! stuffing, bitwise arbitration, one-shot losers withdrawn at the bit where they lose),
-//! driven in virtual time as the emulator drives them — every node's slot timer at the times
-//! `next_slot_at` asks for. These tests check the slot policy where the loopback test bus
-//! cannot: when frames start and end.
+//! The node runtime's slot policy (`r2p_node::slot_tx`, docs/rtcan.md "Node slot policy") on
+//! this bus: real nodes (frame times to the bit, stuffing, bitwise arbitration, one-shot losers
+//! withdrawn at the bit where they lose), driven in virtual time as the emulator drives them —
+//! every node's slot timer at the times `next_slot_at` asks for. They check what r2p-node's
+//! loopback test bus cannot: when frames start and end.
 //!
 //! The rig: M (rank 0, master) subscribes to `scan_a` from A and `scan_b` from B (SRT, 16-byte
 //! messages of two frames, 20 ms deadline) and to `torque` from A (HRT, every cycle). A and B
 //! publish at the same slot boundary, so their frames contend for the same free slots.
 
 use std::collections::HashMap;
-use std::vec::Vec;
 
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
+use r2p_node::{
+    FreeSlots, HrtState, ImportState, NoParams, Node, NodeConfig, RemotePublisher, RemoteSubscriber,
+};
 use r2p_vbus::bits::{FrameBits, INTERMISSION_BITS};
 use r2p_vbus::{Bus, Config, EventKind, Port};
 use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxResult};
-use rtcan::{CanController, Frame, Laxity, LaxityEncoding, Micros, Sync};
+use rtcan::{CanController, CycleConfig, Frame, Laxity, LaxityEncoding, Micros, Sync};
 
-use crate::node::{HrtState, ImportState, Node, NodeConfig};
-use crate::slot_tx::FreeSlots;
-use crate::tdma_tests::{tdma, CYCLE, CYCLE_US};
-use crate::{NoParams, RemotePublisher, RemoteSubscriber};
+/// 4 ms cycles of 16 slots of 250 µs (250 bit times at 1 Mbit/s).
+const CYCLE: CycleConfig = CycleConfig { bit_rate: 1_000_000, cycle_us: 4_000, slots: 16 };
+const CYCLE_US: Micros = 4_000;
 
 /// Two exports, three imports, 32 queued frames.
 type VNode<'a> = Node<'a, 2, 3, 32, 6, 64>;
@@ -132,9 +133,20 @@ impl Seen {
     }
 }
 
-/// The node config of the rig: the test cycle (4 ms, 16 slots of 250 µs, 2 HRT slots).
+/// The node config of the rig: the test cycle, 2 HRT slots, fast protocol timers.
 fn config(n: u32, name: &'static str, rank: Option<u8>, free_slots: FreeSlots) -> NodeConfig {
-    NodeConfig { free_slots, laxity: LAXITY, ..tdma(n, name, rank) }
+    let mut uid = [0u8; 12];
+    uid[8..].copy_from_slice(&n.to_be_bytes());
+    NodeConfig {
+        heartbeat_period_us: 20_000,
+        request_timeout_us: 30_000,
+        cycle: CYCLE,
+        rank,
+        hrt_slots: 2,
+        free_slots,
+        laxity: LAXITY,
+        ..NodeConfig::new(uid, name)
+    }
 }
 
 /// The nodes of a rig and the topics the test drives.
