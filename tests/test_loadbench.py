@@ -36,12 +36,13 @@ def test_one_report_per_policy_and_load(loadbench):
     points, sim = sweep(*ARGS)
     assert [p["load"] for p in points] == [0.2, 0.9]
     for p in points:
-        assert [r["policy"] for r in p["reports"]] == ["rtcan", "rtcan_oneshot", "rtcan_merged", "fixed"]
+        # The node runtime's default (merged windows), its other free-slot policy, the baseline.
+        assert [r["policy"] for r in p["reports"]] == ["rtcan", "rtcan_oneshot", "fixed"]
         assert abs(p["offered"] - p["load"]) <= 0.01 * p["load"]
         for r in p["reports"]:
             assert r["srt_messages"] > 0 and r["hrt_messages"] > 0
             assert 0 <= r["srt_miss_ratio"] <= 1 and 0 < r["utilisation"] < 1
-    assert sim["bench"] == "rtcan_load_sim" and sim["runs"] == 8 and sim["events"] > 0
+    assert sim["bench"] == "rtcan_load_sim" and sim["runs"] == 6 and sim["events"] > 0
 
 
 def test_same_seed_same_numbers_across_processes(loadbench):

@@ -11,7 +11,7 @@ use r2p_management::message::{Message, ModuleState};
 use r2p_management::node_id::initial_node_id;
 use r2p_management::NodeId;
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
-use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError};
+use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxResult};
 use rtcan::id::EXTENDED_ID_MAX;
 use rtcan::{fragments, CanController, Frame, FrameId, Laxity, MessageId, Micros};
 
@@ -32,6 +32,8 @@ struct Wires {
 struct Loopback {
     wires: Rc<RefCell<Wires>>,
     me: usize,
+    /// Every frame goes out at once: its result is `Sent` (the last `TX_RESULTS` are kept).
+    results: VecDeque<TxResult>,
 }
 
 impl CanController for Loopback {
@@ -44,7 +46,15 @@ impl CanController for Loopback {
                 q.push_back(Received { frame: *frame, at });
             }
         }
+        if self.results.len() == rtcan::controller::TX_RESULTS {
+            self.results.pop_front();
+        }
+        self.results.push_back(TxResult { id: frame.id(), outcome: rtcan::TxOutcome::Sent });
         Ok(())
+    }
+    fn set_tx_mode(&mut self, _: TxMode) {}
+    fn take_tx_result(&mut self) -> Option<TxResult> {
+        self.results.pop_front()
     }
     fn try_receive(&mut self) -> Option<Received> {
         self.wires.borrow_mut().inboxes[self.me].pop_front()
@@ -70,7 +80,9 @@ impl VecBus {
     fn new(n: usize) -> Self {
         let wires = Rc::new(RefCell::new(Wires::default()));
         wires.borrow_mut().inboxes = (0..n).map(|_| VecDeque::new()).collect();
-        let ports = (0..n).map(|me| Loopback { wires: wires.clone(), me }).collect();
+        let ports = (0..n)
+            .map(|me| Loopback { wires: wires.clone(), me, results: VecDeque::new() })
+            .collect();
         Self { wires, ports }
     }
 
@@ -371,6 +383,7 @@ mod tdma {
 
     use super::*;
     use crate::node::HrtState;
+    use crate::slot_tx::FreeSlots;
     use crate::tdma_tests::{tdma, CYCLE, CYCLE_US};
     use crate::testbus::{run_slots, Bus, TestNode};
     use rtcan::failover::{Role, RANK_STEP_CYCLES, TAKEOVER_BASE_CYCLES};
@@ -407,10 +420,15 @@ mod tdma {
         BH.subscribe(&BHS).unwrap();
         BS.subscribe(&BSS).unwrap();
 
+        // One frame per free slot, one-shot: what this bus models (it carries one frame per
+        // slot); merged windows are tested on the virtual bus (r2p-vbus's
+        // `tests/node_slot_policy.rs`).
+        let single =
+            |n, name, rank| NodeConfig { free_slots: FreeSlots::Single, ..tdma(n, name, rank) };
         let bus = Bus::<3>::slotted(CYCLE);
-        let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
-        let mut a = TestNode::new(tdma(2, "a", Some(1)), &NoParams).unwrap();
-        let mut b = TestNode::new(tdma(3, "b", None), &NoParams).unwrap();
+        let mut m = TestNode::new(single(1, "psu", Some(0)), &NoParams).unwrap();
+        let mut a = TestNode::new(single(2, "a", Some(1)), &NoParams).unwrap();
+        let mut b = TestNode::new(single(3, "b", None), &NoParams).unwrap();
         a.export(&HO).unwrap();
         a.export(&SO).unwrap();
         b.import(&BHI).unwrap();
@@ -439,6 +457,11 @@ mod tdma {
         assert_eq!(bus.violations(), 0);
         assert_eq!(a.stats().deadline_misses, 0);
         assert!(a.stats().slot_retries > 0, "arbitration was lost sometimes and retried");
+        assert_eq!(
+            a.stats().late_withdrawals,
+            0,
+            "this bus starts every frame at its slot's start"
+        );
         // The HRT stream kept its slot every cycle: no jitter.
         let log = bus.hrt_log();
         assert!(log.len() >= 20);

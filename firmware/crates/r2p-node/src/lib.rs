@@ -29,6 +29,7 @@ extern crate std;
 pub mod node;
 pub mod params;
 pub mod remote;
+pub mod slot_tx;
 pub mod wire;
 
 #[cfg(test)]
@@ -43,6 +44,7 @@ mod tests;
 pub use node::{Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats};
 pub use params::{NoParams, Param, ParamStore, RamParams};
 pub use remote::{Export, Import, ImportError, RemotePublisher, RemoteSubscriber};
+pub use slot_tx::{FreeSlots, SlotTx};
 pub use wire::{Wire, WireError};
 
 /// The crate's test suite, compiled in for bare-metal runners (feature `selftest`).

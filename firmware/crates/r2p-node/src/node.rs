@@ -7,7 +7,8 @@
 //!   [`Node::slot_tick`]`(now, &mut controller)` at every slot boundary
 //!   ([`Node::next_slot_at`] says when). The node tracks the master's syncs, takes over as
 //!   master when its rank says so, sends syncs as master, loads its HRT frames in their
-//!   reserved slots and at most one SRT/NRT frame per free slot.
+//!   reserved slots and its SRT/NRT frames in the free ones, one at a time, none starting
+//!   after its window's latest start ([`crate::slot_tx`]).
 //! - **Unslotted** (a bus without TDMA cycle: no HRT, no node with a rank driving a cycle):
 //!   [`Node::poll`]`(now, &mut controller)` — or its three parts [`Node::on_frame`],
 //!   [`Node::tick`] and [`Node::transmit`] — hands every queued frame to the controller at
@@ -23,7 +24,7 @@ use r2p_management::message::{
 };
 use r2p_management::{NodeId, NodeIdAllocator, MANAGEMENT_INDEX};
 use r2p_middleware::Class;
-use rtcan::controller::{ErrorCounters, Received};
+use rtcan::controller::{ErrorCounters, Received, TxMode, TxOutcome};
 use rtcan::cycle::{ClockState, ConfigError, SYNC_SLOT};
 use rtcan::failover::{sync_timeout_us, Actions, Rank, Role};
 use rtcan::fragment::{frame_count, MAX_MESSAGE_LEN};
@@ -37,6 +38,7 @@ use rtcan::{
 
 use crate::params::ParamStore;
 use crate::remote::{Export, Import, ImportError};
+use crate::slot_tx::{Done, FreeSlots, SlotTx, Slotted};
 
 /// Heartbeats sent with state `Starting` after boot (peers re-advertise to a starting module).
 pub const STARTING_HEARTBEATS: u32 = 2;
@@ -70,12 +72,15 @@ pub struct NodeConfig {
     /// stay free for SRT/NRT traffic (including HRT registrations). Keep it below the cycle's
     /// slot count, the same on every node with a rank.
     pub hrt_slots: u8,
+    /// How the node sends SRT/NRT frames in the free slots (slotted mode): merged windows
+    /// with retransmission, or one one-shot frame per free slot.
+    pub free_slots: FreeSlots,
 }
 
 impl NodeConfig {
     /// Defaults: heartbeat every 100 ms, subscription retried after 300 ms, reassembly timeout
     /// 20 ms, logarithmic laxity with 100 µs ticks, the default cycle (10 ms, 60 slots), no
-    /// rank, slots 1…30 for HRT.
+    /// rank, slots 1…30 for HRT, free slots merged into windows.
     pub const fn new(uid: [u8; UID_LEN], name: &'static str) -> Self {
         Self {
             uid,
@@ -87,6 +92,7 @@ impl NodeConfig {
             cycle: CycleConfig::DEFAULT,
             rank: None,
             hrt_slots: 30,
+            free_slots: FreeSlots::Merged,
         }
     }
 }
@@ -257,11 +263,16 @@ pub struct NodeStats {
     pub syncs_sent: u32,
     /// HRT frames sent in their reserved slots.
     pub hrt_sent: u32,
-    /// HRT occurrences missed: the frame could not be loaded or was still pending at the slot's
-    /// end (reported to the publisher as a deadline miss).
+    /// HRT occurrences missed: the frame could not be loaded, or did not go out in its slot
+    /// (sent one-shot: an error frame is not retried); reported to the publisher as a deadline
+    /// miss.
     pub hrt_missed: u32,
-    /// SRT/NRT frames that lost their free slot's arbitration (aborted, sent later).
+    /// SRT/NRT frames that did not go out in their window — lost a one-shot arbitration, ended
+    /// in an error, or were withdrawn at the latest start — and went back to the queue.
     pub slot_retries: u32,
+    /// Of those, the frames withdrawn at their window's latest start because the bus was busy
+    /// until then.
+    pub late_withdrawals: u32,
     /// HRT reservations the master refused to this node.
     pub hrt_refused: u32,
     /// Frames that are neither on a management stream nor on a subscribed stream: other
@@ -355,18 +366,6 @@ struct MasterCycle {
     epoch: bool,
 }
 
-/// What the node loaded into the controller at the current slot's start.
-#[derive(Clone, Copy)]
-enum Inflight {
-    None,
-    Sync,
-    Hrt(usize),
-    /// The head of the transmit queue as peeked at `at`.
-    Queued {
-        at: Micros,
-    },
-}
-
 struct ImportSlot<'a> {
     import: &'a dyn Import,
     state: ImportState,
@@ -414,7 +413,8 @@ pub struct Node<
     failover: Failover,
     scheduler: Scheduler<MASTER_STREAMS>,
     master: Option<MasterCycle>,
-    inflight: Inflight,
+    /// What is loaded in the controller in slotted mode (HRT exports by index).
+    slot_tx: SlotTx<usize>,
     /// Last sync heard or sent (boot time before the first).
     last_sync: Micros,
 }
@@ -469,7 +469,7 @@ impl<
             failover: Failover::new(rank, config.cycle.cycle_us, 0),
             scheduler: Scheduler::new(config.hrt_slots),
             master: None,
-            inflight: Inflight::None,
+            slot_tx: SlotTx::new(&config.cycle, config.free_slots),
             last_sync: 0,
         })
     }
@@ -772,6 +772,7 @@ impl<
     /// in FIFO order (bxCAN `TXFP` = 1), as docs/rtcan.md requires.
     pub fn transmit<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) -> usize {
         self.errors = can.error_counters();
+        self.slot_tx.set_mode(can, TxMode::Retransmit);
         let mut n = 0;
         while let Some(frame) = self.tx.peek(now) {
             if can.try_transmit(&frame).is_err() {
@@ -786,6 +787,11 @@ impl<
 
     /// Moves published messages from the remote subscribers into the transmit queue, as far
     /// as it has room for whole messages (the rest wait in the remote subscriber's queue).
+    ///
+    /// NRT messages leave half the queue free ([`nrt_reserve`]): under overload NRT frames
+    /// cannot leave, and without a reserve a backlog of them would fill the queue and keep an
+    /// SRT message out of it — out of arbitration — until it expired (docs/rtcan.md, "Under
+    /// load").
     fn drain_exports(&mut self, now: Micros) {
         let me = self.ids.node_id();
         let mut buf = [0u8; BUF];
@@ -795,8 +801,10 @@ impl<
                 continue; // HRT streams go in their reserved slots (`slot_tick`)
             }
             let frames = frame_count(e.size()).unwrap_or(usize::MAX);
+            let reserve =
+                if e.class().deadline_us().is_none() { nrt_reserve(TXQ, frames) } else { 0 };
             let message = me.message_id(i as u8 + 1);
-            while e.pending() > 0 && self.tx.free() >= frames {
+            while e.pending() > 0 && self.tx.free() >= frames.saturating_add(reserve) {
                 let Some(encoded) = e.pop_encoded(&mut buf) else { break };
                 let Ok((n, at)) = encoded else {
                     bump(&mut self.stats.bad_payloads);
@@ -1033,31 +1041,33 @@ impl<
         const BUF: usize,
     > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF>
 {
-    /// The slot timer: call at every slot boundary ([`next_slot_at`](Self::next_slot_at)), with
-    /// `now` the boundary's time. In order:
+    /// The slot timer: call at every slot boundary and at the latest start of a loaded frame's
+    /// window, both as [`next_slot_at`](Self::next_slot_at) says, with `now` that time.
     ///
-    /// 1. the previous slot is over: abort what is still pending; an SRT/NRT frame that went
-    ///    out leaves the queue, one that lost arbitration stays for a later free slot, an HRT
-    ///    frame still pending is a missed occurrence;
+    /// At a loaded frame's latest start, it only withdraws the frame if it has not started. At
+    /// a slot boundary, in order:
+    ///
+    /// 1. the controller's results: an SRT/NRT frame that went out leaves the queue, one that
+    ///    did not stays in it with its deadline (and is loaded again with its laxity for then);
+    ///    an HRT frame that did not go out is a missed occurrence;
     /// 2. take received frames (syncs feed the [`SlotClock`] and the failover state machine);
     /// 3. the protocol's timers ([`tick`](Self::tick)), master takeover, HRT registrations;
     /// 4. as master, at a cycle's start: send the sync with the next cycle's reservations;
     /// 5. load this slot's frame: in slot 0 nothing (the sync's); in a reserved slot this
     ///    node's HRT frame if the slot is its stream's, else nothing; in a free slot the most
-    ///    urgent SRT/NRT frame. Without a cycle (no sync heard for `sync_timeout_us`, or none
-    ///    since boot for that long) every slot is free.
+    ///    urgent SRT/NRT frame for the window the slot opens ([`FreeSlots`]). Without a cycle
+    ///    (no sync heard for `sync_timeout_us`, or none since boot for that long) every slot
+    ///    is free and a window of its own.
     pub fn slot_tick<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
         self.start(now);
-        let aborted = can.abort_pending();
-        match core::mem::replace(&mut self.inflight, Inflight::None) {
-            Inflight::Queued { at } if aborted == 0 => {
-                self.tx.pop(at);
-                bump(&mut self.stats.frames_sent);
+        if self.slot_tx.at_guard(now) {
+            self.slot_tx.on_guard(can);
+            if !self.at_boundary(now) {
+                return;
             }
-            Inflight::Queued { .. } => bump(&mut self.stats.slot_retries),
-            Inflight::Hrt(_) if aborted == 0 => bump(&mut self.stats.hrt_sent),
-            Inflight::Hrt(i) => self.hrt_miss(i),
-            Inflight::Sync | Inflight::None => {}
+        }
+        for done in self.slot_tx.settle(now, can, &self.tx).into_iter().flatten() {
+            self.on_done(done);
         }
         while let Some(r) = can.try_receive() {
             self.receive::<true>(&r);
@@ -1072,12 +1082,11 @@ impl<
             if now >= m.next_sync {
                 let sync =
                     Sync::new(m.cycle, self.scheduler.mask(m.cycle.wrapping_add(1)), m.epoch);
-                let ok = can.try_transmit(&sync.to_frame()).is_ok();
+                let ok = self.slot_tx.load_slotted(can, Slotted::Sync, &sync.to_frame());
                 if ok {
                     self.clock.on_sync(now, &sync);
                     self.last_sync = now;
                     bump(&mut self.stats.syncs_sent);
-                    self.inflight = Inflight::Sync;
                 }
                 let cycle_us = Micros::from(self.config.cycle.cycle_us);
                 m.cycle = m.cycle.wrapping_add(1);
@@ -1088,10 +1097,10 @@ impl<
                 self.master = Some(m);
                 let a = self.failover.on_sync_sent(now, &sync, ok);
                 self.apply(a);
+                if ok {
+                    return;
+                }
             }
-        }
-        if !matches!(self.inflight, Inflight::None) {
-            return;
         }
 
         match self.clock.state(now) {
@@ -1109,11 +1118,51 @@ impl<
                     self.send_hrt(i, can);
                 }
             }
-            ClockState::Running(_) => self.send_queued(now, can),
+            ClockState::Running(p) => {
+                if let Some(end) = self.slot_tx.window_end(&self.clock, p) {
+                    self.send_queued(now, end, can);
+                }
+            }
             ClockState::Unsynced | ClockState::Lost => {
                 let quiet = now.saturating_sub(self.last_sync);
                 if quiet >= sync_timeout_us(self.config.cycle.cycle_us) {
-                    self.send_queued(now, can); // no cycle on the bus: every slot is free
+                    // No cycle on the bus: every slot is free.
+                    let slot_us = Micros::from(self.config.cycle.slot_us());
+                    self.send_queued(now, now + slot_us, can);
+                }
+            }
+        }
+    }
+
+    /// True if `now` is a slot boundary (a slot's start as the clock sees it, or the master's
+    /// next sync), not only a loaded frame's latest start (they meet when a slot is exactly
+    /// one worst-case frame long).
+    fn at_boundary(&self, now: Micros) -> bool {
+        let slot_start = match self.clock.state(now) {
+            ClockState::Running(p) => self.clock.slot_start(p.cycle, p.slot),
+            _ => None,
+        };
+        slot_start == Some(now) || self.master.is_some_and(|m| now >= m.next_sync)
+    }
+
+    /// A loaded frame's fate (step 1 of [`slot_tick`](Self::slot_tick)).
+    fn on_done(&mut self, done: Done<usize>) {
+        if done.is_retry(self.slot_tx.policy()) {
+            bump(&mut self.stats.slot_retries);
+        }
+        match done {
+            Done::Slotted { what: Slotted::Hrt(_), outcome: TxOutcome::Sent, .. } => {
+                bump(&mut self.stats.hrt_sent)
+            }
+            Done::Slotted { what: Slotted::Hrt(i), .. } => self.hrt_miss(i),
+            Done::Slotted { what: Slotted::Sync, .. } => {}
+            Done::Queued { ticket, outcome: TxOutcome::Sent, .. } => {
+                self.tx.remove(ticket);
+                bump(&mut self.stats.frames_sent);
+            }
+            Done::Queued { late, .. } => {
+                if late {
+                    bump(&mut self.stats.late_withdrawals);
                 }
             }
         }
@@ -1121,19 +1170,22 @@ impl<
 
     /// When the slot timer should call [`slot_tick`](Self::slot_tick) next: the next slot
     /// boundary of the cycle as this node's clock sees it (as master: of its own cycle), or one
-    /// nominal slot later while no cycle runs.
+    /// nominal slot later while no cycle runs — or before it, the latest start of the window
+    /// of a frame the node has loaded.
     pub fn next_slot_at(&self, now: Micros) -> Micros {
         let slot_us = Micros::from(self.config.cycle.slot_us().max(1));
         let by_clock = match self.clock.state(now) {
             ClockState::Running(p) => {
                 self.clock.slot_start(p.cycle, p.slot + 1).unwrap_or(now + slot_us)
             }
-            _ => now + slot_us,
+            // No cycle: the nominal slot after the last boundary (a loaded frame's window).
+            _ => self.slot_tx.window_end_loaded().filter(|&e| e > now).unwrap_or(now + slot_us),
         };
-        match self.master {
+        let boundary = match self.master {
             Some(m) => by_clock.min(m.next_sync.max(now)),
             None => by_clock,
-        }
+        };
+        self.slot_tx.next_wake(now, boundary)
     }
 
     /// HRT_REQUEST (answered as master) and HRT_GRANT (for this node's streams).
@@ -1330,9 +1382,8 @@ impl<
             }
         }
         let Some(frame) = frame else { return };
-        if can.try_transmit(&frame).is_ok() {
+        if self.slot_tx.load_slotted(can, Slotted::Hrt(i), &frame) {
             bump(&mut self.stats.queued);
-            self.inflight = Inflight::Hrt(i);
         } else {
             self.hrt_miss(i);
         }
@@ -1344,13 +1395,21 @@ impl<
         self.exports[i].export.report_deadline_miss();
     }
 
-    /// Loads the most urgent SRT/NRT frame (one per free slot).
-    fn send_queued<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
-        if let Some(frame) = self.tx.peek(now) {
-            if can.try_transmit(&frame).is_ok() {
-                self.inflight = Inflight::Queued { at: now };
-            }
-        }
+    /// Loads the most urgent SRT/NRT frame for the window ending at `end` (one at a time).
+    fn send_queued<C: CanController + ?Sized>(&mut self, now: Micros, end: Micros, can: &mut C) {
+        self.slot_tx.load_queued(now, end, can, &self.tx);
+    }
+}
+
+/// Frames of a `txq`-frame transmit queue an NRT message of `frames` frames must leave free
+/// for SRT messages: half the queue, less if the message could not enter an empty queue then.
+pub const fn nrt_reserve(txq: usize, frames: usize) -> usize {
+    let half = txq / 2;
+    let room = txq.saturating_sub(frames);
+    if half < room {
+        half
+    } else {
+        room
     }
 }
 
@@ -1393,6 +1452,25 @@ mod whole_seconds_tests {
         fn matches_division(us in any::<u64>(), small in 0u64..(1 << 40)) {
             for x in [us, small] {
                 prop_assert_eq!(whole_seconds(x), (x / 1_000_000).min(u64::from(u32::MAX)) as u32);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod nrt_reserve_tests {
+    use super::nrt_reserve;
+
+    #[test]
+    fn half_the_queue_unless_the_message_could_never_enter() {
+        assert_eq!(nrt_reserve(32, 2), 16);
+        assert_eq!(nrt_reserve(32, 8), 16);
+        // A message of 6 frames in an 8-frame queue enters an empty queue: reserve 2, not 4.
+        assert_eq!(nrt_reserve(8, 6), 2);
+        assert_eq!(nrt_reserve(8, 8), 0);
+        for txq in 8..64 {
+            for frames in 1..=txq {
+                assert!(frames + nrt_reserve(txq, frames) <= txq, "{txq} {frames}");
             }
         }
     }

@@ -6,15 +6,18 @@
 //! Slotted mode ([`Bus::slotted`], for nodes driven by `slot_tick`): frames wait in their
 //! port's three mailboxes; after every node had its slot tick, [`Bus::arbitrate`] sends one
 //! frame — the lowest identifier among the mailboxes' oldest frames, as CAN arbitration would —
-//! stamped with the slot's start (its start of frame), and the losers stay pending until their
-//! node aborts them. The bus follows the syncs it carries and checks the slot policy: a frame
+//! stamped with the slot's start (its start of frame); the losers are withdrawn if their port
+//! is in one-shot mode, else stay pending until their node aborts them. Every port reports
+//! what became of its frames (`take_tx_result`). The bus follows the syncs it carries and checks the slot policy: a frame
 //! that is not HRT in the sync slot or a reserved slot, or an HRT frame in a free slot, is a
 //! violation; HRT frames are logged with their cycle and slot.
 
 use core::cell::{Cell, RefCell};
 
 use heapless::{Deque, Vec};
-use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError};
+use rtcan::controller::{
+    BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxOutcome, TxResult, TX_RESULTS,
+};
 use rtcan::{CanController, CycleConfig, Frame, Laxity, MessageId, Micros, Sync};
 
 use crate::Node;
@@ -58,6 +61,8 @@ pub struct Bus<const PORTS: usize> {
     unplugged: Cell<[bool; PORTS]>,
     off: Cell<[bool; PORTS]>,
     mailboxes: RefCell<[Deque<Frame, MAILBOXES>; PORTS]>,
+    modes: Cell<[TxMode; PORTS]>,
+    results: RefCell<[Deque<TxResult, TX_RESULTS>; PORTS]>,
     slots: Option<Slots>,
     pub now: Cell<Micros>,
     pub overflow: Cell<u32>,
@@ -70,6 +75,8 @@ impl<const PORTS: usize> Bus<PORTS> {
             unplugged: Cell::new([false; PORTS]),
             off: Cell::new([false; PORTS]),
             mailboxes: RefCell::new(core::array::from_fn(|_| Deque::new())),
+            modes: Cell::new([TxMode::Retransmit; PORTS]),
+            results: RefCell::new(core::array::from_fn(|_| Deque::new())),
             slots: None,
             now: Cell::new(0),
             overflow: Cell::new(0),
@@ -100,6 +107,19 @@ impl<const PORTS: usize> Bus<PORTS> {
         self.off.set(o);
         self.queues.borrow_mut()[me].clear();
         self.mailboxes.borrow_mut()[me].clear();
+        self.results.borrow_mut()[me].clear();
+        let mut m = self.modes.get();
+        m[me] = TxMode::Retransmit;
+        self.modes.set(m);
+    }
+
+    /// Records what became of port `me`'s frame `frame`.
+    fn report(&self, me: usize, frame: &Frame, outcome: TxOutcome) {
+        let mut r = self.results.borrow_mut();
+        if r[me].is_full() {
+            r[me].pop_front();
+        }
+        let _ = r[me].push_back(TxResult { id: frame.id(), outcome });
     }
 
     pub fn is_on(&self, me: usize) -> bool {
@@ -135,6 +155,13 @@ impl<const PORTS: usize> Bus<PORTS> {
         let Some(frame) = self.mailboxes.borrow_mut()[p].pop_front() else { return };
         self.check(&frame);
         self.send(p, frame);
+        self.report(p, &frame, TxOutcome::Sent);
+        for q in (0..PORTS).filter(|&q| q != p && self.modes.get()[q] == TxMode::OneShot) {
+            let lost = self.mailboxes.borrow_mut()[q].pop_front();
+            if let Some(f) = lost {
+                self.report(q, &f, TxOutcome::LostArbitration);
+            }
+        }
     }
 
     fn check(&self, frame: &Frame) {
@@ -231,16 +258,27 @@ impl<const PORTS: usize> CanController for Port<'_, PORTS> {
             return boxes[self.me].push_back(*frame).map_err(|_| TxError::MailboxesFull);
         }
         self.bus.send(self.me, *frame);
+        self.bus.report(self.me, frame, TxOutcome::Sent);
         Ok(())
+    }
+    fn set_tx_mode(&mut self, mode: TxMode) {
+        let mut m = self.bus.modes.get();
+        m[self.me] = mode;
+        self.bus.modes.set(m);
+    }
+    fn take_tx_result(&mut self) -> Option<TxResult> {
+        self.bus.results.borrow_mut()[self.me].pop_front()
     }
     fn try_receive(&mut self) -> Option<Received> {
         self.bus.queues.borrow_mut()[self.me].pop_front()
     }
     fn set_filters(&mut self, _filters: &[Filter]) {}
     fn abort_pending(&mut self) -> usize {
-        let mut boxes = self.bus.mailboxes.borrow_mut();
-        let n = boxes[self.me].len();
-        boxes[self.me].clear();
+        let mut n = 0;
+        while let Some(f) = self.bus.mailboxes.borrow_mut()[self.me].pop_front() {
+            self.bus.report(self.me, &f, TxOutcome::Aborted);
+            n += 1;
+        }
         n
     }
     fn bus_state(&self) -> BusState {

@@ -3,8 +3,15 @@
 //! Implemented by embassy-stm32's bxCAN on the modules (F103, F407) and by the emulated bus on a
 //! host. Every method is non-blocking, so the slot timer can call [`CanController::try_transmit`]
 //! from its interrupt handler to put a frame on the wire at the start of its slot.
+//!
+//! The TDMA cycle needs two things of a controller beyond "send this frame": a frame that did
+//! not get the bus in its slot must not go out later, in someone else's slot, so a slotted node
+//! transmits [one-shot](TxMode::OneShot) (bxCAN `NART`, as the original R2P and TTCAN's
+//! exclusive windows do); and the node must learn what became of each frame it loaded
+//! ([`CanController::take_tx_result`]) to keep a frame that did not go out in its queue.
 
 use crate::frame::Frame;
+use crate::id::FrameId;
 
 /// When a frame was received, in microseconds of the receiver's clock.
 pub type Micros = u64;
@@ -26,6 +33,55 @@ pub enum TxError {
     /// The controller is bus-off and sends nothing until it recovers.
     BusOff,
 }
+
+/// How the controller treats a frame whose transmission attempt fails.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum TxMode {
+    /// CAN's default: a frame that loses arbitration or ends in an error frame is tried again
+    /// at the next bus idle, until it is sent or aborted.
+    #[default]
+    Retransmit,
+    /// One attempt per frame (bxCAN `NART` = 1): a frame that loses arbitration or ends in an
+    /// error frame is withdrawn and reported. A frame loaded while the bus is busy still waits
+    /// for the bus to go idle and makes its attempt then.
+    OneShot,
+}
+
+/// What became of a frame handed to [`CanController::try_transmit`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TxOutcome {
+    /// It went out: sent and acknowledged.
+    Sent,
+    /// One-shot: another node won the arbitration; the frame was withdrawn.
+    LostArbitration,
+    /// One-shot, or aborted while on the wire: its transmission ended in an error frame and it
+    /// was withdrawn.
+    Error,
+    /// [`CanController::abort_pending`] withdrew it before it went out. (With automatic
+    /// retransmission, a frame aborted after failed attempts may be reported with the cause
+    /// of its last attempt instead.)
+    Aborted,
+}
+
+/// A finished frame: which one and what became of it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct TxResult {
+    /// The frame's identifier.
+    pub id: FrameId,
+    /// Sent, or why not.
+    pub outcome: TxOutcome,
+}
+
+impl TxResult {
+    /// True if the frame went out.
+    pub const fn sent(&self) -> bool {
+        matches!(self.outcome, TxOutcome::Sent)
+    }
+}
+
+/// Results a controller keeps until they are taken ([`CanController::take_tx_result`]): one per
+/// bxCAN transmit mailbox. Older untaken results are dropped.
+pub const TX_RESULTS: usize = 3;
 
 /// A hardware acceptance filter: pass frames whose `id & mask == value & mask`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,7 +125,21 @@ pub struct ErrorCounters {
 /// A CAN controller RTCAN can drive.
 pub trait CanController {
     /// Loads `frame` into a free transmit mailbox now; never waits. Callable from an interrupt.
+    /// It is sent as the [transmit mode](Self::set_tx_mode) says; what became of it comes from
+    /// [`take_tx_result`](Self::take_tx_result).
     fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError>;
+
+    /// Sets how frames are sent from now on: [`TxMode::Retransmit`] (the mode after reset) or
+    /// [`TxMode::OneShot`]. The mode is one setting for all transmit mailboxes (bxCAN's `NART`
+    /// bit), frames already loaded included: change it when none is pending.
+    fn set_tx_mode(&mut self, mode: TxMode);
+
+    /// Takes the result of the oldest frame that finished — went out, or was withdrawn (lost
+    /// arbitration or an error in one-shot mode, aborted) — since the last call, if any. A
+    /// frame still waiting or on the wire has no result yet. The controller keeps the last
+    /// [`TX_RESULTS`] results; older untaken ones are dropped, so a caller that takes them
+    /// before loading more frames than that loses none.
+    fn take_tx_result(&mut self) -> Option<TxResult>;
 
     /// Takes the oldest received frame, if any; never waits.
     fn try_receive(&mut self) -> Option<Received>;
@@ -78,10 +148,11 @@ pub trait CanController {
     /// widen them (accept more) rather than drop traffic; RTCAN filters again in software.
     fn set_filters(&mut self, filters: &[Filter]);
 
-    /// Aborts frames still waiting in transmit mailboxes (an HRT frame that missed its slot
-    /// must not go out in someone else's) and returns how many it aborted: 0 means every frame
-    /// loaded since the last call went out, which is how the slot timer learns whether its
-    /// SRT/NRT frame won arbitration or must be retried in a later free slot.
+    /// Withdraws every frame still waiting in a transmit mailbox (a frame that missed its
+    /// window must not go out in someone else's slot) and returns how many. A frame already on
+    /// the wire cannot be stopped: it is not counted, it ends as it ends and, if it fails, is
+    /// not tried again. Each frame's fate is reported by [`take_tx_result`](Self::take_tx_result)
+    /// (a withdrawn one as [`TxOutcome::Aborted`]). Never waits.
     fn abort_pending(&mut self) -> usize;
 
     /// The fault confinement state.

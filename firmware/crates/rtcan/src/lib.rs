@@ -24,7 +24,7 @@ pub mod laxity;
 pub mod schedule;
 pub mod srt;
 
-pub use controller::{CanController, Micros};
+pub use controller::{CanController, Micros, TxMode, TxOutcome, TxResult};
 pub use cycle::{CycleConfig, SlotClock, Sync};
 pub use failover::Failover;
 pub use fragment::{fragments, Expect, Reassembler, ReassemblyStats};
@@ -32,7 +32,7 @@ pub use frame::Frame;
 pub use id::{Class, FrameId, IdError, MessageId};
 pub use laxity::{Laxity, LaxityEncoding};
 pub use schedule::{next_reserved, Period, Phase, Scheduler};
-pub use srt::{Missed, TxQueue, Urgency};
+pub use srt::{Missed, Ticket, TxQueue, Urgency};
 
 /// The crate's test suite, compiled in for bare-metal runners (feature `selftest`).
 #[cfg(any(test, feature = "selftest"))]

@@ -56,6 +56,16 @@ pub enum PushError {
     Fragment(FragmentError),
 }
 
+/// Names one queued frame as [`TxQueue::peek_ticket`] handed it out, so that exactly that frame
+/// can be taken out later ([`TxQueue::remove`]) — once the controller says it went out —
+/// whatever was pushed or expired in between.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ticket {
+    index: u16,
+    group: u32,
+    fragment: u8,
+}
+
 /// End of a list of entries.
 const NIL: u16 = u16::MAX;
 
@@ -194,6 +204,36 @@ impl<const N: usize> TxQueue<N> {
     pub fn peek(&self, now: Micros) -> Option<Frame> {
         let (_, i) = self.next_index(now)?;
         Some(self.stamped(&self.entries[usize::from(i)], now))
+    }
+
+    /// [`TxQueue::peek`], with a ticket for the frame: a slotted node loads the frame into the
+    /// controller, leaves it queued, and [`removes`](TxQueue::remove) it only once it went out;
+    /// a frame that did not stays in its place (same deadline, laxity recomputed when it is
+    /// peeked again).
+    pub fn peek_ticket(&self, now: Micros) -> Option<(Ticket, Frame)> {
+        let (_, i) = self.next_index(now)?;
+        let e = &self.entries[usize::from(i)];
+        let ticket = Ticket { index: i, group: e.group, fragment: e.frame.id().fragment };
+        Some((ticket, self.stamped(e, now)))
+    }
+
+    /// Removes the frame `ticket` names if it is still queued (false if it expired or was
+    /// removed since).
+    pub fn remove(&mut self, ticket: Ticket) -> bool {
+        let mut prev = NIL;
+        let mut found = None;
+        for (i, e) in self.queued() {
+            if i == ticket.index {
+                found = Some(e.group == ticket.group && e.frame.id().fragment == ticket.fragment);
+                break;
+            }
+            prev = i;
+        }
+        if found != Some(true) {
+            return false;
+        }
+        self.unlink(prev, ticket.index);
+        true
     }
 
     /// Takes the frame to send next at time `now`, with its laxity for `now`.
@@ -483,6 +523,34 @@ pub(crate) mod tests {
             q.push_message(MessageId(0x700), &[2], srt(300)).unwrap();
             assert_eq!(q.pop(0).unwrap().id().laxity.code(), 62);
             assert_eq!(q.peek(0).unwrap().id().laxity.code(), 4);
+        }
+
+        fn a_ticket_removes_its_frame_whatever_came_in_between() {
+            let mut q: TxQueue<8> = TxQueue::new(LIN);
+            q.push_message(MessageId(0x500), &[1; 12], srt(2_000)).unwrap(); // 2 frames
+            let (t, f) = q.peek_ticket(0).unwrap();
+            assert_eq!((f.id().message.0, f.id().fragment, f.id().laxity.code()), (0x500, 1, 21));
+            // Meanwhile: a more urgent message arrives, time passes.
+            q.push_frame(one(0x501, 7), srt(500)).unwrap();
+            assert_eq!(q.peek(100).unwrap().id().message.0, 0x501);
+            assert!(q.remove(t));
+            assert!(!q.remove(t), "removed once");
+            let mut out = [(0, 0); 8];
+            assert_eq!(drain(&mut q, 100, &mut out), 2);
+            assert_eq!(&out[..2], &[(0x501, 7), (0x500, 1)]);
+            // The frame after it is the message's last fragment, still queued in order.
+        }
+
+        fn a_ticket_of_an_expired_frame_removes_nothing() {
+            let mut q: TxQueue<4> = TxQueue::new(LIN);
+            q.push_frame(one(0x600, 1), srt(1_000)).unwrap();
+            let (t, _) = q.peek_ticket(0).unwrap();
+            assert_eq!(q.expire(1_000, |_| {}), 1);
+            // The freed entry is reused by another frame: the old ticket does not take it.
+            q.push_frame(one(0x601, 2), srt(5_000)).unwrap();
+            assert!(!q.remove(t));
+            assert_eq!(q.len(), 1);
+            assert_eq!(q.peek_ticket(1_000).unwrap().1.id().message.0, 0x601);
         }
 
         fn the_spec_example_holds() {

@@ -114,6 +114,12 @@ impl CanController for SimPort {
     fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
         self.port.try_transmit(frame)
     }
+    fn set_tx_mode(&mut self, mode: rtcan::TxMode) {
+        self.port.set_tx_mode(mode);
+    }
+    fn take_tx_result(&mut self) -> Option<rtcan::TxResult> {
+        self.port.take_tx_result()
+    }
     fn try_receive(&mut self) -> Option<Received> {
         let mut r = self.port.try_receive()?;
         let bits = FrameBits::of(&r.frame).total() - INTERMISSION_BITS;

@@ -62,21 +62,32 @@ impl<'t> FixedNode<'t> {
         }
     }
 
-    /// Brings the node up to date at `now_ns` (after a bus event or a release).
-    pub fn service(&mut self, now_ns: u64) {
-        self.counters.activations += 1;
-        let now_us = now_ns / 1_000;
-        if let Some(k) = self.loaded {
-            if self.port.pending() == 0 {
-                let e = self.queue.remove(&k).expect("the loaded frame is queued");
+    /// Takes the port's results: the loaded frame went out (it leaves the queue) or was taken
+    /// back (it stays queued).
+    fn settle(&mut self) {
+        while let Some(r) = self.port.take_tx_result() {
+            let Some(k) = self.loaded else { continue };
+            let e = self.queue[&k];
+            if r.id != e.frame.id() {
+                continue;
+            }
+            self.loaded = None;
+            if r.sent() {
+                self.queue.remove(&k);
                 let fragment = e.frame.id().fragment;
                 self.sent.push(Sent {
                     raw_id: e.frame.id().to_raw(),
                     what: Carried::Message { msg: e.msg, fragment },
                 });
-                self.loaded = None;
             }
         }
+    }
+
+    /// Brings the node up to date at `now_ns` (after a bus event or a release).
+    pub fn service(&mut self, now_ns: u64) {
+        self.counters.activations += 1;
+        let now_us = now_ns / 1_000;
+        self.settle();
 
         let traffic = self.traffic;
         let counters = &mut self.counters;
@@ -101,8 +112,9 @@ impl<'t> FixedNode<'t> {
         );
 
         // Frames past their deadline are not sent (as RTCAN's queue drops them); one already on
-        // the wire finishes.
-        let expired: Vec<Key> = queue
+        // the wire (or in an arbitration) finishes.
+        let expired: Vec<Key> = self
+            .queue
             .iter()
             .filter(|(_, e)| e.deadline.is_some_and(|d| d <= now_us))
             .map(|(k, _)| *k)
@@ -110,27 +122,31 @@ impl<'t> FixedNode<'t> {
         let mut last_msg = None;
         for k in expired {
             if Some(k) == self.loaded {
-                if self.port.abort_pending() == 0 {
+                self.port.abort_pending();
+                self.settle();
+                if self.loaded.is_some() {
                     continue; // on the wire
                 }
-                self.loaded = None;
             }
-            let e = queue.remove(&k).expect("listed above");
+            let Some(e) = self.queue.remove(&k) else { continue }; // it went out just now
             if last_msg != Some(e.msg) {
-                counters.expired += 1;
+                self.counters.expired += 1;
                 last_msg = Some(e.msg);
             }
         }
 
         // Keep the most urgent frame in the mailbox.
-        if let (Some(k), Some((&head, _))) = (self.loaded, queue.first_key_value()) {
-            if head < k && self.port.abort_pending() > 0 {
-                self.loaded = None;
-                counters.retries += 1;
+        if let (Some(k), Some((&head, _))) = (self.loaded, self.queue.first_key_value()) {
+            if head < k {
+                self.port.abort_pending();
+                self.settle();
+                if self.loaded.is_none() {
+                    self.counters.retries += 1;
+                }
             }
         }
         if self.loaded.is_none() {
-            if let Some((&k, e)) = queue.first_key_value() {
+            if let Some((&k, e)) = self.queue.first_key_value() {
                 self.port.try_transmit(&e.frame).expect("one mailbox in use at most");
                 self.loaded = Some(k);
             }

@@ -5,8 +5,9 @@
 //!
 //! The RTCAN nodes use the protocol crate itself — [`rtcan::TxQueue`] (EDF order, laxity
 //! codes in identifiers), [`rtcan::SlotClock`] on the master's [`rtcan::Sync`] frames,
-//! [`rtcan::Scheduler`] phases — driven slot by slot as the node runtime drives them
-//! ([`rtcan_node`]). The baseline ([`fixed_node`]) gives every stream a static rate-monotonic
+//! [`rtcan::Scheduler`] phases — and the node runtime's slot transmit path
+//! ([`r2p_node::SlotTx`]: windows, one-shot or merged, latest-start guard, results), driven slot
+//! by slot as the node runtime drives them ([`rtcan_node`]). The baseline ([`fixed_node`]) gives every stream a static rate-monotonic
 //! identifier. [`point`] runs one offered load and reports, per protocol, HRT on-time ratio and
 //! start jitter, SRT deadline misses and latency percentiles, and the bus utilisation reached
 //! ([`metrics::Report`]). Same setup and seed, same report: nothing reads a clock.

@@ -5,7 +5,9 @@
 
 use std::collections::VecDeque;
 
-use crate::setup::Setup;
+use r2p_node::node::nrt_reserve;
+
+use crate::setup::{Setup, TX_QUEUE};
 use crate::traffic::Traffic;
 
 /// Why a released message never reached the transmit queue.
@@ -68,7 +70,9 @@ impl Publishers {
     }
 
     /// Moves whole messages into the transmit queue while `free` frames allow: `push(m)` queues
-    /// message `m`; SRT messages whose deadline is at or before `now_us` go to `lost`.
+    /// message `m`; SRT messages whose deadline is at or before `now_us` go to `lost`. NRT
+    /// messages leave half the queue free for SRT ones, as the node runtime's `drain_exports`
+    /// does (`r2p_node::node::nrt_reserve`).
     pub fn drain(
         &mut self,
         traffic: &Traffic,
@@ -86,7 +90,11 @@ impl Publishers {
                     continue;
                 }
                 let frames = usize::from(msg.frames);
-                if frames > free {
+                let reserve = match traffic.deadline_us(msg, self.cycle_us) {
+                    None => nrt_reserve(TX_QUEUE, frames),
+                    Some(_) => 0,
+                };
+                if frames + reserve > free {
                     break;
                 }
                 q.pop_front();

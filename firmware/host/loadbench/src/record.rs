@@ -29,8 +29,12 @@ pub enum Carried {
 /// Counters of one node (or a whole run, summed).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct Counters {
-    /// Frames loaded for a slot or for arbitration that lost and were taken back to retry.
+    /// RTCAN: queued frames that did not go out in their window (lost a one-shot arbitration,
+    /// or were withdrawn at the latest start) and went back to the queue. Fixed priority: frames
+    /// swapped out of the mailbox for a more urgent one.
     pub retries: u64,
+    /// RTCAN: of those, frames withdrawn at their window's latest start (the bus was busy).
+    pub late: u64,
     /// Messages lost to a full publisher queue.
     pub overflows: u64,
     /// Messages (or their remaining frames) dropped because their deadline passed unsent.
@@ -47,6 +51,7 @@ pub struct Counters {
 impl AddAssign for Counters {
     fn add_assign(&mut self, o: Self) {
         self.retries += o.retries;
+        self.late += o.late;
         self.overflows += o.overflows;
         self.expired += o.expired;
         self.hrt_skipped += o.hrt_skipped;

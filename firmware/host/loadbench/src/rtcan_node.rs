@@ -1,22 +1,24 @@
-//! One node's RTCAN transmit path, as the node runtime runs it (`r2p_node::Node::slot_tick`,
+//! One node's RTCAN transmit path as the node runtime runs it (`r2p_node::Node::slot_tick`,
 //! TDMA mode), reduced to the traffic of this experiment: no management protocol, no
 //! reassembly, HRT phases given by the master's calendar at start-up.
 //!
-//! At every slot boundary of its [`SlotClock`]: (1) abort what is still pending — a queued
-//! frame that went out leaves the [`TxQueue`], one that lost arbitration stays; (2) take
-//! received syncs into the clock; (3) move published messages into the queue, expire SRT
-//! frames past their deadline; (4) as master, at a cycle's start, send the sync with the next
-//! cycle's reservation mask; (5) load at most one frame: nothing in slot 0, this node's HRT
-//! frame in a reserved slot of its stream, else the most urgent queued frame with the laxity
-//! code of the time left ([`TxQueue::peek`]).
-//!
-//! How queued frames meet the controller is the [`Transmit`] mode: as the firmware does it
-//! today, or one of two what-ifs that the load sweep measures against it.
+//! What is loaded when, for which window, and what is done with the controller's results is
+//! the node runtime's own code: [`SlotTx`] (`r2p_node::slot_tx`), with the free-slot policy
+//! ([`FreeSlots`]) of the run. Around it, as `Node::slot_tick` does at every slot boundary of
+//! its [`SlotClock`]: (1) the results — a queued frame that went out leaves the [`TxQueue`], one
+//! that did not stays with its deadline; (2) received syncs into the clock; (3) published
+//! messages into the queue, SRT frames past their deadline expired; (4) as master, at a
+//! cycle's start, the sync with the next cycle's reservation mask; (5) at most one frame:
+//! nothing in slot 0, this node's HRT frame in a reserved slot of its stream, else the most
+//! urgent queued frame for the window the free slot opens. And at a loaded frame's latest
+//! start, the guard ([`SlotTx::on_guard`]).
 
 use std::collections::VecDeque;
 
 use r2p_emu::SimPort;
-use rtcan::controller::Filter;
+use r2p_node::slot_tx::{Done, Slotted};
+use r2p_node::{FreeSlots, SlotTx};
+use rtcan::controller::{Filter, TxOutcome};
 use rtcan::cycle::{ClockState, SYNC_SLOT};
 use rtcan::id::{EXTENDED_ID_MAX, MESSAGE_ID_SHIFT, SYNC_MESSAGE_IDS};
 use rtcan::schedule::occurs;
@@ -28,33 +30,6 @@ use crate::publish::Publishers;
 use crate::record::{Carried, Counters, Sent};
 use crate::setup::{Setup, TX_QUEUE};
 use crate::traffic::{Kind, Traffic};
-
-/// How queued (SRT/NRT) frames are handed to the controller.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Transmit {
-    /// The firmware today: one frame per free slot, loaded at the slot's start; the controller
-    /// retransmits automatically (bxCAN's default), so a frame that loses the slot's arbitration
-    /// tries again as soon as the bus is idle — after the winner, past the slot's end, into the
-    /// next slot, which may be a reserved one or the next cycle's sync slot.
-    Retransmit,
-    /// What-if: one-shot transmission (bxCAN `NART` = 1): a frame that loses arbitration is
-    /// withdrawn at once and waits for the next free slot; free slots never overflow.
-    OneShot,
-    /// What-if: consecutive free slots merged into one arbitration window (as TTCAN merges
-    /// arbitrating windows): a node loads its next frame as soon as its previous one is sent,
-    /// losers retry at once, and every pending frame is withdrawn a worst-case frame time
-    /// before the next reserved slot or sync, so nothing overflows into them.
-    Merged,
-}
-
-/// What the node loaded at the current slot's start.
-#[derive(Clone, Copy, Debug)]
-enum Inflight {
-    None,
-    Sync { raw_id: u32 },
-    Hrt { msg: u32, raw_id: u32 },
-    Queued { at: Micros, msg: u32, fragment: u8, raw_id: u32 },
-}
 
 #[derive(Clone, Copy, Debug)]
 struct Master {
@@ -70,17 +45,20 @@ pub struct RtcanNode<'t> {
     clock: SlotClock,
     tx: TxQueue<TX_QUEUE>,
     master: Option<Master>,
-    inflight: Inflight,
+    /// The node runtime's slot transmit state; HRT frames tagged with their message.
+    slot_tx: SlotTx<u32>,
+    /// The queued frame loaded: its message and fragment (a message may expire while its
+    /// frame is on the wire).
+    loaded: Option<(u32, u8)>,
     publishers: Publishers,
     /// This node's HRT streams and their occurrences still to send, oldest first.
     hrt: Vec<(u16, VecDeque<u32>)>,
     /// Per stream (all streams of the run): its messages in the transmit queue, oldest first.
     queued: Vec<VecDeque<u32>>,
-    mode: Transmit,
-    /// Merged mode: no queued frame may be pending from this time until the next reserved slot.
-    guard: Option<Micros>,
     /// The next slot boundary.
     next_slot: Micros,
+    /// When the node's timer fires next: the next slot boundary or a loaded frame's guard.
+    wake_at: Micros,
     /// Frames this node's port sent, in order.
     pub sent: Vec<Sent>,
     /// What the node counted.
@@ -93,13 +71,13 @@ fn stream_of(message: MessageId) -> usize {
 }
 
 impl<'t> RtcanNode<'t> {
-    /// Node `index` on `can`; node 0 is the master.
+    /// Node `index` on `can`, using the free slots as `free_slots` says; node 0 is the master.
     pub fn new(
         traffic: &'t Traffic,
         setup: &'t Setup,
         index: usize,
         mut can: SimPort,
-        mode: Transmit,
+        free_slots: FreeSlots,
     ) -> Self {
         let master = (index == 0).then_some(Master { cycle: 0, next_sync: 0 });
         // Slaves hear syncs only (laxity 0, fragment 0, message ID < 0x100); the master nothing.
@@ -126,74 +104,40 @@ impl<'t> RtcanNode<'t> {
             clock: SlotClock::new(setup.cycle),
             tx: TxQueue::new(setup.laxity),
             master,
-            inflight: Inflight::None,
+            slot_tx: SlotTx::new(&setup.cycle, free_slots),
+            loaded: None,
             publishers: Publishers::new(traffic, setup, index, |s| !is_hrt(s)),
             hrt,
             queued: vec![VecDeque::new(); traffic.streams.len()],
-            mode,
-            guard: None,
             next_slot: 0,
+            wake_at: 0,
             sent: Vec::new(),
             counters: Counters::default(),
         }
     }
 
-    /// When the node's timer fires next: its next slot boundary, or before it the merged
-    /// window's guard time.
+    /// When the node's timer fires next (`Node::next_slot_at`).
     pub fn next_wake(&self) -> Micros {
-        match self.guard {
-            Some(g) if g < self.next_slot => g,
-            _ => self.next_slot,
-        }
+        self.wake_at
     }
 
-    /// The node's timer at `now`: the slot timer at a slot boundary, else the guard time.
+    /// The node's timer at `now`: a loaded frame's guard, a slot boundary, or both.
     pub fn wake(&mut self, now: Micros) {
         self.counters.activations += 1;
+        if self.slot_tx.at_guard(now) {
+            self.slot_tx.on_guard(&mut self.can);
+        }
         if now >= self.next_slot {
             self.slot_tick(now);
             self.next_slot = self.next_slot_at(now).max(now + 1);
-        } else if self.guard.is_some_and(|g| now >= g) {
-            self.guard = None;
-            self.withdraw();
         }
-    }
-
-    /// Takes back a queued frame still waiting for the bus (one on the wire goes on).
-    fn withdraw(&mut self) {
-        if matches!(self.inflight, Inflight::Queued { .. }) && self.can.abort_pending() > 0 {
-            self.inflight = Inflight::None;
-            self.counters.retries += 1;
-        }
-    }
-
-    /// A queued frame that went out leaves the queue.
-    fn confirm_queued(&mut self, at: Micros, msg: u32, fragment: u8, raw_id: u32) {
-        let popped = self.tx.pop(at).map(|f| f.id().to_raw());
-        assert_eq!(popped, Some(raw_id), "the queue's head changed under a loaded frame");
-        self.sent.push(Sent { raw_id, what: Carried::Message { msg, fragment } });
-        if fragment == 0 {
-            let s = usize::from(self.traffic.messages[msg as usize].stream);
-            self.queued[s].pop_front();
-        }
+        self.wake_at = self.slot_tx.next_wake(now, self.next_slot);
     }
 
     /// The slot timer at boundary `now` (module documentation, steps 1–5).
     fn slot_tick(&mut self, now: Micros) {
-        self.guard = None;
-        let aborted = self.can.abort_pending();
-        match core::mem::replace(&mut self.inflight, Inflight::None) {
-            Inflight::Queued { at, msg, fragment, raw_id } if aborted == 0 => {
-                self.confirm_queued(at, msg, fragment, raw_id);
-            }
-            Inflight::Queued { .. } => self.counters.retries += 1,
-            Inflight::Hrt { msg, raw_id } if aborted == 0 => {
-                self.sent.push(Sent { raw_id, what: Carried::Message { msg, fragment: 0 } });
-            }
-            Inflight::Sync { raw_id } if aborted == 0 => {
-                self.sent.push(Sent { raw_id, what: Carried::Sync });
-            }
-            Inflight::Hrt { .. } | Inflight::Sync { .. } | Inflight::None => {}
+        for done in self.slot_tx.settle(now, &mut self.can, &self.tx).into_iter().flatten() {
+            self.on_done(done);
         }
         while let Some(r) = self.can.try_receive() {
             if let (None, Ok(sync)) = (self.master, Sync::from_frame(&r.frame)) {
@@ -207,12 +151,11 @@ impl<'t> RtcanNode<'t> {
 
         if let Some(mut m) = self.master {
             if now >= m.next_sync {
-                let mask = self.traffic.scheduler.mask(m.cycle.wrapping_add(1));
+                let mask = self.traffic.mask(self.setup, m.cycle.wrapping_add(1));
                 let sync = Sync::new(m.cycle, mask, false);
-                let frame = sync.to_frame();
-                if self.can.try_transmit(&frame).is_ok() {
+                let ok = self.slot_tx.load_slotted(&mut self.can, Slotted::Sync, &sync.to_frame());
+                if ok {
                     self.clock.on_sync(now, &sync);
-                    self.inflight = Inflight::Sync { raw_id: frame.id().to_raw() };
                 }
                 let cycle_us = Micros::from(self.setup.cycle.cycle_us);
                 m.cycle = m.cycle.wrapping_add(1);
@@ -221,10 +164,10 @@ impl<'t> RtcanNode<'t> {
                     m.next_sync = now + cycle_us;
                 }
                 self.master = Some(m);
+                if ok {
+                    return;
+                }
             }
-        }
-        if !matches!(self.inflight, Inflight::None) {
-            return;
         }
         match self.clock.state(now) {
             ClockState::Running(p) if p.slot == SYNC_SLOT => {}
@@ -232,37 +175,47 @@ impl<'t> RtcanNode<'t> {
                 self.send_hrt(p.cycle, p.slot);
             }
             ClockState::Running(p) => {
-                if self.mode == Transmit::Merged {
-                    self.guard = self.guard_time(p.cycle, p.slot);
+                let Some(end) = self.slot_tx.window_end(&self.clock, p) else { return };
+                let head = self.tx.peek(now).map(|f| f.id());
+                if self.slot_tx.load_queued(now, end, &mut self.can, &self.tx) {
+                    let id = head.expect("a frame was loaded");
+                    let msg = self.queued[stream_of(id.message)].front().copied();
+                    self.loaded = Some((msg.expect("a queued frame's message"), id.fragment));
                 }
-                self.send_queued(now);
             }
             ClockState::Unsynced | ClockState::Lost => {}
         }
     }
 
-    /// Merged mode: the last instant a frame may still start and end before the next reserved
-    /// slot (or the next cycle's sync slot) begins.
-    fn guard_time(&self, cycle: u32, slot: u8) -> Option<Micros> {
-        let mask = self.clock.mask(cycle);
-        let slots = self.setup.cycle.slots;
-        let next = (slot + 1..slots).find(|&j| mask & (1 << j) != 0).unwrap_or(slots);
-        let frame_us = Micros::from(self.setup.cycle.frame_us());
-        self.clock.slot_start(cycle, next).map(|r| r.saturating_sub(frame_us))
-    }
-
-    /// Merged mode, after every bus event: once this node's queued frame is sent, the next one
-    /// goes to the controller while the window lasts.
-    pub fn on_bus_event(&mut self, now: Micros) {
-        let Inflight::Queued { at, msg, fragment, raw_id } = self.inflight else { return };
-        if self.mode != Transmit::Merged || self.can.port().pending() > 0 {
-            return;
+    /// A loaded frame's fate (step 1).
+    fn on_done(&mut self, done: Done<u32>) {
+        if done.is_retry(self.slot_tx.policy()) {
+            self.counters.retries += 1;
         }
-        self.counters.activations += 1;
-        self.inflight = Inflight::None;
-        self.confirm_queued(at, msg, fragment, raw_id);
-        if self.guard.is_some_and(|g| now < g) {
-            self.send_queued(now);
+        match done {
+            Done::Slotted { what, id, outcome: TxOutcome::Sent } => {
+                let what = match what {
+                    Slotted::Sync => Carried::Sync,
+                    Slotted::Hrt(msg) => Carried::Message { msg, fragment: 0 },
+                };
+                self.sent.push(Sent { raw_id: id.to_raw(), what });
+            }
+            Done::Slotted { what: Slotted::Hrt(_), .. } => self.counters.hrt_skipped += 1,
+            Done::Slotted { .. } => {}
+            Done::Queued { ticket, id, outcome, late } => {
+                let (msg, fragment) = self.loaded.take().expect("a queued frame was loaded");
+                if outcome != TxOutcome::Sent {
+                    self.counters.late += u64::from(late);
+                    return;
+                }
+                self.sent
+                    .push(Sent { raw_id: id.to_raw(), what: Carried::Message { msg, fragment } });
+                // Unless the message expired while this frame was on the wire (then it was
+                // taken out of the queue and counted already).
+                if self.tx.remove(ticket) && fragment == 0 {
+                    self.queued[stream_of(id.message)].pop_front();
+                }
+            }
         }
     }
 
@@ -317,37 +270,14 @@ impl<'t> RtcanNode<'t> {
             occurrences.pop_front();
             let id = FrameId { laxity: Laxity::HRT, message: stream.message, fragment: 0 };
             let frame = Frame::new(id, &msg.payload).expect("HRT payloads fit one frame");
-            if self.can.try_transmit(&frame).is_ok() {
-                self.inflight = Inflight::Hrt { msg: m, raw_id: id.to_raw() };
-            } else {
+            if !self.slot_tx.load_slotted(&mut self.can, Slotted::Hrt(m), &frame) {
                 self.counters.hrt_skipped += 1;
             }
             return;
         }
     }
 
-    /// Loads the most urgent queued frame.
-    fn send_queued(&mut self, now: Micros) {
-        let Some(frame) = self.tx.peek(now) else { return };
-        let id = frame.id();
-        let Some(&msg) = self.queued[stream_of(id.message)].front() else {
-            unreachable!("a queued frame belongs to a queued message")
-        };
-        if self.can.try_transmit(&frame).is_ok() {
-            self.inflight =
-                Inflight::Queued { at: now, msg, fragment: id.fragment, raw_id: id.to_raw() };
-        }
-    }
-
-    /// One-shot mode, right after the slot's arbitration: a queued frame that lost is withdrawn
-    /// and waits for the next free slot.
-    pub fn withdraw_if_lost(&mut self) {
-        if self.mode == Transmit::OneShot {
-            self.withdraw();
-        }
-    }
-
-    /// When the slot timer fires next (`Node::next_slot_at`).
+    /// When the slot timer fires next (`Node::next_slot_at`, without the guard).
     fn next_slot_at(&self, now: Micros) -> Micros {
         let slot_us = Micros::from(self.setup.cycle.slot_us().max(1));
         let by_clock = match self.clock.state(now) {

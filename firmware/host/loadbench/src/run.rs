@@ -1,22 +1,23 @@
 //! Runs one protocol over a load point's traffic on a fresh virtual bus, in virtual time.
 
 use r2p_emu::SimPort;
+use r2p_node::{FreeSlots, NodeConfig};
 use r2p_vbus::{Bus, Config, Event, EventKind};
 
 use crate::fixed_node::FixedNode;
 use crate::record::{Counters, Sent};
-use crate::rtcan_node::{RtcanNode, Transmit};
+use crate::rtcan_node::RtcanNode;
 use crate::setup::Setup;
 use crate::traffic::Traffic;
 
 /// How the nodes get frames onto the bus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Policy {
-    /// RTCAN as the node runtime runs it (controllers retransmit automatically).
+    /// RTCAN as the node runtime runs it by default (`NodeConfig::new(..).free_slots`).
     Rtcan,
-    /// What-if: RTCAN with one-shot transmission of queued frames ([`Transmit::OneShot`]).
+    /// RTCAN, one one-shot frame per free slot (`FreeSlots::Single`).
     RtcanOneShot,
-    /// What-if: RTCAN with free slots merged into arbitration windows ([`Transmit::Merged`]).
+    /// RTCAN, free slots merged into windows with retransmission (`FreeSlots::Merged`).
     RtcanMerged,
     /// Plain fixed-priority CAN, rate-monotonic identifiers: the baseline.
     Fixed,
@@ -26,6 +27,13 @@ impl Policy {
     /// Every policy, in report order.
     pub const ALL: [Policy; 4] =
         [Policy::Rtcan, Policy::RtcanOneShot, Policy::RtcanMerged, Policy::Fixed];
+
+    /// The sweep's default: the node runtime's default, its other free-slot policy, and the
+    /// baseline (the policy equal to the default is left out: it would repeat `rtcan`).
+    pub fn defaults() -> Vec<Policy> {
+        let repeats = |p: Policy| p != Policy::Rtcan && p.free_slots() == Some(DEFAULT_FREE_SLOTS);
+        Self::ALL.into_iter().filter(|&p| !repeats(p)).collect()
+    }
 
     /// Its name in reports.
     pub const fn name(self) -> &'static str {
@@ -41,7 +49,20 @@ impl Policy {
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|p| p.name() == name)
     }
+
+    /// The RTCAN nodes' free-slot policy (`None`: fixed priority).
+    pub const fn free_slots(self) -> Option<FreeSlots> {
+        match self {
+            Policy::Rtcan => Some(DEFAULT_FREE_SLOTS),
+            Policy::RtcanOneShot => Some(FreeSlots::Single),
+            Policy::RtcanMerged => Some(FreeSlots::Merged),
+            Policy::Fixed => None,
+        }
+    }
 }
+
+/// The node runtime's default free-slot policy.
+const DEFAULT_FREE_SLOTS: FreeSlots = NodeConfig::new([0; 12], "").free_slots;
 
 /// What a run produced: the bus's event log and each node's account of it.
 pub struct Run {
@@ -62,47 +83,31 @@ pub fn run(setup: &Setup, traffic: &Traffic, policy: Policy) -> Run {
     let config = Config { bit_rate: setup.cycle.bit_rate, rx_depth: 8, seed: setup.seed };
     let bus = Bus::new(setup.nodes, config);
     let stop_ns = setup.stop_us() * 1_000;
-    let (sent, counters): (Vec<Vec<Sent>>, Vec<Counters>) = match policy {
-        Policy::Rtcan | Policy::RtcanOneShot | Policy::RtcanMerged => {
-            let mode = match policy {
-                Policy::RtcanOneShot => Transmit::OneShot,
-                Policy::RtcanMerged => Transmit::Merged,
-                _ => Transmit::Retransmit,
-            };
+    let (sent, counters): (Vec<Vec<Sent>>, Vec<Counters>) = match policy.free_slots() {
+        Some(free_slots) => {
             let mut nodes: Vec<RtcanNode> = (0..setup.nodes)
                 .map(|i| {
                     let port = SimPort::new(bus.port(i), setup.cycle.bit_rate);
-                    RtcanNode::new(traffic, setup, i, port, mode)
+                    RtcanNode::new(traffic, setup, i, port, free_slots)
                 })
                 .collect();
             loop {
-                // Slot timers; in merged mode also every bus event (a frame's end frees the
-                // node's mailbox for its next frame).
-                let wake = nodes.iter().map(|n| n.next_wake() * 1_000).min().expect("nodes");
-                let bus_due = if mode == Transmit::Merged { bus.next_event() } else { None };
-                let t = bus_due.map_or(wake, |b| b.min(wake));
+                // The nodes' slot timers (slot boundaries, latest starts); the bus runs
+                // everything due up to then.
+                let t = nodes.iter().map(|n| n.next_wake() * 1_000).min().expect("nodes");
                 if t > stop_ns {
                     break;
                 }
                 bus.advance_to(t);
-                let now = t / 1_000;
                 for node in nodes.iter_mut() {
                     if node.next_wake() * 1_000 <= t {
-                        node.wake(now);
+                        node.wake(t / 1_000);
                     }
-                }
-                match mode {
-                    Transmit::OneShot => {
-                        bus.advance_to(t); // the slot's arbitration
-                        nodes.iter_mut().for_each(RtcanNode::withdraw_if_lost);
-                    }
-                    Transmit::Merged => nodes.iter_mut().for_each(|n| n.on_bus_event(now)),
-                    Transmit::Retransmit => {}
                 }
             }
             nodes.into_iter().map(|n| (n.sent, n.counters)).unzip()
         }
-        Policy::Fixed => {
+        None => {
             let mut nodes: Vec<FixedNode> =
                 (0..setup.nodes).map(|i| FixedNode::new(traffic, setup, i, bus.port(i))).collect();
             let mut releases = traffic.messages.iter().map(|m| m.release_us * 1_000).peekable();

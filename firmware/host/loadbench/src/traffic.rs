@@ -177,7 +177,10 @@ impl Builder<'_> {
             if offered + bits / 2.0 > target {
                 return offered;
             }
-            let Ok(phase) = self.scheduler.register(probe.message, cycles) else { return offered };
+            let Ok(mut phase) = self.scheduler.register(probe.message, cycles) else {
+                return offered;
+            };
+            phase.slot = self.setup.hrt_layout.slot(phase.slot);
             let period = Period::from_cycles(cycles).expect("1 and 2 cycles are harmonic");
             let node = self.streams.len() % self.setup.nodes;
             self.add_stream(node, Kind::Hrt { period, phase }, rate_hz);
@@ -323,6 +326,15 @@ impl Traffic {
         let mut messages = b.messages;
         messages.sort_by_key(|m| (m.release_us, m.stream));
         Ok(Self { streams: b.streams, messages, scheduler: b.scheduler, offered_bits })
+    }
+
+    /// The reservations the master announces for cycle `cycle` (sync slot included), in the
+    /// layout of `setup`.
+    pub fn mask(&self, setup: &Setup, cycle: u32) -> u64 {
+        let m = self.scheduler.mask(cycle);
+        (1..=setup.hrt_slots)
+            .filter(|&k| m & 1 << k != 0)
+            .fold(m & 1, |acc, k| acc | 1 << setup.hrt_layout.slot(k))
     }
 
     /// Offered load: offered bits over the window's bit times.

@@ -2,9 +2,16 @@
 //! must do at the extremes of the sweep. Behaviour only: no wall-clock timing is asserted.
 
 use r2p_loadbench::metrics::deliveries;
+use r2p_loadbench::setup::HrtLayout;
 use r2p_loadbench::traffic::Kind;
 use r2p_loadbench::{point, run, Policy, Setup, SetupError, Traffic};
+use r2p_node::FreeSlots;
+use r2p_vbus::bits::INTERMISSION_BITS;
 use r2p_vbus::{EventKind, FrameBits};
+use rtcan::{Laxity, Sync};
+
+/// The RTCAN policies (the node runtime's default and both free-slot policies).
+const RTCAN: [Policy; 3] = [Policy::Rtcan, Policy::RtcanOneShot, Policy::RtcanMerged];
 
 /// A short load point (debug builds run these tests).
 fn short(load: f64, seed: u64, duration_us: u64) -> Setup {
@@ -87,9 +94,6 @@ fn at_light_load_nothing_misses() {
     let p = point(&short(0.1, 6, 1_000_000), &Policy::ALL).unwrap();
     for r in &p.reports {
         assert_eq!(r.hrt_missed, 0, "{}", r.policy);
-        if r.policy == "rtcan" {
-            continue; // automatic retransmission: see the next tests
-        }
         assert_eq!((r.srt_missed, r.nrt_delivered), (0, 1.0), "{}", r.policy);
         if r.policy != "fixed" {
             assert_eq!(r.hrt_in_slot, Some(1.0), "{}", r.policy);
@@ -102,8 +106,8 @@ fn at_light_load_nothing_misses() {
 }
 
 #[test]
-fn reserved_slots_stay_isolated_when_losers_do_not_retransmit() {
-    let p = point(&short(0.95, 8, 500_000), &[Policy::RtcanOneShot, Policy::RtcanMerged]).unwrap();
+fn reserved_slots_stay_isolated_at_95_percent() {
+    let p = point(&short(0.95, 8, 500_000), &RTCAN).unwrap();
     for r in &p.reports {
         assert_eq!(r.hrt_in_slot, Some(1.0), "{}", r.policy);
         assert_eq!(r.hrt_jitter_max_us, 0.0, "{}", r.policy);
@@ -111,15 +115,66 @@ fn reserved_slots_stay_isolated_when_losers_do_not_retransmit() {
     }
 }
 
+/// SRT/NRT frame starts per (cycle start, slot), checking on the way that each started in a
+/// free slot no later than its window's latest start and left the bus by the window's end
+/// (the window: the slot, or the free slots up to the next reserved one or sync).
+fn check_windows(setup: &Setup, policy: Policy) -> std::collections::HashMap<(u64, u8), u32> {
+    let traffic = Traffic::generate(setup).unwrap();
+    let r = run(setup, &traffic, policy);
+    let cycle = setup.cycle;
+    let merged = policy.free_slots() == Some(FreeSlots::Merged);
+    let (mut start_of_cycle, mut mask, mut next_mask) = (None, None, None);
+    let mut starts = std::collections::HashMap::new();
+    for e in &r.trace {
+        let EventKind::Sent { start_ns, frame, .. } = e.kind else { continue };
+        let start = start_ns / 1_000;
+        if let Ok(sync) = Sync::from_frame(&frame) {
+            let continuous = start_of_cycle.is_some_and(|c| start - c == u64::from(cycle.cycle_us));
+            start_of_cycle = Some(start);
+            mask = next_mask.filter(|_| continuous);
+            next_mask = Some(sync.reservations | 1);
+            continue;
+        }
+        if frame.id().laxity == Laxity::HRT {
+            continue;
+        }
+        let (c, mask) = (start_of_cycle.expect("a sync first"), mask.expect("reservations known"));
+        let slot = (0..cycle.slots)
+            .rev()
+            .find(|&j| c + u64::from(cycle.slot_offset_us(j)) <= start)
+            .unwrap();
+        assert!(mask & 1 << slot == 0, "{policy:?}: {frame:?} in reserved slot {slot}");
+        let end_slot = if merged {
+            (slot + 1..cycle.slots).find(|&j| mask & 1 << j != 0).unwrap_or(cycle.slots)
+        } else {
+            slot + 1
+        };
+        let end = c + u64::from(cycle.slot_offset_us(end_slot));
+        let idle = e.time_ns / 1_000 + u64::from(INTERMISSION_BITS);
+        assert!(start + u64::from(cycle.frame_us()) <= end, "{policy:?}: {frame:?} starts late");
+        assert!(idle <= end, "{policy:?}: {frame:?} ends {} µs into the next window", idle - end);
+        *starts.entry((c, slot)).or_insert(0) += 1;
+    }
+    starts
+}
+
 #[test]
-fn automatic_retransmission_pushes_frames_into_the_next_slot() {
-    // As bxCAN by default: a frame that lost a free slot's arbitration goes out after the
-    // winner, past its slot, delaying reserved slots and syncs (the slaves re-phase).
-    let p = point(&short(0.5, 9, 500_000), &[Policy::Rtcan, Policy::RtcanOneShot]).unwrap();
-    let (rt, one) = (&p.reports[0], &p.reports[1]);
-    assert!(rt.hrt_in_slot.unwrap() < 1.0 && rt.hrt_jitter_max_us > 0.0);
-    assert!(rt.counters.resyncs > 0);
-    assert!(rt.srt_missed > one.srt_missed);
+fn no_frame_leaves_its_window_and_single_slots_carry_one_frame() {
+    // 90 %: the windows are full, frames contend in every one of them.
+    let setup = short(0.9, 11, 300_000);
+    let single = check_windows(&setup, Policy::RtcanOneShot);
+    assert_eq!(single.values().max(), Some(&1), "one frame per free slot");
+    let merged = check_windows(&setup, Policy::RtcanMerged);
+    assert!(merged.values().filter(|&&n| n >= 2).count() > 100, "frames back to back");
+}
+
+#[test]
+fn merged_windows_carry_more_than_single_slots_at_high_load() {
+    let p = point(&short(0.9, 12, 500_000), &[Policy::RtcanOneShot, Policy::RtcanMerged]).unwrap();
+    let (single, merged) = (&p.reports[0], &p.reports[1]);
+    // One frame of 75-150 bits per 166 µs free slot: at most ~90 % of the free time.
+    assert!(single.utilisation < merged.utilisation - 0.05, "{single:?} {merged:?}");
+    assert!(single.counters.retries > 10 * merged.counters.retries.max(1), "losers wait a slot");
 }
 
 #[test]
@@ -149,6 +204,24 @@ fn fixed_priority_at_95_percent_misses_low_priority_srt_deadlines() {
     let sum = |ranks: &[u8]| ranks.iter().map(|&k| misses_by_rank[usize::from(k)]).sum::<u32>();
     assert_eq!(misses_by_rank[usize::from(high[0])], 0, "{misses_by_rank:?}");
     assert!(sum(low) > 2 * sum(high), "{misses_by_rank:?}");
+}
+
+#[test]
+fn the_spread_layout_alternates_reserved_and_free_slots() {
+    let setup = Setup { hrt_layout: HrtLayout::Spread, ..short(0.9, 13, 200_000) };
+    let t = Traffic::generate(&setup).unwrap();
+    let most = (0..64).map(|c| t.mask(&setup, c)).max_by_key(|m| m.count_ones()).unwrap();
+    assert!(most.count_ones() > 10, "{most:#b}");
+    for c in 0..64 {
+        let hrt = t.mask(&setup, c) & !1;
+        assert_eq!(hrt & hrt >> 1, 0, "cycle {c}: adjacent reserved slots {hrt:#b}");
+        assert_eq!(hrt & 0x5555_5555, 0, "cycle {c}: reserved slots are odd");
+    }
+    // Reservations are where the HRT messages go, and nowhere else.
+    let p = point(&setup, &[Policy::Rtcan]).unwrap();
+    assert_eq!((p.reports[0].hrt_missed, p.reports[0].hrt_in_slot), (0, Some(1.0)));
+    let e = Traffic::generate(&Setup { hrt_slots: 16, ..setup }).unwrap_err();
+    assert_eq!(e, SetupError::HrtSlots(16));
 }
 
 #[test]

@@ -79,6 +79,22 @@ pub fn stuff_count(bits: &[bool]) -> u32 {
     count
 }
 
+/// Unstuffed bits of the arbitration field of an extended frame: SOF, base ID, SRR, IDE,
+/// extended ID, RTR.
+pub const ARBITRATION_BITS: usize = 1 + 11 + 1 + 1 + 18 + 1;
+
+/// Bit times from SOF to the end of the bit at which a frame with identifier `loser` loses
+/// arbitration to one with `winner` (stuff bits included: the two send the same bits up to
+/// there, so they stuff alike). The loser sends a recessive bit and reads back the winner's
+/// dominant one. Equal identifiers do not lose in the arbitration field: the count is then the
+/// whole field (both send on; the data decide, which the bus does not model).
+pub fn arbitration_loss_bits(winner: u32, loser: u32) -> u32 {
+    let w = unstuffed_bits(winner, &[]);
+    let l = unstuffed_bits(loser, &[]);
+    let k = (0..ARBITRATION_BITS).find(|&i| w[i] != l[i]).unwrap_or(ARBITRATION_BITS - 1);
+    (k as u32) + stuff_count(&w[..k]) + 1
+}
+
 /// Bit counts of one frame on the wire.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct FrameBits {

@@ -5,10 +5,12 @@ use std::collections::VecDeque;
 use std::hash::{Hash, Hasher};
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError};
+use rtcan::controller::{
+    BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxOutcome, TxResult, TX_RESULTS,
+};
 use rtcan::{CanController, Frame};
 
-use crate::bits::{FrameBits, RECOVERY_RUNS, RECOVERY_RUN_BITS};
+use crate::bits::{arbitration_loss_bits, FrameBits, RECOVERY_RUNS, RECOVERY_RUN_BITS};
 use crate::rng::SplitMix64;
 
 /// Transmit mailboxes per port (bxCAN has three).
@@ -128,7 +130,16 @@ pub enum EventKind {
         /// Receivers that missed it by injection.
         missed_by: Option<Option<usize>>,
     },
-    /// A frame ended in an error frame; the sender will retry unless it was aborted.
+    /// A one-shot frame lost arbitration and was withdrawn (logged at the bit where it lost;
+    /// a frame that will retry loses silently, as on a real bus).
+    LostArbitration {
+        /// Start of frame (the winner's).
+        start_ns: u64,
+        /// The withdrawn frame.
+        frame: Frame,
+    },
+    /// A frame ended in an error frame; the sender will retry unless it was aborted or sent
+    /// one-shot.
     Error {
         /// Start of frame.
         start_ns: u64,
@@ -190,6 +201,9 @@ struct Node {
     received: u64,
     /// A frame of this node is on the wire (possibly on a segment it has since left).
     sending: bool,
+    tx_mode: TxMode,
+    /// Results of finished frames not taken yet, oldest first (at most `TX_RESULTS`).
+    results: VecDeque<TxResult>,
 }
 
 impl Node {
@@ -208,6 +222,8 @@ impl Node {
             overflows: 0,
             received: 0,
             sending: false,
+            tx_mode: TxMode::Retransmit,
+            results: VecDeque::new(),
         }
     }
 
@@ -219,6 +235,19 @@ impl Node {
         self.tec = 0;
         self.rec = 0;
         self.bus_off = None;
+        self.tx_mode = TxMode::Retransmit;
+        self.results.clear();
+    }
+
+    /// Frees mailbox `i` if it still holds the frame loaded as `seq`, and records `outcome`.
+    fn finish(&mut self, i: usize, seq: u64, outcome: TxOutcome) -> bool {
+        let Some(m) = self.mailboxes[i].filter(|m| m.seq == seq) else { return false };
+        self.mailboxes[i] = None;
+        if self.results.len() == TX_RESULTS {
+            self.results.pop_front();
+        }
+        self.results.push_back(TxResult { id: m.frame.id(), outcome });
+        true
     }
 
     /// Takes part in bus traffic (sends, receives, acknowledges).
@@ -292,6 +321,20 @@ enum Due {
     End(usize),
     Start(usize),
     Recover(usize),
+    Withdraw(usize),
+}
+
+/// A frame that is losing arbitration: until the end of the bit where it loses, it is on the
+/// wire (an abort request cannot take it back); then it is withdrawn if it was sent one-shot
+/// or its abort was requested meanwhile, else it waits for the next idle.
+#[derive(Clone, Copy, Debug)]
+struct Withdrawal {
+    at: u64,
+    port: usize,
+    mailbox: usize,
+    seq: u64,
+    start: u64,
+    withdraw: bool,
 }
 
 struct Inner {
@@ -303,6 +346,8 @@ struct Inner {
     faults: Vec<FaultRule>,
     rng: SplitMix64,
     trace: Vec<Event>,
+    /// Pending withdrawals of one-shot losers, in the order they were decided.
+    withdrawals: Vec<Withdrawal>,
 }
 
 impl Inner {
@@ -345,8 +390,8 @@ impl Inner {
         Some(t.max(self.now))
     }
 
-    /// The next thing that happens, earliest first; at equal times recoveries, then ends,
-    /// then starts, each by index.
+    /// The next thing that happens, earliest first; at equal times recoveries, then
+    /// withdrawals and ends, then starts, each by index.
     fn next_due(&self) -> Option<(u64, Due)> {
         let mut best: Option<(u64, u8, usize, Due)> = None;
         let mut consider = |t: u64, rank: u8, i: usize, d: Due| {
@@ -358,6 +403,9 @@ impl Inner {
             if let Some(t) = self.recovery_time(p) {
                 consider(t, 0, p, Due::Recover(p));
             }
+        }
+        for (i, w) in self.withdrawals.iter().enumerate() {
+            consider(w.at, 1, i, Due::Withdraw(i));
         }
         for (i, s) in self.segments.iter().enumerate() {
             if let Some(f) = &s.busy {
@@ -377,6 +425,7 @@ impl Inner {
             self.now = self.now.max(t);
             match due {
                 Due::Recover(p) => self.recover(p, t),
+                Due::Withdraw(i) => self.withdraw(i),
                 Due::End(seg) => self.end(seg),
                 Due::Start(seg) => self.start(seg, t),
             }
@@ -392,6 +441,19 @@ impl Inner {
         self.log(t, port, EventKind::Recovered);
     }
 
+    fn withdraw(&mut self, i: usize) {
+        let w = self.withdrawals.remove(i);
+        if !w.withdraw {
+            return;
+        }
+        let n = &mut self.nodes[w.port];
+        let frame = n.mailboxes[w.mailbox].filter(|m| m.seq == w.seq).map(|m| m.frame);
+        if let Some(frame) = frame {
+            n.finish(w.mailbox, w.seq, TxOutcome::LostArbitration);
+            self.log(w.at, w.port, EventKind::LostArbitration { start_ns: w.start, frame });
+        }
+    }
+
     fn start(&mut self, seg: usize, t: u64) {
         // Bus-off nodes on this segment count the recessive run that this SOF ends.
         let run_bits = self.ns_bits(t - self.segments[seg].recessive_since);
@@ -401,13 +463,23 @@ impl Inner {
                 *c = c.saturating_add(runs);
             }
         }
-        let winner = (0..self.nodes.len())
+        let candidates: Vec<_> = (0..self.nodes.len())
             .filter(|&p| self.nodes[p].segment == seg)
             .filter_map(|p| self.nodes[p].candidate(t).map(|c| (c, p)))
-            .min_by_key(|&((id, _, _, _), p)| (id, p));
+            .collect();
+        let winner = candidates.iter().copied().min_by_key(|&((id, _, _, _), p)| (id, p));
         let Some(((raw_id, _, source, frame), sender)) = winner else {
             return;
         };
+        // Losers send until the bit where they lose; one-shot ones are withdrawn then, the
+        // others wait for the next idle.
+        for &((id, _, src, _), p) in &candidates {
+            if let (Source::Mailbox(mailbox, seq), true) = (src, p != sender) {
+                let at = t + self.bits_ns(arbitration_loss_bits(raw_id, id).into());
+                let withdraw = self.nodes[p].tx_mode == TxMode::OneShot;
+                self.withdrawals.push(Withdrawal { at, port: p, mailbox, seq, start: t, withdraw });
+            }
+        }
         let ackers = self
             .nodes
             .iter()
@@ -496,9 +568,7 @@ impl Inner {
                 let n = &mut self.nodes[f.sender];
                 n.tec = n.tec.saturating_sub(1);
                 if let Source::Mailbox(i, seq) = f.source {
-                    if n.mailboxes[i].is_some_and(|m| m.seq == seq) {
-                        n.mailboxes[i] = None;
-                    }
+                    n.finish(i, seq, TxOutcome::Sent);
                 }
                 self.log(
                     f.end,
@@ -519,11 +589,9 @@ impl Inner {
                     if !(cause == ErrorCause::NoAck && passive) {
                         n.tec += 8;
                     }
-                    if f.aborted {
+                    if f.aborted || n.tx_mode == TxMode::OneShot {
                         if let Source::Mailbox(i, seq) = f.source {
-                            if n.mailboxes[i].is_some_and(|m| m.seq == seq) {
-                                n.mailboxes[i] = None;
-                            }
+                            n.finish(i, seq, TxOutcome::Error);
                         }
                     }
                 }
@@ -572,6 +640,7 @@ impl Bus {
             faults: Vec::new(),
             rng: SplitMix64::new(config.seed),
             trace: Vec::new(),
+            withdrawals: Vec::new(),
         };
         Self { inner: Arc::new(Mutex::new(inner)) }
     }
@@ -770,7 +839,8 @@ impl Port {
 
 impl CanController for Port {
     /// Loads `frame` at the current virtual time. A powered-off port reports
-    /// [`TxError::BusOff`].
+    /// [`TxError::BusOff`]. Mailboxes take part in arbitration lowest identifier first, then
+    /// oldest.
     fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
         let mut g = lock(&self.inner);
         let (now, seq) = (g.now, g.seq);
@@ -784,6 +854,18 @@ impl CanController for Port {
         Ok(())
     }
 
+    /// One setting for the port's mailboxes, read when a frame loses arbitration or fails;
+    /// back to [`TxMode::Retransmit`] at power-on.
+    fn set_tx_mode(&mut self, mode: TxMode) {
+        lock(&self.inner).nodes[self.index].tx_mode = mode;
+    }
+
+    /// A one-shot loser's result is there from the end of the bit where it lost; a sent frame's
+    /// from its end of EOF; a failed one's from the end of its error delimiter.
+    fn take_tx_result(&mut self) -> Option<TxResult> {
+        lock(&self.inner).nodes[self.index].results.pop_front()
+    }
+
     fn try_receive(&mut self) -> Option<Received> {
         lock(&self.inner).nodes[self.index].fifo.pop_front()
     }
@@ -793,38 +875,37 @@ impl CanController for Port {
         lock(&self.inner).nodes[self.index].filters = filters.to_vec();
     }
 
-    /// Frees mailboxes not on the wire. A frame on the wire is left to finish: if it will
-    /// succeed it is not counted; if it will end in an error it is counted and not retried
-    /// (bxCAN's abort request behaves the same).
+    /// Frees the mailboxes not on the wire (results [`TxOutcome::Aborted`], oldest first). A
+    /// frame on the wire is left to finish and not counted; if it fails it is not retried (its
+    /// result: [`TxOutcome::Error`]), as bxCAN's abort request behaves. So is a frame still in
+    /// the arbitration it is losing: it is withdrawn at the bit where it loses
+    /// ([`TxOutcome::LostArbitration`]).
     fn abort_pending(&mut self) -> usize {
         let mut g = lock(&self.inner);
         let me = self.index;
-        let mut in_flight = None;
+        let mut on_wire = Vec::new();
         for s in g.segments.iter_mut() {
             if let Some(f) = &mut s.busy {
-                if f.sender == me && matches!(f.source, Source::Mailbox(..)) {
-                    if matches!(f.outcome, Outcome::Error(_)) {
-                        f.aborted = true;
-                    }
-                    in_flight = Some((f.source, matches!(f.outcome, Outcome::Error(_))));
+                if let (true, Source::Mailbox(i, seq)) = (f.sender == me, f.source) {
+                    f.aborted = true;
+                    on_wire.push((i, seq));
                 }
             }
+        }
+        for w in g.withdrawals.iter_mut().filter(|w| w.port == me) {
+            w.withdraw = true;
+            on_wire.push((w.mailbox, w.seq));
         }
         let n = &mut g.nodes[me];
-        let mut count = 0;
-        for (i, m) in n.mailboxes.iter_mut().enumerate() {
-            let Some(mb) = m else { continue };
-            match in_flight {
-                Some((Source::Mailbox(j, seq), fails)) if j == i && seq == mb.seq => {
-                    count += usize::from(fails);
-                }
-                _ => {
-                    *m = None;
-                    count += 1;
-                }
-            }
+        let mut waiting: Vec<(u64, usize)> = (0..MAILBOXES)
+            .filter_map(|i| n.mailboxes[i].map(|m| (m.seq, i)))
+            .filter(|&(seq, i)| !on_wire.contains(&(i, seq)))
+            .collect();
+        waiting.sort_unstable();
+        for &(seq, i) in &waiting {
+            n.finish(i, seq, TxOutcome::Aborted);
         }
-        count
+        waiting.len()
     }
 
     /// [`BusState::BusOff`] while bus-off or powered off.

@@ -2,7 +2,7 @@
 
 use proptest::prelude::*;
 use r2p_vbus::{Bus, Config, ErrorCause, EventKind, FaultAction, FaultRule, FrameBits};
-use rtcan::controller::{BusState, ErrorCounters, Filter, TxError};
+use rtcan::controller::{BusState, ErrorCounters, Filter, TxError, TxMode, TxOutcome, TxResult};
 use rtcan::{CanController, Frame, FrameId};
 
 const MS: u64 = 1_000_000;
@@ -210,20 +210,140 @@ fn abort_pending_counts_frames_not_on_the_wire() {
     let mut p1 = bus.port(1);
     p1.try_transmit(&frame(0x2, &[])).unwrap();
     p1.try_transmit(&frame(0x3, &[])).unwrap();
-    bus.step(); // port 0 wins
-    assert_eq!(p1.abort_pending(), 2);
+    bus.step(); // start of frame: port 0 will win
+                // 0x3 waits in a mailbox; 0x2 is sending its identifier until the bit where it loses.
+    assert_eq!(p1.abort_pending(), 1);
+    let result = |id, outcome| TxResult { id: FrameId::from_raw(id).unwrap(), outcome };
+    assert_eq!(results(&mut p1), [result(0x3, TxOutcome::Aborted)]);
+    let loses = u64::from(r2p_vbus::bits::arbitration_loss_bits(0x1, 0x2)) * 1_000;
+    assert_eq!(bus.step(), Some(loses));
+    assert_eq!(results(&mut p1), [result(0x2, TxOutcome::LostArbitration)], "not retried");
     let mut p0 = bus.port(0);
-    assert_eq!(p0.abort_pending(), 0, "on the wire and will succeed");
+    assert_eq!(p0.abort_pending(), 0, "on the wire");
+    assert_eq!(p0.take_tx_result(), None, "no result before its end");
     bus.run_until_idle(MS);
     assert_eq!(bus.frames().count(), 1);
-    // A frame on the wire that will fail is counted and not retried.
+    assert!(results(&mut p0)[0].sent());
+    // A frame on the wire that fails is not counted, not retried, and reported as an error.
     bus.inject(FaultRule::corrupt().times(1));
     p0.try_transmit(&frame(0x4, &[])).unwrap();
     bus.step();
-    assert_eq!(p0.abort_pending(), 1);
+    assert_eq!(p0.abort_pending(), 0);
     bus.run_until_idle(2 * MS);
     assert_eq!(bus.frames().count(), 1);
     assert_eq!(p0.pending(), 0);
+    assert_eq!(results(&mut p0)[0].outcome, TxOutcome::Error);
+}
+
+fn results(port: &mut r2p_vbus::Port) -> Vec<TxResult> {
+    std::iter::from_fn(|| port.take_tx_result()).collect()
+}
+
+#[test]
+fn one_shot_losers_are_withdrawn_at_the_bit_where_they_lose() {
+    // Against identifier 0 (all dominant), hand-counted from SOF, stuff bits included:
+    // 0x1000_0000 is recessive at base-ID bit 10, the 2nd bit; 0x0040_0000 at base-ID bit 4,
+    // the 8th unstuffed bit, after 7 zeros and so one stuff bit: 9 bits; 0x1 at the last
+    // extended-ID bit, the 32nd unstuffed bit, after 12 zeros, SRR and IDE, 17 zeros: 5 stuff
+    // bits, 37 bits.
+    let bus = bus(4);
+    let win = frame(0x0, &[1]);
+    let losers =
+        [(frame(0x1000_0000, &[2]), 2), (frame(0x0040_0000, &[3]), 9), (frame(0x1, &[]), 37)];
+    bus.port(0).try_transmit(&win).unwrap();
+    for (p, (f, _)) in losers.iter().enumerate() {
+        let mut port = bus.port(p + 1);
+        port.set_tx_mode(TxMode::OneShot);
+        port.try_transmit(f).unwrap();
+    }
+    assert_eq!(bus.step(), Some(0)); // start of frame: all four arbitrate
+    for (p, &(f, bits)) in losers.iter().enumerate() {
+        assert_eq!(r2p_vbus::bits::arbitration_loss_bits(0, f.id().to_raw()), bits);
+        let mut port = bus.port(p + 1);
+        assert_eq!(port.pending(), 1, "still loaded before the bit where it loses");
+        assert_eq!(bus.step(), Some(u64::from(bits) * 1_000));
+        assert_eq!(
+            results(&mut port),
+            [TxResult { id: f.id(), outcome: TxOutcome::LostArbitration }]
+        );
+        assert_eq!(port.pending(), 0);
+    }
+    bus.run_until_idle(MS);
+    // Only the winner went out; nobody retried.
+    assert_eq!(bus.frames().map(|f| f.2).collect::<Vec<_>>(), [win]);
+    assert!(results(&mut bus.port(0))[0].sent());
+    let lost: Vec<_> = bus
+        .trace()
+        .into_iter()
+        .filter_map(|e| match e.kind {
+            EventKind::LostArbitration { start_ns: 0, frame } => Some((e.time_ns, e.port, frame)),
+            _ => None,
+        })
+        .collect();
+    let expected: Vec<_> =
+        losers.iter().enumerate().map(|(p, &(f, b))| (u64::from(b) * 1_000, p + 1, f)).collect();
+    assert_eq!(lost, expected);
+}
+
+#[test]
+fn a_one_shot_frame_that_fails_is_withdrawn_and_reported() {
+    let bus = bus(2);
+    let mut a = bus.port(0);
+    a.set_tx_mode(TxMode::OneShot);
+    bus.inject(FaultRule::corrupt().times(1));
+    let f = frame(0x60, &[1, 2, 3, 4]);
+    a.try_transmit(&f).unwrap();
+    bus.run_until_idle(MS);
+    assert_eq!(bus.frames().count(), 0, "not retransmitted");
+    assert_eq!(a.pending(), 0);
+    assert_eq!(results(&mut a), [TxResult { id: f.id(), outcome: TxOutcome::Error }]);
+    assert_eq!(a.error_counters().tx, 8);
+    // Back to retransmission: the same fault is retried until it goes out.
+    a.set_tx_mode(TxMode::Retransmit);
+    bus.inject(FaultRule::corrupt().times(1));
+    a.try_transmit(&f).unwrap();
+    bus.run_until_idle(2 * MS);
+    assert_eq!(bus.frames().count(), 1);
+    assert_eq!(results(&mut a), [TxResult { id: f.id(), outcome: TxOutcome::Sent }]);
+}
+
+#[test]
+fn a_one_shot_frame_loaded_while_the_bus_is_busy_waits_then_tries_once() {
+    let bus = bus(3);
+    let (mut a, mut b, mut c) = (bus.port(0), bus.port(1), bus.port(2));
+    b.set_tx_mode(TxMode::OneShot);
+    a.try_transmit(&frame(0x300, &[0; 8])).unwrap();
+    bus.step(); // A alone on the wire
+    b.try_transmit(&frame(0x200, &[])).unwrap();
+    c.try_transmit(&frame(0x100, &[])).unwrap();
+    bus.run_until_idle(MS);
+    // At the next idle B and C arbitrate: C wins, B is withdrawn, never sent.
+    let ids: Vec<u32> = bus.frames().map(|f| f.2.id().to_raw()).collect();
+    assert_eq!(ids, [0x300, 0x100]);
+    assert_eq!(results(&mut b)[0].outcome, TxOutcome::LostArbitration);
+}
+
+#[test]
+fn results_are_kept_for_the_last_three_frames_and_cleared_at_power_on() {
+    let bus = bus(2);
+    let mut a = bus.port(0);
+    for k in 0..5u32 {
+        a.try_transmit(&frame(0x10 + k, &[])).unwrap();
+        bus.run_until_idle(u64::from(k + 1) * MS);
+    }
+    let ids: Vec<u32> = results(&mut a).iter().map(|r| r.id.to_raw()).collect();
+    assert_eq!(ids, [0x12, 0x13, 0x14]);
+    a.set_tx_mode(TxMode::OneShot);
+    a.try_transmit(&frame(0x20, &[])).unwrap();
+    bus.run_until_idle(6 * MS);
+    bus.power(0, false);
+    bus.power(0, true);
+    assert_eq!(a.take_tx_result(), None);
+    // Power-on is back to retransmission.
+    bus.inject(FaultRule::corrupt().times(1));
+    a.try_transmit(&frame(0x21, &[])).unwrap();
+    bus.run_until_idle(8 * MS);
+    assert!(results(&mut a)[0].sent());
 }
 
 #[test]
@@ -349,6 +469,7 @@ enum Op {
     Partition(Vec<usize>),
     Babble(usize, Option<u32>),
     Fault(u8, u32),
+    Mode(usize, bool),
 }
 
 fn op() -> impl Strategy<Value = Op> {
@@ -362,6 +483,7 @@ fn op() -> impl Strategy<Value = Op> {
         1 => prop::collection::vec(0..4usize, 0..3).prop_map(Op::Partition),
         1 => (0..4usize, prop::option::of(0..0x2000_0000u32)).prop_map(|(p, id)| Op::Babble(p, id)),
         1 => (0..3u8, 0..1_000_000u32).prop_map(|(k, ppm)| Op::Fault(k, ppm)),
+        1 => (0..4usize, any::<bool>()).prop_map(|(p, one)| Op::Mode(p, one)),
     ]
 }
 
@@ -376,6 +498,7 @@ proptest! {
         let bus = Bus::new(4, Config { seed, rx_depth: 4, ..Config::default() });
         let mut offered: Vec<(usize, Frame)> = Vec::new();
         let mut received: Vec<(usize, Frame, u64)> = Vec::new();
+        let mut reported: Vec<(usize, TxResult)> = Vec::new();
         for op in ops {
             match op {
                 Op::Send(p, id, d) => {
@@ -399,11 +522,13 @@ proptest! {
                     1 => FaultRule::drop_frames(),
                     _ => FaultRule::new(FaultAction::Drop(Some(ppm as usize % 4))),
                 }.probability_ppm(ppm).times(3)),
+                Op::Mode(p, one) => bus.port(p).set_tx_mode(if one { TxMode::OneShot } else { TxMode::Retransmit }),
             }
             for q in 0..4 {
                 while let Some(rx) = bus.port(q).try_receive() {
                     received.push((q, rx.frame, rx.at));
                 }
+                reported.extend(results(&mut bus.port(q)).into_iter().map(|r| (q, r)));
             }
         }
         bus.run_until_idle(bus.now() + 5 * MS);
@@ -419,5 +544,12 @@ proptest! {
         }
         let times: Vec<u64> = bus.trace().iter().map(|e| e.time_ns).collect();
         prop_assert!(times.windows(2).all(|w| w[0] <= w[1]), "trace out of order");
+        // Results name frames the port loaded; a frame reported sent went out.
+        for (q, r) in &reported {
+            prop_assert!(offered.iter().any(|(p, f)| p == q && f.id() == r.id), "{r:?} never loaded");
+            if r.sent() {
+                prop_assert!(sent.iter().any(|(_, p, f)| p == q && f.id() == r.id), "{r:?} not sent");
+            }
+        }
     }
 }
