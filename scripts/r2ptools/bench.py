@@ -77,8 +77,8 @@ LOAD_IMG = ROOT / "docs" / "img"
 LOAD_PLOTS = ("srt-miss", "latency", "hrt-jitter")
 # Policy in the JSON → label and line style in tables and plots; "fixed" is the baseline.
 POLICIES = {
-    "rtcan": ("RTCAN (firmware)", "o-"),
-    "rtcan_oneshot": ("RTCAN one-shot (what-if)", "v--"),
+    "rtcan": ("RTCAN (firmware: merged free-slot windows)", "o-"),
+    "rtcan_oneshot": ("RTCAN, one one-shot frame per free slot", "v--"),
     "rtcan_merged": ("RTCAN merged windows (what-if)", "^--"),
     "fixed": ("fixed-priority CAN (baseline)", "s-"),
 }

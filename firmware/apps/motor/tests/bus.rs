@@ -35,13 +35,15 @@ impl Bus {
     }
 
     fn port(&self, me: usize) -> Port {
-        Port { bus: self.clone(), me }
+        Port { bus: self.clone(), me, done: Default::default() }
     }
 }
 
 struct Port {
     bus: Bus,
     me: usize,
+    /// Every frame goes out at once: its result is `Sent`.
+    done: std::collections::VecDeque<rtcan::controller::TxResult>,
 }
 
 impl CanController for Port {
@@ -52,7 +54,15 @@ impl CanController for Port {
                 q.push_back(Received { frame: *frame, at });
             }
         }
+        self.done.push_back(rtcan::controller::TxResult {
+            id: frame.id(),
+            outcome: rtcan::controller::TxOutcome::Sent,
+        });
         Ok(())
+    }
+    fn set_tx_mode(&mut self, _: rtcan::controller::TxMode) {}
+    fn take_tx_result(&mut self) -> Option<rtcan::controller::TxResult> {
+        self.done.pop_front()
     }
     fn try_receive(&mut self) -> Option<Received> {
         self.bus.queues.borrow_mut()[self.me].pop_front()

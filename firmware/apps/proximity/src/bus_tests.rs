@@ -44,6 +44,12 @@ impl CanController for Fifo {
     fn abort_pending(&mut self) -> usize {
         self.0.abort_pending()
     }
+    fn set_tx_mode(&mut self, mode: rtcan::controller::TxMode) {
+        self.0.set_tx_mode(mode)
+    }
+    fn take_tx_result(&mut self) -> Option<rtcan::controller::TxResult> {
+        self.0.take_tx_result()
+    }
     fn bus_state(&self) -> BusState {
         self.0.bus_state()
     }

@@ -21,7 +21,9 @@ use r2p_management::message::{Message, Value, UID_LEN};
 use r2p_management::NodeId;
 use r2p_middleware::{Class, Delivery};
 use r2p_node::{Event, Export, Import, ImportError, NoParams, Node, NodeConfig, WireError};
-use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError};
+use rtcan::controller::{
+    BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxOutcome, TxResult,
+};
 use rtcan::{CanController, Frame, Micros};
 
 use crate::error::CliError;
@@ -154,9 +156,15 @@ struct Controller<'l> {
     budget: usize,
     sent: usize,
     error: Option<CliError>,
+    /// Results of the frames handed to the link this step (all sent at once).
+    done: VecDeque<TxResult>,
 }
 
 impl CanController for Controller<'_> {
+    fn set_tx_mode(&mut self, _mode: TxMode) {} // the link sends each frame once, in order
+    fn take_tx_result(&mut self) -> Option<TxResult> {
+        self.done.pop_front()
+    }
     fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
         if self.sent >= self.budget || self.error.is_some() {
             return Err(TxError::MailboxesFull);
@@ -165,6 +173,7 @@ impl CanController for Controller<'_> {
         match self.link.send(&f) {
             Ok(()) => {
                 self.sent += 1;
+                self.done.push_back(TxResult { id: frame.id(), outcome: TxOutcome::Sent });
                 Ok(())
             }
             Err(e) => {
@@ -351,7 +360,14 @@ impl HostNode {
     /// Returns how many it sent.
     pub(crate) fn poll(&mut self, link: &mut dyn Link, budget: usize) -> Result<usize, CliError> {
         let now = self.now();
-        let mut ctl = Controller { link, rx: &mut self.rx, budget, sent: 0, error: None };
+        let mut ctl = Controller {
+            link,
+            rx: &mut self.rx,
+            budget,
+            sent: 0,
+            error: None,
+            done: VecDeque::new(),
+        };
         self.node.poll(now, &mut ctl);
         let (sent, error) = (ctl.sent, ctl.error);
         while let Some(e) = self.node.next_event() {
@@ -412,6 +428,7 @@ mod tests {
                     budget: usize::MAX,
                     sent: 0,
                     error: None,
+                    done: VecDeque::new(),
                 };
                 node.poll(start.elapsed().as_micros() as u64, &mut ctl);
                 std::thread::sleep(Duration::from_millis(1));
