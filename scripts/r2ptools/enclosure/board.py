@@ -1,0 +1,214 @@
+"""Reads a `.kicad_pcb` with pcbnew into the facts a case is made from.
+
+Coordinates are millimetres in the board frame the form factor is specified in: origin at the
+top-left corner of the board outline's bounding box, x right, y down (as KiCad shows the board),
+whatever the board's position on the KiCad page. Footprints are sized by their courtyard on their
+own side (KiCad's libraries draw it around the body plus 0.25-0.5 mm, so it bounds the body).
+
+What a footprint is for the case:
+- mounting hole: library `MountingHole*`, or reference `H<n>`/`MH<n>` with one drilled pad;
+- connector: library `Connector*` or `TerminalBlock*`, or reference `J`, `P`, `CN`, `X`; it faces
+  the board edge its courtyard is nearest to when that is within `edge_near` (else it is inside the
+  case and gets no cut-out); a field `R2P_EDGE` = top|bottom|left|right|none overrides;
+- LED: library `LED_*`, or a `D`/`LED` reference whose value says LED: gets a light-pipe hole;
+- warm: a field `R2P_WARM` (any value but 0/no/false), power inductors (library `Inductor*`
+  beyond chip sizes), DPAK/D2PAK, SMA/SMB/SMC and PowerDI diodes: vented from above.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from .heights import HeightError, height_of
+
+EDGES = ("top", "bottom", "left", "right")
+_CONNECTOR_LIB = re.compile(r"^(Connector|TerminalBlock)")
+_CONNECTOR_REF = re.compile(r"^(J|P|CN|X)\d")
+_HOLE_REF = re.compile(r"^(H|MH)\d")
+_LED_REF = re.compile(r"^(D|LED)\d")
+_WARM = re.compile(
+    r"^Inductor_(SMD|THT)[^:]*:(?!L_(0201|0402|0603|0805|1008|1206|1210)_)"
+    r"|^Package_TO_SOT_SMD:(TO-252|TO-263|TO-268|DPAK|D2PAK)"
+    r"|^Diode_SMD:D_(SMA|SMB|SMC|PowerDI)")
+
+
+class BoardError(ValueError):
+    """The board cannot be made into a case; the message says where and what to do."""
+
+
+@dataclass(frozen=True)
+class Hole:
+    ref: str
+    x: float
+    y: float
+    d: float
+
+
+@dataclass(frozen=True)
+class Part:
+    ref: str
+    fpid: str
+    value: str
+    side: str                  # "top" or "bottom"
+    x0: float                  # courtyard bounding box, board frame
+    y0: float
+    x1: float
+    y1: float
+    h: float                   # body height away from the board surface on its side
+    h_src: str
+    kind: str                  # "connector", "led", "warm" or "part"
+    edge: str | None           # for connectors: the board edge it faces
+    leads: tuple[float, float, float, float] | None  # drilled pads' box (x0, y0, x1, y1)
+
+
+@dataclass(frozen=True)
+class Board:
+    module: str
+    source: str
+    width: float
+    height: float
+    thickness: float
+    corner_r: float
+    outline: tuple[tuple[float, float], ...]   # closed polygon, arcs flattened by KiCad
+    holes: tuple[Hole, ...]
+    parts: tuple[Part, ...]
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+    @staticmethod
+    def from_dict(d: dict) -> "Board":
+        return Board(
+            **{**d,
+               "outline": tuple(tuple(p) for p in d["outline"]),
+               "holes": tuple(Hole(**h) for h in d["holes"]),
+               "parts": tuple(Part(**{**p, "leads": tuple(p["leads"]) if p["leads"] else None})
+                              for p in d["parts"])})
+
+
+def _mm(v: int) -> float:
+    return round(v / 1e6, 4)
+
+
+def _field(fp, name: str) -> str | None:
+    return fp.GetFieldText(name) if fp.HasFieldByName(name) else None
+
+
+def _box(b) -> tuple[int, int, int, int]:
+    return b.GetX(), b.GetY(), b.GetRight(), b.GetBottom()
+
+
+def _facing(ref: str, box: tuple[float, ...], w: float, h: float, near: float, where: str) -> str | None:
+    x0, y0, x1, y1 = box
+    dist = {"top": y0, "bottom": h - y1, "left": x0, "right": w - x1}
+    ranked = sorted(dist.items(), key=lambda kv: kv[1])
+    (e1, d1), (_, d2) = ranked[0], ranked[1]
+    if d1 > near:
+        return None
+    if d2 - d1 < 0.5:
+        raise BoardError(f"{where}: connector {ref} is as close to the {ranked[0][0]} edge as to the "
+                         f"{ranked[1][0]} edge ({d1:.2f} vs {d2:.2f} mm): set its R2P_EDGE field to "
+                         "the edge it faces (top, bottom, left, right or none)")
+    return e1
+
+
+def read(path: Path, design) -> Board:
+    """Reads `path` (a .kicad_pcb); module name = file stem."""
+    import pcbnew
+
+    where = str(path)
+    if not path.exists():
+        raise BoardError(f"{where}: no such board file")
+    board = pcbnew.LoadBoard(str(path))
+    polys = pcbnew.SHAPE_POLY_SET()
+    if not board.GetBoardPolygonOutlines(polys) or polys.OutlineCount() != 1:
+        raise BoardError(f"{where}: Edge.Cuts must form exactly one closed outline "
+                         f"(found {polys.OutlineCount()}); fix it in KiCad (DRC reports gaps)")
+    edges = polys.BBox()           # the outline's centre line, not widened by its stroke
+    ox, oy = edges.GetX(), edges.GetY()
+
+    def pt(x: int, y: int) -> tuple[float, float]:
+        return _mm(x - ox), _mm(y - oy)
+
+    chain = polys.Outline(0)
+    outline = tuple(pt(chain.CPoint(i).x, chain.CPoint(i).y) for i in range(chain.PointCount()))
+    radii = [_mm(s.GetRadius()) for s in board.GetDrawings()
+             if s.GetLayer() == pcbnew.Edge_Cuts and isinstance(s, pcbnew.PCB_SHAPE)
+             and s.GetShape() == pcbnew.SHAPE_T_ARC]
+    width, height = _mm(edges.GetWidth()), _mm(edges.GetHeight())
+
+    holes: list[Hole] = []
+    parts: list[Part] = []
+    for fp in board.GetFootprints():
+        ref = fp.GetReference()
+        fpid = f"{fp.GetFPID().GetLibNickname()}:{fp.GetFPID().GetLibItemName()}"
+        lib = str(fp.GetFPID().GetLibNickname())
+        pads = list(fp.Pads())
+        drilled = [p for p in pads if p.GetDrillSize().x > 0]
+        if lib.startswith("MountingHole") or (_HOLE_REF.match(ref) and len(pads) == 1 and drilled):
+            if len(drilled) != 1:
+                raise BoardError(f"{where}: mounting hole {ref} ({fpid}) has {len(drilled)} drilled pads, expected 1")
+            c = drilled[0].GetPosition()
+            holes.append(Hole(ref, *pt(c.x, c.y), _mm(drilled[0].GetDrillSize().x)))
+            continue
+        try:
+            h, h_src = height_of(fpid, ref, _field(fp, "Height"), where)
+        except HeightError as e:
+            raise BoardError(str(e)) from None
+        if h <= 0:
+            continue
+        side = "bottom" if fp.IsFlipped() else "top"
+        cy = fp.GetCourtyard(pcbnew.B_CrtYd if side == "bottom" else pcbnew.F_CrtYd)
+        if cy.OutlineCount() > 0:
+            bx = _box(cy.BBox())
+        else:
+            bx = _box(fp.GetBoundingBox(False))
+        box = (*pt(bx[0], bx[1]), *pt(bx[2], bx[3]))
+        # Leads and plastic pegs (NPTH) both come through the board.
+        tht = [p for p in pads if p.GetDrillSize().x > 0]
+        leads = None
+        if tht:
+            bb = tht[0].GetBoundingBox()
+            for p in tht[1:]:
+                bb.Merge(p.GetBoundingBox())
+            lb = _box(bb)
+            leads = (*pt(lb[0], lb[1]), *pt(lb[2], lb[3]))
+        value = fp.GetValue()
+        warm_field = _field(fp, "R2P_WARM")
+        if lib.startswith("LED_") or (_LED_REF.match(ref) and "LED" in value.upper()):
+            kind = "led"
+        elif _CONNECTOR_LIB.match(lib) or _CONNECTOR_REF.match(ref):
+            kind = "connector"
+        elif (warm_field is not None and warm_field.strip().lower() not in ("", "0", "no", "false")) \
+                or _WARM.search(fpid):
+            kind = "warm"
+        else:
+            kind = "part"
+        edge = None
+        if kind == "connector":
+            forced = _field(fp, "R2P_EDGE")
+            if forced is not None and forced.strip():
+                f = forced.strip().lower()
+                if f not in (*EDGES, "none"):
+                    raise BoardError(f"{where}: {ref}: R2P_EDGE is {forced!r}; use top, bottom, left, right or none")
+                edge = None if f == "none" else f
+            else:
+                edge = _facing(ref, box, width, height, design.edge_near, where)
+        parts.append(Part(ref, fpid, value, side, *box, h, h_src, kind, edge, leads))
+
+    if not holes:
+        raise BoardError(f"{where}: no mounting holes (MountingHole footprints or H<n> references); "
+                         "the case holds the board by them")
+    holes.sort(key=lambda o: (o.y, o.x, o.ref))
+    parts.sort(key=lambda p: _refkey(p.ref))
+    return Board(module=path.stem, source=path.name, width=width, height=height,
+                 thickness=_mm(board.GetDesignSettings().GetBoardThickness()),
+                 corner_r=max(radii) if radii else 0.0, outline=outline,
+                 holes=tuple(holes), parts=tuple(parts))
+
+
+def _refkey(ref: str) -> tuple:
+    m = re.match(r"^([A-Za-z_]*)(\d*)(.*)$", ref)
+    assert m
+    return m.group(1), int(m.group(2) or 0), m.group(3)
