@@ -183,6 +183,14 @@ class Case:
     def standin(self) -> Standin:
         return standin(self.P)
 
+    def with_standin(self, doc: dict) -> "Case":
+        """This case, already built, around the stand-in of another parameter document (the
+        fit check's own tests change the board, not the case)."""
+        k = Case(self.P)
+        k.__dict__.update({n: v for n, v in self.__dict__.items() if n in ("pieces", "base", "lid")})
+        k.__dict__["standin"] = standin(Params(doc))
+        return k
+
     def assembly(self) -> cq.Assembly:
         a = cq.Assembly(name=f"r2p-{self.P.c['module']}")
         a.add(self.base, name="base")
