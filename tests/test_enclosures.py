@@ -65,9 +65,9 @@ def test_board_facts_come_from_the_kicad_file():
     assert [(h.x, h.y, h.d) for h in b.holes] == [(4, 4, 3.2), (56, 4, 3.2), (4, 46, 3.2), (56, 46, 3.2)]
     parts = {p.ref: p for p in b.parts}
     assert {r: parts[r].edge for r in ("J1", "J2", "J3", "J4", "J5", "J6")} == {
-        "J1": "top", "J2": "top", "J3": "top", "J4": "bottom", "J5": "bottom", "J6": None}
+        "J1": "top", "J2": "top", "J3": None, "J4": "bottom", "J5": "bottom", "J6": None}
     assert parts["J1"].y0 == -2.0          # the jack's mouth sticks 2 mm past the bus edge
-    assert {r for r, p in parts.items() if p.kind == "led"} == {"D1", "D2"}
+    assert {r for r, p in parts.items() if p.kind == "led"} == {"D1", "D2", "D3"}
     assert {r for r, p in parts.items() if p.kind == "warm"} == {"L1"}
     assert parts["C10"].side == "bottom" and parts["U1"].side == "top"
     assert parts["J1"].h == 14.0 and parts["J1"].leads is not None
@@ -138,8 +138,10 @@ def test_layout_follows_the_board(fixture_params):
     assert c["standoff"] == 15.0
     # Under the board: 2.5 mm leads above an M5 head (2.75 mm) with 0.5 mm each -> 6.25 -> 6.5.
     assert c["boss_h"] == 6.5
-    assert sorted(k["ref"] for k in c["cutouts"]) == ["J1", "J2", "J3", "J4", "J5"]   # not J6 (inside)
-    assert c["leds"] == [[8.0, 16.0], [8.0, 20.0]]                  # board y 34, 30 -> case Y 16, 20
+    # J3 (2.2 mm from the edge) and J6 are inside; J4 and J5 leave 6.6 mm of wall between them.
+    assert [k["ref"] for k in c["cutouts"]] == ["J5", "J4", "J1", "J2"]
+    # D1, D2 4 mm apart (board y 34, 30 -> case Y 16, 20) share a window; D3 gets a hole.
+    assert c["led_windows"] == [[6.4, 14.4, 9.6, 21.6]] and c["leds"] == [[54.0, 26.0]]
     assert c["vents"], "the inductor must be vented"
     for x0, y0, x1, y1 in c["vents"]:
         assert x1 - x0 >= d["vent_min_len"]
@@ -178,7 +180,7 @@ def test_broken_clearance_fails_the_fit(fixture_params, fixture_solids):
     # Through the lid: an overlap, not just a clearance.
     found = _broken(fixture_solids, "J2", lambda b: [*b[:5], b[5] + 2.0])
     assert any(f.startswith("J2 vs lid: overlaps by") for f in found), found
-    # A jack 0.3 mm off its notch (J1 reaches through the wall; its notch runs into J3's on the right).
+    # A jack 0.3 mm off its notch (J1 reaches through the wall).
     found = _broken(fixture_solids, "J1", lambda b: [b[0] - 0.3, b[1], b[2], b[3] - 0.3, b[4], b[5]])
     assert found == ["J1 vs base: clearance 0.300 mm < 0.5 mm"]
     # A notch the case forgot: the jack runs into the wall.

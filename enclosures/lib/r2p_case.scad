@@ -21,7 +21,7 @@
 //   M5 pattern (floor holes, lid stacking pads)   m5_d pad_d pad_h insert_m5_d
 //   cutouts: [[edge, a0, a1, z0]] connector extent along its wall and body bottom; cutout_gap
 //   dove_*: side-by-side dovetail (rail right, groove left) at dove_y
-//   leds: [[x,y]] led_hole_d   vents: [[x0,y0,x1,y1]] slots   lid_screw_d lid_csk_d
+//   leds: [[x,y]] led_hole_d   led_windows vents: [[x0,y0,x1,y1]]   lid_screw_d lid_csk_d
 //   name: [text, x, y, size] name_relief font   standin_*: the board stand-in (preview only)
 //   fn: facets per circle
 
@@ -125,7 +125,7 @@ module r2p_lid(P) {
         }
         for (l = r2p(P, "leds"))
             translate([l[0], l[1], z0 - 1]) cylinder(d = r2p(P, "led_hole_d"), h = t + 2, $fn = fn);
-        for (v = r2p(P, "vents"))
+        for (v = concat(r2p(P, "vents"), r2p(P, "led_windows")))
             translate([v[0], v[1], z0 - 1]) cube([v[2] - v[0], v[3] - v[1], t + 2]);
         for (m = r2p(P, "mounts"))
             translate([m[0], m[1], z0 - 1]) cylinder(d = r2p(P, "insert_m5_d"), h = t + r2p(P, "pad_h") + 2, $fn = fn);

@@ -10,6 +10,8 @@ What a footprint is for the case:
 - connector: library `Connector*` or `TerminalBlock*`, or reference `J`, `P`, `CN`, `X`; it faces
   the board edge its courtyard is nearest to when that is within `edge_near` (else it is inside the
   case and gets no cut-out); a field `R2P_EDGE` = top|bottom|left|right|none overrides;
+- control: library `Button_Switch*` or reference `SW`: a switch at an edge (a bus termination
+  slide switch) faces it like a connector, so the wall is open in front of it;
 - LED: library `LED_*`, or a `D`/`LED` reference whose value says LED: gets a light-pipe hole;
 - warm: a field `R2P_WARM` (any value but 0/no/false), power inductors (library `Inductor*`
   beyond chip sizes), DPAK/D2PAK, SMA/SMB/SMC and PowerDI diodes: vented from above.
@@ -26,6 +28,7 @@ EDGES = ("top", "bottom", "left", "right")
 _CONNECTOR_LIB = re.compile(r"^(Connector|TerminalBlock)")
 _CONNECTOR_REF = re.compile(r"^(J|P|CN|X)\d")
 _HOLE_REF = re.compile(r"^(H|MH)\d")
+_SWITCH_REF = re.compile(r"^SW\d")
 _LED_REF = re.compile(r"^(D|LED)\d")
 _WARM = re.compile(
     r"^Inductor_(SMD|THT)[^:]*:(?!L_(0201|0402|0603|0805|1008|1206|1210)_)"
@@ -57,8 +60,8 @@ class Part:
     y1: float
     h: float                   # body height away from the board surface on its side
     h_src: str
-    kind: str                  # "connector", "led", "warm" or "part"
-    edge: str | None           # for connectors: the board edge it faces
+    kind: str                  # "connector", "control", "led", "warm" or "part"
+    edge: str | None           # for connectors and controls: the board edge it faces
     leads: tuple[float, float, float, float] | None  # drilled pads' box (x0, y0, x1, y1)
 
 
@@ -107,7 +110,7 @@ def _facing(ref: str, box: tuple[float, ...], w: float, h: float, near: float, w
     if d1 > near:
         return None
     if d2 - d1 < 0.5:
-        raise BoardError(f"{where}: connector {ref} is as close to the {ranked[0][0]} edge as to the "
+        raise BoardError(f"{where}: {ref} is as close to the {ranked[0][0]} edge as to the "
                          f"{ranked[1][0]} edge ({d1:.2f} vs {d2:.2f} mm): set its R2P_EDGE field to "
                          "the edge it faces (top, bottom, left, right or none)")
     return e1
@@ -180,13 +183,15 @@ def read(path: Path, design) -> Board:
             kind = "led"
         elif _CONNECTOR_LIB.match(lib) or _CONNECTOR_REF.match(ref):
             kind = "connector"
+        elif lib.startswith("Button_Switch") or _SWITCH_REF.match(ref):
+            kind = "control"
         elif (warm_field is not None and warm_field.strip().lower() not in ("", "0", "no", "false")) \
                 or _WARM.search(fpid):
             kind = "warm"
         else:
             kind = "part"
         edge = None
-        if kind == "connector":
+        if kind in ("connector", "control"):
             forced = _field(fp, "R2P_EDGE")
             if forced is not None and forced.strip():
                 f = forced.strip().lower()

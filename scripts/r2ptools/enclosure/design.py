@@ -28,7 +28,9 @@ class Design:
     boss_h_min: float = 5.0      # floor to board underside; >= M5 button head + gap
     insert_m3_d: float = 4.0     # hole for an M3 x 5.7 heat-set insert (e.g. Ruthex RX-M3x5.7)
     insert_m3_depth: float = 6.0
-    standoff_af: float = 5.5     # M3 male-female hex standoff across flats
+    # M3 male-female hex standoff, 5 mm across flats (SW5): in any rotation its corners stay
+    # inside KiCad's M3 hole courtyard (r 3.5) less min_clearance; the 5.5 mm kind does not.
+    standoff_af: float = 5.0
     standoff_male: float = 6.0   # its thread: 1.6 mm board + 4.4 mm into the insert
     standoff_lengths: tuple[float, ...] = (8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0)
     lid_screw_d: float = 3.4     # M3 clearance
@@ -54,6 +56,7 @@ class Design:
 
     # --- lid features ------------------------------------------------------------------------
     led_hole_d: float = 3.2      # a 3 mm acrylic light pipe, or left open
+    min_bar: float = 1.2         # least lid between two holes; closer LEDs share a window
     vent_w: float = 1.6          # slot width (keeps out a 2.5 mm probe)
     vent_pitch: float = 3.6      # slot + 2.0 mm bar
     vent_margin: float = 3.0     # vent field beyond a warm part's courtyard
@@ -65,12 +68,13 @@ class Design:
     font_file: str = "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf"  # fonts-dejavu-core
 
     # --- board reading -----------------------------------------------------------------------
-    edge_near: float = 3.0       # a connector within this of an edge faces that edge
+    edge_near: float = 2.0       # a connector or switch courtyard this close to an edge faces it
+    min_pillar: float = 3.0      # notches closer than this on one wall merge (no slivers of wall)
     fn: int = 96                 # OpenSCAD facets per circle ($fn)
 
     standard_parts: dict[str, str] = field(default_factory=lambda: {
         "board insert": "M3 x 5.7 heat-set insert (Ruthex RX-M3x5.7 or equal), 4 per case",
-        "standoff": "M3 male-female hex standoff, 5.5 mm AF, 6 mm thread, 4 per case",
+        "standoff": "M3 male-female hex standoff, 5 mm AF (SW5), 6 mm thread, 4 per case",
         "lid screw": "M3 x 6 countersunk ISO 10642, 4 per case",
         "stack insert": "M5 x 5.8 heat-set insert (Ruthex RX-M5x5.8 or equal), 4 per lid",
         "mount screw": "M5 x 8 button head ISO 7380 + M5 slot-6 T-nut (20x20 B-type profile)",

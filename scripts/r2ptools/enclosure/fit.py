@@ -1,7 +1,8 @@
 """Proves a module's board fits its case, exactly, on the cadquery solids.
 
 Bodies on the case side: the base walls and floor (with every cut-out), the bosses, the lid, the
-four standoffs and the M5 screw heads of the floor mounts. On the board side: the board
+four standoffs (as the cylinder a hex sweeps: a user may turn it any way) and the M5 screw heads
+of the floor mounts. On the board side: the board
 (outline x thickness, holes drilled), every part as a box of its courtyard x height, and boxes
 under THT parts where leads and pegs come through.
 
@@ -74,7 +75,7 @@ def check(K: solid.Case) -> Report:
     rep = Report(P.c["module"], need)
     shell, bosses, holes = K.pieces
     case: dict[str, cq.Shape] = {"base": _shape(K.base), "lid": _shape(K.lid)}
-    for k, w in enumerate(solid.standoffs(P), 1):
+    for k, w in enumerate(solid.standoffs(P, swept=True), 1):
         case[f"standoff{k}"] = _shape(w)
     for k, w in enumerate(solid.m5_heads(P), 1):
         case[f"m5 head{k}"] = _shape(w)

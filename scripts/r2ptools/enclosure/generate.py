@@ -109,7 +109,8 @@ def readme(doc: dict, r: Result, source: str) -> str:
         f"{d['board_gap']} mm from the walls |",
         f"| lid | {c['standoff']:.0f} mm standoffs above the board |",
         f"| cut-outs | " + (", ".join(f"{k['ref']} ({k['edge']} edge)" for k in c["cutouts"]) or "none") + " |",
-        f"| light pipes | {len(c['leds'])} × Ø{d['led_hole_d']} mm |",
+        f"| light pipes | {len(c['leds'])} × Ø{d['led_hole_d']} mm holes, {len(c['led_windows'])} windows "
+        "over rows of LEDs |",
         f"| vents | {len(c['vents'])} slots {d['vent_w']} mm wide |" if c["vents"] else "| vents | none (no warm parts) |",
     ]
     if r.fit:

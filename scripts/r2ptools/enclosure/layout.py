@@ -9,9 +9,11 @@ cadquery model build from these numbers; they decide nothing the board does not 
   the floor mounts where they are underneath);
 - the lid's underside is a standard standoff length above the board: the shortest that clears
   the tallest part by `min_clearance`;
-- every connector that faces an edge gets a notch in that wall, from below its body to the rim
-  (open at the top, so it prints without support and cables leave whatever their entry);
-- LEDs get light-pipe holes, warm parts a field of vent slots, and the name goes where it fits.
+- every connector (or switch) that faces an edge gets a notch in that wall, from below its body
+  to the rim (open at the top, so it prints without support and cables leave whatever their
+  entry); notches closer than `min_pillar` merge;
+- LEDs get light-pipe holes (a row of close LEDs one window), warm parts a field of vent slots,
+  and the name goes where it fits.
 """
 from __future__ import annotations
 
@@ -65,8 +67,8 @@ def _merge(rects: list[list[float]]) -> list[list[float]]:
     return sorted(rects)
 
 
-def _slots(field: list[float], keep: list[Circle], d: Design) -> list[list[float]]:
-    """Slots along X across `field`, each cut where it passes a keep-out circle."""
+def _slots(field: list[float], keep: list[Circle], keep_r: list[list[float]], d: Design) -> list[list[float]]:
+    """Slots along X across `field`, each cut where it passes a keep-out circle or rectangle."""
     x0, y0, x1, y1 = field
     n = int((y1 - y0 - d.vent_w) // d.vent_pitch) + 1
     if n < 1:
@@ -86,6 +88,10 @@ def _slots(field: list[float], keep: list[Circle], d: Design) -> list[list[float
             a, b = c.x - half, c.x + half
             segs = [s for seg in segs for s in ((seg[0], min(seg[1], a)), (max(seg[0], b), seg[1]))
                     if s[1] > s[0]]
+        for r in keep_r:
+            if r[1] < hi and r[3] > lo:
+                segs = [s for seg in segs for s in ((seg[0], min(seg[1], r[0])), (max(seg[0], r[2]), seg[1]))
+                        if s[1] > s[0]]
         out += [[_r(s0), _r(lo), _r(s1), _r(hi)] for s0, s1 in segs if s1 - s0 >= d.vent_min_len]
     return out
 
@@ -157,15 +163,21 @@ def layout(b: Board, d: Design) -> dict:
             lz = [z_bot - d.lead_protrusion, z_bot] if p.side == "top" else [z_top, z_top + d.lead_protrusion]
             leads.append({"ref": p.ref, "box": [lb[0], lb[1], _r(lz[0]), lb[2], lb[3], _r(lz[1])]})
 
-    # Notches: a connector's extent along its wall, from below its body up through the rim.
-    cutouts = []
-    for p in b.parts:
-        if p.kind != "connector" or p.edge is None:
-            continue
+    # Notches: a connector's (or switch's) extent along its wall, from below its body up through
+    # the rim; notches that would leave less than min_pillar of wall between them become one.
+    def along(p) -> tuple[float, float]:
         xy = box(p.x0, p.y0, p.x1, p.y1)
-        a0, a1 = (xy[0], xy[2]) if p.edge in ("top", "bottom") else (xy[1], xy[3])
-        zlow = z_top if p.side == "top" else z_bot - p.h
-        cutouts.append({"ref": p.ref, "edge": p.edge, "a0": a0, "a1": a1, "z0": _r(zlow)})
+        return (xy[0], xy[2]) if p.edge in ("top", "bottom") else (xy[1], xy[3])
+
+    cutouts: list[dict] = []
+    for p in sorted((p for p in b.parts if p.edge is not None), key=lambda p: (p.edge, along(p), p.ref)):
+        a0, a1 = along(p)
+        zlow = _r(z_top if p.side == "top" else z_bot - p.h)
+        last = cutouts[-1] if cutouts else None
+        if last and last["edge"] == p.edge and a0 - last["a1"] - 2 * d.cutout_gap < d.min_pillar:
+            last.update(ref=f"{last['ref']}+{p.ref}", a1=max(last["a1"], a1), z0=min(last["z0"], zlow))
+        else:
+            cutouts.append({"ref": p.ref, "edge": p.edge, "a0": a0, "a1": a1, "z0": zlow})
     dove_lo, dove_hi = cy - d.dove_pad_w / 2 - d.cutout_gap, cy + d.dove_pad_w / 2 + d.cutout_gap
     for c in cutouts:
         if c["edge"] in ("left", "right") and c["a0"] - d.cutout_gap < dove_hi and c["a1"] + d.cutout_gap > dove_lo:
@@ -187,7 +199,21 @@ def layout(b: Board, d: Design) -> dict:
                                  f"is under a lid screw or stacking pad at ({c.x:.1f}, {H - c.y:.1f}); "
                                  "move the LED (the lid needs its light-pipe hole there)")
         leds.append([lx, ly])
-    led_keep = [Circle(x, y, d.led_hole_d / 2 + ko) for x, y in leds]
+    # LEDs closer than a hole and a bar apart share one window (a row of status LEDs).
+    groups: list[list[list[float]]] = []
+    for led in leds:
+        near = [grp for grp in groups
+                if any(math.hypot(led[0] - o[0], led[1] - o[1]) < d.led_hole_d + d.min_bar for o in grp)]
+        for grp in near:
+            groups.remove(grp)
+        groups.append(sum(near, []) + [led])
+    rl = d.led_hole_d / 2
+    holes_led = sorted(grp[0] for grp in groups if len(grp) == 1)
+    windows = sorted([_r(min(p[0] for p in grp) - rl), _r(min(p[1] for p in grp) - rl),
+                      _r(max(p[0] for p in grp) + rl), _r(max(p[1] for p in grp) + rl)]
+                     for grp in groups if len(grp) > 1)
+    led_keep = [Circle(x, y, rl + ko) for x, y in holes_led]
+    window_keep = [[w[0] - ko, w[1] - ko, w[2] + ko, w[3] + ko] for w in windows]
     inner = [-g, -g, W + g, H + g]
     usable = [inner[0] + ko, inner[1] + ko, inner[2] - ko, inner[3] - ko]
     fields = []
@@ -198,10 +224,10 @@ def layout(b: Board, d: Design) -> dict:
             f = [max(xy[0] - m, usable[0]), max(xy[1] - m, usable[1]), min(xy[2] + m, usable[2]),
                  min(xy[3] + m, usable[3])]
             fields.append(f)
-    vents = [s for f in _merge(fields) for s in _slots(f, csk + pads + led_keep, d)]
+    vents = [s for f in _merge(fields) for s in _slots(f, csk + pads + led_keep, window_keep, d)]
 
     name = module_label(b.module)
-    blocked_r = [[v[0] - ko, v[1] - ko, v[2] + ko, v[3] + ko] for v in vents]
+    blocked_r = [[v[0] - ko, v[1] - ko, v[2] + ko, v[3] + ko] for v in vents] + window_keep
     lid = [inner[0] - d.wall + ko, inner[1] - d.wall + ko, inner[2] + d.wall - ko, inner[3] + d.wall - ko]
     placed = None
     for size in d.name_sizes:
@@ -240,7 +266,8 @@ def layout(b: Board, d: Design) -> dict:
         "mounts": [[_r(x), _r(y)] for x, y in mounts],
         "dove_y": _r(cy),
         "cutouts": cutouts,
-        "leds": leds,
+        "leds": holes_led,
+        "led_windows": windows,
         "vents": vents,
         "name": placed,
         "standin": {

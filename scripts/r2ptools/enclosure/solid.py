@@ -126,7 +126,7 @@ def lid(P: Params) -> cq.Workplane:
                                                              cq.Vector(h[0], h[1], z1 - csk))))
         cuts.append(_cyl(h[0], h[1], z1 - E, P.lid_csk_d, 1))
     cuts += [_cyl(l[0], l[1], z0 - 1, P.led_hole_d, t + 2) for l in P.leds]
-    cuts += [_cube(v[0], v[1], z0 - 1, v[2], v[3], z1 + 1) for v in P.vents]
+    cuts += [_cube(v[0], v[1], z0 - 1, v[2], v[3], z1 + 1) for v in P.vents + P.led_windows]
     cuts += [_cyl(m[0], m[1], z0 - 1, P.insert_m5_d, t + P.pad_h + 2) for m in P.mounts]
     return body.cut(_union(cuts))
 
@@ -150,11 +150,15 @@ def standin(P: Params) -> Standin:
     return Standin(board, parts, leads)
 
 
-def standoffs(P: Params) -> list[cq.Workplane]:
+def standoffs(P: Params, swept: bool = False) -> list[cq.Workplane]:
+    """The hex standoffs between board and lid; `swept`: the cylinder a hex fills turned any way."""
     z = P.c["z"]
     rc = P.standoff_af / math.sqrt(3)          # circumradius of the hexagon
-    return [cq.Workplane("XY").polygon(6, 2 * rc).extrude(z["rim"] - z["board_top"])
-            .translate((h[0], h[1], z["board_top"])) for h in P.holes]
+    h = z["rim"] - z["board_top"]
+    if swept:
+        return [_cyl(x, y, z["board_top"], 2 * rc, h) for x, y, _ in P.holes]
+    return [cq.Workplane("XY").polygon(6, 2 * rc).extrude(h).translate((x, y, z["board_top"]))
+            for x, y, _ in P.holes]
 
 
 def m5_heads(P: Params) -> list[cq.Workplane]:
