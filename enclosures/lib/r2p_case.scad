@@ -21,7 +21,8 @@
 //   M5 pattern (floor holes, lid stacking pads)   m5_d pad_d pad_h insert_m5_d
 //   cutouts: [[edge, a0, a1, z0]] connector extent along its wall and body bottom; cutout_gap
 //   dove_*: side-by-side dovetail (rail right, groove left) at dove_y
-//   leds: [[x,y]] led_hole_d   led_windows vents: [[x0,y0,x1,y1]]   lid_screw_d lid_csk_d
+//   leds: [[x,y]] led_hole_d   pins: [[x,y]] pin_hole_d (push buttons)
+//   led_windows vents: [[x0,y0,x1,y1]]   lid_screw_d lid_csk_d
 //   name: [text, x, y, size] name_relief font   standin_*: the board stand-in (preview only)
 //   fn: facets per circle
 
@@ -125,6 +126,8 @@ module r2p_lid(P) {
         }
         for (l = r2p(P, "leds"))
             translate([l[0], l[1], z0 - 1]) cylinder(d = r2p(P, "led_hole_d"), h = t + 2, $fn = fn);
+        for (b = r2p(P, "pins"))
+            translate([b[0], b[1], z0 - 1]) cylinder(d = r2p(P, "pin_hole_d"), h = t + 2, $fn = fn);
         for (v = concat(r2p(P, "vents"), r2p(P, "led_windows")))
             translate([v[0], v[1], z0 - 1]) cube([v[2] - v[0], v[3] - v[1], t + 2]);
         for (m = r2p(P, "mounts"))
@@ -142,7 +145,8 @@ module r2p_standin(P) {
         for (h = r2p(P, "holes")) translate([h[0], h[1], 0]) cylinder(d = h[2], h = 100, $fn = fn);
     }
     for (b = r2p(P, "standin_parts"))
-        color(b[6] == "connector" ? "silver" : b[6] == "led" ? "red" : b[6] == "warm" ? "orange" : "dimgray")
+        color(b[6] == "connector" || b[6] == "control" ? "silver" : b[6] == "led" ? "red"
+              : b[6] == "warm" ? "orange" : b[6] == "button" ? "black" : "dimgray")
             translate([b[0], b[1], b[2]]) cube([b[3] - b[0], b[4] - b[1], b[5] - b[2]]);
 }
 

@@ -2,24 +2,28 @@
 
 Coordinates are millimetres in the board frame the form factor is specified in: origin at the
 top-left corner of the board outline's bounding box, x right, y down (as KiCad shows the board),
-whatever the board's position on the KiCad page. Footprints are sized by their courtyard on their
-own side (KiCad's libraries draw it around the body plus 0.25-0.5 mm, so it bounds the body).
+whatever the board's position on the KiCad page. A part's extent is the bounding box of its body
+as KiCad's libraries draw it on the fabrication layer (F.Fab/B.Fab) and of its pads (a QFP's
+leads, a connector's tabs); the courtyard (body + placement margin) only when there is no
+fabrication drawing.
 
 What a footprint is for the case:
 - mounting hole: library `MountingHole*`, or reference `H<n>`/`MH<n>` with one drilled pad;
 - connector: library `Connector*` or `TerminalBlock*`, or reference `J`, `P`, `CN`, `X`; it faces
   the board edge its courtyard is nearest to when that is within `edge_near` (else it is inside the
   case and gets no cut-out); a field `R2P_EDGE` = top|bottom|left|right|none overrides;
-- control: library `Button_Switch*` or reference `SW`: a switch at an edge (a bus termination
-  slide switch) faces it like a connector, so the wall is open in front of it;
+- control: a slide, toggle or DIP switch (library `Button_Switch*` or reference `SW`): at an edge
+  (a bus termination switch) it faces it like a connector, so the wall is open in front of it;
+- button: any other switch, pressed from above (reset, boot): a pin hole in the lid over it;
 - LED: library `LED_*`, or a `D`/`LED` reference whose value says LED: gets a light-pipe hole;
 - warm: a field `R2P_WARM` (any value but 0/no/false), power inductors (library `Inductor*`
-  beyond chip sizes), DPAK/D2PAK, SMA/SMB/SMC and PowerDI diodes: vented from above.
+  beyond chip sizes), DPAK/D2PAK, SMA/SMB/SMC and PowerDI diodes, and every part on a power
+  inductor's switch node (a net of at most SWITCH_NODE_MAX footprints: the converter IC): vented.
 """
 from __future__ import annotations
 
 import re
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from .heights import HeightError, height_of
@@ -29,6 +33,8 @@ _CONNECTOR_LIB = re.compile(r"^(Connector|TerminalBlock)")
 _CONNECTOR_REF = re.compile(r"^(J|P|CN|X)\d")
 _HOLE_REF = re.compile(r"^(H|MH)\d")
 _SWITCH_REF = re.compile(r"^SW\d")
+_SIDEWAYS = re.compile(r":SW_(SPDT|DPDT|SP3T|Slide|DIP|Toggle)|:SW_.*_Slide", re.I)
+SWITCH_NODE_MAX = 4      # footprints on a net for it to count as a converter's switch node
 _LED_REF = re.compile(r"^(D|LED)\d")
 _WARM = re.compile(
     r"^Inductor_(SMD|THT)[^:]*:(?!L_(0201|0402|0603|0805|1008|1206|1210)_)"
@@ -54,13 +60,13 @@ class Part:
     fpid: str
     value: str
     side: str                  # "top" or "bottom"
-    x0: float                  # courtyard bounding box, board frame
+    x0: float                  # body and pads bounding box, board frame
     y0: float
     x1: float
     y1: float
     h: float                   # body height away from the board surface on its side
     h_src: str
-    kind: str                  # "connector", "control", "led", "warm" or "part"
+    kind: str                  # "connector", "control", "button", "led", "warm" or "part"
     edge: str | None           # for connectors and controls: the board edge it faces
     leads: tuple[float, float, float, float] | None  # drilled pads' box (x0, y0, x1, y1)
 
@@ -100,6 +106,38 @@ def _field(fp, name: str) -> str | None:
 
 def _box(b) -> tuple[int, int, int, int]:
     return b.GetX(), b.GetY(), b.GetRight(), b.GetBottom()
+
+
+def _body(fp, side: str, pcbnew) -> tuple[int, int, int, int] | None:
+    """The part's footprint on the board: its body as drawn on the fabrication layer plus its
+    pads (leads reach past a QFP's body); the courtyard (body + placement margin) if neither."""
+    fab = pcbnew.B_Fab if side == "bottom" else pcbnew.F_Fab
+    bb = None
+    items = [g for g in fp.GraphicalItems() if isinstance(g, pcbnew.PCB_SHAPE) and g.GetLayer() == fab]
+    for it in [*items, *fp.Pads()]:
+        b = it.GetBoundingBox()
+        if bb is None:
+            bb = b
+        else:
+            bb.Merge(b)
+    if bb is None or not items:
+        cy = fp.GetCourtyard(pcbnew.B_CrtYd if side == "bottom" else pcbnew.F_CrtYd)
+        if cy.OutlineCount() > 0:
+            return _box(cy.BBox())
+    return _box(bb) if bb is not None else None
+
+
+def _kind(ref: str, lib: str, fpid: str, value: str, warm_field: str | None) -> str:
+    if lib.startswith("LED_") or (_LED_REF.match(ref) and "LED" in value.upper()):
+        return "led"
+    if _CONNECTOR_LIB.match(lib) or _CONNECTOR_REF.match(ref):
+        return "connector"
+    if lib.startswith("Button_Switch") or _SWITCH_REF.match(ref):
+        return "control" if _SIDEWAYS.search(fpid) else "button"
+    if (warm_field is not None and warm_field.strip().lower() not in ("", "0", "no", "false")) \
+            or _WARM.search(fpid):
+        return "warm"
+    return "part"
 
 
 def _facing(ref: str, box: tuple[float, ...], w: float, h: float, near: float, where: str) -> str | None:
@@ -143,6 +181,8 @@ def read(path: Path, design) -> Board:
 
     holes: list[Hole] = []
     parts: list[Part] = []
+    nets: dict[str, set[str]] = {}       # net -> references of the footprints on it
+    inductors: list[str] = []
     for fp in board.GetFootprints():
         ref = fp.GetReference()
         fpid = f"{fp.GetFPID().GetLibNickname()}:{fp.GetFPID().GetLibItemName()}"
@@ -162,11 +202,10 @@ def read(path: Path, design) -> Board:
         if h <= 0:
             continue
         side = "bottom" if fp.IsFlipped() else "top"
-        cy = fp.GetCourtyard(pcbnew.B_CrtYd if side == "bottom" else pcbnew.F_CrtYd)
-        if cy.OutlineCount() > 0:
-            bx = _box(cy.BBox())
-        else:
-            bx = _box(fp.GetBoundingBox(False))
+        bx = _body(fp, side, pcbnew)
+        if bx is None:
+            raise BoardError(f"{where}: {ref} ({fpid}) has no fabrication outline, pads or courtyard to size "
+                             "it by; draw its body on F.Fab")
         box = (*pt(bx[0], bx[1]), *pt(bx[2], bx[3]))
         # Leads and plastic pegs (NPTH) both come through the board.
         tht = [p for p in pads if p.GetDrillSize().x > 0]
@@ -178,18 +217,12 @@ def read(path: Path, design) -> Board:
             lb = _box(bb)
             leads = (*pt(lb[0], lb[1]), *pt(lb[2], lb[3]))
         value = fp.GetValue()
-        warm_field = _field(fp, "R2P_WARM")
-        if lib.startswith("LED_") or (_LED_REF.match(ref) and "LED" in value.upper()):
-            kind = "led"
-        elif _CONNECTOR_LIB.match(lib) or _CONNECTOR_REF.match(ref):
-            kind = "connector"
-        elif lib.startswith("Button_Switch") or _SWITCH_REF.match(ref):
-            kind = "control"
-        elif (warm_field is not None and warm_field.strip().lower() not in ("", "0", "no", "false")) \
-                or _WARM.search(fpid):
-            kind = "warm"
-        else:
-            kind = "part"
+        kind = _kind(ref, lib, fpid, value, _field(fp, "R2P_WARM"))
+        for p in pads:
+            if p.GetNetname():
+                nets.setdefault(p.GetNetname(), set()).add(ref)
+        if kind == "warm" and lib.startswith("Inductor"):
+            inductors.append(ref)
         edge = None
         if kind in ("connector", "control"):
             forced = _field(fp, "R2P_EDGE")
@@ -202,6 +235,11 @@ def read(path: Path, design) -> Board:
                 edge = _facing(ref, box, width, height, design.edge_near, where)
         parts.append(Part(ref, fpid, value, side, *box, h, h_src, kind, edge, leads))
 
+    # A power inductor's small nets are its converter's switch node and bootstrap: the IC and
+    # diodes on them are the warm region too (the output rail is a big net and does not count).
+    hot = {r for n, refs in nets.items() if any(i in refs for i in inductors) and len(refs) <= SWITCH_NODE_MAX
+           for r in refs}
+    parts = [replace(p, kind="warm") if p.ref in hot and p.kind == "part" else p for p in parts]
     if not holes:
         raise BoardError(f"{where}: no mounting holes (MountingHole footprints or H<n> references); "
                          "the case holds the board by them")

@@ -56,12 +56,13 @@ class Design:
 
     # --- lid features ------------------------------------------------------------------------
     led_hole_d: float = 3.2      # a 3 mm acrylic light pipe, or left open
-    min_bar: float = 1.2         # least lid between two holes; closer LEDs share a window
+    min_bar: float = 1.0         # least lid between two holes; closer LEDs share a window
+    pin_hole_d: float = 2.0      # over a push button: press it with a pin or a paperclip
     vent_w: float = 1.6          # slot width (keeps out a 2.5 mm probe)
     vent_pitch: float = 3.6      # slot + 2.0 mm bar
     vent_margin: float = 3.0     # vent field beyond a warm part's courtyard
     vent_min_len: float = 4.0
-    keepout: float = 1.5         # lid features keep this far from each other and the rim
+    keepout: float = 1.5         # vents and the name keep this far from other lid features
     name_sizes: tuple[float, ...] = (6.0, 5.0, 4.0)  # OpenSCAD text size, largest that fits
     name_relief: float = 0.8     # raised by this much on the lid
     font: str = "DejaVu Sans:style=Bold"

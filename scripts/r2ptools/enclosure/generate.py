@@ -111,6 +111,7 @@ def readme(doc: dict, r: Result, source: str) -> str:
         f"| cut-outs | " + (", ".join(f"{k['ref']} ({k['edge']} edge)" for k in c["cutouts"]) or "none") + " |",
         f"| light pipes | {len(c['leds'])} × Ø{d['led_hole_d']} mm holes, {len(c['led_windows'])} windows "
         "over rows of LEDs |",
+        f"| pin holes | {len(c['pins'])} × Ø{d['pin_hole_d']} mm over push buttons |",
         f"| vents | {len(c['vents'])} slots {d['vent_w']} mm wide |" if c["vents"] else "| vents | none (no warm parts) |",
     ]
     if r.fit:

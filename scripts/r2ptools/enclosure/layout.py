@@ -12,8 +12,8 @@ cadquery model build from these numbers; they decide nothing the board does not 
 - every connector (or switch) that faces an edge gets a notch in that wall, from below its body
   to the rim (open at the top, so it prints without support and cables leave whatever their
   entry); notches closer than `min_pillar` merge;
-- LEDs get light-pipe holes (a row of close LEDs one window), warm parts a field of vent slots,
-  and the name goes where it fits.
+- LEDs get light-pipe holes (a row of close LEDs one window), push buttons a pin hole, warm
+  parts a field of vent slots, and the name goes where it fits.
 """
 from __future__ import annotations
 
@@ -181,24 +181,25 @@ def layout(b: Board, d: Design) -> dict:
     dove_lo, dove_hi = cy - d.dove_pad_w / 2 - d.cutout_gap, cy + d.dove_pad_w / 2 + d.cutout_gap
     for c in cutouts:
         if c["edge"] in ("left", "right") and c["a0"] - d.cutout_gap < dove_hi and c["a1"] + d.cutout_gap > dove_lo:
-            raise BoardError(f"{where}: connector {c['ref']} faces the {c['edge']} edge where the side-by-side "
+            raise BoardError(f"{where}: {c['ref']} faces the {c['edge']} edge where the side-by-side "
                              f"dovetail is (y {H - dove_hi:.1f}..{H - dove_lo:.1f} mm on the board): move it")
 
     # Lid: countersinks, LED holes, stacking pads; then vents and the name around them.
     ko = d.keepout
     csk = [Circle(hx, hy, d.lid_csk_d / 2 + ko) for hx, hy, _ in holes]
     pads = [Circle(mx, my, d.pad_d / 2 + ko) for mx, my in mounts]
-    leds = []
+    leds, pins = [], []
     for p in b.parts:
-        if p.kind != "led":
+        if p.kind not in ("led", "button"):
             continue
         lx, ly = _r((p.x0 + p.x1) / 2), Y((p.y0 + p.y1) / 2)
-        for c in csk + pads:
-            if math.hypot(lx - c.x, ly - c.y) < c.r + d.led_hole_d / 2:
-                raise BoardError(f"{where}: LED {p.ref} at ({(p.x0 + p.x1) / 2:.1f}, {(p.y0 + p.y1) / 2:.1f}) "
+        what, dia = (("LED", d.led_hole_d) if p.kind == "led" else ("button", d.pin_hole_d))
+        for c in csk + pads:        # a hole may come within min_bar of a screw or pad (not keepout)
+            if math.hypot(lx - c.x, ly - c.y) < c.r - ko + d.min_bar + dia / 2:
+                raise BoardError(f"{where}: {what} {p.ref} at ({(p.x0 + p.x1) / 2:.1f}, {(p.y0 + p.y1) / 2:.1f}) "
                                  f"is under a lid screw or stacking pad at ({c.x:.1f}, {H - c.y:.1f}); "
-                                 "move the LED (the lid needs its light-pipe hole there)")
-        leds.append([lx, ly])
+                                 f"move the {what} (the lid needs its hole there)")
+        (leds if p.kind == "led" else pins).append([lx, ly])
     # LEDs closer than a hole and a bar apart share one window (a row of status LEDs).
     groups: list[list[list[float]]] = []
     for led in leds:
@@ -212,7 +213,7 @@ def layout(b: Board, d: Design) -> dict:
     windows = sorted([_r(min(p[0] for p in grp) - rl), _r(min(p[1] for p in grp) - rl),
                       _r(max(p[0] for p in grp) + rl), _r(max(p[1] for p in grp) + rl)]
                      for grp in groups if len(grp) > 1)
-    led_keep = [Circle(x, y, rl + ko) for x, y in holes_led]
+    led_keep = [Circle(x, y, rl + ko) for x, y in holes_led] + [Circle(x, y, d.pin_hole_d / 2 + ko) for x, y in pins]
     window_keep = [[w[0] - ko, w[1] - ko, w[2] + ko, w[3] + ko] for w in windows]
     inner = [-g, -g, W + g, H + g]
     usable = [inner[0] + ko, inner[1] + ko, inner[2] - ko, inner[3] - ko]
@@ -268,6 +269,7 @@ def layout(b: Board, d: Design) -> dict:
         "cutouts": cutouts,
         "leds": holes_led,
         "led_windows": windows,
+        "pins": sorted(pins),
         "vents": vents,
         "name": placed,
         "standin": {

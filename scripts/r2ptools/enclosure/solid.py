@@ -126,6 +126,7 @@ def lid(P: Params) -> cq.Workplane:
                                                              cq.Vector(h[0], h[1], z1 - csk))))
         cuts.append(_cyl(h[0], h[1], z1 - E, P.lid_csk_d, 1))
     cuts += [_cyl(l[0], l[1], z0 - 1, P.led_hole_d, t + 2) for l in P.leds]
+    cuts += [_cyl(b[0], b[1], z0 - 1, P.pin_hole_d, t + 2) for b in P.pins]
     cuts += [_cube(v[0], v[1], z0 - 1, v[2], v[3], z1 + 1) for v in P.vents + P.led_windows]
     cuts += [_cyl(m[0], m[1], z0 - 1, P.insert_m5_d, t + P.pad_h + 2) for m in P.mounts]
     return body.cut(_union(cuts))
