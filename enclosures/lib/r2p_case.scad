@@ -150,12 +150,19 @@ module r2p_standin(P) {
             translate([b[0], b[1], b[2]]) cube([b[3] - b[0], b[4] - b[1], b[5] - b[2]]);
 }
 
+module r2p_standoffs(P) {         // M3 M-F hex standoffs, board to lid (preview)
+    h = r2p(P, "z_rim") - r2p(P, "z_board_top");
+    for (o = r2p(P, "holes")) color("goldenrod") translate([o[0], o[1], r2p(P, "z_board_top")])
+        cylinder(d = r2p(P, "standoff_af") * 2 / sqrt(3), h = h, $fn = 6);
+}
+
 module r2p_part(P, part) {
     if (part == "base") r2p_base(P);
     else if (part == "lid") translate([0, 0, -r2p(P, "z_rim")]) r2p_lid(P);
     else if (part == "preview") {
         color("steelblue") r2p_base(P);
         r2p_standin(P);
+        r2p_standoffs(P);
         color("lightsteelblue") translate([0, 0, 25]) r2p_lid(P);
     } else assert(false, str("r2p_part: unknown part '", part, "' (base, lid or preview)"));
 }

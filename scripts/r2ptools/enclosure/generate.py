@@ -86,11 +86,19 @@ def generate(pcb: Path, source: str, enclosures: Path, png: bool = True, design:
     return r
 
 
+def _count(n: int, what: str) -> str:
+    return f"{n} {what}{'' if n == 1 else 's'}"
+
+
 def readme(doc: dict, r: Result, source: str) -> str:
     d, c = doc["design"], doc["case"]
     m = c["module"]
     o, z = c["outer"], c["z"]
     width = o[2] - o[0]
+    led_h = [p["h"] for p in doc["board"]["parts"] if p["kind"] == "led"]
+    # A light pipe runs from just above the LED (0.5 mm) to the lid's top face.
+    pipe = (f"Ø3 mm acrylic, {z['lid_top'] - z['board_top'] - max(led_h) - 0.5:.1f} mm long"
+            if led_h else "none")
     lines = [
         f"# {m} case",
         "",
@@ -109,10 +117,11 @@ def readme(doc: dict, r: Result, source: str) -> str:
         f"{d['board_gap']} mm from the walls |",
         f"| lid | {c['standoff']:.0f} mm standoffs above the board |",
         f"| cut-outs | " + (", ".join(f"{k['ref']} ({k['edge']} edge)" for k in c["cutouts"]) or "none") + " |",
-        f"| light pipes | {len(c['leds'])} × Ø{d['led_hole_d']} mm holes, {len(c['led_windows'])} windows "
-        "over rows of LEDs |",
-        f"| pin holes | {len(c['pins'])} × Ø{d['pin_hole_d']} mm over push buttons |",
-        f"| vents | {len(c['vents'])} slots {d['vent_w']} mm wide |" if c["vents"] else "| vents | none (no warm parts) |",
+        f"| lid openings | {_count(len(c['leds']), 'light-pipe hole')} Ø{d['led_hole_d']} mm, "
+        f"{_count(len(c['led_windows']), 'window')} over a row of LEDs, "
+        f"{_count(len(c['pins']), 'pin hole')} Ø{d['pin_hole_d']} mm over push buttons; light pipes: {pipe} |",
+        f"| vents | {_count(len(c['vents']), 'slot')} {d['vent_w']} mm wide over the warm parts |" if c["vents"]
+        else "| vents | none (no warm parts) |",
     ]
     if r.fit:
         worst = sorted(r.fit.nearest.items(), key=lambda kv: kv[1][0])[:3]
