@@ -5,7 +5,7 @@ step for step (same order of unions and cuts, same overlaps), so the two agree; 
 their volumes. Circles are exact here and 96-gons in OpenSCAD.
 
 The STEP assembly places everything as mounted: base, lid, board stand-in (outline x thickness,
-every part a box of its courtyard x height), the standoffs, for people placing a module in a
+every part a box of its body x height), the standoffs, for people placing a module in a
 robot's CAD. It is byte-stable: OpenCASCADE's header (time stamp, author, organisation,
 originating system) is set to fixed values, and its per-process usage counter renumbered.
 """
