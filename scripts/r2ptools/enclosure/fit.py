@@ -2,9 +2,9 @@
 
 Bodies on the case side: the base walls and floor (with every cut-out), the bosses, the lid, the
 four standoffs (as the cylinder a hex sweeps: a user may turn it any way) and the M5 screw heads
-of the floor mounts. On the board side: the board
-(outline x thickness, holes drilled), every part as a box of its body (Fab + pads) x height, and boxes
-under THT parts where leads and pegs come through.
+of the floor mounts. On the board side: the board (outline x thickness, holes drilled), every
+part as a box of its body (Fab drawing + pads) x height, and boxes under THT parts where leads
+and pegs come through.
 
 The rules (`min_clearance` from the design, 0.5 mm):
 - no board-side body intersects a case-side body (OpenCASCADE boolean, volume > 1e-9 mm^3);
