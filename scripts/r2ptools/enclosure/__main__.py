@@ -87,6 +87,8 @@ def cmd_generate(ap, args) -> int:
 
 def cmd_check(ap, args) -> int:
     chosen = _pick(ap, args)
+    if not chosen:
+        print(f"enclosures: no boards in {args.hardware} (hardware/<m>/<m>.kicad_pcb): nothing to check")
     bad = 0
     for m in chosen:
         problems = checks.all_problems(args.out / m, m)
