@@ -279,6 +279,7 @@ TRAJECTORY_PLOT = ROOT / "docs" / "img" / "triskar2-trajectory.png"
 def plot_trajectory(seconds: int = 10) -> Path:
     """The Triskar2's teleop script on emulated boards: true path, odometry, obstacles."""
     import csv
+    import math
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.patches as mp
@@ -298,7 +299,6 @@ def plot_trajectory(seconds: int = 10) -> Path:
     ax.plot([float(r["odom_x_m"]) for r in rows], [float(r["odom_y_m"]) for r in rows], "--",
             lw=1.2, label="odometry (gateway, from the motors' states)")
     for r in rows[::10]:
-        import math
         th = float(r["theta_rad"])
         ax.arrow(float(r["x_m"]), float(r["y_m"]), 0.12 * math.cos(th), 0.12 * math.sin(th),
                  head_width=0.03, color="C3", alpha=0.6)

@@ -108,9 +108,10 @@ struct Leds {
 }
 
 impl Leds {
-    fn new(ctx: &Ctx<'_>, node: &BoardNode) -> Self {
-        let _ = node;
-        let heartbeat = u64::from(NodeConfig::new([0; 12], "").heartbeat_period_us);
+    /// `heartbeat_period_us` from the node's configuration: "running" after the first
+    /// [`STARTING_HEARTBEATS`], as on the MCU.
+    fn new(ctx: &Ctx<'_>, heartbeat_period_us: u32) -> Self {
+        let heartbeat = u64::from(heartbeat_period_us);
         Self {
             running_after_us: ctx.boot_us + u64::from(STARTING_HEARTBEATS) * heartbeat,
             frames: 0,

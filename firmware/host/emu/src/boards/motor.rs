@@ -11,9 +11,10 @@ pub fn motor(ctx: Ctx<'_>) -> Result<Booted, String> {
     let params = load_params(app::params::DEFAULTS, &ctx.flash)?;
     let names = app::Names::from_params(params);
     let mut a = app::App::new(app::Endpoints::leak(names), params);
-    let mut n = node(r2p_node::NodeConfig::new(ctx.module.uid.0, names.node), &ctx, params)?;
+    let config = r2p_node::NodeConfig::new(ctx.module.uid.0, names.node);
+    let mut n = node(config, &ctx, params)?;
     a.register(&mut n).map_err(|e| format!("registering topics: {e:?}"))?;
-    let mut leds = Leds::new(&ctx, &n);
+    let mut leds = Leds::new(&ctx, config.heartbeat_period_us);
     let (world, flash) = (ctx.world, ctx.flash);
     let name: &'static str = leak(ctx.module.name.clone()).as_str();
     Ok((

@@ -68,7 +68,10 @@ fn check_sensor_types(
             RangerKind::MaxSonarLvEz => 3,
         };
         let key = format!("sensor{}", r.channel);
-        let default = match r2p_app_proximity::params::DEFAULTS[2 + usize::from(r.channel)].value {
+        let default = match r2p_app_proximity::params::DEFAULTS
+            [usize::from(r2p_app_proximity::params::SENSOR0) + usize::from(r.channel)]
+        .value
+        {
             Value::U32(v) => i64::from(v),
             _ => 0,
         };

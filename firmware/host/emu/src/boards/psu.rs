@@ -9,9 +9,10 @@ use super::{adc, leak, load_params, node, persist, Booted, Ctx, Leds};
 pub fn psu(ctx: Ctx<'_>) -> Result<Booted, String> {
     let params = load_params(app::params::DEFAULTS, &ctx.flash)?;
     let mut a = app::App::new(app::Endpoints::leak(params), params);
-    let mut n = node(app::node_config(ctx.module.uid.0, params), &ctx, params)?;
+    let config = app::node_config(ctx.module.uid.0, params);
+    let mut n = node(config, &ctx, params)?;
     a.register(&mut n).map_err(|e| format!("registering topics: {e:?}"))?;
-    let mut leds = Leds::new(&ctx, &n);
+    let mut leds = Leds::new(&ctx, config.heartbeat_period_us);
     let (world, flash) = (ctx.world, ctx.flash);
     let name: &'static str = leak(ctx.module.name.clone()).as_str();
     Ok((
