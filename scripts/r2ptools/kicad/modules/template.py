@@ -1,0 +1,30 @@
+"""hardware/template: the starting point of a new module, and a board in its own right.
+
+It is the common core with the fused bus tap and nothing else: every free MCU pin is marked
+no-connect and the area below the core is empty. A new module copies this file to
+`modules/<name>.py`, adds its parts (references from 101) and places them in the free area
+(y > 42 mm and the bottom edge for connectors), maps the MCU pins it uses to the signal names
+of its firmware board file, and registers itself in `modules/__init__.py` (docs/hardware.md).
+Built and checked like every module, so the template itself is known to pass ERC and DRC.
+"""
+from __future__ import annotations
+
+from ..design import Module, Place, Sheet
+from . import core as core_mod
+from .common import bus_tap, frame_texts
+
+NAME = "template"
+TITLE = "R2P module template"
+REVISION = "A"
+
+
+def build(core: Sheet) -> Module:
+    s = Sheet(NAME, f"{TITLE}: the common core alone")
+    bus_tap(s, "+5V_MOD", at=Place(6.0, 20.5, 90))
+    pins = {p: "" for p in core_mod.FREE_GPIO}
+    pins["V5_IN"] = "+5V_MOD"
+    s.use(core, pins)
+    m = Module(NAME, TITLE, REVISION, s, zones=core_mod.bus_copper(),
+               keepouts=core_mod.bus_keepout(), seed=9)
+    m.texts = frame_texts(NAME, REVISION)
+    return m
