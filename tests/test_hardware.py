@@ -150,16 +150,20 @@ def test_a_footprint_missing_from_the_board_breaks_parity(scratch):
     import pcbnew
     pcb = scratch / "proximity.kicad_pcb"
     b = pcbnew.LoadBoard(str(pcb))
-    b.Remove(b.FindFootprintByReference("C104"))
+    b.Delete(b.FindFootprintByReference("C104"))
     pcbnew.SaveBoard(str(pcb), b)
     assert _problems(scratch, "parity")
 
 
 def test_an_unconnected_pin_is_an_erc_error(scratch):
+    """Remove the no-connect flag on U101's fault output (pin 3): ERC must object."""
+    from r2ptools.kicad.schematic import uid
     sch = scratch / "proximity.kicad_sch"
     text = sch.read_text()
-    first_nc = re.search(r"\n\t\(no_connect\n(?:\t\t.*\n)*?\t\)", text)
-    sch.write_text(text[:first_nc.start()] + text[first_nc.end():])
+    flag = re.search(r"\n\t\(no_connect\n\t\t\(at [^)]*\)\n\t\t\(uuid \"%s\"\)\n\t\)"
+                     % uid("proximity", "nc", "U101/3"), text)
+    assert flag, "U101 pin 3's no-connect flag not found"
+    sch.write_text(text[:flag.start()] + text[flag.end():])
     assert _problems(scratch, "ERC error")
 
 

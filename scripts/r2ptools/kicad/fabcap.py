@@ -7,7 +7,8 @@ board edge, 0.15 mm silkscreen line and 1 mm text. They go into the board's desi
 (`.kicad_pro` → board.design_settings.rules) and `.kicad_dru`, so KiCad's DRC fails a board the
 fab could not make. Net classes then ask for more than the minimum where it is cheap: 0.2 mm
 signal tracks with 0.15 mm clearance (0.65 mm-pitch pins leave 0.19 mm), 0.4 mm local power,
-0.6/0.3 mm vias; the 4 A paths are drawn by hand (module descriptions), not autorouted.
+0.7/0.3 mm vias (two vias at 0.15 mm copper clearance keep their holes the fab's 0.5 mm apart);
+the 4 A paths are drawn by hand (module descriptions), not autorouted.
 """
 from __future__ import annotations
 
@@ -31,7 +32,7 @@ POUR_CLEARANCE = 0.25
 
 NETCLASSES = {
     # name: (clearance, track width, via diameter, via drill)
-    "Default": (0.15, 0.2, 0.6, 0.3),
+    "Default": (0.15, 0.2, 0.7, 0.3),
     "Power": (0.2, 0.4, 0.8, 0.4),
 }
 

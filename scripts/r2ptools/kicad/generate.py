@@ -25,6 +25,8 @@ from .modules import MODULES, build_all, core
 from .design import Module
 
 HARDWARE = ROOT / "hardware"
+ROUTE_PASSES = (20, 40, 60)
+"""freerouting's pass limit for a fresh route, raised when a run leaves connections unrouted."""
 
 
 def power_classes(m: Module) -> dict[str, list[str]]:
@@ -61,10 +63,22 @@ def generate(m: Module, modules: list[Module], out: Path, force_route: bool = Fa
     times["board"] = time.monotonic() - t0
 
     t0 = time.monotonic()
-    b = board_mod.load(pcb)
-    routed = route.route(b, folder / "route.ses", m, force=force_route, log=log)
-    board_mod.ground_pours(b)
-    board_mod.fill(b)
+    for attempt, passes in enumerate(ROUTE_PASSES):
+        b = board_mod.load(pcb)
+        routed = route.route(b, folder / "route.ses", m, force=force_route or attempt > 0,
+                             passes=passes, log=log)
+        board_mod.ground_pours(b)
+        board_mod.fill(b)
+        missing = route.unrouted(b)          # counted with every pour filled
+        if not missing:
+            break
+        if not routed:
+            raise route.RoutingError(f"{m.name}: route.ses leaves {missing} connections unrouted: "
+                                     "rerun with --route")
+        log(f"route: {m.name}: {missing} connections left unrouted after {passes} passes")
+    else:
+        raise route.RoutingError(f"{m.name}: freerouting left {missing} connections unrouted "
+                                 f"after {ROUTE_PASSES[-1]} passes: loosen the placement")
     board_mod.save(b, pcb, classes)
     times["route" if routed else "route (replayed)"] = time.monotonic() - t0
     return times

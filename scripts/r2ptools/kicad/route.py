@@ -12,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import shutil
 import subprocess
 import tempfile
@@ -50,10 +51,11 @@ def java() -> str:
 
 
 def dsn_key(dsn: str) -> str:
-    return hashlib.sha256(dsn.encode()).hexdigest()
+    """SHA-256 of the routing problem; KiCad's first line names the (temporary) DSN file."""
+    return hashlib.sha256(re.sub(r"\A\(pcb [^\n]*", "(pcb", dsn).encode()).hexdigest()
 
 
-def run_freerouting(dsn: Path, ses: Path, log=print) -> None:
+def run_freerouting(dsn: Path, ses: Path, passes: int = 20, log=print) -> None:
     with tempfile.TemporaryDirectory() as user:
         # freerouting writes its settings here; written first so telemetry is off from the start
         (Path(user) / "freerouting.json").write_text(json.dumps({
@@ -68,17 +70,18 @@ def run_freerouting(dsn: Path, ses: Path, log=print) -> None:
             "logging": {"console": {"enabled": True, "level": "INFO"}, "file": {"enabled": False}},
         }, indent=2))
         cmd = [java(), "-cp", str(freerouting_dir() / "lib" / "*"), "app.freerouting.Freerouting",
-               "-de", str(dsn), "-do", str(ses), "-mp", "20", "-mt", "1",
+               "-de", str(dsn), "-do", str(ses), "-mp", str(passes), "-mt", "1",
                "--gui.enabled=false", "--api_server.enabled=false",
                "--usage_and_diagnostic_data.disable_analytics=true", f"--user_data_path={user}",
                "--router.automatic_neckdown=false", "--router.fanout.enabled=false"]
-        log(f"route: freerouting {dsn.name} (single-threaded)")
+        log(f"route: freerouting {dsn.name} (single-threaded, {passes} passes)")
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=1800)
         if p.returncode != 0 or not ses.exists():
             raise RoutingError(f"freerouting failed ({p.returncode}):\n{p.stdout[-3000:]}{p.stderr[-3000:]}")
 
 
-def route(board: pcbnew.BOARD, ses_cache: Path, module, force: bool = False, log=print) -> bool:
+def route(board: pcbnew.BOARD, ses_cache: Path, module, force: bool = False, passes: int = 20,
+          log=print) -> bool:
     """Routes `board` in place; returns True if freerouting ran, False if the cache was replayed."""
     key_file = ses_cache.with_suffix(".key")
     with tempfile.TemporaryDirectory() as tmp:
@@ -90,10 +93,16 @@ def route(board: pcbnew.BOARD, ses_cache: Path, module, force: bool = False, log
             or key_file.read_text().strip() != key
         if fresh:
             ses = Path(tmp) / f"{module.name}.ses"
-            run_freerouting(dsn, ses, log)
+            run_freerouting(dsn, ses, passes, log)
             shutil.copyfile(ses, ses_cache)
             key_file.write_text(key + "\n")
         pcbnew.KIID.SeedGenerator(module.seed * 1000 + 7)
         if not pcbnew.ImportSpecctraSES(board, str(ses_cache)):
             raise RoutingError(f"{module.name}: KiCad could not import {ses_cache}")
         return fresh
+
+
+def unrouted(board: pcbnew.BOARD) -> int:
+    """Connections still missing after the import (freerouting can give up on a few)."""
+    board.BuildConnectivity()
+    return board.GetConnectivity().GetUnconnectedCount(True)

@@ -1,7 +1,7 @@
 """Pieces every module sheet repeats: the fused bus tap and the board's silkscreen frame."""
 from __future__ import annotations
 
-from ..design import Place, Sheet, Text
+from ..design import Place, Sheet, Text, Track
 
 
 def bus_tap(s: Sheet, net: str, at: Place) -> None:
@@ -13,11 +13,25 @@ def bus_tap(s: Sheet, net: str, at: Place) -> None:
     s.flags += ["GND", net]
 
 
+BUS_TAP_PLACE = Place(6.0, 20.5, 270)
+
+
+def bus_tap_track() -> Track:
+    """F101's bus side to BUS IN's +5V pin 7 on F.Cu (the B.Cu band is closed to other tracks)."""
+    return Track("+5V", [(6.0, 19.1), (8.0, 17.2), (8.0, 15.5), (10.6, 13.52), (12.58, 13.52)], 0.6)
+
+
 def frame_texts(name: str, revision: str) -> list[Text]:
-    """Module name and revision, the bus port labels over the jacks, the sensor-edge note."""
+    """The silkscreen every module shares: bus port names, bus header pinout, termination switch
+    on the top; the module's name and revision large on the back, where nothing covers them."""
     return [
-        Text(f"R2P {name.upper()}", 30.0, 49.0 - 1.6, 1.2),
-        Text(f"rev {revision}", 51.0, 49.0 - 1.6, 0.8),
-        Text("BUS IN", 12.0, 19.8, 1.0),
-        Text("BUS OUT", 44.0, 19.8, 1.0),
+        Text("BUS IN", 15.9, 18.35, 0.8),
+        Text("BUS OUT", 44.3, 18.35, 0.8),
+        Text("TERM", 29.8, 0.95, 0.8),
+        *[Text(label, x, 12.55, 0.8) for label, x in (("5V", 26.0), ("H", 28.54), ("L", 31.08),
+                                                        ("G", 33.62))],
+        Text(f"R2P {name.upper()}", 30.0, 44.0, 2.0, "B.SilkS"),
+        Text(f"rev {revision}", 30.0, 47.0, 1.2, "B.SilkS"),
+        Text("BUS IN", 15.9, 10.0, 1.2, "B.SilkS"),    # under J1 (mirrored text, same place)
+        Text("BUS OUT", 44.3, 10.0, 1.2, "B.SilkS"),
     ]

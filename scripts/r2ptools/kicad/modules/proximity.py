@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from ..design import Module, Place, Sheet, Text
 from . import core as core_mod
-from .common import bus_tap, frame_texts
+from .common import BUS_TAP_PLACE, bus_tap, bus_tap_track, frame_texts
 
 NAME = "proximity"
 TITLE = "R2P proximity module"
@@ -30,7 +30,7 @@ ADC_PINS = ["PA0", "PA1", "PA2", "PA3"]
 
 def build(core: Sheet) -> Module:
     s = Sheet(NAME, f"{TITLE}: four analog sensor inputs")
-    bus_tap(s, "+5V_MOD", at=Place(6.0, 20.5, 90))
+    bus_tap(s, "+5V_MOD", at=BUS_TAP_PLACE)
     pins = {p: "" for p in core_mod.FREE_GPIO}
     pins.update(dict(zip(ADC_PINS, SIGNALS)))
     pins.update({"PB0": "SENSOR_PWR_EN", "V5_IN": "+5V_MOD"})
@@ -59,7 +59,9 @@ def build(core: Sheet) -> Module:
         s.part(f"C{104 + ch}", "C_100n", {"1": net, "2": "GND"}, at=Place(x + 3.8, 39.0, 90))
 
     m = Module(NAME, TITLE, REVISION, s, zones=core_mod.bus_copper(),
-               keepouts=core_mod.bus_keepout(), seed=2)
-    m.texts = frame_texts(NAME, REVISION) + [
-        Text(f"S{ch}", [11.0, 21.6, 32.2, 42.8][ch] + 2.0, 41.6, 0.8) for ch in range(CHANNELS)]
+               keepouts=core_mod.bus_keepout(), tracks=[bus_tap_track()], seed=2)
+    m.texts = frame_texts(NAME, REVISION)
+    for ch, x in enumerate(xs):
+        m.texts.append(Text(f"S{ch}", x + 2.0, 41.6, 0.8))
+        m.texts.append(Text("5V GND SIG", x + 2.0, 40.0, 0.8, "B.SilkS"))   # seen from the back
     return m

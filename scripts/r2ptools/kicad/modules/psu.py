@@ -14,7 +14,9 @@ feeds the PSU's own MCU ahead of the eFuse, so the firmware keeps running and re
 bus (BUS_FAULT) instead of browning out with it.
 
 Design values (datasheets: LM76005 SNVSBK5, TPS2663 SLVSDO8, INA293 SBOSA06):
-- FB: VOUT = 1.0 V × (1 + 100 k / 24.9 k) = 5.02 V. EN: 100 k / 47 k from VIN_BUCK.
+- FB: VOUT = 1.0 V × (1 + 100 k / 24.9 k) = 5.02 V. EN: 100 k / 47 k from VIN_BUCK. BIAS to GND
+  (the datasheet's other option): VCC then comes from VIN, a few mA × VIN lost at light load,
+  in exchange for a routable pin row; RT open = 400 kHz; SYNC/MODE to GND = auto (PFM) mode.
 - L: ΔI = (36 − 5) × 5 / (36 × 400 kHz × 10 µH) = 1.08 A (27 % of 4 A); peak 4.54 A, well
   under the SRP1038A's 12 A saturation; 4 × 22 µF X7R (≈ 4 × 14 µF at 5 V DC bias) at the output.
 - eFuse: I_LIM = 18 / R_ILIM(kΩ) = 18 / 3.9 = 4.6 A; UVLO 1.2 V × (1 + 100/47) = 3.8 V;
@@ -40,20 +42,21 @@ PLACES = {
     "J101": P(12.4, 37.15, 180), "Q101": P(28.87, 46.3, 180),
     "D102": P(31.3, 40.3, 180), "R102": P(38.8, 44.3, 0), "U101": P(37.2, 40.2, 0),
     "D101": P(38.5, 46.9, 0), "R101": P(38.5, 49.0, 0),
-    "U102": P(43.0, 39.0, 270),
-    "C101": P(43.9, 43.3, 0), "C102": P(43.9, 45.8, 0), "C103": P(43.9, 48.2, 0),
-    "C109": P(43.6, 35.4, 0), "C108": P(40.5, 35.4, 180), "C107": P(37.3, 35.4, 0),
-    "C110": P(34.1, 35.4, 0), "R108": P(37.6, 37.3, 0), "R109": P(34.5, 37.3, 0),
-    "R104": P(47.2, 44.6, 90), "R105": P(49.0, 44.6, 90), "C106": P(50.8, 44.6, 90),
+    "U102": P(43.0, 39.5, 270),
+    "C101": P(43.9, 43.5, 0), "C102": P(43.9, 46.0, 0), "C103": P(43.9, 48.4, 0),
+    "C109": P(42.85, 35.16, 90), "C108": P(41.25, 35.16, 90), "C110": P(39.65, 35.16, 90),
+    "R108": P(37.6, 37.6, 0), "R109": P(34.5, 37.6, 0),
+    "R104": P(31.5, 36.9, 90), "R105": P(29.7, 36.9, 90), "C106": P(27.9, 36.9, 90),
     "R106": P(47.2, 48.0, 90), "R107": P(49.0, 48.0, 90), "C104": P(50.8, 48.0, 90),
-    "L101": P(47.5, 29.2, 0),
+    "L101": P(47.5, 28.2, 0),
     "C111": P(56.85, 20.3, 0), "C112": P(56.85, 24.0, 0), "C113": P(56.85, 27.7, 0),
     "C114": P(56.85, 31.4, 0),
     "U103": P(56.05, 13.5, 90),
-    # eFuse set-up resistors on the back, beside the eFuse's thermal pad
-    "R112": P(55.0, 9.0, 0, True), "R113": P(58.1, 9.0, 0, True),
-    "R114": P(55.0, 10.8, 0, True), "R115": P(58.1, 10.8, 0, True),
-    "R116": P(55.0, 16.9, 0, True), "C115": P(58.1, 16.9, 0, True),
+    # eFuse set-up parts on the back: UVLO/OVP/dV/dt under the output trunk, below the eFuse's
+    # bottom pin row; ILIM above its top row (the top row's other pins escape through vias there)
+    "R112": P(55.2, 19.5, 0, True), "R113": P(58.3, 19.5, 0, True),
+    "R114": P(55.2, 21.15, 0, True), "R115": P(58.3, 21.15, 0, True),
+    "C115": P(55.2, 22.95, 0, True), "R116": P(58.3, 8.7, 0, True),
     "R110": P(31.6, 33.2, 0), "R111": P(28.5, 33.2, 0),
     "R103": P(1.9, 40.3, 90), "C105": P(3.7, 40.3, 90),
     "R117": P(4.0, 16.6, 0), "R118": P(1.9, 36.9, 90), "C117": P(3.7, 36.9, 90),
@@ -93,18 +96,35 @@ def power_tracks() -> list[Track]:
         T("VIN_PROT", [(33.9, 44.0), (33.9, 41.5), (33.3, 40.3)], 1.2),
         # shunt to the input capacitors, up to PVIN (neck to the 0.5 mm-pitch pins)
         T("VIN_BUCK", [(40.26, 44.3), (42.6, 44.3)], 1.8),
-        T("VIN_BUCK", [(42.6, 48.2), (42.6, 42.4)], 2.0),
-        T("VIN_BUCK", [(42.6, 42.4), (43.0, 42.0), (43.0, 40.86)], 0.9),
-        T("VIN_BUCK", [(42.5, 40.86), (43.5, 40.86)], 0.3),
+        T("VIN_BUCK", [(42.6, 48.4), (42.6, 42.9)], 2.0),
+        T("VIN_BUCK", [(42.6, 42.9), (43.0, 42.5), (43.0, 41.36)], 0.9),
+        T("VIN_BUCK", [(42.5, 41.36), (43.5, 41.36)], 0.3),
         # power ground of the hot loop: PGND pins to the capacitor returns (vias to both pours)
-        T("GND", [(44.5, 40.86), (45.5, 40.86)], 0.3),
-        T("GND", [(45.0, 40.86), (45.0, 41.6), (45.4, 42.0), (45.4, 48.4)], 1.2),
+        T("GND", [(44.5, 41.36), (45.5, 41.36)], 0.3),
+        T("GND", [(45.0, 41.36), (45.0, 42.1), (45.4, 42.5), (45.4, 48.6)], 1.2),
+        # small-signal pins of U102 to their parts, fanned out from the 0.5 mm pitch by hand
+        T("GND", [(41.5, 37.64), (41.5, 38.8)], 0.2),                  # BIAS to the pad
+        T("GND", [(41.0, 41.36), (41.0, 40.3)], 0.2),                  # SYNC/MODE: auto mode
+        T("BOOT", [(42.85, 35.94), (43.0, 36.7), (43.0, 37.64)], 0.25),
+        T("VCC_BUCK", [(41.25, 35.94), (42.0, 36.6), (42.0, 37.64)], 0.25),
+        T("SS_BUCK", [(39.65, 35.94), (40.5, 36.7), (40.5, 37.64)], 0.25),
+        T("GND", [(39.65, 34.38), (40.45, 33.75), (41.25, 34.38)], 0.3),
+        T("SW", [(42.85, 34.38), (44.0, 34.38)], 0.4),
+        T("VIN_PROT", [(31.5, 37.725), (31.5, 38.3), (32.6, 39.4)], 0.3),
+        T("VIN_PROT", [(36.85, 46.9), (36.85, 45.0)], 0.5),            # D101 (gate zener)
+        # eFuse bottom-row set-up pins down to the back-side parts (the +5V_BUCK feed fills the row)
+        T("EFUSE_UV", [(57.02, 16.45), (57.02, 17.4), (57.15, 18.05)], 0.25),
+        T("EFUSE_OV", [(57.67, 16.45), (57.67, 17.4), (58.0, 18.05)], 0.25),
+        T("EFUSE_DVDT", [(58.97, 16.45), (58.97, 17.4), (58.85, 18.05)], 0.25),
+        # EN divider feed: under the hot-loop ground on B.Cu
+        T("VIN_BUCK", [(42.1, 47.35), (42.1, 49.2), (48.0, 49.2)], 0.3, "B.Cu"),
+        T("VIN_BUCK", [(48.0, 49.2), (47.2, 48.825)], 0.3),
         # switch node: the SW pins to L101
-        T("SW", [(43.5, 37.14), (45.5, 37.14)], 0.3),
-        T("SW", [(44.5, 37.14), (44.5, 36.4)], 0.9),
-        T("SW", [(44.5, 36.4), (44.5, 30.0), (43.03, 29.2)], 2.0),
+        T("SW", [(43.5, 37.64), (45.5, 37.64)], 0.3),
+        T("SW", [(44.5, 37.64), (44.5, 36.9)], 0.9),
+        T("SW", [(44.5, 36.9), (44.5, 29.0), (43.03, 28.2)], 2.0),
         # buck output: L101 to the output capacitors' trunk, up to the eFuse inputs
-        T("+5V_BUCK", [(51.97, 29.2), (55.37, 29.2)], 2.5),
+        T("+5V_BUCK", [(51.97, 28.2), (55.37, 28.2)], 2.5),
         T("+5V_BUCK", [(55.37, 31.4), (55.37, 19.4)], 2.5),
         T("+5V_BUCK", [(55.37, 19.4), (54.4, 18.6), (53.13, 18.6)], 1.5),
         T("+5V_BUCK", [(53.13, 18.6), (53.13, 16.45)], 0.45),
@@ -119,8 +139,12 @@ def power_tracks() -> list[Track]:
 def power_vias() -> list[Via]:
     out = [Via("+5V", x, y, 0.8, 0.4) for x in (50.4, 51.4, 52.4) for y in (9.5, 10.5)]
     # thermal vias under both power ICs' exposed pads, the hot-loop ground, the output returns
-    out += [Via("GND", x, 39.0, 0.6, 0.3) for x in (41.6, 42.6, 43.6, 44.5)]
-    out += [Via("GND", 46.7, y, 0.6, 0.3) for y in (42.4, 44.6, 47.0)]
+    out += [Via("GND", x, 39.5, 0.6, 0.3) for x in (41.6, 42.6, 43.6, 44.5)]
+    out += [Via("GND", 46.7, y, 0.6, 0.3) for y in (42.9, 45.1, 47.5)]
+    out += [Via("GND", 40.45, 33.75, 0.6, 0.3)]
+    out += [Via("VIN_BUCK", 42.1, 47.35, 0.7, 0.3), Via("VIN_BUCK", 48.0, 49.2, 0.7, 0.3)]
+    out += [Via(n, x, 18.05, 0.7, 0.3) for n, x in (("EFUSE_UV", 57.15), ("EFUSE_OV", 58.0),
+                                                     ("EFUSE_DVDT", 58.85))]
     out += [Via("GND", x, y, 0.6, 0.3) for x in (53.8, 55.2, 56.9, 58.3) for y in (12.6, 14.4)]
     out += [Via("GND", 59.0, y, 0.6, 0.3) for y in (22.2, 25.9, 29.6, 33.3)]
     return out
@@ -155,14 +179,13 @@ def build(core: Sheet) -> Module:
     # buck: input caps straddle PVIN/PGND on the IC's right side, the inductor on its SW side
     s.part("U102", "LM76005", {
         "PVIN": "VIN_BUCK", "EN": "EN_BUCK", "SW": "SW", "BOOT": "BOOT", "VCC": "VCC_BUCK",
-        "BIAS": "+5V_BUCK", "SS/TRK": "SS_BUCK", "SYNC/MODE": "GND", "FB": "FB_BUCK",
+        "BIAS": "GND", "SS/TRK": "SS_BUCK", "SYNC/MODE": "GND", "FB": "FB_BUCK",
         "AGND": "GND", "PGND": "GND", "NC_{GND}": "GND"}, nc=("RT", "PGOOD"))
     s.part("C101", "C_10u_50V", {"1": "VIN_BUCK", "2": "GND"})
     s.part("C102", "C_10u_50V", {"1": "VIN_BUCK", "2": "GND"})
     s.part("C103", "C_100n", {"1": "VIN_BUCK", "2": "GND"})
     s.part("R106", "R_100k", {"1": "VIN_BUCK", "2": "EN_BUCK"})
     s.part("R107", "R_47k", {"1": "EN_BUCK", "2": "GND"})
-    s.part("C107", "C_1u", {"1": "+5V_BUCK", "2": "GND"})
     s.part("C108", "C_1u", {"1": "VCC_BUCK", "2": "GND"})
     s.part("C109", "C_470n", {"1": "BOOT", "2": "SW"})
     s.part("C110", "C_22n", {"1": "SS_BUCK", "2": "GND"})
@@ -194,6 +217,6 @@ def build(core: Sheet) -> Module:
                keepouts=core_mod.bus_keepout() + [Keepout(BAND_EXT, layers=("B.Cu",), vias=True)],
                tracks=power_tracks(), vias=power_vias(), places=PLACES, seed=3)
     m.texts = frame_texts(NAME, REVISION) + [
-        Text("+", 11.0, 34.0, 1.2), Text("-", 19.0, 34.0, 1.2),
-        Text("5.5-36V", 15.0, 32.2, 0.8)]
+        Text("+", 12.4, 40.6, 1.5, "B.SilkS"), Text("-", 17.4, 40.6, 1.5, "B.SilkS"),
+        Text("BATTERY 5.5-36V", 15.0, 33.0, 1.0, "B.SilkS")]
     return m

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from ..design import Module, Place, Sheet
 from . import core as core_mod
-from .common import bus_tap, frame_texts
+from .common import BUS_TAP_PLACE, bus_tap, bus_tap_track, frame_texts
 
 NAME = "template"
 TITLE = "R2P module template"
@@ -20,11 +20,11 @@ REVISION = "A"
 
 def build(core: Sheet) -> Module:
     s = Sheet(NAME, f"{TITLE}: the common core alone")
-    bus_tap(s, "+5V_MOD", at=Place(6.0, 20.5, 90))
+    bus_tap(s, "+5V_MOD", at=BUS_TAP_PLACE)
     pins = {p: "" for p in core_mod.FREE_GPIO}
     pins["V5_IN"] = "+5V_MOD"
     s.use(core, pins)
     m = Module(NAME, TITLE, REVISION, s, zones=core_mod.bus_copper(),
-               keepouts=core_mod.bus_keepout(), seed=9)
+               keepouts=core_mod.bus_keepout(), tracks=[bus_tap_track()], seed=9)
     m.texts = frame_texts(NAME, REVISION)
     return m
