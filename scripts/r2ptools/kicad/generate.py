@@ -77,6 +77,7 @@ def generate(m: Module, modules: list[Module], out: Path, force_route: bool = Fa
                                      "rerun with --route")
         log(f"route: {m.name}: {missing} connections left unrouted after {passes} passes")
     else:
+        board_mod.save(b, pcb, classes)     # kept for inspection: `scripts/py -m r2ptools.kicad.check`
         raise route.RoutingError(f"{m.name}: freerouting left {missing} connections unrouted "
                                  f"after {ROUTE_PASSES[-1]} passes: loosen the placement")
     board_mod.save(b, pcb, classes)

@@ -17,8 +17,14 @@ BUS_TAP_PLACE = Place(6.0, 20.5, 270)
 
 
 def bus_tap_track() -> Track:
-    """F101's bus side to BUS IN's +5V pin 7 on F.Cu (the B.Cu band is closed to other tracks)."""
+    """F101's bus side to BUS IN's +5V pin 7 on F.Cu."""
     return Track("+5V", [(6.0, 19.1), (8.0, 17.2), (8.0, 15.5), (10.6, 13.52), (12.58, 13.52)], 0.6)
+
+
+def core_tracks() -> list[Track]:
+    """Hand-routed core signals for the default core placement (the autorouter boxes this one in)."""
+    return [Track("LED_STATUS", [(7.325, 24.0), (8.6, 24.0), (10.1, 25.5), (24.0, 25.5),
+                                 (24.75, 26.25), (25.84, 26.25)], 0.2)]
 
 
 def frame_texts(name: str, revision: str) -> list[Text]:

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from ..design import Module, Place, Sheet, Text
 from . import core as core_mod
-from .common import BUS_TAP_PLACE, bus_tap, bus_tap_track, frame_texts
+from .common import BUS_TAP_PLACE, bus_tap, bus_tap_track, core_tracks, frame_texts
 
 NAME = "proximity"
 TITLE = "R2P proximity module"
@@ -58,8 +58,8 @@ def build(core: Sheet) -> Module:
         s.part(f"R{103 + 2 * ch}", "R_100k", {"1": net, "2": "GND"}, at=Place(x + 2.0, 39.0, 90))
         s.part(f"C{104 + ch}", "C_100n", {"1": net, "2": "GND"}, at=Place(x + 3.8, 39.0, 90))
 
-    m = Module(NAME, TITLE, REVISION, s, zones=core_mod.bus_copper(),
-               keepouts=core_mod.bus_keepout(), tracks=[bus_tap_track()], seed=2)
+    m = Module(NAME, TITLE, REVISION, s,
+               tracks=[*core_mod.bus_tracks(), bus_tap_track(), *core_tracks()], seed=2)
     m.texts = frame_texts(NAME, REVISION)
     for ch, x in enumerate(xs):
         m.texts.append(Text(f"S{ch}", x + 2.0, 41.6, 0.8))

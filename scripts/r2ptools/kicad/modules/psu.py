@@ -6,7 +6,7 @@ Power path, left to right along the bottom edge:
              D101 15 V zener holds Vgs,              D102 SMAJ36A TVS      INA293A2 ×50 → IIN_SENSE
              R101 pulls the gate down                R104/R105 → VIN_SENSE
     VIN_BUCK ──► U102 LM76005 synchronous buck, 400 kHz, L101 10 µH ──► +5V_BUCK ──► core LDO (MCU)
-    +5V_BUCK ──► U103 TPS26631 eFuse (BUS_EN, BUS_FAULT, 4.6 A limit, 6.0 V OVP) ──► +5V (the bus)
+    +5V_BUCK ──► U103 TPS26631 eFuse (BUS_EN, BUS_FAULT, 4.6 A limit, 6.1 V OVP) ──► +5V (the bus)
 
 Ratings. Q101 -60 V (clamped input ≤ 58.1 V at the TVS's rated pulse), LM76005 60 V (65 V abs
 max), INA293 110 V common mode, input ceramics 50 V X7R (36 V max input, 72 %). The buck output
@@ -19,8 +19,9 @@ Design values (datasheets: LM76005 SNVSBK5, TPS2663 SLVSDO8, INA293 SBOSA06):
   in exchange for a routable pin row; RT open = 400 kHz; SYNC/MODE to GND = auto (PFM) mode.
 - L: ΔI = (36 − 5) × 5 / (36 × 400 kHz × 10 µH) = 1.08 A (27 % of 4 A); peak 4.54 A, well
   under the SRP1038A's 12 A saturation; 4 × 22 µF X7R (≈ 4 × 14 µF at 5 V DC bias) at the output.
-- eFuse: I_LIM = 18 / R_ILIM(kΩ) = 18 / 3.9 = 4.6 A; UVLO 1.2 V × (1 + 100/47) = 3.8 V;
-  OVP 1.2 V × (1 + 100/24.9) = 6.0 V (a shorted buck high-side cannot put VIN on the bus);
+- eFuse: I_LIM = 18 / R_ILIM(kΩ) = 18 / 3.9 = 4.6 A; one chain 100 k / 10 k / 27 k from
+  +5V_BUCK sets UVLO = 1.2 V × 137/37 = 4.44 V and OVP = 1.2 V × 137/27 = 6.09 V (a shorted
+  buck high-side cannot put VIN on the bus);
   MODE open = latch off on overload (the firmware sees BUS_FAULT and retries by toggling BUS_EN);
   SHDN pulled down, so the bus stays off until the firmware turns it on.
 - Sensing: VIN_SENSE = VIN × 10 k / 110 k (36 V → 3.27 V), source 9.1 kΩ; IIN_SENSE = 0.5 V/A
@@ -28,7 +29,7 @@ Design values (datasheets: LM76005 SNVSBK5, TPS2663 SLVSDO8, INA293 SBOSA06):
 """
 from __future__ import annotations
 
-from ..design import Keepout, Module, Place, Sheet, Text, Track, Via, Zone
+from ..design import Module, Place, Sheet, Text, Track, Via
 from . import core as core_mod
 from .common import frame_texts
 
@@ -54,11 +55,11 @@ PLACES = {
     "U103": P(56.05, 13.5, 90),
     # eFuse set-up parts on the back: UVLO/OVP/dV/dt under the output trunk, below the eFuse's
     # bottom pin row; ILIM above its top row (the top row's other pins escape through vias there)
-    "R112": P(55.2, 19.5, 0, True), "R113": P(58.3, 19.5, 0, True),
-    "R114": P(55.2, 21.15, 0, True), "R115": P(58.3, 21.15, 0, True),
-    "C115": P(55.2, 22.95, 0, True), "R116": P(58.3, 8.7, 0, True),
+    "R112": P(55.2, 19.5, 180, True), "R113": P(58.3, 19.5, 180, True),
+    "R114": P(58.3, 21.15, 180, True), "C115": P(55.2, 22.95, 180, True),
+    "R116": P(58.3, 8.7, 0, True),
     "R110": P(31.6, 33.2, 0), "R111": P(28.5, 33.2, 0),
-    "R103": P(1.9, 40.3, 90), "C105": P(3.7, 40.3, 90),
+    "R103": P(25.0, 39.6, 270), "C105": P(23.2, 39.6, 270),
     "R117": P(4.0, 16.6, 0), "R118": P(1.9, 36.9, 90), "C117": P(3.7, 36.9, 90),
     # --- core parts moved to make room (the core's schematic is unchanged)
     "D2": P(2.2, 9.6, 180), "R4": P(5.3, 9.6, 0), "D3": P(2.2, 11.6, 180), "R5": P(5.3, 11.6, 0),
@@ -72,10 +73,6 @@ PLACES = {
     "U3": P(28.8, 26.5, 0), "C9": P(28.8, 30.4, 0),
     "J4": P(36.8, 22.7, 90),
 }
-
-
-BAND_EXT = [(49.0, 9.3), (52.2, 9.3), (52.2, 17.6), (49.0, 17.6)]
-"""B.Cu extension of the bus band to the eFuse output (the PSU feeds the bus here)."""
 
 
 def power_tracks() -> list[Track]:
@@ -112,10 +109,23 @@ def power_tracks() -> list[Track]:
         T("SW", [(42.85, 34.38), (44.0, 34.38)], 0.4),
         T("VIN_PROT", [(31.5, 37.725), (31.5, 38.3), (32.6, 39.4)], 0.3),
         T("VIN_PROT", [(36.85, 46.9), (36.85, 45.0)], 0.5),            # D101 (gate zener)
+        # bus voltage divider top (R117) to BUS IN's +5V pin 7, between the jack's GND pins 6 and 8
+        T("+5V", [(3.175, 16.6), (4.2, 17.6), (12.58, 17.6), (12.58, 13.52)], 0.4),
+        # current-sense amplifier output under D102 (B.Cu) to its RC filter R103/C105
+        T("IIN_AMP", [(36.06, 39.25), (35.1, 38.6)], 0.25),
+        T("IIN_AMP", [(35.1, 38.6), (25.0, 37.7)], 0.25, "B.Cu"),
+        T("IIN_AMP", [(25.0, 37.7), (25.0, 38.775)], 0.25),
         # eFuse bottom-row set-up pins down to the back-side parts (the +5V_BUCK feed fills the row)
         T("EFUSE_UV", [(57.02, 16.45), (57.02, 17.4), (57.15, 18.05)], 0.25),
         T("EFUSE_OV", [(57.67, 16.45), (57.67, 17.4), (58.0, 18.05)], 0.25),
         T("EFUSE_DVDT", [(58.97, 16.45), (58.97, 17.4), (58.85, 18.05)], 0.25),
+        # ... and on the back to the UVLO/OVP divider chain R112-R113-R114
+        T("EFUSE_UV", [(56.025, 19.5), (56.6, 18.9), (57.15, 18.4), (57.15, 18.05)], 0.25, "B.Cu"),
+        T("EFUSE_UV", [(57.15, 18.4), (57.475, 18.9), (57.475, 19.5)], 0.25, "B.Cu"),
+        T("EFUSE_OV", [(58.0, 18.05), (58.0, 18.5), (58.6, 18.9), (59.125, 19.5)], 0.25, "B.Cu"),
+        T("EFUSE_OV", [(59.125, 19.5), (59.125, 20.32), (57.475, 20.32), (57.475, 21.15)], 0.25,
+          "B.Cu"),
+        T("+5V_BUCK", [(54.375, 19.5), (54.4, 20.4)], 0.3, "B.Cu"),
         # EN divider feed: under the hot-loop ground on B.Cu
         T("VIN_BUCK", [(42.1, 47.35), (42.1, 49.2), (48.0, 49.2)], 0.3, "B.Cu"),
         T("VIN_BUCK", [(48.0, 49.2), (47.2, 48.825)], 0.3),
@@ -131,7 +141,7 @@ def power_tracks() -> list[Track]:
         T("+5V_BUCK", [(53.78, 18.6), (53.78, 16.45)], 0.45),
         T("+5V_BUCK", [(54.43, 18.6), (54.43, 16.45)], 0.45),
         T("+5V_BUCK", [(55.37, 19.4), (56.38, 18.6), (56.38, 16.45)], 0.45),
-        # eFuse output to the bus band on B.Cu
+        # eFuse output down to the bus line on B.Cu (core.bus_tracks, extended to x = 52.4)
         T("+5V", [(50.2, 10.0), (53.4, 10.0)], 1.8),
     ]
 
@@ -145,6 +155,8 @@ def power_vias() -> list[Via]:
     out += [Via("VIN_BUCK", 42.1, 47.35, 0.7, 0.3), Via("VIN_BUCK", 48.0, 49.2, 0.7, 0.3)]
     out += [Via(n, x, 18.05, 0.7, 0.3) for n, x in (("EFUSE_UV", 57.15), ("EFUSE_OV", 58.0),
                                                      ("EFUSE_DVDT", 58.85))]
+    out += [Via("+5V_BUCK", 54.4, 20.4, 0.7, 0.3)]
+    out += [Via("IIN_AMP", 35.1, 38.6, 0.7, 0.3), Via("IIN_AMP", 25.0, 37.7, 0.7, 0.3)]
     out += [Via("GND", x, y, 0.6, 0.3) for x in (53.8, 55.2, 56.9, 58.3) for y in (12.6, 14.4)]
     out += [Via("GND", 59.0, y, 0.6, 0.3) for y in (22.2, 25.9, 29.6, 33.3)]
     return out
@@ -202,20 +214,18 @@ def build(core: Sheet) -> Module:
         "dVdT": "EFUSE_DVDT", "PGTH": "GND"}, nc=("B_GATE", "DRV", "MODE", "PGOOD", "IMON"))
     s.part("R110", "R_100k", {"1": "BUS_EN", "2": "GND"})
     s.part("R111", "R_10k", {"1": "+3V3", "2": "BUS_FAULT"})
+    # one divider chain sets both thresholds: +5V_BUCK - 100 k - UVLO - 10 k - OVP - 27 k - GND
     s.part("R112", "R_100k", {"1": "+5V_BUCK", "2": "EFUSE_UV"})
-    s.part("R113", "R_47k", {"1": "EFUSE_UV", "2": "GND"})
-    s.part("R114", "R_100k", {"1": "+5V_BUCK", "2": "EFUSE_OV"})
-    s.part("R115", "R_24k9", {"1": "EFUSE_OV", "2": "GND"})
+    s.part("R113", "R_10k", {"1": "EFUSE_UV", "2": "EFUSE_OV"})
+    s.part("R114", "R_27k", {"1": "EFUSE_OV", "2": "GND"})
     s.part("R116", "R_3k9", {"1": "EFUSE_ILIM", "2": "GND"})
     s.part("C115", "C_22n", {"1": "EFUSE_DVDT", "2": "GND"})
     s.part("R117", "R_10k", {"1": "+5V", "2": "VOUT_SENSE"})
     s.part("R118", "R_10k", {"1": "VOUT_SENSE", "2": "GND"})
     s.part("C117", "C_100n", {"1": "VOUT_SENSE", "2": "GND"})
 
-    band_ext = Zone("+5V", "B.Cu", BAND_EXT, priority=3, min_width=0.25, solid=True)
-    m = Module(NAME, TITLE, REVISION, s, zones=core_mod.bus_copper() + [band_ext],
-               keepouts=core_mod.bus_keepout() + [Keepout(BAND_EXT, layers=("B.Cu",), vias=True)],
-               tracks=power_tracks(), vias=power_vias(), places=PLACES, seed=3)
+    m = Module(NAME, TITLE, REVISION, s, tracks=core_mod.bus_tracks(extend_to=52.4) + power_tracks(),
+               vias=power_vias(), places=PLACES, seed=3)
     m.texts = frame_texts(NAME, REVISION) + [
         Text("+", 12.4, 40.6, 1.5, "B.SilkS"), Text("-", 17.4, 40.6, 1.5, "B.SilkS"),
         Text("BATTERY 5.5-36V", 15.0, 33.0, 1.0, "B.SilkS")]

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from ..design import Module, Place, Sheet
 from . import core as core_mod
-from .common import BUS_TAP_PLACE, bus_tap, bus_tap_track, frame_texts
+from .common import BUS_TAP_PLACE, bus_tap, bus_tap_track, core_tracks, frame_texts
 
 NAME = "template"
 TITLE = "R2P module template"
@@ -24,7 +24,7 @@ def build(core: Sheet) -> Module:
     pins = {p: "" for p in core_mod.FREE_GPIO}
     pins["V5_IN"] = "+5V_MOD"
     s.use(core, pins)
-    m = Module(NAME, TITLE, REVISION, s, zones=core_mod.bus_copper(),
-               keepouts=core_mod.bus_keepout(), tracks=[bus_tap_track()], seed=9)
+    m = Module(NAME, TITLE, REVISION, s,
+               tracks=[*core_mod.bus_tracks(), bus_tap_track(), *core_tracks()], seed=9)
     m.texts = frame_texts(NAME, REVISION)
     return m
