@@ -36,8 +36,8 @@ def frame_texts(name: str, revision: str) -> list[Text]:
         Text("TERM", 29.8, 0.95, 0.8),
         *[Text(label, x, 12.55, 0.8) for label, x in (("5V", 26.0), ("H", 28.54), ("L", 31.08),
                                                         ("G", 33.62))],
-        Text(f"R2P {name.upper()}", 30.0, 44.0, 2.0, "B.SilkS"),
-        Text(f"rev {revision}", 30.0, 47.0, 1.2, "B.SilkS"),
+        Text(f"R2P {name.upper()}", 30.0, 32.0, 2.0, "B.SilkS"),
+        Text(f"rev {revision}", 30.0, 35.0, 1.2, "B.SilkS"),
         Text("BUS IN", 15.9, 10.0, 1.2, "B.SilkS"),    # under J1 (mirrored text, same place)
         Text("BUS OUT", 44.3, 10.0, 1.2, "B.SilkS"),
     ]

@@ -111,6 +111,9 @@ def power_tracks() -> list[Track]:
         T("VIN_PROT", [(36.85, 46.9), (36.85, 45.0)], 0.5),            # D101 (gate zener)
         # bus voltage divider top (R117) to BUS IN's +5V pin 7, between the jack's GND pins 6 and 8
         T("+5V", [(3.175, 16.6), (4.2, 17.6), (12.58, 17.6), (12.58, 13.52)], 0.4),
+        # Kelvin sense lines from the shunt's pads to the amplifier inputs
+        T("VIN_PROT", [(36.06, 41.15), (36.7, 41.8), (37.34, 43.45)], 0.25),
+        T("VIN_BUCK", [(38.34, 41.15), (39.2, 42.0), (40.0, 43.4)], 0.25),
         # current-sense amplifier output under D102 (B.Cu) to its RC filter R103/C105
         T("IIN_AMP", [(36.06, 39.25), (35.1, 38.6)], 0.25),
         T("IIN_AMP", [(35.1, 38.6), (25.0, 37.7)], 0.25, "B.Cu"),
