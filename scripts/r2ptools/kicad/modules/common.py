@@ -33,7 +33,7 @@ def frame_texts(name: str, revision: str) -> list[Text]:
     return [
         Text("BUS IN", 15.9, 18.35, 0.8),
         Text("BUS OUT", 44.3, 18.35, 0.8),
-        Text("TERM", 29.8, 0.95, 0.8),
+        Text("TERM", 29.8, 7.95, 0.8),
         *[Text(label, x, 12.55, 0.8) for label, x in (("5V", 26.0), ("H", 28.54), ("L", 31.08),
                                                         ("G", 33.62))],
         Text(f"R2P {name.upper()}", 30.0, 32.0, 2.0, "B.SilkS"),

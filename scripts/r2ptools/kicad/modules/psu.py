@@ -86,8 +86,8 @@ def power_tracks() -> list[Track]:
     L101's far pad, and the eFuse input is fed from the same trunk."""
     T = Track
     return [
-        # battery +: XT30 pin 1, under the connector body, to Q101's drain tab
-        T("VBAT_IN", [(12.4, 37.15), (12.4, 43.2), (27.6, 43.2), (27.6, 46.3)], 3.0),
+        # battery +: XT30 pin 2, under the connector body, to Q101's drain tab
+        T("VBAT_IN", [(17.4, 37.15), (17.4, 43.2), (27.6, 43.2), (27.6, 46.3)], 3.0),
         # Q101 source to the shunt, and to the TVS
         T("VIN_PROT", [(33.9, 44.0), (35.6, 44.0), (35.9, 44.3), (37.34, 44.3)], 1.8),
         T("VIN_PROT", [(33.9, 44.0), (33.9, 41.5), (33.3, 40.3)], 1.2),
@@ -174,7 +174,8 @@ def build(core: Sheet) -> Module:
     s.flags += ["GND", "VIN_BUCK", "+5V_BUCK"]
 
     # input, reverse polarity, surge
-    s.part("J101", "XT30", {"1": "VBAT_IN", "2": "GND"}, at=Place(12.4, 37.15, 180), value="BATTERY")
+    # XT30PW-M: pin 2 is + (the footprint's and the connector's marking), pin 1 is -
+    s.part("J101", "XT30", {"1": "GND", "2": "VBAT_IN"}, at=Place(12.4, 37.15, 180), value="BATTERY")
     s.part("Q101", "SUD50P06-15", {"D": "VBAT_IN", "S": "VIN_PROT", "G": "Q_GATE"})
     s.part("D101", "Z_15V", {"K": "VIN_PROT", "A": "Q_GATE"})
     s.part("R101", "R_100k", {"1": "Q_GATE", "2": "GND"})
@@ -230,6 +231,6 @@ def build(core: Sheet) -> Module:
     m = Module(NAME, TITLE, REVISION, s, tracks=core_mod.bus_tracks(extend_to=52.4) + power_tracks(),
                vias=power_vias(), places=PLACES, seed=3)
     m.texts = frame_texts(NAME, REVISION) + [
-        Text("+", 12.4, 40.6, 1.5, "B.SilkS"), Text("-", 17.4, 40.6, 1.5, "B.SilkS"),
+        Text("+", 17.4, 40.6, 1.5, "B.SilkS"), Text("-", 12.4, 40.6, 1.5, "B.SilkS"),
         Text("BATTERY 5.5-36V", 15.0, 33.0, 1.0, "B.SilkS")]
     return m
