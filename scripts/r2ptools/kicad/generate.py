@@ -13,7 +13,7 @@ problem, runs freerouting, which needs Java 25) → zone fill → save. Same des
 from __future__ import annotations
 
 import argparse
-import shutil
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -97,6 +97,16 @@ def main(argv: list[str] | None = None) -> int:
         print(f"hwgen: unknown module(s) {', '.join(unknown)}; known: {', '.join(MODULES)}",
               file=sys.stderr)
         return 2
+    if len(names) > 1:
+        # one fresh process per module: pcbnew's footprint-library cache draws on the seeded
+        # UUID generator, so a module built after another in the same process would get other
+        # UUIDs (and another footprint order, DSN and route key) than one built alone
+        for n in names:
+            cmd = [sys.executable, "-m", "r2ptools.kicad.generate", n, "--out", str(args.out.resolve())]
+            if subprocess.run(cmd + (["--route"] if args.route else []),
+                              cwd=Path(__file__).resolve().parents[2]).returncode:
+                return 1
+        return 0
     modules = build_all()
     by_name = {m.name: m for m in modules}
     for n in names:

@@ -48,7 +48,8 @@ def export(sch: Path) -> Netlist:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "net.net"
         p = subprocess.run(["kicad-cli", "sch", "export", "netlist", "--format", "kicadsexpr",
-                            "-o", str(out), str(sch)], capture_output=True, text=True)
+                            "-o", str(out), sch.name], cwd=sch.parent, capture_output=True,
+                           text=True)      # run beside it: sheet file names come out relative
         if p.returncode != 0 or not out.exists():
             raise RuntimeError(f"kicad-cli could not export the netlist of {sch}:\n{p.stdout}{p.stderr}")
         return parse(out.read_text())

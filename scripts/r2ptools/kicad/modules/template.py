@@ -9,13 +9,22 @@ Built and checked like every module, so the template itself is known to pass ERC
 """
 from __future__ import annotations
 
-from ..design import Module, Place, Sheet
+from ..design import Module, Place, Sheet, Track, Via
 from . import core as core_mod
 from .common import BUS_TAP_PLACE, bus_tap, bus_tap_track, core_tracks, frame_texts
 
 NAME = "template"
 TITLE = "R2P module template"
 REVISION = "A"
+
+
+def led_bus_track() -> list[Track]:
+    """LED_BUS (R5 to PC14) by hand, under the crystal's side: with the core alone freerouting
+    leaves this one connection boxed in (60 passes)."""
+    return [Track("LED_BUS", [(7.325, 26.0), (6.65, 26.675), (6.65, 28.5), (8.05, 29.9),
+                              (19.6, 29.9), (20.2, 29.3), (23.85, 29.3)], 0.2),
+            Track("LED_BUS", [(23.85, 29.3), (24.5, 29.3), (27.05, 26.75)], 0.2, "B.Cu"),
+            Track("LED_BUS", [(27.05, 26.75), (25.84, 26.75)], 0.2)]
 
 
 def build(core: Sheet) -> Module:
@@ -25,6 +34,8 @@ def build(core: Sheet) -> Module:
     pins["V5_IN"] = "+5V_MOD"
     s.use(core, pins)
     m = Module(NAME, TITLE, REVISION, s,
-               tracks=[*core_mod.bus_tracks(), bus_tap_track(), *core_tracks()], seed=9)
+               tracks=[*core_mod.bus_tracks(), bus_tap_track(), *core_tracks(), *led_bus_track()],
+               vias=[Via("LED_BUS", 23.85, 29.3, 0.7, 0.3), Via("LED_BUS", 27.05, 26.75, 0.7, 0.3)],
+               seed=9)
     m.texts = frame_texts(NAME, REVISION)
     return m
