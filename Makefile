@@ -4,9 +4,9 @@
 SHELL := /bin/bash
 PY := scripts/py
 
-.PHONY: all setup firmware enclosures check test bench help clean
+.PHONY: all setup firmware fab enclosures check test bench help clean
 
-all: setup enclosures ## Set up if needed, build every artifact into its place, print a summary table
+all: setup fab enclosures ## Set up if needed, build every artifact into its place, print a summary table
 	@$(PY) -m r2ptools.build
 
 setup: ## Install or update tools: apt (KiCad 9.0.8, OpenSCAD, QEMU…), Rust targets, Python venv
@@ -15,6 +15,9 @@ setup: ## Install or update tools: apt (KiCad 9.0.8, OpenSCAD, QEMU…), Rust ta
 
 firmware: setup ## Build the firmware images into firmware/images and print flash/RAM use
 	@scripts/firmware build
+
+fab: setup ## Regenerate each board's fab package (Gerbers, drill, BOM, CPL, PDF, renders, zip) in hardware/*/fab
+	@scripts/fab
 
 enclosures: setup ## Printable cases (STL), STEP assemblies and previews in enclosures/<m>, from each hardware/<m> board
 	@scripts/enclosures generate

@@ -1,0 +1,141 @@
+"""Every part a board may use: how KiCad draws it (symbol, footprint) and what it is (MPN).
+
+The electrical and commercial facts about an MPN (manufacturer, LCSC number, package, price,
+datasheet, description) live once, in `bom/parts.csv`, the project's parts database; this table
+only binds a short key used by the module descriptions (`"R_10k"`) to a KiCad symbol, footprint,
+displayed value and MPN. Every symbol the generator writes carries the MPN, Manufacturer and LCSC
+fields copied from `bom/parts.csv`, so the schematic, the BOM and the database cannot disagree.
+"""
+from __future__ import annotations
+
+import csv
+import functools
+from dataclasses import dataclass
+
+from .. import ROOT
+
+PARTS_CSV = ROOT / "bom" / "parts.csv"
+PARTS_COLUMNS = ["MPN", "Manufacturer", "LCSC", "Package", "Price_USD_qty10", "Datasheet",
+                 "Description"]
+
+
+@dataclass(frozen=True)
+class Item:
+    key: str
+    symbol: str
+    footprint: str
+    value: str
+    mpn: str
+
+    @property
+    def row(self) -> dict[str, str]:
+        rows = database()
+        if self.mpn not in rows:
+            raise KeyError(f"catalogue entry {self.key!r}: MPN {self.mpn!r} has no row in {PARTS_CSV}")
+        return rows[self.mpn]
+
+
+R = "Device:R"
+C = "Device:C"
+R0603 = "Resistor_SMD:R_0603_1608Metric"
+C0603 = "Capacitor_SMD:C_0603_1608Metric"
+C0805 = "Capacitor_SMD:C_0805_2012Metric"
+C1206 = "Capacitor_SMD:C_1206_3216Metric"
+C1210 = "Capacitor_SMD:C_1210_3225Metric"
+
+_ITEMS = [
+    # key, symbol, footprint, value, MPN
+    # --- resistors, 0603 1 % thick film (UNI-ROYAL 0603WAF), JLCPCB basic parts
+    ("R_120", R, R0603, "120", "0603WAF1200T5E"),
+    ("R_1k", R, R0603, "1k", "0603WAF1001T5E"),
+    ("R_10k", R, R0603, "10k", "0603WAF1002T5E"),
+    ("R_47k", R, R0603, "47k", "0603WAF4702T5E"),
+    ("R_56k", R, R0603, "56k", "0603WAF5602T5E"),
+    ("R_3k9", R, R0603, "3.9k", "0603WAF3901T5E"),
+    ("R_24k9", R, R0603, "24.9k", "0603WAF2492T5E"),
+    ("R_27k", R, R0603, "27k", "0603WAF2702T5E"),
+    ("R_100k", R, R0603, "100k", "0603WAF1003T5E"),
+    # --- capacitors
+    ("C_22p", C, C0603, "22pF C0G", "0603CG220J500NT"),
+    ("C_100n", C, C0603, "100nF", "CC0603KRX7R9BB104"),
+    ("C_1u", C, C0603, "1uF", "CL10A105KB8NNNC"),
+    ("C_10u", C, C0805, "10uF 25V", "CL21A106KAYNNNE"),
+    ("C_22n", C, C0603, "22nF", "CL10B223KB8NNNC"),
+    ("C_470n", C, C0603, "470nF", "CL10B474KO8NNNC"),
+    ("C_10u_50V", C, C1206, "10uF 50V", "CL31B106KBHNNNE"),
+    ("C_22u_25V", C, C1210, "22uF 25V", "CS3225X7R226K250NRL"),
+    # --- core actives and electromechanics
+    ("STM32F103CBT6", "MCU_ST_STM32F1:STM32F103CBTx", "Package_QFP:LQFP-48_7x7mm_P0.5mm",
+     "STM32F103CBT6", "STM32F103CBT6"),
+    ("AP2112K-3.3", "Regulator_Linear:AP2112K-3.3", "Package_TO_SOT_SMD:SOT-23-5",
+     "AP2112K-3.3", "AP2112K-3.3TRG1"),
+    ("SN65HVD230", "Interface_CAN_LIN:SN65HVD230", "Package_SO:SOIC-8_3.9x4.9mm_P1.27mm",
+     "SN65HVD230", "SN65HVD230DR"),
+    ("PESD2CAN", "Power_Protection:NUP2105L", "Package_TO_SOT_SMD:SOT-23",
+     "PESD2CAN", "PESD2CAN,215"),
+    ("XTAL_8M", "Device:Crystal_GND24", "Crystal:Crystal_SMD_3225-4Pin_3.2x2.5mm",
+     "8MHz", "X322508MSB4SI"),
+    ("RJ45", "Connector:RJ45", "Connector_RJ:RJ45_Amphenol_54602-x08_Horizontal",
+     "RJ45", "54602-908LF"),
+    ("HDR_1x4", "Connector_Generic:Conn_01x04",
+     "Connector_PinHeader_2.54mm:PinHeader_1x04_P2.54mm_Vertical", "BUS", "PZ254V-11-04P"),
+    ("SWD_2x5", "Connector:Conn_ARM_JTAG_SWD_10",
+     "Connector_PinHeader_1.27mm:PinHeader_2x05_P1.27mm_Vertical_SMD", "SWD", "FTSH-105-01-L-DV-K"),
+    ("SW_TACT", "Switch:SW_Push", "Button_Switch_SMD:SW_Push_1P1T_XKB_TS-1187A",
+     "TS-1187A", "TS-1187A-B-A-B"),
+    ("SW_SLIDE", "Switch:SW_SPDT", "Button_Switch_SMD:SW_SPDT_Shouhan_MSK12C02",
+     "MSK12C02", "MSK12C02"),
+    ("LED_G", "Device:LED", "LED_SMD:LED_0603_1608Metric", "yellow-green", "KT-0603YG"),
+    ("LED_Y", "Device:LED", "LED_SMD:LED_0603_1608Metric", "yellow", "KT-0603Y"),
+    ("LED_R", "Device:LED", "LED_SMD:LED_0603_1608Metric", "red", "KT-0603R"),
+    ("PTC_500mA", "Device:Polyfuse", "Fuse:Fuse_1206_3216Metric", "0.5A", "BSMD1206-050-6V"),
+    # --- psu
+    ("XT30", "Connector_Generic:Conn_01x02", "Connector_AMASS:AMASS_XT30PW-M_1x02_P2.50mm_Horizontal",
+     "XT30 IN", "XT30PW-M"),
+    ("SUD50P06-15", "Transistor_FET:SUD50P06-15", "Package_TO_SOT_SMD:TO-252-2", "SUD50P06-15",
+     "SUD50P06-15"),
+    ("Z_15V", "Device:D_Zener", "Diode_SMD:D_SOD-123", "15V", "BZT52C15"),
+    ("SMAJ36A", "Diode:SMAJ36A", "Diode_SMD:D_SMA", "SMAJ36A", "SMAJ36A"),
+    ("R_10m", R, "Resistor_SMD:R_1206_3216Metric", "10m 1%", "RL1206FR-7W0R01L"),
+    ("INA293A2", "Amplifier_Current:INA293A2", "Package_TO_SOT_SMD:SOT-23-5", "INA293A2",
+     "INA293A2IDBVR"),
+    ("LM76005", "Regulator_Switching:LM76005",
+     "Package_DFN_QFN:Texas_RNP0030B_WQFN-30-1EP_4x6mm_P0.5mm_EP1.8x4.5mm", "LM76005", "LM76005RNPR"),
+    ("L_10u", "Device:L", "Inductor_SMD:L_Bourns_SRP1038C_10.0x10.0mm", "10uH 7.5A", "SRP1038A-100M"),
+    ("TPS26631", "Power_Management:TPS26631PWP",
+     "Package_SO:HTSSOP-20-1EP_4.4x6.5mm_P0.65mm_EP3.4x6.5mm", "TPS26631", "TPS26631PWPR"),
+    # --- proximity
+    ("JST_PH_3", "Connector_Generic:Conn_01x03",
+     "Connector_JST:JST_PH_S3B-PH-K_1x03_P2.00mm_Horizontal", "PH 3p", "S3B-PH-K-S(LF)(SN)"),
+    ("SRV05-4", "Power_Protection:SRV05-4", "Package_TO_SOT_SMD:SOT-23-6", "SRV05-4",
+     "SRV05-4-P-T7"),
+    ("TPS2065C", "Power_Management:TPS2065CDBV", "Package_TO_SOT_SMD:SOT-23-5", "TPS2065C",
+     "TPS2065CDBVR"),
+]
+
+_BY_KEY = {k: Item(k, s, f, v, m) for k, s, f, v, m in _ITEMS}
+
+
+def item(key: str) -> Item:
+    if key not in _BY_KEY:
+        raise KeyError(f"no catalogue entry {key!r} in r2ptools/kicad/catalog.py")
+    return _BY_KEY[key]
+
+
+def items() -> list[Item]:
+    return list(_BY_KEY.values())
+
+
+@functools.cache
+def database() -> dict[str, dict[str, str]]:
+    """bom/parts.csv by MPN."""
+    with PARTS_CSV.open(newline="") as f:
+        reader = csv.DictReader(f)
+        if reader.fieldnames != PARTS_COLUMNS:
+            raise ValueError(f"{PARTS_CSV}: columns must be {PARTS_COLUMNS}, found {reader.fieldnames}")
+        rows = {}
+        for n, row in enumerate(reader, start=2):
+            if row["MPN"] in rows:
+                raise ValueError(f"{PARTS_CSV}:{n}: MPN {row['MPN']} listed twice")
+            rows[row["MPN"]] = row
+        return rows

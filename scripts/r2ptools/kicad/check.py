@@ -1,0 +1,166 @@
+"""Board checks: KiCad's ERC and DRC (with schematic parity), and the parts-database check.
+
+    scripts/py -m r2ptools.kicad.check [BOARD_DIR…]     (default: every hardware/*/ with a .kicad_pro)
+
+Reads KiCad's JSON reports (exit status alone does not say whether there were violations) and
+prints one line per problem. Exit status 1 if any board has an ERC error, a DRC error or warning
+that is not on the reviewed list below, an unconnected item, a parity difference, or a symbol
+whose MPN/Manufacturer/LCSC is missing or disagrees with bom/parts.csv.
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .. import ROOT
+from . import catalog, sexpr
+
+HARDWARE = ROOT / "hardware"
+
+# DRC warnings reviewed and accepted (docs/hardware.md, "Checks"): silkscreen cosmetics that the
+# fab clips automatically. Anything else, and every error, fails the check.
+ACCEPTED_DRC_WARNINGS = {"silk_overlap", "silk_over_copper", "silk_edge_clearance"}
+
+
+@dataclass
+class Report:
+    board: Path
+    problems: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+
+def boards(root: Path = HARDWARE) -> list[Path]:
+    return sorted(p.parent for p in root.glob("*/*.kicad_pro"))
+
+
+def _run(cmd: list[str]) -> None:
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode not in (0, 5):   # 5: violations found (with --exit-code-violations)
+        raise RuntimeError(f"{' '.join(cmd)} failed ({p.returncode}):\n{p.stdout}{p.stderr}")
+
+
+def erc(sch: Path) -> dict:
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "erc.json"
+        _run(["kicad-cli", "sch", "erc", "--format", "json", "--severity-all", "-o", str(out), str(sch)])
+        return json.loads(out.read_text())
+
+
+def drc(pcb: Path) -> dict:
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "drc.json"
+        _run(["kicad-cli", "pcb", "drc", "--format", "json", "--severity-all", "--schematic-parity",
+              "-o", str(out), str(pcb)])
+        return json.loads(out.read_text())
+
+
+def _items(v: dict) -> str:
+    return "; ".join(i["description"] for i in v.get("items", []))
+
+
+def symbol_fields(sch: Path) -> list[tuple[str, str, dict[str, str]]]:
+    """(file, reference, fields) of every placed symbol in `sch` and the sheets it uses."""
+    out = []
+    seen = set()
+    todo = [sch]
+    while todo:
+        f = todo.pop()
+        if f in seen:
+            continue
+        seen.add(f)
+        tree = sexpr.parse(f.read_text())
+        for s in sexpr.find_all(tree, "symbol"):
+            props = {str(p[1]): str(p[2]) for p in sexpr.find_all(s, "property")}
+            refs = {str(sexpr.find(path, "reference")[1])
+                    for inst in sexpr.find_all(s, "instances")
+                    for proj in sexpr.find_all(inst, "project")
+                    for path in sexpr.find_all(proj, "path")} or {props.get("Reference", "?")}
+            for r in sorted(refs):
+                out.append((f.name, r, props))
+        for sh in sexpr.find_all(tree, "sheet"):
+            for p in sexpr.find_all(sh, "property"):
+                if str(p[1]) == "Sheetfile":
+                    todo.append((f.parent / str(p[2])).resolve())
+    return out
+
+
+def bom_fields(sch: Path, warnings: list[str] | None = None) -> list[str]:
+    """Every symbol on the board must name an MPN whose bom/parts.csv row it agrees with.
+
+    A row may leave LCSC empty for a part LCSC does not list (bought from TI or a distributor
+    and consigned): the symbol must then leave it empty too, and it is reported as a warning."""
+    rows = catalog.database()
+    problems = []
+    for file, ref, props in symbol_fields(sch):
+        if ref.startswith("#"):
+            continue                              # power flags: not parts
+        mpn = props.get("MPN", "")
+        if not mpn:
+            problems.append(f"{file}: {ref}: no MPN field")
+            continue
+        row = rows.get(mpn)
+        if row is None:
+            problems.append(f"{file}: {ref}: MPN {mpn} has no row in bom/parts.csv")
+            continue
+        if not row["LCSC"] and not props.get("LCSC") and warnings is not None:
+            warnings.append(f"{file}: {ref}: {mpn} has no LCSC part number (consigned part)")
+        for k in ("Manufacturer", "LCSC"):
+            if k == "LCSC" and not row["LCSC"] and not props.get("LCSC"):
+                continue
+            if not props.get(k):
+                problems.append(f"{file}: {ref}: empty {k} field (bom/parts.csv says {row[k]!r})")
+            elif props[k] != row[k]:
+                problems.append(f"{file}: {ref}: {k} {props[k]!r} but bom/parts.csv says {row[k]!r}")
+    return problems
+
+
+def check(folder: Path) -> Report:
+    name = folder.name
+    sch, pcb = folder / f"{name}.kicad_sch", folder / f"{name}.kicad_pcb"
+    r = Report(folder)
+    e = erc(sch)
+    for s in e["sheets"]:
+        for v in s["violations"]:
+            line = f"{name}: ERC {v['severity']} {v['type']} on sheet {s['path']}: {v['description']} ({_items(v)})"
+            (r.problems if v["severity"] == "error" else r.warnings).append(line)
+    d = drc(pcb)
+    for v in d["violations"]:
+        line = f"{name}: DRC {v['severity']} {v['type']}: {v['description']} ({_items(v)})"
+        if v["severity"] == "error" or v["type"] not in ACCEPTED_DRC_WARNINGS:
+            r.problems.append(line)
+        else:
+            r.warnings.append(line)
+    for v in d["unconnected_items"]:
+        r.problems.append(f"{name}: DRC unconnected: {v['description']} ({_items(v)})")
+    for v in d["schematic_parity"]:
+        r.problems.append(f"{name}: parity {v['type']}: {v['description']} ({_items(v)})")
+    bom_warnings: list[str] = []
+    r.problems += [f"{name}: BOM {p}" for p in bom_fields(sch, bom_warnings)]
+    r.warnings += [f"{name}: BOM {w}" for w in bom_warnings]
+    return r
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = argv if argv is not None else sys.argv[1:]
+    folders = [Path(a) for a in args] or boards()
+    bad = 0
+    for f in folders:
+        r = check(f)
+        for p in r.problems:
+            print(p)
+        print(f"{f.name}: {'OK' if r.ok else 'FAILED'} ({len(r.problems)} problems, "
+              f"{len(r.warnings)} reviewed warnings)")
+        bad += not r.ok
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,199 @@
+"""The readable description a board is generated from: sheets of parts, their nets and places.
+
+A module is written as Python (hardware/<module>/design.py… see `r2ptools.kicad.modules`): each
+part names a catalogue entry (symbol, footprint, value, MPN, from `catalog`) and says which net
+each pin is on. Pins are named by their symbol pin name when it is unique (`VIN`, `PA0`) or by
+number (`"24"`). A pin left out is an error unless listed in `nc=` (a deliberate no-connect), so a
+forgotten pin never slips into a board silently. Placement (mm from the board's top-left corner,
+rotation in degrees, side) lives beside the part.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from . import catalog, libsym
+
+GLOBAL_NETS = ("GND", "+3V3", "+5V")
+"""Nets shared by every sheet of a board (global labels): the bus supply, its ground, the 3.3 V."""
+
+
+class DesignError(ValueError):
+    """A description that cannot become a board; the message names the part and pin."""
+
+
+@dataclass
+class Place:
+    x: float
+    y: float
+    rot: float = 0.0
+    back: bool = False
+
+
+@dataclass
+class Part:
+    ref: str
+    key: str                          # catalogue entry
+    nets: dict[str, str]              # pin number -> net name
+    place: Place | None
+    value: str
+    note: str = ""
+
+    @property
+    def item(self) -> catalog.Item:
+        return catalog.item(self.key)
+
+
+@dataclass
+class Port:
+    """A net that crosses a sheet boundary (a hierarchical label in the child sheet)."""
+    name: str
+    shape: str = "bidirectional"
+
+
+@dataclass
+class Sheet:
+    name: str
+    title: str
+    parts: list[Part] = field(default_factory=list)
+    ports: list[Port] = field(default_factory=list)
+    flags: list[str] = field(default_factory=list)   # nets given a PWR_FLAG (driven from outside)
+    children: list["SheetUse"] = field(default_factory=list)
+
+    def part(self, ref: str, key: str, pins: dict[str, str], at: Place | tuple | None = None,
+             nc: tuple[str, ...] = (), value: str | None = None, note: str = "") -> Part:
+        """Adds a part; `pins` maps pin name or number to net, `nc` lists unconnected pins."""
+        it = catalog.item(key)
+        symbol_pins = libsym.pins(it.symbol)
+        by_number = {p.number: p for p in symbol_pins}
+        names: dict[str, list[str]] = {}
+        for p in symbol_pins:
+            names.setdefault(p.name, []).append(p.number)
+        nets: dict[str, str] = {}
+
+        def resolve(pin: str) -> list[str]:
+            if pin in by_number:
+                return [pin]
+            if pin in names:
+                return names[pin]          # a name shared by several pins (VSS) means all of them
+            raise DesignError(f"{self.name}/{ref}: symbol {it.symbol} has no pin {pin!r} "
+                              f"(pins: {', '.join(sorted(by_number))})")
+
+        for pin, net in pins.items():
+            for num in resolve(pin):
+                if num in nets and nets[num] != net:
+                    raise DesignError(f"{self.name}/{ref} pin {num}: on both {nets[num]} and {net}")
+                nets[num] = net
+        for pin in nc:
+            for num in resolve(pin):
+                nets[num] = ""
+        missing = [p.number for p in symbol_pins if p.number not in nets and p.etype != "no_connect"]
+        if missing:
+            raise DesignError(f"{self.name}/{ref} ({it.symbol}): pins {', '.join(missing)} not "
+                              "connected: give each a net or list it in nc=")
+        for p in symbol_pins:
+            nets.setdefault(p.number, "")
+        if any(p.ref == ref for p in self.parts):
+            raise DesignError(f"{self.name}: reference {ref} used twice")
+        place = at if isinstance(at, Place) or at is None else Place(*at)
+        part = Part(ref, key, nets, place, value or it.value, note)
+        self.parts.append(part)
+        return part
+
+    def port(self, name: str, shape: str = "bidirectional") -> str:
+        self.ports.append(Port(name, shape))
+        return name
+
+    def use(self, child: "Sheet", nets: dict[str, str], at: tuple[float, float] = (30, 30)) -> None:
+        """Instantiates `child` here; `nets` maps each child port to a net of this sheet ('' = NC)."""
+        missing = [p.name for p in child.ports if p.name not in nets]
+        extra = [k for k in nets if k not in {p.name for p in child.ports}]
+        if missing or extra:
+            raise DesignError(f"{self.name}: sheet {child.name}: ports not mapped {missing}, "
+                              f"unknown ports {extra}")
+        self.children.append(SheetUse(child, nets, at))
+
+
+@dataclass
+class SheetUse:
+    sheet: Sheet
+    nets: dict[str, str]
+    at: tuple[float, float]
+
+
+@dataclass
+class Text:
+    text: str
+    x: float
+    y: float
+    size: float = 1.0
+    layer: str = "F.SilkS"
+    rot: float = 0.0
+
+
+@dataclass
+class Track:
+    """A hand-placed copper path (power): points in mm, width in mm."""
+    net: str
+    points: list[tuple[float, float]]
+    width: float
+    layer: str = "F.Cu"
+
+
+@dataclass
+class Via:
+    net: str
+    x: float
+    y: float
+    size: float = 0.6
+    drill: float = 0.3
+
+
+@dataclass
+class Zone:
+    """A copper pour: polygon in mm; priority decides which of overlapping zones wins."""
+    net: str
+    layer: str
+    polygon: list[tuple[float, float]]
+    priority: int = 0
+    min_width: float = 0.2
+    thermal_gap: float = 0.3
+    spoke: float = 0.5
+    solid: bool = False               # pads joined solid (power) rather than by thermal spokes
+
+
+@dataclass
+class Keepout:
+    """A rule area other nets' tracks may not cross (e.g. to keep a power band in one piece)."""
+    polygon: list[tuple[float, float]]
+    layers: tuple[str, ...] = ("F.Cu", "B.Cu")
+    tracks: bool = True
+    vias: bool = False
+
+
+@dataclass
+class Module:
+    """One board: its root sheet, board text, hand-routed power copper, identity."""
+    name: str
+    title: str
+    revision: str
+    root: Sheet
+    texts: list[Text] = field(default_factory=list)
+    tracks: list[Track] = field(default_factory=list)
+    vias: list[Via] = field(default_factory=list)
+    zones: list[Zone] = field(default_factory=list)
+    keepouts: list[Keepout] = field(default_factory=list)
+    places: dict[str, Place] = field(default_factory=dict)   # per-board moves of core parts
+    netclasses: dict[str, list[str]] = field(default_factory=dict)
+    seed: int = 1
+
+    def sheets(self) -> list[Sheet]:
+        out, todo = [], [self.root]
+        while todo:
+            s = todo.pop(0)
+            if s not in out:
+                out.append(s)
+            todo.extend(u.sheet for u in s.children)
+        return out
+
+    def all_parts(self) -> list[tuple[Sheet, Part]]:
+        return [(s, p) for s in self.sheets() for p in s.parts]

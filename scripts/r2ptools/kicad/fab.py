@@ -1,0 +1,186 @@
+"""`make fab`: each board's fab package, byte for byte reproducible, into hardware/<module>/fab/.
+
+    scripts/fab [MODULE…] [--out DIR]
+
+    gerbers/          Gerber X2 (copper, mask, paste, silk, outline), Excellon drill (PTH and
+                      NPTH apart), Gerber job file: what a fab needs to make the bare board
+    <module>-gerbers.zip  the same files zipped for upload (fixed timestamps and order)
+    <module>-bom.csv  assembly BOM: designators, quantity, value, footprint, manufacturer, MPN, LCSC
+    <module>-cpl.csv  pick and place (JLCPCB's column names), board origin at the top-left corner
+    <module>-schematic.pdf
+    <module>-top.png, <module>-bottom.png   renders (no 3D models are installed: bare pads)
+
+KiCad stamps the date into Gerber, drill, job and PDF files; those stamps are removed or pinned
+to the commit date of nothing in particular (1980-01-01, the zip epoch) so that regenerating from
+unchanged sources gives identical bytes, which the tests check.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import zipfile
+from collections import defaultdict
+from pathlib import Path
+
+from .. import ROOT
+from . import check
+
+HARDWARE = ROOT / "hardware"
+FAB_BOARDS = ["proximity", "psu"]
+"""Boards with a committed fab package (the template is checked but not manufactured)."""
+
+GERBER_LAYERS = ["F.Cu", "B.Cu", "F.Paste", "B.Paste", "F.SilkS", "B.SilkS", "F.Mask", "B.Mask",
+                 "Edge.Cuts"]
+ZIP_DATE = (1980, 1, 1, 0, 0, 0)
+PDF_DATE = b"D:19800101000000+00'00'"
+
+_DATE_LINES = [
+    re.compile(r"^%TF\.CreationDate,.*\*%\r?\n", re.M),
+    re.compile(r"^; #@! TF\.CreationDate,.*\r?\n", re.M),
+    re.compile(r'^\s*"CreationDate":\s*".*",?\r?\n', re.M),
+]
+
+
+def _kicad(*args: str) -> None:
+    p = subprocess.run(["kicad-cli", *args], capture_output=True, text=True)
+    if p.returncode != 0:
+        raise RuntimeError(f"kicad-cli {' '.join(args)} failed:\n{p.stdout}{p.stderr}")
+
+
+def strip_dates(text: str) -> str:
+    """Removes KiCad's creation-date stamps from Gerber, Excellon and job files."""
+    for rx in _DATE_LINES:
+        text = rx.sub("", text)
+    text = re.sub(r"^(G04 Created by KiCad \(.*?\)) date .*\*$", r"\1*", text, flags=re.M)
+    text = re.sub(r"^(; DRILL file \{.*?\}) date .*$", r"\1", text, flags=re.M)
+    return text
+
+
+def pin_pdf_dates(data: bytes) -> bytes:
+    """Same-length replacement of the PDF's date strings (keeps the xref offsets valid)."""
+    def fix(m: re.Match) -> bytes:
+        inner = m.group(2)
+        new = PDF_DATE[:len(inner)].ljust(len(inner), b" ")
+        return m.group(1) + new + m.group(3)
+    return re.sub(rb"(/(?:CreationDate|ModDate)\s*\()([^)]*)(\))", fix, data)
+
+
+def gerbers(pcb: Path, out: Path) -> list[Path]:
+    out.mkdir(parents=True, exist_ok=True)
+    _kicad("pcb", "export", "gerbers", "--layers", ",".join(GERBER_LAYERS), "--subtract-soldermask",
+           "--use-drill-file-origin", "-o", str(out) + "/", str(pcb))
+    _kicad("pcb", "export", "drill", "--format", "excellon", "--excellon-units", "mm",
+           "--excellon-separate-th", "--drill-origin", "plot", "-o", str(out) + "/", str(pcb))
+    files = sorted(p for p in out.iterdir() if p.is_file())
+    for f in files:
+        f.write_text(strip_dates(f.read_text()))
+    return files
+
+
+def write_zip(files: list[Path], dest: Path) -> None:
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
+        for f in sorted(files, key=lambda p: p.name):
+            info = zipfile.ZipInfo(f.name, date_time=ZIP_DATE)
+            info.external_attr = 0o644 << 16
+            info.compress_type = zipfile.ZIP_DEFLATED
+            z.writestr(info, f.read_bytes())
+    dest.write_bytes(buf.getvalue())
+
+
+def _ref_key(ref: str) -> tuple[str, int]:
+    head = ref.rstrip("0123456789")
+    return head, int(ref[len(head):] or 0)
+
+
+def bom(sch: Path, pcb_footprints: dict[str, str], dest: Path) -> None:
+    groups: dict[tuple, list[str]] = defaultdict(list)
+    for _, ref, props in check.symbol_fields(sch):
+        if ref.startswith("#"):
+            continue
+        key = (props.get("Value", ""), props.get("Footprint", "").split(":")[-1],
+               props.get("Manufacturer", ""), props.get("MPN", ""), props.get("LCSC", ""))
+        groups[key].append(ref)
+    rows = sorted(((sorted(refs, key=_ref_key), k) for k, refs in groups.items()),
+                  key=lambda r: _ref_key(r[0][0]))
+    with dest.open("w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["Designator", "Quantity", "Value", "Footprint", "Manufacturer", "MPN", "LCSC"])
+        for refs, (value, fp, man, mpn, lcsc) in rows:
+            w.writerow([",".join(refs), len(refs), value, fp, man, mpn, lcsc])
+
+
+def cpl(pcb: Path, dest: Path) -> None:
+    """KiCad's position file in JLCPCB's column names (Designator, Mid X, Mid Y, Layer, Rotation)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        raw = Path(tmp) / "pos.csv"
+        _kicad("pcb", "export", "pos", "--format", "csv", "--units", "mm", "--side", "both",
+               "--use-drill-file-origin", "--exclude-dnp", "-o", str(raw), str(pcb))
+        rows = list(csv.DictReader(raw.open()))
+    rows.sort(key=lambda r: _ref_key(r["Ref"]))
+    with dest.open("w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["Designator", "Mid X", "Mid Y", "Layer", "Rotation"])
+        for r in rows:
+            w.writerow([r["Ref"], f"{float(r['PosX']):.4f}mm", f"{float(r['PosY']):.4f}mm",
+                        "Top" if r["Side"] == "top" else "Bottom", f"{float(r['Rot']):.2f}"])
+
+
+def schematic_pdf(sch: Path, dest: Path) -> None:
+    _kicad("sch", "export", "pdf", "-o", str(dest), str(sch))
+    dest.write_bytes(pin_pdf_dates(dest.read_bytes()))
+
+
+def renders(pcb: Path, folder: Path, name: str) -> list[Path]:
+    out = []
+    for side in ("top", "bottom"):
+        dest = folder / f"{name}-{side}.png"
+        _kicad("pcb", "render", "--side", side, "--width", "1200", "--height", "1000",
+               "--quality", "basic", "--background", "opaque", "--zoom", "1.0", "-o", str(dest), str(pcb))
+        out.append(dest)
+    return out
+
+
+def package(board_dir: Path, out: Path) -> list[Path]:
+    """Writes the fab package of `board_dir` into `out` (replaced entirely)."""
+    name = board_dir.name
+    pcb, sch = board_dir / f"{name}.kicad_pcb", board_dir / f"{name}.kicad_sch"
+    if out.exists():
+        shutil.rmtree(out)
+    out.mkdir(parents=True)
+    files = gerbers(pcb, out / "gerbers")
+    write_zip(files, out / f"{name}-gerbers.zip")
+    bom(sch, {}, out / f"{name}-bom.csv")
+    cpl(pcb, out / f"{name}-cpl.csv")
+    schematic_pdf(sch, out / f"{name}-schematic.pdf")
+    renders(pcb, out, name)
+    return sorted(p for p in out.rglob("*") if p.is_file())
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="scripts/fab", description=__doc__.split("\n")[0])
+    ap.add_argument("modules", nargs="*", help=f"boards (default: {', '.join(FAB_BOARDS)})")
+    ap.add_argument("--hardware", type=Path, default=HARDWARE, help="hardware folder to read")
+    ap.add_argument("--out", type=Path, default=None,
+                    help="write packages under OUT/<module>/fab instead of the hardware folder")
+    args = ap.parse_args(argv)
+    names = args.modules or [n for n in FAB_BOARDS if (args.hardware / n / f"{n}.kicad_pcb").exists()]
+    for n in names:
+        src = args.hardware / n
+        if not (src / f"{n}.kicad_pcb").exists():
+            print(f"fab: no board {src / (n + '.kicad_pcb')}", file=sys.stderr)
+            return 2
+        dest = (args.out or args.hardware) / n / "fab"
+        files = package(src, dest)
+        print(f"fab: {n}: {len(files)} files in {dest}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,22 @@
+"""Project library tables naming KiCad's installed libraries (${KICAD9_*_DIR}).
+
+With them the projects open, pass ERC and DRC and match footprints against their libraries on a
+machine whose global library tables were never configured (a fresh install, CI, kicad-cli)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def write(folder: Path, symbol_libs: list[str], footprint_libs: list[str]) -> None:
+    sym = ["(sym_lib_table", "\t(version 7)"]
+    for lib in sorted(set(symbol_libs)):
+        sym.append(f'\t(lib (name "{lib}")(type "KiCad")(uri "${{KICAD9_SYMBOL_DIR}}/{lib}.kicad_sym")'
+                   '(options "")(descr ""))')
+    sym.append(")")
+    (folder / "sym-lib-table").write_text("\n".join(sym) + "\n")
+    fp = ["(fp_lib_table", "\t(version 7)"]
+    for lib in sorted(set(footprint_libs)):
+        fp.append(f'\t(lib (name "{lib}")(type "KiCad")(uri "${{KICAD9_FOOTPRINT_DIR}}/{lib}.pretty")'
+                  '(options "")(descr ""))')
+    fp.append(")")
+    (folder / "fp-lib-table").write_text("\n".join(fp) + "\n")

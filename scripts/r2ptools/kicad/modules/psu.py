@@ -1,0 +1,236 @@
+"""hardware/psu: battery in (5.5–36 V), bus out (5 V, 4 A), battery voltage and current sensing.
+
+Power path, left to right along the bottom edge:
+
+    XT30 ──► Q101 P-MOSFET (reverse polarity) ──► VIN_PROT ──► R102 10 mΩ shunt ──► VIN_BUCK
+             D101 15 V zener holds Vgs,              D102 SMAJ36A TVS      INA293A2 ×50 → IIN_SENSE
+             R101 pulls the gate down                R104/R105 → VIN_SENSE
+    VIN_BUCK ──► U102 LM76005 synchronous buck, 400 kHz, L101 10 µH ──► +5V_BUCK ──► core LDO (MCU)
+    +5V_BUCK ──► U103 TPS26631 eFuse (BUS_EN, BUS_FAULT, 4.6 A limit, 6.1 V OVP) ──► +5V (the bus)
+
+Ratings. Q101 -60 V (clamped input ≤ 58.1 V at the TVS's rated pulse), LM76005 60 V (65 V abs
+max), INA293 110 V common mode, input ceramics 50 V X7R (36 V max input, 72 %). The buck output
+feeds the PSU's own MCU ahead of the eFuse, so the firmware keeps running and reports a tripped
+bus (BUS_FAULT) instead of browning out with it.
+
+Design values (datasheets: LM76005 SNVSBK5, TPS2663 SLVSDO8, INA293 SBOSA06):
+- FB: VOUT = 1.0 V × (1 + 100 k / 24.9 k) = 5.02 V. EN: 100 k / 47 k from VIN_BUCK. BIAS to GND
+  (the datasheet's other option): VCC then comes from VIN, a few mA × VIN lost at light load,
+  in exchange for a routable pin row; RT open = 400 kHz; SYNC/MODE to GND = auto (PFM) mode.
+- L: ΔI = (36 − 5) × 5 / (36 × 400 kHz × 10 µH) = 1.08 A (27 % of 4 A); peak 4.54 A, well
+  under the SRP1038A's 12 A saturation; 4 × 22 µF X7R (≈ 4 × 14 µF at 5 V DC bias) at the output.
+- eFuse: I_LIM = 18 / R_ILIM(kΩ) = 18 / 3.9 = 4.6 A; one chain 100 k / 10 k / 27 k from
+  +5V_BUCK sets UVLO = 1.2 V × 137/37 = 4.44 V and OVP = 1.2 V × 137/27 = 6.09 V (a shorted
+  buck high-side cannot put VIN on the bus);
+  MODE open = latch off on overload (the firmware sees BUS_FAULT and retries by toggling BUS_EN);
+  SHDN pulled down, so the bus stays off until the firmware turns it on.
+- Sensing: VIN_SENSE = VIN × 10 k / 110 k (36 V → 3.27 V), source 9.1 kΩ; IIN_SENSE = 0.5 V/A
+  (4 A → 2.0 V, full scale 6.6 A), 1 k + 100 nF; VOUT_SENSE = 5 V / 2 = 2.5 V.
+"""
+from __future__ import annotations
+
+from ..design import Module, Place, Sheet, Text, Track, Via
+from . import core as core_mod
+from .common import frame_texts
+
+NAME = "psu"
+TITLE = "R2P power supply module"
+REVISION = "A"
+
+P = Place
+PLACES = {
+    # --- power stage (bottom edge and right side)
+    "J101": P(12.4, 37.15, 180), "Q101": P(28.87, 46.3, 180),
+    "D102": P(31.3, 40.3, 180), "R102": P(38.8, 44.3, 0), "U101": P(37.2, 40.2, 0),
+    "D101": P(38.5, 46.9, 0), "R101": P(38.5, 49.0, 0),
+    "U102": P(43.0, 39.5, 270),
+    "C101": P(43.9, 43.5, 0), "C102": P(43.9, 46.0, 0), "C103": P(43.9, 48.4, 0),
+    "C109": P(42.85, 35.16, 90), "C108": P(41.25, 35.16, 90), "C110": P(39.65, 35.16, 90),
+    "R108": P(37.6, 37.6, 0), "R109": P(34.5, 37.6, 0),
+    "R104": P(31.5, 36.9, 90), "R105": P(29.7, 36.9, 90), "C106": P(27.9, 36.9, 90),
+    "R106": P(47.2, 48.0, 90), "R107": P(49.0, 48.0, 90), "C104": P(50.8, 48.0, 90),
+    "L101": P(47.5, 28.2, 0),
+    "C111": P(56.85, 20.3, 0), "C112": P(56.85, 24.0, 0), "C113": P(56.85, 27.7, 0),
+    "C114": P(56.85, 31.4, 0),
+    "U103": P(56.05, 13.5, 90),
+    # eFuse set-up parts on the back: UVLO/OVP/dV/dt under the output trunk, below the eFuse's
+    # bottom pin row; ILIM above its top row (the top row's other pins escape through vias there)
+    "R112": P(55.2, 19.5, 180, True), "R113": P(58.3, 19.5, 180, True),
+    "R114": P(58.3, 21.15, 180, True), "C115": P(55.2, 22.95, 180, True),
+    "R116": P(58.3, 8.7, 0, True),
+    "R110": P(31.6, 33.2, 0), "R111": P(28.5, 33.2, 0),
+    "R103": P(25.0, 39.6, 270), "C105": P(23.2, 39.6, 270),
+    "R117": P(4.0, 16.6, 0), "R118": P(1.9, 36.9, 90), "C117": P(3.7, 36.9, 90),
+    # --- core parts moved to make room (the core's schematic is unchanged)
+    "D2": P(2.2, 9.6, 180), "R4": P(5.3, 9.6, 0), "D3": P(2.2, 11.6, 180), "R5": P(5.3, 11.6, 0),
+    "D4": P(2.2, 13.6, 180), "R6": P(5.3, 13.6, 0),
+    "SW1": P(3.95, 23.0, 90), "SW2": P(3.95, 31.0, 90),
+    "U1": P(19.0, 26.0, 0), "C3": P(14.6, 19.6, 0), "R1": P(18.4, 19.6, 0), "C4": P(25.5, 19.9, 0),
+    "C6": P(12.9, 30.3, 90), "C5": P(25.4, 33.1, 0), "R2": P(22.3, 33.1, 0),
+    "Y1": P(10.4, 25.2, 0), "C1": P(10.4, 28.7, 0), "C2": P(10.4, 21.7, 0),
+    "C10": P(10.4, 30.6, 0),
+    "U2": P(16.0, 33.1, 0), "C8": P(12.0, 33.6, 0), "C7": P(19.3, 33.1, 90),
+    "U3": P(28.8, 26.5, 0), "C9": P(28.8, 30.4, 0),
+    "J4": P(36.8, 22.7, 90),
+}
+
+
+def power_tracks() -> list[Track]:
+    """The 4 A paths, drawn here rather than left to the autorouter.
+
+    Widths follow docs/hardware.md: 2.0 mm carries 4 A on 1 oz outer copper at a 10 °C rise
+    (IPC-2221 external-layer curve; IPC-2152 gives less for outer layers over a plane), so the
+    long runs are 2.0-3.0 mm and only the last millimetre into a fine-pitch pin narrows to the
+    pin. The buck's hot loop is the short one: C103/C101/C102 sit directly under U102's PVIN
+    and PGND pins, the switch node runs 6 mm straight up to L101, the output capacitors line
+    L101's far pad, and the eFuse input is fed from the same trunk."""
+    T = Track
+    return [
+        # battery +: XT30 pin 2, under the connector body, to Q101's drain tab
+        T("VBAT_IN", [(17.4, 37.15), (17.4, 43.2), (27.6, 43.2), (27.6, 46.3)], 3.0),
+        # Q101 source to the shunt, and to the TVS
+        T("VIN_PROT", [(33.9, 44.0), (35.6, 44.0), (35.9, 44.3), (37.34, 44.3)], 1.8),
+        T("VIN_PROT", [(33.9, 44.0), (33.9, 41.5), (33.3, 40.3)], 1.2),
+        # shunt to the input capacitors, up to PVIN (neck to the 0.5 mm-pitch pins)
+        T("VIN_BUCK", [(40.26, 44.3), (42.6, 44.3)], 1.8),
+        T("VIN_BUCK", [(42.6, 48.4), (42.6, 42.9)], 2.0),
+        T("VIN_BUCK", [(42.6, 42.9), (43.0, 42.5), (43.0, 41.36)], 0.9),
+        T("VIN_BUCK", [(42.5, 41.36), (43.5, 41.36)], 0.3),
+        # power ground of the hot loop: PGND pins to the capacitor returns (vias to both pours)
+        T("GND", [(44.5, 41.36), (45.5, 41.36)], 0.3),
+        T("GND", [(45.0, 41.36), (45.0, 42.1), (45.4, 42.5), (45.4, 48.6)], 1.2),
+        # small-signal pins of U102 to their parts, fanned out from the 0.5 mm pitch by hand
+        T("GND", [(41.5, 37.64), (41.5, 38.8)], 0.2),                  # BIAS to the pad
+        T("GND", [(41.0, 41.36), (41.0, 40.3)], 0.2),                  # SYNC/MODE: auto mode
+        T("BOOT", [(42.85, 35.94), (43.0, 36.7), (43.0, 37.64)], 0.25),
+        T("VCC_BUCK", [(41.25, 35.94), (42.0, 36.6), (42.0, 37.64)], 0.25),
+        T("SS_BUCK", [(39.65, 35.94), (40.5, 36.7), (40.5, 37.64)], 0.25),
+        T("GND", [(39.65, 34.38), (40.45, 33.75), (41.25, 34.38)], 0.3),
+        T("SW", [(42.85, 34.38), (44.0, 34.38)], 0.4),
+        T("VIN_PROT", [(31.5, 37.725), (31.5, 38.3), (32.6, 39.4)], 0.3),
+        T("VIN_PROT", [(36.85, 46.9), (36.85, 45.0)], 0.5),            # D101 (gate zener)
+        # bus voltage divider top (R117) to BUS IN's +5V pin 7, between the jack's GND pins 6 and 8
+        T("+5V", [(3.175, 16.6), (4.2, 17.6), (12.58, 17.6), (12.58, 13.52)], 0.4),
+        # Kelvin sense lines from the shunt's pads to the amplifier inputs
+        T("VIN_PROT", [(36.06, 41.15), (36.7, 41.8), (37.34, 43.45)], 0.25),
+        T("VIN_BUCK", [(38.34, 41.15), (39.2, 42.0), (40.0, 43.4)], 0.25),
+        # current-sense amplifier output under D102 (B.Cu) to its RC filter R103/C105
+        T("IIN_AMP", [(36.06, 39.25), (35.1, 38.6)], 0.25),
+        T("IIN_AMP", [(35.1, 38.6), (25.0, 37.7)], 0.25, "B.Cu"),
+        T("IIN_AMP", [(25.0, 37.7), (25.0, 38.775)], 0.25),
+        # eFuse bottom-row set-up pins down to the back-side parts (the +5V_BUCK feed fills the row)
+        T("EFUSE_UV", [(57.02, 16.45), (57.02, 17.4), (57.15, 18.05)], 0.25),
+        T("EFUSE_OV", [(57.67, 16.45), (57.67, 17.4), (58.0, 18.05)], 0.25),
+        T("EFUSE_DVDT", [(58.97, 16.45), (58.97, 17.4), (58.85, 18.05)], 0.25),
+        # ... and on the back to the UVLO/OVP divider chain R112-R113-R114
+        T("EFUSE_UV", [(56.025, 19.5), (56.6, 18.9), (57.15, 18.4), (57.15, 18.05)], 0.25, "B.Cu"),
+        T("EFUSE_UV", [(57.15, 18.4), (57.475, 18.9), (57.475, 19.5)], 0.25, "B.Cu"),
+        T("EFUSE_OV", [(58.0, 18.05), (58.0, 18.5), (58.6, 18.9), (59.125, 19.5)], 0.25, "B.Cu"),
+        T("EFUSE_OV", [(59.125, 19.5), (59.125, 20.32), (57.475, 20.32), (57.475, 21.15)], 0.25,
+          "B.Cu"),
+        T("+5V_BUCK", [(54.375, 19.5), (54.4, 20.4)], 0.3, "B.Cu"),
+        # EN divider feed: under the hot-loop ground on B.Cu
+        T("VIN_BUCK", [(42.1, 47.35), (42.1, 49.2), (48.0, 49.2)], 0.3, "B.Cu"),
+        T("VIN_BUCK", [(48.0, 49.2), (47.2, 48.825)], 0.3),
+        # switch node: the SW pins to L101
+        T("SW", [(43.5, 37.64), (45.5, 37.64)], 0.3),
+        T("SW", [(44.5, 37.64), (44.5, 36.9)], 0.9),
+        T("SW", [(44.5, 36.9), (44.5, 29.0), (43.03, 28.2)], 2.0),
+        # buck output: L101 to the output capacitors' trunk, up to the eFuse inputs
+        T("+5V_BUCK", [(51.97, 28.2), (55.37, 28.2)], 2.5),
+        T("+5V_BUCK", [(55.37, 31.4), (55.37, 19.4)], 2.5),
+        T("+5V_BUCK", [(55.37, 19.4), (54.4, 18.6), (53.13, 18.6)], 1.5),
+        T("+5V_BUCK", [(53.13, 18.6), (53.13, 16.45)], 0.45),
+        T("+5V_BUCK", [(53.78, 18.6), (53.78, 16.45)], 0.45),
+        T("+5V_BUCK", [(54.43, 18.6), (54.43, 16.45)], 0.45),
+        T("+5V_BUCK", [(55.37, 19.4), (56.38, 18.6), (56.38, 16.45)], 0.45),
+        # eFuse output down to the bus line on B.Cu (core.bus_tracks, extended to x = 52.4)
+        T("+5V", [(50.2, 10.0), (53.4, 10.0)], 1.8),
+    ]
+
+
+def power_vias() -> list[Via]:
+    out = [Via("+5V", x, y, 0.8, 0.4) for x in (50.4, 51.4, 52.4) for y in (9.5, 10.5)]
+    # thermal vias under both power ICs' exposed pads, the hot-loop ground, the output returns
+    out += [Via("GND", x, 39.5, 0.6, 0.3) for x in (41.6, 42.6, 43.6, 44.5)]
+    out += [Via("GND", 46.7, y, 0.6, 0.3) for y in (42.9, 45.1, 47.5)]
+    out += [Via("GND", 40.45, 33.75, 0.6, 0.3)]
+    out += [Via("VIN_BUCK", 42.1, 47.35, 0.7, 0.3), Via("VIN_BUCK", 48.0, 49.2, 0.7, 0.3)]
+    out += [Via(n, x, 18.05, 0.7, 0.3) for n, x in (("EFUSE_UV", 57.15), ("EFUSE_OV", 58.0),
+                                                     ("EFUSE_DVDT", 58.85))]
+    out += [Via("+5V_BUCK", 54.4, 20.4, 0.7, 0.3)]
+    out += [Via("IIN_AMP", 35.1, 38.6, 0.7, 0.3), Via("IIN_AMP", 25.0, 37.7, 0.7, 0.3)]
+    out += [Via("GND", x, y, 0.6, 0.3) for x in (53.8, 55.2, 56.9, 58.3) for y in (12.6, 14.4)]
+    out += [Via("GND", 59.0, y, 0.6, 0.3) for y in (22.2, 25.9, 29.6, 33.3)]
+    return out
+
+
+def build(core: Sheet) -> Module:
+    s = Sheet(NAME, f"{TITLE}: 5.5-36 V in, 5 V 4 A bus out")
+    pins = {p: "" for p in core_mod.FREE_GPIO}
+    pins.update({"PA0": "VIN_SENSE", "PA1": "IIN_SENSE", "PA2": "VOUT_SENSE", "PB0": "BUS_EN",
+                 "PB1": "BUS_FAULT", "V5_IN": "+5V_BUCK"})
+    s.use(core, pins)
+    s.flags += ["GND", "VIN_BUCK", "+5V_BUCK"]
+
+    # input, reverse polarity, surge
+    # XT30PW-M: pin 2 is + (the footprint's and the connector's marking), pin 1 is -
+    s.part("J101", "XT30", {"1": "GND", "2": "VBAT_IN"}, at=Place(12.4, 37.15, 180), value="BATTERY")
+    s.part("Q101", "SUD50P06-15", {"D": "VBAT_IN", "S": "VIN_PROT", "G": "Q_GATE"})
+    s.part("D101", "Z_15V", {"K": "VIN_PROT", "A": "Q_GATE"})
+    s.part("R101", "R_100k", {"1": "Q_GATE", "2": "GND"})
+    s.part("D102", "SMAJ36A", {"1": "VIN_PROT", "2": "GND"})
+
+    # input current and voltage sensing
+    s.part("R102", "R_10m", {"1": "VIN_PROT", "2": "VIN_BUCK"})
+    s.part("U101", "INA293A2", {"IN+": "VIN_PROT", "IN-": "VIN_BUCK", "Vs": "+3V3", "GND": "GND",
+                                "OUT": "IIN_AMP"})
+    s.part("C104", "C_100n", {"1": "+3V3", "2": "GND"})
+    s.part("R103", "R_1k", {"1": "IIN_AMP", "2": "IIN_SENSE"})
+    s.part("C105", "C_100n", {"1": "IIN_SENSE", "2": "GND"})
+    s.part("R104", "R_100k", {"1": "VIN_PROT", "2": "VIN_SENSE"})
+    s.part("R105", "R_10k", {"1": "VIN_SENSE", "2": "GND"})
+    s.part("C106", "C_100n", {"1": "VIN_SENSE", "2": "GND"})
+
+    # buck: input caps straddle PVIN/PGND on the IC's right side, the inductor on its SW side
+    s.part("U102", "LM76005", {
+        "PVIN": "VIN_BUCK", "EN": "EN_BUCK", "SW": "SW", "BOOT": "BOOT", "VCC": "VCC_BUCK",
+        "BIAS": "GND", "SS/TRK": "SS_BUCK", "SYNC/MODE": "GND", "FB": "FB_BUCK",
+        "AGND": "GND", "PGND": "GND", "NC_{GND}": "GND"}, nc=("RT", "PGOOD"))
+    s.part("C101", "C_10u_50V", {"1": "VIN_BUCK", "2": "GND"})
+    s.part("C102", "C_10u_50V", {"1": "VIN_BUCK", "2": "GND"})
+    s.part("C103", "C_100n", {"1": "VIN_BUCK", "2": "GND"})
+    s.part("R106", "R_100k", {"1": "VIN_BUCK", "2": "EN_BUCK"})
+    s.part("R107", "R_47k", {"1": "EN_BUCK", "2": "GND"})
+    s.part("C108", "C_1u", {"1": "VCC_BUCK", "2": "GND"})
+    s.part("C109", "C_470n", {"1": "BOOT", "2": "SW"})
+    s.part("C110", "C_22n", {"1": "SS_BUCK", "2": "GND"})
+    s.part("R108", "R_100k", {"1": "+5V_BUCK", "2": "FB_BUCK"})
+    s.part("R109", "R_24k9", {"1": "FB_BUCK", "2": "GND"})
+    s.part("L101", "L_10u", {"1": "SW", "2": "+5V_BUCK"})
+    for i in range(4):
+        s.part(f"C{111 + i}", "C_22u_25V", {"1": "+5V_BUCK", "2": "GND"})
+
+    # bus output switch
+    s.part("U103", "TPS26631", {
+        "IN": "+5V_BUCK", "IN_SYS": "+5V_BUCK", "OUT": "+5V", "GND": "GND", "~{SHDN}": "BUS_EN",
+        "~{FLT}": "BUS_FAULT", "UVLO": "EFUSE_UV", "OVP": "EFUSE_OV", "ILIM": "EFUSE_ILIM",
+        "dVdT": "EFUSE_DVDT", "PGTH": "GND"}, nc=("B_GATE", "DRV", "MODE", "PGOOD", "IMON"))
+    s.part("R110", "R_100k", {"1": "BUS_EN", "2": "GND"})
+    s.part("R111", "R_10k", {"1": "+3V3", "2": "BUS_FAULT"})
+    # one divider chain sets both thresholds: +5V_BUCK - 100 k - UVLO - 10 k - OVP - 27 k - GND
+    s.part("R112", "R_100k", {"1": "+5V_BUCK", "2": "EFUSE_UV"})
+    s.part("R113", "R_10k", {"1": "EFUSE_UV", "2": "EFUSE_OV"})
+    s.part("R114", "R_27k", {"1": "EFUSE_OV", "2": "GND"})
+    s.part("R116", "R_3k9", {"1": "EFUSE_ILIM", "2": "GND"})
+    s.part("C115", "C_22n", {"1": "EFUSE_DVDT", "2": "GND"})
+    s.part("R117", "R_10k", {"1": "+5V", "2": "VOUT_SENSE"})
+    s.part("R118", "R_10k", {"1": "VOUT_SENSE", "2": "GND"})
+    s.part("C117", "C_100n", {"1": "VOUT_SENSE", "2": "GND"})
+
+    m = Module(NAME, TITLE, REVISION, s, tracks=core_mod.bus_tracks(extend_to=52.4) + power_tracks(),
+               vias=power_vias(), places=PLACES, seed=3)
+    m.texts = frame_texts(NAME, REVISION) + [
+        Text("+", 17.4, 40.6, 1.5, "B.SilkS"), Text("-", 12.4, 40.6, 1.5, "B.SilkS"),
+        Text("BATTERY 5.5-36V", 15.0, 33.0, 1.0, "B.SilkS")]
+    return m

@@ -1,0 +1,51 @@
+"""Schematic stage of the generator: a module description → its `.kicad_sch` files.
+
+Output layout (relative to the hardware/ folder, or a scratch copy of it):
+    <module>/<module>.kicad_sch     root sheet: the module's own parts and the core sheet box
+    core/core.kicad_sch             the shared core sheet, with every module's references
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from .design import Module, Sheet
+from .schematic import Instance, SheetWriter, sheet_symbol, uid, write
+
+CORE_FILE = "../core/core.kicad_sch"
+
+
+def root_path(module: str) -> str:
+    return "/" + uid(module, "sheet")
+
+
+def child_path(module: str, child: str) -> str:
+    return root_path(module) + "/" + uid(module, "sheet", child)
+
+
+def write_module(m: Module, out: Path) -> Path:
+    root = m.root
+    ports = set()
+    w = SheetWriter(root, m.name, [Instance(m.name, root_path(m.name))], m.title, m.revision, ports)
+    w.build()
+    uses = []
+    x = w.width + 20
+    for page, use in enumerate(root.children, start=2):
+        use.at = (round(x / 2.54) * 2.54, 38.1)
+        uses += sheet_symbol(m.name, use, m.name, root_path(m.name), page, CORE_FILE)
+    folder = out / m.name
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{m.name}.kicad_sch"
+    write(path, w.document(uses, root=True))
+    return path
+
+
+def write_core(core: Sheet, modules: list[Module], out: Path) -> Path:
+    """The shared sheet, instantiated once by each module."""
+    inst = [Instance(m.name, child_path(m.name, core.name)) for m in modules
+            if any(u.sheet.name == core.name for u in m.root.children)]
+    w = SheetWriter(core, core.name, inst, core.title, "A", {p.name for p in core.ports})
+    folder = out / core.name
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{core.name}.kicad_sch"
+    write(path, w.document())
+    return path

@@ -1,0 +1,173 @@
+"""The boards under hardware/: what a maker relies on before sending one to a fab.
+
+Every board with a KiCad project passes ERC (0 errors), DRC against the JLCPCB capability (0
+errors, only the reviewed silkscreen warnings, 0 unconnected items), schematic parity, and the
+parts-database check; its MCU pins carry the signals of its firmware board file; regenerating it
+from its description, and its fab package from the board, gives the committed bytes. The last
+tests break a scratch copy on purpose and see each check fail, so the checks cannot pass vacuously.
+"""
+from __future__ import annotations
+
+import filecmp
+import re
+import shutil
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT
+
+pytest.importorskip("pcbnew", reason="KiCad's pcbnew module is needed (scripts/setup installs it)")
+if shutil.which("kicad-cli") is None:
+    pytest.skip("kicad-cli is not installed (scripts/setup installs KiCad 9)", allow_module_level=True)
+
+from r2ptools.kicad import check, fab, libsym, netlist  # noqa: E402
+
+HARDWARE = ROOT / "hardware"
+BOARDS = check.boards()
+GENERATED = ("{m}.kicad_sch", "{m}.kicad_pcb", "{m}.kicad_pro", "{m}.kicad_dru", "sym-lib-table",
+             "fp-lib-table")
+
+
+def test_the_expected_boards_exist():
+    assert {b.name for b in BOARDS} >= {"proximity", "psu", "template"}
+
+
+@pytest.mark.parametrize("board", BOARDS, ids=lambda b: b.name)
+def test_board_passes_erc_drc_parity_and_bom(board):
+    r = check.check(board)
+    assert r.ok, "\n".join(r.problems)
+
+
+def _board_file(module: str) -> dict[str, str]:
+    """pin -> signal from firmware/boards/<module>.toml and the file it extends."""
+    path = ROOT / "firmware" / "boards" / f"{module}.toml"
+    d = tomllib.loads(path.read_text())
+    pins = {}
+    if "extends" in d.get("board", {}):
+        pins.update(_board_file(d["board"]["extends"].removesuffix(".toml")))
+    pins.update({p: v["signal"] for p, v in d.get("pins", {}).items()})
+    return pins
+
+
+@pytest.mark.parametrize("module", ["proximity", "psu"])
+def test_mcu_pins_carry_the_board_file_signals(module):
+    net = netlist.export(HARDWARE / module / f"{module}.kicad_sch")
+    pad_names = {p.number: p.name for p in libsym.pins("MCU_ST_STM32F1:STM32F103CBTx")}
+    wanted = _board_file(module)
+    seen = {}
+    for name, nodes in net.nets.items():
+        for ref, pin in nodes:
+            if ref == "U1":
+                seen[pad_names[pin]] = (name, len(nodes))
+    for pin, signal in wanted.items():
+        assert seen[pin][0].rsplit("/", 1)[-1] == signal, f"{module}: {pin} is on {seen[pin][0]}, not {signal}"
+    for pin, (name, nodes) in seen.items():
+        if pin not in wanted and not pin.startswith(("V", "NRST", "BOOT0")):
+            assert nodes == 1, f"{module}: {pin} is wired ({name}) but the board file does not use it"
+
+
+def test_regeneration_is_byte_identical(tmp_path):
+    """scripts/hwgen into a scratch copy (routing replayed from route.ses) gives the committed files."""
+    out = tmp_path / "hardware"
+    shutil.copytree(HARDWARE, out, ignore=shutil.ignore_patterns("fab"))
+    for b in BOARDS:
+        for f in GENERATED:
+            (out / b.name / f.format(m=b.name)).unlink()
+    (out / "core" / "core.kicad_sch").unlink()
+    p = subprocess.run([sys.executable, "-m", "r2ptools.kicad.generate", "--out", str(out)],
+                       cwd=ROOT / "scripts", capture_output=True, text=True)
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert "freerouting" not in p.stdout, "routing was not replayed from route.ses: " + p.stdout
+    files = [Path("core/core.kicad_sch")] + [Path(b.name) / f.format(m=b.name) for b in BOARDS
+                                             for f in GENERATED]
+    differ = [str(f) for f in files if not filecmp.cmp(HARDWARE / f, out / f, shallow=False)]
+    assert not differ, f"regenerated files differ from the committed ones: {differ}"
+
+
+@pytest.mark.parametrize("module", fab.FAB_BOARDS)
+def test_fab_package_is_current_and_byte_identical(module, tmp_path):
+    committed = HARDWARE / module / "fab"
+    fab.package(HARDWARE / module, tmp_path / "fab")
+    ours = sorted(p.relative_to(tmp_path / "fab") for p in (tmp_path / "fab").rglob("*") if p.is_file())
+    theirs = sorted(p.relative_to(committed) for p in committed.rglob("*") if p.is_file())
+    assert ours == theirs
+    differ = [str(f) for f in ours if not filecmp.cmp(committed / f, tmp_path / "fab" / f, shallow=False)]
+    assert not differ, f"{module}: fab files differ (run `make fab`): {differ}"
+
+
+def test_fab_package_has_what_a_fab_needs():
+    files = {p.name for p in (HARDWARE / "psu" / "fab" / "gerbers").iterdir()}
+    for layer in ("F_Cu", "B_Cu", "F_Mask", "B_Mask", "F_Silkscreen", "B_Silkscreen", "Edge_Cuts"):
+        assert any(layer in f for f in files), layer
+    assert any(f.endswith(".drl") for f in files) and any(f.endswith(".gbrjob") for f in files)
+    for f in files:
+        text = (HARDWARE / "psu" / "fab" / "gerbers" / f).read_text()
+        assert "CreationDate" not in text and not re.search(r"date \d", text), f"{f} carries a date"
+    bom = (HARDWARE / "psu" / "fab" / "psu-bom.csv").read_text().splitlines()
+    assert bom[0] == "Designator,Quantity,Value,Footprint,Manufacturer,MPN,LCSC"
+    assert any(",LM76005RNPR," in line for line in bom)
+
+
+# --- the checks fail for real -------------------------------------------------------------------
+
+@pytest.fixture
+def scratch(tmp_path):
+    """A scratch copy of hardware/ (the proximity board and the shared core)."""
+    out = tmp_path / "hardware"
+    for d in ("proximity", "core"):
+        shutil.copytree(HARDWARE / d, out / d, ignore=shutil.ignore_patterns("fab"))
+    return out / "proximity"
+
+
+def _problems(board: Path, kind: str) -> list[str]:
+    return [p for p in check.check(board).problems if kind in p]
+
+
+def test_a_missing_track_is_reported_unconnected(scratch):
+    import pcbnew
+    pcb = scratch / "proximity.kicad_pcb"
+    b = pcbnew.LoadBoard(str(pcb))
+    victim = next(t for t in b.GetTracks() if t.GetNetname().endswith("CAN_RX"))
+    b.Delete(victim)
+    pcbnew.SaveBoard(str(pcb), b)
+    assert _problems(scratch, "unconnected")
+
+
+def test_overlapping_parts_are_a_drc_error(scratch):
+    import pcbnew
+    pcb = scratch / "proximity.kicad_pcb"
+    b = pcbnew.LoadBoard(str(pcb))
+    b.FindFootprintByReference("R102").SetPosition(b.FindFootprintByReference("R103").GetPosition())
+    pcbnew.SaveBoard(str(pcb), b)
+    assert _problems(scratch, "DRC error")
+
+
+def test_a_footprint_missing_from_the_board_breaks_parity(scratch):
+    import pcbnew
+    pcb = scratch / "proximity.kicad_pcb"
+    b = pcbnew.LoadBoard(str(pcb))
+    b.Delete(b.FindFootprintByReference("C104"))
+    pcbnew.SaveBoard(str(pcb), b)
+    assert _problems(scratch, "parity")
+
+
+def test_an_unconnected_pin_is_an_erc_error(scratch):
+    """Remove the no-connect flag on U101's fault output (pin 3): ERC must object."""
+    from r2ptools.kicad.schematic import uid
+    sch = scratch / "proximity.kicad_sch"
+    text = sch.read_text()
+    flag = re.search(r"\n\t\(no_connect\n\t\t\(at [^)]*\)\n\t\t\(uuid \"%s\"\)\n\t\)"
+                     % uid("proximity", "nc", "U101/3"), text)
+    assert flag, "U101 pin 3's no-connect flag not found"
+    sch.write_text(text[:flag.start()] + text[flag.end():])
+    assert _problems(scratch, "ERC error")
+
+
+def test_a_field_disagreeing_with_the_parts_database_is_reported(scratch):
+    sch = scratch / "proximity.kicad_sch"
+    sch.write_text(sch.read_text().replace('(property "LCSC" "C25803"', '(property "LCSC" "C99999"', 1))
+    assert any("C99999" in p for p in _problems(scratch, "BOM"))
