@@ -6,7 +6,7 @@ PY := scripts/py
 
 .PHONY: all setup firmware fab enclosures check test bench help clean
 
-all: setup fab enclosures ## Set up if needed, build every artifact into its place, print a summary table
+all: setup ## Set up if needed, build every artifact (firmware images, fab packages, cases), print a summary
 	@$(PY) -m r2ptools.build
 
 setup: ## Install or update tools: apt (KiCad 9.0.8, OpenSCAD, QEMU…), Rust targets, Python venv

@@ -45,6 +45,7 @@ def make_repo(tmp: Path, symbols: list[Part] | None = None, parts_csv: str | Non
     (tmp / "bom" / "parts.csv").write_text(parts_csv or (FIXTURES / "parts.csv").read_text())
     (tmp / "hardware" / "future").mkdir(parents=True)
     write_schematic(tmp / SCH, {"PB2": "BOOT1"}, parts() if symbols is None else symbols)
+    (tmp / SCH).with_suffix(".kicad_pro").write_text("{}\n")
     return tmp
 
 
@@ -83,6 +84,26 @@ def test_generate_writes_module_and_robot_boms_with_cost_and_the_summary(tmp_pat
             "(not designed yet) | [duo.csv](duo.csv) |") in readme
     assert readme.startswith("# Fixture bom/README.md") and readme.endswith(
         "<!-- END generated -->\nText after the summary stays.\n")
+
+
+def test_a_part_lcsc_does_not_stock_is_listed_for_consignment(tmp_path):
+    csv = (FIXTURES / "parts.csv").read_text().replace(",C1525,", ",-,")
+    repo = make_repo(tmp_path, parts_csv=csv)
+    rc, out = bom(repo, "generate")
+    assert rc == 0, out
+    assert "CL05B104KO5NNNC,Samsung Electro-Mechanics,-,0.0021" in (repo / "bom" / "demo.csv").read_text()
+    assert "Not stocked by LCSC (`-` in `parts.csv`): `CL05B104KO5NNNC`." in \
+        (repo / "bom" / "README.md").read_text()
+
+
+def test_a_shared_sheet_is_not_a_module(tmp_path):
+    repo = make_repo(tmp_path)
+    (repo / "hardware" / "core").mkdir()
+    shutil.copy(repo / SCH, repo / "hardware" / "core" / "core.kicad_sch")
+    rc, out = bom(repo, "generate")
+    assert rc == 0, out
+    assert "core" not in out and not (repo / "bom" / "core.csv").exists()
+    assert "| core |" not in (repo / "bom" / "README.md").read_text()
 
 
 def test_generation_is_reproducible_and_check_sees_stale_files(tmp_path):
@@ -138,7 +159,7 @@ def test_an_incomplete_row_is_reported_for_the_row_and_for_each_reference(tmp_pa
 @pytest.mark.parametrize("old, new, message", [
     (",2.46,", ",about 2,", "STM32F103CBT6: unit_price_usd_qty10 'about 2' is not a positive price in "
                             "USD (e.g. 0.0123)"),
-    (",C8323,", ",8323,", "STM32F103CBT6: lcsc '8323' is not an LCSC part number (C followed by digits)"),
+    (",C8323,", ",8323,", "STM32F103CBT6: lcsc '8323' is not an LCSC part number (C followed by digits; - if LCSC does not stock the part)"),
     ("https://www.st.com", "www.st.com", "STM32F103CBT6: datasheet 'www.st.com/resource/en/datasheet/"
                                          "stm32f103cb.pdf' is not an http(s) link"),
 ])
@@ -208,6 +229,8 @@ def test_the_repositorys_boms_are_complete_and_current():
     result = run([BOM, "check"])
     assert result.returncode == 0, result.stdout
     for module in sorted(d.name for d in (ROOT / "hardware").iterdir() if d.is_dir()):
+        if module == "core":
+            continue                      # the shared sheet: its parts count in every module
         designed = (ROOT / "hardware" / module / f"{module}.kicad_sch").is_file()
         assert designed == (ROOT / "bom" / f"{module}.csv").is_file(), module
         if not designed:

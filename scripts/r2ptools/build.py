@@ -6,17 +6,14 @@ fab packages per board, enclosures per module.
 """
 from __future__ import annotations
 
+import subprocess
 import sys
 import time
-from pathlib import Path
 
 from . import ROOT, firmware
+from .kicad.fab import FAB_BOARDS
 
 MODULES = ["psu", "motor", "imu", "proximity", "gateway"]
-
-
-def board_file(module: str) -> Path:
-    return ROOT / "hardware" / module / f"{module}.kicad_pcb"
 
 
 def module_images() -> dict[str, str]:
@@ -37,9 +34,13 @@ def main() -> int:
         print("make: the firmware stage failed (above); nothing else was built", file=sys.stderr)
         return rc
 
-    boards = [m for m in MODULES if board_file(m).exists()]
-    times.append(("fab", "skipped: no KiCad boards yet" if not boards else "not wired yet"))
-    times.append(("enclosures", "skipped: no boards to fit yet"))
+    for name, cmd in (("fab", ["scripts/fab"]), ("enclosures", ["scripts/enclosures", "generate"])):
+        t0 = time.monotonic()
+        rc = subprocess.run(cmd, cwd=ROOT).returncode
+        times.append((name, f"{time.monotonic() - t0:.0f} s"))
+        if rc:
+            print(f"make: the {name} stage failed (above); stopped", file=sys.stderr)
+            return rc
 
     print("\n=== make: summary")
     print(f"{'stage':<12} time")
@@ -56,10 +57,17 @@ def main() -> int:
             print(f"{m:<18} {state}")
     print("\nfab packages (hardware/<module>/fab)")
     for m in MODULES:
-        print(f"{m:<18} {'board present' if board_file(m).exists() else 'not yet: no hardware/' + m + '/' + m + '.kicad_pcb'}")
+        zip_file = ROOT / "hardware" / m / "fab" / f"{m}-gerbers.zip"
+        if m in FAB_BOARDS and zip_file.exists():
+            print(f"{m:<18} {zip_file.relative_to(ROOT)} ({zip_file.stat().st_size / 1024:.0f} KiB), "
+                  f"BOM, CPL, schematic PDF, renders")
+        else:
+            print(f"{m:<18} not yet: no hardware/{m}/{m}.kicad_pcb")
     print("\nenclosures (enclosures/<module>)")
     for m in MODULES:
-        print(f"{m:<18} not yet: needs the module's board")
+        step = ROOT / "enclosures" / m / f"{m}-assembly.step"
+        print(f"{m:<18} " + (f"enclosures/{m}/: {m}-base.stl, {m}-lid.stl, {m}-assembly.step, {m}.png"
+                             if step.exists() else "not yet: needs the module's board"))
     return 0
 
 

@@ -259,7 +259,13 @@ def check_module(module: str, root: Path, netlist_dir: Path) -> Result:
     result = Result(module)
     path = root / "firmware" / "boards" / f"{module}.toml"
     if not path.is_file():
-        result.skipped = f"no HAL board file {display(path, root)}"
+        folder = root / "hardware" / module
+        if any(folder.glob("*.kicad_sch")) and not any(folder.glob("*.kicad_pro")):
+            result.skipped = ("a shared sheet, not a board: its pins are checked in every module "
+                              "whose schematic uses it")
+        else:
+            result.skipped = (f"no HAL board file {display(path, root)} (a module's firmware "
+                              f"starts there: docs/board-files.md)")
         return result
     try:
         board = load_board(path, root)

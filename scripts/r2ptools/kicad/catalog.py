@@ -8,15 +8,12 @@ fields copied from `bom/parts.csv`, so the schematic, the BOM and the database c
 """
 from __future__ import annotations
 
-import csv
 import functools
 from dataclasses import dataclass
 
-from .. import ROOT
+from .. import ROOT, bom
 
 PARTS_CSV = ROOT / "bom" / "parts.csv"
-PARTS_COLUMNS = ["MPN", "Manufacturer", "LCSC", "Package", "Price_USD_qty10", "Datasheet",
-                 "Description"]
 
 
 @dataclass(frozen=True)
@@ -128,14 +125,15 @@ def items() -> list[Item]:
 
 @functools.cache
 def database() -> dict[str, dict[str, str]]:
-    """bom/parts.csv by MPN."""
-    with PARTS_CSV.open(newline="") as f:
-        reader = csv.DictReader(f)
-        if reader.fieldnames != PARTS_COLUMNS:
-            raise ValueError(f"{PARTS_CSV}: columns must be {PARTS_COLUMNS}, found {reader.fieldnames}")
-        rows = {}
-        for n, row in enumerate(reader, start=2):
-            if row["MPN"] in rows:
-                raise ValueError(f"{PARTS_CSV}:{n}: MPN {row['MPN']} listed twice")
-            rows[row["MPN"]] = row
-        return rows
+    """bom/parts.csv by MPN, with the KiCad symbol field names as keys.
+
+    Read through `r2ptools.bom.load_parts`, the one reader of the database; an LCSC of `-`
+    (LCSC does not stock the part) becomes an empty `LCSC` field on the symbol."""
+    parts, errors = bom.load_parts(PARTS_CSV, ROOT)
+    if errors:
+        raise ValueError("\n".join(errors))
+    return {mpn: {"MPN": mpn, "Manufacturer": f["manufacturer"],
+                  "LCSC": "" if f["lcsc"] == bom.NOT_AT_LCSC else f["lcsc"],
+                  "Package": f["package"], "Datasheet": f["datasheet"],
+                  "Description": f["description"]}
+            for mpn, f in ((mpn, row.fields) for mpn, row in parts.items())}
