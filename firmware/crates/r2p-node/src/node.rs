@@ -68,9 +68,10 @@ pub struct NodeConfig {
     /// for the others. By convention the power-supply module is rank 0 (its firmware sets
     /// `rank: Some(0)`); other standbys take 1, 2, …; the default is `None`.
     pub rank: Option<u8>,
-    /// Slots 1…`hrt_slots` the node reserves for HRT streams when it is master; the others
-    /// stay free for SRT/NRT traffic (including HRT registrations). Keep it below the cycle's
-    /// slot count, the same on every node with a rank.
+    /// Slots the node reserves for HRT streams when it is master, laid out by
+    /// `rtcan::Scheduler` in short runs with a free slot after each; the others stay free for
+    /// SRT/NRT traffic (including HRT registrations). Keep it well below the cycle's slot count,
+    /// the same on every node with a rank.
     pub hrt_slots: u8,
     /// How the node sends SRT/NRT frames in the free slots (slotted mode): merged windows
     /// with retransmission, or one one-shot frame per free slot.
@@ -80,7 +81,8 @@ pub struct NodeConfig {
 impl NodeConfig {
     /// Defaults: heartbeat every 100 ms, subscription retried after 300 ms, reassembly timeout
     /// 20 ms, logarithmic laxity with 100 µs ticks, the default cycle (10 ms, 60 slots), no
-    /// rank, slots 1…30 for HRT, free slots merged into windows.
+    /// rank, 30 HRT slots (in runs of two: slots 1, 2, 4, 5, …, 44), free slots merged into
+    /// windows.
     pub const fn new(uid: [u8; UID_LEN], name: &'static str) -> Self {
         Self {
             uid,
@@ -467,7 +469,7 @@ impl<
             stats: NodeStats::default(),
             clock: SlotClock::new(config.cycle),
             failover: Failover::new(rank, config.cycle.cycle_us, 0),
-            scheduler: Scheduler::new(config.hrt_slots),
+            scheduler: Scheduler::new(config.hrt_slots, config.cycle.slots),
             master: None,
             slot_tx: SlotTx::new(&config.cycle, config.free_slots),
             last_sync: 0,

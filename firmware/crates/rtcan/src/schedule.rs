@@ -26,6 +26,16 @@
 //! takes, over all slots, the free aligned block whose largest free enclosing aligned block is
 //! smallest (best fit); ties go to the lower slot, then the lower block number. The phase is
 //! `offset = rev_k(block)`, `slot = s`.
+//!
+//! # Where the HRT slots lie ([`hrt_slot`])
+//! The scheduler's HRT slots 1…h are laid out in runs of at most `run` slots, each run followed
+//! by one free slot (`run` ≥ 2, the shortest that fits the cycle; `run` ≥ h is one block
+//! 1…h). The longest time in which no SRT or NRT frame can start is thus the sync slot and
+//! `run` reserved slots (3 slots, 500 µs with the defaults) instead of every reservation of the
+//! cycle in one block after the sync, which made short-deadline SRT messages released late in a
+//! cycle miss (docs/rtcan.md, "Under load"); the cycle's free tail stays one long window in which
+//! frames go back to back. Placement fills HRT slot 1 first, so light calendars stay at the
+//! start of the cycle.
 
 use crate::cycle::{EPOCH_BIT, MAX_SLOTS};
 use crate::id::MessageId;
@@ -148,25 +158,49 @@ impl Occupancy {
     }
 }
 
-/// The master's calendar: up to `N` admitted streams in slots `1..=hrt_slots`.
+/// The cycle slot of the scheduler's HRT slot `k` (1…) when HRT slots come in runs of `run`,
+/// each run followed by one free slot.
+pub const fn hrt_slot(k: u8, run: u8) -> u8 {
+    1 + (run + 1) * ((k - 1) / run) + (k - 1) % run
+}
+
+/// The shortest run (≥ 2) that places `hrt_slots` HRT slots in a cycle of `cycle_slots`.
+const fn run_for(hrt_slots: u8, cycle_slots: u8) -> u8 {
+    let mut run = 2;
+    while run < hrt_slots && hrt_slot(hrt_slots, run) >= cycle_slots {
+        run += 1;
+    }
+    run
+}
+
+/// The master's calendar: up to `N` admitted streams in `hrt_slots` slots of the cycle.
 #[derive(Clone, Debug)]
 pub struct Scheduler<const N: usize> {
     table: [Option<Reservation>; N],
     hrt_slots: u8,
+    run: u8,
 }
 
 impl<const N: usize> Scheduler<N> {
-    /// An empty calendar reserving only slots `1..=hrt_slots` (at most [`MAX_HRT_SLOT`]); keep
-    /// `hrt_slots` below the cycle's slot count so that SRT and NRT traffic — including the
-    /// registrations themselves — always has free slots.
-    pub const fn new(hrt_slots: u8) -> Self {
-        let hrt_slots = if hrt_slots > MAX_HRT_SLOT { MAX_HRT_SLOT } else { hrt_slots };
-        Self { table: [None; N], hrt_slots }
+    /// An empty calendar with `hrt_slots` HRT slots in a cycle of `cycle_slots` slots, laid out
+    /// as the module documentation says. `hrt_slots` is capped at `cycle_slots − 1` (the sync
+    /// slot) and [`MAX_HRT_SLOT`]; keep it well below so that SRT and NRT traffic — including the
+    /// registrations themselves — has room.
+    pub const fn new(hrt_slots: u8, cycle_slots: u8) -> Self {
+        let cap =
+            if cycle_slots > MAX_SLOTS { MAX_HRT_SLOT } else { cycle_slots.saturating_sub(1) };
+        let hrt_slots = if hrt_slots > cap { cap } else { hrt_slots };
+        Self { table: [None; N], hrt_slots, run: run_for(hrt_slots, cycle_slots) }
     }
 
     /// Number of slots the scheduler may reserve.
     pub const fn hrt_slots(&self) -> u8 {
         self.hrt_slots
+    }
+
+    /// The cycle slots the scheduler may reserve, in placement order.
+    pub fn slots(&self) -> impl Iterator<Item = u8> + '_ {
+        (1..=self.hrt_slots).map(|k| hrt_slot(k, self.run))
     }
 
     /// Admitted streams.
@@ -221,7 +255,7 @@ impl<const N: usize> Scheduler<N> {
         let k = period.log2();
         let size = MAX_PERIOD_CYCLES >> k;
         let mut best: Option<(u32, Phase)> = None;
-        for slot in 1..=self.hrt_slots {
+        for slot in self.slots() {
             let occ = self.occupancy(slot);
             for block in 0..(1u32 << k) {
                 if !occ.is_free(block * size, size) {
@@ -318,7 +352,7 @@ pub(crate) mod tests {
         }
 
         fn phases_spread_like_a_buddy_allocator() {
-            let mut s = Scheduler::<8>::new(1);
+            let mut s = Scheduler::<8>::new(1, 2);
             assert_eq!(s.register(MessageId(0x100), 4), Ok(Phase { offset: 0, slot: 1 }));
             assert_eq!(s.register(MessageId(0x101), 4), Ok(Phase { offset: 2, slot: 1 }));
             // Period 2 still fits: offsets 1 and 3 are both free.
@@ -331,7 +365,7 @@ pub(crate) mod tests {
         }
 
         fn best_fit_fills_holes_first() {
-            let mut s = Scheduler::<8>::new(2);
+            let mut s = Scheduler::<8>::new(2, 3);
             assert_eq!(s.register(MessageId(0x100), 2), Ok(Phase { offset: 0, slot: 1 }));
             assert_eq!(s.register(MessageId(0x101), 1), Ok(Phase { offset: 0, slot: 2 }));
             // The half-slot hole in slot 1 is the best fit for period 4.
@@ -341,7 +375,7 @@ pub(crate) mod tests {
         }
 
         fn removal_frees_and_fragmentation_is_reported() {
-            let mut s = Scheduler::<8>::new(1);
+            let mut s = Scheduler::<8>::new(1, 2);
             for (id, o) in [(0x100, 0), (0x101, 2), (0x102, 1), (0x103, 3)] {
                 assert_eq!(s.register(MessageId(id), 4), Ok(Phase { offset: o, slot: 1 }));
             }
@@ -356,7 +390,7 @@ pub(crate) mod tests {
         }
 
         fn best_fit_keeps_large_holes_after_removals() {
-            let mut s = Scheduler::<8>::new(1);
+            let mut s = Scheduler::<8>::new(1, 2);
             for id in 0x100..0x104 {
                 s.register(MessageId(id), 4).unwrap();
             }
@@ -372,7 +406,7 @@ pub(crate) mod tests {
         }
 
         fn reregistration_is_idempotent() {
-            let mut s = Scheduler::<2>::new(4);
+            let mut s = Scheduler::<2>::new(4, 5);
             let ph = s.register(MessageId(0x200), 8).unwrap();
             assert_eq!(s.register(MessageId(0x200), 8), Ok(ph));
             assert_eq!(s.register(MessageId(0x200), 16), Err(Reject::Conflict));
@@ -386,8 +420,48 @@ pub(crate) mod tests {
             assert_eq!(s.mask(0), 1);
         }
 
+        fn hrt_slots_come_in_short_runs() {
+            let slots = |h, c| {
+                let s = Scheduler::<1>::new(h, c);
+                let mut out = [0u8; 64];
+                let mut n = 0;
+                for x in s.slots() {
+                    out[n] = x;
+                    n += 1;
+                }
+                (out, n)
+            };
+            // The load benchmark's cycle: 15 of 30 slots, runs of two, a free tail of 7 slots.
+            let (s15, n) = slots(15, 30);
+            assert_eq!(&s15[..n], &[1, 2, 4, 5, 7, 8, 10, 11, 13, 14, 16, 17, 19, 20, 22]);
+            // Longer runs where the cycle is short; one block where it must be.
+            let (s20, n) = slots(20, 25);
+            assert_eq!(&s20[..n], &[1, 2, 3, 4, 6, 7, 8, 9, 11, 12, 13, 14, 16, 17, 18, 19, 21, 22, 23, 24]);
+            let (s3, n) = slots(3, 4);
+            assert_eq!(&s3[..n], &[1, 2, 3]);
+            // Capped: the sync slot and the sync payload's 64 bits.
+            assert_eq!(Scheduler::<1>::new(9, 5).hrt_slots(), 4);
+            assert_eq!(Scheduler::<1>::new(70, 64).hrt_slots(), MAX_HRT_SLOT);
+            for c in 2..=MAX_SLOTS {
+                for h in 1..c {
+                    let s = Scheduler::<1>::new(h, c);
+                    let (v, n) = slots(h, c);
+                    assert_eq!(n, h as usize);
+                    // Distinct, increasing, inside the cycle, never more than the run in a row.
+                    assert!(v[..n].windows(2).all(|w| w[0] < w[1]) && v[n - 1] < c);
+                    let mut longest = 0;
+                    let mut run = 0;
+                    for x in 1..c {
+                        run = if v[..n].contains(&x) { run + 1 } else { 0 };
+                        longest = longest.max(run);
+                    }
+                    assert!(longest <= s.run.max(2), "h {h} c {c}");
+                }
+            }
+        }
+
         fn mask_is_the_union_of_occurrences() {
-            let mut s = Scheduler::<16>::new(6);
+            let mut s = Scheduler::<16>::new(6, 7);
             let periods = [1, 2, 4, 8, 16, 32, 64, 128, 256, 2, 4, 8];
             for (i, &per) in periods.iter().enumerate() {
                 s.register(MessageId(0x300 + i as u16), per).unwrap();
@@ -411,7 +485,7 @@ mod proptests {
 
     /// Brute force: is there any (slot, offset) free for `period`?
     fn some_phase_free<const N: usize>(s: &Scheduler<N>, period: Period) -> bool {
-        (1..=s.hrt_slots()).any(|slot| {
+        s.slots().any(|slot| {
             (0..period.cycles()).any(|o| {
                 s.iter().filter(|r| r.phase.slot == slot).all(|r| {
                     let m = period.cycles().min(r.period.cycles()) - 1;
@@ -438,9 +512,10 @@ mod proptests {
         #[test]
         fn any_sequence_keeps_streams_apart(
             hrt_slots in 1u8..=3,
+            extra in 1u8..8,
             ops in proptest::collection::vec((any::<bool>(), 0u16..12, 0usize..PERIODS.len()), 1..60),
         ) {
-            let mut s = Scheduler::<10>::new(hrt_slots);
+            let mut s = Scheduler::<10>::new(hrt_slots, hrt_slots + extra);
             for (reg, id, pi) in ops {
                 let stream = MessageId(0x100 + id);
                 if !reg {
@@ -460,7 +535,7 @@ mod proptests {
                     (Err(_), r) => prop_assert_eq!(r, Err(Reject::NotHarmonic)),
                     (Ok(per), Ok(ph)) => {
                         prop_assert!((ph.offset as u32) < per.cycles());
-                        prop_assert!(ph.slot >= 1 && ph.slot <= hrt_slots);
+                        prop_assert!(s.slots().any(|x| x == ph.slot));
                         match existing {
                             Some(e) => prop_assert_eq!(e.phase, ph),
                             None => prop_assert!(util + (256 >> per.log2()) <= cap),
@@ -488,9 +563,10 @@ mod proptests {
         #[test]
         fn without_removals_admission_is_the_utilization_test(
             hrt_slots in 1u8..=3,
+            extra in 1u8..8,
             periods in proptest::collection::vec(0u32..=8, 1..40),
         ) {
-            let mut s = Scheduler::<64>::new(hrt_slots);
+            let mut s = Scheduler::<64>::new(hrt_slots, hrt_slots + extra);
             let mut admitted: Vec<u32> = Vec::new();
             for (i, k) in periods.into_iter().enumerate() {
                 let need = 256 >> k;
@@ -526,6 +602,7 @@ mod vectors {
     struct Case {
         name: String,
         hrt_slots: u8,
+        cycle_slots: u8,
         steps: Vec<Step>,
     }
 
@@ -554,7 +631,7 @@ mod vectors {
                 .unwrap();
         let mut checked = 0;
         for case in &f.cases {
-            let mut s = Scheduler::<8>::new(case.hrt_slots);
+            let mut s = Scheduler::<8>::new(case.hrt_slots, case.cycle_slots);
             for (i, st) in case.steps.iter().enumerate() {
                 let at = (case.name.as_str(), i);
                 match st.op.as_str() {

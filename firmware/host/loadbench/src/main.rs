@@ -6,7 +6,7 @@
 use std::process::ExitCode;
 use std::time::Instant;
 
-use r2p_loadbench::setup::{HrtLayout, Mix};
+use r2p_loadbench::setup::Mix;
 use r2p_loadbench::{point, Policy, Setup};
 use rtcan::LaxityEncoding;
 
@@ -19,8 +19,7 @@ const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L
                   the free-slot policy rtcan does not use, fixed)
   --mix H,S       HRT and SRT shares of the offered load, NRT the rest (default 0.3,0.5)
   --laxity E:T    SRT laxity encoding, log or linear, tick T µs (default log:100)
-  --hrt-layout L  packed (slots 1-15 after the sync, as the scheduler reserves them; default)
-                  or spread (what-if: reserved slots alternate with free ones)";
+";
 
 struct Args {
     seed: u64,
@@ -29,7 +28,6 @@ struct Args {
     policies: Vec<Policy>,
     mix: Mix,
     laxity: LaxityEncoding,
-    hrt_layout: HrtLayout,
 }
 
 fn parse() -> Result<Args, String> {
@@ -40,7 +38,6 @@ fn parse() -> Result<Args, String> {
         policies: Policy::defaults(),
         mix: Setup::new(0.5, 0).mix,
         laxity: Setup::new(0.5, 0).laxity,
-        hrt_layout: HrtLayout::Packed,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -97,13 +94,6 @@ fn parse() -> Result<Args, String> {
                     _ => return Err(bad("the encoding is log or linear")),
                 };
             }
-            "--hrt-layout" => {
-                a.hrt_layout = match value.as_str() {
-                    "packed" => HrtLayout::Packed,
-                    "spread" => HrtLayout::Spread,
-                    _ => return Err(bad("write packed or spread")),
-                };
-            }
             _ => return Err(format!("unknown option {flag}")),
         }
     }
@@ -129,7 +119,6 @@ fn main() -> ExitCode {
             duration_us: (args.seconds * 1e6).round() as u64,
             mix: args.mix,
             laxity: args.laxity,
-            hrt_layout: args.hrt_layout,
             ..Setup::new(load, args.seed)
         };
         let t = Instant::now();
@@ -150,7 +139,6 @@ fn main() -> ExitCode {
         json["seconds"] = args.seconds.into();
         json["mix"] = serde_json::json!({ "hrt": args.mix.hrt, "srt": args.mix.srt });
         json["laxity"] = format!("{:?}", args.laxity).into();
-        json["hrt_layout"] = format!("{:?}", args.hrt_layout).to_lowercase().into();
         json["wall_s"] = wall.into();
         json["events_per_s"] = (ev as f64 / wall).round().into();
         println!("{json}");

@@ -151,7 +151,7 @@ impl<'t> RtcanNode<'t> {
 
         if let Some(mut m) = self.master {
             if now >= m.next_sync {
-                let mask = self.traffic.mask(self.setup, m.cycle.wrapping_add(1));
+                let mask = self.traffic.mask(m.cycle.wrapping_add(1));
                 let sync = Sync::new(m.cycle, mask, false);
                 let ok = self.slot_tx.load_slotted(&mut self.can, Slotted::Sync, &sync.to_frame());
                 if ok {

@@ -15,27 +15,6 @@ pub struct Mix {
     pub srt: f64,
 }
 
-/// Where the master's HRT slots lie in the cycle.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum HrtLayout {
-    /// Slots 1…`hrt_slots`, as `rtcan::Scheduler` reserves them: one block after the sync.
-    #[default]
-    Packed,
-    /// What-if: the scheduler's slot k is the cycle's slot 2k − 1, so reserved slots alternate
-    /// with free ones (needs `slots` ≥ 2·`hrt_slots`).
-    Spread,
-}
-
-impl HrtLayout {
-    /// The cycle slot of the scheduler's HRT slot `k` (1…).
-    pub const fn slot(self, k: u8) -> u8 {
-        match self {
-            HrtLayout::Packed => k,
-            HrtLayout::Spread => 2 * k - 1,
-        }
-    }
-}
-
 /// One load point: the bus, the nodes and the traffic to offer.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Setup {
@@ -48,10 +27,8 @@ pub struct Setup {
     pub nodes: usize,
     /// The RTCAN cycle (also fixes the bit rate of both protocols).
     pub cycle: CycleConfig,
-    /// Slots 1…`hrt_slots` the master may reserve for HRT streams.
+    /// Slots the master may reserve for HRT streams (`rtcan::Scheduler` lays them out).
     pub hrt_slots: u8,
-    /// Where those slots lie in the cycle.
-    pub hrt_layout: HrtLayout,
     /// SRT laxity encoding (the node runtime's default: logarithmic, 100 µs ticks).
     pub laxity: LaxityEncoding,
     /// Class shares of the offered load.
@@ -83,7 +60,6 @@ impl Setup {
             nodes: 8,
             cycle: CycleConfig { bit_rate: 1_000_000, cycle_us: 5_000, slots: 30 },
             hrt_slots: 15,
-            hrt_layout: HrtLayout::Packed,
             laxity: LaxityEncoding::Logarithmic { tick_us: 100 },
             mix: Mix { hrt: 0.3, srt: 0.5 },
             srt_streams_per_node: 4,
@@ -104,10 +80,7 @@ impl Setup {
             return Err(SetupError::Nodes(self.nodes));
         }
         self.cycle.validate().map_err(SetupError::Cycle)?;
-        if self.hrt_slots == 0
-            || self.hrt_layout.slot(self.hrt_slots) >= self.cycle.slots
-            || self.hrt_slots >= self.cycle.slots
-        {
+        if self.hrt_slots == 0 || self.hrt_slots >= self.cycle.slots {
             return Err(SetupError::HrtSlots(self.hrt_slots));
         }
         let m = self.mix;
@@ -178,7 +151,7 @@ impl core::fmt::Display for SetupError {
             Self::Nodes(n) => write!(f, "{n} node(s): the bus needs at least 2"),
             Self::Cycle(e) => write!(f, "invalid RTCAN cycle: {e:?}"),
             Self::HrtSlots(s) => {
-                write!(f, "hrt_slots = {s}: use 1 … slots − 1 (spread: 2·hrt_slots ≤ slots)")
+                write!(f, "hrt_slots = {s}: use 1 … slots − 1")
             }
             Self::Mix(m) => write!(f, "class mix {m:?}: shares must be ≥ 0, SRT > 0, sum ≤ 1"),
             Self::Deadlines(d) => {

@@ -177,10 +177,9 @@ impl Builder<'_> {
             if offered + bits / 2.0 > target {
                 return offered;
             }
-            let Ok(mut phase) = self.scheduler.register(probe.message, cycles) else {
+            let Ok(phase) = self.scheduler.register(probe.message, cycles) else {
                 return offered;
             };
-            phase.slot = self.setup.hrt_layout.slot(phase.slot);
             let period = Period::from_cycles(cycles).expect("1 and 2 cycles are harmonic");
             let node = self.streams.len() % self.setup.nodes;
             self.add_stream(node, Kind::Hrt { period, phase }, rate_hz);
@@ -308,7 +307,7 @@ impl Traffic {
             setup,
             rng: Xoshiro256PlusPlus::seed_from_u64(seed),
             streams: Vec::new(),
-            scheduler: Scheduler::new(setup.hrt_slots),
+            scheduler: Scheduler::new(setup.hrt_slots, setup.cycle.slots),
             messages: Vec::new(),
             hrt_len: Vec::new(),
         };
@@ -328,13 +327,9 @@ impl Traffic {
         Ok(Self { streams: b.streams, messages, scheduler: b.scheduler, offered_bits })
     }
 
-    /// The reservations the master announces for cycle `cycle` (sync slot included), in the
-    /// layout of `setup`.
-    pub fn mask(&self, setup: &Setup, cycle: u32) -> u64 {
-        let m = self.scheduler.mask(cycle);
-        (1..=setup.hrt_slots)
-            .filter(|&k| m & 1 << k != 0)
-            .fold(m & 1, |acc, k| acc | 1 << setup.hrt_layout.slot(k))
+    /// The reservations the master announces for cycle `cycle` (sync slot included).
+    pub fn mask(&self, cycle: u32) -> u64 {
+        self.scheduler.mask(cycle)
     }
 
     /// Offered load: offered bits over the window's bit times.

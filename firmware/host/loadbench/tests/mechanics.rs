@@ -2,7 +2,6 @@
 //! must do at the extremes of the sweep. Behaviour only: no wall-clock timing is asserted.
 
 use r2p_loadbench::metrics::deliveries;
-use r2p_loadbench::setup::HrtLayout;
 use r2p_loadbench::traffic::Kind;
 use r2p_loadbench::{point, run, Policy, Setup, SetupError, Traffic};
 use r2p_node::FreeSlots;
@@ -174,7 +173,9 @@ fn merged_windows_carry_more_than_single_slots_at_high_load() {
     let (single, merged) = (&p.reports[0], &p.reports[1]);
     // One frame of 75-150 bits per 166 µs free slot: at most ~90 % of the free time.
     assert!(single.utilisation < merged.utilisation - 0.05, "{single:?} {merged:?}");
-    assert!(single.counters.retries > 10 * merged.counters.retries.max(1), "losers wait a slot");
+    // Losers wait a slot; merged windows retransmit inside the window (only the single free
+    // slots between two runs of reserved slots make their losers wait).
+    assert!(single.counters.retries > 2 * merged.counters.retries.max(1), "losers wait a slot");
 }
 
 #[test]
@@ -207,21 +208,22 @@ fn fixed_priority_at_95_percent_misses_low_priority_srt_deadlines() {
 }
 
 #[test]
-fn the_spread_layout_alternates_reserved_and_free_slots() {
-    let setup = Setup { hrt_layout: HrtLayout::Spread, ..short(0.9, 13, 200_000) };
+fn reserved_slots_come_in_runs_of_two_with_a_free_slot_after_each() {
+    let setup = short(0.9, 13, 200_000);
     let t = Traffic::generate(&setup).unwrap();
-    let most = (0..64).map(|c| t.mask(&setup, c)).max_by_key(|m| m.count_ones()).unwrap();
+    let most = (0..64).map(|c| t.mask(c)).max_by_key(|m| m.count_ones()).unwrap();
     assert!(most.count_ones() > 10, "{most:#b}");
     for c in 0..64 {
-        let hrt = t.mask(&setup, c) & !1;
-        assert_eq!(hrt & hrt >> 1, 0, "cycle {c}: adjacent reserved slots {hrt:#b}");
-        assert_eq!(hrt & 0x5555_5555, 0, "cycle {c}: reserved slots are odd");
+        let m = t.mask(c);
+        // The sync slot and at most two reserved slots in a row: SRT waits ≤ 3 slots.
+        assert_eq!(m & m >> 1 & m >> 2 & !1, 0, "cycle {c}: three reserved slots in a row {m:#b}");
+        assert_eq!(m & 0b1000, 0, "cycle {c}: slot 3 follows the first run {m:#b}");
     }
     // Reservations are where the HRT messages go, and nowhere else.
     let p = point(&setup, &[Policy::Rtcan]).unwrap();
     assert_eq!((p.reports[0].hrt_missed, p.reports[0].hrt_in_slot), (0, Some(1.0)));
-    let e = Traffic::generate(&Setup { hrt_slots: 16, ..setup }).unwrap_err();
-    assert_eq!(e, SetupError::HrtSlots(16));
+    let e = Traffic::generate(&Setup { hrt_slots: 30, ..setup }).unwrap_err();
+    assert_eq!(e, SetupError::HrtSlots(30));
 }
 
 #[test]
