@@ -186,11 +186,10 @@ impl<U: Read + ReadReady> Tfmini<U> {
             for &b in &buf[..n] {
                 if let Some(f) = self.parser.push(b) {
                     newest = Some(f);
+                    // Kept at once: an error later in this poll loses no frame.
+                    self.latest = newest;
                 }
             }
-        }
-        if newest.is_some() {
-            self.latest = newest;
         }
         Ok(newest)
     }
@@ -208,6 +207,11 @@ impl<U: Read + ReadReady> Tfmini<U> {
     /// The UART, e.g. to read its error counters.
     pub fn uart(&self) -> &U {
         &self.uart
+    }
+
+    /// The UART, mutably (the emulator advances its virtual time through this).
+    pub fn uart_mut(&mut self) -> &mut U {
+        &mut self.uart
     }
 
     /// Gives the UART back.
