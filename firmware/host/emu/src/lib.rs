@@ -20,6 +20,7 @@
 pub mod boards;
 pub mod bridge;
 pub mod demo;
+pub mod periph;
 pub mod robot;
 pub mod serve;
 

@@ -2,7 +2,9 @@
 //! emulated boards: brushed DC motors behind H-bridges with encoders and Hall current
 //! sensors, a wheeled base (three-wheel omni or differential) with its rigid-body dynamics, a
 //! battery discharging under the motors' load, the PSU's 5 V bus, and IR/ultrasonic rangers
-//! seeing 2-D obstacles through their datasheet transfer curves.
+//! seeing 2-D obstacles through their datasheet transfer curves; an IMU feeling the base's
+//! motion ([`imu`]) and a single-point LiDAR ranging the obstacles ([`lidar`]), which the
+//! emulator's I2C/SPI/UART device models encode.
 //!
 //! A [`Robot`] is read from a robot file (`robots/*.toml`, format in `robots/README.md`);
 //! [`World::from_robot`] builds its world; [`World::advance_ns`] steps it in virtual time;
@@ -24,7 +26,9 @@ pub mod encoder;
 pub mod frontends;
 pub mod geometry;
 pub mod hbridge;
+pub mod imu;
 pub mod kinematics;
+pub mod lidar;
 mod linalg;
 pub mod motor;
 pub mod noise;

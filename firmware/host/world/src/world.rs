@@ -227,6 +227,8 @@ pub struct World {
     base: Base,
     pose: Pose,
     q: [f64; 3],
+    /// q̇ of the last sub-step (what an accelerometer on the base feels).
+    q_dot: [f64; 3],
     wheels: Vec<Wheel>,
     battery: Battery,
     supply_v: f64,
@@ -315,6 +317,7 @@ impl World {
             base,
             pose: robot.initial_pose,
             q: [0.0; 3],
+            q_dot: [0.0; 3],
             wheels: std::mem::take(&mut wheels),
             battery,
             supply_v,
@@ -484,6 +487,7 @@ impl World {
         for (q, a) in self.q.iter_mut().zip(acc.q_dot) {
             *q += h * a;
         }
+        self.q_dot = acc.q_dot;
         self.pose.integrate(&self.kin.twist(&self.q), h);
         for (k, w) in self.wheels.iter_mut().enumerate() {
             let n = w.gearbox.ratio;
@@ -709,6 +713,7 @@ impl World {
     pub fn set_pose(&mut self, pose: Pose) {
         self.pose = pose;
         self.q = [0.0; 3];
+        self.q_dot = [0.0; 3];
         for w in &mut self.wheels {
             w.speed = 0.0;
             let angle = w.motor.angle();
@@ -726,6 +731,13 @@ impl World {
     /// The base's velocity (body frame).
     pub fn twist(&self) -> Twist {
         self.kin.twist(&self.q)
+    }
+
+    /// The rate of change of the base's body twist over the last sub-step: (v̇x, v̇y, ω̇) in
+    /// the body frame, the derivative of [`Self::twist`]'s components (not yet the
+    /// acceleration: see [`crate::imu`] for the ω × v term).
+    pub fn twist_rate(&self) -> Twist {
+        self.kin.twist(&self.q_dot)
     }
 
     /// The base's kinematics.

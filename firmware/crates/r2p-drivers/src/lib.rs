@@ -1,0 +1,26 @@
+//! Sensor drivers for R2P modules: `no_std`, no heap, generic over the embedded-hal 1.0 and
+//! embedded-io traits that embassy-stm32's I2C, SPI and UART drivers implement — and that the
+//! emulator's simulated buses implement too (`firmware/host/emu/src/periph/`), so the same
+//! driver code runs on a module and against a simulated device in virtual time.
+//!
+//! - [`lsm6dso`]: ST LSM6DSO 6-axis IMU (accelerometer + gyroscope) over I2C or SPI — probe,
+//!   configure output data rate and full scale, read gyro + accel + temperature in one
+//!   auto-incremented burst, convert to SI units with the datasheet sensitivities.
+//! - [`tfmini`]: Benewake TFmini-S single-point LiDAR over UART — a frame parser that
+//!   resynchronises on garbage and counts bad checksums, and the frame-rate command.
+//!
+//! Why our own drivers rather than crates.io's: the `lsm6dso` crate (0.2) speaks I2C only (the
+//! IMU module may use SPI), reports a wrong chip as a bare `ChipDetectFailed` without the value
+//! read, and makes its `blocking` and `async` features mutually exclusive with a
+//! `compile_error!`, which breaks as soon as two crates of one build enable different ones;
+//! `lsm6dsox` targets embedded-hal 0.2 and another part. No maintained TFmini driver exists for
+//! embedded-io. Both devices need only a handful of registers or one frame format, so a small
+//! driver that we test against a register-level model is the sounder choice.
+#![no_std]
+#![warn(missing_docs)]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod lsm6dso;
+pub mod tfmini;
