@@ -146,6 +146,18 @@ def test_overlapping_parts_are_a_drc_error(scratch):
     assert _problems(scratch, "DRC error")
 
 
+def test_a_reference_over_another_part_is_a_silkscreen_problem(scratch):
+    """silk.py keeps references off pads and other silk; check.py must not wave one through."""
+    import pcbnew
+    pcb = scratch / "proximity.kicad_pcb"
+    b = pcbnew.LoadBoard(str(pcb))
+    ref = b.FindFootprintByReference("R102").GetFieldByName("Reference")
+    ref.SetPosition(b.FindFootprintByReference("R103").GetPosition())
+    pcbnew.SaveBoard(str(pcb), b)
+    found = _problems(scratch, "DRC warning silk_")
+    assert any("Reference field of R102" in p for p in found), found
+
+
 def test_a_footprint_missing_from_the_board_breaks_parity(scratch):
     import pcbnew
     pcb = scratch / "proximity.kicad_pcb"

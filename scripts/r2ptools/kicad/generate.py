@@ -8,7 +8,8 @@ For each module (default: all of `modules.MODULES`) it writes, under DIR (defaul
     core/core.kicad_sch      the shared core sheet
 Steps: schematic (label per pin) → KiCad netlist → placed board with power copper → signal
 routing (replayed from route.ses when the routing problem is unchanged; --route, or a changed
-problem, runs freerouting, which needs Java 25) → zone fill → save. Same description, same bytes.
+problem, runs freerouting, which needs Java 25) → zone fill → silkscreen layout (silk.py) → save.
+Same description, same bytes.
 """
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ from pathlib import Path
 
 from .. import ROOT
 from . import board as board_mod
-from . import fabcap, libtables, netlist, route, sch_gen
+from . import fabcap, libtables, netlist, route, sch_gen, silk
 from .modules import MODULES, build_all, core
 from .design import Module
 
@@ -80,6 +81,7 @@ def generate(m: Module, modules: list[Module], out: Path, force_route: bool = Fa
         board_mod.save(b, pcb, classes)     # kept for inspection: `scripts/py -m r2ptools.kicad.check`
         raise route.RoutingError(f"{m.name}: freerouting left {missing} connections unrouted "
                                  f"after {ROUTE_PASSES[-1]} passes: loosen the placement")
+    log(f"{m.name}: " + silk.layout(b).summary())
     board_mod.save(b, pcb, classes)
     times["route" if routed else "route (replayed)"] = time.monotonic() - t0
     return times

@@ -27,13 +27,17 @@ def core_tracks() -> list[Track]:
                                  (24.75, 26.25), (25.84, 26.25)], 0.2)]
 
 
-def frame_texts(name: str, revision: str) -> list[Text]:
+def frame_texts(name: str, revision: str, bus_in: tuple[float, float] = (21.0, 18.4)) -> list[Text]:
     """The silkscreen every module shares: bus port names, bus header pinout, termination switch
-    on the top; the module's name and revision large on the back, where nothing covers them."""
+    on the top; the module's name and revision large on the back, where nothing covers them.
+
+    BUS IN sits under J1 where the parts below the jack leave a gap (`bus_in`: the core's
+    placement leaves one right of C7; a module that moves core parts passes its own), clear of
+    pads and outlines as silk.py requires."""
     return [
-        Text("BUS IN", 15.9, 18.35, 0.8),
+        Text("BUS IN", *bus_in, 0.8),
         Text("BUS OUT", 44.3, 18.35, 0.8),
-        Text("TERM", 29.8, 7.95, 0.8),
+        Text("TERM", 29.8, 7.8, 0.8),
         *[Text(label, x, 12.55, 0.8) for label, x in (("5V", 26.0), ("H", 28.54), ("L", 31.08),
                                                         ("G", 33.62))],
         Text(f"R2P {name.upper()}", 30.0, 32.0, 2.0, "B.SilkS"),

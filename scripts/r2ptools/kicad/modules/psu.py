@@ -230,7 +230,7 @@ def build(core: Sheet) -> Module:
 
     m = Module(NAME, TITLE, REVISION, s, tracks=core_mod.bus_tracks(extend_to=52.4) + power_tracks(),
                vias=power_vias(), places=PLACES, seed=3)
-    m.texts = frame_texts(NAME, REVISION) + [
+    m.texts = frame_texts(NAME, REVISION, bus_in=(11.0, 18.4)) + [
         Text("+", 17.4, 40.6, 1.5, "B.SilkS"), Text("-", 12.4, 40.6, 1.5, "B.SilkS"),
         Text("BATTERY 5.5-36V", 15.0, 33.0, 1.0, "B.SilkS")]
     return m
