@@ -16,6 +16,11 @@
 //! A frame that did not go out stays in the node's transmit queue ([`TxQueue::peek_ticket`])
 //! with its deadline, to be loaded again with its laxity recomputed. The node learns each
 //! frame's fate from the controller's results (`CanController::take_tx_result`).
+//!
+//! In a merged window the node loads the next [`QUEUED_MAX`] frames of its queue at once (the
+//! controller sends its mailboxes in load order), so a multi-frame message goes out back to
+//! back as on plain CAN instead of one fragment per slot boundary; the guard withdraws every
+//! one that has not started.
 
 use rtcan::controller::{TxMode, TxOutcome};
 use rtcan::cycle::SlotPosition;
@@ -30,7 +35,8 @@ pub enum FreeSlots {
     Single,
     /// Consecutive free slots, up to the next reserved slot or sync, are one window (as TTCAN
     /// merges arbitrating windows): frames are sent with automatic retransmission, so the bus
-    /// carries frames back to back, and a node loads its next frame at each slot boundary.
+    /// carries frames back to back; a node keeps its next [`QUEUED_MAX`] frames loaded and tops
+    /// them up at each slot boundary.
     #[default]
     Merged,
 }
@@ -93,17 +99,27 @@ struct Window {
     guard: Micros,
 }
 
-/// The node's transmit state in slotted mode: at most one slotted (sync/HRT) and one queued
-/// frame in the controller, the queued one's window, and the controller's transmit mode.
+/// Queued frames a node keeps in its controller in a merged window: bxCAN's three mailboxes.
+pub const QUEUED_MAX: usize = 3;
+
+/// What [`SlotTx::settle`] returns: the slotted frame's and every queued frame's fate.
+pub type Settled<T> = [Option<Done<T>>; 1 + QUEUED_MAX];
+
+/// The node's transmit state in slotted mode: at most one slotted (sync/HRT) frame or up to
+/// [`QUEUED_MAX`] queued frames (one with [`FreeSlots::Single`]) in the controller, in load
+/// order, their window, and the controller's transmit mode.
 #[derive(Clone, Debug)]
 pub struct SlotTx<T> {
     policy: FreeSlots,
     slots: u8,
     frame_us: Micros,
     slotted: Option<(Slotted<T>, FrameId)>,
-    queued: Option<(Ticket, FrameId)>,
+    queued: [Option<(Ticket, FrameId)>; QUEUED_MAX],
     window: Option<Window>,
     late: bool,
+    /// Withdrawn but still in the controller (on the wire or losing an arbitration): whether
+    /// they go out is not known yet, so nothing is loaded behind them.
+    draining: bool,
     mode: Option<TxMode>,
 }
 
@@ -115,9 +131,10 @@ impl<T: Copy> SlotTx<T> {
             slots: cycle.slots,
             frame_us: cycle.frame_us() as Micros,
             slotted: None,
-            queued: None,
+            queued: [None; QUEUED_MAX],
             window: None,
             late: false,
+            draining: false,
             mode: None,
         }
     }
@@ -130,14 +147,24 @@ impl<T: Copy> SlotTx<T> {
     /// True if a call of the slot timer at `now` is the loaded queued frame's guard (its
     /// window's latest start), not a slot boundary.
     pub fn at_guard(&self, now: Micros) -> bool {
-        self.queued.is_some() && self.window.is_some_and(|w| now >= w.guard && now < w.end)
+        self.has_queued() && self.window.is_some_and(|w| now >= w.guard && now < w.end)
     }
 
-    /// At the guard: withdraws the queued frame if it has not started (one on the wire ends
+    fn has_queued(&self) -> bool {
+        self.queued[0].is_some()
+    }
+
+    /// The queued frames in the controller, in load order (their tickets and identifiers).
+    pub fn queued(&self) -> impl Iterator<Item = (Ticket, FrameId)> + '_ {
+        self.queued.iter().map_while(|q| *q)
+    }
+
+    /// At the guard: withdraws the queued frames that have not started (one on the wire ends
     /// within the window).
     pub fn on_guard<C: CanController + ?Sized>(&mut self, can: &mut C) {
         // Only the queued frame can be waiting: nothing else is loaded in a free slot.
         self.late = can.abort_pending() > 0;
+        self.draining = true;
         if let Some(w) = &mut self.window {
             w.guard = w.end;
         }
@@ -145,48 +172,75 @@ impl<T: Copy> SlotTx<T> {
 
     /// At slot boundary `now`: withdraws what has not started and takes the controller's
     /// results. Returns what became of the loaded frames, in the order they finished; a frame
-    /// on the wire stays loaded. Inside a merged window, a queued frame that is still the
-    /// queue's head with the same laxity code is left loaded (withdrawing it while it is in an
-    /// arbitration would cost it its retry); otherwise it is withdrawn, to be loaded again
-    /// with the more urgent frame or code.
+    /// on the wire stays loaded. Inside a merged window, queued frames that are still the
+    /// queue's next frames, in order and with the same laxity codes, are left loaded
+    /// (withdrawing one while it is in an arbitration would cost it its retry); otherwise they
+    /// are withdrawn, to be loaded again behind the more urgent frame or code.
     pub fn settle<C: CanController + ?Sized, const N: usize>(
         &mut self,
         now: Micros,
         can: &mut C,
         tx: &TxQueue<N>,
-    ) -> [Option<Done<T>>; 2] {
-        let mut done = [None, None];
-        if self.slotted.is_none() && self.queued.is_none() {
+    ) -> Settled<T> {
+        let mut done: Settled<T> = [None; 1 + QUEUED_MAX];
+        if self.slotted.is_none() && !self.has_queued() {
             return done;
         }
+        let n = self.take_results(can, &mut done, 0);
         let inside = self.policy == FreeSlots::Merged && self.window.is_some_and(|w| now < w.end);
-        let head = if inside { tx.peek_ticket(now) } else { None };
-        let current = matches!((self.queued, head), (Some(q), Some((t, f))) if q == (t, f.id()));
+        // Still loaded: the queue's next frames in order (the ones just sent aside, the node
+        // removes them after this returns)? Else a frame that lost or was withdrawn would go
+        // out behind the ones loaded after it.
+        let current = inside
+            && {
+                let sent = |t: Ticket| {
+                    done.iter().flatten().any(|d| {
+                    matches!(d, Done::Queued { ticket, outcome: TxOutcome::Sent, .. } if *ticket == t)
+                })
+                };
+                let mut next = tx.upcoming(now).filter(|&(t, _)| !sent(t));
+                self.queued().all(|q| next.next().is_some_and(|(t, f)| q == (t, f.id())))
+            };
         if !current || self.slotted.is_some() {
             can.abort_pending();
+            self.take_results(can, &mut done, n);
+            self.draining = true;
         }
-        let mut n = 0;
-        while let Some(r) = can.take_tx_result() {
-            let d = match (self.slotted, self.queued) {
-                (Some((what, id)), _) if id == r.id => {
-                    self.slotted = None;
-                    Done::Slotted { what, id, outcome: r.outcome }
-                }
-                (_, Some((ticket, id))) if id == r.id => {
-                    self.queued = None;
-                    let late = self.late && r.outcome == TxOutcome::Aborted;
-                    Done::Queued { ticket, id, outcome: r.outcome, late }
-                }
-                _ => continue, // a frame of an earlier mode of use (unslotted): nothing to do
-            };
-            done[n] = Some(d);
-            n += 1;
-        }
-        if self.queued.is_none() {
+        if !self.has_queued() {
             self.window = None;
             self.late = false;
+            self.draining = false;
         }
         done
+    }
+
+    /// Takes the controller's results into `done` from index `n`; returns the next index.
+    fn take_results<C: CanController + ?Sized>(
+        &mut self,
+        can: &mut C,
+        done: &mut Settled<T>,
+        mut n: usize,
+    ) -> usize {
+        while let Some(r) = can.take_tx_result() {
+            let d = if let Some((what, _)) = self.slotted.filter(|&(_, id)| id == r.id) {
+                self.slotted = None;
+                Done::Slotted { what, id: r.id, outcome: r.outcome }
+            } else if let Some(j) = self.queued.iter().position(|q| q.is_some_and(|q| q.1 == r.id))
+            {
+                // Loaded frames have distinct identifiers (`load_queued`).
+                let (ticket, id) = self.queued[j].take().expect("found above");
+                self.queued[j..].rotate_left(1);
+                let late = self.late && r.outcome == TxOutcome::Aborted;
+                Done::Queued { ticket, id, outcome: r.outcome, late }
+            } else {
+                continue; // a frame of an earlier mode of use (unslotted): nothing to do
+            };
+            if let Some(slot) = done.get_mut(n) {
+                *slot = Some(d);
+                n += 1;
+            }
+        }
+        n
     }
 
     /// Switches the controller to `mode` if it is not there yet.
@@ -230,9 +284,10 @@ impl<T: Copy> SlotTx<T> {
         clock.slot_start(p.cycle, next)
     }
 
-    /// Loads the queue's most urgent frame at `now` for the window ending at `end`, if its
-    /// latest start is still ahead; one-shot in a one-slot window, with retransmission in a
-    /// merged one. False if nothing was loaded.
+    /// Loads the queue's most urgent frames at `now` for the window ending at `end`, if its
+    /// latest start is still ahead: one, one-shot, in a one-slot window ([`FreeSlots::Single`]);
+    /// up to [`QUEUED_MAX`] with retransmission in a merged one, topping up what is still
+    /// loaded for the same window. False if nothing was loaded.
     pub fn load_queued<C: CanController + ?Sized, const N: usize>(
         &mut self,
         now: Micros,
@@ -241,25 +296,49 @@ impl<T: Copy> SlotTx<T> {
         tx: &TxQueue<N>,
     ) -> bool {
         let guard = end.saturating_sub(self.frame_us);
-        if self.queued.is_some() || now >= guard {
+        let other_window = self.window.is_some_and(|w| w.end != end);
+        if now >= guard || (self.has_queued() && (other_window || self.draining)) {
             return false;
         }
-        let Some((ticket, frame)) = tx.peek_ticket(now) else { return false };
-        let mode = match self.policy {
-            FreeSlots::Single => TxMode::OneShot,
-            FreeSlots::Merged => TxMode::Retransmit,
+        let (mode, depth) = match self.policy {
+            FreeSlots::Single => (TxMode::OneShot, 1),
+            FreeSlots::Merged => (TxMode::Retransmit, QUEUED_MAX),
         };
-        self.set_mode(can, mode);
-        if can.try_transmit(&frame).is_err() {
+        let mut loaded = self.queued().count();
+        let first = loaded;
+        // What is still loaded is the queue's next frames, in order (`settle` withdrew it
+        // otherwise, and `draining` waits for the fate of what it could not take back): the
+        // frames after it go in behind it.
+        for (ticket, frame) in tx.upcoming(now) {
+            if loaded == depth {
+                break;
+            }
+            if self.queued().any(|(t, _)| t == ticket) {
+                continue;
+            }
+            if self.queued().any(|(_, id)| id == frame.id()) {
+                // Results name a frame by identifier: two loaded frames must not share one
+                // (two messages of one stream can, fragment and laxity code alike).
+                break;
+            }
+            self.set_mode(can, mode);
+            if can.try_transmit(&frame).is_err() {
+                break;
+            }
+            self.queued[loaded] = Some((ticket, frame.id()));
+            loaded += 1;
+        }
+        if loaded == first {
             return false;
         }
-        self.queued = Some((ticket, frame.id()));
-        self.window = Some(Window { end, guard });
-        self.late = false;
+        if first == 0 {
+            self.window = Some(Window { end, guard });
+            self.late = false;
+        }
         true
     }
 
-    /// The end of the loaded queued frame's window, if one is loaded.
+    /// The end of the loaded queued frames' window, if any is loaded.
     pub fn window_end_loaded(&self) -> Option<Micros> {
         self.window.map(|w| w.end)
     }
@@ -268,7 +347,7 @@ impl<T: Copy> SlotTx<T> {
     /// if that is still ahead.
     pub fn next_wake(&self, now: Micros, boundary: Micros) -> Micros {
         match self.window {
-            Some(w) if self.queued.is_some() && now < w.guard && w.guard < boundary => w.guard,
+            Some(w) if self.has_queued() && now < w.guard && w.guard < boundary => w.guard,
             _ => boundary,
         }
     }

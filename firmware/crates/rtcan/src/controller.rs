@@ -126,7 +126,9 @@ pub struct ErrorCounters {
 pub trait CanController {
     /// Loads `frame` into a free transmit mailbox now; never waits. Callable from an interrupt.
     /// It is sent as the [transmit mode](Self::set_tx_mode) says; what became of it comes from
-    /// [`take_tx_result`](Self::take_tx_result).
+    /// [`take_tx_result`](Self::take_tx_result). Frames in several mailboxes go out in the
+    /// order they were loaded (transmit FIFO priority: bxCAN's `TXFP`), not lowest identifier
+    /// first, so a node may load the next frames of its queue at once and keep its order.
     fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError>;
 
     /// Sets how frames are sent from now on: [`TxMode::Retransmit`] (the mode after reset) or

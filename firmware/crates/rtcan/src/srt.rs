@@ -211,10 +211,17 @@ impl<const N: usize> TxQueue<N> {
     /// a frame that did not stays in its place (same deadline, laxity recomputed when it is
     /// peeked again).
     pub fn peek_ticket(&self, now: Micros) -> Option<(Ticket, Frame)> {
-        let (_, i) = self.next_index(now)?;
-        let e = &self.entries[usize::from(i)];
-        let ticket = Ticket { index: i, group: e.group, fragment: e.frame.id().fragment };
-        Some((ticket, self.stamped(e, now)))
+        self.upcoming(now).next()
+    }
+
+    /// The frames to send from `now` on, in sending order, with their tickets and laxity for
+    /// `now`; expired entries are skipped. The first is [`TxQueue::peek_ticket`]'s: a node whose
+    /// controller sends its mailboxes in load order may load the next few at once.
+    pub fn upcoming(&self, now: Micros) -> impl Iterator<Item = (Ticket, Frame)> + '_ {
+        self.queued().filter(move |(_, e)| !e.expired(now)).map(move |(i, e)| {
+            let ticket = Ticket { index: i, group: e.group, fragment: e.frame.id().fragment };
+            (ticket, self.stamped(e, now))
+        })
     }
 
     /// Removes the frame `ticket` names if it is still queued (false if it expired or was

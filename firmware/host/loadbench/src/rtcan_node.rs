@@ -23,7 +23,8 @@ use rtcan::cycle::{ClockState, SYNC_SLOT};
 use rtcan::id::{EXTENDED_ID_MAX, MESSAGE_ID_SHIFT, SYNC_MESSAGE_IDS};
 use rtcan::schedule::occurs;
 use rtcan::{
-    CanController, Frame, FrameId, Laxity, MessageId, Micros, SlotClock, Sync, TxQueue, Urgency,
+    CanController, Frame, FrameId, Laxity, MessageId, Micros, SlotClock, Sync, Ticket, TxQueue,
+    Urgency,
 };
 
 use crate::publish::Publishers;
@@ -47,9 +48,9 @@ pub struct RtcanNode<'t> {
     master: Option<Master>,
     /// The node runtime's slot transmit state; HRT frames tagged with their message.
     slot_tx: SlotTx<u32>,
-    /// The queued frame loaded: its message and fragment (a message may expire while its
-    /// frame is on the wire).
-    loaded: Option<(u32, u8)>,
+    /// The queued frames loaded: their tickets, messages and fragments (a message may expire
+    /// while its frame is on the wire).
+    loaded: Vec<(Ticket, u32, u8)>,
     publishers: Publishers,
     /// This node's HRT streams and their occurrences still to send, oldest first.
     hrt: Vec<(u16, VecDeque<u32>)>,
@@ -105,7 +106,7 @@ impl<'t> RtcanNode<'t> {
             tx: TxQueue::new(setup.laxity),
             master,
             slot_tx: SlotTx::new(&setup.cycle, free_slots),
-            loaded: None,
+            loaded: Vec::new(),
             publishers: Publishers::new(traffic, setup, index, |s| !is_hrt(s)),
             hrt,
             queued: vec![VecDeque::new(); traffic.streams.len()],
@@ -176,14 +177,33 @@ impl<'t> RtcanNode<'t> {
             }
             ClockState::Running(p) => {
                 let Some(end) = self.slot_tx.window_end(&self.clock, p) else { return };
-                let head = self.tx.peek(now).map(|f| f.id());
                 if self.slot_tx.load_queued(now, end, &mut self.can, &self.tx) {
-                    let id = head.expect("a frame was loaded");
-                    let msg = self.queued[stream_of(id.message)].front().copied();
-                    self.loaded = Some((msg.expect("a queued frame's message"), id.fragment));
+                    self.note_loaded(now);
                 }
             }
             ClockState::Unsynced | ClockState::Lost => {}
+        }
+    }
+
+    /// Records which message and fragment each newly loaded frame carries: the queue's frames
+    /// in sending order, a stream's messages in its publisher order.
+    fn note_loaded(&mut self, now: Micros) {
+        let mut nth = std::collections::HashMap::<usize, usize>::new();
+        let loaded: Vec<Ticket> = self.slot_tx.queued().map(|(t, _)| t).collect();
+        for (ticket, frame) in self.tx.upcoming(now) {
+            let id = frame.id();
+            let stream = stream_of(id.message);
+            let k = *nth.entry(stream).or_insert(0);
+            if id.fragment == 0 {
+                nth.insert(stream, k + 1);
+            }
+            if loaded.contains(&ticket) && !self.loaded.iter().any(|l| l.0 == ticket) {
+                let msg = self.queued[stream].get(k).copied().expect("a queued frame's message");
+                self.loaded.push((ticket, msg, id.fragment));
+            }
+            if self.loaded.len() == loaded.len() {
+                break;
+            }
         }
     }
 
@@ -203,7 +223,8 @@ impl<'t> RtcanNode<'t> {
             Done::Slotted { what: Slotted::Hrt(_), .. } => self.counters.hrt_skipped += 1,
             Done::Slotted { .. } => {}
             Done::Queued { ticket, id, outcome, late } => {
-                let (msg, fragment) = self.loaded.take().expect("a queued frame was loaded");
+                let at = self.loaded.iter().position(|l| l.0 == ticket);
+                let (_, msg, fragment) = self.loaded.remove(at.expect("a queued frame was loaded"));
                 if outcome != TxOutcome::Sent {
                     self.counters.late += u64::from(late);
                     return;

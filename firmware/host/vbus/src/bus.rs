@@ -13,6 +13,18 @@ use rtcan::{CanController, Frame};
 use crate::bits::{arbitration_loss_bits, FrameBits, RECOVERY_RUNS, RECOVERY_RUN_BITS};
 use crate::rng::SplitMix64;
 
+/// In which order a port's loaded mailboxes go out.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum TxOrder {
+    /// The order they were loaded in: bxCAN with transmit FIFO priority (`TXFP` = 1), as
+    /// `rtcan-bxcan` sets it and `rtcan::CanController` requires. The default.
+    #[default]
+    Loaded,
+    /// Lowest identifier first, then oldest: bxCAN's reset setting (`TXFP` = 0), a plain CAN
+    /// node's.
+    Identifier,
+}
+
 /// Transmit mailboxes per port (bxCAN has three).
 pub const MAILBOXES: usize = 3;
 
@@ -202,6 +214,7 @@ struct Node {
     /// A frame of this node is on the wire (possibly on a segment it has since left).
     sending: bool,
     tx_mode: TxMode,
+    tx_order: TxOrder,
     /// Results of finished frames not taken yet, oldest first (at most `TX_RESULTS`).
     results: VecDeque<TxResult>,
 }
@@ -223,6 +236,7 @@ impl Node {
             received: 0,
             sending: false,
             tx_mode: TxMode::Retransmit,
+            tx_order: TxOrder::Loaded,
             results: VecDeque::new(),
         }
     }
@@ -265,7 +279,9 @@ impl Node {
         }
     }
 
-    /// The request this node would arbitrate with at `t`: lowest identifier, then oldest.
+    /// The request this node would arbitrate with at `t`: its oldest loaded mailbox
+    /// ([`TxOrder::Loaded`]) or its lowest identifier, then oldest ([`TxOrder::Identifier`]);
+    /// a babbler's frame competes by identifier.
     fn candidate(&self, t: u64) -> Option<(u32, u64, Source, Frame)> {
         if !self.active() || self.sending {
             return None;
@@ -274,11 +290,15 @@ impl Node {
             m.filter(|m| m.loaded_at <= t)
                 .map(|m| (m.frame.id().to_raw(), m.seq, Source::Mailbox(i, m.seq), m.frame))
         });
+        let boxes = match self.tx_order {
+            TxOrder::Loaded => boxes.min_by_key(|&(_, seq, _, _)| seq),
+            TxOrder::Identifier => boxes.min_by_key(|&(id, seq, _, _)| (id, seq)),
+        };
         let babble = self
             .babble
             .filter(|&(_, since)| since <= t)
             .map(|(f, _)| (f.id().to_raw(), 0, Source::Babble, f));
-        boxes.chain(babble).min_by_key(|&(id, seq, _, _)| (id, seq))
+        boxes.into_iter().chain(babble).min_by_key(|&(id, seq, _, _)| (id, seq))
     }
 
     fn earliest_request(&self) -> Option<u64> {
@@ -835,12 +855,17 @@ impl Port {
     pub fn rx_len(&self) -> usize {
         lock(&self.inner).nodes[self.index].fifo.len()
     }
+
+    /// Sets the order in which the port's mailboxes go out (kept across power cycles, like
+    /// the driver setting it at every start).
+    pub fn set_tx_order(&mut self, order: TxOrder) {
+        lock(&self.inner).nodes[self.index].tx_order = order;
+    }
 }
 
 impl CanController for Port {
     /// Loads `frame` at the current virtual time. A powered-off port reports
-    /// [`TxError::BusOff`]. Mailboxes take part in arbitration lowest identifier first, then
-    /// oldest.
+    /// [`TxError::BusOff`]. Mailboxes take part in arbitration in the port's [`TxOrder`].
     fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
         let mut g = lock(&self.inner);
         let (now, seq) = (g.now, g.seq);

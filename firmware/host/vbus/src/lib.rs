@@ -10,7 +10,8 @@
 //! - exact frame durations from the frame's bits: CRC-15, bit stuffing over SOF..CRC, CRC
 //!   delimiter, ACK, EOF and intermission ([`bits`]);
 //! - arbitration: requests pending when the bus goes idle start together, the lowest
-//!   identifier wins, losers retry at the next idle; each port offers its lowest-ID mailbox;
+//!   identifier wins, losers retry at the next idle; each port offers its oldest mailbox
+//!   (transmit FIFO priority, as RTCAN sets bxCAN) or its lowest-ID one ([`TxOrder`]);
 //! - delivery to every other active port on the segment at end of EOF (µs timestamps),
 //!   acceptance filters, a bounded receive FIFO with overflows counted, transmit confirmation;
 //! - error frames and fault confinement (TEC/REC, error passive, bus-off, recovery after
@@ -35,7 +36,9 @@ mod bus;
 mod rng;
 
 pub use bits::FrameBits;
-pub use bus::{Bus, Config, ErrorCause, Event, EventKind, FaultAction, FaultRule, Port, MAILBOXES};
+pub use bus::{
+    Bus, Config, ErrorCause, Event, EventKind, FaultAction, FaultRule, Port, TxOrder, MAILBOXES,
+};
 
 #[cfg(test)]
 mod tests {

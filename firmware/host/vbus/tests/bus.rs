@@ -1,7 +1,7 @@
 //! Behaviour of the virtual bus through its public API.
 
 use proptest::prelude::*;
-use r2p_vbus::{Bus, Config, ErrorCause, EventKind, FaultAction, FaultRule, FrameBits};
+use r2p_vbus::{Bus, Config, ErrorCause, EventKind, FaultAction, FaultRule, FrameBits, TxOrder};
 use rtcan::controller::{BusState, ErrorCounters, Filter, TxError, TxMode, TxOutcome, TxResult};
 use rtcan::{CanController, Frame, FrameId};
 
@@ -46,7 +46,8 @@ fn arbitration_lowest_id_first_losers_retry_at_next_idle() {
 }
 
 #[test]
-fn a_port_offers_its_lowest_id_mailbox() {
+fn a_port_sends_its_mailboxes_in_load_order_or_lowest_id_first() {
+    // Transmit FIFO priority (bxCAN TXFP = 1, the default here): load order.
     let bus = bus(2);
     let mut a = bus.port(0);
     for raw in [0x30, 0x10, 0x20] {
@@ -55,8 +56,18 @@ fn a_port_offers_its_lowest_id_mailbox() {
     assert_eq!(a.try_transmit(&frame(0x5, &[])), Err(TxError::MailboxesFull));
     bus.run_until_idle(MS);
     let ids: Vec<u32> = bus.frames().map(|f| f.2.id().to_raw()).collect();
-    assert_eq!(ids, [0x10, 0x20, 0x30]);
+    assert_eq!(ids, [0x30, 0x10, 0x20]);
     assert_eq!(a.pending(), 0);
+    // Identifier priority (TXFP = 0): lowest identifier first.
+    let bus = self::bus(2);
+    let mut a = bus.port(0);
+    a.set_tx_order(TxOrder::Identifier);
+    for raw in [0x30, 0x10, 0x20] {
+        a.try_transmit(&frame(raw, &[])).unwrap();
+    }
+    bus.run_until_idle(MS);
+    let ids: Vec<u32> = bus.frames().map(|f| f.2.id().to_raw()).collect();
+    assert_eq!(ids, [0x10, 0x20, 0x30]);
 }
 
 #[test]
