@@ -78,13 +78,13 @@ def test_regeneration_is_byte_identical(tmp_path):
         for f in GENERATED:
             (out / b.name / f.format(m=b.name)).unlink()
     (out / "core" / "core.kicad_sch").unlink()
-    shutil.rmtree(out / "lib")
+    shutil.rmtree(out / "core" / "R2P.pretty")
     p = subprocess.run([sys.executable, "-m", "r2ptools.kicad.generate", "--out", str(out)],
                        cwd=ROOT / "scripts", capture_output=True, text=True)
     assert p.returncode == 0, p.stdout + p.stderr
     assert "freerouting" not in p.stdout, "routing was not replayed from route.ses: " + p.stdout
-    lib = sorted(p.relative_to(HARDWARE) for p in (HARDWARE / "lib").rglob("*.kicad_mod"))
-    assert lib == sorted(p.relative_to(out) for p in (out / "lib").rglob("*.kicad_mod"))
+    lib = sorted(p.relative_to(HARDWARE) for p in (HARDWARE / "core").rglob("*.kicad_mod"))
+    assert lib and lib == sorted(p.relative_to(out) for p in (out / "core").rglob("*.kicad_mod"))
     files = [Path("core/core.kicad_sch")] + lib + [Path(b.name) / f.format(m=b.name) for b in BOARDS
                                                    for f in GENERATED]
     differ = [str(f) for f in files if not filecmp.cmp(HARDWARE / f, out / f, shallow=False)]
@@ -119,9 +119,9 @@ def test_fab_package_has_what_a_fab_needs():
 
 @pytest.fixture
 def scratch(tmp_path):
-    """A scratch copy of hardware/ (the proximity board, the shared core, the footprint library)."""
+    """A scratch copy of hardware/ (the proximity board and the shared core and footprints)."""
     out = tmp_path / "hardware"
-    for d in ("proximity", "core", "lib"):
+    for d in ("proximity", "core"):
         shutil.copytree(HARDWARE / d, out / d, ignore=shutil.ignore_patterns("fab"))
     return out / "proximity"
 

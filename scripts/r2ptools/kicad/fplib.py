@@ -1,4 +1,4 @@
-"""The project footprint library `R2P` (hardware/lib/R2P.pretty): KiCad footprints, silk trimmed.
+"""The project footprint library `R2P` (hardware/core/R2P.pretty): KiCad footprints, silk trimmed.
 
 Some KiCad library outlines cannot sit cleanly on our boards: the RJ45, XT30 and JST PH bodies
 overhang the edge they face out of (their outline crosses the board edge), and the PSU's eFuse
@@ -274,7 +274,7 @@ def write(lib: dict[str, pcbnew.FOOTPRINT], folder: Path) -> None:
 
 
 def folder(hardware: Path) -> Path:
-    return hardware / "lib" / f"{LIB}.pretty"
+    return hardware / "core" / f"{LIB}.pretty"      # shared by every module, like the core sheet
 
 
 def build(hardware: Path) -> dict[str, pcbnew.FOOTPRINT]:

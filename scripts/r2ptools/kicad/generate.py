@@ -5,7 +5,7 @@
 For each module (default: all of `modules.MODULES`) it writes, under DIR (default hardware/):
     <module>/<module>.kicad_sch, .kicad_pcb, .kicad_pro, .kicad_dru, sym-lib-table, fp-lib-table
     <module>/route.ses       freerouting's result, the cache of the autorouted signal tracks
-    lib/R2P.pretty/          the project footprint variants with trimmed silkscreen (fplib.py)
+    core/R2P.pretty/         the project footprint variants with trimmed silkscreen (fplib.py)
     core/core.kicad_sch      the shared core sheet
 Steps: schematic (label per pin) → KiCad netlist → placed board with power copper → signal
 routing (replayed from route.ses when the routing problem is unchanged; --route, or a changed

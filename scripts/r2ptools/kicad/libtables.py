@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 PROJECT_FP_LIB = "R2P"
-"""The project's own footprints (hardware/lib/R2P.pretty, fplib.py), beside the module folders."""
+"""The project's own footprints (hardware/core/R2P.pretty, fplib.py), shared like the core sheet."""
 
 
 def write(folder: Path, symbol_libs: list[str], footprint_libs: list[str]) -> None:
@@ -20,7 +20,7 @@ def write(folder: Path, symbol_libs: list[str], footprint_libs: list[str]) -> No
     (folder / "sym-lib-table").write_text("\n".join(sym) + "\n")
     fp = ["(fp_lib_table", "\t(version 7)"]
     for lib in sorted(set(footprint_libs)):
-        uri = f"${{KIPRJMOD}}/../lib/{lib}.pretty" if lib == PROJECT_FP_LIB else f"${{KICAD9_FOOTPRINT_DIR}}/{lib}.pretty"
+        uri = f"${{KIPRJMOD}}/../core/{lib}.pretty" if lib == PROJECT_FP_LIB else f"${{KICAD9_FOOTPRINT_DIR}}/{lib}.pretty"
         fp.append(f'\t(lib (name "{lib}")(type "KiCad")(uri "{uri}")(options "")(descr ""))')
     fp.append(")")
     (folder / "fp-lib-table").write_text("\n".join(fp) + "\n")
