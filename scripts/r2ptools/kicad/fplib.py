@@ -292,6 +292,8 @@ def build(hardware: Path) -> dict[str, pcbnew.FOOTPRINT]:
 def main(argv: list[str] | None = None) -> int:
     from .modules import build_all
     args = argv if argv is not None else sys.argv[1:]
+    # loaded items get UUIDs from this generator and KiCad orders some by UUID when saving
+    pcbnew.KIID.SeedGenerator(0x52325046)
     write(variants(build_all()), Path(args[0]))
     return 0
 
