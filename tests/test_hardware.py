@@ -1,7 +1,7 @@
 """The boards under hardware/: what a maker relies on before sending one to a fab.
 
 Every board with a KiCad project passes ERC (0 errors), DRC against the JLCPCB capability (0
-errors, only the reviewed silkscreen warnings, 0 unconnected items), schematic parity, and the
+errors, no warnings, 0 unconnected items), schematic parity, and the
 parts-database check; its MCU pins carry the signals of its firmware board file; regenerating it
 from its description, and its fab package from the board, gives the committed bytes. The last
 tests break a scratch copy on purpose and see each check fail, so the checks cannot pass vacuously.
@@ -78,12 +78,15 @@ def test_regeneration_is_byte_identical(tmp_path):
         for f in GENERATED:
             (out / b.name / f.format(m=b.name)).unlink()
     (out / "core" / "core.kicad_sch").unlink()
+    shutil.rmtree(out / "core" / "R2P.pretty")
     p = subprocess.run([sys.executable, "-m", "r2ptools.kicad.generate", "--out", str(out)],
                        cwd=ROOT / "scripts", capture_output=True, text=True)
     assert p.returncode == 0, p.stdout + p.stderr
     assert "freerouting" not in p.stdout, "routing was not replayed from route.ses: " + p.stdout
-    files = [Path("core/core.kicad_sch")] + [Path(b.name) / f.format(m=b.name) for b in BOARDS
-                                             for f in GENERATED]
+    lib = sorted(p.relative_to(HARDWARE) for p in (HARDWARE / "core").rglob("*.kicad_mod"))
+    assert lib and lib == sorted(p.relative_to(out) for p in (out / "core").rglob("*.kicad_mod"))
+    files = [Path("core/core.kicad_sch")] + lib + [Path(b.name) / f.format(m=b.name) for b in BOARDS
+                                                   for f in GENERATED]
     differ = [str(f) for f in files if not filecmp.cmp(HARDWARE / f, out / f, shallow=False)]
     assert not differ, f"regenerated files differ from the committed ones: {differ}"
 
@@ -116,7 +119,7 @@ def test_fab_package_has_what_a_fab_needs():
 
 @pytest.fixture
 def scratch(tmp_path):
-    """A scratch copy of hardware/ (the proximity board and the shared core)."""
+    """A scratch copy of hardware/ (the proximity board and the shared core and footprints)."""
     out = tmp_path / "hardware"
     for d in ("proximity", "core"):
         shutil.copytree(HARDWARE / d, out / d, ignore=shutil.ignore_patterns("fab"))
@@ -156,6 +159,24 @@ def test_a_reference_over_another_part_is_a_silkscreen_problem(scratch):
     pcbnew.SaveBoard(str(pcb), b)
     found = _problems(scratch, "DRC warning silk_")
     assert any("Reference field of R102" in p for p in found), found
+
+
+def test_a_library_outline_over_the_edge_is_a_silkscreen_problem(scratch):
+    """fplib.py trims the JST outlines short of the bottom edge; an outline crossing it fails."""
+    import pcbnew
+    pcb = scratch / "proximity.kicad_pcb"
+    b = pcbnew.LoadBoard(str(pcb))
+    fp = b.FindFootprintByReference("J101")
+    line = max((g for g in fp.GraphicalItems() if isinstance(g, pcbnew.PCB_SHAPE)
+                and g.GetLayer() == pcbnew.F_SilkS and g.GetShape() == pcbnew.SHAPE_T_SEGMENT),
+               key=lambda g: max(g.GetStart().y, g.GetEnd().y))
+    end = line.GetEnd() if line.GetEnd().y >= line.GetStart().y else line.GetStart()
+    end.y += pcbnew.FromMM(1.0)                     # back over the edge, like the KiCad original
+    line.SetEnd(end) if line.GetEnd().y >= line.GetStart().y else line.SetStart(end)
+    pcbnew.SaveBoard(str(pcb), b)
+    found = _problems(scratch, "DRC warning")
+    assert any("silk_edge_clearance" in p and "J101" in p for p in found), found
+    assert any("lib_footprint_mismatch" in p and "J101" in p for p in found), found
 
 
 def test_a_footprint_missing_from_the_board_breaks_parity(scratch):

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import re
 
+from ..kicad import fplib
+
 # (pattern on "Library:Footprint", height in mm, what bounds it). First match wins.
 TABLE: list[tuple[str, float, str]] = [
     # zero-height items: no body above the copper
@@ -115,6 +117,7 @@ def height_of(fpid: str, ref: str, field: str | None, where: str) -> tuple[float
         if m:
             h = float(m.group(1))
             return (h / 10 if rx is _EIA else h), src
+    fpid = fplib.source(fpid)        # a project variant (R2P:) is its KiCad source's body
     for pattern, h, what in TABLE:
         if re.search(pattern, fpid):
             return h, f"table: {what}"

@@ -111,6 +111,7 @@ def _zone(board: pcbnew.BOARD, nets: dict[str, pcbnew.NETINFO_ITEM], z, resolve=
 
 
 def build(m: Module, net: Netlist) -> pcbnew.BOARD:
+    from .fplib import source as fplib_source      # fplib builds on this module
     pcbnew.KIID.SeedGenerator(m.seed)
     board = pcbnew.BOARD()
     fabcap.apply(board)
@@ -137,7 +138,8 @@ def build(m: Module, net: Netlist) -> pcbnew.BOARD:
         c = net.components[ref]
         if not c.footprint:
             continue
-        fp = load_footprint(c.footprint)
+        # a project variant (R2P:) is routed as its KiCad source: fplib.py swaps its silk in later
+        fp = load_footprint(fplib_source(c.footprint))
         fp.SetReference(ref)
         fp.SetValue(c.value)
         # a library footprint's own clearance override (0.2 mm on the HTSSOP-20) can be wider than

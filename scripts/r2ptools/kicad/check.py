@@ -3,14 +3,13 @@
     scripts/py -m r2ptools.kicad.check [BOARD_DIR…]     (default: every hardware/*/ with a .kicad_pro)
 
 Reads KiCad's JSON reports (exit status alone does not say whether there were violations) and
-prints one line per problem. Exit status 1 if any board has an ERC error, a DRC error or warning
-that is not on the reviewed list below, an unconnected item, a parity difference, or a symbol
-whose MPN/Manufacturer/LCSC is missing or disagrees with bom/parts.csv.
+prints one line per problem. Exit status 1 if any board has an ERC error, any DRC error or
+warning, an unconnected item, a parity difference, or a symbol whose MPN/Manufacturer/LCSC is
+missing or disagrees with bom/parts.csv.
 """
 from __future__ import annotations
 
 import json
-import re
 import subprocess
 import sys
 import tempfile
@@ -22,24 +21,9 @@ from . import catalog, sexpr
 
 HARDWARE = ROOT / "hardware"
 
-# No DRC warning type is accepted wholesale: silk.py places every reference and checks every
-# board label, so silkscreen over a pad (silk_over_copper) or a reference or label in any
-# silkscreen warning fails. The one reviewed exception (docs/hardware.md, "Checks"): a KiCad
-# library body outline that overhangs the board edge (RJ45, XT30, JST PH bodies) or touches a
-# neighbour's outline, which the generator cannot trim without editing the footprint.
-ACCEPTED_DRC_WARNINGS: set[str] = set()
-OUTLINE_WARNINGS = {"silk_overlap", "silk_edge_clearance"}
-_OUTLINE_ITEM = re.compile(r"(Segment|Arc) of \S+ on [FB]\.Silkscreen|(Segment|Arc) on Edge\.Cuts")
-
-
-def accepted(v: dict) -> bool:
-    """A DRC warning on the reviewed list: its type, or library outlines (and the edge) only."""
-    if v["severity"] == "error":
-        return False
-    if v["type"] in ACCEPTED_DRC_WARNINGS:
-        return True
-    return v["type"] in OUTLINE_WARNINGS and all(_OUTLINE_ITEM.fullmatch(i["description"])
-                                                 for i in v.get("items", []))
+# No DRC warning is accepted: silk.py places every reference and checks every board label, and
+# fplib.py trims the library outlines that overhang the board edge or touch a neighbour, so any
+# silkscreen warning (or any other) is a problem to fix in the description or the generator.
 
 
 @dataclass
@@ -149,11 +133,7 @@ def check(folder: Path) -> Report:
             (r.problems if v["severity"] == "error" else r.warnings).append(line)
     d = drc(pcb)
     for v in d["violations"]:
-        line = f"{name}: DRC {v['severity']} {v['type']}: {v['description']} ({_items(v)})"
-        if not accepted(v):
-            r.problems.append(line)
-        else:
-            r.warnings.append(line)
+        r.problems.append(f"{name}: DRC {v['severity']} {v['type']}: {v['description']} ({_items(v)})")
     for v in d["unconnected_items"]:
         r.problems.append(f"{name}: DRC unconnected: {v['description']} ({_items(v)})")
     for v in d["schematic_parity"]:

@@ -5,10 +5,12 @@
 For each module (default: all of `modules.MODULES`) it writes, under DIR (default hardware/):
     <module>/<module>.kicad_sch, .kicad_pcb, .kicad_pro, .kicad_dru, sym-lib-table, fp-lib-table
     <module>/route.ses       freerouting's result, the cache of the autorouted signal tracks
+    core/R2P.pretty/         the project footprint variants with trimmed silkscreen (fplib.py)
     core/core.kicad_sch      the shared core sheet
 Steps: schematic (label per pin) → KiCad netlist → placed board with power copper → signal
 routing (replayed from route.ses when the routing problem is unchanged; --route, or a changed
-problem, runs freerouting, which needs Java 25) → zone fill → silkscreen layout (silk.py) → save.
+problem, runs freerouting, which needs Java 25) → zone fill → trimmed footprint silk (fplib.py) →
+silkscreen layout (silk.py) → save.
 Same description, same bytes.
 """
 from __future__ import annotations
@@ -21,7 +23,7 @@ from pathlib import Path
 
 from .. import ROOT
 from . import board as board_mod
-from . import fabcap, libtables, netlist, route, sch_gen, silk
+from . import fabcap, fplib, libtables, netlist, route, sch_gen, silk
 from .modules import MODULES, build_all, core
 from .design import Module
 
@@ -81,6 +83,8 @@ def generate(m: Module, modules: list[Module], out: Path, force_route: bool = Fa
         board_mod.save(b, pcb, classes)     # kept for inspection: `scripts/py -m r2ptools.kicad.check`
         raise route.RoutingError(f"{m.name}: freerouting left {missing} connections unrouted "
                                  f"after {ROUTE_PASSES[-1]} passes: loosen the placement")
+    # trimmed silk for the routed board (fplib.py)
+    fplib.apply(b, {r: c.footprint for r, c in net.components.items()}, fplib.build(out))
     log(f"{m.name}: " + silk.layout(b).summary())
     board_mod.save(b, pcb, classes)
     times["route" if routed else "route (replayed)"] = time.monotonic() - t0

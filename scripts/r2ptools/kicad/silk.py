@@ -7,11 +7,10 @@ accepts no reference or label in a silkscreen warning (check.py). Three steps, o
 1. **Board labels** (module name, BUS IN/OUT, TERM, pin labels…, from the description) are
    deliberate and fixed: one that touches a pad, the edge or another label is an error naming it
    (move it in the description).
-2. **Footprint outlines and pin-1 marks** stay exactly as the KiCad library draws them: they are
-   obstacles here, not edited (an edited footprint no longer matches its library, a DRC warning
-   of its own, and its outline is part of the routing problem). Where a library body outline
-   overhangs the board edge (the RJ45, XT30 and JST bodies) or touches a neighbour's outline,
-   check.py accepts exactly that and nothing else.
+2. **Footprint outlines and pin-1 marks** are obstacles here, not edited: they are the KiCad
+   library's, or, where a library outline overhangs the board edge or touches a neighbour (the
+   RJ45, XT30 and JST PH bodies, the PSU's eFuse beside J2's arrow), the trimmed variant from
+   the project library that fplib.py swapped in after routing.
 3. **References**: each is tried beside its part, rotated with it (0/180° parts read
    left-to-right, 90/270° parts bottom-to-top), on the sides in a fixed order (a horizontal part
    above, below, left, right; a vertical one left, right, above, below), centred and then slid
@@ -137,11 +136,7 @@ class Layout:
 
     # --- 2. footprint outlines -------------------------------------------------------------
     def outlines(self) -> None:
-        """The library outlines and marks as they are: obstacles for the references.
-
-        Not cut here: a footprint whose silk differs from its library copy is a DRC warning of
-        its own (lib_footprint_mismatch), and its outline is part of the routing problem (the
-        Specctra DSN, so route.key); trimming one belongs in a project footprint library."""
+        """The footprint outlines and marks as they are (fplib.py trimmed any that needed it)."""
         for f in self.fps:
             for g in f.GraphicalItems():
                 if g.GetLayer() in self.silk:
