@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from decimal import ROUND_HALF_UP, Decimal, InvalidOperation
 from pathlib import Path
 
-from . import ROOT
+from . import ROOT, is_shared_sheet
 
 PARTS_COLUMNS = ("mpn", "manufacturer", "lcsc", "package", "unit_price_usd_qty10", "datasheet",
                  "description")
@@ -343,8 +343,7 @@ def all_modules(root: Path) -> list[str]:
     hardware = root / "hardware"
     if not hardware.is_dir():
         return []
-    return sorted(d.name for d in hardware.iterdir() if d.is_dir()
-                  and not (any(d.glob("*.kicad_sch")) and not any(d.glob("*.kicad_pro"))))
+    return sorted(d.name for d in hardware.iterdir() if d.is_dir() and not is_shared_sheet(d))
 
 
 def build(root: Path) -> Build:

@@ -28,7 +28,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import ROOT
+from . import ROOT, is_shared_sheet
 from .boardfile import Board, BoardFileError, display, load_board
 from .stm32db import Chip, ChipDbError, load_chip
 
@@ -259,8 +259,7 @@ def check_module(module: str, root: Path, netlist_dir: Path) -> Result:
     result = Result(module)
     path = root / "firmware" / "boards" / f"{module}.toml"
     if not path.is_file():
-        folder = root / "hardware" / module
-        if any(folder.glob("*.kicad_sch")) and not any(folder.glob("*.kicad_pro")):
+        if is_shared_sheet(root / "hardware" / module):
             result.skipped = ("a shared sheet, not a board: its pins are checked in every module "
                               "whose schematic uses it")
         else:

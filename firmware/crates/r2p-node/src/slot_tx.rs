@@ -162,7 +162,7 @@ impl<T: Copy> SlotTx<T> {
     /// At the guard: withdraws the queued frames that have not started (one on the wire ends
     /// within the window).
     pub fn on_guard<C: CanController + ?Sized>(&mut self, can: &mut C) {
-        // Only the queued frame can be waiting: nothing else is loaded in a free slot.
+        // Only queued frames can be waiting: nothing else is loaded in a free slot.
         self.late = can.abort_pending() > 0;
         self.draining = true;
         if let Some(w) = &mut self.window {
@@ -188,20 +188,7 @@ impl<T: Copy> SlotTx<T> {
         }
         let n = self.take_results(can, &mut done, 0);
         let inside = self.policy == FreeSlots::Merged && self.window.is_some_and(|w| now < w.end);
-        // Still loaded: the queue's next frames in order (the ones just sent aside, the node
-        // removes them after this returns)? Else a frame that lost or was withdrawn would go
-        // out behind the ones loaded after it.
-        let current = inside
-            && {
-                let sent = |t: Ticket| {
-                    done.iter().flatten().any(|d| {
-                    matches!(d, Done::Queued { ticket, outcome: TxOutcome::Sent, .. } if *ticket == t)
-                })
-                };
-                let mut next = tx.upcoming(now).filter(|&(t, _)| !sent(t));
-                self.queued().all(|q| next.next().is_some_and(|(t, f)| q == (t, f.id())))
-            };
-        if !current || self.slotted.is_some() {
+        if !inside || !self.still_next(now, tx, &done) || self.slotted.is_some() {
             can.abort_pending();
             self.take_results(can, &mut done, n);
             self.draining = true;
@@ -212,6 +199,20 @@ impl<T: Copy> SlotTx<T> {
             self.draining = false;
         }
         done
+    }
+
+    /// True if the frames still loaded are the queue's next frames at `now`, in order and with
+    /// the same identifiers (those `done` reports sent aside: the node removes them after
+    /// `settle`). Else a frame that lost or was withdrawn would go out behind the ones loaded
+    /// after it.
+    fn still_next<const N: usize>(&self, now: Micros, tx: &TxQueue<N>, done: &Settled<T>) -> bool {
+        let sent = |t: Ticket| {
+            done.iter().flatten().any(
+                |d| matches!(d, Done::Queued { ticket, outcome: TxOutcome::Sent, .. } if *ticket == t),
+            )
+        };
+        let mut next = tx.upcoming(now).filter(|&(t, _)| !sent(t));
+        self.queued().all(|q| next.next().is_some_and(|(t, f)| q == (t, f.id())))
     }
 
     /// Takes the controller's results into `done` from index `n`; returns the next index.
