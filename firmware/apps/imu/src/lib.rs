@@ -26,6 +26,7 @@ pub mod endpoints;
 pub mod params;
 #[cfg(any(test, feature = "std"))]
 pub mod readme;
+pub mod sensor;
 
 #[cfg(test)]
 mod tests;

@@ -92,7 +92,10 @@ pub const DOCS: [ParamDoc; COUNT] = [
          estimate (bias 0)",
     ),
     doc("°/s", "a gyro sample this far from the window's mean means motion: the window restarts"),
-    doc("ms", "time constant of the roll/pitch complementary filter (gyro below, accelerometer above)"),
+    doc(
+        "ms",
+        "time constant of the roll/pitch complementary filter (gyro below, accelerometer above)",
+    ),
     doc(
         "",
         "the accelerometer corrects roll/pitch only while its magnitude is within this \
@@ -243,7 +246,12 @@ mod tests {
             (STILL_DPS, Value::F32(f32::NAN)),
             (ACCEL_GATE, Value::F32(1.5)),
         ] {
-            assert_eq!(store.set(i, bad), Err(ParamFault::OutOfRange), "{}", DEFAULTS[i as usize].name);
+            assert_eq!(
+                store.set(i, bad),
+                Err(ParamFault::OutOfRange),
+                "{}",
+                DEFAULTS[i as usize].name
+            );
         }
         assert_eq!(store.set(BIAS_MS, Value::F32(1.0)), Err(ParamFault::WrongType));
         assert_eq!(Config::read(&store), Config::read(&RamParams::new(DEFAULTS)));

@@ -191,7 +191,8 @@ fn a_silent_sensor_reads_no_data_and_lights_the_fault_led() {
     assert_eq!(r.app.state().status, STATUS_OK);
     assert!(!r.fault_led);
     // Data-ready never set again: lost after 10 periods (~96 ms), not before.
-    let mut s = Sample { fresh: false, raw: raw([0.0; 3], UP), sensor_ok: true, ..Sample::default() };
+    let mut s =
+        Sample { fresh: false, raw: raw([0.0; 3], UP), sensor_ok: true, ..Sample::default() };
     let last = r.now_us;
     for k in 0..120 {
         let c = r.app.step(last + k * 1000, &s);

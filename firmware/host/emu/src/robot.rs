@@ -122,6 +122,7 @@ impl EmuRobot {
             BoardKind::Motor => boards::motor(ctx),
             BoardKind::Proximity => boards::proximity(ctx),
             BoardKind::Gateway => boards::gateway(ctx),
+            BoardKind::Imu => boards::imu(ctx),
         }
         .map_err(|e| format!("{}: {e}", module.name))
     }
