@@ -210,3 +210,59 @@ fn a_silent_sensor_reads_no_data_and_lights_the_fault_led() {
     r.app.step(last + 120_000, &s);
     assert_eq!(r.app.state().status, STATUS_OK);
 }
+
+/// A register file behind the driver: WHO_AM_I, the status flags and a sample; fails every
+/// access when `fail` is set.
+struct Regs {
+    r: [u8; 128],
+    fail: bool,
+}
+
+impl r2p_drivers::lsm6dso::RegisterBus for Regs {
+    type Error = ();
+    fn write_register(&mut self, reg: u8, value: u8) -> Result<(), ()> {
+        if self.fail {
+            return Err(());
+        }
+        self.r[usize::from(reg)] = value;
+        Ok(())
+    }
+    fn read_registers(&mut self, reg: u8, buf: &mut [u8]) -> Result<(), ()> {
+        if self.fail {
+            return Err(());
+        }
+        let a = usize::from(reg);
+        buf.copy_from_slice(&self.r[a..a + buf.len()]);
+        Ok(())
+    }
+}
+
+#[test]
+fn the_poll_reads_a_burst_only_on_new_gyro_data_and_reports_bus_errors() {
+    use r2p_drivers::lsm6dso::{Lsm6dso, STATUS_REG, WHO_AM_I, WHO_AM_I_VALUE};
+    let mut r = [0u8; 128];
+    r[usize::from(WHO_AM_I)] = WHO_AM_I_VALUE;
+    r[0x20..0x2E].copy_from_slice(&[0, 1, 0xE8, 0x03, 0, 0, 0, 0, 0, 0, 0, 0, 0x05, 0x20]);
+    let mut imu = Lsm6dso::new(Regs { r, fail: false });
+    imu.init(params::SensorConfig::read(&r2p_node::NoParams).0).unwrap();
+    let status = r2p_module::leds::Status::default();
+    // No new data (accel only): no burst, the sensor answered.
+    let mut bus = imu.release();
+    bus.r[usize::from(STATUS_REG)] = 0b001;
+    let mut imu = Lsm6dso::new(bus);
+    let s = crate::sensor::poll(&mut imu, true, status);
+    assert!(s.sensor_ok && !s.fresh);
+    // Gyro data ready: the burst, decoded.
+    let mut bus = imu.release();
+    bus.r[usize::from(STATUS_REG)] = 0b010;
+    let mut imu = Lsm6dso::new(bus);
+    let s = crate::sensor::poll(&mut imu, true, status);
+    assert!(s.sensor_ok && s.fresh);
+    assert_eq!(s.raw, RawSample { temp: 256, gyro: [1000, 0, 0], accel: [0, 0, 8197] });
+    // Not initialised: nothing read, no data; a failing bus: no data.
+    assert!(!crate::sensor::poll(&mut imu, false, status).sensor_ok);
+    let mut bus = imu.release();
+    bus.fail = true;
+    let s = crate::sensor::poll(&mut Lsm6dso::new(bus), true, status);
+    assert!(!s.sensor_ok && !s.fresh);
+}
