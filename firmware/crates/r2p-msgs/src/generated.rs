@@ -106,6 +106,61 @@ impl crate::R2pMessage for FaultClear {
 
 crate::impl_wire!(FaultClear);
 
+/// Motion and attitude from an IMU module (LSM6DSO), in the sensor's axes (x forward, y left, z up when mounted flat and aligned with the base). Published by the IMU module at its `rate_hz`.
+///
+/// 41 bytes on the bus, type hash `0x0F532940`; schema `firmware/msgs/Imu.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Imu {
+    /// rad/s, angular rate about x, y, z, gyro bias removed (`float32[3]`, bytes 0..12)
+    pub rate: [f32; 3],
+    /// m/s^2, specific force: +9.81 on z at rest (`float32[3]`, bytes 12..24)
+    pub accel: [f32; 3],
+    /// rad, about x (complementary filter of gyro and accelerometer) (`float32`, bytes 24..28)
+    pub roll: f32,
+    /// rad, about y (complementary filter of gyro and accelerometer) (`float32`, bytes 28..32)
+    pub pitch: f32,
+    /// rad, heading: yaw rate integrated since start, counter-clockwise, in (-pi, pi] (`float32`, bytes 32..36)
+    pub yaw: f32,
+    /// degC, the sensor's die (`float32`, bytes 36..40)
+    pub temperature: f32,
+    /// 0 = ok, 1 = estimating the gyro bias (hold still), 2 = no data from the sensor (`uint8`, bytes 40..41)
+    pub status: u8,
+}
+
+impl crate::R2pMessage for Imu {
+    const NAME: &'static str = "Imu";
+    const CANONICAL: &'static str = "Imu:float32[3] rate;float32[3] accel;float32 roll;float32 pitch;float32 yaw;float32 temperature;uint8 status";
+    const SIZE: usize = 41;
+    const TYPE_HASH: u32 = 0x0F53_2940;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.rate);
+        w.put(&self.accel);
+        w.put(&self.roll);
+        w.put(&self.pitch);
+        w.put(&self.yaw);
+        w.put(&self.temperature);
+        w.put(&self.status);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self {
+            rate: r.get()?,
+            accel: r.get()?,
+            roll: r.get()?,
+            pitch: r.get()?,
+            yaw: r.get()?,
+            temperature: r.get()?,
+            status: r.get()?,
+        })
+    }
+}
+
+crate::impl_wire!(Imu);
+
 /// Event of a DC motor controller: a fault latched, or latched faults were cleared. Sent SRT when it happens; the same bits are in every WheelState.faults.
 ///
 /// 6 bytes on the bus, type hash `0x2D53828B`; schema `firmware/msgs/MotorFault.msg`.
@@ -451,6 +506,7 @@ pub const ALL: &[(&str, u32, usize)] = &[
     ("Battery", 0x471D_E2CA, 16),
     ("BusPower", 0xC2BD_8B69, 1),
     ("FaultClear", 0x9688_B902, 1),
+    ("Imu", 0x0F53_2940, 41),
     ("MotorFault", 0x2D53_828B, 6),
     ("Obstacle", 0x24BE_C850, 5),
     ("Odometry", 0xEEDD_D804, 24),
@@ -469,6 +525,7 @@ macro_rules! for_each_message {
         $f::<crate::Battery>($($arg),*);
         $f::<crate::BusPower>($($arg),*);
         $f::<crate::FaultClear>($($arg),*);
+        $f::<crate::Imu>($($arg),*);
         $f::<crate::MotorFault>($($arg),*);
         $f::<crate::Obstacle>($($arg),*);
         $f::<crate::Odometry>($($arg),*);

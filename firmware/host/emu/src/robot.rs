@@ -2,7 +2,7 @@
 //! module's firmware application on its own board, on one virtual bus, against the world
 //! model, in virtual time.
 //!
-//! Each board runs the module's application crate (`r2p-app-psu`, `-motor`, `-proximity`; the
+//! Each board runs the module's application crate (`r2p-app-psu`, `-motor`, `-proximity`, `-imu`; the
 //! gateway runs `r2p-app-base`, the robot-level nodes, until the gateway firmware lands) with
 //! the same node runtime and parameter store as on the MCU. Only the board-support layer
 //! differs: [`boards`](crate::boards) reads the world where the MCU reads its ADC, timers and
@@ -122,6 +122,7 @@ impl EmuRobot {
             BoardKind::Motor => boards::motor(ctx),
             BoardKind::Proximity => boards::proximity(ctx),
             BoardKind::Gateway => boards::gateway(ctx),
+            BoardKind::Imu => boards::imu(ctx),
         }
         .map_err(|e| format!("{}: {e}", module.name))
     }

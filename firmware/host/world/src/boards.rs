@@ -17,6 +17,9 @@ pub enum BoardKind {
     Proximity,
     /// Ethernet gateway (no simulated peripherals).
     Gateway,
+    /// IMU: an LSM6DSO on SPI, reading the base's motion (no pin-level signals: the
+    /// emulator's SPI and LSM6DSO models sit between the firmware and [`crate::imu`]).
+    Imu,
 }
 
 /// How the world sees a signal.
@@ -98,8 +101,13 @@ pub const PROXIMITY_SIGNALS: &[SignalSpec] = &[
 
 impl BoardKind {
     /// Every kind, in robot-file order.
-    pub const ALL: [BoardKind; 4] =
-        [BoardKind::Psu, BoardKind::Motor, BoardKind::Proximity, BoardKind::Gateway];
+    pub const ALL: [BoardKind; 5] = [
+        BoardKind::Psu,
+        BoardKind::Motor,
+        BoardKind::Proximity,
+        BoardKind::Gateway,
+        BoardKind::Imu,
+    ];
 
     /// The name the robot file uses.
     pub fn name(self) -> &'static str {
@@ -108,6 +116,7 @@ impl BoardKind {
             BoardKind::Motor => "motor",
             BoardKind::Proximity => "proximity",
             BoardKind::Gateway => "gateway",
+            BoardKind::Imu => "imu",
         }
     }
 
@@ -122,7 +131,7 @@ impl BoardKind {
             BoardKind::Psu => PSU_SIGNALS,
             BoardKind::Motor => MOTOR_SIGNALS,
             BoardKind::Proximity => PROXIMITY_SIGNALS,
-            BoardKind::Gateway => &[],
+            BoardKind::Gateway | BoardKind::Imu => &[],
         }
     }
 
@@ -142,6 +151,7 @@ impl BoardKind {
             BoardKind::Psu => Some("psu.toml"),
             BoardKind::Motor => Some("motor.toml"),
             BoardKind::Proximity => Some("proximity.toml"),
+            BoardKind::Imu => Some("imu.toml"),
             BoardKind::Gateway => None,
         }
     }
@@ -208,7 +218,7 @@ mod tests {
         for k in BoardKind::ALL {
             assert_eq!(BoardKind::from_name(k.name()), Some(k));
         }
-        assert_eq!(BoardKind::from_name("imu"), None);
+        assert_eq!(BoardKind::from_name("lidar"), None);
         assert_eq!(BoardKind::Motor.signal_names(SignalKind::Pwm), ["PWM_AH", "PWM_BH"]);
     }
 }

@@ -161,6 +161,11 @@ pub enum Wiring {
     },
     /// Gateway: nothing in the world.
     Gateway,
+    /// IMU module, mounted on the base.
+    Imu {
+        /// Its pose on the base (the sensor's x along the pose's heading, z up).
+        mount: Pose,
+    },
 }
 
 /// A parameter value as a robot file gives it (the emulator checks it against the module's
@@ -210,6 +215,7 @@ impl Module {
             Wiring::Motor { .. } => BoardKind::Motor,
             Wiring::Proximity { .. } => BoardKind::Proximity,
             Wiring::Gateway => BoardKind::Gateway,
+            Wiring::Imu { .. } => BoardKind::Imu,
         }
     }
 }
@@ -368,6 +374,7 @@ struct ModuleSection {
     battery: Option<String>,
     bus_load_a: Option<f64>,
     rangers: Option<Vec<RangerSection>>,
+    pose: Option<PoseSection>,
     #[serde(default)]
     params: std::collections::BTreeMap<String, toml::Value>,
 }
@@ -853,6 +860,7 @@ fn validate_module(
         ("battery", m.battery.is_some(), BoardKind::Psu),
         ("bus_load_a", m.bus_load_a.is_some(), BoardKind::Psu),
         ("rangers", m.rangers.is_some(), BoardKind::Proximity),
+        ("pose", m.pose.is_some(), BoardKind::Imu),
     ];
     for (k, present, owner) in given {
         if present && owner != kind {
@@ -931,6 +939,7 @@ fn validate_module(
             Wiring::Proximity { rangers }
         }
         BoardKind::Gateway => Wiring::Gateway,
+        BoardKind::Imu => Wiring::Imu { mount: m.pose.unwrap_or_default().pose() },
     };
     let mut params = Vec::new();
     for (name, v) in &m.params {

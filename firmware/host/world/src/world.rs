@@ -26,6 +26,7 @@ use crate::encoder::Encoder;
 use crate::frontends;
 use crate::geometry::{Pose, Twist};
 use crate::hbridge::{HBridge, HBridgeInput};
+use crate::imu::{Imu, ImuParams, ImuReading};
 use crate::kinematics::Kinematics;
 use crate::linalg::{self, Mat3};
 use crate::motor::{Gearbox, Motor, Terminal};
@@ -51,6 +52,8 @@ const MASS_CACHE_WHEELS: usize = 8;
 const STREAM_BOARD: u64 = 1;
 const STREAM_RANGER: u64 = 10_000;
 const STREAM_PHASE: u64 = 20_000;
+/// IMU `i` draws its device errors from stream `STREAM_IMU + 2i` and its noise from the next.
+const STREAM_IMU: u64 = 30_000;
 
 /// A wheel and its drive train.
 #[derive(Clone, Debug)]
@@ -75,6 +78,7 @@ enum Link {
     Motor { wheel: usize },
     Proximity { channels: [Option<usize>; 4], sensor_power: bool },
     Gateway,
+    Imu { imu: usize },
 }
 
 #[derive(Clone, Debug)]
@@ -238,6 +242,7 @@ pub struct World {
     bus_base_load_a: f64,
     rangers: Vec<Ranger>,
     ranger_noise: Vec<Noise>,
+    imus: Vec<Imu>,
     obstacles: Obstacles,
     boards: Vec<Board>,
     ledger: EnergyLedger,
@@ -275,6 +280,7 @@ impl World {
         let mut bus_base_load_a = 0.0;
         let mut rangers = Vec::new();
         let mut ranger_noise = Vec::new();
+        let mut imus = Vec::new();
         let mut boards = Vec::new();
         for (bi, m) in robot.modules.iter().enumerate() {
             let kind = m.kind();
@@ -303,6 +309,11 @@ impl World {
                     Link::Proximity { channels, sensor_power: true }
                 }
                 Wiring::Gateway => Link::Gateway,
+                Wiring::Imu { mount } => {
+                    let stream = STREAM_IMU + 2 * imus.len() as u64;
+                    imus.push(Imu::new(ImuParams::LSM6DSO, *mount, robot.seed, stream));
+                    Link::Imu { imu: imus.len() - 1 }
+                }
             };
             let noise = (0..kind.signals().len())
                 .map(|s| Noise::new(robot.seed, STREAM_BOARD + 64 * bi as u64 + s as u64))
@@ -326,6 +337,7 @@ impl World {
             bus_base_load_a,
             rangers,
             ranger_noise,
+            imus,
             obstacles: Obstacles::new(robot.obstacles.clone()),
             boards,
             ledger: EnergyLedger::default(),
@@ -701,6 +713,30 @@ impl World {
                 "is a {} board, not a proximity board",
                 self.boards[b].kind.name()
             ))),
+        }
+    }
+
+    /// The IMU on board `board`: its device (mount, offsets, gains) and noise stream.
+    pub fn imu(&self, board: &str) -> Result<&Imu, IoError> {
+        Ok(&self.imus[self.imu_index(board)?])
+    }
+
+    /// One sample of the IMU on board `board` at output data rate `odr_hz`, for the base's
+    /// motion now (what the board's LSM6DSO latches when a sample falls due).
+    pub fn sample_imu(&mut self, board: &str, odr_hz: f64) -> Result<ImuReading, IoError> {
+        let i = self.imu_index(board)?;
+        let (t, dt) = (self.twist(), self.twist_rate());
+        Ok(self.imus[i].measure(&t, &dt, odr_hz))
+    }
+
+    fn imu_index(&self, board: &str) -> Result<usize, IoError> {
+        let b = self.board_index(board)?;
+        match self.boards[b].link {
+            Link::Imu { imu } => Ok(imu),
+            _ => Err(IoError::Invalid {
+                board: board.to_string(),
+                problem: format!("is a {} board, not an imu board", self.boards[b].kind.name()),
+            }),
         }
     }
 

@@ -78,3 +78,35 @@ fn lidar_on_the_triskar_sees_the_box_ahead() {
     assert!((back.true_distance(&w.pose(), w.obstacles()).unwrap() - 0.8).abs() < 1e-3);
     assert!((i32::from(back.measure(&w.pose(), w.obstacles()).dist_cm) - 80).abs() <= 8);
 }
+
+/// The Triskar2 file with an IMU module 0.1 m ahead of the centre, turned 90°.
+fn with_imu() -> World {
+    let text = std::fs::read_to_string(common::triskar_path()).unwrap()
+        + "\n[[modules]]\nkind = \"imu\"\nname = \"imu\"\nuid = \"0070001F3137510939383538\"\n\
+           pose = { x_m = 0.1, y_m = 0.0, theta_deg = 90.0 }\n";
+    World::from_robot(&r2p_world::Robot::parse(&text, "triskar-imu.toml").unwrap())
+}
+
+#[test]
+fn an_imu_board_samples_its_own_device_at_its_mount() {
+    let mut w = with_imu();
+    let imu = w.imu("imu").unwrap().clone();
+    assert_eq!(imu.mount, Pose::new(0.1, 0.0, std::f64::consts::FRAC_PI_2));
+    // Its device errors come from the robot's seed: the same file gives the same device.
+    assert_eq!(with_imu().imu("imu").unwrap().gyro_offset(), imu.gyro_offset());
+    spin(&mut w, 0.4);
+    w.step(3.0);
+    let wz = w.twist().wz;
+    let e = imu.expected(&w.twist(), &w.twist_rate());
+    // Turned 90° (its x along the base's y, its y along the base's −x): the centripetal
+    // acceleration, ω²·0.1 towards the centre (the base's −x), is along the sensor's +y.
+    assert!((e.accel[1] - imu.accel_offset()[1]) > 0.98 * wz * wz * 0.1, "{e:?}");
+    assert!((e.accel[0] - imu.accel_offset()[0]).abs() < 0.05, "{e:?}");
+    let n = 1000;
+    let mean = (0..n).map(|_| w.sample_imu("imu", 104.0).unwrap().gyro[2]).sum::<f64>() / n as f64;
+    let se = ImuParams::LSM6DSO.gyro_sigma(104.0) / (n as f64).sqrt();
+    assert!((mean - e.gyro[2]).abs() < 5.0 * se, "{mean} vs {}", e.gyro[2]);
+    let err = w.sample_imu("motor1", 104.0).unwrap_err().to_string();
+    assert_eq!(err, "board `motor1`: is a motor board, not an imu board");
+    assert!(w.sample_imu("imu9", 104.0).unwrap_err().to_string().contains("no board `imu9`"));
+}

@@ -83,10 +83,10 @@ fn missing_top_level_key() {
 
 #[test]
 fn unknown_module_kind_lists_the_kinds() {
-    let e = refuse(&edit("kind = \"gateway\"", "kind = \"imu\""));
+    let e = refuse(&edit("kind = \"gateway\"", "kind = \"lidar\""));
     assert_eq!(e.key, "modules[5].kind");
-    assert!(e.problem.contains("`imu`"), "{e}");
-    assert!(e.fix.contains("\"psu\", \"motor\", \"proximity\", \"gateway\""), "{e}");
+    assert!(e.problem.contains("`lidar`"), "{e}");
+    assert!(e.fix.contains("\"psu\", \"motor\", \"proximity\", \"gateway\", \"imu\""), "{e}");
 }
 
 #[test]
@@ -210,4 +210,20 @@ fn differential_robot() {
     let e = Robot::parse(&t, "diffbot.toml").unwrap_err();
     assert_eq!(e.key, "modules[2].wheel");
     assert!(e.problem.contains("the base has 2"), "{e}");
+}
+
+#[test]
+fn an_imu_module_has_a_pose_and_only_it_does() {
+    let imu = "\n[[modules]]\nkind = \"imu\"\nname = \"imu\"\nuid = \"0070001F3137510939383538\"\n";
+    let r = Robot::parse(&(triskar_text() + imu), "a.toml").unwrap();
+    let m = r.module("imu").unwrap();
+    assert_eq!((m.kind(), &m.wiring), (BoardKind::Imu, &Wiring::Imu { mount: Default::default() }));
+    let posed = format!("{imu}pose = {{ x_m = -0.05, y_m = 0.02, theta_deg = 180.0 }}\n");
+    let r = Robot::parse(&(triskar_text() + &posed), "a.toml").unwrap();
+    let Wiring::Imu { mount } = r.module("imu").unwrap().wiring else { panic!() };
+    assert_eq!((mount.x, mount.y), (-0.05, 0.02));
+    assert!((mount.theta.abs() - std::f64::consts::PI).abs() < 1e-12);
+    let e = refuse(&edit("wheel = 1", "wheel = 1\npose = { x_m = 0.1 }"));
+    assert_eq!(e.key, "modules[2].pose");
+    assert!(e.fix.contains("imu modules"), "{e}");
 }

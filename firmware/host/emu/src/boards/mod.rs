@@ -7,6 +7,7 @@
 //! model of what the board is wired to (firmware/host/world).
 
 mod gateway;
+mod imu;
 mod motor;
 mod params;
 mod proximity;
@@ -26,6 +27,7 @@ use rtcan::failover::Role;
 use rtcan::{CycleConfig, Micros};
 
 pub use gateway::gateway;
+pub use imu::imu;
 pub use motor::motor;
 pub use params::store_params;
 pub use proximity::proximity;

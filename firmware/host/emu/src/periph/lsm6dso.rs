@@ -106,6 +106,12 @@ impl Lsm6dsoModel {
 
     /// Runs the samples due by `now_ns`, reading the world through `imu`.
     pub fn advance_to(&mut self, now_ns: u64, imu: &mut Imu, world: &World) {
+        self.advance_with(now_ns, |odr_hz| imu.sample(world, odr_hz));
+    }
+
+    /// Runs the samples due by `now_ns`, taking each from `sample(odr_hz)` (an emulated board
+    /// passes the world's IMU on its mount: [`World::sample_imu`]).
+    pub fn advance_with(&mut self, now_ns: u64, mut sample: impl FnMut(f64) -> ImuReading) {
         self.now_ns = self.now_ns.max(now_ns);
         let now = self.now_ns;
         let due = |s: &Schedule| period_ns(s.code).is_some() && s.next_ns <= now;
@@ -116,7 +122,7 @@ impl Lsm6dsoModel {
         // Both sensors run on one clock: a single reading serves whichever is due.
         let odr = if gyro_due { self.gyro_code() } else { self.accel_code() };
         let hz = Odr::from_code(odr).map_or(0.0, Odr::hz);
-        let r = imu.sample(world, f64::from(hz));
+        let r = sample(f64::from(hz));
         self.latch(&r, accel_due, gyro_due);
         for (s, is_due) in [(&mut self.accel, accel_due), (&mut self.gyro, gyro_due)] {
             if let (true, Some(p)) = (is_due, period_ns(s.code)) {

@@ -1,0 +1,134 @@
+//! Default firmware of the R2P IMU module (STM32F103CB): the application of `r2p-app-imu` on
+//! an ST LSM6DSO on SPI1, through the `r2p-drivers` driver (the same driver and poll the
+//! emulated board runs over its simulated SPI bus), the status LEDs, bxCAN and parameters in
+//! flash. Pins come only from the board file (firmware/boards/imu.toml) through the generated
+//! `board` module.
+#![no_std]
+#![no_main]
+
+use embassy_executor::Spawner;
+use embassy_stm32::can::{
+    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
+};
+use embassy_stm32::flash::{Blocking, Flash};
+use embassy_stm32::gpio::Output;
+use embassy_stm32::mode::Blocking as BlockingMode;
+use embassy_stm32::peripherals::CAN;
+use embassy_stm32::spi::{self, Spi, MODE_3};
+use embassy_stm32::time::Hertz;
+use embassy_stm32::{bind_interrupts, pac};
+use embassy_time::{Duration, Instant, Ticker, Timer};
+use embedded_hal_bus::spi::{ExclusiveDevice, NoDelay};
+use panic_halt as _;
+use r2p_app_imu::{params, sensor, App, Storage};
+use r2p_drivers::lsm6dso::{Lsm6dso, SpiBus};
+use r2p_module::FlashParams;
+use rtcan_bxcan::BxCan;
+
+mod board {
+    include!(concat!(env!("OUT_DIR"), "/board.rs"));
+}
+
+use module_core::{drive, ModuleNode};
+
+bind_interrupts!(struct Irqs {
+    USB_LP_CAN1_RX0 => Rx0InterruptHandler<CAN>;
+    CAN1_RX1 => Rx1InterruptHandler<CAN>;
+    CAN1_SCE => SceInterruptHandler<CAN>;
+    USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
+});
+
+static PARAMS: FlashParams<{ params::COUNT }> =
+    FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
+static ENDPOINTS: Storage = Storage::new();
+
+/// SPI clock: the LSM6DSO takes up to 10 MHz; SPI1 divides its 72 MHz APB2 clock by powers of
+/// two and embassy picks the fastest not above this, 4.5 MHz (a 15-byte burst in ~30 µs).
+const SPI_HZ: u32 = 5_000_000;
+/// The LSM6DSO's boot time after power-up before it answers (datasheet DS12140: 10 ms).
+const SENSOR_BOOT_MS: u64 = 10;
+
+/// The sensor on SPI1 with its chip select.
+type Imu = Lsm6dso<
+    SpiBus<
+        ExclusiveDevice<Spi<'static, BlockingMode, spi::mode::Master>, Output<'static>, NoDelay>,
+    >,
+>;
+
+/// The board's I/O the application step reads and drives.
+struct Io {
+    imu: Imu,
+    /// [`Lsm6dso::init`] succeeded at boot.
+    initialised: bool,
+    leds: [Output<'static>; 3],
+}
+
+/// The application: one step per millisecond in thread mode (a 2-byte status read, and a
+/// 15-byte burst when the gyro has a new sample); parameters persisted every 100 ms when
+/// changed.
+#[embassy_executor::task]
+async fn run(mut app: App<'static>, mut io: Io, mut flash: Flash<'static, Blocking>) {
+    let mut ticker = Ticker::every(Duration::from_millis(1));
+    let mut step = 0u32;
+    loop {
+        let now = Instant::now().as_micros();
+        let sample = sensor::poll(&mut io.imu, io.initialised, module_core::led_status());
+        let c = app.step(now, &sample);
+        let [status, bus, fault] = &mut io.leds;
+        drive(status, c.led_status, board::LED_STATUS_ACTIVE_LOW);
+        drive(bus, c.led_bus, board::LED_BUS_ACTIVE_LOW);
+        drive(fault, c.led_fault, board::LED_FAULT_ACTIVE_LOW);
+        step = step.wrapping_add(1);
+        if step.is_multiple_of(100) {
+            module_core::persist(&PARAMS, &mut flash);
+        }
+        ticker.next().await;
+    }
+}
+
+#[embassy_executor::main]
+async fn main(spawner: Spawner) {
+    let pll_mul = const { module_core::pll_mul(board::HSE_HZ, board::SYSCLK_HZ) };
+    let p = embassy_stm32::init(module_core::clocks(board::HSE_HZ, pll_mul));
+    let pins = board::take_pins!(p);
+
+    // Outputs first: the chip select deselects the sensor and the LEDs take their boot levels.
+    let cs = board::imu_cs(pins.imu_cs);
+    let leds = [
+        board::led_status(pins.led_status),
+        board::led_bus(pins.led_bus),
+        board::led_fault(pins.led_fault),
+    ];
+    // INT1 is wired for users' firmware (wake-up, FIFO thresholds); the default firmware polls
+    // the data-ready flag over SPI, as the emulated board does. Held as an input with its pull.
+    let _int1 = board::imu_int1(pins.imu_int1);
+
+    let mut config = spi::Config::default();
+    config.mode = MODE_3;
+    config.frequency = Hertz(SPI_HZ);
+    let bus = Spi::new_blocking(p.SPI1, pins.imu_sck, pins.imu_mosi, pins.imu_miso, config);
+    let device = match ExclusiveDevice::new_no_delay(bus, cs) {
+        Ok(d) => d,
+        Err(e) => match e {},
+    };
+    let mut imu = Lsm6dso::new_spi(device);
+
+    // The bus controller before the application and its node, so that neither lives across
+    // this await (and in `main`'s future).
+    let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
+    can.modify_config().set_bitrate(1_000_000);
+    can.enable().await;
+
+    let mut flash = Flash::new_blocking(p.FLASH);
+    module_core::load_params(&PARAMS, &mut flash);
+    let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
+    Timer::after_millis(SENSOR_BOOT_MS).await;
+    // A sensor that does not answer leaves the module on the bus, reporting "no data".
+    let initialised = imu.init(app.sensor_config()).is_ok();
+    let config = r2p_app_imu::node_config(embassy_stm32::uid::uid(), &PARAMS);
+    let mut node = ModuleNode::new(config, &PARAMS).unwrap();
+    app.register(&mut node).unwrap();
+    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN));
+
+    spawner.spawn(run(app, Io { imu, initialised, leds }, flash)).unwrap();
+}
