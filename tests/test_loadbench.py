@@ -84,6 +84,22 @@ def test_goal_summary_says_where_a_goal_fails():
     assert all(ok.values())
 
 
+def test_seed_table_sums_misses_and_names_the_seeds_where_rtcan_misses_more():
+    from r2ptools import bench
+
+    def point(load, a, b, n=1000):
+        def report(policy, missed):
+            return {"policy": policy, "srt_missed": missed, "srt_messages": n}
+        return {"load": load, "reports": [report("rtcan", a), report("fixed", b)]}
+
+    text = bench.seeds_table({1: [point(0.9, 0, 5), point(0.95, 7, 3)],
+                              2: [point(0.9, 2, 4), point(0.95, 1, 9)],
+                              3: [point(0.9, 0, 0), point(0.95, 4, 2)]})
+    lines = text.splitlines()
+    assert lines[1] == " 0.90 |     3,000 |            2      9 | 0 of 3"
+    assert lines[2] == " 0.95 |     3,000 |           12     14 | 2 of 3 (1, 3)"
+
+
 def test_tables_show_ratios_against_fixed_priority(loadbench):
     from r2ptools import bench
     points, _ = sweep(*ARGS)
