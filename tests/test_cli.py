@@ -147,16 +147,18 @@ def test_pub_reaches_an_echo_on_the_bus(demo):
     """Two host nodes through the emulated bus's socketcand server: pub advertises, echo
     subscribes by the advertised type, pub publishes once a subscriber is there."""
     import subprocess
-    echo = subprocess.Popen([str(R2P), "--socketcand", f"127.0.0.1:{demo.port}", "--timeout", "5", "echo",
+    # Generous bus timeouts: both are real-time processes on a possibly loaded machine (a CI run
+    # once saw pub give up after 5 s); a working bus meets them within a second.
+    echo = subprocess.Popen([str(R2P), "--socketcand", f"127.0.0.1:{demo.port}", "--timeout", "20", "echo",
                              "wheel", "--count", "1", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     try:
         time.sleep(0.3)
-        p = r2p(demo, "pub", "wheel", "--type", "WheelSetpoint", "mode=1", "value=-2.5", "--timeout", "5")
+        p = r2p(demo, "pub", "wheel", "--type", "WheelSetpoint", "mode=1", "value=-2.5", "--timeout", "20")
         assert p.returncode == 0, p.stdout
         assert re.search(r"published 1 message\(s\) of type WheelSetpoint on \"wheel\" to node\(s\) \d+", p.stdout), \
             p.stdout
-        out, err = echo.communicate(timeout=20)
+        out, err = echo.communicate(timeout=30)
     finally:
         echo.kill()
     assert echo.returncode == 0, err

@@ -216,7 +216,12 @@ fn leak_name(s: &str) -> &'static str {
 impl HostNode {
     /// A node called [`NODE_NAME`] with a unique ID for this run; `start` is its time zero.
     pub fn new(start: Instant) -> Result<Self, CliError> {
-        let config = NodeConfig::new(run_uid(), NODE_NAME);
+        Self::with_uid(start, run_uid())
+    }
+
+    /// A node with unique ID `uid` (tests force node-ID conflicts with it).
+    pub(crate) fn with_uid(start: Instant, uid: [u8; UID_LEN]) -> Result<Self, CliError> {
+        let config = NodeConfig::new(uid, NODE_NAME);
         let node = CliNode::new(config, &NoParams)
             .map_err(|e| CliError::new(format!("cannot start the host node: {e:?}")))?;
         Ok(Self {
@@ -446,6 +451,51 @@ mod tests {
             }
         }
         false
+    }
+
+    /// Two host uids that claim the same first node ID.
+    fn colliding_uids() -> ([u8; UID_LEN], [u8; UID_LEN]) {
+        use r2p_management::node_id::initial_node_id;
+        let uid = |n: u32| {
+            let mut u = *b"r2p\0\0\0\0\0\0\0\0\0";
+            u[8..].copy_from_slice(&n.to_be_bytes());
+            u
+        };
+        let a = uid(1);
+        let b = (2..).map(uid).find(|b| initial_node_id(b) == initial_node_id(&a)).unwrap();
+        (a, b)
+    }
+
+    #[test]
+    fn a_publisher_and_a_subscriber_that_claim_one_node_id_still_meet() {
+        for swap in [false, true] {
+            let (a, b) = colliding_uids();
+            let (pub_uid, sub_uid) = if swap { (b, a) } else { (a, b) };
+            let hub = Arc::new(BroadcastHub::new());
+            let mut sub = Session::new(Box::new(HubLink::join(hub.clone() as Arc<dyn Hub>, 4096)));
+            let mut publ = Session::new(Box::new(HubLink::join(hub.clone() as Arc<dyn Hub>, 4096)));
+            sub.join_with_uid(sub_uid).unwrap().want_import("wheel");
+            for _ in 0..20 {
+                sub.step(Duration::from_millis(1)).unwrap();
+            }
+            let ty = MsgType::by_name("uint32").unwrap();
+            publ.join_with_uid(pub_uid).unwrap().export("wheel", &ty, Class::NonRealTime).unwrap();
+            let t0 = Instant::now();
+            let mut subscribed = false;
+            while !subscribed && t0.elapsed() < Duration::from_secs(5) {
+                sub.step(Duration::from_millis(1)).unwrap();
+                publ.step(Duration::from_millis(1)).unwrap();
+                while let Some(e) = publ.host().unwrap().next_event() {
+                    subscribed |= matches!(e, Event::RemoteSubscriber { .. });
+                }
+            }
+            let (p, s) = (publ.host().unwrap().node_id(), sub.host().unwrap().node_id());
+            assert!(
+                subscribed,
+                "swap {swap}: no subscription in 5 s (publisher {p:?}, subscriber {s:?})"
+            );
+            assert_ne!(p, s);
+        }
     }
 
     #[test]

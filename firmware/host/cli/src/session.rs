@@ -68,6 +68,18 @@ impl Session {
         Ok(self.host.as_mut().expect("just made"))
     }
 
+    /// [`Session::join`] with the host node's unique ID given (tests).
+    #[cfg(test)]
+    pub(crate) fn join_with_uid(
+        &mut self,
+        uid: [u8; r2p_management::message::UID_LEN],
+    ) -> Result<&mut HostNode, CliError> {
+        if self.host.is_none() {
+            self.host = Some(HostNode::with_uid(self.start, uid)?);
+        }
+        Ok(self.host.as_mut().expect("just made"))
+    }
+
     /// The host node, once joined.
     pub fn host(&mut self) -> Option<&mut HostNode> {
         self.host.as_mut()
