@@ -6,8 +6,8 @@
 use core::fmt::Write;
 use std::string::String;
 
-use r2p_management::message::Value;
 use r2p_middleware::{Class, TopicInfo};
+use r2p_module::readme::value_cell;
 use r2p_msgs::{Imu, R2pMessage};
 use r2p_node::RamParams;
 
@@ -50,8 +50,8 @@ pub fn render() -> String {
     line(w, "| # | name | type | default | range | unit | meaning |");
     line(w, "|---|---|---|---|---|---|---|");
     for (i, (p, d)) in DEFAULTS.iter().zip(DOCS.iter()).enumerate() {
-        let (ty, def) = value(p.value);
-        let range = std::format!("{} … {}", value(p.min).1, value(p.max).1);
+        let (ty, def) = value_cell(p.value);
+        let range = std::format!("{} … {}", value_cell(p.min).1, value_cell(p.max).1);
         let boot = if d.at_boot { " (at boot)" } else { "" };
         let _ = writeln!(
             w,
@@ -88,21 +88,9 @@ fn class(c: Class) -> String {
     }
 }
 
-fn value(v: Value) -> (&'static str, String) {
-    match v {
-        Value::Bool(b) => ("bool", std::format!("{b}")),
-        Value::U32(x) => ("u32", std::format!("{x}")),
-        Value::I32(x) => ("i32", std::format!("{x}")),
-        Value::F32(x) => ("f32", std::format!("{x}")),
-    }
-}
-
 /// `text` with the generated section replaced by `section`; `None` without both markers.
 pub fn splice(text: &str, section: &str) -> Option<String> {
-    let a = text.find(BEGIN)?;
-    let b = text[a..].find(END)? + a + END.len();
-    let rest = text[b..].strip_prefix('\n').unwrap_or(&text[b..]);
-    Some(std::format!("{}{section}{rest}", &text[..a]))
+    r2p_module::readme::splice(text, BEGIN, END, section)
 }
 
 #[cfg(test)]
@@ -112,16 +100,8 @@ mod tests {
     #[test]
     fn readme_generated_section_is_current() {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/README.md");
-        let text = std::fs::read_to_string(path).unwrap();
-        let want = splice(&text, &render()).expect("README.md has the BEGIN/END GENERATED markers");
-        if std::env::var_os("R2P_BLESS").is_some() {
-            std::fs::write(path, &want).unwrap();
-        } else {
-            assert!(
-                text == want,
-                "{path}: the generated section is stale; run `R2P_BLESS=1 cargo test -p r2p-app-imu readme`"
-            );
-        }
+        let bless = "cargo test -p r2p-app-imu readme";
+        r2p_module::readme::check_section(path, BEGIN, END, &render(), bless);
     }
 
     #[test]

@@ -19,12 +19,7 @@ R2P_BLESS=1 cargo test -p r2p-app-motor --test readme rewrites it -->";
 pub const END: &str = "<!-- end of generated section -->";
 
 fn value(v: Value) -> String {
-    match v {
-        Value::Bool(b) => std::format!("{b}"),
-        Value::U32(x) => std::format!("{x}"),
-        Value::I32(x) => std::format!("{x}"),
-        Value::F32(x) => std::format!("{x}"),
-    }
+    r2p_module::readme::value_cell(v).1
 }
 
 /// The section between [`BEGIN`] and [`END`] (both excluded).

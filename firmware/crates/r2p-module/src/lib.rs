@@ -6,17 +6,20 @@
 //! - [`RamFlash`]: a NOR flash in RAM with the real part's rules (erase to `0xFF`, program only
 //!   erased bytes), for emulated boards and tests, with a power cut at a chosen byte;
 //! - [`filters`]: median and first-order low-pass filters for sensor channels;
-//! - [`leds`]: the status LED patterns every module shows the same way.
+//! - [`leds`]: the status LED patterns every module shows the same way;
+//! - `readme` (feature `std`): what the READMEs' generated sections share.
 #![no_std]
 #![warn(missing_docs)]
 
-#[cfg(test)]
+#[cfg(any(test, feature = "std"))]
 extern crate std;
 
 pub mod filters;
 pub mod flash_params;
 pub mod leds;
 pub mod ram_flash;
+#[cfg(any(test, feature = "std"))]
+pub mod readme;
 
 pub use flash_params::{CommitReport, FlashParams, LoadReport};
 pub use ram_flash::RamFlash;
