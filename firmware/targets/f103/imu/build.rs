@@ -1,20 +1,7 @@
-//! Generates `board.rs` from the module's board file (the single source of its pins), links
-//! with cortex-m-rt's script (embassy-stm32's `memory-x` feature provides memory.x), and adds a
-//! linker check that the image ends below the parameter pages.
+//! The module image's build steps (../module-core/build_image.rs) for its board file.
 
-include!("../module-core/src/flash_layout.rs");
+include!("../module-core/build_image.rs");
 
 fn main() {
-    r2p_boardgen::build("../../../boards/imu.toml");
-    println!("cargo:rerun-if-changed=../module-core/src/flash_layout.rs");
-    let out = std::env::var("OUT_DIR").expect("OUT_DIR");
-    let check = format!(
-        "ASSERT(__sidata + (__edata - __sdata) <= ORIGIN(FLASH) + {PARAMS_BASE:#x}, \
-         \"the image reaches the parameter pages at flash offset {PARAMS_BASE:#x} (flash_layout.rs)\");\n"
-    );
-    std::fs::write(format!("{out}/params.x"), check).expect("writing params.x");
-    println!("cargo:rustc-link-search={out}");
-    println!("cargo:rustc-link-arg-bins=--nmagic");
-    println!("cargo:rustc-link-arg-bins=-Tlink.x");
-    println!("cargo:rustc-link-arg-bins=-Tparams.x");
+    build_image("../../../boards/imu.toml");
 }
