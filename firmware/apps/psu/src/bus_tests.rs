@@ -10,9 +10,7 @@ use r2p_msgs::{Battery, BusPower, PsuEvent};
 use r2p_node::{
     Event, NoParams, Node, NodeConfig, ParamStore, RamParams, RemotePublisher, RemoteSubscriber,
 };
-use r2p_vbus::{Bus, Config, Port};
-use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError};
-use rtcan::{CanController, Frame};
+use r2p_vbus::{Bus, Config};
 
 use crate::event::{CAUSE_COMMAND, OUTPUT_OFF};
 use crate::frontend::{iin_counts, vin_counts, vout_counts};
@@ -21,42 +19,6 @@ use crate::{node_config, App, Endpoints, Sample};
 
 fn leak<T>(x: T) -> &'static T {
     Box::leak(Box::new(x))
-}
-
-/// A vbus port that sends its frames in the order they were loaded, as bxCAN does with
-/// `TXFP = 1` (the node needs it: fragments of a message must leave in order). The vbus port
-/// arbitrates its own mailboxes lowest identifier first, which would send a message's last
-/// fragment (counter 0) before the others: so load one frame at a time.
-struct Fifo(Port);
-
-impl CanController for Fifo {
-    fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
-        if self.0.pending() > 0 {
-            return Err(TxError::MailboxesFull);
-        }
-        self.0.try_transmit(frame)
-    }
-    fn try_receive(&mut self) -> Option<Received> {
-        self.0.try_receive()
-    }
-    fn set_filters(&mut self, filters: &[Filter]) {
-        self.0.set_filters(filters)
-    }
-    fn abort_pending(&mut self) -> usize {
-        self.0.abort_pending()
-    }
-    fn set_tx_mode(&mut self, mode: rtcan::controller::TxMode) {
-        self.0.set_tx_mode(mode)
-    }
-    fn take_tx_result(&mut self) -> Option<rtcan::controller::TxResult> {
-        self.0.take_tx_result()
-    }
-    fn bus_state(&self) -> BusState {
-        self.0.bus_state()
-    }
-    fn error_counters(&self) -> ErrorCounters {
-        self.0.error_counters()
-    }
 }
 
 type Q4<T> = Topic<'static, T, { pool_size(&[4], 1) }, 1>;
@@ -117,7 +79,8 @@ impl Rig {
 
     /// Runs `ms` milliseconds: the bus and both nodes every 100 µs, the application every 1 ms.
     fn run(&mut self, ms: u64, sample: Sample) -> bool {
-        let (mut p0, mut p1) = (Fifo(self.bus.port(0)), Fifo(self.bus.port(1)));
+        // vbus ports send their mailboxes in load order (bxCAN's TXFP = 1), as the node needs.
+        let (mut p0, mut p1) = (self.bus.port(0), self.bus.port(1));
         let mut on = false;
         for _ in 0..ms * 10 {
             self.bus.advance_to(self.now_us * 1000);

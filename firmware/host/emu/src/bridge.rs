@@ -134,13 +134,9 @@ impl Bridge {
                 Some(f) => self.backlog.push_back(f),
             }
         }
-        // One frame in the mailboxes at a time: the port sends its lowest identifier first,
-        // and a message's later fragments have lower identifiers, so loading several would
-        // reorder them (a SocketCAN interface also sends a socket's frames in order).
+        // The port sends its mailboxes in load order (`TxOrder::Loaded`), so a message's
+        // fragments leave in order, as a SocketCAN interface sends a socket's frames.
         while let Some(f) = self.backlog.front() {
-            if self.port.pending() > 0 {
-                break;
-            }
             match self.port.try_transmit(f) {
                 Ok(()) => {
                     self.backlog.pop_front();
