@@ -346,10 +346,10 @@ fn a_rebooted_peer_gets_the_advertisements_again() {
     a.export(&OUT).unwrap();
     let mut bus = VecBus::new(1);
     a.poll(0, &mut bus.ports[0]);
-    let heartbeat = |state| {
+    let heartbeat = |state, who| {
         let mut buf = [0u8; 64];
         let n = Message::Heartbeat {
-            uid: uid(2),
+            uid: uid(who),
             name: "b".try_into().unwrap(),
             state,
             uptime_s: 0,
@@ -361,8 +361,8 @@ fn a_rebooted_peer_gets_the_advertisements_again() {
         .unwrap();
         mgmt_frames(0x50, &buf[..n])
     };
-    let advertised = |a: &mut HostNode<'_>, bus: &mut VecBus, state, at| {
-        for f in heartbeat(state) {
+    let advertised_by = |a: &mut HostNode<'_>, bus: &mut VecBus, who, state, at| {
+        for f in heartbeat(state, who) {
             a.on_frame(&Received { frame: f, at });
         }
         let before = bus.wires.borrow().frames;
@@ -371,10 +371,19 @@ fn a_rebooted_peer_gets_the_advertisements_again() {
         // A heartbeat (5 frames) is not due; an advertisement is 3 frames.
         bus.wires.borrow().frames - before == 3
     };
+    let advertised =
+        |a: &mut HostNode<'_>, bus: &mut VecBus, state, at| advertised_by(a, bus, 2, state, at);
     assert!(advertised(&mut a, &mut bus, ModuleState::Starting, 1), "new peer");
-    assert!(!advertised(&mut a, &mut bus, ModuleState::Starting, 2), "once per start");
+    assert!(advertised(&mut a, &mut bus, ModuleState::Starting, 2), "a start's second heartbeat");
     assert!(!advertised(&mut a, &mut bus, ModuleState::Running, 3));
-    assert!(advertised(&mut a, &mut bus, ModuleState::Starting, 4), "it rebooted");
+    assert!(!advertised(&mut a, &mut bus, ModuleState::Running, 4));
+    assert!(advertised(&mut a, &mut bus, ModuleState::Starting, 5), "it rebooted");
+    // It went away during its start (a CLI tool that exits at once); the next tool to claim
+    // the node ID starts too and must get the advertisements, though it is no new peer.
+    assert!(
+        advertised_by(&mut a, &mut bus, 3, ModuleState::Starting, 6),
+        "the node ID's next holder"
+    );
     assert_eq!(a.peer_count(), 1);
 }
 

@@ -404,8 +404,6 @@ pub struct Node<
     errors: ErrorCounters,
     /// Nodes heard from.
     peers: NodeSet,
-    /// Peers heard `Starting` since their last `Running`: re-advertised to once.
-    greeted: NodeSet,
     /// Nodes this module sent parameter requests to (their answers become events).
     asked: NodeSet,
     reboot: bool,
@@ -462,7 +460,6 @@ impl<
             state: ModuleState::Running,
             errors: ErrorCounters::default(),
             peers: NodeSet::default(),
-            greeted: NodeSet::default(),
             asked: NodeSet::default(),
             reboot: false,
             events: Deque::new(),
@@ -899,13 +896,14 @@ impl<
                     self.next_heartbeat = now; // claim the new ID at once
                     self.event(Event::NodeIdChanged(new));
                 }
-                let starting = state == ModuleState::Starting;
-                if !self.peers.contains(from) || (starting && !self.greeted.contains(from)) {
-                    // A module that just arrived (or rebooted) missed our advertisements.
+                // A module that just arrived or is starting (again) missed our advertisements.
+                // Every `Starting` heartbeat counts, not only the first of a start: a tool
+                // that leaves within its start and a new one that takes its node ID look the
+                // same from here, and the second heartbeat of a start retries a lost first.
+                if !self.peers.contains(from) || state == ModuleState::Starting {
                     self.readvertise();
                 }
                 self.peers.set(from, true);
-                self.greeted.set(from, starting);
             }
             Message::Reboot { target } if for_me(target) || target == NodeId::BROADCAST => {
                 self.reboot = true;

@@ -42,11 +42,17 @@ pub const NODE_NAME: &str = "r2p-cli";
 /// Messages an import keeps for the CLI (and the queue length it asks publishers for).
 pub const QUEUE: usize = 64;
 
-/// A unique ID for this run: `r2p\0`, the process ID and the clock's nanoseconds, so that two
-/// tools started together claim different node IDs.
+/// The first bytes of every tool's unique ID. A node-ID conflict is won by the smaller unique
+/// ID, and no MCU's starts with `FF FF` (an STM32's begins with its die's X coordinate on the
+/// wafer, little-endian), so a tool always yields a node ID to a module.
+pub const TOOL_UID_PREFIX: [u8; 2] = [0xFF, 0xFF];
+
+/// A unique ID for this run: [`TOOL_UID_PREFIX`], `r2`, the process ID and the clock's
+/// nanoseconds, so that two tools started together claim different node IDs.
 fn run_uid() -> [u8; UID_LEN] {
     let mut uid = [0u8; UID_LEN];
-    uid[..3].copy_from_slice(b"r2p");
+    uid[..2].copy_from_slice(&TOOL_UID_PREFIX);
+    uid[2..4].copy_from_slice(b"r2");
     uid[4..8].copy_from_slice(&std::process::id().to_be_bytes());
     let nanos = SystemTime::now().duration_since(UNIX_EPOCH).unwrap_or_default().subsec_nanos();
     uid[8..].copy_from_slice(&nanos.to_be_bytes());
@@ -361,6 +367,15 @@ impl HostNode {
         }
     }
 
+    /// Takes the queued frames without running the node's timers or sending: before it joins,
+    /// the node learns from the heartbeats which node IDs are in use (and moves off its first
+    /// choice if a module holds it) without a frame of its own on the bus.
+    pub(crate) fn listen(&mut self) {
+        while let Some(r) = self.rx.pop_front() {
+            self.node.on_frame(&r);
+        }
+    }
+
     /// Runs the node: takes the queued frames, runs its timers, sends up to `budget` frames.
     /// Returns how many it sent.
     pub(crate) fn poll(&mut self, link: &mut dyn Link, budget: usize) -> Result<usize, CliError> {
@@ -383,7 +398,7 @@ impl HostNode {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::link::HubLink;
     use crate::session::Session;
@@ -394,26 +409,31 @@ mod tests {
     use std::sync::Arc;
     use std::time::Duration;
 
+    type Speed = Topic<'static, u32, { pool_size(&[8], 1) }, 1>;
+
     /// A module on the hub: a real node with an exported `u32` topic and two parameters,
-    /// polled every millisecond on its own thread, publishing 1, 2, 3… every 5 ms.
-    fn spawn_module(
+    /// polled every millisecond on its own thread, publishing 1, 2, 3… every 5 ms. Each call
+    /// makes its own topic and parameters (leaked: they live as long as the test process).
+    pub(crate) fn spawn_module(
         hub: Arc<BroadcastHub>,
         stop: Arc<std::sync::atomic::AtomicBool>,
     ) -> std::thread::JoinHandle<()> {
-        static SPEED: Topic<'static, u32, { pool_size(&[8], 1) }, 1> = Topic::new("speed", 0);
-        static SPEED_PUB: Publisher<'static, u32> = Publisher::new(&SPEED, Class::NonRealTime);
-        static SPEED_OUT: RemoteSubscriber<'static, u32, 8> = RemoteSubscriber::new(&SPEED_PUB);
-        static PARAMS: RamParams<2> = RamParams::new([
+        let speed: &'static Speed = Box::leak(Box::new(Topic::new("speed", 0)));
+        let speed_pub: &'static Publisher<'static, u32> =
+            Box::leak(Box::new(Publisher::new(speed, Class::NonRealTime)));
+        let speed_out: &'static RemoteSubscriber<'static, u32, 8> =
+            Box::leak(Box::new(RemoteSubscriber::new(speed_pub)));
+        let params: &'static RamParams<2> = Box::leak(Box::new(RamParams::new([
             Param::u32("rate_hz", 100, 1, 1000),
             Param::f32("gain", 0.5, 0.0, 2.0),
-        ]);
+        ])));
+        speed.subscribe(speed_out).unwrap();
         std::thread::spawn(move || {
-            SPEED.subscribe(&SPEED_OUT).unwrap();
             let mut uid = [0u8; 12];
             uid[11] = 0x42;
             let mut node: Node<'static, 1, 1, 32, 4, 64> =
-                Node::new(NodeConfig::new(uid, "sensor"), &PARAMS).unwrap();
-            node.export(&SPEED_OUT).unwrap();
+                Node::new(NodeConfig::new(uid, "sensor"), params).unwrap();
+            node.export(speed_out).unwrap();
             let mut link = HubLink::join(hub, 1024);
             let start = Instant::now();
             let mut n = 0u32;
@@ -425,7 +445,7 @@ mod tests {
                 }
                 if start.elapsed().as_millis() as u32 / 5 > n {
                     n += 1;
-                    SPEED_PUB.publish_with(|v| *v = n);
+                    speed_pub.publish_with(|v| *v = n);
                 }
                 let mut ctl = Controller {
                     link: &mut link,
@@ -453,17 +473,80 @@ mod tests {
         false
     }
 
-    /// Two host uids that claim the same first node ID.
+    /// A tool's unique ID (as [`run_uid`] makes them) with serial `n`.
+    fn tool_uid(n: u32) -> [u8; UID_LEN] {
+        let mut u = [0u8; UID_LEN];
+        u[..2].copy_from_slice(&TOOL_UID_PREFIX);
+        u[8..].copy_from_slice(&n.to_be_bytes());
+        u
+    }
+
+    /// Two tool uids that claim the same first node ID.
     fn colliding_uids() -> ([u8; UID_LEN], [u8; UID_LEN]) {
         use r2p_management::node_id::initial_node_id;
-        let uid = |n: u32| {
-            let mut u = *b"r2p\0\0\0\0\0\0\0\0\0";
-            u[8..].copy_from_slice(&n.to_be_bytes());
-            u
-        };
-        let a = uid(1);
-        let b = (2..).map(uid).find(|b| initial_node_id(b) == initial_node_id(&a)).unwrap();
+        let a = tool_uid(1);
+        let b = (2..).map(tool_uid).find(|b| initial_node_id(b) == initial_node_id(&a)).unwrap();
         (a, b)
+    }
+
+    #[test]
+    fn a_tool_listens_first_and_never_claims_a_running_modules_node_id() {
+        use r2p_management::node_id::initial_node_id;
+        let hub = Arc::new(BroadcastHub::new());
+        let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let module = spawn_module(hub.clone(), stop.clone());
+        let mut module_uid = [0u8; UID_LEN];
+        module_uid[11] = 0x42; // spawn_module's
+        let taken = initial_node_id(&module_uid);
+        let uid = (1..).map(tool_uid).find(|u| initial_node_id(u) == taken).unwrap();
+        std::thread::sleep(Duration::from_millis(50)); // the module is running
+
+        // A listener sees every frame (a session does not get its own back from the hub).
+        let mut observer = Session::new(Box::new(HubLink::join(hub.clone() as Arc<dyn Hub>, 8192)));
+        let mut s = Session::new(Box::new(HubLink::join(hub.clone() as Arc<dyn Hub>, 4096)));
+        let mine = s.join_with_uid(uid).unwrap().node_id();
+        assert_ne!(mine, taken, "its first choice is the module's: it moved before claiming");
+        // Not one heartbeat of the tool on the module's stream: the module never had to settle.
+        let mut reports = Vec::new();
+        for _ in 0..300 {
+            s.step(Duration::from_millis(1)).unwrap();
+            reports.extend(observer.step(Duration::ZERO).unwrap());
+        }
+        let on_taken: Vec<_> = reports
+            .iter()
+            .filter_map(|r| match &r.what {
+                What::Management { node, done: Some(Ok(Message::Heartbeat { uid: u, .. })) } => {
+                    Some((*node, *u))
+                }
+                _ => None,
+            })
+            .filter(|(n, _)| *n == taken.get())
+            .collect();
+        assert!(!on_taken.is_empty(), "the module heartbeats");
+        assert!(on_taken.iter().all(|(_, u)| *u == module_uid), "only the module on its ID");
+        assert!(
+            reports.iter().any(|r| matches!(&r.what,
+            What::Management { node, done: Some(Ok(Message::Heartbeat { uid: u, .. })) }
+                if *node == mine.get() && *u == uid)),
+            "the tool heartbeats on its own ID"
+        );
+        stop.store(true, std::sync::atomic::Ordering::SeqCst);
+        module.join().unwrap();
+    }
+
+    #[test]
+    fn a_tool_yields_a_contested_node_id_to_any_module() {
+        use r2p_management::node_id::NodeIdAllocator;
+        // The largest unique ID an MCU could have (its first bytes are not FF FF), against
+        // this run's tool ID: both claim one node ID at once, and the module keeps it.
+        let module_uid = [0xFF, 0xFE, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF];
+        let tool = run_uid();
+        let mut module = NodeIdAllocator::new(module_uid);
+        let mut t = NodeIdAllocator::new(tool);
+        assert_eq!(module.on_heartbeat(module.node_id(), &tool), None, "the module stays");
+        let before = t.node_id();
+        assert!(t.on_heartbeat(before, &module_uid).is_some(), "the tool moves");
+        assert_ne!(t.node_id(), before);
     }
 
     #[test]

@@ -31,10 +31,10 @@ pub trait Link {
     fn send(&mut self, frame: &CanFrame) -> Result<(), CliError>;
     /// What the link is, for messages (`socketcand 127.0.0.1:29536`).
     fn describe(&self) -> String;
-    /// Least time between two frames a host node sends. A socketcand server in front of an
-    /// emulated bus may hold several frames in a controller's mailboxes, which send the lowest
-    /// identifier first; a message's later fragments have lower identifiers, so frames are
-    /// spaced to keep a message in order.
+    /// Least time between two frames a host node sends. A socketcand server may hold several
+    /// frames in a CAN controller's mailboxes, and many controllers send the lowest identifier
+    /// first (bxCAN by default); a message's later fragments have lower identifiers, so frames
+    /// are spaced to keep a message in order (the emulated bus sends in load order anyway).
     fn tx_gap(&self) -> Duration {
         Duration::ZERO
     }

@@ -113,18 +113,30 @@ fn resolve(node: &str, bus: &BusArgs, s: &mut Session) -> Result<NodeId, CliErro
     }
 }
 
-/// Sends a request (`ask`) and waits for the answer about `index` from `target`.
+/// How long an unanswered request waits before it is sent again. A request or its answer can
+/// be lost (a receiver's full FIFO, a tool's full queue); reading a parameter, and setting
+/// one to a given value, do the same when done twice, so asking again is safe.
+pub const RETRY: Duration = Duration::from_millis(300);
+
+/// Sends a request (`ask`), again every [`RETRY`] while unanswered, and waits up to the
+/// bus timeout for the answer about `index` from `target`.
 fn ask(
     s: &mut Session,
     bus: &BusArgs,
     target: NodeId,
     index: u16,
     what: &str,
-    ask: impl FnOnce(&mut crate::host::HostNode) -> Result<(), CliError>,
+    ask: impl Fn(&mut crate::host::HostNode) -> Result<(), CliError>,
 ) -> Result<Result<Value, ParamFault>, CliError> {
-    ask(s.host().expect("joined"))?;
     let start = Instant::now();
+    let mut asked: Option<Instant> = None;
     while start.elapsed() < bus.timeout {
+        let host = s.host().expect("joined");
+        let again = asked.is_some_and(|t| t.elapsed() >= RETRY) && host.tx_pending() == 0;
+        if asked.is_none() || again {
+            ask(host)?;
+            asked = Some(Instant::now());
+        }
         s.step(Duration::from_millis(2))?;
         while let Some(e) = s.host().expect("joined").next_event() {
             match e {
@@ -204,6 +216,70 @@ pub fn run(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::link::{HubLink, Link, Recv};
+    use crate::watch::{Watcher, What};
+    use r2p_canlink::{BroadcastHub, CanFrame, Hub, Stamped};
+    use r2p_management::message::Message;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    /// A hub link that loses the first `lose` PARAM_GET requests the tool sends.
+    struct LosesRequests {
+        inner: HubLink,
+        watch: Watcher,
+        lose: usize,
+    }
+
+    impl Link for LosesRequests {
+        fn recv(&mut self, timeout: Duration) -> Result<Recv, CliError> {
+            self.inner.recv(timeout)
+        }
+        fn send(&mut self, frame: &CanFrame) -> Result<(), CliError> {
+            let r = self.watch.feed(&Stamped { time: Duration::ZERO, frame: *frame });
+            if self.lose > 0
+                && matches!(
+                    r.what,
+                    What::Management { done: Some(Ok(Message::ParamGet { .. })), .. }
+                )
+            {
+                self.lose -= 1;
+                return Ok(());
+            }
+            self.inner.send(frame)
+        }
+        fn describe(&self) -> String {
+            "a lossy in-process bus".into()
+        }
+    }
+
+    fn get_over(lose: usize) -> Result<String, CliError> {
+        let hub = Arc::new(BroadcastHub::new());
+        let stop = Arc::new(AtomicBool::new(false));
+        let module = crate::host::tests::spawn_module(hub.clone(), stop.clone());
+        let inner = HubLink::join(hub as Arc<dyn Hub>, 4096);
+        let s = Session::new(Box::new(LosesRequests { inner, watch: Watcher::new(), lose }));
+        let bus = BusArgs {
+            socketcand: None,
+            socketcan: None,
+            trace: None,
+            channel: "vcan0".into(),
+            timeout: Duration::from_secs(2),
+            json: false,
+        };
+        let cmd = ParamCommand::Get { node: "sensor".into(), index: 1 };
+        let mut out = Vec::new();
+        let r = run(&cmd, &bus, s, &mut out);
+        stop.store(true, Ordering::SeqCst);
+        module.join().unwrap();
+        r.map(|()| String::from_utf8(out).unwrap())
+    }
+
+    #[test]
+    fn a_lost_request_is_asked_again_until_the_timeout() {
+        assert_eq!(get_over(2).unwrap().trim(), "f32:0.5", "two lost, the third answered");
+        let e = get_over(usize::MAX).unwrap_err().to_string();
+        assert!(e.contains("did not answer PARAM_GET of parameter 1 within 2s"), "{e}");
+    }
 
     #[test]
     fn values_parse_typed_or_like_the_current_one() {

@@ -16,10 +16,17 @@ pub struct Session {
     start: Instant,
     last_tx: Option<Instant>,
     ended: bool,
+    /// Frames decoded while the host node listened before joining (returned by the next step).
+    heard: Vec<Report>,
 }
 
 /// Frames taken per step at most (then the node runs).
 const BATCH: usize = 256;
+
+/// How long the host node listens before it sends anything: one and a half default heartbeat
+/// periods, so every running module has heartbeated and the node's first claim avoids their
+/// node IDs (a tool never disturbs a running module; docs/middleware.md, "Node ID").
+pub const LISTEN: Duration = Duration::from_millis(150);
 
 impl Session {
     /// A session on `link`; nothing is sent until [`Session::join`].
@@ -31,6 +38,7 @@ impl Session {
             start: Instant::now(),
             last_tx: None,
             ended: false,
+            heard: Vec::new(),
         }
     }
 
@@ -54,18 +62,10 @@ impl Session {
         &self.watch
     }
 
-    /// Puts the host node on the bus (it heartbeats at once, so modules re-advertise to it).
+    /// Puts the host node on the bus: it listens for [`LISTEN`] (taking the node IDs it hears
+    /// as in use), then heartbeats at once, so modules re-advertise to it.
     pub fn join(&mut self) -> Result<&mut HostNode, CliError> {
-        if self.link.is_trace() {
-            return Err(CliError::new(format!(
-                "this command needs a live bus, not the {}: use --socketcand or --socketcan",
-                self.link.describe()
-            )));
-        }
-        if self.host.is_none() {
-            self.host = Some(HostNode::new(self.start)?);
-        }
-        Ok(self.host.as_mut().expect("just made"))
+        self.join_as(HostNode::new)
     }
 
     /// [`Session::join`] with the host node's unique ID given (tests).
@@ -74,8 +74,27 @@ impl Session {
         &mut self,
         uid: [u8; r2p_management::message::UID_LEN],
     ) -> Result<&mut HostNode, CliError> {
+        self.join_as(|start| HostNode::with_uid(start, uid))
+    }
+
+    fn join_as(
+        &mut self,
+        make: impl FnOnce(Instant) -> Result<HostNode, CliError>,
+    ) -> Result<&mut HostNode, CliError> {
+        if self.link.is_trace() {
+            return Err(CliError::new(format!(
+                "this command needs a live bus, not the {}: use --socketcand or --socketcan",
+                self.link.describe()
+            )));
+        }
         if self.host.is_none() {
-            self.host = Some(HostNode::with_uid(self.start, uid)?);
+            self.host = Some(make(self.start)?);
+            let t0 = Instant::now();
+            while t0.elapsed() < LISTEN && !self.ended {
+                let mut reports = self.read(LISTEN.saturating_sub(t0.elapsed()))?;
+                self.host.as_mut().expect("just made").listen();
+                self.heard.append(&mut reports);
+            }
         }
         Ok(self.host.as_mut().expect("just made"))
     }
@@ -98,6 +117,25 @@ impl Session {
     /// Waits up to `wait` for frames, decodes every frame that came (at most [`BATCH`]), lets
     /// the host node take them and run, and returns the decoded frames.
     pub fn step(&mut self, wait: Duration) -> Result<Vec<Report>, CliError> {
+        let mut reports = std::mem::take(&mut self.heard);
+        reports.append(&mut self.read(wait)?);
+        if let Some(h) = &mut self.host {
+            let gap = self.link.tx_gap();
+            let budget = if gap.is_zero() {
+                usize::MAX
+            } else {
+                usize::from(self.last_tx.is_none_or(|t| t.elapsed() >= gap))
+            };
+            if h.poll(self.link.as_mut(), budget)? > 0 {
+                self.last_tx = Some(Instant::now());
+            }
+        }
+        Ok(reports)
+    }
+
+    /// Waits up to `wait` for frames and decodes every frame that came (at most [`BATCH`]);
+    /// the host node takes them (it runs later).
+    fn read(&mut self, wait: Duration) -> Result<Vec<Report>, CliError> {
         let mut reports = Vec::new();
         let mut timeout = wait;
         while reports.len() < BATCH {
@@ -115,17 +153,6 @@ impl Session {
                     self.ended = true;
                     break;
                 }
-            }
-        }
-        if let Some(h) = &mut self.host {
-            let gap = self.link.tx_gap();
-            let budget = if gap.is_zero() {
-                usize::MAX
-            } else {
-                usize::from(self.last_tx.is_none_or(|t| t.elapsed() >= gap))
-            };
-            if h.poll(self.link.as_mut(), budget)? > 0 {
-                self.last_tx = Some(Instant::now());
             }
         }
         Ok(reports)
