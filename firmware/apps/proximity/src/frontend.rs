@@ -18,9 +18,9 @@ pub const INPUT_GAIN: f32 = 1.0;
 /// Pull-down on each input, Ω: holds an empty channel at 0 V. Must match hardware/proximity
 /// schematic.
 pub const PULL_DOWN_OHM: f32 = 100_000.0;
-/// The sensors' supply, V (the MaxSonar's output scales with it). Must match
-/// hardware/proximity schematic.
-pub const SENSOR_SUPPLY_V: f32 = 5.0;
+/// The sensors' supply, V: the one the datasheet curves assume (the MaxSonar's output scales
+/// with it). Must match hardware/proximity schematic.
+pub const SENSOR_SUPPLY_V: f32 = r2p_drivers::rangers::SUPPLY_V;
 
 /// Sensor output volts for a code.
 pub fn volts(counts: u16) -> f32 {

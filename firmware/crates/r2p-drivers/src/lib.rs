@@ -6,6 +6,9 @@
 //! - [`lsm6dso`]: ST LSM6DSO 6-axis IMU (accelerometer + gyroscope) over I2C or SPI — probe,
 //!   configure output data rate and full scale, read gyro + accel + temperature in one
 //!   auto-incremented burst, convert to SI units with the datasheet sensitivities.
+//! - [`rangers`]: analog rangers (Sharp GP2Y0A21/GP2Y0A02 infrared, MaxBotix LV-MaxSonar-EZ):
+//!   their datasheet transfer curves, voltage to distance and back, shared by the proximity
+//!   firmware and the world model that emulates the sensors.
 //! - [`tfmini`]: Benewake TFmini-S single-point LiDAR over UART — a frame parser that
 //!   resynchronises on garbage and counts bad checksums, and the frame-rate command.
 //!
@@ -23,4 +26,5 @@
 extern crate std;
 
 pub mod lsm6dso;
+pub mod rangers;
 pub mod tfmini;

@@ -14,8 +14,8 @@
 //! clock is read and all noise comes from seeded streams.
 //!
 //! One model per module, each documenting its equations, integrator and assumptions, each
-//! with tests against analytic results. `ranger_curves` is `no_std`-clean so that the
-//! proximity firmware can share the datasheet curves.
+//! with tests against analytic results. The rangers' datasheet curves are
+//! `r2p_drivers::rangers`, the same ones the proximity firmware inverts.
 
 pub mod adc;
 pub mod base;
@@ -35,7 +35,6 @@ pub mod noise;
 pub mod obstacles;
 pub mod psu;
 pub mod ranger;
-pub mod ranger_curves;
 pub mod robot;
 pub mod world;
 

@@ -3,7 +3,7 @@
 //! A ranger measures once per cycle (Sharp: every 38.3 ms typ.; LV-MaxSonar-EZ: every 49 ms)
 //! and holds its output between measurements, as the real parts do. A measurement finds the
 //! nearest obstacle in its beam ([`Obstacles::cast_beam`]) and maps the distance through its
-//! datasheet curve ([`crate::ranger_curves`]) plus Gaussian output noise:
+//! datasheet curve (`r2p_drivers::rangers`) plus Gaussian output noise:
 //!
 //! - Sharp, nearer than the calibrated range: the curve's non-monotonic part (the output
 //!   peaks, then falls towards 0 cm). Farther than the table: the output keeps falling as the
@@ -22,7 +22,7 @@
 use crate::geometry::Pose;
 use crate::noise::Noise;
 use crate::obstacles::{Beam, Obstacles};
-use crate::ranger_curves::{self, Curve};
+use r2p_drivers::rangers::{self, Curve};
 
 /// A kind of range sensor.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,8 +35,8 @@ pub enum RangerKind {
     MaxSonarLvEz,
 }
 
-/// Supply of the sensors (the proximity board's switched 5 V), V.
-pub const SENSOR_SUPPLY_V: f64 = 5.0;
+/// Supply of the sensors (the proximity board's switched 5 V, the curves' condition), V.
+pub const SENSOR_SUPPLY_V: f64 = rangers::SUPPLY_V as f64;
 
 impl RangerKind {
     /// Every kind, in robot-file order.
@@ -60,9 +60,9 @@ impl RangerKind {
     /// Its datasheet curve (at 5 V supply).
     pub fn curve(self) -> &'static Curve {
         match self {
-            RangerKind::Gp2y0a21 => &ranger_curves::GP2Y0A21YK,
-            RangerKind::Gp2y0a02 => &ranger_curves::GP2Y0A02YK,
-            RangerKind::MaxSonarLvEz => &ranger_curves::MAXSONAR_LV_EZ_5V,
+            RangerKind::Gp2y0a21 => &rangers::GP2Y0A21YK,
+            RangerKind::Gp2y0a02 => &rangers::GP2Y0A02YK,
+            RangerKind::MaxSonarLvEz => &rangers::MAXSONAR_LV_EZ_5V,
         }
     }
 
@@ -88,7 +88,7 @@ impl RangerKind {
         match self {
             RangerKind::Gp2y0a21 => 0.25,
             RangerKind::Gp2y0a02 => 0.30,
-            RangerKind::MaxSonarLvEz => inches_to_volts(ranger_curves::MAXSONAR_MAX_INCHES.into()),
+            RangerKind::MaxSonarLvEz => inches_to_volts(rangers::MAXSONAR_MAX_INCHES.into()),
         }
     }
 
@@ -103,9 +103,7 @@ impl RangerKind {
             }
             RangerKind::MaxSonarLvEz => Beam {
                 half_angle: 15.0 * deg,
-                max_range: f64::from(
-                    ranger_curves::MAXSONAR_MAX_INCHES * ranger_curves::M_PER_INCH,
-                ),
+                max_range: f64::from(rangers::MAXSONAR_MAX_INCHES * rangers::M_PER_INCH),
             },
         }
     }
@@ -129,8 +127,8 @@ impl RangerKind {
         match self {
             RangerKind::MaxSonarLvEz => {
                 let inches = distance.map_or(f64::INFINITY, |d| (d / 0.0254).round());
-                let lo = f64::from(ranger_curves::MAXSONAR_MIN_INCHES);
-                let hi = f64::from(ranger_curves::MAXSONAR_MAX_INCHES);
+                let lo = f64::from(rangers::MAXSONAR_MIN_INCHES);
+                let hi = f64::from(rangers::MAXSONAR_MAX_INCHES);
                 inches_to_volts(inches.clamp(lo, hi))
             }
             _ => {
@@ -147,7 +145,7 @@ impl RangerKind {
 }
 
 fn inches_to_volts(inches: f64) -> f64 {
-    SENSOR_SUPPLY_V * f64::from(ranger_curves::MAXSONAR_V_PER_INCH_PER_VCC) * inches
+    SENSOR_SUPPLY_V * f64::from(rangers::MAXSONAR_V_PER_INCH_PER_VCC) * inches
 }
 
 /// One ranger mounted on the robot's base.

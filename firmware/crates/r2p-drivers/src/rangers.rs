@@ -1,20 +1,34 @@
-//! Datasheet transfer curves of the rangers the proximity module reads: output voltage against
-//! distance to a target, as tables with linear interpolation, and their inverse.
+//! Analog rangers: the datasheet transfer curves of the Sharp GP2Y0A21YK0F and GP2Y0A02YK0F
+//! infrared rangers and the MaxBotix LV-MaxSonar-EZ sonar (output voltage against distance to
+//! a target), as tables with linear interpolation, and their inverse.
 //!
-//! This file is shared by the world model (which turns a distance into a voltage) and, later,
-//! by the proximity firmware (which turns a voltage back into a distance), so that both use
-//! the same curve. It must stay `no_std`: `core` only, no allocation, no float functions that
-//! need `std` (a test compiles it as a `#![no_std]` crate). Values are `f32`, the firmware's
-//! float.
+//! An analog ranger's driver is its curve. One copy serves both sides of the emulation: the
+//! proximity firmware turns a voltage into a distance with it, the world model
+//! (`firmware/host/world`) turns a distance into the voltage an emulated board reads. Adding a
+//! sensor: a [`Curve`] here (its table and calibrated range, with the datasheet figure it
+//! comes from), then its number in the proximity app's `curves::curve` and its name in the
+//! world's `RangerKind`.
 //!
 //! Sources (typical curves, white target of 90 % reflectance, read off the datasheet figures to
-//! about ±0.05 V):
-//! - Sharp GP2Y0A21YK0F, "distance measuring characteristics (output)", 10–80 cm; the output
-//!   peaks near 6 cm and falls again towards 0 cm, so a target nearer than ~3 cm reads like
-//!   one in range (an ambiguity of the sensor itself, kept here).
-//! - Sharp GP2Y0A02YK0F, same figure, 20–150 cm; peak near 15 cm.
-//! - MaxBotix LV-MaxSonar-EZ (EZ0–EZ4) analog output: Vcc/512 per inch, 6–254 in; targets
-//!   nearer than 6 in read as 6 in.
+//! about ±0.05 V, anchored on the datasheets' typical output specifications):
+//! - Sharp GP2Y0A21YK0F datasheet, figure "distance measuring characteristics (output)",
+//!   10–80 cm: 0.4 V typ at 80 cm, ΔV 1.9 V typ from 80 to 10 cm. The output peaks near 6 cm
+//!   and falls towards 0 cm, so a target nearer than ~3 cm reads like one in range (the
+//!   sensor's own ambiguity).
+//! - Sharp GP2Y0A02YK0F datasheet, same figure, 20–150 cm: ~0.44 V at 150 cm, ΔV ~2.05 V
+//!   from 150 to 20 cm; peak near 15 cm.
+//! - MaxBotix LV-MaxSonar-EZ (EZ0–EZ4) datasheet, analog output: Vcc/512 per inch, 6–254 in;
+//!   targets nearer than 6 in read as 6 in, nothing in view reads 254 in (so the last half
+//!   inch at each end counts as out of range here).
+//!
+//! Error of the tables against the datasheets' typical curves: about ±0.05 V on the Sharps
+//! (±3 % of distance near the range's middle, up to ±10 % at its far end where the curve is
+//! flat), one inch (the sensor's resolution) on the MaxSonar. Unit-to-unit spread
+//! (datasheet: ±0.15 V at the far end) is larger: calibrate per sensor if it matters.
+
+/// The supply every curve here assumes, V (the rangers' datasheet condition, and what the
+/// proximity board switches to its sensor connectors).
+pub const SUPPLY_V: f32 = 5.0;
 
 /// A sensor's output voltage against target distance, with its calibrated (monotonic) range.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,7 +43,7 @@ pub struct Curve {
     pub max_range_m: f32,
 }
 
-/// What a voltage read on a proximity channel means.
+/// What a voltage within or outside a curve's calibrated range means.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Reading {
     /// A target at this distance, m.
@@ -38,13 +52,11 @@ pub enum Reading {
     TooNear,
     /// Farther than the calibrated range, or nothing in view.
     TooFar,
-    /// No sensor: the channel's pull-down holds it near 0 V.
-    NoSensor,
 }
 
-/// Below this a channel has no sensor (or an unpowered one): the proximity board pulls each
-/// input to 0 V through 100 kΩ, and every modelled sensor drives more when powered (the
-/// MaxSonar's lowest output, 6 in at 5 V, is 58.6 mV; the Sharps stay above 0.2 V).
+/// Below this a channel has no sensor (or an unpowered one): the pull-down holds it at 0 V,
+/// and every supported sensor drives more when powered (the MaxSonar's lowest output, 6 in at
+/// 5 V, is 58.6 mV; the Sharps stay above 0.2 V).
 pub const NO_SENSOR_BELOW_V: f32 = 0.030;
 
 /// Sharp GP2Y0A21YK0F (10–80 cm) at 5 V supply.
@@ -120,15 +132,26 @@ pub const MAXSONAR_MIN_INCHES: f32 = 6.0;
 /// Farthest reading of the LV-MaxSonar-EZ, inches (also what it reads with nothing in view).
 pub const MAXSONAR_MAX_INCHES: f32 = 254.0;
 
-/// MaxBotix LV-MaxSonar-EZ analog output at 5 V supply (linear: Vcc/512 per inch).
+/// Half an inch at each end of the MaxSonar's scale is out of range: it reads 6 in for
+/// anything nearer and 254 in with nothing in view, so those readings are not distances.
+pub const MAXSONAR_END_MARGIN_INCHES: f32 = 0.5;
+
+const fn maxsonar_point(inches: f32) -> (f32, f32) {
+    (inches * M_PER_INCH, SUPPLY_V * MAXSONAR_V_PER_INCH_PER_VCC * inches)
+}
+
+/// MaxBotix LV-MaxSonar-EZ analog output at 5 V supply (linear: Vcc/512 per inch). The line
+/// has extra points half an inch inside each end, where the calibrated range stops.
 pub const MAXSONAR_LV_EZ_5V: Curve = Curve {
     name: "LV-MaxSonar-EZ",
     points: &[
-        (MAXSONAR_MIN_INCHES * M_PER_INCH, 5.0 * MAXSONAR_V_PER_INCH_PER_VCC * MAXSONAR_MIN_INCHES),
-        (MAXSONAR_MAX_INCHES * M_PER_INCH, 5.0 * MAXSONAR_V_PER_INCH_PER_VCC * MAXSONAR_MAX_INCHES),
+        maxsonar_point(MAXSONAR_MIN_INCHES),
+        maxsonar_point(MAXSONAR_MIN_INCHES + MAXSONAR_END_MARGIN_INCHES),
+        maxsonar_point(MAXSONAR_MAX_INCHES - MAXSONAR_END_MARGIN_INCHES),
+        maxsonar_point(MAXSONAR_MAX_INCHES),
     ],
-    min_range_m: MAXSONAR_MIN_INCHES * M_PER_INCH,
-    max_range_m: MAXSONAR_MAX_INCHES * M_PER_INCH,
+    min_range_m: (MAXSONAR_MIN_INCHES + MAXSONAR_END_MARGIN_INCHES) * M_PER_INCH,
+    max_range_m: (MAXSONAR_MAX_INCHES - MAXSONAR_END_MARGIN_INCHES) * M_PER_INCH,
 };
 
 fn lerp(x: f32, (x0, y0): (f32, f32), (x1, y1): (f32, f32)) -> f32 {
@@ -143,12 +166,10 @@ impl Curve {
         if distance_m <= p[0].0 {
             return p[0].1;
         }
-        let mut i = 1;
-        while i < p.len() {
-            if distance_m <= p[i].0 {
-                return lerp(distance_m, p[i - 1], p[i]);
+        for w in p.windows(2) {
+            if distance_m <= w[1].0 {
+                return lerp(distance_m, w[0], w[1]);
             }
-            i += 1;
         }
         p[p.len() - 1].1
     }
@@ -161,32 +182,22 @@ impl Curve {
     /// The distance whose output is `volts`, within the calibrated range only (where the
     /// curve is monotonic); `None` outside it.
     pub fn distance_at(&self, volts: f32) -> Option<f32> {
-        let p = self.points;
-        let mut i = 1;
-        while i < p.len() {
-            let (a, b) = (p[i - 1], p[i]);
-            if a.0 >= self.min_range_m && b.0 <= self.max_range_m {
-                let (lo, hi) = if a.1 <= b.1 { (a.1, b.1) } else { (b.1, a.1) };
-                if volts >= lo && volts <= hi && a.1 != b.1 {
-                    let (sa, sb) = ((a.1, a.0), (b.1, b.0));
-                    return Some(lerp(volts, sa, sb));
-                }
-            }
-            i += 1;
-        }
-        None
+        self.points.windows(2).find_map(|w| {
+            let (a, b) = (w[0], w[1]);
+            let inside = a.0 >= self.min_range_m && b.0 <= self.max_range_m;
+            let (lo, hi) = if a.1 <= b.1 { (a.1, b.1) } else { (b.1, a.1) };
+            (inside && volts >= lo && volts <= hi && a.1 != b.1)
+                .then(|| lerp(volts, (a.1, a.0), (b.1, b.0)))
+        })
     }
 
-    /// What `volts` on a channel wired to this sensor means (see [`Reading`]).
+    /// What `volts` from this sensor means. A missing sensor (a channel pulled down below
+    /// [`NO_SENSOR_BELOW_V`]) is the caller's business: it takes more than one sample to tell.
     pub fn classify(&self, volts: f32) -> Reading {
-        if volts < NO_SENSOR_BELOW_V {
-            return Reading::NoSensor;
-        }
         if let Some(d) = self.distance_at(volts) {
             return Reading::Distance(d);
         }
         let (v_near, v_far) = self.range_volts();
-        // Outside the calibrated span: on the near side or the far side of it.
         let nearer = if v_near > v_far { volts > v_near } else { volts < v_near };
         if nearer {
             Reading::TooNear
@@ -199,37 +210,58 @@ impl Curve {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use proptest::prelude::*;
 
     const ALL: [Curve; 3] = [GP2Y0A21YK, GP2Y0A02YK, MAXSONAR_LV_EZ_5V];
 
     #[test]
-    fn tables_are_well_formed() {
+    fn tables_are_monotonic_over_their_range_and_above_the_no_sensor_level() {
         for c in ALL {
             assert!(c.points.windows(2).all(|w| w[0].0 < w[1].0), "{}: distances ascend", c.name);
-            // The calibrated range ends on table points and is strictly monotonic.
-            assert!(c.points.iter().any(|p| p.0 == c.min_range_m), "{}", c.name);
-            assert!(c.points.iter().any(|p| p.0 == c.max_range_m), "{}", c.name);
-            let cal: Vec<_> =
+            let cal: std::vec::Vec<_> =
                 c.points.iter().filter(|p| p.0 >= c.min_range_m && p.0 <= c.max_range_m).collect();
+            assert!(
+                cal.first().unwrap().0 == c.min_range_m && cal.last().unwrap().0 == c.max_range_m
+            );
             let dec = cal.windows(2).all(|w| w[1].1 < w[0].1);
             let inc = cal.windows(2).all(|w| w[1].1 > w[0].1);
             assert!(dec || inc, "{}: calibrated range must be monotonic", c.name);
-            // Every powered output is distinguishable from an empty (pulled-down) channel.
             assert!(c.points.iter().all(|p| p.1 > NO_SENSOR_BELOW_V), "{}", c.name);
         }
     }
 
     #[test]
     fn datasheet_anchor_points() {
-        // GP2Y0A21: 0.4 V typ at 80 cm, 1.9 V typ difference from 80 to 10 cm.
         assert_eq!(GP2Y0A21YK.volts_at(0.80), 0.40);
         assert!((GP2Y0A21YK.volts_at(0.10) - GP2Y0A21YK.volts_at(0.80) - 1.9).abs() < 0.01);
-        // GP2Y0A02: 0.4–0.45 V at 150 cm, ~2.05 V difference from 150 to 20 cm.
         assert!((GP2Y0A02YK.volts_at(0.20) - GP2Y0A02YK.volts_at(1.50) - 2.05).abs() < 0.02);
-        // MaxSonar at 5 V: 9.766 mV per inch; 100 in → 0.9766 V.
         let v = MAXSONAR_LV_EZ_5V.volts_at(100.0 * M_PER_INCH);
-        assert!((v - 0.9765625).abs() < 1e-5, "{v}");
+        assert!((v - 0.976_562_5).abs() < 1e-5, "9.766 mV per inch at 5 V: {v}");
+    }
+
+    #[test]
+    fn inversion_round_trips_across_each_range() {
+        for c in ALL {
+            for i in 0..=100 {
+                let d = c.min_range_m + (c.max_range_m - c.min_range_m) * i as f32 / 100.0;
+                let back = c.distance_at(c.volts_at(d)).unwrap();
+                assert!((back - d).abs() < 2e-5, "{} {d} -> {back}", c.name);
+            }
+        }
+    }
+
+    #[test]
+    fn out_of_range_is_classified_not_extrapolated() {
+        assert_eq!(GP2Y0A21YK.classify(3.0), Reading::TooNear);
+        assert_eq!(GP2Y0A21YK.classify(0.30), Reading::TooFar);
+        assert_eq!(GP2Y0A02YK.classify(2.70), Reading::TooNear);
+        assert_eq!(MAXSONAR_LV_EZ_5V.classify(2.6), Reading::TooFar);
+        assert_eq!(MAXSONAR_LV_EZ_5V.classify(0.05), Reading::TooNear);
+        // The sensor's floor and ceiling readings are out of range, not distances.
+        let inch = |i: f32| MAXSONAR_LV_EZ_5V.volts_at(i * M_PER_INCH);
+        assert_eq!(MAXSONAR_LV_EZ_5V.classify(inch(6.0)), Reading::TooNear);
+        assert_eq!(MAXSONAR_LV_EZ_5V.classify(inch(254.0)), Reading::TooFar);
+        assert!(matches!(MAXSONAR_LV_EZ_5V.classify(inch(7.0)), Reading::Distance(_)));
+        assert_eq!(GP2Y0A21YK.classify(1.30), Reading::Distance(0.20));
     }
 
     #[test]
@@ -237,27 +269,11 @@ mod tests {
         // The peak lies below min range: 3 cm reads like ~12 cm (the real sensor's trap).
         let c = GP2Y0A21YK;
         assert!(c.volts_at(0.06) > c.volts_at(c.min_range_m));
-        let v3 = c.volts_at(0.03);
-        let d = c.distance_at(v3).unwrap();
+        let d = c.distance_at(c.volts_at(0.03)).unwrap();
         assert!((d - 0.12).abs() < 1e-6, "{d}");
-        // A voltage above the range's near end is reported as too near, not as a distance.
-        assert_eq!(c.classify(3.0), Reading::TooNear);
     }
 
-    #[test]
-    fn classify_out_of_range_and_no_sensor() {
-        assert_eq!(GP2Y0A21YK.classify(0.0008), Reading::NoSensor);
-        assert_eq!(GP2Y0A21YK.classify(0.30), Reading::TooFar);
-        assert_eq!(GP2Y0A02YK.classify(2.70), Reading::TooNear);
-        assert_eq!(MAXSONAR_LV_EZ_5V.classify(2.6), Reading::TooFar);
-        assert_eq!(MAXSONAR_LV_EZ_5V.classify(0.0), Reading::NoSensor);
-        match GP2Y0A21YK.classify(1.30) {
-            Reading::Distance(d) => assert!((d - 0.20).abs() < 1e-6),
-            r => panic!("{r:?}"),
-        }
-    }
-
-    proptest! {
+    proptest::proptest! {
         /// Inverting the curve gives back the distance anywhere in the calibrated range.
         #[test]
         fn inversion_round_trip(which in 0usize..3, f in 0.0f32..=1.0) {
@@ -266,7 +282,7 @@ mod tests {
             let back = c.distance_at(c.volts_at(d)).unwrap();
             // f32 rounding: a few ulp of the voltage (≤ 1e-6 V) over the flattest calibrated
             // slope (0.3 V/m, GP2Y0A02 at 1.5 m) is ≤ 4e-6 m, plus an ulp of d (≤ 5e-7 m).
-            prop_assert!((back - d).abs() < 2e-5, "{} {d} -> {back}", c.name);
+            proptest::prop_assert!((back - d).abs() < 2e-5, "{} {d} -> {back}", c.name);
         }
     }
 }
