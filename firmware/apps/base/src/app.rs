@@ -1,9 +1,8 @@
 //! The base controller's step: IK, obstacle avoidance, odometry.
 
 use libm::{cosf, sinf};
-use r2p_management::message::Value;
 use r2p_msgs::{Odometry, Twist2D, WheelSetpoint};
-use r2p_node::{Export, Import, Node, NodeError, ParamStore};
+use r2p_node::{Export, Import, Node, NodeError, ParamStore, Typed};
 
 use crate::kinematics::Omni3;
 use crate::params as p;
@@ -41,37 +40,12 @@ pub struct App<'a> {
     pub dropped: u32,
 }
 
-fn f32_of(params: &dyn ParamStore, i: u16) -> f32 {
-    match params.get(i) {
-        Ok(Value::F32(v)) => v,
-        _ => crate::params::DEFAULTS[usize::from(i)].value_f32(),
-    }
-}
-
-fn u32_of(params: &dyn ParamStore, i: u16) -> u32 {
-    match params.get(i) {
-        Ok(Value::U32(v)) => v,
-        _ => match crate::params::DEFAULTS[usize::from(i)].value {
-            Value::U32(v) => v,
-            _ => 1,
-        },
-    }
-}
-
-trait ParamF32 {
-    fn value_f32(&self) -> f32;
-}
-
-impl ParamF32 for r2p_node::Param {
-    fn value_f32(&self) -> f32 {
-        match self.value {
-            Value::F32(v) => v,
-            _ => 0.0,
-        }
-    }
-}
-
 impl<'a> App<'a> {
+    /// The parameters as the application reads them (defaults from the table).
+    fn typed(&self) -> Typed<'a> {
+        Typed::new(self.params, &crate::params::DEFAULTS)
+    }
+
     /// The application over `ends` with parameters from `params` (read every step, so a
     /// PARAM_SET applies at once).
     #[cfg(any(test, feature = "std"))]
@@ -124,15 +98,15 @@ impl<'a> App<'a> {
 
     fn geometry(&self) -> Omni3 {
         Omni3 {
-            wheel_radius: f32_of(self.params, p::WHEEL_RADIUS),
-            base_radius: f32_of(self.params, p::BASE_RADIUS),
-            first_wheel: f32_of(self.params, p::FIRST_WHEEL_DEG).to_radians(),
+            wheel_radius: self.typed().f32(p::WHEEL_RADIUS),
+            base_radius: self.typed().f32(p::BASE_RADIUS),
+            first_wheel: self.typed().f32(p::FIRST_WHEEL_DEG).to_radians(),
         }
     }
 
     /// The command after obstacle avoidance (what the wheels are asked for).
     pub fn command(&self, now_us: u64) -> Twist2D {
-        let timeout = u64::from(u32_of(self.params, p::CMD_TIMEOUT_MS)) * 1000;
+        let timeout = u64::from(self.typed().u32(p::CMD_TIMEOUT_MS)) * 1000;
         let mut c = match self.cmd_at_us {
             Some(t) if now_us.saturating_sub(t) <= timeout => self.cmd,
             _ => return Twist2D::default(),
@@ -141,7 +115,7 @@ impl<'a> App<'a> {
             if now_us >= *until {
                 continue;
             }
-            let a = f32_of(self.params, p::CHANNEL0_DEG + ch as u16).to_radians();
+            let a = self.typed().f32(p::CHANNEL0_DEG + ch as u16).to_radians();
             let (ux, uy) = (cosf(a), sinf(a));
             let towards = c.vx * ux + c.vy * uy;
             if towards > 0.0 {
@@ -165,8 +139,8 @@ impl<'a> App<'a> {
             self.cmd = *c;
             self.cmd_at_us = Some(now_us);
         }
-        let stop = f32_of(self.params, p::STOP_DISTANCE);
-        let until = now_us + u64::from(u32_of(self.params, p::OBSTACLE_HOLD_MS)) * 1000;
+        let stop = self.typed().f32(p::STOP_DISTANCE);
+        let until = now_us + u64::from(self.typed().u32(p::OBSTACLE_HOLD_MS)) * 1000;
         // The event reacts at once (soft real time); the periodic ranges keep the block while
         // the obstacle stays (the event is not repeated).
         while let Some(o) = self.ends.obstacle.try_recv() {
@@ -187,7 +161,7 @@ impl<'a> App<'a> {
             }
         }
         if now_us >= self.next_ik_us {
-            let period = 1_000_000 / u64::from(u32_of(self.params, p::IK_RATE_HZ).max(1));
+            let period = 1_000_000 / u64::from(self.typed().u32(p::IK_RATE_HZ).max(1));
             self.next_ik_us = now_us - now_us % period + period;
             let c = self.command(now_us);
             let w = self.geometry().inverse(c.vx, c.vy, c.wz);
@@ -202,7 +176,7 @@ impl<'a> App<'a> {
         }
         self.integrate(now_us);
         if now_us >= self.next_odom_us {
-            let period = 1_000_000 / u64::from(u32_of(self.params, p::ODOM_RATE_HZ).max(1));
+            let period = 1_000_000 / u64::from(self.typed().u32(p::ODOM_RATE_HZ).max(1));
             self.next_odom_us = now_us - now_us % period + period;
             let (x, y, theta) = self.pose;
             let (vx, vy, wz) = self.velocity;

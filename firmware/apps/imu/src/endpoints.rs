@@ -13,7 +13,7 @@ use r2p_msgs::Imu;
 use r2p_node::{ParamStore, RemoteSubscriber};
 use static_cell::StaticCell;
 
-use crate::params::{u32_param, INSTANCE};
+use crate::params::INSTANCE;
 
 /// A module's node name and its topic's name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -34,7 +34,7 @@ pub const NAMES: [Names; 4] = [
 
 /// The names the parameters select.
 pub fn names(params: &dyn ParamStore) -> &'static Names {
-    let i = u32_param(params, INSTANCE) as usize;
+    let i = crate::params::typed(params).u32(INSTANCE) as usize;
     &NAMES[i.min(NAMES.len() - 1)]
 }
 

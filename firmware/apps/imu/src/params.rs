@@ -3,8 +3,7 @@
 //! the sensor set-up ([`SensorConfig`]) fixed at boot.
 
 use r2p_drivers::lsm6dso::{self, AccelScale, GyroScale, Odr};
-use r2p_management::message::Value;
-use r2p_node::{Param, ParamStore};
+use r2p_node::{NoParams, Param, ParamStore, Typed};
 
 /// Module instance: selects the node name and topic from [`crate::NAMES`] (at boot).
 pub const INSTANCE: u16 = 0;
@@ -121,13 +120,14 @@ pub struct Config {
 impl Config {
     /// Reads every run-time parameter (a missing or mistyped one falls back to its default).
     pub fn read(store: &dyn ParamStore) -> Self {
-        let u = |i| u32_param(store, i);
+        let t = typed(store);
+        let u = |i| t.u32(i);
         Self {
             period_us: 1_000_000 / u64::from(u(RATE_HZ).max(1)),
             bias_us: u64::from(u(BIAS_MS)) * 1000,
-            still_rad_s: f32_param(store, STILL_DPS).to_radians(),
+            still_rad_s: t.f32(STILL_DPS).to_radians(),
             tilt_tau_s: u(TILT_TAU_MS) as f32 * 1e-3,
-            accel_gate: f32_param(store, ACCEL_GATE),
+            accel_gate: t.f32(ACCEL_GATE),
         }
     }
 }
@@ -140,15 +140,16 @@ pub struct SensorConfig(pub lsm6dso::Config);
 impl SensorConfig {
     /// The set-up the parameters ask for (out-of-table values fall back to the defaults).
     pub fn read(store: &dyn ParamStore) -> Self {
+        let (t, defaults) = (typed(store), Typed::new(&NoParams, &DEFAULTS));
         let pick = |i: u16, n: usize| {
-            let v = u32_param(store, i) as usize;
+            let v = t.u32(i) as usize;
             if v < n {
                 v
             } else {
-                default_u32(i) as usize
+                defaults.u32(i) as usize
             }
         };
-        let odr = Odr::from_code(u32_param(store, ODR).min(ODR_MAX) as u8)
+        let odr = Odr::from_code(t.u32(ODR).min(ODR_MAX) as u8)
             .filter(|o| *o != Odr::Off)
             .unwrap_or(Odr::Hz104);
         SensorConfig(lsm6dso::Config {
@@ -165,33 +166,17 @@ impl SensorConfig {
     }
 }
 
-fn default_u32(index: u16) -> u32 {
-    match DEFAULTS[usize::from(index)].value {
-        Value::U32(v) => v,
-        _ => 0,
-    }
-}
-
-/// A `u32` parameter, or its default.
-pub fn u32_param(store: &dyn ParamStore, index: u16) -> u32 {
-    match store.get(index) {
-        Ok(Value::U32(v)) => v,
-        _ => default_u32(index),
-    }
-}
-
-/// An `f32` parameter, or its default.
-pub fn f32_param(store: &dyn ParamStore, index: u16) -> f32 {
-    match (store.get(index), DEFAULTS[usize::from(index)].value) {
-        (Ok(Value::F32(v)), _) | (_, Value::F32(v)) => v,
-        _ => 0.0,
-    }
+/// The parameters as the application reads them: each as its type, the default from
+/// [`DEFAULTS`] if the store lacks it.
+pub fn typed(store: &dyn ParamStore) -> Typed<'_> {
+    Typed::new(store, &DEFAULTS)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use r2p_management::message::ParamFault;
+    use r2p_management::message::Value;
     use r2p_node::{NoParams, RamParams};
 
     #[test]

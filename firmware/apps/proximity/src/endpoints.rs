@@ -14,7 +14,7 @@ use r2p_msgs::{Obstacle, Proximity};
 use r2p_node::{ParamStore, RemoteSubscriber};
 use static_cell::StaticCell;
 
-use crate::params::{u32_param, INSTANCE, OBSTACLE_DEADLINE_MS};
+use crate::params::{INSTANCE, OBSTACLE_DEADLINE_MS};
 
 /// A module's name and its topics' names.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -37,7 +37,7 @@ pub const NAMES: [Names; 4] = [
 
 /// The names the parameters select.
 pub fn names(params: &dyn ParamStore) -> &'static Names {
-    let i = u32_param(params, INSTANCE) as usize;
+    let i = crate::params::typed(params).u32(INSTANCE) as usize;
     &NAMES[i.min(NAMES.len() - 1)]
 }
 
@@ -108,7 +108,7 @@ impl Storage {
     /// If called twice on one storage (each `StaticCell` is initialised once).
     pub fn build(&'static self, params: &dyn ParamStore) -> Endpoints<'static> {
         let names = names(params);
-        let deadline_us = u32_param(params, OBSTACLE_DEADLINE_MS) * 1000;
+        let deadline_us = crate::params::typed(params).u32(OBSTACLE_DEADLINE_MS) * 1000;
         let empty = Proximity { distance: [f32::NAN; 4], status: [3; 4] };
 
         let ranges = &*self.ranges.init(Topic::new(names.ranges, empty));

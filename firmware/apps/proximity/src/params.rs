@@ -2,8 +2,7 @@
 //! PARAM_SET, ranges checked by the store) and the [`Config`] the application reads from it
 //! every step.
 
-use r2p_management::message::Value;
-use r2p_node::{Param, ParamStore};
+use r2p_node::{Param, ParamStore, Typed};
 
 /// Module instance: selects the node name and topic prefix from [`crate::NAMES`] (at boot).
 pub const INSTANCE: u16 = 0;
@@ -103,41 +102,30 @@ pub struct Config {
 impl Config {
     /// Reads every parameter (a missing or mistyped one falls back to its default).
     pub fn read(store: &dyn ParamStore) -> Self {
-        let u = |i| u32_param(store, i);
+        let t = typed(store);
+        let u = |i| t.u32(i);
         Self {
             period_us: 1_000_000 / u64::from(u(RATE_HZ).max(1)),
             sensors: core::array::from_fn(|c| u(SENSOR0 + c as u16)),
             filter_tau_us: u64::from(u(FILTER_TAU_MS)) * 1000,
-            obstacle_m: f32_param(store, OBSTACLE_M),
-            obstacle_hysteresis_m: f32_param(store, OBSTACLE_HYSTERESIS_M),
-            sensor_power: match store.get(SENSOR_POWER) {
-                Ok(Value::Bool(b)) => b,
-                _ => true,
-            },
+            obstacle_m: t.f32(OBSTACLE_M),
+            obstacle_hysteresis_m: t.f32(OBSTACLE_HYSTERESIS_M),
+            sensor_power: t.bool(SENSOR_POWER),
         }
     }
 }
 
-/// A `u32` parameter, or its default.
-pub fn u32_param(store: &dyn ParamStore, index: u16) -> u32 {
-    match (store.get(index), DEFAULTS[usize::from(index)].value) {
-        (Ok(Value::U32(v)), _) | (_, Value::U32(v)) => v,
-        _ => 0,
-    }
-}
-
-/// An `f32` parameter, or its default.
-pub fn f32_param(store: &dyn ParamStore, index: u16) -> f32 {
-    match (store.get(index), DEFAULTS[usize::from(index)].value) {
-        (Ok(Value::F32(v)), _) | (_, Value::F32(v)) => v,
-        _ => 0.0,
-    }
+/// The parameters as the application reads them: each as its type, the default from
+/// [`DEFAULTS`] if the store lacks it.
+pub fn typed(store: &dyn ParamStore) -> Typed<'_> {
+    Typed::new(store, &DEFAULTS)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use r2p_management::message::ParamFault;
+    use r2p_management::message::Value;
     use r2p_node::{NoParams, RamParams};
 
     #[test]

@@ -17,7 +17,7 @@ use r2p_msgs::{Battery, BusPower, PsuEvent, PsuState};
 use r2p_node::{ParamStore, RemotePublisher, RemoteSubscriber};
 use static_cell::StaticCell;
 
-use crate::params::{u32_param, EVENT_DEADLINE_MS, INSTANCE};
+use crate::params::{EVENT_DEADLINE_MS, INSTANCE};
 
 /// A module's name and its topics' names.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,7 +68,7 @@ pub const NAMES: [Names; 4] = [
 
 /// The names the parameters select.
 pub fn names(params: &dyn ParamStore) -> &'static Names {
-    let i = u32_param(params, INSTANCE) as usize;
+    let i = crate::params::typed(params).u32(INSTANCE) as usize;
     &NAMES[i.min(NAMES.len() - 1)]
 }
 
@@ -174,7 +174,7 @@ impl Storage {
     /// If called twice on one storage (each `StaticCell` is initialised once).
     pub fn build(&'static self, params: &dyn ParamStore) -> Endpoints<'static> {
         let names = names(params);
-        let deadline_us = u32_param(params, EVENT_DEADLINE_MS) * 1000;
+        let deadline_us = crate::params::typed(params).u32(EVENT_DEADLINE_MS) * 1000;
 
         let battery = &*self.battery.init(Topic::new(names.battery, Battery::default()));
         let battery_pub = &*self.battery_pub.init(Publisher::new(battery, Class::NonRealTime));

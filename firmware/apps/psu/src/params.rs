@@ -1,8 +1,7 @@
 //! The PSU's parameters: the table the node serves over the bus (PARAM_GET / PARAM_SET, ranges
 //! checked by the store) and the [`Config`] the application reads from it every step.
 
-use r2p_management::message::Value;
-use r2p_node::{Param, ParamStore};
+use r2p_node::{Param, ParamStore, Typed};
 
 /// Module instance: selects the node name and topic prefix from [`crate::NAMES`] (at boot).
 pub const INSTANCE: u16 = 0;
@@ -139,8 +138,9 @@ pub struct Config {
 impl Config {
     /// Reads every parameter (a missing or mistyped one falls back to its default).
     pub fn read(store: &dyn ParamStore) -> Self {
-        let f = |i| f32_param(store, i);
-        let u = |i| u64::from(u32_param(store, i));
+        let t = typed(store);
+        let f = |i| t.f32(i);
+        let u = |i| u64::from(t.u32(i));
         Self {
             capacity_ah: f(CAPACITY_AH),
             battery_period_us: 1_000_000 / u(BATTERY_RATE_HZ).max(1),
@@ -156,26 +156,17 @@ impl Config {
     }
 }
 
-/// A `u32` parameter, or its default.
-pub fn u32_param(store: &dyn ParamStore, index: u16) -> u32 {
-    match (store.get(index), DEFAULTS[usize::from(index)].value) {
-        (Ok(Value::U32(v)), _) | (_, Value::U32(v)) => v,
-        _ => 0,
-    }
-}
-
-/// An `f32` parameter, or its default.
-pub fn f32_param(store: &dyn ParamStore, index: u16) -> f32 {
-    match (store.get(index), DEFAULTS[usize::from(index)].value) {
-        (Ok(Value::F32(v)), _) | (_, Value::F32(v)) => v,
-        _ => 0.0,
-    }
+/// The parameters as the application reads them: each as its type, the default from
+/// [`DEFAULTS`] if the store lacks it.
+pub fn typed(store: &dyn ParamStore) -> Typed<'_> {
+    Typed::new(store, &DEFAULTS)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use r2p_management::message::ParamFault;
+    use r2p_management::message::Value;
     use r2p_node::{NoParams, RamParams};
 
     #[test]

@@ -42,7 +42,7 @@ mod testbus;
 mod tests;
 
 pub use node::{Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats};
-pub use params::{NoParams, Param, ParamStore, RamParams};
+pub use params::{NoParams, Param, ParamStore, RamParams, Typed};
 pub use remote::{Export, Import, ImportError, RemotePublisher, RemoteSubscriber};
 pub use slot_tx::{FreeSlots, SlotTx};
 pub use wire::{Wire, WireError};

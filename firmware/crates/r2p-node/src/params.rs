@@ -93,6 +93,65 @@ impl Param {
     }
 }
 
+/// An application's view of its parameters: each read as its type, falling back to the
+/// default in the module's parameter table when the store has no such index or holds another
+/// type there (a store that lost its flash page must not stop the module: it runs on its
+/// defaults), and to zero if the table disagrees too.
+#[derive(Clone, Copy)]
+pub struct Typed<'a> {
+    store: &'a dyn ParamStore,
+    defaults: &'a [Param],
+}
+
+impl<'a> Typed<'a> {
+    /// `store`'s parameters, with `defaults` (index = position) to fall back on.
+    pub fn new(store: &'a dyn ParamStore, defaults: &'a [Param]) -> Self {
+        Self { store, defaults }
+    }
+
+    #[inline]
+    fn value(&self, index: u16) -> (Option<Value>, Option<Value>) {
+        let default = self.defaults.get(usize::from(index)).map(|p| p.value);
+        (self.store.get(index).ok(), default)
+    }
+
+    /// A `u32` parameter.
+    #[inline]
+    pub fn u32(&self, index: u16) -> u32 {
+        match self.value(index) {
+            (Some(Value::U32(v)), _) | (_, Some(Value::U32(v))) => v,
+            _ => 0,
+        }
+    }
+
+    /// An `i32` parameter.
+    #[inline]
+    pub fn i32(&self, index: u16) -> i32 {
+        match self.value(index) {
+            (Some(Value::I32(v)), _) | (_, Some(Value::I32(v))) => v,
+            _ => 0,
+        }
+    }
+
+    /// An `f32` parameter.
+    #[inline]
+    pub fn f32(&self, index: u16) -> f32 {
+        match self.value(index) {
+            (Some(Value::F32(v)), _) | (_, Some(Value::F32(v))) => v,
+            _ => 0.0,
+        }
+    }
+
+    /// A `bool` parameter.
+    #[inline]
+    pub fn bool(&self, index: u16) -> bool {
+        match self.value(index) {
+            (Some(Value::Bool(v)), _) | (_, Some(Value::Bool(v))) => v,
+            _ => false,
+        }
+    }
+}
+
 /// `N` parameters in RAM, indexed 0..N (for tests and modules without persistence; flash
 /// persistence wraps a store like this in the module firmware).
 pub struct RamParams<const N: usize> {
@@ -152,6 +211,28 @@ pub(crate) mod tests {
             assert_eq!(p.set(4, Value::Bool(false)), Err(ParamFault::UnknownIndex));
             assert_eq!(NoParams.get(0), Err(ParamFault::UnknownIndex));
             assert_eq!(p.param(3).unwrap().name, "enabled");
+        }
+
+        fn typed_reads_fall_back_to_the_table_then_to_zero() {
+            const TABLE: [Param; 4] = [
+                Param::u32("rate_hz", 100, 1, 1000),
+                Param::f32("gain", 0.5, 0.0, 2.0),
+                Param::i32("offset", -3, -10, 10),
+                Param::bool("enabled", true),
+            ];
+            let store = RamParams::new(TABLE);
+            store.set(0, Value::U32(50)).unwrap();
+            let t = Typed::new(&store, &TABLE);
+            assert_eq!((t.u32(0), t.f32(1), t.i32(2), t.bool(3)), (50, 0.5, -3, true));
+            // A store without the parameters (a lost flash page): the table's defaults.
+            let t = Typed::new(&NoParams, &TABLE);
+            assert_eq!((t.u32(0), t.f32(1), t.i32(2), t.bool(3)), (100, 0.5, -3, true));
+            // Another type under the index (an old firmware's layout): the table's default.
+            let other = RamParams::new([Param::f32("x", 9.0, 0.0, 10.0)]);
+            assert_eq!(Typed::new(&other, &TABLE).u32(0), 100);
+            // Neither has it: zero, never a panic.
+            let t = Typed::new(&NoParams, &TABLE[..0]);
+            assert_eq!((t.u32(7), t.f32(7), t.i32(7), t.bool(7)), (0, 0.0, 0, false));
         }
     }
 }
