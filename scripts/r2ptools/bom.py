@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from decimal import ROUND_HALF_UP, Decimal, InvalidOperation
 from pathlib import Path
 
-from . import ROOT, is_shared_sheet
+from . import ROOT, assembly_cost, is_shared_sheet
 
 PARTS_COLUMNS = ("mpn", "manufacturer", "lcsc", "package", "unit_price_usd_qty10", "datasheet",
                  "description")
@@ -292,7 +292,35 @@ def robot_csv(robot: Robot, boms: dict[str, list[Line]]) -> str:
     return _csv(rows)
 
 
-def readme_summary(modules: list[str], boms: dict[str, list[Line]], robots: list[Robot]) -> str:
+def assembled_summary(estimates: dict[str, list[assembly_cost.Estimate]], fees_file: str,
+                      checked: str) -> list[str]:
+    """The assembled-cost table: per board at each order quantity, with what makes it up."""
+    q = assembly_cost.QUANTITIES
+    out = ["", "### Assembled at JLCPCB", "",
+           f"Per board, parts plus assembly fees ({fees_file}, read {checked}): setup and stencil "
+           "per order, a loading fee per distinct extended part, SMD and hand-soldered "
+           "through-hole joints; a board with SMD parts on the back is a two-sided standard "
+           "PCBA. Parts at the quantity-10 prices for both quantities (an upper bound at "
+           f"{q[-1]}); parts not known to be basic are costed as extended. PCB fabrication and "
+           "shipping not included.", "",
+           "| module | assembly | extended parts | SMD joints | THT joints | "
+           + " | ".join(f"{n} boards (USD/board)" for n in q) + " |",
+           "|---|---|---:|---:|---:|" + "---:|" * len(q)]
+    for m, est in estimates.items():
+        e = est[0]
+        out.append(f"| {m} | {e.kind} | {e.extended} | {e.smd_joints} | {e.tht_joints} | "
+                   + " | ".join(money(x.per_board, SUMMARY_STEP) for x in est) + " |")
+    for m, est in estimates.items():
+        out += ["", f"{m}: " + "; ".join(
+            f"{e.boards} boards {money(e.total, SUMMARY_STEP)} = parts {money(e.parts, SUMMARY_STEP)}"
+            f" + setup {money(e.setup, SUMMARY_STEP)} + stencil {money(e.stencil, SUMMARY_STEP)}"
+            f" + loading {money(e.loading, SUMMARY_STEP)} + SMT {money(e.smt, SUMMARY_STEP)}"
+            f" + THT {money(e.tht, SUMMARY_STEP)}" for e in est) + "."]
+    return out
+
+
+def readme_summary(modules: list[str], boms: dict[str, list[Line]], robots: list[Robot],
+                   assembled: list[str] | None = None) -> str:
     out = ["### Modules", "",
            "Parts cost of one board at the quantity-10 unit prices of `parts.csv` (PCB and assembly "
            "not included).", "",
@@ -312,6 +340,7 @@ def readme_summary(modules: list[str], boms: dict[str, list[Line]], robots: list
                 + ", ".join(f"`{mpn}`" for mpn in elsewhere)
                 + ". Order them from the manufacturer or a distributor and consign them for "
                   "assembly, or let JLCPCB's global sourcing buy them."]
+    out += assembled or []
     out += ["", "### Robots", "", "| robot | modules | cost (USD) | BOM |", "|---|---|---:|---|"]
     for r in robots:
         designed = {m: c for m, c in r.modules.items() if m in boms}
@@ -344,6 +373,34 @@ def all_modules(root: Path) -> list[str]:
     if not hardware.is_dir():
         return []
     return sorted(d.name for d in hardware.iterdir() if d.is_dir() and not is_shared_sheet(d))
+
+
+def assembled_costs(root: Path, boms: dict[str, list[Line]]) -> list[str] | str:
+    """The README's assembled-cost lines for every module with a board, or the error that stops
+    them (a malformed fee file, a BOM part missing from the board)."""
+    fees_path = root / "bom" / "jlcpcb-fees.toml"
+    boards = {m: root / "hardware" / m / f"{m}.kicad_pcb" for m in boms}
+    boards = {m: p for m, p in boards.items() if p.is_file()}
+    if not boards:
+        return []
+    if not fees_path.is_file():
+        return (f"{rel(fees_path, root)} does not exist: it holds JLCPCB's assembly fees the "
+                f"assembled cost needs (see bom/README.md)")
+    try:
+        fees = assembly_cost.load_fees(fees_path, rel(fees_path, root))
+    except assembly_cost.FeeError as e:
+        return str(e)
+    estimates = {}
+    for m, pcb in boards.items():
+        lines = [assembly_cost.Line(tuple(l.refs), l.row.fields["lcsc"], l.row.price)
+                 for l in boms[m]]
+        joints = assembly_cost.board_joints(pcb)
+        try:
+            estimates[m] = [assembly_cost.estimate(lines, joints, fees, n)
+                            for n in assembly_cost.QUANTITIES]
+        except KeyError as e:
+            return f"{rel(pcb, root)}: {e.args[0]}"
+    return assembled_summary(estimates, rel(fees_path, root), fees.checked)
 
 
 def build(root: Path) -> Build:
@@ -383,6 +440,10 @@ def build(root: Path) -> Build:
             b.errors.append(f"{rel(bom_dir / 'robots' / (robot.name + '.toml'), root)}: a robot may "
                             f"not share a module's name ({robot.name}.csv would be both)")
         b.files[bom_dir / f"{robot.name}.csv"] = robot_csv(robot, boms)
+    assembled = assembled_costs(root, boms)
+    if isinstance(assembled, str):
+        b.errors.append(assembled)
+        return b
     readme = bom_dir / "README.md"
     text = readme.read_text() if readme.is_file() else ""
     if BEGIN not in text or END not in text:
@@ -390,7 +451,7 @@ def build(root: Path) -> Build:
                         f"goes between")
     else:
         head, rest = text.split(BEGIN, 1)
-        b.files[readme] = head + BEGIN + "\n" + readme_summary(modules, boms, robots) + END + \
+        b.files[readme] = head + BEGIN + "\n" + readme_summary(modules, boms, robots, assembled) + END + \
             rest.split(END, 1)[1]
     return b
 
