@@ -184,6 +184,7 @@ class Module:
     keepouts: list[Keepout] = field(default_factory=list)
     places: dict[str, Place] = field(default_factory=dict)   # per-board moves of core parts
     netclasses: dict[str, list[str]] = field(default_factory=dict)
+    fiducials: list[tuple[float, float]] = field(default_factory=list)   # 3, board-only
     seed: int = 1
 
     def sheets(self) -> list[Sheet]:
