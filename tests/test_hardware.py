@@ -190,13 +190,14 @@ def test_a_footprint_missing_from_the_board_breaks_parity(scratch):
 
 
 def test_an_unconnected_pin_is_an_erc_error(scratch):
-    """Remove the no-connect flag on U101's fault output (pin 3): ERC must object."""
+    """Remove the no-connect flag on the CAN transceiver's Vref output (U3 pin 5, in the core
+    sheet the proximity board uses): ERC must object."""
     from r2ptools.kicad.schematic import uid
-    sch = scratch / "proximity.kicad_sch"
+    sch = scratch.parent / "core" / "core.kicad_sch"
     text = sch.read_text()
     flag = re.search(r"\n\t\(no_connect\n\t\t\(at [^)]*\)\n\t\t\(uuid \"%s\"\)\n\t\)"
-                     % uid("proximity", "nc", "U101/3"), text)
-    assert flag, "U101 pin 3's no-connect flag not found"
+                     % uid("core", "nc", "U3/5"), text)
+    assert flag, "U3 pin 5's no-connect flag not found"
     sch.write_text(text[:flag.start()] + text[flag.end():])
     assert _problems(scratch, "ERC error")
 
@@ -205,3 +206,55 @@ def test_a_field_disagreeing_with_the_parts_database_is_reported(scratch):
     sch = scratch / "proximity.kicad_sch"
     sch.write_text(sch.read_text().replace('(property "LCSC" "C25803"', '(property "LCSC" "C99999"', 1))
     assert any("C99999" in p for p in _problems(scratch, "BOM"))
+
+
+# --- revision B: parts that are not assembled ---------------------------------------------------
+
+def test_test_pads_and_fiducials_are_on_the_board_but_on_no_bom_or_placement_file(tmp_path):
+    """Test pads (TP) are symbols excluded from the BOM; fiducials (FID) are board-only: both are
+    copper on the board, and neither reaches the assembly BOM, the parts check or the CPL."""
+    import pcbnew
+    for module in ("proximity", "template"):
+        pcb = HARDWARE / module / f"{module}.kicad_pcb"
+        b = pcbnew.LoadBoard(str(pcb))
+        refs = {fp.GetReference(): fp for fp in b.GetFootprints()}
+        pads = [r for r in refs if r.startswith("TP")]
+        fids = [r for r in refs if r.startswith("FID")]
+        assert len(pads) >= 8 and len(fids) == 3, (module, pads, fids)
+        for r in pads + fids:
+            attrs = refs[r].GetAttributes()
+            assert attrs & pcbnew.FP_EXCLUDE_FROM_BOM and attrs & pcbnew.FP_EXCLUDE_FROM_POS_FILES, r
+        sch = HARDWARE / module / f"{module}.kicad_sch"
+        assert not any(ref.startswith("TP") for _, ref, _ in check.symbol_fields(sch))
+        assert sum(ref.startswith("TP") for _, ref, _ in check.symbol_fields(sch, excluded=True)) \
+            == len(pads)
+        fab.bom(sch, {}, tmp_path / "bom.csv")
+        fab.cpl(pcb, tmp_path / "cpl.csv")
+        for f in ("bom.csv", "cpl.csv"):
+            text = (tmp_path / f).read_text()
+            assert not re.search(r"\b(TP|FID)\d", text), (module, f)
+
+
+def test_a_test_pad_put_on_the_bom_is_reported(scratch):
+    """A test pad has no part number: marked "on the BOM", the parts check must object."""
+    sch = scratch.parent / "core" / "core.kicad_sch"
+    text = sch.read_text()
+    i = text.index('(lib_id "Connector:TestPoint")')
+    j = text.index("(in_bom no)", i)
+    sch.write_text(text[:j] + "(in_bom yes)" + text[j + len("(in_bom no)"):])
+    assert any("TP" in p and "no MPN" in p for p in _problems(scratch, "BOM"))
+
+
+def test_design_numbers_hold():
+    """The equations behind revision B's values (the modules print them), and the emulated
+    sensor switch uses the hardware's nominal limit."""
+    from r2ptools.kicad.modules import core, proximity
+    x = core.crystal_load()
+    assert abs(x["chosen_pf"] - x["ideal_pf"]) <= 0.1 * x["ideal_pf"] and x["gain_margin"] >= 5
+    assert x["cl_min_pf"] < core.CRYSTAL_CL_PF < x["cl_max_pf"]
+    lo, nom, hi = proximity.switch_limit_ma()
+    assert lo >= 4 * max(proximity.SENSORS_MA.values()) and hi < 200
+    model = (ROOT / "firmware/host/world/src/sensor_switch.rs").read_text()
+    limit_a = float(re.search(r"SENSOR_SWITCH_LIMIT_A: f64 = ([0-9.]+);", model).group(1))
+    assert abs(limit_a * 1000 - nom) < 1.0, (limit_a, nom)
+

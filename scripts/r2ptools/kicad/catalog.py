@@ -60,6 +60,7 @@ _ITEMS = [
     ("R_24k9", R, R0603, "24.9k", "0603WAF2492T5E"),
     ("R_27k", R, R0603, "27k", "0603WAF2702T5E"),
     ("R_100k", R, R0603, "100k", "0603WAF1003T5E"),
+    ("R_174k", R, R0603, "174k", "0603WAF1743T5E"),
     ("R_60R4", R, R0805, "60.4", "0805W8F604JT5E"),        # split CAN termination, 0.125 W
     # --- capacitors
     ("C_22p", C, C0603, "22pF C0G", "0603CG220J500NT"),
@@ -126,6 +127,10 @@ _ITEMS = [
      "SRV05-4-P-T7"),
     ("TPS2065C", "Power_Management:TPS2065CDBV", "Package_TO_SOT_SMD:SOT-23-5", "TPS2065C",
      "TPS2065CDBVR"),
+    # KiCad has no TPS2553 symbol; ROHM's BD2222G is pin for pin the same SOT-23-6 switch
+    # (1 IN, 2 GND, 3 EN active high, 4 open-drain fault, 5 ILIM, 6 OUT)
+    ("TPS2553", "Power_Management:BD2222G", "Package_TO_SOT_SMD:SOT-23-6", "TPS2553",
+     "TPS2553DBVR"),
 ]
 
 _BY_KEY = {k: Item(k, s, f, v, m) for k, s, f, v, m in _ITEMS}
