@@ -135,8 +135,11 @@ def test_a_missing_track_is_reported_unconnected(scratch):
     import pcbnew
     pcb = scratch / "proximity.kicad_pcb"
     b = pcbnew.LoadBoard(str(pcb))
-    victim = next(t for t in b.GetTracks() if t.GetNetname().endswith("CAN_RX"))
-    b.Delete(victim)
+    # every segment of the net: one alone may be a redundant stub the router left
+    victims = [t for t in b.GetTracks() if t.GetNetname().endswith("CAN_RX")]
+    assert victims
+    for t in victims:
+        b.Delete(t)
     pcbnew.SaveBoard(str(pcb), b)
     assert _problems(scratch, "unconnected")
 
