@@ -231,6 +231,8 @@ def test_test_pads_and_fiducials_are_on_the_board_but_on_no_bom_or_placement_fil
         assert not any(ref.startswith("TP") for _, ref, _ in check.symbol_fields(sch))
         assert sum(ref.startswith("TP") for _, ref, _ in check.symbol_fields(sch, excluded=True)) \
             == len(pads)
+        from r2ptools import bom
+        assert not any(s.ref.startswith("TP") for s in bom.schematic_symbols(sch))   # scripts/bom
         fab.bom(sch, {}, tmp_path / "bom.csv")
         fab.cpl(pcb, tmp_path / "cpl.csv")
         for f in ("bom.csv", "cpl.csv"):
