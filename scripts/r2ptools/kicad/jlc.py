@@ -14,8 +14,11 @@ filter and kicad-jlcpcb-tools' `fix_rotation`:
 `OVERRIDES` (below) holds the footprints where our boards need something else, each with its
 reason; it is searched first. Positions are the centre of the footprint's pads (as
 kicad-jlcpcb-tools does), not KiCad's footprint origin: a through-hole connector's origin is
-its pin 1, and the centre of the pads is where JLC's own footprint is centred. That also makes
-KiBot's origin offsets (for footprints whose origin is pin 1) unnecessary.
+its pin 1, and the centre of the pads is where JLC's own footprint is centred. KiBot's origin
+offsets (for footprints whose origin is pin 1) are therefore not used: its row for the
+through-hole 2x5 1.27 mm header also matches our SMD variant (same pin pattern, so the same
+rotation is right), but the SMD variant's origin is its centre and KiBot's own JLCPCB output
+moves our SWD header J4 by 2.6 mm with it.
 
 tests/test_fab.py checks every polarised part's rotation against a statement of where JLC's
 library puts pin 1, without this table.
@@ -52,11 +55,6 @@ OVERRIDES = [
              "top of the left side, JLC's at the left end of the bottom side); the table's QFN "
              "patterns are anchored at the start of the name and miss TI's 'Texas_…_WQFN-30' "
              "name, so without this row the LM76005 would be placed 90° off"),
-    Override(r"PinHeader_2x05_P1\.27mm_Vertical_SMD", 270,
-             "the table's '^PinHeader_2x05_P1.27mm_Vertical' row (-90) was written for the "
-             "through-hole header, whose origin is pin 1 (hence KiBot's -2.54/-0.635 mm offset "
-             "for it); the SMD variant has the same pin pattern around its centre: same "
-             "rotation, no offset (KiBot's own JLC output moves our J4 by 2.6 mm)"),
 ]
 
 
