@@ -276,10 +276,18 @@ def test_bom_lists_every_placed_part_once(board):
 # --- interactive BOM, assembly drawing, checklist -------------------------------------------------
 
 def test_interactive_bom_is_there_with_every_part(board):
+    """The page's board data names every BOM part with its LCSC number and MPN."""
+    import json
     module, geometry, folder = board
     html = (folder / f"{module}-ibom.html").read_text()
-    assert "<html" in html.lower() and "LZString" in html    # the page and its compressed board data
-    assert re.search(r"var pcbdata = JSON\.parse\(LZString\.decompressFromBase64\(", html)
+    data = json.loads(re.search(r"^var pcbdata = (\{.*\})$", html, re.M).group(1))
+    fields = data["bom"]["fields"]
+    refs = {ref: fields[str(i)] for group in data["bom"]["both"] for ref, i in group}
+    _, bom_parts = jlc.parts(HARDWARE / module / f"{module}.kicad_pcb")
+    for p in bom_parts:
+        assert p.ref in refs, f"{module}: {p.ref} is not in the interactive BOM"
+        assert p.fields.get("LCSC", "") in refs[p.ref] and p.fields["MPN"] in refs[p.ref], p.ref
+    assert data["metadata"]["date"] == "1980-01-01 00:00:00", data["metadata"]
 
 
 def test_interactive_bom_data_is_pinned(tmp_path):
@@ -337,3 +345,21 @@ def test_every_override_is_needed(monkeypatch, tmp_path):
             flagged |= users
         assert flagged, f"no board uses {override.pattern}: remove the override"
         monkeypatch.undo()
+
+
+def test_renders_ignore_the_users_kicad_settings(monkeypatch, tmp_path):
+    """A colour theme in the user's KiCad configuration (KiBot's render step leaves one) must
+    not change the committed renders: kicad-cli runs with a clean configuration."""
+    dirty = tmp_path / "config"
+    (dirty / "9.0" / "colors").mkdir(parents=True)
+    (dirty / "9.0" / "colors" / "user.json").write_text(     # what KiBot 1.9.1's render_3d left behind
+        '{"3d_viewer": {"background_bottom": "rgb(102, 102, 127)", "background_top": '
+        '"rgb(204, 204, 229)", "board": "rgb(51, 43, 22)", "copper": "rgb(139, 137, 140)", '
+        '"silkscreen_bottom": "rgb(213, 220, 228)", "silkscreen_top": "rgb(213, 220, 228)", '
+        '"soldermask_bottom": "rgba(32, 139, 71, 0.83)", "soldermask_top": "rgba(32, 139, 71, 0.83)", '
+        '"solderpaste": "rgb(128, 128, 128)", "use_board_stackup_colors": false}}')
+    monkeypatch.setenv("KICAD_CONFIG_HOME", str(dirty))
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path))
+    out = fab.renders(HARDWARE / "proximity" / "proximity.kicad_pcb", tmp_path, "proximity")
+    for f in out:
+        assert f.read_bytes() == (HARDWARE / "proximity" / "fab" / f.name).read_bytes(), f.name

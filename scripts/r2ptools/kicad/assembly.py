@@ -20,6 +20,7 @@ import tempfile
 from pathlib import Path
 
 from .jlc import Part, correction
+from .kicadcli import run as _kicad
 
 PT_PER_MM = 72 / 25.4
 MARGIN_MM = 4.0
@@ -29,12 +30,6 @@ UNPOLARISED = re.compile(r"^(R_\d|C_\d|Fuse_\d|L_|R_Array)")
 
 def polarised(p: Part) -> bool:
     return not UNPOLARISED.match(p.footprint)
-
-
-def _kicad(*args: str) -> None:
-    p = subprocess.run(["kicad-cli", *args], capture_output=True, text=True)
-    if p.returncode != 0:
-        raise RuntimeError(f"kicad-cli {' '.join(args)} failed:\n{p.stdout}{p.stderr}")
 
 
 def _crop(pdf: bytes, box_mm: tuple[float, float, float, float], mirror_width_mm: float | None) -> bytes:

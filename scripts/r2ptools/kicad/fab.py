@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import io
-import os
 import re
 import shutil
 import subprocess
@@ -32,6 +31,7 @@ from pathlib import Path
 
 from .. import ROOT
 from . import assembly, ibom, jlc, models3d
+from .kicadcli import run as _kicad
 
 HARDWARE = ROOT / "hardware"
 FAB_BOARDS = ["proximity", "psu"]
@@ -47,12 +47,6 @@ _DATE_LINES = [
     re.compile(r"^; #@! TF\.CreationDate,.*\r?\n", re.M),
     re.compile(r'^\s*"CreationDate":\s*".*",?\r?\n', re.M),
 ]
-
-
-def _kicad(*args: str) -> None:
-    p = subprocess.run(["kicad-cli", *args], capture_output=True, text=True)
-    if p.returncode != 0:
-        raise RuntimeError(f"kicad-cli {' '.join(args)} failed:\n{p.stdout}{p.stderr}")
 
 
 def strip_dates(text: str) -> str:
@@ -103,12 +97,13 @@ def schematic_pdf(sch: Path, dest: Path) -> None:
 
 def renders(pcb: Path, folder: Path, name: str) -> list[Path]:
     """Top and bottom renders with the 3D models KiCad ships for our footprints."""
-    os.environ["KICAD9_3DMODEL_DIR"] = str(models3d.ensure([pcb]))
+    env = {"KICAD9_3DMODEL_DIR": str(models3d.ensure([pcb]))}
     out = []
     for side in ("top", "bottom"):
         dest = folder / f"{name}-{side}.png"
         _kicad("pcb", "render", "--side", side, "--width", "1200", "--height", "1000",
-               "--quality", "basic", "--background", "opaque", "--zoom", "1.0", "-o", str(dest), str(pcb))
+               "--quality", "basic", "--background", "opaque", "--zoom", "1.0", "-o", str(dest), str(pcb),
+               env=env)
         out.append(dest)
     return out
 
