@@ -24,7 +24,6 @@ import argparse
 import io
 import re
 import shutil
-import subprocess
 import sys
 import zipfile
 from pathlib import Path
