@@ -74,7 +74,7 @@ JLC_ZERO = [
 ]
 TOLERANCE_DEG = 40
 """Half-width of the accepted window: any 90° or 180° error, or a wrong mirror, lands outside."""
-UNPOLARISED = re.compile(r"^(R_\d{4}_|C_\d{4}_|Fuse_\d{4}_|L_Bourns_)")
+UNPOLARISED = re.compile(r"^(R_\d{4}_|C_\d{4}_|Fuse_\d{4}_|L_)")
 """Resistors, ceramic capacitors, fuses, inductors: either way round is right."""
 
 

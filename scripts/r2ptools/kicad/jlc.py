@@ -99,8 +99,10 @@ def _ref_key(ref: str) -> tuple[str, int]:
 
 
 def parts(pcb: Path, board=None) -> tuple[list[Part], list[Part]]:
-    """(placed parts, BOM parts) of a board: footprints KiCad would put in its position file
-    and in its BOM (not DNP, not excluded, not board-only), sorted by reference."""
+    """(placed parts, BOM parts) of a board, sorted by reference: the BOM has the footprints
+    KiCad would put in its BOM (not DNP, not board-only, not excluded from the BOM); the CPL those
+    of them KiCad would also put in its position file. A fiducial (in KiCad's position file but
+    not its BOM) stays out of the CPL: JLC would flag a placement without a BOM line."""
     import pcbnew
     b = board or pcbnew.LoadBoard(str(pcb))
     origin = b.GetDesignSettings().GetAuxOrigin()
@@ -133,10 +135,11 @@ def parts(pcb: Path, board=None) -> tuple[list[Part], list[Part]]:
                     kicad_rotation=rot, rotation=jlc_rotation(name, rot, bottom),
                     pin1=mm(one.GetPosition()) if one is not None else None,
                     through_hole=bool(attrs & pcbnew.FP_THROUGH_HOLE), fields=fields)
+        if attrs & pcbnew.FP_EXCLUDE_FROM_BOM:
+            continue                 # fiducials, test points, logos: nothing for JLC to place
+        bom.append(part)
         if not attrs & pcbnew.FP_EXCLUDE_FROM_POS_FILES and pads:
             placed.append(part)
-        if not attrs & pcbnew.FP_EXCLUDE_FROM_BOM:
-            bom.append(part)
     placed.sort(key=lambda p: _ref_key(p.ref))
     bom.sort(key=lambda p: _ref_key(p.ref))
     return placed, bom
