@@ -34,14 +34,14 @@ HARDWARE = ROOT / "hardware"
 # Written down once per package, independently of jlc.py's correction table: the direction of
 # pin 1 (cathode for diodes and LEDs) from the part's centre in JLC's part at 0°, looking at the
 # side it is placed on, in degrees counter-clockwise from +x (0 right, 90 up, 180 left, 225
-# lower left). Sources: JLC's library is EasyEDA's; its footprint names carry the pin-1 corner
-# (e.g. LCSC's "SOIC-8_L4.9-W3.9-P1.27-LS6.0-BL", "LQFP-48_L7.0-W7.0-P0.50-LS9.0-BL",
-# "SOT-23-3_L2.9-W1.3-P1.90-LS2.4-BR": bottom-left, bottom-right), the JLC preview experience
-# collected in kicad-jlcpcb-tools / JLCKicadTools / KiBot (ICs: pin 1 at the left end of the
-# bottom row; SOT-23 family: the lower right; two-terminal diodes and LEDs: cathode left as in
-# IPC-7351), and for packages those tools have no correction for, KiCad's own IPC-7351
-# orientation. A new package on a board fails test_every_polarised_part_has_a_statement until
-# its line is added here.
+# lower left). JLC's rule (quoted by LCSC and in the field's tools' threads): 0° is the part as
+# it lies in its carrier tape with the sprocket holes on the left. ICs (SOIC, TSSOP, QFP, QFN)
+# then have pin 1 next to the holes at the lower left with their rows horizontal; the SOT-23
+# family has pin 1 away from the holes, at the lower right; two-terminal diodes and LEDs have
+# the cathode on the left (as IPC-7351); packages the field's tools have no correction for keep
+# KiCad's IPC-7351 orientation. The SOT-23 family and the 2x5 1.27 mm header are disputed
+# between the tools (jlc.DISPUTED; the checklist flags them for JLC's preview). A new package on
+# a board fails test_every_polarised_part_has_a_statement until its line is added here.
 
 @dataclass(frozen=True)
 class Zero:
@@ -51,11 +51,11 @@ class Zero:
 
 
 JLC_ZERO = [
-    Zero(r"LQFP-\d+_", 225, "quad flat: pin 1 at the left end of the bottom row (EasyEDA '-BL')"),
+    Zero(r"LQFP-\d+_", 225, "quad flat: pin 1 at the left end of the bottom row"),
     Zero(r"(Texas_RNP\w+_)?W?QFN-\d+", 225, "quad no-lead: pin 1 at the left end of the bottom row"),
-    Zero(r"SOIC-\d+_", 225, "SOIC: rows horizontal, pin 1 bottom left (EasyEDA '-BL')"),
-    Zero(r"H?TSSOP-\d+", 225, "TSSOP/HTSSOP: rows horizontal, pin 1 bottom left (EasyEDA '-BL')"),
-    Zero(r"SOT-23(-[56])?$", 315, "SOT-23 family: pin 1 at the lower right (EasyEDA '-BR')"),
+    Zero(r"SOIC-\d+_", 225, "SOIC: rows horizontal, pin 1 lower left, next to the tape's holes"),
+    Zero(r"H?TSSOP-\d+", 225, "TSSOP/HTSSOP: rows horizontal, pin 1 lower left"),
+    Zero(r"SOT-23(-[56])?$", 315, "SOT-23 family: pin 1 lower right, away from the tape's holes"),
     Zero(r"TO-252-2", 135, "DPAK: leads to the left, pin 1 the upper lead (IPC-7351, no correction)"),
     Zero(r"D_(SOD-123|SMA)$", 180, "diode: cathode left (IPC-7351; JLC's diodes likewise)"),
     Zero(r"LED_0603_1608Metric", 180, "chip LED: cathode left (IPC-7351; JLC's LEDs likewise)"),

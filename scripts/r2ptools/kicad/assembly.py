@@ -19,7 +19,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from .jlc import Part, correction
+from .jlc import Part, correction, disputed
 from .kicadcli import run as _kicad
 
 PT_PER_MM = 72 / 25.4
@@ -120,13 +120,22 @@ def checklist(name: str, placed: list[Part], dest: Path) -> list[Part]:
         "| Ref | Part | Package | Side | KiCad rot | CPL rot | Pin 1 / cathode | Correction |",
         "|---|---|---|---|---|---|---|---|",
     ]
+    notes: dict[str, str] = {}
     for p in parts:
         mpn = p.fields.get("MPN", "") or p.value
         kind = " (THT)" if p.through_hole else ""
+        source = correction(p.footprint)[1].split(":")[0]
+        why = disputed(p.footprint)
+        if why:
+            mark = notes.setdefault(why, f"[{len(notes) + 1}]")
+            source = f"**{source}, disputed {mark}: check first**"
         lines.append(f"| {p.ref} | {mpn} | {p.footprint}{kind} | {'bottom' if p.bottom else 'top'} | "
                      f"{p.kicad_rotation % 360:g} | {p.rotation:g} | {_pin1_name(p)}: {_where(p)} | "
-                     f"{correction(p.footprint)[1].split(':')[0]} |")
+                     f"{source} |")
     lines += ["", f"{len(parts)} parts to check; resistors, non-polarised capacitors, fuses and "
               "inductors are not listed (either way round is right).", ""]
+    for why, mark in notes.items():
+        lines += [f"{mark} {why[0].upper()}{why[1:]}. If JLC's preview shows the part turned, "
+                  "correct it there and record the angle in `jlc.OVERRIDES`.", ""]
     dest.write_text("\n".join(lines))
     return parts

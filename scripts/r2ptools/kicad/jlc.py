@@ -1,8 +1,8 @@
 """JLCPCB's assembly files: the BOM in its columns and the CPL with its part orientations.
 
-JLCPCB places each part in the orientation its own library (EasyEDA's footprints) has at 0°,
-which differs from KiCad's (IPC-7351) for many packages: a SOT-23 is 180° off, an LQFP or SOIC
-90°. Rather than invent corrections, the table the field's tools share is used: KiBot's
+JLCPCB's 0° for a part is its orientation in the carrier tape (sprocket holes on the left),
+which differs from KiCad's IPC-7351 zero for many packages: an LQFP or SOIC is 90° off, a
+SOT-23 180° (or 90°: see DISPUTED). Rather than invent corrections, the table the field's tools share is used: KiBot's
 JLCPCB rotation table (`kibot.misc.DEFAULT_ROTATIONS`, imported from the pinned PyPI package,
 itself grown from matthewlai/JLCKicadTools' cpl_rotations_db.csv, which Bouni's
 kicad-jlcpcb-tools also loads), with the same arithmetic as KiBot's `_rot_footprint_jlcpcb`
@@ -56,6 +56,23 @@ OVERRIDES = [
              "patterns are anchored at the start of the name and miss TI's 'Texas_…_WQFN-30' "
              "name, so without this row the LM76005 would be placed 90° off"),
 ]
+
+
+DISPUTED = {
+    r"SOT-23(-\d)?": (
+        "the tools disagree: KiBot 1.9.1's table says 180, JLCKicadTools' cpl_rotations_db.csv "
+        "(master 50ab537, 2024-09, the table kicad-jlcpcb-tools downloads) says -90 after a "
+        "checked upload, and LCSC's own SOT-23-5 footprint (pins 1-3 along the bottom) fits -90; "
+        "JLC's 0° is the part's orientation on its reel, which varies by maker"),
+    r"PinHeader_2x05_P1\.27mm_Vertical(_SMD)?": (
+        "the tools disagree: KiBot 1.9.1's table says -90, JLCKicadTools master says +90"),
+}
+"""Footprints whose correction the field's tables disagree on: the CPL uses KiBot's, and the
+checklist asks for these to be looked at first in JLC's placement preview."""
+
+
+def disputed(footprint: str) -> str | None:
+    return next((why for pattern, why in DISPUTED.items() if re.fullmatch(pattern, footprint)), None)
 
 
 def correction(footprint: str) -> tuple[float, str]:
