@@ -69,6 +69,8 @@ JLC_ZERO = [
          "2x5 1.27 mm SMD header: rows horizontal, pin 1 at the left end of the bottom row"),
     Zero(r"SW_Push_1P1T_XKB_TS-1187A", 135, "4-pad tact switch: pad 1 upper left (IPC-7351)"),
     Zero(r"SW_SPDT_Shouhan_MSK12C02", 135, "slide switch: pad 1 upper left (IPC-7351)"),
+    Zero(r"SW_DIP_SPSTx\d+_Slide_KingTek_", 160,
+         "SMD DIP switch: pin 1 at the top of the left column (IPC-7351, no correction)"),
     Zero(r"PinHeader_1x04_P2\.54mm_Vertical", 90, "THT header: pin 1 at the top (KiCad)"),
     Zero(r"RJ45_Amphenol_54602-x08_Horizontal", 135,
          "THT RJ45, cable opening down: pin 1 upper left (KiCad's orientation; fitted by hand)"),
@@ -79,7 +81,7 @@ JLC_ZERO = [
 ]
 TOLERANCE_DEG = 40
 """Half-width of the accepted window: any 90° or 180° error, or a wrong mirror, lands outside."""
-UNPOLARISED = re.compile(r"^(R_\d{4}_|C_\d{4}_|Fuse_\d{4}_|L_)")
+UNPOLARISED = re.compile(r"^(R_\d{4}_|C_\d{4}_|Fuse_|L_)")
 """Resistors, ceramic capacitors, fuses, inductors: either way round is right."""
 
 

@@ -24,7 +24,7 @@ from .kicadcli import run as _kicad
 
 PT_PER_MM = 72 / 25.4
 MARGIN_MM = 4.0
-UNPOLARISED = re.compile(r"^(R_\d{4}_|C_\d{4}_|Fuse_\d{4}_|L_)")
+UNPOLARISED = re.compile(r"^(R_\d{4}_|C_\d{4}_|Fuse_|L_)")
 """Footprints whose two (or more) terminals may be swapped: no orientation to check."""
 
 
