@@ -21,7 +21,8 @@ rotation is right), but the SMD variant's origin is its centre and KiBot's own J
 moves our SWD header J4 by 2.6 mm with it.
 
 tests/test_fab.py checks every polarised part's rotation against a statement of where JLC's
-library puts pin 1, without this table.
+part has pin 1, without this table. KiBot (GPL/AGPL) is a build-time dependency whose table is
+imported at run time, not copied into this MIT/Apache code.
 """
 from __future__ import annotations
 
