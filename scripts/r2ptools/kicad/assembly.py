@@ -1,8 +1,8 @@
 """The assembly drawing (PDF) and the pin-1 / polarity checklist of a fab package.
 
 The drawing is KiCad's fabrication layers (F.Fab, B.Fab: part outlines with their pin-1
-chamfers and cathode bars, references) with the pads sketched and numbered, so pin 1 is
-labelled on every part, and the board outline: page 1 the top, page 2 the bottom mirrored (as
+chamfers and cathode bars, references) with the pads sketched, a filled dot on pad 1 of every
+polarised part, and the board outline: page 1 the top, page 2 the bottom mirrored (as
 seen when the board is turned over). kicad-cli plots at 1:1 on the board's A4 sheet; the page is
 cropped to the board so a viewer or printer scales it up.
 
@@ -62,10 +62,36 @@ def _fixed_id(pdf: bytes) -> bytes:
     return pdf[:a] + b"/ID [<" + digest + b"> <" + digest + b">" + pdf[b:]
 
 
+PIN1_DOT_MM = 0.5
+
+
+def _marked_copy(pcb: Path, folder: Path) -> Path:
+    """A copy of the board with a filled dot on the fabrication layer at pad 1 of every
+    polarised part, so the drawing marks pin 1 even where a library outline does not."""
+    import pcbnew
+    board = pcbnew.LoadBoard(str(pcb))
+    for fp in board.Footprints():
+        name = str(fp.GetFPID().GetLibItemName())
+        one = next((p for p in fp.Pads() if p.GetNumber() == "1"), None)
+        if one is None or UNPOLARISED.match(name) or fp.GetAttributes() & pcbnew.FP_EXCLUDE_FROM_BOM:
+            continue
+        dot = pcbnew.PCB_SHAPE(board, pcbnew.SHAPE_T_CIRCLE)
+        dot.SetLayer(pcbnew.B_Fab if fp.IsFlipped() else pcbnew.F_Fab)
+        dot.SetCenter(one.GetPosition())
+        dot.SetEnd(one.GetPosition() + pcbnew.VECTOR2I(pcbnew.FromMM(PIN1_DOT_MM / 2), 0))
+        dot.SetFilled(True)
+        dot.SetWidth(0)
+        board.Add(dot)
+    copy = folder / pcb.name
+    pcbnew.SaveBoard(str(copy), board)
+    return copy
+
+
 def drawing(pcb: Path, board_box_mm: tuple[float, float, float, float], dest: Path,
             pin_dates) -> None:
     """Two-page PDF: top (F.Fab), bottom (B.Fab, mirrored), each with the board outline."""
     with tempfile.TemporaryDirectory() as tmp:
+        pcb = _marked_copy(pcb, Path(tmp))
         pages = []
         for side, layer, mirror in (("top", "F.Fab", False), ("bottom", "B.Fab", True)):
             out = Path(tmp) / f"{side}.pdf"
