@@ -112,8 +112,11 @@ def test_fab_package_has_what_a_fab_needs():
         text = (HARDWARE / "psu" / "fab" / "gerbers" / f).read_text()
         assert "CreationDate" not in text and not re.search(r"date \d", text), f"{f} carries a date"
     bom = (HARDWARE / "psu" / "fab" / "psu-bom.csv").read_text().splitlines()
-    assert bom[0] == "Designator,Quantity,Value,Footprint,Manufacturer,MPN,LCSC"
-    assert any(",LM76005RNPR," in line for line in bom)
+    assert bom[0] == "Comment,Designator,Footprint,LCSC Part #,Manufacturer,MPN"   # JLCPCB's
+    assert any(line.endswith(",LM76005RNPR") for line in bom)
+    package = {p.name for p in (HARDWARE / "psu" / "fab").iterdir()}
+    assert {"psu-gerbers.zip", "psu-bom.csv", "psu-cpl.csv", "psu-ibom.html", "psu-assembly.pdf",
+            "psu-assembly-checklist.md", "psu-schematic.pdf", "psu-top.png", "psu-bottom.png"} <= package
 
 
 # --- the checks fail for real -------------------------------------------------------------------
