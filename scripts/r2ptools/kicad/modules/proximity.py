@@ -57,7 +57,6 @@ BUS_SIDE_UF = 11.0                         # C8 (LDO input) + C101 (switch input
 SENSORS_MA = {"Sharp GP2Y0A21": 30.0, "Sharp GP2Y0A02": 33.0, "MaxBotix HRLV": 3.1}
 """Typical average supply currents (datasheets); four GP2Y0A02 are the largest set."""
 HOP_MOHM, FIRST_HOP_MOHM = 42.93, 32.93   # docs/bus.md §5.2, loop resistance per hop
-# docs/bus.md §5.4: lowest module voltages of the two allowed configurations (200 mA each)
 
 
 def switch_limit_ma(r_kohm: float = R_ILIM_KOHM) -> tuple[float, float, float]:
@@ -85,6 +84,7 @@ def sensor_budget() -> str:
         " (stated exception)",
     ]
     extra = (worst - MODULE_LIMIT_MA) / 1000
+    # lowest module voltages of docs/bus.md §5.4's two allowed configurations (200 mA each)
     for n, where, lowest_v in ((10, "PSU in the middle, 10 modules per side", 4.45),
                                (14, "PSU at one end, 14 modules", 4.03)):
         # the exception's extra current crosses every hop between the PSU and the module; worst
