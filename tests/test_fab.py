@@ -104,6 +104,8 @@ def _geometry(module: str) -> dict[str, Placed]:
     board = pcbnew.LoadBoard(str(HARDWARE / module / f"{module}.kicad_pcb"))
     out = {}
     for fp in board.Footprints():
+        if fp.GetAttributes() & pcbnew.FP_EXCLUDE_FROM_POS_FILES:
+            continue                    # not placed by the assembler (test pads, fiducials)
         pads = list(fp.Pads())
         one = [p for p in pads if p.GetNumber() == "1"]
         if not one:

@@ -236,8 +236,10 @@ def test_test_pads_and_fiducials_are_on_the_board_but_on_no_bom_or_placement_fil
             == len(pads)
         from r2ptools import bom
         assert not any(s.ref.startswith("TP") for s in bom.schematic_symbols(sch))   # scripts/bom
-        fab.bom(sch, {}, tmp_path / "bom.csv")
-        fab.cpl(pcb, tmp_path / "cpl.csv")
+        from r2ptools.kicad import jlc
+        placed, on_bom = jlc.parts(pcb)
+        jlc.write_bom(on_bom, tmp_path / "bom.csv")
+        jlc.write_cpl(placed, tmp_path / "cpl.csv")
         for f in ("bom.csv", "cpl.csv"):
             text = (tmp_path / f).read_text()
             assert not re.search(r"\b(TP|FID)\d", text), (module, f)
