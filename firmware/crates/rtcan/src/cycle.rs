@@ -4,7 +4,7 @@
 //! equal slots (slot 0 carries the sync). The sync's payload is the reservation mask of the
 //! *next* cycle: bit k set = slot k is reserved for an HRT frame. Every node re-phases its
 //! [`SlotClock`] on each sync it receives, and free-runs on its period estimate for at most
-//! [`FREE_RUN_CYCLES`] cycles when syncs are missing (docs/drafts/rtcan-cycle-schedule-failover.md).
+//! [`FREE_RUN_CYCLES`] cycles when syncs are missing (docs/rtcan.md, "Communication cycle").
 //!
 //! # Slot length
 //! A slot must hold the longest frame RTCAN sends — a CAN 2.0B extended data frame with 8 data

@@ -1,5 +1,5 @@
 //! Master failover: any node with a rank can stand by for the master and take over when syncs
-//! stop (docs/drafts/rtcan-cycle-schedule-failover.md, "Failover").
+//! stop (docs/rtcan.md, "Master failover").
 //!
 //! States: **Slave** (a master is heard), **Candidate** (a standby that has heard no sync for
 //! [`sync_timeout_us`] and waits for its takeover time), **Master** (sends the syncs).

@@ -11,7 +11,7 @@
 //! (a message ID is one publisher's stream, so it also names the source). It checks order,
 //! times out stale partial messages and drops bad input, counting each kind separately in
 //! [`ReassemblyStats`]. The rules, the slot state machine and their limits are in
-//! docs/drafts/rtcan-fragmentation-and-srt.md.
+//! docs/rtcan.md, "Fragmentation, reassembly and the transmit queue".
 
 use crate::controller::Micros;
 use crate::frame::{Frame, MAX_PAYLOAD};

@@ -561,7 +561,7 @@ pub(crate) mod tests {
         }
 
         fn the_spec_example_holds() {
-            // docs/drafts/rtcan-fragmentation-and-srt.md, "The SRT/NRT transmit queue".
+            // docs/rtcan.md, "The SRT/NRT transmit queue".
             let mut q: TxQueue<4> = TxQueue::new(LIN);
             q.push_frame(one(0xA, 0), srt(5_000)).unwrap();
             q.push_frame(one(0xB, 0), srt(1_000)).unwrap();
