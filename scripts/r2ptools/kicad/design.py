@@ -185,6 +185,8 @@ class Module:
     places: dict[str, Place] = field(default_factory=dict)   # per-board moves of core parts
     netclasses: dict[str, list[str]] = field(default_factory=dict)
     seed: int = 1
+    solid_pads: tuple[str, ...] = ()    # parts whose pads join the pours solid, THT ones too
+    dru_rules: str = ""                 # board-specific KiCad custom rules, after the fab's
 
     def sheets(self) -> list[Sheet]:
         out, todo = [], [self.root]

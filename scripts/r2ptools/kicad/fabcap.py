@@ -90,10 +90,10 @@ def assign(board: pcbnew.BOARD, classes: dict[str, list[str]]) -> None:
             ns.SetNetclassPatternAssignment(n, cls)
 
 
-def write_dru(path: Path) -> None:
+def write_dru(path: Path, extra: str = "") -> None:
     path.write_text(DRU.format(track=MIN_TRACK, clearance=MIN_CLEARANCE, drill=MIN_DRILL,
                                via=MIN_VIA, annular=MIN_ANNULAR, h2h=HOLE_TO_HOLE,
-                               edge=EDGE_CLEARANCE))
+                               edge=EDGE_CLEARANCE) + extra)
 
 
 def normalise_project(path: Path, classes: dict[str, list[str]]) -> None:
