@@ -26,6 +26,10 @@ ORIGIN = (100.0, 60.0)          # the board's top-left corner on the KiCad page,
 BOARD_W, BOARD_H, CORNER_R = 60.0, 50.0, 2.0
 HOLES = [(4.0, 4.0), (56.0, 4.0), (4.0, 46.0), (56.0, 46.0)]
 HOLE_FP = ("MountingHole", "MountingHole_3.2mm_M3")
+FIDUCIAL_FP = ("Fiducial", "Fiducial_1mm_Mask2mm")
+"""Global fiducials for the assembler's vision system: 1 mm copper in a 2 mm mask opening, three
+per board (`Module.fiducials`), board-only (no symbol), on no BOM and in no placement file."""
+NOT_ASSEMBLED = pcbnew.FP_EXCLUDE_FROM_BOM | pcbnew.FP_EXCLUDE_FROM_POS_FILES
 
 
 LAYERS = {"F.Cu": pcbnew.F_Cu, "B.Cu": pcbnew.B_Cu, "F.SilkS": pcbnew.F_SilkS,
@@ -133,6 +137,7 @@ def build(m: Module, net: Netlist) -> pcbnew.BOARD:
     pin_net = net.pin_nets()
 
     places = {p.ref: p.place for _, p in m.all_parts()}
+    not_assembled = {p.ref for _, p in m.all_parts() if not p.item.on_bom}
     places.update(m.places)
     for ref in sorted(net.components, key=lambda r: (r.rstrip("0123456789"), int(r[len(r.rstrip("0123456789")):] or 0))):
         c = net.components[ref]
@@ -159,6 +164,8 @@ def build(m: Module, net: Netlist) -> pcbnew.BOARD:
             raise ValueError(f"{m.name}: {ref} has no placement in the description")
         fp.SetPosition(pt(place.x, place.y))
         fp.SetOrientationDegrees(place.rot)
+        if ref in not_assembled:        # test pads: copper only, nothing to buy or place
+            fp.SetAttributes(fp.GetAttributes() | NOT_ASSEMBLED)
         for pad in fp.Pads():
             n = pin_net.get((ref, pad.GetNumber()))
             if n is not None:
@@ -179,6 +186,18 @@ def build(m: Module, net: Netlist) -> pcbnew.BOARD:
         fp.Reference().SetVisible(False)
         fp.SetAttributes(fp.GetAttributes() | pcbnew.FP_BOARD_ONLY | pcbnew.FP_EXCLUDE_FROM_BOM
                          | pcbnew.FP_EXCLUDE_FROM_POS_FILES)
+        fp.SetPosition(pt(x, y))
+        board.Add(fp)
+
+    if len(m.fiducials) != 3:
+        raise ValueError(f"{m.name}: {len(m.fiducials)} fiducials; the assembler wants 3 "
+                         "(Module.fiducials, mm from the top-left corner)")
+    for i, (x, y) in enumerate(m.fiducials, start=1):
+        fp = load_footprint(":".join(FIDUCIAL_FP))
+        fp.SetReference(f"FID{i}")
+        fp.SetValue("Fiducial")
+        fp.Reference().SetVisible(False)
+        fp.SetAttributes(fp.GetAttributes() | pcbnew.FP_BOARD_ONLY | NOT_ASSEMBLED)
         fp.SetPosition(pt(x, y))
         board.Add(fp)
 

@@ -22,10 +22,17 @@ class Item:
     symbol: str
     footprint: str
     value: str
-    mpn: str
+    mpn: str                          # "" for board features that are not parts (test pads)
+
+    @property
+    def on_bom(self) -> bool:
+        """False for copper-only features: not ordered, not placed, no row in bom/parts.csv."""
+        return bool(self.mpn)
 
     @property
     def row(self) -> dict[str, str]:
+        if not self.on_bom:
+            raise KeyError(f"catalogue entry {self.key!r} is a board feature, not a part: no BOM row")
         rows = database()
         if self.mpn not in rows:
             raise KeyError(f"catalogue entry {self.key!r}: MPN {self.mpn!r} has no row in {PARTS_CSV}")
@@ -35,6 +42,7 @@ class Item:
 R = "Device:R"
 C = "Device:C"
 R0603 = "Resistor_SMD:R_0603_1608Metric"
+R0805 = "Resistor_SMD:R_0805_2012Metric"
 C0603 = "Capacitor_SMD:C_0603_1608Metric"
 C0805 = "Capacitor_SMD:C_0805_2012Metric"
 C1206 = "Capacitor_SMD:C_1206_3216Metric"
@@ -54,8 +62,12 @@ _ITEMS = [
     ("R_100k", R, R0603, "100k", "0603WAF1003T5E"),
     ("R_150k", R, R0603, "150k", "0603WAF1503T5E"),
     ("R_6k8", R, R0603, "6.8k", "0603WAF6801T5E"),
+    ("R_60R4", R, R0805, "60.4", "0805W8F604JT5E"),        # split CAN termination, 0.125 W
     # --- capacitors
     ("C_22p", C, C0603, "22pF C0G", "0603CG220J500NT"),
+    ("C_30p", C, C0603, "30pF C0G", "0603CG300J500NT"),
+    ("C_4n7", C, C0603, "4.7nF", "0603B472K500NT"),
+    ("C_10n", C, C0603, "10nF", "0603B103K500NT"),
     ("C_100n", C, C0603, "100nF", "CC0603KRX7R9BB104"),
     ("C_1u", C, C0603, "1uF", "CL10A105KB8NNNC"),
     ("C_10u", C, C0805, "10uF 25V", "CL21A106KAYNNNE"),
@@ -75,7 +87,7 @@ _ITEMS = [
     ("PESD2CAN", "Power_Protection:NUP2105L", "Package_TO_SOT_SMD:SOT-23",
      "PESD2CAN", "PESD2CAN,215"),
     ("XTAL_8M", "Device:Crystal_GND24", "Crystal:Crystal_SMD_3225-4Pin_3.2x2.5mm",
-     "8MHz", "X322508MSB4SI"),
+     "8MHz", "X32258MSB4SI"),
     ("RJ45", "Connector:RJ45", "R2P:RJ45_Amphenol_54602-x08_Horizontal",
      "RJ45", "54602-908LF"),
     ("HDR_1x4", "Connector_Generic:Conn_01x04",
@@ -86,6 +98,12 @@ _ITEMS = [
      "TS-1187A", "TS-1187A-B-A-B"),
     ("SW_SLIDE", "Switch:SW_SPDT", "Button_Switch_SMD:SW_SPDT_Shouhan_MSK12C02",
      "MSK12C02", "MSK12C02"),
+    ("SW_DIP_2", "Switch:SW_DIP_x02",
+     "Button_Switch_SMD:SW_DIP_SPSTx02_Slide_KingTek_DSHP02TS_W7.62mm_P1.27mm", "DSHP02TS",
+     "DSHP02TSGER"),
+    ("SMAJ5.0A", "Diode:SMAJ5.0A", "Diode_SMD:D_SMA", "SMAJ5.0A", "SMAJ5.0A"),
+    # a bare copper test pad: part of the board, not of the BOM or the placement file
+    ("TP", "Connector:TestPoint", "TestPoint:TestPoint_Pad_D1.0mm", "TP", ""),
     ("LED_G", "Device:LED", "LED_SMD:LED_0603_1608Metric", "yellow-green", "KT-0603YG"),
     ("LED_Y", "Device:LED", "LED_SMD:LED_0603_1608Metric", "yellow", "KT-0603Y"),
     ("LED_R", "Device:LED", "LED_SMD:LED_0603_1608Metric", "red", "KT-0603R"),

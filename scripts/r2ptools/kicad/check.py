@@ -66,8 +66,11 @@ def _items(v: dict) -> str:
     return "; ".join(i["description"] for i in v.get("items", []))
 
 
-def symbol_fields(sch: Path) -> list[tuple[str, str, dict[str, str]]]:
-    """(file, reference, fields) of every placed symbol in `sch` and the sheets it uses."""
+def symbol_fields(sch: Path, excluded: bool = False) -> list[tuple[str, str, dict[str, str]]]:
+    """(file, reference, fields) of every placed symbol in `sch` and the sheets it uses.
+
+    Symbols marked "exclude from BOM" (power flags, bare test pads) are parts of no order and
+    are left out unless `excluded` asks for them."""
     out = []
     seen = set()
     todo = [sch]
@@ -78,6 +81,9 @@ def symbol_fields(sch: Path) -> list[tuple[str, str, dict[str, str]]]:
         seen.add(f)
         tree = sexpr.parse(f.read_text())
         for s in sexpr.find_all(tree, "symbol"):
+            in_bom = sexpr.find(s, "in_bom")
+            if not excluded and in_bom is not None and str(in_bom[1]) == "no":
+                continue
             props = {str(p[1]): str(p[2]) for p in sexpr.find_all(s, "property")}
             refs = {str(sexpr.find(path, "reference")[1])
                     for inst in sexpr.find_all(s, "instances")

@@ -184,6 +184,7 @@ class Module:
     keepouts: list[Keepout] = field(default_factory=list)
     places: dict[str, Place] = field(default_factory=dict)   # per-board moves of core parts
     netclasses: dict[str, list[str]] = field(default_factory=dict)
+    fiducials: list[tuple[float, float]] = field(default_factory=list)   # 3, board-only
     seed: int = 1
     solid_pads: tuple[str, ...] = ()    # parts whose pads join the pours solid, THT ones too
     dru_rules: str = ""                 # board-specific KiCad custom rules, after the fab's

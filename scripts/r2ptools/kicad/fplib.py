@@ -123,6 +123,11 @@ def _module_board(m) -> pcbnew.BOARD:
         fp.SetReference(f"H{i}")
         fp.SetPosition(board_mod.pt(x, y))
         b.Add(fp)
+    for i, (x, y) in enumerate(m.fiducials, start=1):
+        fp = board_mod.load_footprint(":".join(board_mod.FIDUCIAL_FP))
+        fp.SetReference(f"FID{i}")
+        fp.SetPosition(board_mod.pt(x, y))
+        b.Add(fp)
     return b
 
 

@@ -52,7 +52,8 @@ def generate(m: Module, modules: list[Module], out: Path, force_route: bool = Fa
     sch = sch_gen.write_module(m, out)
     folder = sch.parent
     symbols = {p.item.symbol.split(":")[0] for _, p in m.all_parts()} | {"power"}
-    footprints = {p.item.footprint.split(":")[0] for _, p in m.all_parts()} | {board_mod.HOLE_FP[0]}
+    footprints = {p.item.footprint.split(":")[0] for _, p in m.all_parts()} | \
+        {board_mod.HOLE_FP[0], board_mod.FIDUCIAL_FP[0]}
     libtables.write(folder, sorted(symbols), sorted(footprints))
     times["schematic"] = time.monotonic() - t0
 

@@ -127,7 +127,8 @@ class SheetWriter:
                            ["uuid", Q(uid(self.key, "nc", tag))]])
 
     def _symbol(self, lib_id: str, ref: str, value: str, x: float, y: float, fields: dict[str, str],
-                pins_nets: dict[str, str], in_bom: bool = True, tag: str | None = None) -> None:
+                pins_nets: dict[str, str], in_bom: bool = True, tag: str | None = None,
+                on_board: bool | None = None) -> None:
         if lib_id not in self.lib_ids:
             self.lib_ids.append(lib_id)
         tag = tag or ref
@@ -147,8 +148,8 @@ class SheetWriter:
         self.items.append(["symbol", ["lib_id", Q(lib_id)],
                            ["at", sexpr.num(x), sexpr.num(y), "0"], ["unit", "1"],
                            ["exclude_from_sim", "no"], ["in_bom", "yes" if in_bom else "no"],
-                           ["on_board", "yes" if in_bom else "no"], ["dnp", "no"],
-                           ["uuid", Q(uid(self.key, tag))], *props, *pins, inst])
+                           ["on_board", "yes" if (in_bom if on_board is None else on_board) else "no"],
+                           ["dnp", "no"], ["uuid", Q(uid(self.key, tag))], *props, *pins, inst])
         for p in libsym.pins(lib_id):
             px, py = x + p.x, y - p.y
             net = pins_nets.get(p.number, "")
@@ -167,6 +168,12 @@ class SheetWriter:
                              {"1": obj}, in_bom=False, tag=f"flag/{obj}")
                 continue
             it = obj.item
+            if not it.on_bom:        # a test pad: on the board, off the BOM, no part fields
+                self._symbol(it.symbol, obj.ref, obj.value, x, y,
+                             {"Footprint": it.footprint, "Datasheet": "~",
+                              "Description": "bare copper test pad (no part)"},
+                             obj.nets, in_bom=False, on_board=True)
+                continue
             row = it.row
             fields = {"Footprint": it.footprint, "Datasheet": row["Datasheet"] or "~",
                       "Description": row["Description"], "MPN": it.mpn,

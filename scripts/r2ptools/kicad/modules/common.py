@@ -21,6 +21,12 @@ def bus_tap_track() -> Track:
     return Track("+5V", [(6.0, 19.1), (8.0, 17.2), (8.0, 15.5), (10.6, 13.52), (12.58, 13.52)], 0.6)
 
 
+def tvs_track() -> Track:
+    """The +5V TVS D5's cathode (pad 1, below) to the bus tap track, on F.Cu: the shortest path
+    from the jack's +5V to the clamp (the autorouter has no room left of J1)."""
+    return Track("+5V", [(4.2, 14.6), (7.1, 14.6), (8.0, 15.5)], 0.6)
+
+
 def core_tracks() -> list[Track]:
     """Hand-routed core signals for the default core placement (the autorouter boxes this one in)."""
     return [Track("LED_STATUS", [(7.325, 24.0), (8.6, 24.0), (10.1, 25.5), (24.0, 25.5),

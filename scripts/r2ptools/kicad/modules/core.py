@@ -12,14 +12,85 @@ its fused bus tap, the PSU from its own buck (ahead of its bus output switch).
 
 Reference designators 1–99 belong to the core; module sheets number their parts from 101.
 Placement is in mm from the board's top-left corner; the bus edge (RJ45s, header) is the top.
+
+Revision B (issue 14) changed or added these core references (a board that moves core parts,
+such as the PSU, places them through `Module.places`):
+
+    C6        VDDA 10 nF (was 100 nF), AN2586: 10 nF + 1 uF at VDDA
+    C11       new: VDDA 1 uF
+    C1, C2    crystal load capacitors 30 pF C0G (were 22 pF): `crystal_load()` below
+    Y1        the 8 MHz crystal's MPN corrected: X32258MSB4SI (LCSC C2682774, CL 20 pF); the
+              rev A row (X322508MSB4SI, C9002) named LCSC's 12 MHz X322512MSB4SI
+    D5        new: SMAJ5.0A, +5V TVS to GND at the bus jacks (docs/bus.md §7 SHOULD)
+    R3, R7    split termination 2 x 60.4 ohm 0805 (R3 was one 120 ohm), R7 new
+    C12       new: 4.7 nF from the termination midpoint TERM_MID to GND
+    SW3       now a 2-pole DIP switch (DSHP02TSGER): pole 1 CAN_H-TERM_H, pole 2 TERM_L-CAN_L,
+              so "off" leaves nothing on the bus (was a 1-pole slide switch)
+    TP1-TP8   new: bare 1 mm test pads (no BOM line, no placement): +5V, +3V3, GND, CAN_H,
+              CAN_L, NRST, SWDIO, SWCLK
+    FID1-FID3 board-only fiducials (no symbol), `FIDUCIALS` below, `Module.fiducials`
 """
 from __future__ import annotations
+
+import math
 
 from ..design import Place, Sheet, Track
 
 FREE_GPIO = [f"PA{i}" for i in (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 15)] + \
             [f"PB{i}" for i in (0, 1, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)]
 """MCU pins the core does not use, offered to the module sheet."""
+
+FIDUCIALS = [(2.6, 20.2), (57.4, 14.5), (57.4, 39.5)]
+"""Default fiducial places (mm), clear of the core's parts and of the bottom module area."""
+
+# crystal and load capacitors (AN2867 §3): C1 = C2 = 2 (CL - Cstray)
+CRYSTAL_CL_PF = 20.0          # X32258MSB4SI load capacitance (LCSC C2682774 listing)
+CRYSTAL_ESR_MAX_OHM = 120.0   # the same listing's ESR maximum
+CRYSTAL_C0_MAX_PF = 3.0       # shunt capacitance: assumed (3225 crystals: 1-3 pF); to confirm
+STRAY_PF = 5.0                # OSC_IN/OSC_OUT pin capacitance + 3 mm of trace per side
+STRAY_RANGE_PF = (3.0, 7.0)
+LOAD_CAP_PF = 30.0            # the E24 value chosen (0603CG300J500NT, C0G 5 %)
+HSE_GM_MA_PER_V = 25.0        # STM32F103 datasheet, HSE oscillator transconductance (startup)
+
+# split termination (docs/bus.md §4)
+TERM_R_OHM = 60.4
+TERM_C_NF = 4.7
+
+
+def crystal_load() -> dict[str, float]:
+    """The load capacitor value from the crystal's CL and the stated stray capacitance, the
+    effective CL the chosen value gives over the stray range and 5 % tolerance, and the
+    oscillator's gain margin (AN2867: gm / gm_crit >= 5)."""
+    ideal = 2 * (CRYSTAL_CL_PF - STRAY_PF)
+    lo = LOAD_CAP_PF * 0.95 / 2 + STRAY_RANGE_PF[0]
+    hi = LOAD_CAP_PF * 1.05 / 2 + STRAY_RANGE_PF[1]
+    w = 2 * math.pi * 8e6
+    gm_crit = 4 * CRYSTAL_ESR_MAX_OHM * w ** 2 * ((CRYSTAL_C0_MAX_PF + CRYSTAL_CL_PF) * 1e-12) ** 2
+    return {"ideal_pf": ideal, "chosen_pf": LOAD_CAP_PF, "cl_min_pf": lo, "cl_max_pf": hi,
+            "gm_crit_ma_per_v": gm_crit * 1e3, "gain_margin": HSE_GM_MA_PER_V / (gm_crit * 1e3)}
+
+
+def termination() -> dict[str, float]:
+    """Split termination: differential resistance and the common-mode filter's corner."""
+    return {"differential_ohm": 2 * TERM_R_OHM,
+            "common_mode_corner_mhz": 1 / (2 * math.pi * (TERM_R_OHM / 2) * TERM_C_NF * 1e-9) / 1e6}
+
+
+def report() -> str:
+    x, t = crystal_load(), termination()
+    return "\n".join([
+        f"crystal: C = 2 (CL - Cstray) = 2 ({CRYSTAL_CL_PF:g} - {STRAY_PF:g}) pF = {x['ideal_pf']:.1f} pF;"
+        f" chosen {x['chosen_pf']:g} pF C0G 5 %",
+        f"  effective CL over Cstray {STRAY_RANGE_PF[0]:g}-{STRAY_RANGE_PF[1]:g} pF and tolerance:"
+        f" {x['cl_min_pf']:.1f}-{x['cl_max_pf']:.1f} pF (crystal wants {CRYSTAL_CL_PF:g} pF)",
+        f"  gm_crit = 4 ESR (2 pi F)^2 (C0 + CL)^2 = {x['gm_crit_ma_per_v']:.2f} mA/V;"
+        f" gain margin {HSE_GM_MA_PER_V:g} / {x['gm_crit_ma_per_v']:.2f} = {x['gain_margin']:.0f}"
+        " (AN2867 asks >= 5)",
+        f"termination: 2 x {TERM_R_OHM:g} ohm = {t['differential_ohm']:.1f} ohm differential;"
+        f" {TERM_C_NF:g} nF common-mode filter corner {t['common_mode_corner_mhz']:.2f} MHz",
+        "VDDA: 10 nF + 1 uF (AN2586 §2.1); VDD: 100 nF per pin + 10 uF at the LDO",
+    ])
+
 
 # RJ45 pinout of the R2P bus (docs/bus.md): CAN on pair 1-2, +5V on 4, 5, 7, GND on 3, 6, 8.
 RJ45_PINS = {"1": "CAN_H", "2": "CAN_L", "3": "GND", "4": "+5V", "5": "+5V", "6": "GND",
@@ -42,14 +113,16 @@ def build() -> Sheet:
     }
     mcu.update({p: p for p in FREE_GPIO})
     s.part("U1", "STM32F103CBT6", mcu, at=Place(30.0, 28.5, 0))
-    # decoupling: one 100 nF per VDD pin, VDDA its own, 10 uF bulk at the LDO output
+    # decoupling: one 100 nF per VDD pin, VDDA 10 nF + 1 uF (AN2586), 10 uF bulk at the LDO
     s.part("C3", "C_100n", {"1": "+3V3", "2": "GND"}, at=Place(25.3, 21.6, 0))     # VBAT (1), VDD 48
     s.part("C4", "C_100n", {"1": "+3V3", "2": "GND"}, at=Place(37.0, 25.0, 90))    # VDD 36
     s.part("C5", "C_100n", {"1": "+3V3", "2": "GND"}, at=Place(33.8, 35.0, 0))     # VDD 24
-    s.part("C6", "C_100n", {"1": "+3V3", "2": "GND"}, at=Place(23.2, 31.0, 90))    # VDDA
+    s.part("C6", "C_10n", {"1": "+3V3", "2": "GND"}, at=Place(23.2, 31.0, 90))     # VDDA
+    s.part("C11", "C_1u", {"1": "+3V3", "2": "GND"}, at=Place(21.6, 31.0, 90))     # VDDA
+    # crystal: load capacitors from CL and the stray capacitance (crystal_load())
     s.part("Y1", "XTAL_8M", {"1": "OSC_IN", "3": "OSC_OUT", "G": "GND"}, at=Place(21.3, 27.6, 0))
-    s.part("C1", "C_22p", {"1": "OSC_IN", "2": "GND"}, at=Place(17.8, 28.4, 90))
-    s.part("C2", "C_22p", {"1": "OSC_OUT", "2": "GND"}, at=Place(21.0, 24.4, 0))
+    s.part("C1", "C_30p", {"1": "OSC_IN", "2": "GND"}, at=Place(17.8, 28.4, 90))
+    s.part("C2", "C_30p", {"1": "OSC_OUT", "2": "GND"}, at=Place(21.0, 24.4, 0))
 
     # 3.3 V from the 5 V input
     s.part("U2", "AP2112K-3.3", {"VIN": "V5_IN", "EN": "V5_IN", "GND": "GND", "VOUT": "+3V3"},
@@ -81,9 +154,25 @@ def build() -> Sheet:
            at=Place(42.0, 25.5, 0))
     s.part("C9", "C_100n", {"1": "+3V3", "2": "GND"}, at=Place(40.0, 30.0, 0))
     s.part("D1", "PESD2CAN", {"1": "CAN_H", "2": "CAN_L", "3": "GND"}, at=Place(32.4, 16.0, 0))
-    # termination: 120 ohm across the pair when the slide switch is at "ON"
-    s.part("R3", "R_120", {"1": "CAN_H", "2": "TERM"}, at=Place(26.6, 15.6, 0))
-    s.part("SW3", "SW_SLIDE", {"B": "TERM", "A": "CAN_L"}, nc=("C",), at=Place(29.8, 4.6, 0))
+    # +5V TVS at the jacks (docs/bus.md §7): 5.0 V standoff, 6.4 V minimum breakdown (above the
+    # bus's 6 V survival voltage and the PSU's 6.1 V overvoltage cut-off), 9.2 V clamp at 43.5 A
+    # pin 1 is the cathode (band; D_SMA pad 1)
+    s.part("D5", "SMAJ5.0A", {"1": "+5V", "2": "GND"}, at=Place(4.2, 12.6, 90))
+    # split termination (docs/bus.md §4): 2 x 60.4 ohm with 4.7 nF from the midpoint to GND.
+    # Both legs go through the 2-pole switch, so "off" leaves neither resistor nor capacitor on
+    # the pair (one pole would leave 60 ohm + 4.7 nF hanging on CAN_H).
+    s.part("SW3", "SW_DIP_2", {"1": "CAN_H", "4": "TERM_H", "2": "CAN_L", "3": "TERM_L"},
+           at=Place(29.8, 4.4, 0))
+    s.part("R3", "R_60R4", {"1": "TERM_H", "2": "TERM_MID"}, at=Place(25.4, 15.4, 90))
+    s.part("R7", "R_60R4", {"1": "TERM_MID", "2": "TERM_L"}, at=Place(27.4, 15.4, 90))
+    s.part("C12", "C_4n7", {"1": "TERM_MID", "2": "GND"}, at=Place(29.3, 15.4, 90))
+
+    # test pads (bare copper, no BOM line, no placement): the right edge, beside U3 and J4
+    for ref, net, x, y in (("TP1", "+5V", 48.6, 20.2), ("TP2", "+3V3", 51.1, 20.2),
+                           ("TP3", "GND", 53.6, 20.2), ("TP4", "CAN_H", 56.1, 20.2),
+                           ("TP5", "NRST", 48.6, 23.4), ("TP6", "SWDIO", 51.1, 23.4),
+                           ("TP7", "SWCLK", 53.6, 23.4), ("TP8", "CAN_L", 56.1, 23.4)):
+        s.part(ref, "TP", {"1": net}, at=Place(x, y, 0), value=net)
 
     # the bus: two RJ45 jacks and the 1x4 header in parallel
     s.part("J1", "RJ45", RJ45_PINS, at=Place(20.2, 13.52, 180), value="BUS IN")
@@ -110,3 +199,7 @@ def bus_tracks(extend_to: float | None = None) -> list[Track]:
         out.append(Track("+5V", [(x, 10.9), (x, y)], w, "B.Cu"))
     out.append(Track("+5V", [(26.0, 12.8), (26.0, 10.2)], 1.2, "B.Cu"))     # header pin 1
     return out
+
+
+if __name__ == "__main__":
+    print(report())

@@ -17,11 +17,12 @@ from __future__ import annotations
 
 from ..design import Module, Place, Sheet, Text
 from . import core as core_mod
-from .common import BUS_TAP_PLACE, bus_tap, bus_tap_track, core_tracks, frame_texts
+from .common import (BUS_TAP_PLACE, bus_tap, bus_tap_track, core_tracks, frame_texts,
+                     tvs_track)
 
 NAME = "proximity"
 TITLE = "R2P proximity module"
-REVISION = "A"
+REVISION = "B"
 
 CHANNELS = 4
 SIGNALS = [f"PROX_CH{i}" for i in range(CHANNELS)]
@@ -59,7 +60,8 @@ def build(core: Sheet) -> Module:
         s.part(f"C{104 + ch}", "C_100n", {"1": net, "2": "GND"}, at=Place(x + 3.8, 39.0, 90))
 
     m = Module(NAME, TITLE, REVISION, s,
-               tracks=[*core_mod.bus_tracks(), bus_tap_track(), *core_tracks()], seed=2)
+               tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks()], seed=2)
+    m.fiducials = list(core_mod.FIDUCIALS)
     m.texts = frame_texts(NAME, REVISION)
     for ch, x in enumerate(xs):
         m.texts.append(Text(f"S{ch}", x + 2.0, 41.6, 0.8))

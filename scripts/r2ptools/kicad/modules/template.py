@@ -11,11 +11,12 @@ from __future__ import annotations
 
 from ..design import Module, Place, Sheet, Track, Via
 from . import core as core_mod
-from .common import BUS_TAP_PLACE, bus_tap, bus_tap_track, core_tracks, frame_texts
+from .common import (BUS_TAP_PLACE, bus_tap, bus_tap_track, core_tracks, frame_texts,
+                     tvs_track)
 
 NAME = "template"
 TITLE = "R2P module template"
-REVISION = "A"
+REVISION = "B"
 
 
 def led_bus_track() -> list[Track]:
@@ -34,8 +35,10 @@ def build(core: Sheet) -> Module:
     pins["V5_IN"] = "+5V_MOD"
     s.use(core, pins)
     m = Module(NAME, TITLE, REVISION, s,
-               tracks=[*core_mod.bus_tracks(), bus_tap_track(), *core_tracks(), *led_bus_track()],
+               tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks(),
+                       *led_bus_track()],
                vias=[Via("LED_BUS", 23.85, 29.3, 0.7, 0.3), Via("LED_BUS", 27.05, 26.75, 0.7, 0.3)],
                seed=9)
+    m.fiducials = list(core_mod.FIDUCIALS)
     m.texts = frame_texts(NAME, REVISION)
     return m
