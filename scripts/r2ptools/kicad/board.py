@@ -118,7 +118,7 @@ def build(m: Module, net: Netlist) -> pcbnew.BOARD:
     from .fplib import source as fplib_source      # fplib builds on this module
     pcbnew.KIID.SeedGenerator(m.seed)
     board = pcbnew.BOARD()
-    fabcap.apply(board)
+    fabcap.apply(board, m.netclass_defs)
     ds = board.GetDesignSettings()
     ds.SetAuxOrigin(pt(0, 0))
     ds.SetGridOrigin(pt(0, 0))

@@ -56,7 +56,9 @@ DRU = """(version 1)
 """
 
 
-def apply(board: pcbnew.BOARD) -> None:
+def apply(board: pcbnew.BOARD, extra: dict[str, tuple[float, float, float, float]] | None = None) -> None:
+    """The fab's minimums and the net classes; `extra` adds a board's own classes (the PSU's
+    high-voltage class, so the autorouter keeps its spacing)."""
     ds = board.GetDesignSettings()
     mm = pcbnew.FromMM
     ds.m_TrackMinWidth = mm(MIN_TRACK)
@@ -72,7 +74,7 @@ def apply(board: pcbnew.BOARD) -> None:
     ds.m_MinSilkTextThickness = mm(MIN_TEXT_THICKNESS)
     ds.m_MinResolvedSpokes = 1     # a THT pad between two other-net pins may keep a single spoke
     ns = ds.m_NetSettings
-    for name, (cl, tw, vd, vdr) in NETCLASSES.items():
+    for name, (cl, tw, vd, vdr) in {**NETCLASSES, **(extra or {})}.items():
         nc = ns.GetDefaultNetclass() if name == "Default" else pcbnew.NETCLASS(name)
         nc.SetClearance(mm(cl))
         nc.SetTrackWidth(mm(tw))

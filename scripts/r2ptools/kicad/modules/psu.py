@@ -22,7 +22,7 @@ reports a tripped bus (BUS_FAULT) instead of browning out with it.
 """
 from __future__ import annotations
 
-from ..design import Module, Place, Sheet, Text, Track, Via
+from ..design import Keepout, Module, Place, Sheet, Text, Track, Via
 from . import core as core_mod
 from .common import frame_texts
 
@@ -30,23 +30,37 @@ NAME = "psu"
 TITLE = "R2P power supply module"
 REVISION = "B"
 
+FIDUCIALS = [(1.8, 40.0), (22.3, 19.4), (57.5, 40.5)]
+"""Three board-only fiducials, clear of the PSU's parts."""
+
 P = Place
 PLACES = {
+    # --- test pads (TP1-TP8 the core's, TP101-TP105 the PSU's): a grid right of the buck, and
+    # three beside the SWD header; TP101 on the EN divider's VIN_BUCK feed and TP102 below the
+    # output capacitors (hand tracks)
+    "TP1": P(48.5, 35.5, 0), "TP2": P(51.0, 35.5, 0), "TP3": P(53.5, 35.5, 0),
+    "TP4": P(57.0, 35.5, 0), "TP5": P(48.5, 38.0, 0), "TP6": P(51.0, 38.0, 0),
+    "TP7": P(53.5, 38.0, 0), "TP8": P(57.0, 38.0, 0), "TP102": P(55.4, 34.1, 0),
+    "TP101": P(48.5, 44.3, 0), "TP103": P(35.5, 29.5, 0), "TP104": P(35.5, 32.0, 0),
+    "TP105": P(38.0, 29.5, 0),
+    # core rev B parts: the +5V TVS right of BUS OUT's pins, VDDA's 1 uF under its 10 nF
+    "D5": P(47.0, 20.3, 0), "C11": P(12.9, 30.3, 90, True),
     # --- power stage (bottom edge and right side)
     "J101": P(12.4, 37.15, 180), "Q101": P(28.87, 46.3, 180),
     "D102": P(31.3, 40.3, 180), "R102": P(38.8, 44.3, 0), "U101": P(37.2, 40.2, 0),
     "D101": P(38.5, 46.9, 0), "R101": P(38.5, 49.0, 0),
     "U102": P(43.0, 39.5, 270),
     "C101": P(43.9, 43.85, 0), "C102": P(43.9, 47.2, 0),
-    "C109": P(42.85, 35.16, 90), "C108": P(41.25, 35.16, 90), "C110": P(39.65, 35.16, 90),
-    "R108": P(37.6, 37.6, 0), "R109": P(34.5, 37.6, 0),
+    # U102's top-row parts, left to right as their pins: SS (11), BIAS (9), VCC (8), BOOT (6)
+    "C110": P(38.9, 35.16, 90), "C116": P(40.5, 35.16, 90), "C108": P(42.1, 35.16, 90),
+    "C109": P(43.7, 35.16, 90),
+    "R108": P(37.6, 37.6, 0), "R109": P(34.5, 37.1, 0),
     "R104": P(31.5, 36.4, 90), "R105": P(29.7, 36.4, 90), "C106": P(27.9, 36.4, 90),
     # the fuse on the back, under the XT30's body, in the battery + line to Q101's drain tab
-    "F101": P(22.0, 43.2, 0, True),
-    # BIAS decoupling on the back under U102's BIAS via; the HF input capacitor on the back
-    # between the PVIN trunk's via and the PGND trunk's via
-    "C116": P(40.9, 43.0, 90, True), "C103": P(44.0, 45.5, 180, True),
-    "R106": P(47.2, 48.0, 90), "R107": P(49.0, 48.0, 90), "C104": P(50.8, 48.0, 90),
+    "F101": P(22.0, 43.2, 180, True),
+    # the HF input capacitor on the back, between the PVIN trunk's via and the PGND trunk's via
+    "C103": P(44.0, 45.5, 180, True),
+    "R106": P(47.2, 48.0, 90), "R107": P(49.4, 48.0, 90), "C104": P(51.2, 48.0, 90),
     "L101": P(47.5, 28.2, 0),
     "C111": P(56.85, 20.3, 0), "C112": P(56.85, 24.0, 0), "C113": P(56.85, 27.7, 0),
     "C114": P(56.85, 31.4, 0),
@@ -100,18 +114,18 @@ def power_tracks() -> list[Track]:
         T("GND", [(44.5, 41.36), (45.5, 41.36)], 0.3),
         T("GND", [(45.0, 41.36), (45.0, 42.1), (45.4, 42.5), (45.4, 48.6)], 1.2),
         # small-signal pins of U102 to their parts, fanned out from the 0.5 mm pitch by hand
-        # BIAS to +5V_BUCK (SNVSBK5 §5): pin 9 down under the body to a via, C116 on the back
-        T("+5V_BUCK", [(41.5, 37.64), (41.5, 38.6), (41.25, 38.9), (41.25, 39.5)], 0.25),
-        T("+5V_BUCK", [(41.25, 39.5), (40.9, 40.0), (40.9, 42.2)], 0.3, "B.Cu"),
         # C103 on the back: PVIN trunk via to pad 1, pad 2 to the PGND trunk via
         T("VIN_BUCK", [(42.6, 45.5), (43.22, 45.5)], 0.6, "B.Cu"),
         T("GND", [(44.78, 45.5), (45.4, 45.5)], 0.6, "B.Cu"),
         T("GND", [(41.0, 41.36), (41.0, 40.3)], 0.2),                  # SYNC/MODE: auto mode
-        T("BOOT", [(42.85, 35.94), (43.0, 36.7), (43.0, 37.64)], 0.25),
-        T("VCC_BUCK", [(41.25, 35.94), (42.0, 36.6), (42.0, 37.64)], 0.25),
-        T("SS_BUCK", [(39.65, 35.94), (40.5, 36.7), (40.5, 37.64)], 0.25),
-        T("GND", [(39.65, 34.38), (40.45, 33.75), (41.25, 34.38)], 0.3),
-        T("SW", [(42.85, 34.38), (44.0, 34.38)], 0.4),
+        T("BOOT", [(43.7, 35.94), (43.7, 36.6), (43.05, 36.95), (43.05, 37.64)], 0.25),
+        T("VCC_BUCK", [(42.1, 35.94), (42.0, 36.5), (42.0, 37.64)], 0.25),
+        # BIAS to +5V_BUCK (SNVSBK5 §5 for a 5 V output) with C116 at the pin
+        T("+5V_BUCK", [(40.5, 35.94), (41.5, 36.7), (41.5, 37.64)], 0.25),
+        T("SS_BUCK", [(38.9, 35.94), (39.6, 36.9), (40.5, 36.9), (40.5, 37.64)], 0.25),
+        T("GND", [(38.9, 34.38), (38.9, 33.6), (42.1, 33.6), (42.1, 34.38)], 0.3),
+        T("GND", [(40.5, 34.38), (40.5, 33.6)], 0.3),
+        T("SW", [(43.7, 34.38), (45.4, 34.38)], 0.4),
         T("VIN_PROT", [(31.5, 37.225), (31.5, 38.2), (32.6, 39.3)], 0.3),
         T("VIN_PROT", [(36.85, 46.9), (36.85, 45.0)], 0.5),            # D101 (gate zener)
         # bus voltage divider top (R117) to BUS IN's +5V pin 7, between the jack's GND pins 6 and 8
@@ -120,8 +134,8 @@ def power_tracks() -> list[Track]:
         T("VIN_PROT", [(36.06, 41.15), (36.7, 41.8), (37.34, 43.45)], 0.25),
         T("VIN_BUCK", [(38.34, 41.15), (39.2, 42.0), (40.0, 43.4)], 0.25),
         # current-sense amplifier output under D102 (B.Cu) to its RC filter R103/C105
-        T("IIN_AMP", [(36.06, 39.25), (35.1, 38.6)], 0.25),
-        T("IIN_AMP", [(35.1, 38.6), (25.0, 37.7)], 0.25, "B.Cu"),
+        T("IIN_AMP", [(36.06, 39.25), (35.6, 38.3)], 0.25),
+        T("IIN_AMP", [(35.6, 38.3), (25.0, 37.7)], 0.25, "B.Cu"),
         T("IIN_AMP", [(25.0, 37.7), (25.0, 38.775)], 0.25),
         # eFuse bottom-row set-up pins down to the back-side parts (the +5V_BUCK feed fills the row)
         T("EFUSE_UV", [(57.02, 16.45), (57.02, 17.4), (57.15, 18.05)], 0.25),
@@ -134,15 +148,28 @@ def power_tracks() -> list[Track]:
         T("EFUSE_OV", [(59.125, 19.5), (59.125, 20.32), (57.475, 20.32), (57.475, 21.15)], 0.25,
           "B.Cu"),
         T("+5V_BUCK", [(54.375, 19.5), (54.4, 20.4)], 0.3, "B.Cu"),
+        # EN (pin 18) out between the PGND pins and the PVIN trunk's 0.6 mm, on the back to the
+        # divider: R106's EN pad (via A) and R107's (via B)
+        T("EN_BUCK", [(41.5, 41.36), (41.5, 41.95), (40.6, 42.6)], 0.25),
+        T("EN_BUCK", [(40.6, 42.6), (40.6, 43.8), (47.4, 43.8), (47.4, 46.1), (50.2, 46.1),
+                      (50.2, 48.0)], 0.25, "B.Cu"),
+        T("EN_BUCK", [(47.4, 46.1), (47.2, 46.5), (47.2, 47.17)], 0.25),
+        T("EN_BUCK", [(50.2, 48.0), (49.4, 48.83)], 0.25),
+        # TP101 (VIN_BUCK) down between the EN divider's resistors to the feed's via
+        T("VIN_BUCK", [(48.5, 44.3), (48.05, 45.2), (48.05, 49.2)], 0.3),
         # EN divider feed: under the hot-loop ground on B.Cu
-        T("VIN_BUCK", [(42.1, 47.35), (42.1, 49.2), (48.0, 49.2)], 0.3, "B.Cu"),
-        T("VIN_BUCK", [(48.0, 49.2), (47.2, 48.825)], 0.3),
+        T("VIN_BUCK", [(42.1, 47.35), (42.1, 49.2), (48.05, 49.2)], 0.3, "B.Cu"),
+        T("VIN_BUCK", [(48.05, 49.2), (47.2, 48.825)], 0.3),
         # switch node: the SW pins to L101
         T("SW", [(43.5, 37.64), (45.5, 37.64)], 0.3),
-        T("SW", [(44.5, 37.64), (44.5, 36.9)], 0.9),
-        T("SW", [(44.5, 36.9), (44.5, 29.0), (43.03, 28.2)], 2.0),
+        T("SW", [(45.25, 37.64), (45.25, 36.9)], 0.8),
+        T("SW", [(45.4, 36.9), (45.4, 29.0), (43.03, 28.2)], 2.0),
         # buck output: L101 to the output capacitors' trunk, up to the eFuse inputs
         T("+5V_BUCK", [(51.97, 28.2), (55.37, 28.2)], 2.5),
+        T("+5V_BUCK", [(55.375, 31.4), (55.4, 34.1)], 0.6),             # TP102 below C114
+        # BIAS's via (under the top-row parts) on the back to TP102's track
+        T("+5V_BUCK", [(41.0, 36.5), (41.9, 35.6), (53.9, 35.6), (55.4, 34.1), (55.4, 33.2)], 0.4,
+          "B.Cu"),
         T("+5V_BUCK", [(55.37, 31.4), (55.37, 19.4)], 2.5),
         T("+5V_BUCK", [(55.37, 19.4), (54.4, 18.6), (53.13, 18.6)], 1.5),
         T("+5V_BUCK", [(53.13, 18.6), (53.13, 16.45)], 0.45),
@@ -158,19 +185,19 @@ def power_vias() -> list[Via]:
     out = [Via("+5V", x, y, 0.8, 0.4) for x in (50.4, 51.4, 52.4) for y in (9.5, 10.5)]
     # thermal vias in U102's exposed pad (2 x 5 at 0.9 x 0.8 mm; KiCad's _ThermalVias variant
     # drills 0.2 mm, below the fab's 0.3 mm), the hot-loop ground, the output returns
-    out += [Via("GND", x, y, 0.6, 0.3) for x in (42.55, 43.45) for y in (37.9, 38.7, 39.5, 40.3, 41.1)]
-    out += [Via("GND", 44.5, 39.5, 0.6, 0.3)]
-    out += [Via("+5V_BUCK", 41.25, 39.5, 0.6, 0.3)]                      # BIAS
+    out += [Via("GND", x, y, 0.6, 0.3) for x in (41.3, 42.15, 43.0, 43.85, 44.7) for y in (39.05, 39.95)]
     out += [Via("VIN_BUCK", 42.6, 45.5, 0.7, 0.3), Via("GND", 45.4, 45.5, 0.7, 0.3)]   # C103
     # battery +: F101's output up to Q101's drain tab (3.1 A over six 0.4 mm vias)
     out += [Via("VBAT_IN", x, y, 0.8, 0.4) for x in (25.3, 26.3, 27.3) for y in (44.6, 45.8)]
-    out += [Via("GND", 46.7, y, 0.6, 0.3) for y in (42.9, 45.1, 47.5)]
-    out += [Via("GND", 40.45, 33.75, 0.6, 0.3)]
-    out += [Via("VIN_BUCK", 42.1, 47.35, 0.7, 0.3), Via("VIN_BUCK", 48.0, 49.2, 0.7, 0.3)]
+    out += [Via("GND", 46.7, y, 0.6, 0.3) for y in (42.9, 45.1)]
+    out += [Via("GND", 40.5, 33.0, 0.6, 0.3)]
+    out += [Via("+5V_BUCK", 41.0, 36.5, 0.6, 0.3), Via("+5V_BUCK", 55.4, 33.2, 0.6, 0.3)]   # BIAS
+    out += [Via("EN_BUCK", x, y, 0.6, 0.3) for x, y in ((40.6, 42.6), (47.4, 46.1), (50.2, 48.0))]
+    out += [Via("VIN_BUCK", 42.1, 47.35, 0.7, 0.3), Via("VIN_BUCK", 48.05, 49.2, 0.7, 0.3)]
     out += [Via(n, x, 18.05, 0.7, 0.3) for n, x in (("EFUSE_UV", 57.15), ("EFUSE_OV", 58.0),
                                                      ("EFUSE_DVDT", 58.85))]
     out += [Via("+5V_BUCK", 54.4, 20.4, 0.7, 0.3)]
-    out += [Via("IIN_AMP", 35.1, 38.6, 0.7, 0.3), Via("IIN_AMP", 25.0, 37.7, 0.7, 0.3)]
+    out += [Via("IIN_AMP", 35.6, 38.3, 0.7, 0.3), Via("IIN_AMP", 25.0, 37.7, 0.7, 0.3)]
     out += [Via("GND", x, y, 0.6, 0.3) for x in (53.8, 55.2, 56.9, 58.3) for y in (12.6, 14.4)]
     out += [Via("GND", 59.0, y, 0.6, 0.3) for y in (22.2, 25.9, 29.6, 33.3)]
     return out
@@ -194,6 +221,9 @@ spacing is the part maker's (rated for the full voltage), not a board conductor 
 
 
 def ipc2221b_rules() -> str:
+    # The same nets form the net class "HV" with a 0.6 mm clearance: the autorouter knows net
+    # classes, not custom rules, so it keeps its tracks that far from them. DRC checks the rules
+    # below (custom rules take precedence over net classes).
     """The board's high-voltage clearance as a KiCad custom rule (calc/psu.py prints the row).
 
     IPC-2221B table 6-1, B2 (external conductors, uncoated, sea level to 3050 m): 31-50 V and
@@ -283,14 +313,27 @@ def build(core: Sheet) -> Module:
     s.part("R114", "R_27k", {"1": "EFUSE_OV", "2": "GND"})
     s.part("R116", "R_6k8", {"1": "EFUSE_ILIM", "2": "GND"})
     s.part("C115", "C_22n", {"1": "EFUSE_DVDT", "2": "GND"})
+    # test pads (bare 1 mm copper, no BOM line): the PSU's own key signals; the core adds
+    # +5V, +3V3, GND, CAN_H/L, NRST, SWD (TP1-TP8)
+    for ref, net in (("TP101", "VIN_BUCK"), ("TP102", "+5V_BUCK"), ("TP103", "BUS_EN"),
+                     ("TP104", "BUS_FAULT"), ("TP105", "IIN_SENSE")):
+        s.part(ref, "TP", {"1": net}, value=net)
     s.part("R117", "R_10k", {"1": "+5V", "2": "VOUT_SENSE"})
     s.part("R118", "R_10k", {"1": "VOUT_SENSE", "2": "GND"})
     s.part("C117", "C_100n", {"1": "VOUT_SENSE", "2": "GND"})
 
     m = Module(NAME, TITLE, REVISION, s, tracks=core_mod.bus_tracks(extend_to=52.4) + power_tracks(),
                vias=power_vias(), places=PLACES, seed=3, dru_rules=ipc2221b_rules(),
-               solid_pads=SOLID_PADS)
-    m.texts = frame_texts(NAME, REVISION, bus_in=(11.0, 18.4)) + [
-        Text("+", 17.4, 40.6, 1.5, "B.SilkS"), Text("-", 12.4, 40.6, 1.5, "B.SilkS"),
+               solid_pads=SOLID_PADS, netclasses={"HV": [*BATTERY_NETS, *SWITCH_NETS]},
+               netclass_defs={"HV": (0.6, 0.3, 0.7, 0.3)},
+               keepouts=[Keepout([(x - 1.6, y - 1.6), (x + 1.6, y - 1.6), (x + 1.6, y + 1.6),
+                                  (x - 1.6, y + 1.6)]) for x, y in FIDUCIALS])
+    m.fiducials = list(FIDUCIALS)
+    # the +5V TVS D5 sits where the front "BUS OUT" label goes on other boards, and no gap
+    # around it holds the label: on the PSU the jacks are named on the back only
+    texts = [t for t in frame_texts(NAME, REVISION, bus_in=(11.0, 18.4))
+             if (t.text, t.layer) != ("BUS OUT", "F.SilkS")]
+    m.texts = texts + [
+        Text("+", 16.0, 40.6, 1.5, "B.SilkS"), Text("-", 12.4, 40.6, 1.5, "B.SilkS"),
         Text("BATTERY 6-42V", 15.0, 33.0, 1.0, "B.SilkS")]
     return m
