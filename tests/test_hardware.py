@@ -112,8 +112,11 @@ def test_fab_package_has_what_a_fab_needs():
         text = (HARDWARE / "psu" / "fab" / "gerbers" / f).read_text()
         assert "CreationDate" not in text and not re.search(r"date \d", text), f"{f} carries a date"
     bom = (HARDWARE / "psu" / "fab" / "psu-bom.csv").read_text().splitlines()
-    assert bom[0] == "Designator,Quantity,Value,Footprint,Manufacturer,MPN,LCSC"
-    assert any(",LM76005RNPR," in line for line in bom)
+    assert bom[0] == "Comment,Designator,Footprint,LCSC Part #,Manufacturer,MPN"   # JLCPCB's
+    assert any(line.endswith(",LM76005RNPR") for line in bom)
+    package = {p.name for p in (HARDWARE / "psu" / "fab").iterdir()}
+    assert {"psu-gerbers.zip", "psu-bom.csv", "psu-cpl.csv", "psu-ibom.html", "psu-assembly.pdf",
+            "psu-assembly-checklist.md", "psu-schematic.pdf", "psu-top.png", "psu-bottom.png"} <= package
 
 
 # --- the checks fail for real -------------------------------------------------------------------
@@ -135,8 +138,11 @@ def test_a_missing_track_is_reported_unconnected(scratch):
     import pcbnew
     pcb = scratch / "proximity.kicad_pcb"
     b = pcbnew.LoadBoard(str(pcb))
-    victim = next(t for t in b.GetTracks() if t.GetNetname().endswith("CAN_RX"))
-    b.Delete(victim)
+    # every segment of the net: one alone may be a redundant stub the router left
+    victims = [t for t in b.GetTracks() if t.GetNetname().endswith("CAN_RX")]
+    assert victims
+    for t in victims:
+        b.Delete(t)
     pcbnew.SaveBoard(str(pcb), b)
     assert _problems(scratch, "unconnected")
 
@@ -190,13 +196,14 @@ def test_a_footprint_missing_from_the_board_breaks_parity(scratch):
 
 
 def test_an_unconnected_pin_is_an_erc_error(scratch):
-    """Remove the no-connect flag on U101's fault output (pin 3): ERC must object."""
+    """Remove the no-connect flag on the CAN transceiver's Vref output (U3 pin 5, in the core
+    sheet the proximity board uses): ERC must object."""
     from r2ptools.kicad.schematic import uid
-    sch = scratch / "proximity.kicad_sch"
+    sch = scratch.parent / "core" / "core.kicad_sch"
     text = sch.read_text()
     flag = re.search(r"\n\t\(no_connect\n\t\t\(at [^)]*\)\n\t\t\(uuid \"%s\"\)\n\t\)"
-                     % uid("proximity", "nc", "U101/3"), text)
-    assert flag, "U101 pin 3's no-connect flag not found"
+                     % uid("core", "nc", "U3/5"), text)
+    assert flag, "U3 pin 5's no-connect flag not found"
     sch.write_text(text[:flag.start()] + text[flag.end():])
     assert _problems(scratch, "ERC error")
 
@@ -269,3 +276,57 @@ def test_psu_high_voltage_clearance_rule_catches_a_violation(tmp_path):
     b.Add(via)
     pcbnew.SaveBoard(str(pcb), b)
     assert ipc_errors(), "a GND via 0.4 mm from VIN_BUCK must break the 0.6 mm rule"
+# --- revision B: parts that are not assembled ---------------------------------------------------
+
+def test_test_pads_and_fiducials_are_on_the_board_but_on_no_bom_or_placement_file(tmp_path):
+    """Test pads (TP) are symbols excluded from the BOM; fiducials (FID) are board-only: both are
+    copper on the board, and neither reaches the assembly BOM, the parts check or the CPL."""
+    import pcbnew
+    for module in ("proximity", "template"):
+        pcb = HARDWARE / module / f"{module}.kicad_pcb"
+        b = pcbnew.LoadBoard(str(pcb))
+        refs = {fp.GetReference(): fp for fp in b.GetFootprints()}
+        pads = [r for r in refs if r.startswith("TP")]
+        fids = [r for r in refs if r.startswith("FID")]
+        assert len(pads) >= 8 and len(fids) == 3, (module, pads, fids)
+        for r in pads + fids:
+            attrs = refs[r].GetAttributes()
+            assert attrs & pcbnew.FP_EXCLUDE_FROM_BOM and attrs & pcbnew.FP_EXCLUDE_FROM_POS_FILES, r
+        sch = HARDWARE / module / f"{module}.kicad_sch"
+        assert not any(ref.startswith("TP") for _, ref, _ in check.symbol_fields(sch))
+        assert sum(ref.startswith("TP") for _, ref, _ in check.symbol_fields(sch, excluded=True)) \
+            == len(pads)
+        from r2ptools import bom
+        assert not any(s.ref.startswith("TP") for s in bom.schematic_symbols(sch))   # scripts/bom
+        from r2ptools.kicad import jlc
+        placed, on_bom = jlc.parts(pcb)
+        jlc.write_bom(on_bom, tmp_path / "bom.csv")
+        jlc.write_cpl(placed, tmp_path / "cpl.csv")
+        for f in ("bom.csv", "cpl.csv"):
+            text = (tmp_path / f).read_text()
+            assert not re.search(r"\b(TP|FID)\d", text), (module, f)
+
+
+def test_a_test_pad_put_on_the_bom_is_reported(scratch):
+    """A test pad has no part number: marked "on the BOM", the parts check must object."""
+    sch = scratch.parent / "core" / "core.kicad_sch"
+    text = sch.read_text()
+    i = text.index('(lib_id "Connector:TestPoint")')
+    j = text.index("(in_bom no)", i)
+    sch.write_text(text[:j] + "(in_bom yes)" + text[j + len("(in_bom no)"):])
+    assert any("TP" in p and "no MPN" in p for p in _problems(scratch, "BOM"))
+
+
+def test_design_numbers_hold():
+    """The equations behind revision B's values (the modules print them), and the emulated
+    sensor switch uses the hardware's nominal limit."""
+    from r2ptools.kicad.modules import core, proximity
+    x = core.crystal_load()
+    assert abs(x["chosen_pf"] - x["ideal_pf"]) <= 0.1 * x["ideal_pf"] and x["gain_margin"] >= 5
+    assert x["cl_min_pf"] < core.CRYSTAL_CL_PF < x["cl_max_pf"]
+    lo, nom, hi = proximity.switch_limit_ma()
+    assert lo >= 4 * max(proximity.SENSORS_MA.values()) and hi < 200
+    model = (ROOT / "firmware/host/world/src/sensor_switch.rs").read_text()
+    limit_a = float(re.search(r"SENSOR_SWITCH_LIMIT_A: f64 = ([0-9.]+);", model).group(1))
+    assert abs(limit_a * 1000 - nom) < 1.0, (limit_a, nom)
+

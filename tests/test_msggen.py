@@ -177,9 +177,10 @@ def test_decode_prints_the_fields_as_json():
     p = msggen_cli("decode", "Obstacle", "03 00 00 00 3f")
     assert (p.returncode, p.stdout) == (0, '{"channel": 3, "distance": 0.5}\n')
     # float32 values print as the shortest decimal with the same bits; NaN as a string (valid JSON).
-    payload = msgs.load()["Proximity"].encode({"distance": [0.1, math.nan, 1.25, 0.0], "status": [0, 2, 0, 3]})
+    payload = msgs.load()["Proximity"].encode({"distance": [0.1, math.nan, 1.25, 0.0], "status": [0, 2, 0, 3],
+                                               "supply_fault": False})
     p = msggen_cli("decode", "Proximity", payload.hex())
-    assert p.stdout == '{"distance": [0.1, "nan", 1.25, 0.0], "status": [0, 2, 0, 3]}\n'
+    assert p.stdout == '{"distance": [0.1, "nan", 1.25, 0.0], "status": [0, 2, 0, 3], "supply_fault": false}\n'
 
 
 @pytest.mark.parametrize("args, error", [

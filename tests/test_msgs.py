@@ -11,7 +11,7 @@ def test_every_schema_reads_with_its_size():
     types = msgs.load()
     assert {"Battery", "Proximity", "Obstacle", "WheelSetpoint", "WheelState", "Twist2D"} <= set(types)
     assert types["Battery"].size == 16
-    assert types["Proximity"].size == 4 * 4 + 4
+    assert types["Proximity"].size == 4 * 4 + 4 + 1
     assert types["Obstacle"].size == 5          # packed: no padding after the uint8
     for t in types.values():
         assert 0 < t.size <= msgs.MAX_SIZE
@@ -30,13 +30,13 @@ def test_type_hash_is_fnv1a_of_the_canonical_text():
 
 def test_payloads_roundtrip_little_endian_packed():
     prox = msgs.load()["Proximity"]
-    values = {"distance": [0.5, float("nan"), 1.25, 0.0], "status": [0, 2, 0, 3]}
+    values = {"distance": [0.5, float("nan"), 1.25, 0.0], "status": [0, 2, 0, 3], "supply_fault": True}
     payload = prox.encode(values)
     assert len(payload) == prox.size
     assert payload[:4] == bytes.fromhex("0000003f")     # 0.5f, little-endian
     back = prox.decode(payload)
     assert msgs.nan_safe_equal(back["distance"], values["distance"]) and math.isnan(back["distance"][1])
-    assert back["status"] == [0, 2, 0, 3]
+    assert back["status"] == [0, 2, 0, 3] and back["supply_fault"] is True
 
 
 def test_wrong_payload_size_and_fields_are_refused():

@@ -60,7 +60,7 @@ def main() -> int:
         zip_file = ROOT / "hardware" / m / "fab" / f"{m}-gerbers.zip"
         if m in FAB_BOARDS and zip_file.exists():
             print(f"{m:<18} {zip_file.relative_to(ROOT)} ({zip_file.stat().st_size / 1024:.0f} KiB), "
-                  f"BOM, CPL, schematic PDF, renders")
+                  f"JLC BOM and CPL, iBOM, assembly PDF and checklist, schematic PDF, renders")
         else:
             print(f"{m:<18} not yet: no hardware/{m}/{m}.kicad_pcb")
     print("\nenclosures (enclosures/<module>)")

@@ -62,6 +62,7 @@ _ITEMS = [
     ("R_100k", R, R0603, "100k", "0603WAF1003T5E"),
     ("R_150k", R, R0603, "150k", "0603WAF1503T5E"),
     ("R_6k8", R, R0603, "6.8k", "0603WAF6801T5E"),
+    ("R_174k", R, R0603, "174k", "0603WAF1743T5E"),
     ("R_60R4", R, R0805, "60.4", "0805W8F604JT5E"),        # split CAN termination, 0.125 W
     # --- capacitors
     ("C_22p", C, C0603, "22pF C0G", "0603CG220J500NT"),
@@ -135,6 +136,10 @@ _ITEMS = [
      "SRV05-4-P-T7"),
     ("TPS2065C", "Power_Management:TPS2065CDBV", "Package_TO_SOT_SMD:SOT-23-5", "TPS2065C",
      "TPS2065CDBVR"),
+    # KiCad has no TPS2553 symbol; ROHM's BD2222G is pin for pin the same SOT-23-6 switch
+    # (1 IN, 2 GND, 3 EN active high, 4 open-drain fault, 5 ILIM, 6 OUT)
+    ("TPS2553", "Power_Management:BD2222G", "Package_TO_SOT_SMD:SOT-23-6", "TPS2553",
+     "TPS2553DBVR"),
 ]
 
 _BY_KEY = {k: Item(k, s, f, v, m) for k, s, f, v, m in _ITEMS}

@@ -5,31 +5,32 @@
     gerbers/          Gerber X2 (copper, mask, paste, silk, outline), Excellon drill (PTH and
                       NPTH apart), Gerber job file: what a fab needs to make the bare board
     <module>-gerbers.zip  the same files zipped for upload (fixed timestamps and order)
-    <module>-bom.csv  assembly BOM: designators, quantity, value, footprint, manufacturer, MPN, LCSC
-    <module>-cpl.csv  pick and place (JLCPCB's column names), board origin at the top-left corner
+    <module>-bom.csv  JLCPCB's BOM: Comment, Designator, Footprint, LCSC Part #, Manufacturer, MPN
+    <module>-cpl.csv  JLCPCB's CPL (Designator, Mid X, Mid Y, Layer, Rotation), rotations
+                      corrected for JLC's part orientations (jlc.py), from the drill origin
+    <module>-ibom.html    interactive HTML BOM (ibom.py)
+    <module>-assembly.pdf assembly drawing: top, then bottom mirrored (assembly.py)
+    <module>-assembly-checklist.md  pin 1 / polarity of every polarised part, for JLC's preview
     <module>-schematic.pdf
-    <module>-top.png, <module>-bottom.png   renders (no 3D models are installed: bare pads)
+    <module>-top.png, <module>-bottom.png   renders with KiCad's 3D models (models3d.py)
 
 KiCad stamps the date into Gerber, drill, job and PDF files; those stamps are removed or pinned
-to the commit date of nothing in particular (1980-01-01, the zip epoch) so that regenerating from
-unchanged sources gives identical bytes, which the tests check.
+to 1980-01-01 (the zip epoch) so that regenerating from unchanged sources gives identical
+bytes, which the tests check.
 """
 from __future__ import annotations
 
 import argparse
-import csv
 import io
 import re
 import shutil
-import subprocess
 import sys
-import tempfile
 import zipfile
-from collections import defaultdict
 from pathlib import Path
 
 from .. import ROOT
-from . import check
+from . import assembly, ibom, jlc, models3d
+from .kicadcli import run as _kicad
 
 HARDWARE = ROOT / "hardware"
 FAB_BOARDS = ["proximity", "psu"]
@@ -45,12 +46,6 @@ _DATE_LINES = [
     re.compile(r"^; #@! TF\.CreationDate,.*\r?\n", re.M),
     re.compile(r'^\s*"CreationDate":\s*".*",?\r?\n', re.M),
 ]
-
-
-def _kicad(*args: str) -> None:
-    p = subprocess.run(["kicad-cli", *args], capture_output=True, text=True)
-    if p.returncode != 0:
-        raise RuntimeError(f"kicad-cli {' '.join(args)} failed:\n{p.stdout}{p.stderr}")
 
 
 def strip_dates(text: str) -> str:
@@ -94,57 +89,30 @@ def write_zip(files: list[Path], dest: Path) -> None:
     dest.write_bytes(buf.getvalue())
 
 
-def _ref_key(ref: str) -> tuple[str, int]:
-    head = ref.rstrip("0123456789")
-    return head, int(ref[len(head):] or 0)
-
-
-def bom(sch: Path, pcb_footprints: dict[str, str], dest: Path) -> None:
-    groups: dict[tuple, list[str]] = defaultdict(list)
-    for _, ref, props in check.symbol_fields(sch):
-        if ref.startswith("#"):
-            continue
-        key = (props.get("Value", ""), props.get("Footprint", "").split(":")[-1],
-               props.get("Manufacturer", ""), props.get("MPN", ""), props.get("LCSC", ""))
-        groups[key].append(ref)
-    rows = sorted(((sorted(refs, key=_ref_key), k) for k, refs in groups.items()),
-                  key=lambda r: _ref_key(r[0][0]))
-    with dest.open("w", newline="") as f:
-        w = csv.writer(f, lineterminator="\n")
-        w.writerow(["Designator", "Quantity", "Value", "Footprint", "Manufacturer", "MPN", "LCSC"])
-        for refs, (value, fp, man, mpn, lcsc) in rows:
-            w.writerow([",".join(refs), len(refs), value, fp, man, mpn, lcsc])
-
-
-def cpl(pcb: Path, dest: Path) -> None:
-    """KiCad's position file in JLCPCB's column names (Designator, Mid X, Mid Y, Layer, Rotation)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        raw = Path(tmp) / "pos.csv"
-        _kicad("pcb", "export", "pos", "--format", "csv", "--units", "mm", "--side", "both",
-               "--use-drill-file-origin", "--exclude-dnp", "-o", str(raw), str(pcb))
-        rows = list(csv.DictReader(raw.open()))
-    rows.sort(key=lambda r: _ref_key(r["Ref"]))
-    with dest.open("w", newline="") as f:
-        w = csv.writer(f, lineterminator="\n")
-        w.writerow(["Designator", "Mid X", "Mid Y", "Layer", "Rotation"])
-        for r in rows:
-            w.writerow([r["Ref"], f"{float(r['PosX']):.4f}mm", f"{float(r['PosY']):.4f}mm",
-                        "Top" if r["Side"] == "top" else "Bottom", f"{float(r['Rot']):.2f}"])
-
-
 def schematic_pdf(sch: Path, dest: Path) -> None:
     _kicad("sch", "export", "pdf", "-o", str(dest), str(sch))
     dest.write_bytes(pin_pdf_dates(dest.read_bytes()))
 
 
 def renders(pcb: Path, folder: Path, name: str) -> list[Path]:
+    """Top and bottom renders with the 3D models KiCad ships for our footprints."""
+    env = {"KICAD9_3DMODEL_DIR": str(models3d.ensure([pcb]))}
     out = []
     for side in ("top", "bottom"):
         dest = folder / f"{name}-{side}.png"
         _kicad("pcb", "render", "--side", side, "--width", "1200", "--height", "1000",
-               "--quality", "basic", "--background", "opaque", "--zoom", "1.0", "-o", str(dest), str(pcb))
+               "--quality", "basic", "--background", "opaque", "--zoom", "1.0", "-o", str(dest), str(pcb),
+               env=env)
         out.append(dest)
     return out
+
+
+def board_box_mm(pcb: Path) -> tuple[float, float, float, float]:
+    """The board outline's bounding box in page millimetres (x0, y0, x1, y1)."""
+    import pcbnew
+    bb = pcbnew.LoadBoard(str(pcb)).GetBoardEdgesBoundingBox()
+    return (pcbnew.ToMM(bb.GetLeft()), pcbnew.ToMM(bb.GetTop()), pcbnew.ToMM(bb.GetRight()),
+            pcbnew.ToMM(bb.GetBottom()))
 
 
 def package(board_dir: Path, out: Path) -> list[Path]:
@@ -156,10 +124,16 @@ def package(board_dir: Path, out: Path) -> list[Path]:
     out.mkdir(parents=True)
     files = gerbers(pcb, out / "gerbers")
     write_zip(files, out / f"{name}-gerbers.zip")
-    bom(sch, {}, out / f"{name}-bom.csv")
-    cpl(pcb, out / f"{name}-cpl.csv")
+    placed, bom_parts = jlc.parts(pcb)
+    jlc.write_bom(bom_parts, out / f"{name}-bom.csv")
+    jlc.write_cpl(placed, out / f"{name}-cpl.csv")
+    ibom.interactive_bom(pcb, out / f"{name}-ibom.html")
+    assembly.drawing(pcb, board_box_mm(pcb), out / f"{name}-assembly.pdf", pin_pdf_dates)
+    assembly.checklist(name, placed, out / f"{name}-assembly-checklist.md")
     schematic_pdf(sch, out / f"{name}-schematic.pdf")
     renders(pcb, out, name)
+    for problem in jlc.bom_problems(out / f"{name}-bom.csv"):
+        print(f"fab: {name}: JLCPCB would not take this BOM as is: {problem}", file=sys.stderr)
     return sorted(p for p in out.rglob("*") if p.is_file())
 
 

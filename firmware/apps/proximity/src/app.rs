@@ -16,6 +16,9 @@ pub struct Sample {
     pub adc: [u16; CHANNELS],
     /// The node's state for the status LEDs (running, synced, traffic, storage fault).
     pub status: leds::Status,
+    /// `SENSOR_PWR_FAULT` asserted (logical: `true` = the sensors' 5 V switch reports
+    /// over-current and holds them at its current limit).
+    pub supply_fault: bool,
 }
 
 /// What the board-support layer applies after each step (logical levels: `true` = on).
@@ -39,6 +42,8 @@ pub struct App<'a> {
     channels: [Channel; CHANNELS],
     /// Per channel: may report an obstacle (re-armed once the channel reads clear).
     armed: [bool; CHANNELS],
+    /// The switch's fault flag as last read.
+    supply_fault: bool,
     next_publish_us: u64,
 }
 
@@ -50,6 +55,7 @@ impl<'a> App<'a> {
             params,
             channels: [Channel::default(); CHANNELS],
             armed: [true; CHANNELS],
+            supply_fault: false,
             next_publish_us: 0,
         }
     }
@@ -75,16 +81,22 @@ impl<'a> App<'a> {
         &self.ep
     }
 
-    /// What the four channels read now (what `ranges` last carried or would carry now).
+    /// What the four channels read now and the supply switch's fault flag (what `ranges` last
+    /// carried or would carry now).
     pub fn ranges(&self) -> Proximity {
         let s = self.channels.map(|c| c.status());
-        Proximity { distance: s.map(Status::distance), status: s.map(Status::code) }
+        Proximity {
+            distance: s.map(Status::distance),
+            status: s.map(Status::code),
+            supply_fault: self.supply_fault,
+        }
     }
 
-    /// One step at `now_us`: filter and convert the four channels, report obstacles, publish
-    /// `ranges` when due; returns the outputs to apply.
+    /// One step at `now_us`: read the supply's fault flag, filter and convert the four
+    /// channels, report obstacles, publish `ranges` when due; returns the outputs to apply.
     pub fn step(&mut self, now_us: u64, sample: &Sample) -> Command {
         let cfg = Config::read(self.params);
+        self.supply_fault = sample.supply_fault;
         for c in 0..CHANNELS {
             let kind = cfg.sensors[c];
             let status = self.channels[c].update(

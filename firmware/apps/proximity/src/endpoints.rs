@@ -109,7 +109,7 @@ impl Storage {
     pub fn build(&'static self, params: &dyn ParamStore) -> Endpoints<'static> {
         let names = names(params);
         let deadline_us = crate::params::typed(params).u32(OBSTACLE_DEADLINE_MS) * 1000;
-        let empty = Proximity { distance: [f32::NAN; 4], status: [3; 4] };
+        let empty = Proximity { distance: [f32::NAN; 4], status: [3; 4], supply_fault: false };
 
         let ranges = &*self.ranges.init(Topic::new(names.ranges, empty));
         let ranges_pub = &*self.ranges_pub.init(Publisher::new(ranges, Class::NonRealTime));

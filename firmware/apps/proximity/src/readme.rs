@@ -36,7 +36,8 @@ pub fn render() -> String {
     let _ = writeln!(
         w,
         "| `{}` | `{}` | publishes | {} | every 1/`rate_hz`: per channel a distance (m), or NaN with \
-         status 1 too near, 2 too far, 3 no sensor |",
+         status 1 too near, 2 too far, 3 no sensor; `supply_fault`: the sensors' 5 V switch \
+         (`SENSOR_PWR_FAULT`) reports over-current |",
         ep.ranges.name(),
         Proximity::NAME,
         class(ep.ranges_pub.class()),

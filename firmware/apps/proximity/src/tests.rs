@@ -57,8 +57,12 @@ impl Rig {
     }
 
     fn run(&mut self, ms: u64, adc: [u16; 4]) -> Proximity {
+        self.run_sample(ms, Sample { adc, ..Sample::default() })
+    }
+
+    fn run_sample(&mut self, ms: u64, sample: Sample) -> Proximity {
         for _ in 0..ms {
-            self.last = self.app.step(self.now_us, &Sample { adc, ..Sample::default() });
+            self.last = self.app.step(self.now_us, &sample);
             while let Some(m) = self.ranges.try_recv() {
                 self.published.push((self.now_us, *m));
             }
@@ -275,6 +279,20 @@ fn sensor_power_follows_its_parameter_and_sensors_settle_after_it() {
     assert_eq!(r.run(2, adc).status[0], STATUS_OK);
     assert_eq!(r.run(330, adc).status[1], STATUS_NO_SENSOR, "sonar powering up (400 ms)");
     assert_eq!(r.run(20, adc).status[1], STATUS_OK);
+}
+
+#[test]
+fn the_supply_switch_fault_flag_is_read_each_step_and_published_in_ranges() {
+    let mut r = Rig::new([1, 1, 1, 1]);
+    let adc = [code(&GP2Y0A21YK, 0.5); 4];
+    assert!(!r.run(200, adc).supply_fault);
+    let published = r.published.len();
+    let p = r.run_sample(1, Sample { adc, supply_fault: true, ..Sample::default() });
+    assert!(p.supply_fault, "read in the step it is asserted");
+    r.run_sample(200, Sample { adc, supply_fault: true, ..Sample::default() });
+    let after: Vec<_> = r.published[published..].iter().map(|(_, m)| m.supply_fault).collect();
+    assert!(!after.is_empty() && after.iter().all(|f| *f), "every ranges carries it: {after:?}");
+    assert!(!r.run(1, adc).supply_fault, "and it clears with the flag");
 }
 
 #[test]

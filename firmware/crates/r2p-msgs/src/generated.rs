@@ -282,31 +282,35 @@ crate::impl_wire!(Odometry);
 
 /// Four range readings, published by the proximity module.
 ///
-/// 20 bytes on the bus, type hash `0xA7C115E9`; schema `firmware/msgs/Proximity.msg`.
+/// 21 bytes on the bus, type hash `0xE54B0412`; schema `firmware/msgs/Proximity.msg`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Proximity {
     /// m; NaN when the channel reads out of range (`float32[4]`, bytes 0..16)
     pub distance: [f32; 4],
     /// 0 = ok, 1 = out of range (too near), 2 = out of range (too far), 3 = no sensor (`uint8[4]`, bytes 16..20)
     pub status: [u8; 4],
+    /// the sensors' 5 V switch flags over-current (it holds them at its current limit) (`bool`, bytes 20..21)
+    pub supply_fault: bool,
 }
 
 impl crate::R2pMessage for Proximity {
     const NAME: &'static str = "Proximity";
-    const CANONICAL: &'static str = "Proximity:float32[4] distance;uint8[4] status";
-    const SIZE: usize = 20;
-    const TYPE_HASH: u32 = 0xA7C1_15E9;
+    const CANONICAL: &'static str =
+        "Proximity:float32[4] distance;uint8[4] status;bool supply_fault";
+    const SIZE: usize = 21;
+    const TYPE_HASH: u32 = 0xE54B_0412;
 
     fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
         let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
         w.put(&self.distance);
         w.put(&self.status);
+        w.put(&self.supply_fault);
         Ok(w.finish())
     }
 
     fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
         let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
-        Ok(Self { distance: r.get()?, status: r.get()? })
+        Ok(Self { distance: r.get()?, status: r.get()?, supply_fault: r.get()? })
     }
 }
 
@@ -510,7 +514,7 @@ pub const ALL: &[(&str, u32, usize)] = &[
     ("MotorFault", 0x2D53_828B, 6),
     ("Obstacle", 0x24BE_C850, 5),
     ("Odometry", 0xEEDD_D804, 24),
-    ("Proximity", 0xA7C1_15E9, 20),
+    ("Proximity", 0xE54B_0412, 21),
     ("PsuEvent", 0x7585_7AC8, 10),
     ("PsuState", 0xDBBD_3F72, 7),
     ("Twist2D", 0x10F0_3E9D, 12),

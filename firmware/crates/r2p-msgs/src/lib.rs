@@ -342,13 +342,17 @@ pub(crate) mod tests {
             let mut buf = [0u8; 32];
             let n = Obstacle { channel: 3, distance: 0.5 }.encode(&mut buf).unwrap();
             assert_eq!(&buf[..n], &[0x03, 0x00, 0x00, 0x00, 0x3F]);
-            let prox = Proximity { distance: [0.5, f32::NAN, 1.25, 0.0], status: [0, 2, 0, 3] };
+            let prox = Proximity {
+                distance: [0.5, f32::NAN, 1.25, 0.0],
+                status: [0, 2, 0, 3],
+                supply_fault: true,
+            };
             let n = prox.encode(&mut buf).unwrap();
-            assert_eq!(n, 20);
+            assert_eq!(n, 21);
             assert_eq!(&buf[..4], &[0x00, 0x00, 0x00, 0x3F]);
-            assert_eq!(&buf[16..20], &[0, 2, 0, 3]);
+            assert_eq!(&buf[16..21], &[0, 2, 0, 3, 1]);
             let back = Proximity::decode(&buf[..n]).unwrap();
-            assert!(back.distance[1].is_nan() && back.distance[2] == 1.25);
+            assert!(back.distance[1].is_nan() && back.distance[2] == 1.25 && back.supply_fault);
             let battery = Battery { remaining_s: 0xFFFF_FFFF, ..Battery::default() };
             battery.encode(&mut buf).unwrap();
             assert_eq!(&buf[12..16], &[0xFF; 4]);

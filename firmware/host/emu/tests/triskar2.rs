@@ -226,6 +226,28 @@ fn proximity_distances_match_the_world_and_a_missing_sensor_reads_no_sensor() {
 }
 
 #[test]
+fn a_short_on_the_sensor_rail_raises_the_supply_fault_in_ranges_and_clearing_it_recovers() {
+    let mut r = EmuRobot::build(robot_file()).unwrap();
+    let o = observe(&mut r);
+    r.sim.run_until(2 * S);
+    let before = drain(o.ranges);
+    assert!(!before.is_empty() && before.iter().all(|p| !p.supply_fault), "four Sharp sensors run");
+    let load = r.world.borrow().bus_load_a();
+    r.world.borrow_mut().set_sensor_rail_shorted("proximity", true).unwrap();
+    r.sim.run_for(300 * MS);
+    let last = *drain(o.ranges).last().expect("ranges at 20 Hz");
+    assert!(last.supply_fault, "the switch's flag reaches the bus: {last:?}");
+    assert!(last.status.iter().all(|s| *s == 3), "the rail is down, no sensor reads: {last:?}");
+    let limited = r.world.borrow().bus_load_a();
+    println!("bus load {load:.3} A with the sensors, {limited:.3} A with the rail shorted");
+    assert!(limited - load < 0.05, "the switch holds the short at its limit");
+    r.world.borrow_mut().set_sensor_rail_shorted("proximity", false).unwrap();
+    r.sim.run_for(500 * MS);
+    let last = *drain(o.ranges).last().unwrap();
+    assert!(!last.supply_fault, "cleared: {last:?}");
+}
+
+#[test]
 fn a_motor_follows_a_speed_step_on_the_simulated_70_w_motor_and_stops_when_setpoints_stop() {
     // Without the gateway, the test drives motor1 itself.
     let mut robot = robot_file();

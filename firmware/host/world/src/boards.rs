@@ -90,13 +90,14 @@ pub const MOTOR_SIGNALS: &[SignalSpec] = &[
     sig("DRV_FAULT", SignalKind::Input),
 ];
 
-/// Proximity: four sensor channels and the sensors' 5 V switch.
+/// Proximity: four sensor channels, the sensors' 5 V switch and its fault flag.
 pub const PROXIMITY_SIGNALS: &[SignalSpec] = &[
     sig("PROX_CH0", SignalKind::Analog),
     sig("PROX_CH1", SignalKind::Analog),
     sig("PROX_CH2", SignalKind::Analog),
     sig("PROX_CH3", SignalKind::Analog),
     out("SENSOR_PWR_EN", true),
+    sig("SENSOR_PWR_FAULT", SignalKind::Input),
 ];
 
 impl BoardKind {

@@ -36,6 +36,7 @@ pub mod obstacles;
 pub mod psu;
 pub mod ranger;
 pub mod robot;
+pub mod sensor_switch;
 pub mod world;
 
 pub use boards::{BoardKind, SignalKind};

@@ -35,6 +35,7 @@ use crate::obstacles::Obstacles;
 use crate::psu::{supply_voltage, Psu, PsuParams};
 use crate::ranger::Ranger;
 use crate::robot::{Robot, Uid, Wiring};
+use crate::sensor_switch::SensorSwitch;
 
 /// Longest sub-step, ns: 50 µs, one PWM period. The electrical step is exact for any length
 /// and the coupled mechanics' fastest pole is ~20 s⁻¹ (see `motor.rs`), so this costs
@@ -76,7 +77,7 @@ struct Wheel {
 enum Link {
     Psu,
     Motor { wheel: usize },
-    Proximity { channels: [Option<usize>; 4], sensor_power: bool },
+    Proximity { channels: [Option<usize>; 4], switch: SensorSwitch },
     Gateway,
     Imu { imu: usize },
 }
@@ -306,7 +307,15 @@ impl World {
                         rangers.push(ranger);
                         ranger_noise.push(Noise::new(robot.seed, STREAM_RANGER + i));
                     }
-                    Link::Proximity { channels, sensor_power: true }
+                    // settled as the rangers start: powered, from a bus that is up
+                    let demand: f64 = mounts
+                        .iter()
+                        .filter(|r| r.connected)
+                        .map(|r| r.kind.supply_current_a())
+                        .sum();
+                    let mut switch = SensorSwitch::default();
+                    switch.settle(demand, true);
+                    Link::Proximity { channels, switch }
                 }
                 Wiring::Gateway => Link::Gateway,
                 Wiring::Imu { mount } => {
@@ -401,24 +410,38 @@ impl World {
         }
     }
 
-    /// Powers each ranger from its board's SENSOR_PWR_EN and the bus (a bus that went down
-    /// during a step is seen at its end).
+    /// Powers each ranger through its board's sensor switch (SENSOR_PWR_EN, its current limit)
+    /// from the bus (a bus that went down during a step is seen at its end).
     fn power_rangers(&mut self) {
         let now = self.time_s();
         let bus_on = self.bus_voltage() > 4.5;
-        for b in &self.boards {
-            if let Link::Proximity { channels, sensor_power } = &b.link {
+        for b in &mut self.boards {
+            if let Link::Proximity { channels, switch } = &mut b.link {
+                let demand: f64 = channels
+                    .iter()
+                    .flatten()
+                    .map(|r| &self.rangers[*r])
+                    .filter(|r| r.connected())
+                    .map(|r| r.kind.supply_current_a())
+                    .sum();
+                let rail_up = switch.settle(demand, bus_on);
                 for r in channels.iter().flatten() {
-                    self.rangers[*r].set_powered(*sensor_power && bus_on, now);
+                    self.rangers[*r].set_powered(rail_up, now);
                 }
             }
         }
     }
 
-    /// Current drawn from the 5 V bus, A: the modules' own plus powered rangers.
+    /// Current drawn from the 5 V bus, A: the modules' own plus what the sensor switches pass.
     pub fn bus_load_a(&self) -> f64 {
-        let sensors: f64 =
-            self.rangers.iter().filter(|r| r.powered()).map(|r| r.kind.supply_current_a()).sum();
+        let sensors: f64 = self
+            .boards
+            .iter()
+            .map(|b| match &b.link {
+                Link::Proximity { switch, .. } => switch.load_a(),
+                _ => 0.0,
+            })
+            .sum();
         self.bus_base_load_a + sensors
     }
 
@@ -648,8 +671,8 @@ impl World {
             }
             _ => {
                 // SENSOR_PWR_EN: switches the sensors now.
-                if let Link::Proximity { sensor_power, .. } = &mut self.boards[b].link {
-                    *sensor_power = high;
+                if let Link::Proximity { switch, .. } = &mut self.boards[b].link {
+                    switch.enabled = high;
                 }
                 self.power_rangers();
             }
@@ -664,6 +687,10 @@ impl World {
         Ok(match self.boards[b].kind.signals()[s].name {
             // Active low: high while there is no fault.
             "DRV_FAULT" => !self.wheels[self.wheel_of(b)?].bridge.fault,
+            "SENSOR_PWR_FAULT" => match &self.boards[b].link {
+                Link::Proximity { switch, .. } => !switch.fault(),
+                _ => unreachable!("SENSOR_PWR_FAULT is a proximity signal"),
+            },
             _ => !self.psu.as_ref().is_some_and(|p| p.tripped()), // BUS_FAULT
         })
     }
@@ -697,6 +724,26 @@ impl World {
     ) -> Result<(), IoError> {
         let r = self.ranger_index(board, channel)?;
         self.rangers[r].set_connected(connected);
+        Ok(())
+    }
+
+    /// Injects (or clears) a short on the sensor rail of proximity board `board`: its sensor
+    /// switch goes into current limit and SENSOR_PWR_FAULT goes low while it is enabled.
+    pub fn set_sensor_rail_shorted(&mut self, board: &str, shorted: bool) -> Result<(), IoError> {
+        let b = self.board_index(board)?;
+        match &mut self.boards[b].link {
+            Link::Proximity { switch, .. } => switch.set_shorted(shorted),
+            _ => {
+                return Err(IoError::Invalid {
+                    board: board.to_string(),
+                    problem: format!(
+                        "is a {} board, not a proximity board",
+                        self.boards[b].kind.name()
+                    ),
+                })
+            }
+        }
+        self.power_rangers();
         Ok(())
     }
 

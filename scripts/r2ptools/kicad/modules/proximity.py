@@ -1,9 +1,25 @@
 """hardware/proximity: four analog distance sensors (Sharp GP2Y0A21/0A02 IR, MaxBotix sonar).
 
 Each sensor plugs into a JST PH 3-pin jack on the bottom edge, wired like the Sharp sensors'
-own cable (pin 1 signal Vo, pin 2 GND, pin 3 +5 V) so a straight PH-PH cable fits. The sensors'
-5 V comes from the bus through a current-limited switch (TPS2065C, 1 A class) that the firmware
-turns on with SENSOR_PWR_EN (PB0; a 100 k pull-down keeps the sensors off through reset).
+own cable (pin 1 signal Vo, pin 2 GND, pin 3 +5 V) so a straight PH-PH cable fits.
+
+Sensor supply (revision B). The sensors' 5 V comes from the module's fused bus tap through a
+TPS2553 current-limited switch (SENSOR_PWR_EN, PB0, turns it on; a 100 k pull-down keeps the
+sensors off through reset). Its limit is set by R_ILIM (TPS2553 datasheet SLVS841, RILIM
+equations) so that four Sharp sensors at their typical draw always run (the limit's minimum, with
+the 1 % resistor at its high end, is above 4 x 33 mA) and nothing more is fed: a shorted sensor
+cable or a fifth load is held at the limit, and the switch pulls its open-drain fault flag low
+after its 7.5 ms deglitch. The flag (SENSOR_PWR_FAULT, PB1, 10 k pull-up to 3.3 V) is read and
+published by the firmware. `sensor_budget()` prints the numbers.
+
+Budget exception (README, docs/bus.md §6): the bus allows a module 200 mA and the core takes up
+to 115 mA worst case, which leaves 85 mA: not even three Sharp sensors. The switch's lowest
+setting (ILIM tied to IN, 50-100 mA) would run one or two, and the reference robot (four Sharp
+rangers, robots/triskar2.toml) would not work. So the proximity module may draw up to the
+limit's maximum plus the core's worst case (about 300 mA, typically under 200 mA), counted as
+such in the drop calculation (`sensor_budget()`, docs/bus.md §6).
+Inrush: the 20 uF of the sensor rail charge behind the switch at its limit (>= 0.5 ms), so the
+bus sees only the 11 uF ahead of it (docs/bus.md §6: <= 22 uF).
 
 Per channel: an ESD clamp at the jack (one SRV05-4 array for the four signals), then a divider
 56 k over 100 k into the ADC pin with 100 nF: 5 V full scale becomes 3.21 V (MaxBotix HRLV
@@ -12,6 +28,9 @@ channel read 0 V ("no sensor"), the source impedance is 36 k, and the pole is at
 1 / (2 pi * 36 k * 100 nF) = 44 Hz: above the sensors' 26 Hz (Sharp, 38 ms) update rate and
 settled to 0.1 % in 7 time constants (25 ms). The 56 k also limits the current a miswired 24 V
 sensor could inject into the MCU's clamp diodes to 0.4 mA (the F103 allows 5 mA).
+
+Test pads (no BOM, no placement) on the back: the sensor rail, each channel's ADC input and the
+fault flag.
 """
 from __future__ import annotations
 
@@ -28,19 +47,75 @@ CHANNELS = 4
 SIGNALS = [f"PROX_CH{i}" for i in range(CHANNELS)]
 ADC_PINS = ["PA0", "PA1", "PA2", "PA3"]
 
+# sensor supply budget (docs/bus.md §5-6; TPS2553 datasheet SLVS841, RILIM equations)
+MODULE_LIMIT_MA = 200.0
+CORE_WORST_MA = 115.0
+R_ILIM_KOHM = 174.0                        # 1 %, R111
+R_TOL = 0.01
+SENSOR_RAIL_UF = 20.0                      # C102 + C103 behind the switch
+BUS_SIDE_UF = 11.0                         # C8 (LDO input) + C101 (switch input)
+SENSORS_MA = {"Sharp GP2Y0A21": 30.0, "Sharp GP2Y0A02": 33.0, "MaxBotix HRLV": 3.1}
+"""Typical average supply currents (datasheets); four GP2Y0A02 are the largest set."""
+HOP_MOHM, FIRST_HOP_MOHM = 42.93, 32.93   # docs/bus.md §5.2, loop resistance per hop
+
+
+def switch_limit_ma(r_kohm: float = R_ILIM_KOHM) -> tuple[float, float, float]:
+    """TPS2553 short-circuit current limit (min, nominal, max) in mA for R_ILIM in kohm, the
+    1 % tolerance applied the way that widens the range (datasheet: IOS equations)."""
+    lo = 25230 / (r_kohm * (1 + R_TOL)) ** 1.016
+    nom = 23950 / r_kohm ** 0.977
+    hi = 22980 / (r_kohm * (1 - R_TOL)) ** 0.94
+    return lo, nom, hi
+
+
+def sensor_budget() -> str:
+    """The switch's limit against the sensors' draw and the module's share of the bus."""
+    lo, nom, hi = switch_limit_ma()
+    four = 4 * max(SENSORS_MA.values())
+    worst = hi + CORE_WORST_MA
+    lines = [
+        f"TPS2553, R_ILIM {R_ILIM_KOHM:g} k 1 %: limit {lo:.0f} / {nom:.0f} / {hi:.0f} mA"
+        " (min / nominal / max)",
+        f"four GP2Y0A02 draw {four:.0f} mA typ: at or below the minimum limit ({lo - four:+.1f} mA);"
+        f" robots/triskar2.toml's set (one GP2Y0A02, three GP2Y0A21) {33 + 3 * 30:.0f} mA:"
+        f" {lo - 123:+.0f} mA ({(lo - 123) / 123:.0%})",
+        f"module worst case: {hi:.0f} + {CORE_WORST_MA:g} (core) = {worst:.0f} mA, "
+        f"{worst - MODULE_LIMIT_MA:+.0f} mA against the {MODULE_LIMIT_MA:g} mA of docs/bus.md §6"
+        " (stated exception)",
+    ]
+    extra = (worst - MODULE_LIMIT_MA) / 1000
+    # lowest module voltages of docs/bus.md §5.4's two allowed configurations (200 mA each)
+    for n, where, lowest_v in ((10, "PSU in the middle, 10 modules per side", 4.45),
+                               (14, "PSU at one end, 14 modules", 4.03)):
+        # the exception's extra current crosses every hop between the PSU and the module; worst
+        # when the proximity module is the last one
+        dv_mv = extra * (FIRST_HOP_MOHM + (n - 1) * HOP_MOHM)     # A x mohm = mV
+        v = lowest_v - dv_mv / 1000
+        lines.append(f"  extra drop with the proximity module last ({where}): +{dv_mv:.0f} mV,"
+                     f" lowest module {lowest_v:.2f} -> {v:.2f} V"
+                     f" ({'>=' if v >= 4.0 else '< '} 4.00 V)")
+    lines.append(f"inrush: {SENSOR_RAIL_UF:g} uF behind the switch charge at <= {hi:.0f} mA in"
+                 f" >= {SENSOR_RAIL_UF * 5.0 / hi:.2f} ms; {BUS_SIDE_UF:g} uF on the bus side"
+                 " (SHOULD <= 22 uF)")
+    return "\n".join(lines)
+
 
 def build(core: Sheet) -> Module:
     s = Sheet(NAME, f"{TITLE}: four analog sensor inputs")
     bus_tap(s, "+5V_MOD", at=BUS_TAP_PLACE)
     pins = {p: "" for p in core_mod.FREE_GPIO}
     pins.update(dict(zip(ADC_PINS, SIGNALS)))
-    pins.update({"PB0": "SENSOR_PWR_EN", "V5_IN": "+5V_MOD"})
+    pins.update({"PB0": "SENSOR_PWR_EN", "PB1": "SENSOR_PWR_FAULT", "V5_IN": "+5V_MOD"})
     s.use(core, pins)
 
-    # sensor supply switch
-    s.part("U101", "TPS2065C", {"IN": "+5V_MOD", "EN": "SENSOR_PWR_EN", "GND": "GND",
-                                "OUT": "+5V_SENS"}, nc=("~{FLT}",), at=Place(39.4, 39.0, 0))
+    # sensor supply switch, its limit set by R111 (sensor_budget())
+    s.part("U101", "TPS2553", {"IN": "+5V_MOD", "ILIM": "ILIM", "EN": "SENSOR_PWR_EN",
+                               "GND": "GND", "~{OC}": "SENSOR_PWR_FAULT", "OUT": "+5V_SENS"},
+           at=Place(39.4, 39.0, 0))
+    # R_ILIM beside the ILIM pin (5, right side): channel 3's passives make room for it
+    s.part("R111", "R_174k", {"1": "ILIM", "2": "GND"}, at=Place(42.35, 39.0, 90))
     s.part("R101", "R_100k", {"1": "SENSOR_PWR_EN", "2": "GND"}, at=Place(41.0, 35.8, 0))
+    s.part("R110", "R_10k", {"1": "+3V3", "2": "SENSOR_PWR_FAULT"}, at=Place(44.6, 35.8, 0))
     s.part("C101", "C_1u", {"1": "+5V_MOD", "2": "GND"}, at=Place(37.2, 35.8, 0))
     s.part("C102", "C_10u", {"1": "+5V_SENS", "2": "GND"}, at=Place(18.3, 38.6, 90))
     s.part("C103", "C_10u", {"1": "+5V_SENS", "2": "GND"}, at=Place(49.8, 39.0, 90))
@@ -55,9 +130,18 @@ def build(core: Sheet) -> Module:
         sig, net = f"SIG{ch}", SIGNALS[ch]
         s.part(f"J{101 + ch}", "JST_PH_3", {"1": sig, "2": "GND", "3": "+5V_SENS"},
                at=Place(x, 43.8, 0), value=f"SENSOR {ch}")
-        s.part(f"R{102 + 2 * ch}", "R_56k", {"1": sig, "2": net}, at=Place(x + 0.2, 39.0, 90))
-        s.part(f"R{103 + 2 * ch}", "R_100k", {"1": net, "2": "GND"}, at=Place(x + 2.0, 39.0, 90))
-        s.part(f"C{104 + ch}", "C_100n", {"1": net, "2": "GND"}, at=Place(x + 3.8, 39.0, 90))
+        px = x + (1.0 if ch == 3 else 0.0)          # the passives' row (channel 3: R111's room)
+        s.part(f"R{102 + 2 * ch}", "R_56k", {"1": sig, "2": net}, at=Place(px + 0.2, 39.0, 90))
+        s.part(f"R{103 + 2 * ch}", "R_100k", {"1": net, "2": "GND"}, at=Place(px + 2.0, 39.0, 90))
+        s.part(f"C{104 + ch}", "C_100n", {"1": net, "2": "GND"}, at=Place(px + 3.8, 39.0, 90))
+
+    # test pads on the back (bare copper): sensor rail, the four ADC inputs, the fault flag
+    s.part("TP101", "TP", {"1": "+5V_SENS"}, at=Place(47.6, 38.2, 0, back=True), value="5V_SENS")
+    s.part("TP106", "TP", {"1": "SENSOR_PWR_FAULT"}, at=Place(47.6, 35.6, 0, back=True),
+           value="FAULT")
+    for ch in range(CHANNELS):
+        s.part(f"TP{102 + ch}", "TP", {"1": SIGNALS[ch]},
+               at=Place(xs[ch] + 1.1, 37.4, 0, back=True), value=SIGNALS[ch])
 
     m = Module(NAME, TITLE, REVISION, s,
                tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks()], seed=2)
@@ -67,3 +151,7 @@ def build(core: Sheet) -> Module:
         m.texts.append(Text(f"S{ch}", x + 2.0, 41.6, 0.8))
         m.texts.append(Text("5V GND SIG", x + 2.0, 40.0, 0.8, "B.SilkS"))   # seen from the back
     return m
+
+
+if __name__ == "__main__":
+    print(sensor_budget())

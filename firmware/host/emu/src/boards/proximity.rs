@@ -1,5 +1,5 @@
 //! The proximity board: four ranger outputs on PROX_CH0–3 from the world; the sensors' supply
-//! switch.
+//! switch and its over-current flag.
 
 use r2p_app_proximity as app;
 
@@ -22,6 +22,8 @@ pub fn proximity(ctx: Ctx<'_>) -> Result<Booted, String> {
             let sample = app::Sample {
                 adc: ["PROX_CH0", "PROX_CH1", "PROX_CH2", "PROX_CH3"].map(|s| adc(&mut w, name, s)),
                 status: leds.status(now, node, false),
+                // SENSOR_PWR_FAULT is active low.
+                supply_fault: !w.read_input(name, "SENSOR_PWR_FAULT").unwrap_or(true),
             };
             let c = a.step(now, &sample);
             w.set_output(name, "SENSOR_PWR_EN", c.sensor_power).unwrap_or_else(|e| panic!("{e}"));

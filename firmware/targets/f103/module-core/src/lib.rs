@@ -12,7 +12,7 @@ use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
 use embassy_executor::InterruptExecutor;
 use embassy_stm32::flash::{Blocking, Flash};
-use embassy_stm32::gpio::{Flex, Level, Output, Pin};
+use embassy_stm32::gpio::{Flex, Input, Level, Output, Pin};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
 use embassy_stm32::{rcc, time::Hertz, Config, Peri};
@@ -176,4 +176,9 @@ pub fn analog(pin: &mut Peri<'static, impl Pin>) {
 /// Drives an output to its logical level (`on`), given the board file's `active`.
 pub fn drive(out: &mut Output<'static>, on: bool, active_low: bool) {
     out.set_level(Level::from(on != active_low));
+}
+
+/// Whether an input is asserted (its logical level), given the board file's `active`.
+pub fn asserted(input: &Input<'static>, active_low: bool) -> bool {
+    input.is_high() != active_low
 }

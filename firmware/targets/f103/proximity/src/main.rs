@@ -1,5 +1,6 @@
 //! Default firmware of the R2P proximity module (STM32F103CB): the application of
-//! `r2p-app-proximity` on the board's four analog sensor inputs, the sensors' power switch,
+//! `r2p-app-proximity` on the board's four analog sensor inputs, the sensors' power switch and
+//! its fault flag,
 //! the status LEDs, bxCAN and parameters in flash. Pins come only from the board file
 //! (firmware/boards/proximity.toml) through the generated `board` module.
 #![no_std]
@@ -11,7 +12,7 @@ use embassy_stm32::can::{
     Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
 };
 use embassy_stm32::flash::{Blocking, Flash};
-use embassy_stm32::gpio::Output;
+use embassy_stm32::gpio::{Input, Output};
 use embassy_stm32::peripherals::{ADC1, CAN, PA0, PA1, PA2, PA3};
 use embassy_stm32::{bind_interrupts, pac, Peri};
 use embassy_time::{Duration, Instant, Ticker};
@@ -24,7 +25,7 @@ mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
 }
 
-use module_core::{drive, ModuleNode};
+use module_core::{asserted, drive, ModuleNode};
 
 bind_interrupts!(struct Irqs {
     USB_LP_CAN1_RX0 => Rx0InterruptHandler<CAN>;
@@ -50,6 +51,7 @@ struct Io {
     ch2: Peri<'static, PA2>,
     ch3: Peri<'static, PA3>,
     sensor_power: Output<'static>,
+    sensor_fault: Input<'static>,
     leds: [Output<'static>; 3],
 }
 
@@ -67,7 +69,12 @@ async fn run(mut app: App<'static>, mut io: Io, mut flash: Flash<'static, Blocki
             io.adc.read(&mut io.ch2, SAMPLE_TIME).await,
             io.adc.read(&mut io.ch3, SAMPLE_TIME).await,
         ];
-        let c = app.step(now, &Sample { adc, status: module_core::led_status() });
+        let sample = Sample {
+            adc,
+            status: module_core::led_status(),
+            supply_fault: asserted(&io.sensor_fault, board::SENSOR_PWR_FAULT_ACTIVE_LOW),
+        };
+        let c = app.step(now, &sample);
         drive(&mut io.sensor_power, c.sensor_power, board::SENSOR_PWR_EN_ACTIVE_LOW);
         let [status, bus, fault] = &mut io.leds;
         drive(status, c.led_status, board::LED_STATUS_ACTIVE_LOW);
@@ -105,6 +112,7 @@ async fn main(spawner: Spawner) {
         ch2: pins.prox_ch2,
         ch3: pins.prox_ch3,
         sensor_power,
+        sensor_fault: board::sensor_pwr_fault(pins.sensor_pwr_fault),
         leds,
     };
 
