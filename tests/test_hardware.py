@@ -214,6 +214,68 @@ def test_a_field_disagreeing_with_the_parts_database_is_reported(scratch):
     assert any("C99999" in p for p in _problems(scratch, "BOM"))
 
 
+# --- hardware/psu revision B: the design calculation is the board's ------------------------------
+
+def _si(value: str) -> float:
+    """A catalogue value ("6.8k", "470nF 25V", "10m 1%", "10uH 7.5A") as a number in SI units."""
+    m = re.match(r"([0-9.]+)\s*([pnumkM]?)", value)
+    if not m:
+        raise ValueError(f"not a component value: {value!r}")
+    scale = {"": 1.0, "p": 1e-12, "n": 1e-9, "u": 1e-6, "m": 1e-3, "k": 1e3, "M": 1e6}[m.group(2)]
+    return float(m.group(1)) * scale
+
+
+def test_psu_design_calculation_uses_the_boards_values():
+    """calc/psu.py prints the design numbers from BOARD_VALUES: they must be the board's parts."""
+    from r2ptools.kicad.calc import psu as calc
+    from r2ptools.kicad.modules import build
+    parts = {p.ref: p for _, p in build("psu").all_parts()}
+    wrong = [f"{ref}: calc assumes {want:g}, board has {parts[ref].value}"
+             for ref, want in calc.BOARD_VALUES.items()
+             if ref not in parts or abs(_si(parts[ref].value) - want) > 1e-9 * want]
+    assert not wrong, "\n".join(wrong)
+    pin = {p.name: p.number for p in libsym.pins(parts["U102"].item.symbol)}
+    assert parts["U102"].nets[pin["BIAS"]] == "+5V_BUCK", "LM76005 BIAS on the 5 V output (SNVSBK5)"
+    assert calc.main() == 0, "a design row fails: run scripts/py -m r2ptools.kicad.calc.psu"
+
+
+def test_psu_calculation_catches_a_drifted_value(monkeypatch):
+    """The check above is real: a value the calculation did not assume is reported."""
+    from r2ptools.kicad.calc import psu as calc
+    monkeypatch.setitem(calc.BOARD_VALUES, "R116", 3.9e3)      # revision A's 4.6 A limit
+    with pytest.raises(AssertionError, match="R116"):
+        test_psu_design_calculation_uses_the_boards_values()
+    rows = {r.what: r for r in calc.rows()}
+    assert not rows["eFuse limit 18/R_ILIM"].ok, "4.6 A out of one jack must fail the bus rule"
+
+
+def test_psu_high_voltage_clearance_rule_catches_a_violation(tmp_path):
+    """psu.kicad_dru's IPC-2221B rule: a GND via 0.4 mm from a battery-side pad is a DRC error
+    (0.4 mm passes the fab's 0.127 mm and the 0.15 mm class clearance, so only the rule sees it)."""
+    import pcbnew
+    out = tmp_path / "hardware"
+    for d in ("psu", "core"):
+        shutil.copytree(HARDWARE / d, out / d, ignore=shutil.ignore_patterns("fab"))
+    pcb = out / "psu" / "psu.kicad_pcb"
+    assert "ipc2221b" in (out / "psu" / "psu.kicad_dru").read_text()
+
+    def ipc_errors() -> list[str]:
+        return [v["description"] for v in check.drc(pcb)["violations"]
+                if "ipc2221b" in v["description"]]
+
+    assert not ipc_errors(), "the committed board keeps the rule"
+    b = pcbnew.LoadBoard(str(pcb))
+    pad = next(p for p in b.FindFootprintByReference("C102").Pads() if p.GetNetname().endswith("VIN_BUCK"))
+    gnd = b.FindNet("GND")
+    via = pcbnew.PCB_VIA(b)
+    right = pad.GetPosition().x + pad.GetSize().x // 2
+    via.SetPosition(pcbnew.VECTOR2I(right + pcbnew.FromMM(0.4 + 0.3), pad.GetPosition().y))
+    via.SetWidth(pcbnew.FromMM(0.6))
+    via.SetDrill(pcbnew.FromMM(0.3))
+    via.SetNet(gnd)
+    b.Add(via)
+    pcbnew.SaveBoard(str(pcb), b)
+    assert ipc_errors(), "a GND via 0.4 mm from VIN_BUCK must break the 0.6 mm rule"
 # --- revision B: parts that are not assembled ---------------------------------------------------
 
 def test_test_pads_and_fiducials_are_on_the_board_but_on_no_bom_or_placement_file(tmp_path):

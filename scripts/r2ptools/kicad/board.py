@@ -118,7 +118,7 @@ def build(m: Module, net: Netlist) -> pcbnew.BOARD:
     from .fplib import source as fplib_source      # fplib builds on this module
     pcbnew.KIID.SeedGenerator(m.seed)
     board = pcbnew.BOARD()
-    fabcap.apply(board)
+    fabcap.apply(board, m.netclass_defs)
     ds = board.GetDesignSettings()
     ds.SetAuxOrigin(pt(0, 0))
     ds.SetGridOrigin(pt(0, 0))
@@ -173,6 +173,8 @@ def build(m: Module, net: Netlist) -> pcbnew.BOARD:
         for txt in (fp.Reference(), fp.Value()):
             txt.SetTextSize(pcbnew.VECTOR2I(mm(0.8), mm(0.8)))
             txt.SetTextThickness(mm(0.15))
+        if ref in m.solid_pads:         # power pads: solid pour joins, no thermal spokes
+            fp.SetLocalZoneConnection(pcbnew.ZONE_CONNECTION_FULL)
         board.Add(fp)
         if place.back:                  # flipping needs the footprint on a board
             fp.Flip(fp.GetPosition(), pcbnew.FLIP_DIRECTION_LEFT_RIGHT)
@@ -262,11 +264,12 @@ def fill(board: pcbnew.BOARD) -> None:
     pcbnew.ZONE_FILLER(board).Fill(board.Zones())
 
 
-def save(board: pcbnew.BOARD, path: Path, classes: dict[str, list[str]]) -> None:
-    """Saves the board and its project (rules, net classes) in a byte-stable form."""
+def save(board: pcbnew.BOARD, path: Path, classes: dict[str, list[str]], rules: str = "") -> None:
+    """Saves the board and its project (rules, net classes) in a byte-stable form; `rules` are
+    the board's own custom design rules, written after the fab's."""
     pcbnew.SaveBoard(str(path), board)
     fabcap.normalise_project(path.with_suffix(".kicad_pro"), classes)
-    fabcap.write_dru(path.with_suffix(".kicad_dru"))
+    fabcap.write_dru(path.with_suffix(".kicad_dru"), rules)
     prl = path.with_suffix(".kicad_prl")
     if prl.exists():
         prl.unlink()

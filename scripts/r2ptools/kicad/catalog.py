@@ -60,6 +60,8 @@ _ITEMS = [
     ("R_24k9", R, R0603, "24.9k", "0603WAF2492T5E"),
     ("R_27k", R, R0603, "27k", "0603WAF2702T5E"),
     ("R_100k", R, R0603, "100k", "0603WAF1003T5E"),
+    ("R_150k", R, R0603, "150k", "0603WAF1503T5E"),
+    ("R_6k8", R, R0603, "6.8k", "0603WAF6801T5E"),
     ("R_174k", R, R0603, "174k", "0603WAF1743T5E"),
     ("R_60R4", R, R0805, "60.4", "0805W8F604JT5E"),        # split CAN termination, 0.125 W
     # --- capacitors
@@ -71,8 +73,10 @@ _ITEMS = [
     ("C_1u", C, C0603, "1uF", "CL10A105KB8NNNC"),
     ("C_10u", C, C0805, "10uF 25V", "CL21A106KAYNNNE"),
     ("C_22n", C, C0603, "22nF", "CL10B223KB8NNNC"),
-    ("C_470n", C, C0603, "470nF", "CL10B474KO8NNNC"),
+    ("C_470n", C, C0603, "470nF 25V", "CL10B474KA8NNNC"),
     ("C_10u_50V", C, C1206, "10uF 50V", "CL31B106KBHNNNE"),
+    ("C_100n_100V", C, C0603, "100nF 100V", "CL10B104KC8NNNC"),
+    ("C_2u2_100V", C, C1210, "2.2uF 100V", "CL32B225KCJSNNE"),
     ("C_22u_25V", C, C1210, "22uF 25V", "CS3225X7R226K250NRL"),
     # --- core actives and electromechanics
     ("STM32F103CBT6", "MCU_ST_STM32F1:STM32F103CBTx", "Package_QFP:LQFP-48_7x7mm_P0.5mm",
@@ -109,17 +113,22 @@ _ITEMS = [
     ("XT30", "Connector_Generic:Conn_01x02", "R2P:AMASS_XT30PW-M_1x02_P2.50mm_Horizontal",
      "XT30 IN", "XT30PW-M"),
     ("SUD50P06-15", "Transistor_FET:SUD50P06-15", "Package_TO_SOT_SMD:TO-252-2", "SUD50P06-15",
-     "SUD50P06-15"),
+     "SUD50P06-15-GE3"),
+    ("FUSE_5A_SLOW", "Device:Fuse", "Fuse:Fuse_Littelfuse-NANO2-451_453", "5A T 125V", "0452005.MRL"),
     ("Z_15V", "Device:D_Zener", "Diode_SMD:D_SOD-123", "15V", "BZT52C15"),
-    ("SMAJ36A", "Diode:SMAJ36A", "Diode_SMD:D_SMA", "SMAJ36A", "SMAJ36A"),
+    ("SMBJ40A", "Device:D_TVS", "Diode_SMD:D_SMB", "SMBJ40A", "SMBJ40A"),
     ("R_10m", R, "Resistor_SMD:R_1206_3216Metric", "10m 1%", "RL1206FR-7W0R01L"),
     ("INA293A2", "Amplifier_Current:INA293A2", "Package_TO_SOT_SMD:SOT-23-5", "INA293A2",
      "INA293A2IDBVR"),
     ("LM76005", "Regulator_Switching:LM76005",
      "Package_DFN_QFN:Texas_RNP0030B_WQFN-30-1EP_4x6mm_P0.5mm_EP1.8x4.5mm", "LM76005", "LM76005RNPR"),
     ("L_10u", "Device:L", "Inductor_SMD:L_Bourns_SRP1038C_10.0x10.0mm", "10uH 7.5A", "SRP1038A-100M"),
-    ("TPS26631", "Power_Management:TPS26631PWP",
-     "R2P:HTSSOP-20-1EP_4.4x6.5mm_P0.65mm_EP3.4x6.5mm", "TPS26631", "TPS26631PWPR"),
+    # TPS16630PWPR on KiCad's TPS26631PWP symbol: KiCad has no TPS1663 symbol; the HTSSOP-20
+    # pinouts agree pin for pin (SLVSET9 table 6-1 vs SLVSDO8) except that the TPS16630 has no
+    # B_GATE/DRV (its pins 4, 5 and 17 are NC), calls IN_SYS P_IN (6) and has PGOOD on 16 (the
+    # symbol's PGTH). psu.py wires the pins by what the TPS16630 has there.
+    ("TPS16630", "Power_Management:TPS26631PWP",
+     "R2P:HTSSOP-20-1EP_4.4x6.5mm_P0.65mm_EP3.4x6.5mm", "TPS16630", "TPS16630PWPR"),
     # --- proximity
     ("JST_PH_3", "Connector_Generic:Conn_01x03",
      "R2P:JST_PH_S3B-PH-K_1x03_P2.00mm_Horizontal", "PH 3p", "S3B-PH-K-S(LF)(SN)"),

@@ -186,6 +186,10 @@ class Module:
     netclasses: dict[str, list[str]] = field(default_factory=dict)
     fiducials: list[tuple[float, float]] = field(default_factory=list)   # 3, board-only
     seed: int = 1
+    solid_pads: tuple[str, ...] = ()    # parts whose pads join the pours solid, THT ones too
+    netclass_defs: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+    # extra net classes (clearance, track, via, drill in mm) for `netclasses` beyond Power
+    dru_rules: str = ""                 # board-specific KiCad custom rules, after the fab's
 
     def sheets(self) -> list[Sheet]:
         out, todo = [], [self.root]

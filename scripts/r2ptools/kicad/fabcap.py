@@ -56,7 +56,9 @@ DRU = """(version 1)
 """
 
 
-def apply(board: pcbnew.BOARD) -> None:
+def apply(board: pcbnew.BOARD, extra: dict[str, tuple[float, float, float, float]] | None = None) -> None:
+    """The fab's minimums and the net classes; `extra` adds a board's own classes (the PSU's
+    high-voltage class, so the autorouter keeps its spacing)."""
     ds = board.GetDesignSettings()
     mm = pcbnew.FromMM
     ds.m_TrackMinWidth = mm(MIN_TRACK)
@@ -72,7 +74,7 @@ def apply(board: pcbnew.BOARD) -> None:
     ds.m_MinSilkTextThickness = mm(MIN_TEXT_THICKNESS)
     ds.m_MinResolvedSpokes = 1     # a THT pad between two other-net pins may keep a single spoke
     ns = ds.m_NetSettings
-    for name, (cl, tw, vd, vdr) in NETCLASSES.items():
+    for name, (cl, tw, vd, vdr) in {**NETCLASSES, **(extra or {})}.items():
         nc = ns.GetDefaultNetclass() if name == "Default" else pcbnew.NETCLASS(name)
         nc.SetClearance(mm(cl))
         nc.SetTrackWidth(mm(tw))
@@ -90,10 +92,10 @@ def assign(board: pcbnew.BOARD, classes: dict[str, list[str]]) -> None:
             ns.SetNetclassPatternAssignment(n, cls)
 
 
-def write_dru(path: Path) -> None:
+def write_dru(path: Path, extra: str = "") -> None:
     path.write_text(DRU.format(track=MIN_TRACK, clearance=MIN_CLEARANCE, drill=MIN_DRILL,
                                via=MIN_VIA, annular=MIN_ANNULAR, h2h=HOLE_TO_HOLE,
-                               edge=EDGE_CLEARANCE))
+                               edge=EDGE_CLEARANCE) + extra)
 
 
 def normalise_project(path: Path, classes: dict[str, list[str]]) -> None:

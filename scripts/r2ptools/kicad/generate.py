@@ -63,7 +63,7 @@ def generate(m: Module, modules: list[Module], out: Path, force_route: bool = Fa
     classes = {c: sorted(net.resolve(n) for n in names) for c, names in power_classes(m).items()}
     fabcap.assign(b, classes)
     pcb = folder / f"{m.name}.kicad_pcb"
-    board_mod.save(b, pcb, classes)
+    board_mod.save(b, pcb, classes, m.dru_rules)
     times["board"] = time.monotonic() - t0
 
     t0 = time.monotonic()
@@ -81,13 +81,13 @@ def generate(m: Module, modules: list[Module], out: Path, force_route: bool = Fa
                                      "rerun with --route")
         log(f"route: {m.name}: {missing} connections left unrouted after {passes} passes")
     else:
-        board_mod.save(b, pcb, classes)     # kept for inspection: `scripts/py -m r2ptools.kicad.check`
+        board_mod.save(b, pcb, classes, m.dru_rules)     # kept for inspection: `scripts/py -m r2ptools.kicad.check`
         raise route.RoutingError(f"{m.name}: freerouting left {missing} connections unrouted "
                                  f"after {ROUTE_PASSES[-1]} passes: loosen the placement")
     # trimmed silk for the routed board (fplib.py)
     fplib.apply(b, {r: c.footprint for r, c in net.components.items()}, fplib.build(out))
     log(f"{m.name}: " + silk.layout(b).summary())
-    board_mod.save(b, pcb, classes)
+    board_mod.save(b, pcb, classes, m.dru_rules)
     times["route" if routed else "route (replayed)"] = time.monotonic() - t0
     return times
 

@@ -137,12 +137,12 @@ fn an_out_of_range_param_set_over_the_bus_is_refused() {
     }));
     assert_eq!(r.params.get(params::OC_THRESHOLD_A), Ok(Value::F32(5.0)), "not applied");
 
-    r.tool.node.set_param(psu, params::OC_THRESHOLD_A, Value::F32(8.0)).unwrap();
+    r.tool.node.set_param(psu, params::OC_THRESHOLD_A, Value::F32(6.0)).unwrap();
     r.run(20, s);
     assert!(r.tool_events.contains(&Event::ParamValue {
         from: psu,
         index: params::OC_THRESHOLD_A,
-        value: Value::F32(8.0)
+        value: Value::F32(6.0)
     }));
-    assert_eq!(r.params.get(params::OC_THRESHOLD_A), Ok(Value::F32(8.0)));
+    assert_eq!(r.params.get(params::OC_THRESHOLD_A), Ok(Value::F32(6.0)));
 }

@@ -4,8 +4,8 @@
 //!
 //! | channel | pin | front end | full scale at 3.3 V | one count |
 //! |---|---|---|---|---|
-//! | `VIN_SENSE` | PA0 | 100 kΩ / 10 kΩ divider (× 1/11) | 36.3 V | 8.86 mV |
-//! | `IIN_SENSE` | PA1 | 5 mΩ low-side shunt × 50 V/V amplifier (INA180A3-like) = 0.25 V/A | 13.2 A | 3.22 mA |
+//! | `VIN_SENSE` | PA0 | 150 kΩ / 10 kΩ divider (× 1/16) | 52.8 V | 12.9 mV |
+//! | `IIN_SENSE` | PA1 | 10 mΩ high-side shunt × 50 V/V amplifier (INA293A2) = 0.5 V/A | 6.6 A | 1.61 mA |
 //! | `VOUT_SENSE` | PA2 | 10 kΩ / 10 kΩ divider (× 1/2) | 6.6 V | 1.61 mV |
 //!
 //! One count is VREF/4096 at the pin (3.3 V = 4096 LSB; the ADC tops out at code 4095).
@@ -21,17 +21,18 @@ pub const ADC_MAX: u16 = 4095;
 pub const LSB_V: f32 = VREF_V / 4096.0;
 
 /// VIN divider, top resistor (battery side), Ω. Must match hardware/psu schematic.
-pub const VIN_R_TOP_OHM: f32 = 100_000.0;
+pub const VIN_R_TOP_OHM: f32 = 150_000.0;
 /// VIN divider, bottom resistor (to ground), Ω. Must match hardware/psu schematic.
 pub const VIN_R_BOTTOM_OHM: f32 = 10_000.0;
-/// Battery volts per volt at the pin (11).
+/// Battery volts per volt at the pin (16): 52.8 V full scale, above a 10S pack on its charger
+/// (42.4 V, 80 % of full scale).
 pub const VIN_GAIN: f32 = (VIN_R_TOP_OHM + VIN_R_BOTTOM_OHM) / VIN_R_BOTTOM_OHM;
 
 /// Current shunt, Ω. Must match hardware/psu schematic.
-pub const SHUNT_OHM: f32 = 0.005;
-/// Current-sense amplifier gain, V/V (INA180A3). Must match hardware/psu schematic.
+pub const SHUNT_OHM: f32 = 0.010;
+/// Current-sense amplifier gain, V/V (INA293A2). Must match hardware/psu schematic.
 pub const IIN_AMP_GAIN: f32 = 50.0;
-/// Volts at the pin per amp through the shunt (0.25 V/A).
+/// Volts at the pin per amp through the shunt (0.5 V/A).
 pub const IIN_V_PER_A: f32 = SHUNT_OHM * IIN_AMP_GAIN;
 
 /// VOUT divider, top resistor (bus side), Ω. Must match hardware/psu schematic.
@@ -94,34 +95,34 @@ mod tests {
 
     #[test]
     fn full_scale_matches_the_front_end_math() {
-        // 3.3 V at the pin (4096 LSB): 36.3 V battery, 13.2 A, 6.6 V bus.
-        assert!((VIN_GAIN * 4096.0 * LSB_V - 36.3).abs() < 1e-4);
-        assert!((4096.0 * LSB_V / IIN_V_PER_A - 13.2).abs() < 1e-4);
+        // 3.3 V at the pin (4096 LSB): 52.8 V battery, 6.6 A, 6.6 V bus.
+        assert!((VIN_GAIN * 4096.0 * LSB_V - 52.8).abs() < 1e-4);
+        assert!((4096.0 * LSB_V / IIN_V_PER_A - 6.6).abs() < 1e-4);
         assert!((VOUT_GAIN * 4096.0 * LSB_V - 6.6).abs() < 1e-5);
         // The top code is one LSB below.
-        assert!((vin_volts(4095) - 36.291).abs() < 1e-3);
+        assert!((vin_volts(4095) - 52.787).abs() < 1e-3);
         assert_eq!(vin_volts(0), 0.0);
         assert_eq!(pin_volts(5000), pin_volts(4095), "codes above full scale saturate");
     }
 
     #[test]
     fn a_count_is_the_stated_resolution() {
-        assert!((vin_volts(1) - 0.008_862).abs() < 1e-6);
-        assert!((iin_amps(1) - 0.003_223).abs() < 1e-6);
+        assert!((vin_volts(1) - 0.012_891).abs() < 1e-6);
+        assert!((iin_amps(1) - 0.001_611).abs() < 1e-6);
         assert!((vout_volts(1) - 0.001_611).abs() < 1e-6);
     }
 
     #[test]
     fn conversions_round_trip_within_half_a_count() {
-        for v in [5.5f32, 7.4, 12.0, 24.0, 36.0] {
+        for v in [6.0f32, 7.4, 12.0, 24.0, 36.0, 42.4] {
             assert!((vin_volts(vin_counts(v)) - v).abs() <= 0.5 * vin_volts(1) + 1e-5, "{v} V");
         }
-        for a in [0.0f32, 0.1, 2.0, 4.0, 13.0] {
+        for a in [0.0f32, 0.1, 2.0, 3.2, 6.5] {
             assert!((iin_amps(iin_counts(a)) - a).abs() <= 0.5 * iin_amps(1) + 1e-5, "{a} A");
         }
         assert_eq!(vout_counts(5.0), 3103); // 2.5 V at the pin: 3103.03 LSB
         assert_eq!(iin_counts(-1.0), 0);
-        assert_eq!(vin_counts(40.0), 4095);
+        assert_eq!(vin_counts(55.0), 4095);
         assert_eq!(pin_counts(f32::NAN), 0);
     }
 }

@@ -1,4 +1,4 @@
-//! Default application of the R2P power-supply module (PSU): 5.5–36 V in, 5 V / 4 A bus out.
+//! Default application of the R2P power-supply module (PSU): 6–42 V in, 5 V / 2.4 A bus out.
 //!
 //! It measures the battery (voltage, current) and the bus output through the ADC, counts the
 //! charge drawn, estimates the time left, and publishes them (`psu/battery`, `psu/state`); it

@@ -144,7 +144,7 @@ mod tests {
         let s = render();
         assert!(s.contains("| `psu/event` | `PsuEvent` | publishes | SRT, deadline 10 ms"));
         assert!(s.contains("| `psu/battery` | `Battery` | publishes | NRT |"));
-        assert!(s.contains("| 4 | `oc_threshold_a` | f32 | 5 | 0.1 … 13 | A |"));
+        assert!(s.contains("| 4 | `oc_threshold_a` | f32 | 5 | 0.1 … 6.5 | A |"));
         assert_eq!(splice("a\nb\n", &s), None);
         assert_eq!(
             splice(&std::format!("x\n{BEGIN}\nold\n{END}\ny\n"), "new\n").unwrap(),

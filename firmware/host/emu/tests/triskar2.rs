@@ -157,10 +157,10 @@ fn the_psu_reports_the_battery_within_its_accuracy() {
     assert!(got.len() >= 20, "10 Hz battery messages: {}", got.len());
     let last = got.last().unwrap();
     let w = r.world.borrow();
-    // Voltage: 12-bit ADC over a 36.3 V range (8.9 mV per count) and a 1 s filter.
+    // Voltage: 12-bit ADC over a 52.8 V range (12.9 mV per count) and a 1 s filter.
     let v = w.supply_voltage();
     assert!((f64::from(last.voltage) - v).abs() < 0.05, "{} V vs {v:.3} V", last.voltage);
-    // Current: the PSU's own input (the bus load through the converter), 3.2 mA per count.
+    // Current: the PSU's own input (the bus load through the converter), 1.6 mA per count.
     let i = w.psu_input_current();
     assert!(
         (f64::from(last.current) - i).abs() < 0.01 + 0.02 * i,
@@ -173,16 +173,18 @@ fn the_psu_reports_the_battery_within_its_accuracy() {
 fn an_over_current_fires_the_event_and_switches_the_bus_off() {
     let mut robot = robot_file();
     let psu = robot.modules.iter_mut().find(|m| m.name == "psu").unwrap();
-    psu.params.push(("oc_threshold_a".into(), ParamValue::Float(0.5)));
+    psu.params.push(("oc_threshold_a".into(), ParamValue::Float(0.4)));
     psu.params.push(("oc_time_ms".into(), ParamValue::Int(50)));
     let mut r = EmuRobot::build(robot).unwrap();
     let o = observe(&mut r);
     r.sim.run_until(S);
     assert!(r.world.borrow().bus_voltage() > 4.9);
     drain(o.events);
-    // A short on the bus side: 3 A more from the 5 V output, ~0.75 A more at the input.
+    // An overload on the bus side below the eFuse's limit (2.65 A, hardware/psu rev B): the bus
+    // at 2.3 A, ~0.53 A at the input, so the firmware's check fires before the eFuse would.
     let load = r.world.borrow().bus_load_a();
-    r.world.borrow_mut().set_bus_load_a(load + 3.0);
+    assert!(load < 1.5, "the robot's own bus load: {load} A");
+    r.world.borrow_mut().set_bus_load_a(2.3);
     let t0 = r.sim.now_ns();
     let fired = r.sim.run_while(MS, t0 + 500 * MS, |_| !o.events.is_empty());
     assert!(fired, "no over-current event within 500 ms");

@@ -39,13 +39,13 @@ impl Divider {
 /// Every module's ADC (STM32F103, 12 bits, 3.3 V reference).
 pub const ADC: Adc = Adc::STM32F103;
 
-/// PSU `VIN_SENSE`: battery voltage through 100 kΩ / 10 kΩ (÷11): 36.3 V full scale, above
-/// the PSU's 36 V maximum input.
-pub const VIN_SENSE: Divider = Divider { top_ohm: 100e3, bottom_ohm: 10e3 };
+/// PSU `VIN_SENSE`: battery voltage through 150 kΩ / 10 kΩ (÷16): 52.8 V full scale, above
+/// the PSU's 42.4 V maximum input (revision B).
+pub const VIN_SENSE: Divider = Divider { top_ohm: 150e3, bottom_ohm: 10e3 };
 
-/// PSU `IIN_SENSE`: the PSU's input current (from the battery) through a 5 mΩ low-side shunt...
-pub const IIN_SHUNT_OHM: f64 = 0.005;
-/// ...amplified 50 V/V (0.25 V/A, 13.2 A full scale). Unidirectional: a charging (negative)
+/// PSU `IIN_SENSE`: the PSU's input current (from the battery) through a 10 mΩ high-side shunt...
+pub const IIN_SHUNT_OHM: f64 = 0.010;
+/// ...amplified 50 V/V by an INA293A2 (0.5 V/A, 6.6 A full scale). Unidirectional: a charging (negative)
 /// current reads 0 V.
 pub const IIN_GAIN: f64 = 50.0;
 
@@ -76,14 +76,14 @@ mod tests {
 
     #[test]
     fn full_scales() {
-        assert!((VIN_SENSE.full_scale(3.3) - 36.3).abs() < 1e-12);
+        assert!((VIN_SENSE.full_scale(3.3) - 52.8).abs() < 1e-12);
         assert!((VMOT_SENSE.full_scale(3.3) - 36.3).abs() < 1e-12);
         assert!((VOUT_SENSE.output(5.0) - 2.5).abs() < 1e-12);
-        assert!((iin_sense(4.0) - 1.0).abs() < 1e-12);
+        assert!((iin_sense(2.0) - 1.0).abs() < 1e-12);
         assert_eq!(iin_sense(20.0), 3.3, "clips at 13.2 A");
         assert_eq!(iin_sense(-2.0), 0.0, "unidirectional");
-        // ADC codes of the nominal values: 24 V → 2.18 V → 2708; 5 V bus → 3103.
-        assert_eq!(ADC.convert_ideal(VIN_SENSE.output(24.0)), 2708);
+        // ADC codes of the nominal values: 24 V → 1.5 V → 1862; 5 V bus → 3103.
+        assert_eq!(ADC.convert_ideal(VIN_SENSE.output(24.0)), 1862);
         assert_eq!(ADC.convert_ideal(VOUT_SENSE.output(5.0)), 3103);
     }
 }

@@ -3,11 +3,12 @@
 //!
 //! Model: the converter regulates 5.0 V exactly while its input is at least 5.5 V, drawing
 //! P_out/η from the battery (η constant); below 5.5 V it drops out and the bus is off. The
-//! output switch (BUS_EN) trips when the bus load exceeds 4 A and stays off, with BUS_FAULT
+//! output switch (BUS_EN) trips when the bus load exceeds its limit (2.65 A nominal) and stays off, with BUS_FAULT
 //! asserted, until BUS_EN is cycled (latch-off, as the eFuse class of switch does). The bus
 //! load is the modules' own consumption (robot file) plus the rangers powered from it.
 
-/// Constants of the PSU's power path (PSU hardware issue: 5.5–36 V in, 5 V / 4 A out).
+/// Constants of the PSU's power path (hardware/psu revision B: 6–42 V in, 5 V / 2.4 A out,
+/// eFuse limit 2.41–2.89 A).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PsuParams {
     /// Regulated bus voltage, V.
@@ -23,7 +24,7 @@ pub struct PsuParams {
 impl PsuParams {
     /// The R2P PSU module.
     pub const R2P: PsuParams =
-        PsuParams { bus_voltage_v: 5.0, efficiency: 0.85, min_input_v: 5.5, current_limit_a: 4.0 };
+        PsuParams { bus_voltage_v: 5.0, efficiency: 0.85, min_input_v: 5.5, current_limit_a: 2.65 };
 }
 
 /// State of the PSU's power path.

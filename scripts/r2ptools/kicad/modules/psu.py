@@ -1,54 +1,66 @@
-"""hardware/psu: battery in (5.5–36 V), bus out (5 V, 4 A), battery voltage and current sensing.
+"""hardware/psu revision B: battery in (6-42 V, 2S-10S Li-ion), bus out (5 V, 2.4 A), battery
+voltage and current sensing.
 
 Power path, left to right along the bottom edge:
 
-    XT30 ──► Q101 P-MOSFET (reverse polarity) ──► VIN_PROT ──► R102 10 mΩ shunt ──► VIN_BUCK
-             D101 15 V zener holds Vgs,              D102 SMAJ36A TVS      INA293A2 ×50 → IIN_SENSE
-             R101 pulls the gate down                R104/R105 → VIN_SENSE
-    VIN_BUCK ──► U102 LM76005 synchronous buck, 400 kHz, L101 10 µH ──► +5V_BUCK ──► core LDO (MCU)
-    +5V_BUCK ──► U103 TPS26631 eFuse (BUS_EN, BUS_FAULT, 4.6 A limit, 6.1 V OVP) ──► +5V (the bus)
+    XT30 ──► F101 5 A T ──► Q101 P-MOSFET (reverse polarity) ──► VIN_PROT ──► R102 10 mΩ ──► VIN_BUCK
+                            D101 15 V zener holds Vgs,   D102 SMBJ40A TVS    INA293A2 ×50 → IIN_SENSE
+                            R101 pulls the gate down     R104/R105 → VIN_SENSE (÷16)
+    VIN_BUCK ──► U102 LM76005 synchronous buck, 400 kHz, L101 10 µH, BIAS on 5 V ──► +5V_BUCK
+    +5V_BUCK ──► core LDO (MCU)
+    +5V_BUCK ──► U103 TPS16630 eFuse (BUS_EN, BUS_FAULT, 2.41-2.89 A limit, 6.0-6.2 V OVP) ──► +5V
 
-Ratings. Q101 -60 V (clamped input ≤ 58.1 V at the TVS's rated pulse), LM76005 60 V (65 V abs
-max), INA293 110 V common mode, input ceramics 50 V X7R (36 V max input, 72 %). The buck output
-feeds the PSU's own MCU ahead of the eFuse, so the firmware keeps running and reports a tripped
-bus (BUS_FAULT) instead of browning out with it.
-
-Design values (datasheets: LM76005 SNVSBK5, TPS2663 SLVSDO8, INA293 SBOSA06):
-- FB: VOUT = 1.0 V × (1 + 100 k / 24.9 k) = 5.02 V. EN: 100 k / 47 k from VIN_BUCK. BIAS to GND
-  (the datasheet's other option): VCC then comes from VIN, a few mA × VIN lost at light load,
-  in exchange for a routable pin row; RT open = 400 kHz; SYNC/MODE to GND = auto (PFM) mode.
-- L: ΔI = (36 − 5) × 5 / (36 × 400 kHz × 10 µH) = 1.08 A (27 % of 4 A); peak 4.54 A, well
-  under the SRP1038A's 12 A saturation; 4 × 22 µF X7R (≈ 4 × 14 µF at 5 V DC bias) at the output.
-- eFuse: I_LIM = 18 / R_ILIM(kΩ) = 18 / 3.9 = 4.6 A; one chain 100 k / 10 k / 27 k from
-  +5V_BUCK sets UVLO = 1.2 V × 137/37 = 4.44 V and OVP = 1.2 V × 137/27 = 6.09 V (a shorted
-  buck high-side cannot put VIN on the bus);
-  MODE open = latch off on overload (the firmware sees BUS_FAULT and retries by toggling BUS_EN);
-  SHDN pulled down, so the bus stays off until the firmware turns it on.
-- Sensing: VIN_SENSE = VIN × 10 k / 110 k (36 V → 3.27 V), source 9.1 kΩ; IIN_SENSE = 0.5 V/A
-  (4 A → 2.0 V, full scale 6.6 A), 1 k + 100 nF; VOUT_SENSE = 5 V / 2 = 2.5 V.
+Every value of the power path is computed, with its datasheet equation and margin, in
+`r2ptools.kicad.calc.psu` (`scripts/py -m r2ptools.kicad.calc.psu` prints the table), and
+tests/test_hardware.py checks that the values it assumes are the ones below. In short: the TVS
+clamps at 64.5 V at its rated pulse, under the LM76005's 65 V absolute maximum, at the price of a
+40 V stand-off (its breakdown stays above the 42.4 V of a charger); every input-side part is
+rated above the clamp; the fuse carries the 3.1 A worst case (6 V in, bus at its limit) at 63 %;
+one eFuse limit of at most 2.89 A keeps either jack under docs/bus.md's 3.0 A whatever the split.
+The buck output feeds the PSU's own MCU ahead of the eFuse, so the firmware keeps running and
+reports a tripped bus (BUS_FAULT) instead of browning out with it.
 """
 from __future__ import annotations
 
-from ..design import Module, Place, Sheet, Text, Track, Via
+from ..design import Keepout, Module, Place, Sheet, Text, Track, Via
 from . import core as core_mod
 from .common import frame_texts
 
 NAME = "psu"
 TITLE = "R2P power supply module"
-REVISION = "A"
+REVISION = "B"
+
+FIDUCIALS = [(1.8, 40.0), (22.3, 19.4), (57.5, 40.5)]
+"""Three board-only fiducials, clear of the PSU's parts."""
 
 P = Place
 PLACES = {
+    # --- test pads (TP1-TP8 the core's, TP101-TP105 the PSU's): a grid right of the buck, and
+    # three beside the SWD header; TP101 on the EN divider's VIN_BUCK feed and TP102 below the
+    # output capacitors (hand tracks)
+    "TP1": P(48.5, 35.5, 0), "TP2": P(51.0, 35.5, 0), "TP3": P(53.5, 35.5, 0),
+    "TP4": P(57.0, 35.5, 0), "TP5": P(48.5, 38.0, 0), "TP6": P(51.0, 38.0, 0),
+    "TP7": P(53.5, 38.0, 0), "TP8": P(57.0, 38.0, 0), "TP102": P(55.4, 34.1, 0),
+    "TP101": P(48.5, 44.3, 0), "TP103": P(35.5, 29.5, 0), "TP104": P(35.5, 32.0, 0),
+    "TP105": P(38.0, 29.5, 0),
+    # core rev B parts: the +5V TVS right of BUS OUT's pins, VDDA's 1 uF under its 10 nF
+    "D5": P(47.0, 20.3, 0), "C11": P(12.9, 30.3, 90, True),
     # --- power stage (bottom edge and right side)
     "J101": P(12.4, 37.15, 180), "Q101": P(28.87, 46.3, 180),
     "D102": P(31.3, 40.3, 180), "R102": P(38.8, 44.3, 0), "U101": P(37.2, 40.2, 0),
     "D101": P(38.5, 46.9, 0), "R101": P(38.5, 49.0, 0),
     "U102": P(43.0, 39.5, 270),
-    "C101": P(43.9, 43.5, 0), "C102": P(43.9, 46.0, 0), "C103": P(43.9, 48.4, 0),
-    "C109": P(42.85, 35.16, 90), "C108": P(41.25, 35.16, 90), "C110": P(39.65, 35.16, 90),
-    "R108": P(37.6, 37.6, 0), "R109": P(34.5, 37.6, 0),
-    "R104": P(31.5, 36.9, 90), "R105": P(29.7, 36.9, 90), "C106": P(27.9, 36.9, 90),
-    "R106": P(47.2, 48.0, 90), "R107": P(49.0, 48.0, 90), "C104": P(50.8, 48.0, 90),
+    "C101": P(43.9, 43.85, 0), "C102": P(43.9, 47.2, 0),
+    # U102's top-row parts, left to right as their pins: SS (11), BIAS (9), VCC (8), BOOT (6)
+    "C110": P(38.9, 35.16, 90), "C116": P(40.5, 35.16, 90), "C108": P(42.1, 35.16, 90),
+    "C109": P(43.7, 35.16, 90),
+    "R108": P(37.6, 37.6, 0), "R109": P(34.5, 37.1, 0),
+    "R104": P(31.5, 36.4, 90), "R105": P(29.7, 36.4, 90), "C106": P(27.9, 36.4, 90),
+    # the fuse on the back, under the XT30's body, in the battery + line to Q101's drain tab
+    "F101": P(22.0, 43.2, 180, True),
+    # the HF input capacitor on the back, between the PVIN trunk's via and the PGND trunk's via
+    "C103": P(44.0, 45.5, 180, True),
+    "R106": P(47.2, 48.0, 90), "R107": P(49.4, 48.0, 90), "C104": P(51.2, 48.0, 90),
     "L101": P(47.5, 28.2, 0),
     "C111": P(56.85, 20.3, 0), "C112": P(56.85, 24.0, 0), "C113": P(56.85, 27.7, 0),
     "C114": P(56.85, 31.4, 0),
@@ -86,28 +98,35 @@ def power_tracks() -> list[Track]:
     L101's far pad, and the eFuse input is fed from the same trunk."""
     T = Track
     return [
-        # battery +: XT30 pin 2, under the connector body, to Q101's drain tab
-        T("VBAT_IN", [(17.4, 37.15), (17.4, 43.2), (27.6, 43.2), (27.6, 46.3)], 3.0),
+        # battery +: XT30 pin 2, on the back under the connector body, through F101 and six vias
+        # up to Q101's drain tab
+        T("VBAT_CONN", [(17.4, 37.15), (17.4, 43.2), (19.545, 43.2)], 3.0, "B.Cu"),
+        T("VBAT_IN", [(24.455, 43.2), (26.3, 43.2), (26.3, 46.0)], 3.0, "B.Cu"),
         # Q101 source to the shunt, and to the TVS
         T("VIN_PROT", [(33.9, 44.0), (35.6, 44.0), (35.9, 44.3), (37.34, 44.3)], 1.8),
         T("VIN_PROT", [(33.9, 44.0), (33.9, 41.5), (33.3, 40.3)], 1.2),
         # shunt to the input capacitors, up to PVIN (neck to the 0.5 mm-pitch pins)
         T("VIN_BUCK", [(40.26, 44.3), (42.6, 44.3)], 1.8),
-        T("VIN_BUCK", [(42.6, 48.4), (42.6, 42.9)], 2.0),
+        T("VIN_BUCK", [(42.6, 48.3), (42.6, 42.9)], 2.0),
         T("VIN_BUCK", [(42.6, 42.9), (43.0, 42.5), (43.0, 41.36)], 0.9),
         T("VIN_BUCK", [(42.5, 41.36), (43.5, 41.36)], 0.3),
         # power ground of the hot loop: PGND pins to the capacitor returns (vias to both pours)
         T("GND", [(44.5, 41.36), (45.5, 41.36)], 0.3),
         T("GND", [(45.0, 41.36), (45.0, 42.1), (45.4, 42.5), (45.4, 48.6)], 1.2),
         # small-signal pins of U102 to their parts, fanned out from the 0.5 mm pitch by hand
-        T("GND", [(41.5, 37.64), (41.5, 38.8)], 0.2),                  # BIAS to the pad
+        # C103 on the back: PVIN trunk via to pad 1, pad 2 to the PGND trunk via
+        T("VIN_BUCK", [(42.6, 45.5), (43.22, 45.5)], 0.6, "B.Cu"),
+        T("GND", [(44.78, 45.5), (45.4, 45.5)], 0.6, "B.Cu"),
         T("GND", [(41.0, 41.36), (41.0, 40.3)], 0.2),                  # SYNC/MODE: auto mode
-        T("BOOT", [(42.85, 35.94), (43.0, 36.7), (43.0, 37.64)], 0.25),
-        T("VCC_BUCK", [(41.25, 35.94), (42.0, 36.6), (42.0, 37.64)], 0.25),
-        T("SS_BUCK", [(39.65, 35.94), (40.5, 36.7), (40.5, 37.64)], 0.25),
-        T("GND", [(39.65, 34.38), (40.45, 33.75), (41.25, 34.38)], 0.3),
-        T("SW", [(42.85, 34.38), (44.0, 34.38)], 0.4),
-        T("VIN_PROT", [(31.5, 37.725), (31.5, 38.3), (32.6, 39.4)], 0.3),
+        T("BOOT", [(43.7, 35.94), (43.7, 36.6), (43.05, 36.95), (43.05, 37.64)], 0.25),
+        T("VCC_BUCK", [(42.1, 35.94), (42.0, 36.5), (42.0, 37.64)], 0.25),
+        # BIAS to +5V_BUCK (SNVSBK5 §5 for a 5 V output) with C116 at the pin
+        T("+5V_BUCK", [(40.5, 35.94), (41.5, 36.7), (41.5, 37.64)], 0.25),
+        T("SS_BUCK", [(38.9, 35.94), (39.6, 36.9), (40.5, 36.9), (40.5, 37.64)], 0.25),
+        T("GND", [(38.9, 34.38), (38.9, 33.6), (42.1, 33.6), (42.1, 34.38)], 0.3),
+        T("GND", [(40.5, 34.38), (40.5, 33.6)], 0.3),
+        T("SW", [(43.7, 34.38), (45.4, 34.38)], 0.4),
+        T("VIN_PROT", [(31.5, 37.225), (31.5, 38.2), (32.6, 39.3)], 0.3),
         T("VIN_PROT", [(36.85, 46.9), (36.85, 45.0)], 0.5),            # D101 (gate zener)
         # bus voltage divider top (R117) to BUS IN's +5V pin 7, between the jack's GND pins 6 and 8
         T("+5V", [(3.175, 16.6), (4.2, 17.6), (12.58, 17.6), (12.58, 13.52)], 0.4),
@@ -115,8 +134,8 @@ def power_tracks() -> list[Track]:
         T("VIN_PROT", [(36.06, 41.15), (36.7, 41.8), (37.34, 43.45)], 0.25),
         T("VIN_BUCK", [(38.34, 41.15), (39.2, 42.0), (40.0, 43.4)], 0.25),
         # current-sense amplifier output under D102 (B.Cu) to its RC filter R103/C105
-        T("IIN_AMP", [(36.06, 39.25), (35.1, 38.6)], 0.25),
-        T("IIN_AMP", [(35.1, 38.6), (25.0, 37.7)], 0.25, "B.Cu"),
+        T("IIN_AMP", [(36.06, 39.25), (35.6, 38.3)], 0.25),
+        T("IIN_AMP", [(35.6, 38.3), (25.0, 37.7)], 0.25, "B.Cu"),
         T("IIN_AMP", [(25.0, 37.7), (25.0, 38.775)], 0.25),
         # eFuse bottom-row set-up pins down to the back-side parts (the +5V_BUCK feed fills the row)
         T("EFUSE_UV", [(57.02, 16.45), (57.02, 17.4), (57.15, 18.05)], 0.25),
@@ -129,15 +148,28 @@ def power_tracks() -> list[Track]:
         T("EFUSE_OV", [(59.125, 19.5), (59.125, 20.32), (57.475, 20.32), (57.475, 21.15)], 0.25,
           "B.Cu"),
         T("+5V_BUCK", [(54.375, 19.5), (54.4, 20.4)], 0.3, "B.Cu"),
+        # EN (pin 18) out between the PGND pins and the PVIN trunk's 0.6 mm, on the back to the
+        # divider: R106's EN pad (via A) and R107's (via B)
+        T("EN_BUCK", [(41.5, 41.36), (41.5, 41.95), (40.6, 42.6)], 0.25),
+        T("EN_BUCK", [(40.6, 42.6), (40.6, 43.8), (47.4, 43.8), (47.4, 46.1), (50.2, 46.1),
+                      (50.2, 48.0)], 0.25, "B.Cu"),
+        T("EN_BUCK", [(47.4, 46.1), (47.2, 46.5), (47.2, 47.17)], 0.25),
+        T("EN_BUCK", [(50.2, 48.0), (49.4, 48.83)], 0.25),
+        # TP101 (VIN_BUCK) down between the EN divider's resistors to the feed's via
+        T("VIN_BUCK", [(48.5, 44.3), (48.05, 45.2), (48.05, 49.2)], 0.3),
         # EN divider feed: under the hot-loop ground on B.Cu
-        T("VIN_BUCK", [(42.1, 47.35), (42.1, 49.2), (48.0, 49.2)], 0.3, "B.Cu"),
-        T("VIN_BUCK", [(48.0, 49.2), (47.2, 48.825)], 0.3),
+        T("VIN_BUCK", [(42.1, 47.35), (42.1, 49.2), (48.05, 49.2)], 0.3, "B.Cu"),
+        T("VIN_BUCK", [(48.05, 49.2), (47.2, 48.825)], 0.3),
         # switch node: the SW pins to L101
         T("SW", [(43.5, 37.64), (45.5, 37.64)], 0.3),
-        T("SW", [(44.5, 37.64), (44.5, 36.9)], 0.9),
-        T("SW", [(44.5, 36.9), (44.5, 29.0), (43.03, 28.2)], 2.0),
+        T("SW", [(45.25, 37.64), (45.25, 36.9)], 0.8),
+        T("SW", [(45.4, 36.9), (45.4, 29.0), (43.03, 28.2)], 2.0),
         # buck output: L101 to the output capacitors' trunk, up to the eFuse inputs
         T("+5V_BUCK", [(51.97, 28.2), (55.37, 28.2)], 2.5),
+        T("+5V_BUCK", [(55.375, 31.4), (55.4, 34.1)], 0.6),             # TP102 below C114
+        # BIAS's via (under the top-row parts) on the back to TP102's track
+        T("+5V_BUCK", [(41.0, 36.5), (41.9, 35.6), (53.9, 35.6), (55.4, 34.1), (55.4, 33.2)], 0.4,
+          "B.Cu"),
         T("+5V_BUCK", [(55.37, 31.4), (55.37, 19.4)], 2.5),
         T("+5V_BUCK", [(55.37, 19.4), (54.4, 18.6), (53.13, 18.6)], 1.5),
         T("+5V_BUCK", [(53.13, 18.6), (53.13, 16.45)], 0.45),
@@ -151,22 +183,71 @@ def power_tracks() -> list[Track]:
 
 def power_vias() -> list[Via]:
     out = [Via("+5V", x, y, 0.8, 0.4) for x in (50.4, 51.4, 52.4) for y in (9.5, 10.5)]
-    # thermal vias under both power ICs' exposed pads, the hot-loop ground, the output returns
-    out += [Via("GND", x, 39.5, 0.6, 0.3) for x in (41.6, 42.6, 43.6, 44.5)]
-    out += [Via("GND", 46.7, y, 0.6, 0.3) for y in (42.9, 45.1, 47.5)]
-    out += [Via("GND", 40.45, 33.75, 0.6, 0.3)]
-    out += [Via("VIN_BUCK", 42.1, 47.35, 0.7, 0.3), Via("VIN_BUCK", 48.0, 49.2, 0.7, 0.3)]
+    # thermal vias in U102's exposed pad (2 x 5 at 0.9 x 0.8 mm; KiCad's _ThermalVias variant
+    # drills 0.2 mm, below the fab's 0.3 mm), the hot-loop ground, the output returns
+    out += [Via("GND", x, y, 0.6, 0.3) for x in (41.3, 42.15, 43.0, 43.85, 44.7) for y in (39.05, 39.95)]
+    out += [Via("VIN_BUCK", 42.6, 45.5, 0.7, 0.3), Via("GND", 45.4, 45.5, 0.7, 0.3)]   # C103
+    # battery +: F101's output up to Q101's drain tab (3.1 A over six 0.4 mm vias)
+    out += [Via("VBAT_IN", x, y, 0.8, 0.4) for x in (25.3, 26.3, 27.3) for y in (44.6, 45.8)]
+    out += [Via("GND", 46.7, y, 0.6, 0.3) for y in (42.9, 45.1)]
+    out += [Via("GND", 40.5, 33.0, 0.6, 0.3)]
+    out += [Via("+5V_BUCK", 41.0, 36.5, 0.6, 0.3), Via("+5V_BUCK", 55.4, 33.2, 0.6, 0.3)]   # BIAS
+    out += [Via("EN_BUCK", x, y, 0.6, 0.3) for x, y in ((40.6, 42.6), (47.4, 46.1), (50.2, 48.0))]
+    out += [Via("VIN_BUCK", 42.1, 47.35, 0.7, 0.3), Via("VIN_BUCK", 48.05, 49.2, 0.7, 0.3)]
     out += [Via(n, x, 18.05, 0.7, 0.3) for n, x in (("EFUSE_UV", 57.15), ("EFUSE_OV", 58.0),
                                                      ("EFUSE_DVDT", 58.85))]
     out += [Via("+5V_BUCK", 54.4, 20.4, 0.7, 0.3)]
-    out += [Via("IIN_AMP", 35.1, 38.6, 0.7, 0.3), Via("IIN_AMP", 25.0, 37.7, 0.7, 0.3)]
+    out += [Via("IIN_AMP", 35.6, 38.3, 0.7, 0.3), Via("IIN_AMP", 25.0, 37.7, 0.7, 0.3)]
     out += [Via("GND", x, y, 0.6, 0.3) for x in (53.8, 55.2, 56.9, 58.3) for y in (12.6, 14.4)]
     out += [Via("GND", 59.0, y, 0.6, 0.3) for y in (22.2, 25.9, 29.6, 33.3)]
     return out
 
 
+SOLID_PADS = ("J101", "F101", "Q101", "D102", "R102", "C101", "C102", "C103", "U102", "L101",
+              "C111", "C112", "C113", "C114", "U103")
+"""Power parts whose pads join the GND pours solid (no thermal spokes), the XT30's THT pins too."""
+
+BATTERY_NETS = ("VBAT_CONN", "VBAT_IN", "VIN_PROT", "VIN_BUCK")
+"""Nets at the battery voltage (up to 42.4 V, 64.5 V at the TVS clamp); among themselves they
+differ by at most the shunt's and the MOSFET's drop."""
+SWITCH_NETS = ("SW", "BOOT")
+"""The switch node swings between GND and VIN (BOOT rides 5 V above it): 42.4 V to both."""
+LOW_DIFF_NETS = ("EN_BUCK", "Q_GATE")
+"""Battery-derived nets within 30 V of VIN_BUCK/VIN_PROT (EN at 36 % of VIN, the gate 15 V below
+the source): the 16-30 V row (0.1 mm, the fab minimum) covers them against the battery nets."""
+FINE_PITCH = ("U101", "U102")
+"""Parts whose own pin pitch is below the rule (0.5 and 0.95 mm): inside their courtyards the
+spacing is the part maker's (rated for the full voltage), not a board conductor spacing."""
+
+
+def ipc2221b_rules() -> str:
+    # The same nets form the net class "HV" with a 0.6 mm clearance: the autorouter knows net
+    # classes, not custom rules, so it keeps its tracks that far from them. DRC checks the rules
+    # below (custom rules take precedence over net classes).
+    """The board's high-voltage clearance as a KiCad custom rule (calc/psu.py prints the row).
+
+    IPC-2221B table 6-1, B2 (external conductors, uncoated, sea level to 3050 m): 31-50 V and
+    51-100 V both ask 0.6 mm. The battery side reaches 42.4 V (a charger on a 10S pack) and
+    64.5 V at the TVS's rated clamp, so every battery-side conductor keeps 0.6 mm from every
+    conductor at another potential. Net names are the board's (root-sheet labels: '/NAME')."""
+    def anyof(side: str, nets: tuple[str, ...]) -> str:
+        return "(" + " || ".join(f"{side}.NetName == '/{n}'" for n in nets) + ")"
+    exempt = " && ".join(f"!(A.intersectsCourtyard('{r}') && B.intersectsCourtyard('{r}'))"
+                         for r in FINE_PITCH)
+    return (
+        "# IPC-2221B table 6-1, B2 (external, uncoated): 0.6 mm for 31-100 V between conductors.\n"
+        "# Battery side: up to 42.4 V (10S + charger), 64.5 V at the TVS clamp (calc/psu.py).\n"
+        '(rule "ipc2221b: battery nets 0.6 mm from other potentials"\n'
+        f'    (condition "{anyof("A", BATTERY_NETS)} && !{anyof("B", BATTERY_NETS + LOW_DIFF_NETS)}'
+        f' && {exempt}")\n'
+        "    (constraint clearance (min 0.6mm)))\n"
+        '(rule "ipc2221b: switch node 0.6 mm from other potentials"\n'
+        f'    (condition "{anyof("A", SWITCH_NETS)} && !{anyof("B", SWITCH_NETS)} && {exempt}")\n'
+        "    (constraint clearance (min 0.6mm)))\n")
+
+
 def build(core: Sheet) -> Module:
-    s = Sheet(NAME, f"{TITLE}: 5.5-36 V in, 5 V 4 A bus out")
+    s = Sheet(NAME, f"{TITLE}: 6-42 V in, 5 V 2.4 A bus out")
     pins = {p: "" for p in core_mod.FREE_GPIO}
     pins.update({"PA0": "VIN_SENSE", "PA1": "IIN_SENSE", "PA2": "VOUT_SENSE", "PB0": "BUS_EN",
                  "PB1": "BUS_FAULT", "V5_IN": "+5V_BUCK"})
@@ -175,11 +256,15 @@ def build(core: Sheet) -> Module:
 
     # input, reverse polarity, surge
     # XT30PW-M: pin 2 is + (the footprint's and the connector's marking), pin 1 is -
-    s.part("J101", "XT30", {"1": "GND", "2": "VBAT_IN"}, at=Place(12.4, 37.15, 180), value="BATTERY")
+    s.part("J101", "XT30", {"1": "GND", "2": "VBAT_CONN"}, at=Place(12.4, 37.15, 180), value="BATTERY")
+    # 5 A time-lag fuse: carries the 3.1 A worst-case input current (6 V, bus at its limit) at
+    # 63 % of its rating and rides through the input capacitors' hot-plug surge (calc/psu.py)
+    s.part("F101", "FUSE_5A_SLOW", {"1": "VBAT_CONN", "2": "VBAT_IN"})
     s.part("Q101", "SUD50P06-15", {"D": "VBAT_IN", "S": "VIN_PROT", "G": "Q_GATE"})
     s.part("D101", "Z_15V", {"K": "VIN_PROT", "A": "Q_GATE"})
     s.part("R101", "R_100k", {"1": "Q_GATE", "2": "GND"})
-    s.part("D102", "SMAJ36A", {"1": "VIN_PROT", "2": "GND"})
+    # pad 1 of D_SMB is the cathode
+    s.part("D102", "SMBJ40A", {"1": "VIN_PROT", "2": "GND"})
 
     # input current and voltage sensing
     s.part("R102", "R_10m", {"1": "VIN_PROT", "2": "VIN_BUCK"})
@@ -188,21 +273,22 @@ def build(core: Sheet) -> Module:
     s.part("C104", "C_100n", {"1": "+3V3", "2": "GND"})
     s.part("R103", "R_1k", {"1": "IIN_AMP", "2": "IIN_SENSE"})
     s.part("C105", "C_100n", {"1": "IIN_SENSE", "2": "GND"})
-    s.part("R104", "R_100k", {"1": "VIN_PROT", "2": "VIN_SENSE"})
+    s.part("R104", "R_150k", {"1": "VIN_PROT", "2": "VIN_SENSE"})
     s.part("R105", "R_10k", {"1": "VIN_SENSE", "2": "GND"})
     s.part("C106", "C_100n", {"1": "VIN_SENSE", "2": "GND"})
 
     # buck: input caps straddle PVIN/PGND on the IC's right side, the inductor on its SW side
     s.part("U102", "LM76005", {
         "PVIN": "VIN_BUCK", "EN": "EN_BUCK", "SW": "SW", "BOOT": "BOOT", "VCC": "VCC_BUCK",
-        "BIAS": "GND", "SS/TRK": "SS_BUCK", "SYNC/MODE": "GND", "FB": "FB_BUCK",
+        "BIAS": "+5V_BUCK", "SS/TRK": "SS_BUCK", "SYNC/MODE": "GND", "FB": "FB_BUCK",
         "AGND": "GND", "PGND": "GND", "NC_{GND}": "GND"}, nc=("RT", "PGOOD"))
-    s.part("C101", "C_10u_50V", {"1": "VIN_BUCK", "2": "GND"})
-    s.part("C102", "C_10u_50V", {"1": "VIN_BUCK", "2": "GND"})
-    s.part("C103", "C_100n", {"1": "VIN_BUCK", "2": "GND"})
+    for ref in ("C101", "C102"):
+        s.part(ref, "C_2u2_100V", {"1": "VIN_BUCK", "2": "GND"})
+    s.part("C103", "C_100n_100V", {"1": "VIN_BUCK", "2": "GND"})
     s.part("R106", "R_100k", {"1": "VIN_BUCK", "2": "EN_BUCK"})
-    s.part("R107", "R_47k", {"1": "EN_BUCK", "2": "GND"})
+    s.part("R107", "R_56k", {"1": "EN_BUCK", "2": "GND"})
     s.part("C108", "C_1u", {"1": "VCC_BUCK", "2": "GND"})
+    s.part("C116", "C_1u", {"1": "+5V_BUCK", "2": "GND"})          # BIAS decoupling at the pin
     s.part("C109", "C_470n", {"1": "BOOT", "2": "SW"})
     s.part("C110", "C_22n", {"1": "SS_BUCK", "2": "GND"})
     s.part("R108", "R_100k", {"1": "+5V_BUCK", "2": "FB_BUCK"})
@@ -212,25 +298,42 @@ def build(core: Sheet) -> Module:
         s.part(f"C{111 + i}", "C_22u_25V", {"1": "+5V_BUCK", "2": "GND"})
 
     # bus output switch
-    s.part("U103", "TPS26631", {
+    # TPS16630 on the TPS26631PWP symbol (catalog.py): "IN_SYS" is its P_IN (to IN), "PGTH" (16)
+    # its PGOOD and "PGOOD" (17), "B_GATE" (4), "DRV" (5) its NC pins: all left open
+    s.part("U103", "TPS16630", {
         "IN": "+5V_BUCK", "IN_SYS": "+5V_BUCK", "OUT": "+5V", "GND": "GND", "~{SHDN}": "BUS_EN",
         "~{FLT}": "BUS_FAULT", "UVLO": "EFUSE_UV", "OVP": "EFUSE_OV", "ILIM": "EFUSE_ILIM",
-        "dVdT": "EFUSE_DVDT", "PGTH": "GND"}, nc=("B_GATE", "DRV", "MODE", "PGOOD", "IMON"))
-    s.part("R110", "R_100k", {"1": "BUS_EN", "2": "GND"})
+        "dVdT": "EFUSE_DVDT"}, nc=("B_GATE", "DRV", "MODE", "PGOOD", "PGTH", "IMON"))
+    # 10 k, not 100 k: SHDN sources up to 10 µA, and 0.1 V stays below its 0.8 V off threshold
+    s.part("R110", "R_10k", {"1": "BUS_EN", "2": "GND"})
     s.part("R111", "R_10k", {"1": "+3V3", "2": "BUS_FAULT"})
     # one divider chain sets both thresholds: +5V_BUCK - 100 k - UVLO - 10 k - OVP - 27 k - GND
     s.part("R112", "R_100k", {"1": "+5V_BUCK", "2": "EFUSE_UV"})
     s.part("R113", "R_10k", {"1": "EFUSE_UV", "2": "EFUSE_OV"})
     s.part("R114", "R_27k", {"1": "EFUSE_OV", "2": "GND"})
-    s.part("R116", "R_3k9", {"1": "EFUSE_ILIM", "2": "GND"})
+    s.part("R116", "R_6k8", {"1": "EFUSE_ILIM", "2": "GND"})
     s.part("C115", "C_22n", {"1": "EFUSE_DVDT", "2": "GND"})
+    # test pads (bare 1 mm copper, no BOM line): the PSU's own key signals; the core adds
+    # +5V, +3V3, GND, CAN_H/L, NRST, SWD (TP1-TP8)
+    for ref, net in (("TP101", "VIN_BUCK"), ("TP102", "+5V_BUCK"), ("TP103", "BUS_EN"),
+                     ("TP104", "BUS_FAULT"), ("TP105", "IIN_SENSE")):
+        s.part(ref, "TP", {"1": net}, value=net)
     s.part("R117", "R_10k", {"1": "+5V", "2": "VOUT_SENSE"})
     s.part("R118", "R_10k", {"1": "VOUT_SENSE", "2": "GND"})
     s.part("C117", "C_100n", {"1": "VOUT_SENSE", "2": "GND"})
 
     m = Module(NAME, TITLE, REVISION, s, tracks=core_mod.bus_tracks(extend_to=52.4) + power_tracks(),
-               vias=power_vias(), places=PLACES, seed=3)
-    m.texts = frame_texts(NAME, REVISION, bus_in=(11.0, 18.4)) + [
-        Text("+", 17.4, 40.6, 1.5, "B.SilkS"), Text("-", 12.4, 40.6, 1.5, "B.SilkS"),
-        Text("BATTERY 5.5-36V", 15.0, 33.0, 1.0, "B.SilkS")]
+               vias=power_vias(), places=PLACES, seed=3, dru_rules=ipc2221b_rules(),
+               solid_pads=SOLID_PADS, netclasses={"HV": [*BATTERY_NETS, *SWITCH_NETS]},
+               netclass_defs={"HV": (0.6, 0.3, 0.7, 0.3)},
+               keepouts=[Keepout([(x - 1.6, y - 1.6), (x + 1.6, y - 1.6), (x + 1.6, y + 1.6),
+                                  (x - 1.6, y + 1.6)]) for x, y in FIDUCIALS])
+    m.fiducials = list(FIDUCIALS)
+    # the +5V TVS D5 sits where the front "BUS OUT" label goes on other boards, and no gap
+    # around it holds the label: on the PSU the jacks are named on the back only
+    texts = [t for t in frame_texts(NAME, REVISION, bus_in=(11.0, 18.4))
+             if (t.text, t.layer) != ("BUS OUT", "F.SilkS")]
+    m.texts = texts + [
+        Text("+", 16.0, 40.6, 1.5, "B.SilkS"), Text("-", 12.4, 40.6, 1.5, "B.SilkS"),
+        Text("BATTERY 6-42V", 15.0, 33.0, 1.0, "B.SilkS")]
     return m
