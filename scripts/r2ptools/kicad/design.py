@@ -29,6 +29,30 @@ class Place:
     back: bool = False
 
 
+@dataclass(frozen=True)
+class At:
+    """A symbol's place on the sheet: grid units (2.54 mm) from the page's top-left corner."""
+    x: float
+    y: float
+    rot: int = 0
+
+
+@dataclass
+class Block:
+    """A functional block: a dashed frame with a title and design notes, in grid units."""
+    title: str
+    x0: float
+    y0: float
+    x1: float
+    y1: float
+    notes: list[tuple[float, float, str]] = field(default_factory=list)   # (x, y, text)
+
+    def contains(self, p: tuple[int, int]) -> bool:
+        """`p` in 0.01 mm (drawing.py's unit)."""
+        return self.x0 * 254 <= p[0] <= self.x1 * 254 and self.y0 * 254 <= p[1] <= self.y1 * 254
+
+
+
 @dataclass
 class Part:
     ref: str
@@ -58,6 +82,8 @@ class Sheet:
     ports: list[Port] = field(default_factory=list)
     flags: list[str] = field(default_factory=list)   # nets given a PWR_FLAG (driven from outside)
     children: list["SheetUse"] = field(default_factory=list)
+    drawing: dict[str, At] = field(default_factory=dict)   # ref (or "flag:NET") -> place
+    blocks: list[Block] = field(default_factory=list)      # functional blocks of the drawing
 
     def part(self, ref: str, key: str, pins: dict[str, str], at: Place | tuple | None = None,
              nc: tuple[str, ...] = (), value: str | None = None, note: str = "") -> Part:

@@ -9,7 +9,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from .design import Module, Sheet
-from .schematic import Instance, SheetWriter, sheet_symbol, uid, write
+from .drawing import DrawnSheetWriter as SheetWriter
+from .schematic import Instance, sheet_symbol, uid, write
 
 CORE_FILE = "../core/core.kicad_sch"
 
