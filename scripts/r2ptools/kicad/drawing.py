@@ -188,6 +188,17 @@ def _paths(a: Pt, b: Pt) -> list[list[Seg]]:
     return [[(a, (b[0], a[1])), ((b[0], a[1]), b)], [(a, (a[0], b[1])), ((a[0], b[1]), b)]]
 
 
+def _candidates(pin: "PinAt", t: Pt) -> list[list[Seg]]:
+    """Straight or L paths from the pin to `t`, then the same after 1-3 grid out of the pin
+    (a comb: how same-net pins in a row are joined without running over their neighbours)."""
+    out = _paths(pin.p, t)
+    for k in (1, 2, 3):
+        e = (pin.p[0] + pin.out[0] * k * G, pin.p[1] + pin.out[1] * k * G)
+        if e != t:
+            out += [[(pin.p, e), *p] for p in _paths(e, t)]
+    return out
+
+
 def _length(path: list[Seg]) -> int:
     return sum(abs(s[0][0] - s[1][0]) + abs(s[0][1] - s[1][1]) for s in path)
 
@@ -282,7 +293,7 @@ class DrawnSheetWriter(SheetWriter):
             self._net_label(pin.net, pin.p, pin.out, tag)
             self.canvas.mark(pin.p, pin.net)
 
-    def _route(self, net: str, pins: list[PinAt], tag: str) -> None:
+    def _route(self, net: str, pins: list[PinAt], tag: str, label: bool = True) -> list[Seg]:
         """Joins `pins` (one net, one block) into a tree of wires grown from the first pin."""
         segs: list[Seg] = []
         ends: dict[Pt, int] = {}
@@ -299,7 +310,7 @@ class DrawnSheetWriter(SheetWriter):
                         if _on_segment(q, s):
                             targets.add(q)
                 for t in targets:
-                    for path in _paths(pin.p, t):
+                    for path in _candidates(pin, t):
                         if best is not None and _length(path) >= best[0]:
                             continue
                         if _leaves_inward(pin, path):
@@ -333,10 +344,24 @@ class DrawnSheetWriter(SheetWriter):
                 self.items.append(["junction", ["at", mm(q[0]), mm(q[1])], ["diameter", "0"],
                                    ["color", "0", "0", "0", "0"],
                                    ["uuid", Q(uid(self.key, "junction", tag, str(q)))]])
-        # the net's name, on its first pin (the wire leaving it carries the text)
-        self._net_label(net, pins[0].p, pins[0].out, f"{tag}/label")
+        if label:     # the net's name, on its first pin (the wire leaving it carries the text)
+            self._net_label(net, pins[0].p, pins[0].out, f"{tag}/label")
         for pin in labelled:
-            self._stub_label(pin, f"{tag}/label/{pin.ref}/{pin.number}")
+            if label:
+                self._stub_label(pin, f"{tag}/label/{pin.ref}/{pin.number}")
+            else:
+                self._power(net, pin.p, pin.out)
+        return segs
+
+    def _comb(self, net: str, pins: list[PinAt], tag: str) -> None:
+        """A part's pins on one rail and one side, wired together, with one power symbol at the
+        end of the wire the symbol points to (GND below, a rail above)."""
+        segs = self._route(net, pins, tag, label=False)
+        pts = [q for s in segs for q in s] or [p.p for p in pins]
+        native = (0, 1) if net == "GND" else (0, -1)
+        pin_pts = {p.p for p in pins}
+        end = max(pts, key=lambda q: (q[1] * native[1], q not in pin_pts, -q[0]))
+        self._power(net, end, native)
 
     # --- sheet ----------------------------------------------------------------------------------
     def build(self) -> list:
@@ -361,7 +386,7 @@ class DrawnSheetWriter(SheetWriter):
         self._blocks()
         # group pins: (net, block) -> pins
         groups: dict[tuple[str, int], list[PinAt]] = {}
-        powered: set[tuple[Pt, str]] = set()
+        combs: dict[tuple[str, str, Pt], dict[Pt, PinAt]] = {}
         for pl in self.placed:
             for pin in pl.pins:
                 if not pin.net:
@@ -371,14 +396,17 @@ class DrawnSheetWriter(SheetWriter):
                                            ["uuid", Q(uid(self.key, "nc", pl.ref, pin.number))]])
                     continue
                 if pin.net in POWER_SYMBOL:
-                    if (pin.p, pin.net) not in powered:     # stacked pins share one symbol
-                        powered.add((pin.p, pin.net))
-                        self._power(pin.net, pin.p, pin.out)
+                    combs.setdefault((pl.ref, pin.net, pin.out), {}).setdefault(pin.p, pin)
                     continue
                 groups.setdefault((pin.net, self._block_of(pin.p)), []).append(pin)
-        spans: dict[str, set[int]] = {}
-        for net, b in groups:
-            spans.setdefault(net, set()).add(b)
+        by_ref = {pl.ref: pl for pl in self.placed}
+        for (ref, net, out), by_point in sorted(combs.items()):
+            pins = list(by_point.values())
+            if len(pins) == 1 or _interleaved(pins, by_ref[ref]):
+                for pin in pins:
+                    self._power(net, pin.p, out)
+            else:
+                self._comb(net, pins, f"comb/{ref}/{net}/{out}")
         # short nets first: they have the fewest ways round
         for (net, b), pins in sorted(groups.items(), key=lambda kv: (_spread(kv[1]), kv[0])):
             tag = f"net/{net}/{b}"
@@ -459,10 +487,20 @@ class DrawnSheetWriter(SheetWriter):
         items = self.items if self.items else self.build()
         xs = [pl.box[2] for pl in self.placed] + [round(b.x1 * G) for b in self.sheet.blocks] + [0]
         ys = [pl.box[3] for pl in self.placed] + [round(b.y1 * G) for b in self.sheet.blocks] + [0]
-        self.width = max(self.width, max(xs) / 100 + 20)
-        self.height = max(self.height, max(ys) / 100 + 50)
+        self.width = max(self.width, max(xs) / 100 + 8)
+        self.height = max(self.height, max(ys) / 100 + 8)
         self.items = items
         return super().document(sheet_uses, root)
+
+
+def _interleaved(pins: list[PinAt], pl: Placed) -> bool:
+    """Do other pins of the part sit between these (a connector's GND, +5V, GND...)? Then each
+    pin gets its own power symbol: a comb would cross its neighbours."""
+    xs, ys = [p.p[0] for p in pins], [p.p[1] for p in pins]
+    box = (min(xs), min(ys), max(xs), max(ys))
+    mine = {p.p for p in pins}
+    return any(q.p not in mine and q.out == pins[0].out and box[0] <= q.p[0] <= box[2]
+               and box[1] <= q.p[1] <= box[3] for q in pl.pins)
 
 
 def _spread(pins: list[PinAt]) -> int:

@@ -10,7 +10,7 @@ def bus_tap(s: Sheet, net: str, at: Place) -> None:
     A module that shorts internally then trips its own polyfuse instead of dragging the whole
     bus into the PSU's current limit. The bus itself passes through the module unfused."""
     s.part("F101", "PTC_500mA", {"1": "+5V", "2": net}, at=at)
-    s.flags += ["GND", net]
+    s.flags += ["GND", net, "+5V"]     # +5V arrives from the bus jacks (passive pins)
 
 
 BUS_TAP_PLACE = Place(6.0, 20.5, 270)

@@ -179,6 +179,8 @@ def build() -> Sheet:
     s.part("J2", "RJ45", RJ45_PINS, at=Place(48.6, 13.52, 180), value="BUS OUT")
     s.part("J3", "HDR_1x4", {"1": "+5V", "2": "CAN_H", "3": "CAN_L", "4": "GND"},
            at=Place(26.0, 10.2, 90))
+    from . import core_sheet          # the drawing imports this module's numbers
+    s.drawing, s.blocks = core_sheet.DRAWING, core_sheet.BLOCKS
     return s
 
 
