@@ -92,6 +92,61 @@ def test_regeneration_is_byte_identical(tmp_path):
     assert not differ, f"regenerated files differ from the committed ones: {differ}"
 
 
+def _label_per_pin(module: str, out: Path) -> Path:
+    """The module's circuit written label-per-pin (every pin labelled, no wires to get wrong)."""
+    from r2ptools.kicad import sch_gen
+    from r2ptools.kicad.modules import build_all
+    from r2ptools.kicad.schematic import SheetWriter
+    modules = build_all()
+    m = next(x for x in modules if x.name == module)
+    sch_gen.write_core(modules[0].root.children[0].sheet, modules, out, writer=SheetWriter)
+    sch = sch_gen.write_module(m, out, writer=SheetWriter)
+    for f in ("sym-lib-table", "fp-lib-table"):
+        shutil.copy(HARDWARE / module / f, sch.parent / f)
+    shutil.copytree(HARDWARE / "core" / "R2P.pretty", out / "core" / "R2P.pretty")
+    return sch
+
+
+@pytest.mark.parametrize("module", [b.name for b in BOARDS])
+def test_drawn_schematic_is_the_described_circuit(module, tmp_path):
+    """The drawn sheets (blocks, wires, junctions, power symbols, labels between blocks) join
+    exactly the pins the description joins: their netlist equals the label-per-pin rendering's
+    net by net (names included: the board's nets are named after them) and pin by pin, and each
+    component keeps its value, footprint and symbol path (the board stays in parity)."""
+    from r2ptools.kicad import netcompare
+    reference = netlist.export(_label_per_pin(module, tmp_path / "hardware"))
+    drawn = netlist.export(HARDWARE / module / f"{module}.kicad_sch")
+    assert netcompare.differences(reference, drawn) == []
+
+
+def test_a_wire_missing_from_a_drawing_changes_its_netlist(tmp_path):
+    """The equivalence check can fail: the core sheet with one wire of the crystal removed."""
+    from r2ptools.kicad import netcompare, sexpr
+    out = tmp_path / "hardware"
+    for d in ("template", "core"):
+        shutil.copytree(HARDWARE / d, out / d, ignore=shutil.ignore_patterns("fab"))
+    core_sch = out / "core" / "core.kicad_sch"
+    tree = sexpr.parse(core_sch.read_text())
+    wires = [w for w in sexpr.find_all(tree, "wire")]
+    before = netlist.export(out / "template" / "template.kicad_sch")
+    tree.remove(wires[0])
+    core_sch.write_text(sexpr.dump(tree) + "\n")
+    after = netlist.export(out / "template" / "template.kicad_sch")
+    assert netcompare.differences(before, after)
+
+
+def test_a_dangling_wire_is_a_drawing_fault(scratch):
+    """A wire end that connects nothing is reported (ERC warnings of that kind are faults)."""
+    from r2ptools.kicad import sexpr
+    sch = scratch / "proximity.kicad_sch"
+    tree = sexpr.parse(sch.read_text())
+    tree.insert(-1, ["wire", ["pts", ["xy", "12.7", "12.7"], ["xy", "17.78", "12.7"]],
+                     ["stroke", ["width", "0"], ["type", "default"]],
+                     ["uuid", sexpr.Q("0b7c5f62-9d0e-4d3c-8a41-5b2f3e1d9a77")]])
+    sch.write_text(sexpr.dump(tree) + "\n")
+    assert _problems(scratch, "wire_dangling")
+
+
 @pytest.mark.parametrize("module", fab.FAB_BOARDS)
 def test_fab_package_is_current_and_byte_identical(module, tmp_path):
     committed = HARDWARE / module / "fab"

@@ -26,6 +26,14 @@ HARDWARE = ROOT / "hardware"
 # silkscreen warning (or any other) is a problem to fix in the description or the generator.
 
 
+DRAWING_FAULTS = {"wire_dangling", "label_dangling", "unconnected_wire_endpoint",
+                  "endpoint_off_grid", "no_connect_dangling", "pin_not_connected",
+                  "isolated_pin_label", "similar_labels", "multiple_net_names"}
+"""ERC warnings that are faults of a drawn schematic, not reviewed exceptions: a wire or label
+that connects nothing, a pin or wire end off the 1.27 mm grid (it looks connected and is not),
+two names on one net or names differing only in case."""
+
+
 @dataclass
 class Report:
     board: Path
@@ -136,7 +144,8 @@ def check(folder: Path) -> Report:
     for s in e["sheets"]:
         for v in s["violations"]:
             line = f"{name}: ERC {v['severity']} {v['type']} on sheet {s['path']}: {v['description']} ({_items(v)})"
-            (r.problems if v["severity"] == "error" else r.warnings).append(line)
+            bad = v["severity"] == "error" or v["type"] in DRAWING_FAULTS
+            (r.problems if bad else r.warnings).append(line)
     d = drc(pcb)
     for v in d["violations"]:
         r.problems.append(f"{name}: DRC {v['severity']} {v['type']}: {v['description']} ({_items(v)})")

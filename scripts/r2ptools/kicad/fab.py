@@ -12,6 +12,7 @@
     <module>-assembly.pdf assembly drawing: top, then bottom mirrored (assembly.py)
     <module>-assembly-checklist.md  pin 1 / polarity of every polarised part, for JLC's preview
     <module>-schematic.pdf
+    <module>-schematic.png     the largest block of the module's own sheet, for its README
     <module>-top.png, <module>-bottom.png   renders with KiCad's 3D models (models3d.py)
 
 KiCad stamps the date into Gerber, drill, job and PDF files; those stamps are removed or pinned
@@ -94,6 +95,20 @@ def schematic_pdf(sch: Path, dest: Path) -> None:
     dest.write_bytes(pin_pdf_dates(dest.read_bytes()))
 
 
+def main_block_png(sch: Path, dest: Path) -> None:
+    """The largest functional block of the module's own sheet (its dashed frame), as a picture
+    for the module's README; the whole sheet if it has no blocks."""
+    from . import sexpr, sheet_png
+    tree = sexpr.parse(sch.read_text())
+    boxes = []
+    for r in sexpr.find_all(tree, "rectangle"):
+        (x0, y0), (x1, y1) = ((float(sexpr.find(r, k)[1]), float(sexpr.find(r, k)[2]))
+                              for k in ("start", "end"))
+        boxes.append(((x1 - x0) * (y1 - y0), (x0 - 2, y0 - 2, x1 + 2, y1 + 2)))
+    crop = max(boxes)[1] if boxes else None
+    sheet_png.render(sch, dest, page=1, crop=crop, dpi=110)
+
+
 def renders(pcb: Path, folder: Path, name: str) -> list[Path]:
     """Top and bottom renders with the 3D models KiCad ships for our footprints."""
     env = {"KICAD9_3DMODEL_DIR": str(models3d.ensure([pcb]))}
@@ -131,6 +146,7 @@ def package(board_dir: Path, out: Path) -> list[Path]:
     assembly.drawing(pcb, board_box_mm(pcb), out / f"{name}-assembly.pdf", pin_pdf_dates)
     assembly.checklist(name, placed, out / f"{name}-assembly-checklist.md")
     schematic_pdf(sch, out / f"{name}-schematic.pdf")
+    main_block_png(sch, out / f"{name}-schematic.png")
     renders(pcb, out, name)
     for problem in jlc.bom_problems(out / f"{name}-bom.csv"):
         print(f"fab: {name}: JLCPCB would not take this BOM as is: {problem}", file=sys.stderr)

@@ -9,8 +9,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from .design import Module, Sheet
-from .drawing import DrawnSheetWriter as SheetWriter
-from .schematic import Instance, sheet_symbol, uid, write
+from .drawing import DrawnSheetWriter
+from .schematic import Instance, SheetWriter, sheet_symbol, uid, write
 
 CORE_FILE = "../core/core.kicad_sch"
 
@@ -23,10 +23,12 @@ def child_path(module: str, child: str) -> str:
     return root_path(module) + "/" + uid(module, "sheet", child)
 
 
-def write_module(m: Module, out: Path) -> Path:
+def write_module(m: Module, out: Path, writer: type[SheetWriter] = DrawnSheetWriter) -> Path:
+    """The module's root sheet, drawn (`DrawnSheetWriter`) or label-per-pin (`SheetWriter`: the
+    same circuit with no wires, the reference the drawing is checked against)."""
     root = m.root
     ports = set()
-    w = SheetWriter(root, m.name, [Instance(m.name, root_path(m.name))], m.title, m.revision, ports)
+    w = writer(root, m.name, [Instance(m.name, root_path(m.name))], m.title, m.revision, ports)
     w.build()
     uses = []
     x = w.width + 20
@@ -40,11 +42,12 @@ def write_module(m: Module, out: Path) -> Path:
     return path
 
 
-def write_core(core: Sheet, modules: list[Module], out: Path) -> Path:
+def write_core(core: Sheet, modules: list[Module], out: Path,
+               writer: type[SheetWriter] = DrawnSheetWriter) -> Path:
     """The shared sheet, instantiated once by each module."""
     inst = [Instance(m.name, child_path(m.name, core.name)) for m in modules
             if any(u.sheet.name == core.name for u in m.root.children)]
-    w = SheetWriter(core, core.name, inst, core.title, "A", {p.name for p in core.ports})
+    w = writer(core, core.name, inst, core.title, "A", {p.name for p in core.ports})
     folder = out / core.name
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{core.name}.kicad_sch"
