@@ -12,6 +12,7 @@
     <module>-assembly.pdf assembly drawing: top, then bottom mirrored (assembly.py)
     <module>-assembly-checklist.md  pin 1 / polarity of every polarised part, for JLC's preview
     <module>-schematic.pdf
+    <module>-netlist.txt       components and nets, sorted: the circuit as reviewers diff it
     <module>-schematic.png     the largest block of the module's own sheet, for its README
     <module>-top.png, <module>-bottom.png   renders with KiCad's 3D models (models3d.py)
 
@@ -95,6 +96,27 @@ def schematic_pdf(sch: Path, dest: Path) -> None:
     dest.write_bytes(pin_pdf_dates(dest.read_bytes()))
 
 
+def netlist_text(sch: Path, dest: Path) -> None:
+    """The circuit as reviewers diff it: every component (reference, value, footprint, MPN) and
+    every net with its pins, sorted, from KiCad's own netlist of the sheets. Regenerated with the
+    package, so a drawing change that is not a circuit change leaves it byte for byte the same."""
+    from . import netlist
+    net = netlist.export(sch)
+    lines = ["# components: reference, value, footprint, MPN"]
+    for ref in sorted(net.components, key=_natural):
+        c = net.components[ref]
+        lines.append(f"{ref}\t{c.value}\t{c.footprint}\t{c.fields.get('MPN', '')}")
+    lines.append("# nets: name, then reference.pin of every pin on it")
+    for name in sorted(net.nets):
+        pins = sorted(net.nets[name], key=lambda rp: (_natural(rp[0]), _natural(rp[1])))
+        lines.append(name + "\t" + " ".join(f"{r}.{p}" for r, p in pins))
+    dest.write_text("\n".join(lines) + "\n")
+
+
+def _natural(s: str) -> tuple:
+    return tuple(int(t) if t.isdigit() else t for t in re.split(r"(\d+)", s))
+
+
 def main_block_png(sch: Path, dest: Path) -> None:
     """The largest functional block of the module's own sheet (its dashed frame), as a picture
     for the module's README; the whole sheet if it has no blocks."""
@@ -146,6 +168,7 @@ def package(board_dir: Path, out: Path) -> list[Path]:
     assembly.drawing(pcb, board_box_mm(pcb), out / f"{name}-assembly.pdf", pin_pdf_dates)
     assembly.checklist(name, placed, out / f"{name}-assembly-checklist.md")
     schematic_pdf(sch, out / f"{name}-schematic.pdf")
+    netlist_text(sch, out / f"{name}-netlist.txt")
     main_block_png(sch, out / f"{name}-schematic.png")
     renders(pcb, out, name)
     for problem in jlc.bom_problems(out / f"{name}-bom.csv"):
