@@ -117,7 +117,19 @@ def place(lib_id: str, ref: str, at: Pt, rot: int, nets: dict[str, str], part: P
         p = _to_screen(lp.x, lp.y, at, rot)
         ox, oy = _rot(-math.cos(math.radians(lp.angle)), math.sin(math.radians(lp.angle)), rot)
         pins.append(PinAt(ref, lp.number, nets.get(lp.number, ""), p, (round(ox), round(oy))))
-    return Placed(part, lib_id, ref, at, rot, box, pins)
+    # a drawing may overhang a pin's end (an LED's light arrows): a wire leaving that pin must
+    # still be free to go, so no side of the body reaches past the pins that point out of it
+    x0, y0, x1, y1 = box
+    for pin in pins:
+        if pin.out == (1, 0):
+            x1 = min(x1, pin.p[0])
+        elif pin.out == (-1, 0):
+            x0 = max(x0, pin.p[0])
+        elif pin.out == (0, 1):
+            y1 = min(y1, pin.p[1])
+        else:
+            y0 = max(y0, pin.p[1])
+    return Placed(part, lib_id, ref, at, rot, (x0, y0, x1, y1), pins)
 
 
 def _on_segment(p: Pt, s: Seg) -> bool:
@@ -235,6 +247,9 @@ class DrawnSheetWriter(SheetWriter):
                        , justify=just)]
         for k, v in fields.items():
             props.append(_prop(k, v, pl.at[0] / 100, pl.at[1] / 100, hide=True))
+        if pl.rot in (90, 270):      # field angles are relative to the symbol's: keep text level
+            for prop in props:
+                prop[3][3] = "90"
         pins = [["pin", Q(p.number), ["uuid", Q(uid(self.key, pl.ref, "pin", p.number))]]
                 for p in libsym.pins(pl.lib_id)]
         inst = ["instances"]
@@ -344,14 +359,34 @@ class DrawnSheetWriter(SheetWriter):
                 self.items.append(["junction", ["at", mm(q[0]), mm(q[1])], ["diameter", "0"],
                                    ["color", "0", "0", "0", "0"],
                                    ["uuid", Q(uid(self.key, "junction", tag, str(q)))]])
-        if label:     # the net's name, on its first pin (the wire leaving it carries the text)
-            self._net_label(net, pins[0].p, pins[0].out, f"{tag}/label")
+        if label:     # the net's name: on its longest horizontal wire (text reads along it),
+            flat = [s for s in segs if s[0][1] == s[1][1]]    # else on its first pin
+            if flat:
+                s = max(flat, key=lambda s: (abs(s[1][0] - s[0][0]), -min(s[0][0], s[1][0])))
+                left = min(s, key=lambda q: q[0])
+                self._label(net, left[0] / 100, left[1] / 100, 0, f"{tag}/label")
+            else:
+                self._net_label(net, pins[0].p, pins[0].out, f"{tag}/label")
         for pin in labelled:
             if label:
                 self._stub_label(pin, f"{tag}/label/{pin.ref}/{pin.number}")
             else:
                 self._power(net, pin.p, pin.out)
         return segs
+
+    def _power_pin(self, net: str, pin: PinAt, part_pins: int) -> None:
+        """A rail on one pin. A two-terminal part lying sideways (an LED, a series resistor) gets
+        a short wire and the symbol upright, as drawn by hand; an IC's side pin gets the symbol
+        turned along the pin (upright it would cover the neighbouring pins)."""
+        native = (0, 1) if net == "GND" else (0, -1)
+        if part_pins <= 2 and pin.out[1] == 0:
+            end = (pin.p[0] + pin.out[0] * STUB, pin.p[1])
+            if self.canvas.ok(net, (pin.p, end)) and end not in self.canvas.points:
+                self.canvas.add(net, (pin.p, end))
+                self._wire((pin.p, end), f"power/{pin.ref}/{pin.number}")
+                self._power(net, end, native)
+                return
+        self._power(net, pin.p, pin.out)
 
     def _comb(self, net: str, pins: list[PinAt], tag: str) -> None:
         """A part's pins on one rail and one side, wired together, with one power symbol at the
@@ -404,7 +439,7 @@ class DrawnSheetWriter(SheetWriter):
             pins = list(by_point.values())
             if len(pins) == 1 or _interleaved(pins, by_ref[ref]):
                 for pin in pins:
-                    self._power(net, pin.p, out)
+                    self._power_pin(net, pin, len(by_ref[ref].pins))
             else:
                 self._comb(net, pins, f"comb/{ref}/{net}/{out}")
         # short nets first: they have the fewest ways round

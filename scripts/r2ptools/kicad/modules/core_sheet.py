@@ -26,14 +26,14 @@ DRAWING = {
     # SWD
     "J4": A(120, 36),
     # status LEDs
-    **{d: A(x, 55, 90) for d, x in (("D2", 114), ("D3", 124), ("D4", 134))},
-    **{r: A(x, 60, 0) for r, x in (("R4", 114), ("R5", 124), ("R6", 134))},
+    **{d: A(114, y, 180) for d, y in (("D2", 53), ("D3", 58), ("D4", 63))},
+    **{r: A(128, y, 90) for r, y in (("R4", 53), ("R5", 58), ("R6", 63))},
     # test pads: rails with the pad up (the rail symbol points up), signals down
     "TP1": A(112, 82, 180), "TP2": A(118, 82, 180), "TP3": A(124, 80),
     "TP4": A(130, 80), "TP8": A(136, 80), "TP5": A(142, 80), "TP6": A(148, 80), "TP7": A(154, 80),
     # reset and boot
-    "C10": A(16, 49.5), "SW1": A(10, 50, 270),
-    "SW2": A(10, 58, 270), "R1": A(16, 61.5), "R2": A(26, 61.5),
+    "C10": A(20, 49.5), "SW1": A(10, 50, 270),
+    "SW2": A(10, 61, 270), "R1": A(20, 64.5), "R2": A(32, 64.5),
     # clock
     "Y1": A(20, 84), "C1": A(14, 87.5), "C2": A(26, 87.5),
     # MCU and decoupling
@@ -61,10 +61,10 @@ BLOCKS = [
     Block("SWD (Cortex 10-pin, 1.27 mm)", 106, 26, 160, 46, notes=[
         (128, 44, "SWO not wired: PB3 stays a GPIO.")]),
     Block("Status LEDs", 106, 48, 160, 70, notes=[
-        (138, 58, "LEDs sink into PC13-PC15\n(3 mA max there): 1 k gives\n~1.3 mA at Vf ~2 V.")]),
+        (138, 56, "LEDs sink into PC13-PC15\n(3 mA max there): 1 k gives\n~1.3 mA at Vf ~2 V.")]),
     Block("Test pads (bare 1 mm copper, no BOM line)", 106, 72, 160, 92),
     Block("Reset and boot straps", 4, 42, 40, 72, notes=[
-        (5, 68, "NRST: 100 nF to GND (AN2586).\nBOOT0 low: boot from flash;\nhold SW2 through reset for\nthe ROM bootloader. BOOT1 low.")]),
+        (22, 55, "NRST: 100 nF to GND (AN2586).\nBOOT0 low: boot from flash;\nhold SW2 through reset for\nthe ROM bootloader. BOOT1 low.")]),
     Block("Clock: 8 MHz crystal", 4, 74, 40, 108, notes=[
         (5, 96, f"C1 = C2 = 2 (CL - Cstray)\n= 2 ({core.CRYSTAL_CL_PF:g} - {core.STRAY_PF:g}) pF"
                 f" = {_x['ideal_pf']:.0f} pF C0G 5 %.\nEffective CL {_x['cl_min_pf']:.1f}-"
