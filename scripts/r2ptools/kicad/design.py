@@ -82,6 +82,7 @@ class Sheet:
     ports: list[Port] = field(default_factory=list)
     flags: list[str] = field(default_factory=list)   # nets given a PWR_FLAG (driven from outside)
     children: list["SheetUse"] = field(default_factory=list)
+    revision: str = "A"                                    # of a shared sheet (the core)
     drawing: dict[str, At] = field(default_factory=dict)   # ref (or "flag:NET") -> place
     blocks: list[Block] = field(default_factory=list)      # functional blocks of the drawing
 

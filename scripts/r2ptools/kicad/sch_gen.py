@@ -47,7 +47,7 @@ def write_core(core: Sheet, modules: list[Module], out: Path,
     """The shared sheet, instantiated once by each module."""
     inst = [Instance(m.name, child_path(m.name, core.name)) for m in modules
             if any(u.sheet.name == core.name for u in m.root.children)]
-    w = writer(core, core.name, inst, core.title, "A", {p.name for p in core.ports})
+    w = writer(core, core.name, inst, core.title, core.revision, {p.name for p in core.ports})
     folder = out / core.name
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{core.name}.kicad_sch"

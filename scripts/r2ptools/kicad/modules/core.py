@@ -98,7 +98,7 @@ RJ45_PINS = {"1": "CAN_H", "2": "CAN_L", "3": "GND", "4": "+5V", "5": "+5V", "6"
 
 
 def build() -> Sheet:
-    s = Sheet("core", "R2P common module core: STM32F103, CAN, bus, SWD")
+    s = Sheet("core", "R2P common module core: STM32F103, CAN, bus, SWD", revision="B")
     s.port("V5_IN", "input")
     for pin in FREE_GPIO:
         s.port(pin)

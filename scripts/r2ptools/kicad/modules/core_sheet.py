@@ -15,7 +15,7 @@ from . import core
 A = At
 DRAWING = {
     # bus connectors
-    "J1": A(12, 14), "D5": A(30, 14, 270),
+    "J1": A(12, 14), "D5": A(30, 12, 270),
     "J2": A(12, 32),
     "J3": A(32, 29),
     # CAN transceiver, ESD, termination
@@ -47,7 +47,7 @@ BLOCKS = [
     Block("BUS IN", 4, 4, 24, 22),
     Block("BUS OUT", 4, 24, 24, 40),
     Block("Bus header and +5V TVS", 26, 4, 42, 40, notes=[
-        (27, 19, "D5 SMAJ5.0A: 5.0 V stand-off,\n6.4 V min. breakdown (above the\nbus's 6 V survival and the PSU's\n6.1 V cut-off), 9.2 V clamp\n(docs/bus.md §7)"),
+        (27, 21, "D5 SMAJ5.0A: 5.0 V stand-off,\n6.4 V min. breakdown (above the\nbus's 6 V survival and the PSU's\n6.1 V cut-off), 9.2 V clamp\n(docs/bus.md §7)"),
         (27, 36, "BUS IN, BUS OUT and J3\nare wired in parallel:\nthe bus passes through.")]),
     Block("CAN transceiver, ESD, split termination", 44, 4, 104, 40, notes=[
         (46, 35, "SN65HVD230: Rs to GND = high speed (1 Mbit/s)."),
