@@ -143,6 +143,9 @@ def build(core: Sheet) -> Module:
         s.part(f"TP{102 + ch}", "TP", {"1": SIGNALS[ch]},
                at=Place(xs[ch] + 1.1, 37.4, 0, back=True), value=SIGNALS[ch])
 
+    from . import proximity_sheet     # the drawing imports this module's numbers
+    s.drawing, s.blocks = proximity_sheet.DRAWING, proximity_sheet.BLOCKS
+
     m = Module(NAME, TITLE, REVISION, s,
                tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks()], seed=2)
     m.fiducials = list(core_mod.FIDUCIALS)
