@@ -237,6 +237,8 @@ class DrawnSheetWriter(SheetWriter):
             rx, ry, vx, vy, just = x1 + 127, (y0 + y1) // 2 - 127, x1 + 127, (y0 + y1) // 2 + 127, "left"
             if len(pl.pins) > 4:       # an IC: reference above, value below the body
                 rx, ry, vx, vy, just = x0, y0 - 127, x0, y1 + 254, "left"
+            elif all(p.out == (1, 0) for p in pl.pins):    # pins on the right (a jack turned
+                rx, vx, just = x0 - 127, x0 - 127, "right"  # to face the circuit): text left
         else:
             rx, ry, vx, vy, just = (x0 + x1) // 2, y0 - 127, (x0 + x1) // 2, y1 + 254, None
         if value_at is not None:
@@ -490,7 +492,9 @@ class DrawnSheetWriter(SheetWriter):
                 continue                     # packed with the loose parts
             p = (round(a.x * G), round(a.y * G))
             ref = f"#FLG{self.key[:3].upper()}{n:02d}"
-            pl = place("power:PWR_FLAG", ref, p, 0, {"1": net}, None)
+            # a rail drawn upwards (+5V) takes the flag hanging below its symbol, not over it
+            up = net in POWER_SYMBOL and net != "GND"
+            pl = place("power:PWR_FLAG", ref, p, 180 if up else 0, {"1": net}, None)
             self._emit_symbol(pl, "PWR_FLAG", {"Footprint": "", "Datasheet": "~", "Description": ""},
                               in_bom=False, on_board=False, hide_fields=True)
             if net in POWER_SYMBOL:

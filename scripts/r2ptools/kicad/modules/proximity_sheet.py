@@ -17,27 +17,27 @@ from . import proximity as prox
 
 A = At
 
-CH_Y0 = [30, 44, 58, 72]
+CH_Y0 = [34, 49, 64, 79]
 """Top edge of each channel's block."""
 
 DRAWING = {
     # sensor supply: bus tap, switch, limit, flags
     "F101": A(12, 12, 90), "C101": A(18, 13.5), "R101": A(22, 15.5),
     "U101": A(32, 13), "R111": A(38, 14.5), "R110": A(42, 17.5), "TP106": A(48, 19),
-    "C102": A(46, 13.5), "C103": A(50, 13.5), "TP101": A(56, 12),
-    "flag:+5V": A(8, 22), "flag:GND": A(12, 22), "flag:+5V_MOD": A(16, 22),
+    "C102": A(46, 13.5), "C103": A(52, 13.5), "TP101": A(56, 12),
+    "flag:+5V": A(7, 21), "flag:GND": A(13, 20), "flag:+5V_MOD": A(19, 20),
     # ESD array for the four inputs
-    "U102": A(98, 43),
+    "U102": A(98, 47),
     # the core sheet's box (page 2)
-    "sheet:core": A(124, 30),
+    "sheet:core": A(124, 38),
 }
 for _ch, _y0 in enumerate(CH_Y0):
     DRAWING.update({
         f"J{101 + _ch}": A(9, _y0 + 6, 180),
-        f"R{102 + 2 * _ch}": A(20, _y0 + 7, 90),
-        f"R{103 + 2 * _ch}": A(26, _y0 + 8.5),
-        f"C{104 + _ch}": A(30, _y0 + 8.5),
-        f"TP{102 + _ch}": A(40, _y0 + 7),
+        f"R{102 + 2 * _ch}": A(20, _y0 + 8, 90),
+        f"R{103 + 2 * _ch}": A(26, _y0 + 9.5),
+        f"C{104 + _ch}": A(30, _y0 + 9.5),
+        f"TP{102 + _ch}": A(40, _y0 + 8),
     })
 
 _lo, _nom, _hi = prox.switch_limit_ma()
@@ -50,9 +50,10 @@ _pole_hz = 1 / (2 * math.pi * _r_src * 1e3 * _C_NF * 1e-9)
 _tau_ms = _r_src * _C_NF * 1e-3
 
 BLOCKS = [
-    Block("Sensor supply: fused bus tap, current-limited switch", 4, 4, 120, 26, notes=[
-        (5, 25, "F101: 0.5 A hold polyfuse: a short on this\nmodule trips its own fuse,"
-                " not the whole bus."),
+    Block("Sensor supply: fused bus tap, current-limited switch", 4, 4, 120, 30, notes=[
+        (5, 28, "F101: 0.5 A hold polyfuse: a short on this module trips\nits own fuse,"
+                " not the whole bus (which passes through\nunfused). PWR_FLAGs: +5V and GND come"
+                " from the bus\njacks, +5V_MOD feeds the core's V5_IN (3.3 V LDO)."),
         (58, 8, f"I_LIM (TPS2553, SLVS841) set by R111 = {prox.R_ILIM_KOHM:g} k 1 %:\n"
                 f"nom. 23950 / R^0.977 = {_nom:.0f} mA,\n"
                 f"min. 25230 / (1.01 R)^1.016 = {_lo:.0f} mA >= 4 x 33 mA = {_four:.0f} mA"
@@ -61,7 +62,7 @@ BLOCKS = [
         (58, 15.5, "R101 100 k: sensors off through reset (PB0 turns them on).\n"
                    "~OC: open drain, R110 10 k to 3.3 V; low after the 7.5 ms\n"
                    "deglitch while limiting: SENSOR_PWR_FAULT on PB1."),
-        (58, 23, f"Bus budget exception (docs/bus.md §6): {prox.MODULE_LIMIT_MA:g} mA per module"
+        (58, 25, f"Bus budget exception (docs/bus.md §6): {prox.MODULE_LIMIT_MA:g} mA per module"
                  f" - {prox.CORE_WORST_MA:g} mA core\n= {_left:.0f} mA, not three Sharp"
                  f" sensors: this module may draw {_hi:.0f} + {prox.CORE_WORST_MA:g}"
                  f" = {_hi + prox.CORE_WORST_MA:.0f} mA.\nInrush: C102 + C103 ="
@@ -69,18 +70,24 @@ BLOCKS = [
                  f" {prox.SENSOR_RAIL_UF * 5.0 / _hi:.2f} ms);"
                  f" the bus sees {prox.BUS_SIDE_UF:g} uF (<= 22 uF)."),
     ]),
-    *[Block(f"Sensor {ch} (S{ch})", 4, y0, 82, y0 + 12) for ch, y0 in enumerate(CH_Y0)],
-    Block("ESD clamp at the jacks", 84, 30, 114, 56, notes=[
-        (85, 53, "SRV05-4: one array for the four inputs,\nclamped to the sensor rail."),
+    *[Block(f"Sensor {ch} (S{ch})", 4, y0, 82, y0 + 13) for ch, y0 in enumerate(CH_Y0)],
+    Block("ESD clamp at the jacks", 84, 34, 114, 60, notes=[
+        (85, 57, "SRV05-4: one array for the four inputs,\nclamped to the sensor rail."),
+    ]),
+    Block("Core (page 2)", 116, 34, 160, 78, notes=[
+        (117, 77, "Bus jacks, CAN, 3.3 V LDO, MCU.\nPA0-PA3 ADC, PB0 enable, PB1 fault;\n"
+                  "the other free GPIOs: no-connect."),
     ]),
 ]
-BLOCKS[1].notes.append((44, 33, f"R102 / R103 = 56 k / 100 k: 5 V reads {5 * _ratio:.2f} V\n"
-                                f"(HRLV output ~0.98 Vcc); the 100 k reads 0 V\nwith no sensor"
-                                " plugged."))
-BLOCKS[2].notes.append((44, 47, f"Source {_r_src:.0f} k with C104 {_C_NF:g} nF:\n"
-                                f"pole 1 / (2 pi R C) = {_pole_hz:.0f} Hz (Sharp: 26 Hz updates),\n"
-                                f"0.1 % in 7 tau = {7 * _tau_ms:.0f} ms."))
-BLOCKS[3].notes.append((44, 61, f"56 k: a miswired 24 V sensor injects\n<= {24 / _R_SER:.1f} mA"
-                                " into the ADC pin's clamp (F103: 5 mA)."))
-BLOCKS[4].notes.append((44, 75, "JST PH 3-pin, the Sharp cable's order:\n1 signal, 2 GND,"
-                                " 3 +5 V (sensor rail)."))
+# the channels are identical: each note sits by the parts it sizes, in one channel's block
+BLOCKS[1].notes.append((44, 38, f"Every channel: 56 k in series, 100 k to GND (R102-R109):\n"
+                                f"5 V reads 5 x 100 / 156 = {5 * _ratio:.2f} V at the ADC (MaxBotix"
+                                f" HRLV\nreaches ~0.98 Vcc); an unplugged input reads 0 V (no sensor)."))
+BLOCKS[2].notes.append((44, 53, f"Source 56 k || 100 k = {_r_src:.0f} k with {_C_NF:g} nF"
+                                f" (C104-C107):\npole 1 / (2 pi R C) = {_pole_hz:.0f} Hz, above the"
+                                f" Sharp's 26 Hz\nupdates; settled to 0.1 % in 7 tau ="
+                                f" {7 * _tau_ms:.0f} ms."))
+BLOCKS[3].notes.append((44, 68, f"The 56 k also limits what a miswired 24 V sensor\ninjects into"
+                                f" the ADC pin's clamp: {24 / _R_SER:.1f} mA (F103: 5 mA)."))
+BLOCKS[4].notes.append((44, 83, "JST PH 3-pin in the Sharp cable's order:\n1 signal, 2 GND,"
+                                " 3 +5 V (the switched sensor rail)."))
