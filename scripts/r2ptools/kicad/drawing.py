@@ -497,7 +497,9 @@ class DrawnSheetWriter(SheetWriter):
             pl = place("power:PWR_FLAG", ref, p, 180 if up else 0, {"1": net}, None)
             self._emit_symbol(pl, "PWR_FLAG", {"Footprint": "", "Datasheet": "~", "Description": ""},
                               in_bom=False, on_board=False, hide_fields=True)
-            if net in POWER_SYMBOL:
+            if net in self.canvas.points.get(p, set()):
+                pass            # set on its net's pin, wire end or power symbol: no second name
+            elif net in POWER_SYMBOL:
                 self._power(net, p, (0, 1) if net == "GND" else (0, -1))
             else:
                 self._net_label(net, p, (0, 1), f"flag/{net}")

@@ -22,10 +22,11 @@ CH_Y0 = [34, 49, 64, 79]
 
 DRAWING = {
     # sensor supply: bus tap, switch, limit, flags
-    "F101": A(12, 12, 90), "C101": A(18, 13.5), "R101": A(22, 15.5),
-    "U101": A(32, 13), "R111": A(38, 14.5), "R110": A(42, 17.5), "TP106": A(48, 19),
-    "C102": A(46, 13.5), "C103": A(52, 13.5), "TP101": A(56, 12),
-    "flag:+5V": A(7, 21), "flag:GND": A(13, 20), "flag:+5V_MOD": A(19, 20),
+    "F101": A(10, 12, 90), "C101": A(19, 13.5), "R101": A(23, 15.5),
+    "U101": A(33, 13), "R111": A(39, 14.5), "R110": A(44, 17.5), "TP106": A(50, 19),
+    "C102": A(48, 13.5), "C103": A(54, 13.5), "TP101": A(58, 12),
+    # PWR_FLAGs: +5V_MOD's on F101's output pin, the bus rails' in free space
+    "flag:+5V": A(6, 22), "flag:GND": A(12, 21), "flag:+5V_MOD": A(11.5, 12),
     # ESD array for the four inputs
     "U102": A(98, 47),
     # the core sheet's box (page 2)
@@ -53,16 +54,16 @@ BLOCKS = [
     Block("Sensor supply: fused bus tap, current-limited switch", 4, 4, 120, 30, notes=[
         (5, 28, "F101: 0.5 A hold polyfuse: a short on this module trips\nits own fuse,"
                 " not the whole bus (which passes through\nunfused). PWR_FLAGs: +5V and GND come"
-                " from the bus\njacks, +5V_MOD feeds the core's V5_IN (3.3 V LDO)."),
-        (58, 8, f"I_LIM (TPS2553, SLVS841) set by R111 = {prox.R_ILIM_KOHM:g} k 1 %:\n"
+                " from the bus\njacks (core sheet); +5V_MOD feeds the core's V5_IN (3.3 V LDO)."),
+        (62, 8, f"I_LIM (TPS2553, SLVS841) set by R111 = {prox.R_ILIM_KOHM:g} k 1 %:\n"
                 f"nom. 23950 / R^0.977 = {_nom:.0f} mA,\n"
                 f"min. 25230 / (1.01 R)^1.016 = {_lo:.0f} mA >= 4 x 33 mA = {_four:.0f} mA"
                 " (four GP2Y0A02),\n"
                 f"max. 22980 / (0.99 R)^0.94 = {_hi:.0f} mA: a shorted cable is held there."),
-        (58, 15.5, "R101 100 k: sensors off through reset (PB0 turns them on).\n"
+        (62, 15.5, "R101 100 k: sensors off through reset (PB0 turns them on).\n"
                    "~OC: open drain, R110 10 k to 3.3 V; low after the 7.5 ms\n"
                    "deglitch while limiting: SENSOR_PWR_FAULT on PB1."),
-        (58, 25, f"Bus budget exception (docs/bus.md §6): {prox.MODULE_LIMIT_MA:g} mA per module"
+        (62, 25, f"Bus budget exception (docs/bus.md §6): {prox.MODULE_LIMIT_MA:g} mA per module"
                  f" - {prox.CORE_WORST_MA:g} mA core\n= {_left:.0f} mA, not three Sharp"
                  f" sensors: this module may draw {_hi:.0f} + {prox.CORE_WORST_MA:g}"
                  f" = {_hi + prox.CORE_WORST_MA:.0f} mA.\nInrush: C102 + C103 ="
