@@ -34,11 +34,11 @@ DRAWING = {
 }
 for _ch, _y0 in enumerate(CH_Y0):
     DRAWING.update({
-        f"J{101 + _ch}": A(9, _y0 + 6, 180),
-        f"R{102 + 2 * _ch}": A(20, _y0 + 8, 90),
-        f"R{103 + 2 * _ch}": A(26, _y0 + 9.5),
-        f"C{104 + _ch}": A(30, _y0 + 9.5),
-        f"TP{102 + _ch}": A(40, _y0 + 8),
+        f"J{101 + _ch}": A(12, _y0 + 6, 180),
+        f"R{102 + 2 * _ch}": A(23, _y0 + 8, 90),
+        f"R{103 + 2 * _ch}": A(29, _y0 + 9.5),
+        f"C{104 + _ch}": A(33, _y0 + 9.5),
+        f"TP{102 + _ch}": A(42, _y0 + 8),
     })
 
 _lo, _nom, _hi = prox.switch_limit_ma()
