@@ -51,7 +51,7 @@ _pole_hz = 1 / (2 * math.pi * _r_src * 1e3 * _C_NF * 1e-9)
 _tau_ms = _r_src * _C_NF * 1e-3
 
 BLOCKS = [
-    Block("Sensor supply: fused bus tap, current-limited switch", 4, 4, 120, 30, notes=[
+    Block("Sensor supply: fused bus tap, current-limited switch", 4, 4, 100, 30, notes=[
         (5, 28, "F101: 0.5 A hold polyfuse: a short on this module trips\nits own fuse,"
                 " not the whole bus (which passes through\nunfused). PWR_FLAGs: +5V and GND come"
                 " from the bus\njacks (core sheet); +5V_MOD feeds the core's V5_IN (3.3 V LDO)."),
@@ -63,7 +63,7 @@ BLOCKS = [
         (62, 15.5, "R101 100 k: sensors off through reset (PB0 turns them on).\n"
                    "~OC: open drain, R110 10 k to 3.3 V; low after the 7.5 ms\n"
                    "deglitch while limiting: SENSOR_PWR_FAULT on PB1."),
-        (62, 25, f"Bus budget exception (docs/bus.md §6): {prox.MODULE_LIMIT_MA:g} mA per module"
+        (34, 28, f"Bus budget exception (docs/bus.md §6): {prox.MODULE_LIMIT_MA:g} mA per module"
                  f" - {prox.CORE_WORST_MA:g} mA core\n= {_left:.0f} mA, not three Sharp"
                  f" sensors: this module may draw {_hi:.0f} + {prox.CORE_WORST_MA:g}"
                  f" = {_hi + prox.CORE_WORST_MA:.0f} mA.\nInrush: C102 + C103 ="
