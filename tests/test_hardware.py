@@ -137,6 +137,78 @@ def test_a_wire_missing_from_a_drawing_changes_its_netlist(tmp_path):
     assert netcompare.differences(before, after)
 
 
+def _drag(tree: list, ref: str, dx: float, dy: float) -> None:
+    """Moves symbol `ref` and whatever is attached to its pins (wire ends, power symbols,
+    labels, junctions), as KiCad's drag does."""
+    from r2ptools.kicad import drawing, sexpr
+    sym = next(x for x in sexpr.find_all(tree, "symbol")
+               if any(str(p[1]) == "Reference" and str(p[2]) == ref for p in sexpr.find_all(x, "property")))
+    at = sexpr.find(sym, "at")
+    pl = drawing.place(str(sexpr.find(sym, "lib_id")[1]), ref,
+                       (round(float(at[1]) * 100), round(float(at[2]) * 100)), int(at[3]), {}, None)
+    pins = {(q.p[0] / 100, q.p[1] / 100) for q in pl.pins}
+
+    def shift(node: list, i: int = 1) -> None:
+        node[i], node[i + 1] = sexpr.num(float(node[i]) + dx), sexpr.num(float(node[i + 1]) + dy)
+
+    def on_pin(node: list, i: int = 1) -> bool:
+        return (round(float(node[i]), 2), round(float(node[i + 1]), 2)) in pins
+    for item in tree:
+        if not isinstance(item, list) or item is sym:
+            continue
+        if item[0] == "wire":
+            for xy in sexpr.find_all(sexpr.find(item, "pts"), "xy"):
+                if on_pin(xy):
+                    shift(xy)
+        elif item[0] in ("symbol", "label", "junction", "no_connect", "hierarchical_label"):
+            a = sexpr.find(item, "at")
+            if on_pin(a):
+                shift(a)
+                for prop in sexpr.find_all(item, "property"):
+                    shift(sexpr.find(prop, "at"))
+    shift(at)
+    for prop in sexpr.find_all(sym, "property"):
+        shift(sexpr.find(prop, "at"))
+
+
+def test_a_board_edited_by_hand_in_its_files_passes_every_check(tmp_path):
+    """What a contributor does in KiCad, done to the files: a part dragged to a new place, a
+    wire rerouted round a detour, a track widened. ERC, DRC, parity, parts, pins and the fab
+    netlist still pass: the checks read the KiCad files, not the description."""
+    from r2ptools import pins
+    from r2ptools.kicad import sexpr
+    root = tmp_path
+    for d in ("proximity", "core"):
+        shutil.copytree(HARDWARE / d, root / "hardware" / d, ignore=shutil.ignore_patterns("fab"))
+    shutil.copytree(ROOT / "firmware" / "boards", root / "firmware" / "boards")
+    core_sch = root / "hardware" / "core" / "core.kicad_sch"
+    tree = sexpr.parse(core_sch.read_text())
+    _drag(tree, "C12", 2.54, 0)
+    flat = [w for w in sexpr.find_all(tree, "wire")
+            if len({xy[2] for xy in sexpr.find_all(sexpr.find(w, "pts"), "xy")}) == 1]
+    wire = max(flat, key=lambda w: abs(float(sexpr.find(w, "pts")[1][1]) - float(sexpr.find(w, "pts")[2][1])))
+    (ax, ay), (bx, by) = [(xy[1], xy[2]) for xy in sexpr.find_all(sexpr.find(wire, "pts"), "xy")]
+    up = sexpr.num(float(ay) - 1.27)
+    i = tree.index(wire)
+    tree[i:i + 1] = [["wire", ["pts", ["xy", p, q], ["xy", r, t]], ["stroke", ["width", "0"], ["type", "default"]],
+                      ["uuid", sexpr.Q(f"5e0c0a3e-1d2b-4c5d-8e9f-00000000000{k}")]]
+                     for k, (p, q, r, t) in enumerate(((ax, ay, ax, up), (ax, up, bx, up), (bx, up, bx, by)))]
+    core_sch.write_text(sexpr.dump(tree) + "\n")
+    import pcbnew
+    pcb = root / "hardware" / "proximity" / "proximity.kicad_pcb"
+    b = pcbnew.LoadBoard(str(pcb))
+    track = max((t for t in b.GetTracks() if t.GetNetname() == "GND" and not isinstance(t, pcbnew.PCB_VIA)),
+                key=lambda t: t.GetLength())
+    track.SetWidth(track.GetWidth() + pcbnew.FromMM(0.05))
+    pcbnew.SaveBoard(str(pcb), b)
+    r = check.check(root / "hardware" / "proximity")
+    assert r.ok, "\n".join(r.problems)
+    assert pins.main(["proximity", "--root", str(root)]) == 0
+    fab.netlist_text(root / "hardware" / "proximity" / "proximity.kicad_sch", tmp_path / "net.txt")
+    assert (tmp_path / "net.txt").read_text() == \
+        (HARDWARE / "proximity" / "fab" / "proximity-netlist.txt").read_text()
+
+
 def test_a_dangling_wire_is_a_drawing_fault(scratch):
     """A wire end that connects nothing is reported (ERC warnings of that kind are faults)."""
     from r2ptools.kicad import sexpr
