@@ -489,10 +489,12 @@ class DrawnSheetWriter(SheetWriter):
             pl = place("power:PWR_FLAG", ref, p, 0, {"1": net}, None)
             self._emit_symbol(pl, "PWR_FLAG", {"Footprint": "", "Datasheet": "~", "Description": ""},
                               in_bom=False, on_board=False, hide_fields=True)
-            if net in POWER_SYMBOL:
-                self._power(net, p, (0, 1) if net == "GND" else (0, -1))
-            else:
-                self._net_label(net, p, (0, 1), f"flag/{net}")
+            q = (p[0] + 2 * G, p[1])           # a short wire to the rail's symbol or label
+            self._wire((p, q), f"flag/{net}")
+            self.canvas.add(net, (p, q))
+            # a label, not a power symbol, even for a rail: KiCad's ERC counts a flag joined only
+            # to a power symbol as an unconnected pin (a global label joins the rail all the same)
+            self._net_label(net, q, (1, 0), f"flag/{net}")
 
     def _loose(self, parts: list[Part]) -> None:
         """Parts (and PWR_FLAGs) not drawn yet: packed below the drawing, a label on each pin."""

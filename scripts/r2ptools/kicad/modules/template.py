@@ -34,6 +34,8 @@ def build(core: Sheet) -> Module:
     pins = {p: "" for p in core_mod.FREE_GPIO}
     pins["V5_IN"] = "+5V_MOD"
     s.use(core, pins)
+    from . import template_sheet
+    s.drawing, s.blocks = template_sheet.DRAWING, template_sheet.BLOCKS
     m = Module(NAME, TITLE, REVISION, s,
                tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks(),
                        *led_bus_track()],
