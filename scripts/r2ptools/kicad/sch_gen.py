@@ -33,11 +33,15 @@ def write_module(m: Module, out: Path, writer: type[SheetWriter] = DrawnSheetWri
     uses = []
     x = w.width + 20
     for page, use in enumerate(root.children, start=2):
-        use.at = (round(x / 2.54) * 2.54, 38.1)
+        a = root.drawing.get(f"sheet:{use.sheet.name}")     # the drawing may place the box
+        use.at = (round(x / 2.54) * 2.54, 38.1) if a is None else (a.x * 2.54, a.y * 2.54)
         uses += sheet_symbol(m.name, use, m.name, root_path(m.name), page, CORE_FILE)
     folder = out / m.name
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{m.name}.kicad_sch"
+    if all(f"sheet:{u.sheet.name}" in root.drawing for u in root.children):
+        w.items += uses             # boxes inside the drawing: no room to add at its right
+        uses = []
     write(path, w.document(uses, root=True))
     return path
 
