@@ -28,31 +28,31 @@ def _v(what: str) -> str:
 
 DRAWING = {
     # battery input and protection: the line at y = 20
-    "J101": A(8, 21, 180), "F101": A(14, 20, 90), "Q101": A(20, 21, 90),
-    "D101": A(28, 21.5, 270), "R101": A(20, 25.5), "D102": A(32, 21.5, 270),
+    "J101": A(6.5, 21, 180), "F101": A(14, 20, 90), "Q101": A(20, 21, 90),
+    "D101": A(29.5, 21.5, 270), "R101": A(20, 25.5), "D102": A(33.5, 21.5, 270),
     # sensing: the shunt in the line, the amplifier above it (Kelvin taps), the divider below
-    "R102": A(40, 20, 90), "U101": A(48, 14), "C104": A(65, 10.5),
-    "R103": A(58, 14, 90), "C105": A(64, 15.5), "TP105": A(66.5, 14),
-    "R104": A(38.5, 23.5), "R105": A(38.5, 29), "C106": A(42.5, 29),
+    "R102": A(41, 20, 90), "U101": A(49, 14), "C104": A(66, 10.5),
+    "R103": A(59, 14, 90), "C105": A(65, 15.5), "TP105": A(67.5, 14),
+    "R104": A(39.5, 23.5), "R105": A(39.5, 29), "C106": A(43.5, 29),
     # buck: input caps and EN divider left of U102 (line at y = 20); BIAS, BOOT, L101, feedback
     # and VCC on its right, the output line at y = 16
     "U102": A(105, 27),
-    "TP101": A(74, 19), "C101": A(76, 21.5), "C102": A(82, 21.5), "C103": A(88, 21.5),
+    "TP101": A(75, 19), "C101": A(77, 21.5), "C102": A(83, 21.5), "C103": A(89, 21.5),
     "R106": A(95, 23, 90), "R107": A(95, 26.5, 270), "C110": A(91, 30.5),
-    "C116": A(112, 17.5), "C109": A(114.5, 22, 90), "L101": A(120, 17.5, 180),
-    "R108": A(125, 17.5), "R109": A(125, 28.5), "C108": A(112, 31.5),
-    "C111": A(131.5, 17.5), "C112": A(136, 17.5), "C113": A(140.5, 17.5), "C114": A(145, 17.5),
-    "TP102": A(151, 15),
+    "C116": A(112, 17.5), "C109": A(114, 23.5), "L101": A(121, 17.5, 180),
+    "R108": A(127, 17.5), "R109": A(127, 28.5), "C108": A(112, 31.5),
+    "C111": A(133.5, 17.5), "C112": A(138, 17.5), "C113": A(142.5, 17.5), "C114": A(147, 17.5),
+    "TP102": A(153, 15),
     # eFuse (second row): IN_SYS straight under the buck's output line
-    "U103": A(129.5, 53),
-    "R112": A(116, 49.5), "R113": A(116, 55.5), "R114": A(116, 60.5),
-    "R110": A(122, 61.5), "TP103": A(120, 65, 180),
-    "R111": A(139.5, 51.5), "TP104": A(141.5, 53),
-    "R116": A(141, 59.5), "C115": A(137.5, 60.5),
+    "U103": A(131, 53),
+    "R112": A(117.5, 49.5), "R113": A(117.5, 55.5), "R114": A(117.5, 60.5),
+    "R110": A(122, 61.5), "TP103": A(120, 67, 180),
+    "R111": A(141, 51.5), "TP104": A(143, 53),
+    "R116": A(142.5, 59.5), "C115": A(139, 60.5),
     # bus voltage sense
-    "R117": A(150, 50.5), "R118": A(150, 55.5), "C117": A(154, 55.5),
+    "R117": A(152, 50.5), "R118": A(152, 55.5), "C117": A(156, 55.5),
     # PWR_FLAGs
-    "flag:VIN_BUCK": A(69, 20), "flag:+5V_BUCK": A(151, 16), "flag:GND": A(12, 25),
+    "flag:VIN_BUCK": A(70, 20), "flag:+5V_BUCK": A(153, 16), "flag:GND": A(12, 25),
     # the core sheet (MCU, page 2): bottom, left of the title block
     "sheet:core": A(92, 79.5),
 }
@@ -66,18 +66,18 @@ _DIV = (_BV["R104"] + _BV["R105"]) / _BV["R105"]
 
 BLOCKS = [
     Block("Power path: battery 6-42 V in, 5 V bus out", 4, 4, 161, 77),
-    Block("Battery input and protection", 5, 6.5, 36, 76, notes=[
-        (6, 34, f"F101 5 A time-lag, 125 V DC: max input current\n"
+    Block("Battery input and protection", 5, 6.5, 37, 76, notes=[
+        (6, 37, f"F101 5 A time-lag, 125 V DC: max input current\n"
                 f"{_v('max input current')} (6 V in, bus at its limit, eff. 85 %)\n"
                 f"{_ROWS['fuse F101 5 A T (0452005.MRL)'].limit}.\n"
                 f"Hot-plug I2t into C_in {_v('hot-plug inrush I²t into C_in')}\n"
                 f"{_ROWS['hot-plug inrush I²t into C_in'].limit}."),
-        (6, 44, f"Q101 P-MOSFET: reverse polarity. Battery reversed:\n"
+        (6, 42, f"Q101 P-MOSFET: reverse polarity. Battery reversed:\n"
                 f"V_DS {_v('Q101 V_DS, battery reversed')} "
                 f"{_ROWS['Q101 V_DS, battery reversed'].limit} "
                 f"({_ROWS['Q101 V_DS, battery reversed'].note}).\n"
                 "D101 15 V zener holds V_GS, R101 turns it on."),
-        (6, 53, f"D102 SMBJ40A clamps {_v('TVS clamp at rated pulse vs LM76005 abs max')}\n"
+        (6, 51, f"D102 SMBJ40A clamps {_v('TVS clamp at rated pulse vs LM76005 abs max')}\n"
                 f"{_ROWS['TVS clamp at rated pulse vs LM76005 abs max'].limit} (LM76005 abs max):\n"
                 f"{_ROWS['TVS clamp at rated pulse vs LM76005 abs max'].note}.\n"
                 f"Stand-off {_v('TVS stand-off vs max input')} < {calc.VIN_MAX:.2f} V max input,"
@@ -88,30 +88,30 @@ BLOCKS = [
                 f" {_ROWS['TVS clamp at a 2 A hot-plug surge'].limit}.\n"
                 "Input-side parts rated above the clamp:\n"
                 "caps 100 V, INA293 110 V, eFuse 67 V.")]),
-    Block("Input current and voltage sensing", 37, 6.5, 71, 76, notes=[
-        (38, 36, f"IIN_SENSE = I_IN x R102 x 50 (INA293A2)\n"
+    Block("Input current and voltage sensing", 38, 6.5, 73, 76, notes=[
+        (48, 28, f"IIN_SENSE = I_IN x R102 x 50 (INA293A2)\n"
                  f"= {_v('IIN_SENSE scale')}: {_ROWS['IIN_SENSE scale'].limit},\n"
                  f"{_ROWS['IIN_SENSE scale'].note}.\n"
                  f"R102 10 mohm: {_v('shunt R102 dissipation')} at {_v('max input current')}"
                  f" ({_ROWS['shunt R102 dissipation'].limit}).\n"
                  f"R103/C105: {_RC_HZ / 1e3:.1f} kHz anti-alias filter.\n"
                  "IN+/IN- are Kelvin taps on the shunt's pads."),
-        (38, 47, f"VIN_SENSE = VIN x R105 / (R104 + R105) = VIN/{_DIV:.0f}:\n"
+        (39, 37, f"VIN_SENSE = VIN x R105 / (R104 + R105) = VIN/{_DIV:.0f}:\n"
                  f"{_ROWS['VIN_SENSE scale'].limit}; {_ROWS['VIN_SENSE scale'].note}.\n"
                  f"At the clamp: R104 sees {_v('VIN divider top (R104) voltage at the clamp')}"
                  f" ({_ROWS['VIN divider top (R104) voltage at the clamp'].limit}),\n"
                  f"the ADC pin {_v('ADC pin injection at the clamp')}"
                  f" ({_ROWS['ADC pin injection at the clamp'].limit}).")]),
-    Block("Buck converter LM76005 (60 V, 400 kHz, synchronous)", 72, 6.5, 160, 42, notes=[
-        (73, 36, f"C101-C103: {_ROWS['input ripple at duty 0.5, 2.5 A rated'].note} at 42 V:\n"
+    Block("Buck converter LM76005 (60 V, 400 kHz, synchronous)", 74, 6.5, 160, 42, notes=[
+        (75, 41, f"C101-C103: {_ROWS['input ripple at duty 0.5, 2.5 A rated'].note} at 42 V:\n"
                  f"{_v('input ripple at duty 0.5, 2.5 A rated')} (duty 0.5, 2.5 A).\n"
                  f"EN: start = 2.1 V x (1 + R106/R107) = {_v('buck start (EN rising)')},\n"
                  f"stop {_v('buck stop (EN falling)')}; soft start C110 x 1.0 V / 2 uA ="
                  f" {_v('soft start t = C_SS V_FB / I_SS')}."),
-        (110, 36, f"VOUT = VFB (1 + R108/R109)\n= 1.0 V x (1 + 100k/24.9k) ="
+        (110, 41, f"VOUT = VFB (1 + R108/R109)\n= 1.0 V x (1 + 100k/24.9k) ="
                   f" {_v('VOUT = VFB (1 + R108/R109)')}\n"
                   "BOOT 470 nF 25 V; BIAS on +5V_BUCK,\nC116 1 uF at the pin (SNVSBK5 §5)."),
-        (131, 25, f"L101 10 uH: ripple {_v('inductor ripple at max input, f min')} at"
+        (133, 33, f"L101 10 uH: ripple {_v('inductor ripple at max input, f min')} at"
                   f" {calc.VIN_MAX:.1f} V,\n{calc.BUCK_FSW_MIN / 1e3:.0f} kHz"
                   f" ({_ROWS['inductor ripple at max input, f min'].note});\n"
                   f"peak {_v('inductor peak')} {_ROWS['inductor peak'].limit}.\n"
@@ -120,8 +120,8 @@ BLOCKS = [
                   f"Output worst case {_v('buck output, worst case')}.\n"
                   f"U102 at 42 V, 3 A: {_v('U102 rise at 42 V, 3.0 A (estimate)')}"
                   " (estimate).")]),
-    Block("eFuse TPS16630 and bus output", 106, 44, 146, 76, notes=[
-        (107, 67, f"I_LIM = 18 / R116 = 18 / 6.8 k = {_ILIM:.2f} A; with +-8 %, R +-1 %:\n"
+    Block("eFuse TPS16630 and bus output", 106, 44, 148, 76, notes=[
+        (107, 75, f"I_LIM = 18 / R116 = 18 / 6.8 k = {_ILIM:.2f} A; with +-8 %, R +-1 %:\n"
                   f"{_v('eFuse limit 18/R_ILIM')} {_ROWS['eFuse limit 18/R_ILIM'].limit}.\n"
                   f"UVLO = 1.2 V (R112+R113+R114)/(R113+R114) = {_v('eFuse UVLO on +5V_BUCK')}\n"
                   f"OVP = 1.2 V (R112+R113+R114)/R114 = {_v('eFuse OVP on +5V_BUCK')}\n"
@@ -129,14 +129,14 @@ BLOCKS = [
                   f" {5.0 / _SLEW * 1e3:.1f} ms, {_ROWS['bus turn-on slew'].limit}.\n"
                   f"R110 holds SHDN at {_v('SHDN held off by R110 (10 µA source)')}: bus off"
                   " until BUS_EN.")]),
-    Block("Bus voltage sense", 147, 44, 160, 76, notes=[
-        (148, 62, "VOUT_SENSE =\n+5V x R118/(R117+R118)\n= +5V / 2")]),
+    Block("Bus voltage sense", 149, 44, 160, 76, notes=[
+        (150, 64, "VOUT_SENSE\n= +5V / 2\n(R117 = R118):\n0-6.6 V full\nscale")]),
     Block("MCU (core sheet, page 2)", 4, 78, 115, 113, notes=[
-        (6, 84, "The MCU reads VIN_SENSE (PA0), IIN_SENSE (PA1) and VOUT_SENSE (PA2),\n"
+        (6, 88, "The MCU reads VIN_SENSE (PA0), IIN_SENSE (PA1) and VOUT_SENSE (PA2),\n"
                 "enables the bus (BUS_EN, PB0) and sees its fault (BUS_FAULT, PB1).\n"
                 "+5V_BUCK feeds its LDO ahead of the eFuse: the firmware keeps running\n"
                 "and reports a tripped bus instead of browning out with it."),
-        (6, 94, f"Input {_v('input range')}: 2S-10S Li-ion, charger +-1 %.\n"
+        (6, 98, f"Input {_v('input range')}: 2S-10S Li-ion, charger +-1 %.\n"
                 f"No power switch: a switch on EN would still drain"
                 f" {_v('pack drain with the buck off (an EN switch)')}\n"
                 f"({_ROWS['pack drain with the buck off (an EN switch)'].note}).\n"
