@@ -41,18 +41,18 @@ DRAWING = {
     "R106": A(95, 23, 90), "R107": A(95, 26.5, 270), "C110": A(91, 30.5),
     "C116": A(112, 17.5), "C109": A(114, 23.5), "L101": A(121, 17.5, 180),
     "R108": A(127, 17.5), "R109": A(127, 28.5), "C108": A(112, 31.5),
-    "C111": A(133.5, 17.5), "C112": A(138, 17.5), "C113": A(142.5, 17.5), "C114": A(147, 17.5),
-    "TP102": A(153, 15),
+    "C111": A(134, 17.5), "C112": A(139.5, 17.5), "C113": A(145, 17.5), "C114": A(150.5, 17.5),
+    "TP102": A(153.5, 16),
     # eFuse (second row): IN_SYS straight under the buck's output line
     "U103": A(131, 53),
-    "R112": A(117.5, 49.5), "R113": A(117.5, 55.5), "R114": A(117.5, 60.5),
+    "R112": A(116, 49.5), "R113": A(116, 55.5), "R114": A(116, 60.5),
     "R110": A(122, 61.5), "TP103": A(120, 67, 180),
     "R111": A(141, 51.5), "TP104": A(143, 53),
     "R116": A(142.5, 59.5), "C115": A(139, 60.5),
     # bus voltage sense
     "R117": A(152, 50.5), "R118": A(152, 55.5), "C117": A(156, 55.5),
     # PWR_FLAGs
-    "flag:VIN_BUCK": A(70, 20), "flag:+5V_BUCK": A(153, 16), "flag:GND": A(12, 25),
+    "flag:VIN_BUCK": A(70, 20), "flag:+5V_BUCK": A(155, 23), "flag:GND": A(12, 25),
     # the core sheet (MCU, page 2): bottom, left of the title block
     "sheet:core": A(92, 79.5),
 }
@@ -120,7 +120,7 @@ BLOCKS = [
                   f"Output worst case {_v('buck output, worst case')}.\n"
                   f"U102 at 42 V, 3 A: {_v('U102 rise at 42 V, 3.0 A (estimate)')}"
                   " (estimate).")]),
-    Block("eFuse TPS16630 and bus output", 106, 44, 148, 76, notes=[
+    Block("eFuse TPS16630 and bus output", 106, 44, 149, 76, notes=[
         (107, 75, f"I_LIM = 18 / R116 = 18 / 6.8 k = {_ILIM:.2f} A; with +-8 %, R +-1 %:\n"
                   f"{_v('eFuse limit 18/R_ILIM')} {_ROWS['eFuse limit 18/R_ILIM'].limit}.\n"
                   f"UVLO = 1.2 V (R112+R113+R114)/(R113+R114) = {_v('eFuse UVLO on +5V_BUCK')}\n"
@@ -129,8 +129,8 @@ BLOCKS = [
                   f" {5.0 / _SLEW * 1e3:.1f} ms, {_ROWS['bus turn-on slew'].limit}.\n"
                   f"R110 holds SHDN at {_v('SHDN held off by R110 (10 µA source)')}: bus off"
                   " until BUS_EN.")]),
-    Block("Bus voltage sense", 149, 44, 160, 76, notes=[
-        (150, 64, "VOUT_SENSE\n= +5V / 2\n(R117 = R118):\n0-6.6 V full\nscale")]),
+    Block("Bus voltage sense", 150, 44, 160, 76, notes=[
+        (151, 64, "VOUT_SENSE\n= +5V / 2\n(R117 = R118):\n0-6.6 V full\nscale")]),
     Block("MCU (core sheet, page 2)", 4, 78, 115, 113, notes=[
         (6, 88, "The MCU reads VIN_SENSE (PA0), IIN_SENSE (PA1) and VOUT_SENSE (PA2),\n"
                 "enables the bus (BUS_EN, PB0) and sees its fault (BUS_FAULT, PB1).\n"
