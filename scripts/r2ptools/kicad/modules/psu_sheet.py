@@ -50,7 +50,7 @@ DRAWING = {
     "R111": A(141, 51.5), "TP104": A(143, 53),
     "R116": A(142.5, 59.5), "C115": A(139, 60.5),
     # bus voltage sense
-    "R117": A(152, 50.5), "R118": A(152, 55.5), "C117": A(156, 55.5),
+    "R117": A(121, 84.5), "R118": A(121, 90.5), "C117": A(125, 90.5),
     # PWR_FLAGs
     "flag:VIN_BUCK": A(70, 20), "flag:+5V_BUCK": A(155, 23), "flag:GND": A(12, 25),
     # the core sheet (MCU, page 2): bottom, left of the title block
@@ -120,7 +120,7 @@ BLOCKS = [
                   f"Output worst case {_v('buck output, worst case')}.\n"
                   f"U102 at 42 V, 3 A: {_v('U102 rise at 42 V, 3.0 A (estimate)')}"
                   " (estimate).")]),
-    Block("eFuse TPS16630 and bus output", 106, 44, 149, 76, notes=[
+    Block("eFuse TPS16630 and bus output", 106, 44, 160, 76, notes=[
         (107, 75, f"I_LIM = 18 / R116 = 18 / 6.8 k = {_ILIM:.2f} A; with +-8 %, R +-1 %:\n"
                   f"{_v('eFuse limit 18/R_ILIM')} {_ROWS['eFuse limit 18/R_ILIM'].limit}.\n"
                   f"UVLO = 1.2 V (R112+R113+R114)/(R113+R114) = {_v('eFuse UVLO on +5V_BUCK')}\n"
@@ -129,9 +129,9 @@ BLOCKS = [
                   f" {5.0 / _SLEW * 1e3:.1f} ms, {_ROWS['bus turn-on slew'].limit}.\n"
                   f"R110 holds SHDN at {_v('SHDN held off by R110 (10 µA source)')}: bus off"
                   " until BUS_EN.")]),
-    Block("Bus voltage sense", 150, 44, 160, 76, notes=[
-        (151, 64, "VOUT_SENSE\n= +5V / 2\n(R117 = R118):\n0-6.6 V full\nscale")]),
-    Block("MCU (core sheet, page 2)", 4, 78, 115, 113, notes=[
+    Block("Bus voltage sense", 117, 78, 160, 97, notes=[
+        (131, 90, "VOUT_SENSE = +5V x R118 / (R117 + R118)\n= +5V / 2: 6.6 V full scale.")]),
+    Block("MCU (core sheet, page 2)", 4, 78, 116, 113, notes=[
         (6, 88, "The MCU reads VIN_SENSE (PA0), IIN_SENSE (PA1) and VOUT_SENSE (PA2),\n"
                 "enables the bus (BUS_EN, PB0) and sees its fault (BUS_FAULT, PB1).\n"
                 "+5V_BUCK feeds its LDO ahead of the eFuse: the firmware keeps running\n"
