@@ -1,13 +1,16 @@
 """How the PSU's root sheet is drawn (hardware/psu/psu.kicad_sch): the power path left to right.
 
 Top row, along the battery current: battery input and protection, input current and voltage
-sensing, the buck converter; its 5 V output drops to the second row, into the eFuse and bus
-output, beside the bus voltage sense. The outer block "Power path" holds them all and is listed
-first, so drawing.py wires every net whose pins are inside it (a pin belongs to the first block
-that contains it): VBAT_CONN → VBAT_IN → VIN_PROT → VIN_BUCK → SW → +5V_BUCK → +5V is one wired
-line across the inner frames, which carry the titles and the design notes. Below it, the core
-sheet's box (the MCU, page 2): its pins' labels are the sheet's only labels between blocks.
-Grid units of 2.54 mm (drawing.py); every number in the notes is a row of calc/psu.py.
+sensing, the buck converter; the buck's 5 V output drops straight into the eFuse's IN_SYS pin on
+the second row, where the bus output leaves as the +5V rail. The outer block "Power path" holds
+these four and is listed first, so drawing.py wires every net whose pins lie inside it (a pin
+belongs to the first block that contains it): VBAT_CONN → VBAT_IN → VIN_PROT → VIN_BUCK → SW →
++5V_BUCK is one wired line across the inner frames, which carry the titles and the design notes
+next to the parts they size. Bottom row: the core sheet's box (the MCU, page 2, placed here by
+"sheet:core") with the notes on the board as a whole, and the bus voltage sense. The MCU's
+signals (VIN_SENSE, IIN_SENSE, VOUT_SENSE, BUS_EN, BUS_FAULT, +5V_BUCK) are the only nets that
+meet by label. Grid units of 2.54 mm (drawing.py); every number in the notes is a row of
+calc/psu.py (looked up by its name, so a renamed row fails loudly here).
 """
 from __future__ import annotations
 
@@ -47,7 +50,7 @@ DRAWING = {
     "U103": A(131, 53),
     "R112": A(116, 49.5), "R113": A(116, 55.5), "R114": A(116, 60.5),
     "R110": A(122, 61.5), "TP103": A(120, 67, 180),
-    "R111": A(141, 51.5), "TP104": A(143, 53),
+    "R111": A(141, 51.5), "TP104": A(145.5, 53),
     "R116": A(142.5, 59.5), "C115": A(139, 60.5),
     # bus voltage sense
     "R117": A(121, 84.5), "R118": A(121, 90.5), "C117": A(125, 90.5),
