@@ -40,8 +40,8 @@ DRAWING = {
     # buck: input caps and EN divider left of U102 (line at y = 20); BIAS, BOOT, L101, feedback
     # and VCC on its right, the output line at y = 16
     "U102": A(105, 27),
-    "TP101": A(74.5, 20), "C101": A(76, 21.5), "C102": A(82, 21.5), "C103": A(88, 21.5),
-    "R106": A(95, 23, 90), "R107": A(95, 26.5, 270), "C110": A(91, 30.5),
+    "TP101": A(74.5, 20), "C101": A(75.5, 21.5), "C102": A(81.5, 21.5), "C103": A(87.5, 21.5),
+    "R106": A(95, 23, 90), "R107": A(95, 26.5, 270), "C110": A(86.5, 30.5),
     "C116": A(112, 17.5), "C109": A(114, 23.5), "L101": A(121, 17.5, 180),
     "R108": A(127, 17.5), "R109": A(127, 28.5), "C108": A(112, 31.5),
     "C111": A(134, 17.5), "C112": A(139.5, 17.5), "C113": A(145, 17.5), "C114": A(150.5, 17.5),
@@ -55,7 +55,7 @@ DRAWING = {
     # bus voltage sense
     "R117": A(121, 84.5), "R118": A(121, 90.5), "C117": A(125, 90.5),
     # PWR_FLAGs
-    "flag:VIN_BUCK": A(70, 20), "flag:+5V_BUCK": A(155, 23), "flag:GND": A(12, 25),
+    "flag:VIN_BUCK": A(67.5, 20), "flag:+5V_BUCK": A(155, 23), "flag:GND": A(12, 25),
     # the core sheet (MCU, page 2): bottom, left of the title block
     "sheet:core": A(92, 79.5),
 }
@@ -92,7 +92,7 @@ BLOCKS = [
                 "Input-side parts rated above the clamp:\n"
                 "caps 100 V, INA293 110 V, eFuse 67 V.")]),
     Block("Input current and voltage sensing", 38, 6.5, 73, 76, notes=[
-        (48, 28, f"IIN_SENSE = I_IN x R102 x 50 (INA293A2)\n"
+        (48, 30, f"IIN_SENSE = I_IN x R102 x 50 (INA293A2)\n"
                  f"= {_v('IIN_SENSE scale')}: {_ROWS['IIN_SENSE scale'].limit},\n"
                  f"{_ROWS['IIN_SENSE scale'].note}.\n"
                  f"R102 10 mohm: {_v('shunt R102 dissipation')} at {_v('max input current')}"
