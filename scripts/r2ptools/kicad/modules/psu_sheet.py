@@ -61,9 +61,7 @@ DRAWING = {
 }
 
 _ILIM = calc.EFUSE_ILIM_K / (_BV["R116"] / 1e3)
-_CHAIN = _BV["R112"] + _BV["R113"] + _BV["R114"]
 _SLEW = calc.EFUSE_IDVDT * calc.EFUSE_GAIN_DVDT / _BV["C115"]          # V/s
-_EN = 1 + _BV["R106"] / _BV["R107"]
 _RC_HZ = 1 / (2 * math.pi * 1e3 * 100e-9)                             # R103/C105
 _DIV = (_BV["R104"] + _BV["R105"]) / _BV["R105"]
 
@@ -73,7 +71,7 @@ BLOCKS = [
         (6, 37, f"F101 5 A time-lag, 125 V DC: max input current\n"
                 f"{_v('max input current')} (6 V in, bus at its limit, eff. 85 %)\n"
                 f"{_ROWS['fuse F101 5 A T (0452005.MRL)'].limit}.\n"
-                f"Hot-plug I2t into C_in {_v('hot-plug inrush I²t into C_in')}\n"
+                f"Hot-plug I²t into C_in {_v('hot-plug inrush I²t into C_in')}\n"
                 f"{_ROWS['hot-plug inrush I²t into C_in'].limit}."),
         (6, 42, f"Q101 P-MOSFET: reverse polarity. Battery reversed:\n"
                 f"V_DS {_v('Q101 V_DS, battery reversed')} "
@@ -90,16 +88,16 @@ BLOCKS = [
                 f"2 A hot-plug surge: {_v('TVS clamp at a 2 A hot-plug surge')}"
                 f" {_ROWS['TVS clamp at a 2 A hot-plug surge'].limit}.\n"
                 "Input-side parts rated above the clamp:\n"
-                "caps 100 V, INA293 110 V, eFuse 67 V.")]),
+                f"caps {calc.CIN_RATED:.0f} V, INA293 {calc.INA293_CM_MAX:.0f} V, eFuse {calc.EFUSE_ABS_MAX:.0f} V.")]),
     Block("Input current and voltage sensing", 38, 6.5, 73, 76, notes=[
-        (48, 30, f"IIN_SENSE = I_IN x R102 x 50 (INA293A2)\n"
+        (48, 30, f"IIN_SENSE = I_IN × R102 × 50 (INA293A2)\n"
                  f"= {_v('IIN_SENSE scale')}: {_ROWS['IIN_SENSE scale'].limit},\n"
                  f"{_ROWS['IIN_SENSE scale'].note}.\n"
-                 f"R102 10 mohm: {_v('shunt R102 dissipation')} at {_v('max input current')}"
+                 f"R102 10 mΩ: {_v('shunt R102 dissipation')} at {_v('max input current')}"
                  f" ({_ROWS['shunt R102 dissipation'].limit}).\n"
                  f"R103/C105: {_RC_HZ / 1e3:.1f} kHz anti-alias filter.\n"
                  "IN+/IN- are Kelvin taps on the shunt's pads."),
-        (39, 37, f"VIN_SENSE = VIN x R105 / (R104 + R105) = VIN/{_DIV:.0f}:\n"
+        (39, 37, f"VIN_SENSE = VIN × R105 / (R104 + R105) = VIN/{_DIV:.0f}:\n"
                  f"{_ROWS['VIN_SENSE scale'].limit}; {_ROWS['VIN_SENSE scale'].note}.\n"
                  f"At the clamp: R104 sees {_v('VIN divider top (R104) voltage at the clamp')}"
                  f" ({_ROWS['VIN divider top (R104) voltage at the clamp'].limit}),\n"
@@ -108,38 +106,43 @@ BLOCKS = [
     Block("Buck converter LM76005 (60 V, 400 kHz, synchronous)", 74, 6.5, 160, 42, notes=[
         (75, 41, f"C101-C103: {_ROWS['input ripple at duty 0.5, 2.5 A rated'].note} at 42 V:\n"
                  f"{_v('input ripple at duty 0.5, 2.5 A rated')} (duty 0.5, 2.5 A).\n"
-                 f"EN: start = 2.1 V x (1 + R106/R107) = {_v('buck start (EN rising)')},\n"
-                 f"stop {_v('buck stop (EN falling)')}; soft start C110 x 1.0 V / 2 uA ="
+                 f"EN: start = {calc.BUCK_EN_RISE} V × (1 + R106/R107) = {_v('buck start (EN rising)')},\n"
+                 f"stop {_v('buck stop (EN falling)')}; soft start C110 × {calc.BUCK_VFB:.1f} V /"
+                 f" {calc.BUCK_ISS * 1e6:.0f} µA ="
                  f" {_v('soft start t = C_SS V_FB / I_SS')}."),
-        (110, 41, f"VOUT = VFB (1 + R108/R109)\n= 1.0 V x (1 + 100k/24.9k) ="
+        (110, 41, f"VOUT = VFB (1 + R108/R109)\n= {calc.BUCK_VFB:.1f} V × (1 + {_BV['R108'] / 1e3:g}k/"
+                  f"{_BV['R109'] / 1e3:g}k) ="
                   f" {_v('VOUT = VFB (1 + R108/R109)')}\n"
-                  "BOOT 470 nF 25 V; BIAS on +5V_BUCK,\nC116 1 uF at the pin (SNVSBK5 §5)."),
-        (133, 33, f"L101 10 uH: ripple {_v('inductor ripple at max input, f min')} at"
+                  "BOOT 470 nF 25 V; BIAS on +5V_BUCK,\nC116 1 µF at the pin (SNVSBK5 §5)."),
+        (133, 33, f"L101 10 µH: ripple {_v('inductor ripple at max input, f min')} at"
                   f" {calc.VIN_MAX:.1f} V,\n{calc.BUCK_FSW_MIN / 1e3:.0f} kHz"
                   f" ({_ROWS['inductor ripple at max input, f min'].note});\n"
                   f"peak {_v('inductor peak')} {_ROWS['inductor peak'].limit}.\n"
-                  f"C111-C114 4 x 22 uF 25 V: {_v('output capacitance at 5 V DC bias')}"
+                  f"C111-C114 4 × 22 µF 25 V: {_v('output capacitance at 5 V DC bias')}"
                   f" at 5 V,\n{_ROWS['output capacitance at 5 V DC bias'].note}.\n"
                   f"Output worst case {_v('buck output, worst case')}.\n"
                   f"U102 at 42 V, 3 A: {_v('U102 rise at 42 V, 3.0 A (estimate)')}"
                   " (estimate).")]),
     Block("eFuse TPS16630 and bus output", 106, 44, 160, 76, notes=[
-        (107, 75, f"I_LIM = 18 / R116 = 18 / 6.8 k = {_ILIM:.2f} A; with +-8 %, R +-1 %:\n"
+        (107, 75, f"I_LIM = {calc.EFUSE_ILIM_K:g} / R116 = {calc.EFUSE_ILIM_K:g} / {_BV['R116'] / 1e3:g} k"
+                  f" = {_ILIM:.2f} A; with ±{calc.EFUSE_ILIM_TOL:.0%}, R ±1 %:\n"
                   f"{_v('eFuse limit 18/R_ILIM')} {_ROWS['eFuse limit 18/R_ILIM'].limit}.\n"
-                  f"UVLO = 1.2 V (R112+R113+R114)/(R113+R114) = {_v('eFuse UVLO on +5V_BUCK')}\n"
-                  f"OVP = 1.2 V (R112+R113+R114)/R114 = {_v('eFuse OVP on +5V_BUCK')}\n"
-                  f"dV/dt: C115 22 nF -> {_v('bus turn-on slew')}: 5 V in"
+                  f"UVLO = {calc.EFUSE_VTH[1]} V (R112+R113+R114)/(R113+R114) = {_v('eFuse UVLO on +5V_BUCK')}\n"
+                  f"OVP = {calc.EFUSE_VTH[0]}-{calc.EFUSE_VTH[2]} V (R112+R113+R114)/R114 ="
+                  f" {_v('eFuse OVP on +5V_BUCK')}\n"
+                  f"dV/dt: C115 {_BV['C115'] * 1e9:g} nF → {_v('bus turn-on slew')}: 5 V in"
                   f" {5.0 / _SLEW * 1e3:.1f} ms, {_ROWS['bus turn-on slew'].limit}.\n"
                   f"R110 holds SHDN at {_v('SHDN held off by R110 (10 µA source)')}: bus off"
                   " until BUS_EN.")]),
     Block("Bus voltage sense", 117, 78, 160, 97, notes=[
-        (131, 90, "VOUT_SENSE = +5V x R118 / (R117 + R118)\n= +5V / 2: 6.6 V full scale.")]),
+        (131, 90, "VOUT_SENSE = +5V × R118 / (R117 + R118)\n= +5V / 2: "
+                  f"{calc.ADC_FS * (_BV['R117'] + _BV['R118']) / _BV['R118']:.1f} V full scale.")]),
     Block("MCU (core sheet, page 2)", 4, 78, 116, 113, notes=[
         (6, 88, "The MCU reads VIN_SENSE (PA0), IIN_SENSE (PA1) and VOUT_SENSE (PA2),\n"
                 "enables the bus (BUS_EN, PB0) and sees its fault (BUS_FAULT, PB1).\n"
                 "+5V_BUCK feeds its LDO ahead of the eFuse: the firmware keeps running\n"
                 "and reports a tripped bus instead of browning out with it."),
-        (6, 98, f"Input {_v('input range')}: 2S-10S Li-ion, charger +-1 %.\n"
+        (6, 98, f"Input {_v('input range')}: 2S-10S Li-ion, charger ±1 %.\n"
                 f"No power switch: a switch on EN would still drain"
                 f" {_v('pack drain with the buck off (an EN switch)')}\n"
                 f"({_ROWS['pack drain with the buck off (an EN switch)'].note}).\n"
