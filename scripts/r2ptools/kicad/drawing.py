@@ -241,6 +241,10 @@ class DrawnSheetWriter(SheetWriter):
             rx, ry, vx, vy, just = (x0 + x1) // 2, y0 - 127, (x0 + x1) // 2, y1 + 254, None
         if value_at is not None:
             vx, vy, just = value_at
+        elif pl.rot in (90, 180) and just is not None:
+            # KiCad reads a field's justification in the symbol's frame: turned 90 (with the
+            # level field angle below) or 180, "left" is drawn right-justified, over the body
+            just = {"left": "right", "right": "left"}[just]
         hide = hide_fields or pl.ref.startswith("#")
         props = [_prop("Reference", pl.ref, rx / 100, ry / 100, hide=hide, justify=just),
                  _prop("Value", value, vx / 100, vy / 100, hide=hide and not pl.lib_id.startswith("power:")

@@ -34,13 +34,20 @@ def write_module(m: Module, out: Path, writer: type[SheetWriter] = DrawnSheetWri
     w.build()
     uses = []
     x = w.width + 20
+    # a drawn sheet may place a child's box ("sheet:<name>" in Sheet.drawing): inside the drawing,
+    # where its pins' labels face the blocks they join; else the boxes go right of the drawing
+    drawn = root.drawing if isinstance(w, DrawnSheetWriter) else {}
+    placed = bool(root.children) and all(f"sheet:{u.sheet.name}" in drawn for u in root.children)
     for page, use in enumerate(root.children, start=2):
-        a = root.drawing.get(f"sheet:{use.sheet.name}")     # where the drawing puts the box
-        use.at = (a.x * 2.54, a.y * 2.54) if a else (round(x / 2.54) * 2.54, 38.1)
+        a = drawn.get(f"sheet:{use.sheet.name}")
+        use.at = (round(x / 2.54) * 2.54, 38.1) if a is None else (a.x * 2.54, a.y * 2.54)
         uses += sheet_symbol(m.name, use, m.name, root_path(m.name), page, CORE_FILE)
     folder = out / m.name
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{m.name}.kicad_sch"
+    if placed:                      # the drawing's extent holds the boxes: no margin added
+        w.items += uses
+        uses = []
     write(path, w.document(uses, root=True))
     return path
 
