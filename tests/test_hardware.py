@@ -456,14 +456,21 @@ def test_a_test_pad_put_on_the_bom_is_reported(scratch):
 
 
 def test_design_numbers_hold():
-    """The equations behind revision B's values (the modules print them), and the emulated
-    sensor switch uses the hardware's nominal limit."""
-    from r2ptools.kicad.modules import core, proximity
+    """The equations behind revision B's values (calc/core.py, calc/proximity.py print them)
+    hold, the boards' KiCad schematics carry the values they assume, and the emulated sensor
+    switch uses the hardware's nominal limit."""
+    from r2ptools.kicad.calc import core, proximity
     x = core.crystal_load()
     assert abs(x["chosen_pf"] - x["ideal_pf"]) <= 0.1 * x["ideal_pf"] and x["gain_margin"] >= 5
     assert x["cl_min_pf"] < core.CRYSTAL_CL_PF < x["cl_max_pf"]
     lo, nom, hi = proximity.switch_limit_ma()
     assert lo >= 4 * max(proximity.SENSORS_MA.values()) and hi < 200
+    for board, values in [(b.name, core.BOARD_VALUES) for b in BOARDS] + [("proximity", proximity.BOARD_VALUES)]:
+        parts = netlist.export(HARDWARE / board / f"{board}.kicad_sch").components
+        wrong = [f"{board} {ref}: calc assumes {want:g}, board has {parts[ref].value}"
+                 for ref, want in values.items()
+                 if ref not in parts or abs(_si(parts[ref].value) - want) > 1e-9 * want]
+        assert not wrong, "\n".join(wrong)
     model = (ROOT / "firmware/host/world/src/sensor_switch.rs").read_text()
     limit_a = float(re.search(r"SENSOR_SWITCH_LIMIT_A: f64 = ([0-9.]+);", model).group(1))
     assert abs(limit_a * 1000 - nom) < 1.0, (limit_a, nom)
