@@ -492,20 +492,16 @@ class DrawnSheetWriter(SheetWriter):
                 continue                     # packed with the loose parts
             p = (round(a.x * G), round(a.y * G))
             ref = f"#FLG{self.key[:3].upper()}{n:02d}"
-            on_net = net in self.canvas.points.get(p, set())
-            # the flag hangs below a rail drawn upwards (+5V) or a wire it sits on: the space
-            # above stays for the rail's symbol or the net's name
-            down = net != "GND" and (net in POWER_SYMBOL or on_net)
-            pl = place("power:PWR_FLAG", ref, p, 180 if down else 0, {"1": net}, None)
+            pl = place("power:PWR_FLAG", ref, p, 0, {"1": net}, None)
             self._emit_symbol(pl, "PWR_FLAG", {"Footprint": "", "Datasheet": "~", "Description": ""},
-                              in_bom=False, on_board=False, hide_fields=True)
-            if on_net:
-                pass            # set on its net's pin, wire end or power symbol: no second name
-            elif net in POWER_SYMBOL and any(q.net == net for o in self.placed for q in o.pins):
-                self._power(net, p, (0, 1) if net == "GND" else (0, -1))
-            else:       # a net name; for a rail no part here uses (GND on the template) a global
-                self._net_label(net, p, (0, 1), f"flag/{net}")   # label: KiCad's ERC calls a
-                # flag joined only to a lone power symbol unconnected
+                              in_bom=False, on_board=False, hide_fields=True,
+                              value_at=(p[0], pl.box[1] - 127, None))   # above: the label is right
+            q = (p[0] + 2 * G, p[1])           # a short wire to the rail's symbol or label
+            self._wire((p, q), f"flag/{net}")
+            self.canvas.add(net, (p, q))
+            # a label, not a power symbol, even for a rail: KiCad's ERC counts a flag joined only
+            # to a power symbol as an unconnected pin (a global label joins the rail all the same)
+            self._net_label(net, q, (1, 0), f"flag/{net}")
 
     def _loose(self, parts: list[Part]) -> None:
         """Parts (and PWR_FLAGs) not drawn yet: packed below the drawing, a label on each pin."""

@@ -266,10 +266,12 @@ def apply(board: pcbnew.BOARD, footprints: dict[str, str], lib: dict[str, pcbnew
 
 
 def write(lib: dict[str, pcbnew.FOOTPRINT], folder: Path) -> None:
-    """Writes the variants into `folder` (…/R2P.pretty), UUIDs derived from each name."""
+    """Writes the variants `folder` (…/R2P.pretty) does not have yet, UUIDs derived from each name."""
     folder.mkdir(parents=True, exist_ok=True)
     io = pcbnew.PCB_IO_MGR.PluginFind(pcbnew.PCB_IO_MGR.KICAD_SEXP)
     for name, fp in sorted(lib.items()):
+        if (folder / f"{name}.kicad_mod").exists():
+            continue      # the boards' own: edited in KiCad, or cut for placements no longer described
         io.FootprintSave(str(folder), fp)
         f = folder / f"{name}.kicad_mod"
         n = iter(range(1_000_000))

@@ -1,17 +1,25 @@
-"""`scripts/hwgen`: regenerate KiCad projects from their descriptions.
+"""`scripts/hwgen`: scaffold a new board's KiCad project from its description, once.
 
-    scripts/hwgen [MODULE…] [--out DIR] [--route]
+    scripts/hwgen [MODULE…] [--out DIR] [--route] [--force] [--core]
 
-For each module (default: all of `modules.MODULES`) it writes, under DIR (default hardware/):
+The KiCad files under hardware/ are the hardware's source: a person edits them in KiCad 9 and
+the checks read them (docs/hardware.md, "Changing a board"). This tool writes the first version
+of a new board from a Python description (`modules/<module>.py`, its drawing in
+`<module>_sheet.py`) and then steps aside: a board that already has its `.kicad_sch` is refused,
+unless `--force` (which overwrites it and every edit made in KiCad since; meant for a board
+still being scaffolded). For each module (default: every description without a board yet) it
+writes, under DIR (default hardware/):
     <module>/<module>.kicad_sch, .kicad_pcb, .kicad_pro, .kicad_dru, sym-lib-table, fp-lib-table
     <module>/route.ses       freerouting's result, the cache of the autorouted signal tracks
-    core/R2P.pretty/         the project footprint variants with trimmed silkscreen (fplib.py)
-    core/core.kicad_sch      the shared core sheet
-Steps: schematic (label per pin) → KiCad netlist → placed board with power copper → signal
-routing (replayed from route.ses when the routing problem is unchanged; --route, or a changed
-problem, runs freerouting, which needs Java 25) → zone fill → trimmed footprint silk (fplib.py) →
-silkscreen layout (silk.py) → save.
-Same description, same bytes.
+    core/R2P.pretty/         project footprint variants with trimmed silkscreen (fplib.py; new
+                             variants only: the existing ones are the boards')
+and records the new board in the shared core sheet (core/core.kicad_sch keeps each project's
+references), leaving the sheet's drawing alone; `--core` rewrites the core sheet from
+`modules/core.py` instead (every project's references kept).
+Steps: drawn schematic → KiCad netlist → placed board with power copper → signal routing
+(replayed from route.ses when the routing problem is unchanged; --route, or a changed problem,
+runs freerouting, which needs Java 25) → zone fill → trimmed footprint silk → silkscreen layout
+(silk.py) → save. Same description, same bytes.
 """
 from __future__ import annotations
 
@@ -43,12 +51,16 @@ def power_classes(m: Module) -> dict[str, list[str]]:
     return {"Power": sorted(set(power) | set(m.netclasses.get("Power", []))), **extra}
 
 
-def generate(m: Module, modules: list[Module], out: Path, force_route: bool = False,
+def generate(m: Module, out: Path, force_route: bool = False, rewrite_core: bool = False,
              log=print) -> dict[str, float]:
     times = {}
     t0 = time.monotonic()
-    sch_gen.write_core(modules[0].root.children[0].sheet if modules[0].root.children else core.build(),
-                       modules, out)
+    core_sch = out / "core" / "core.kicad_sch"
+    if rewrite_core or not core_sch.exists():
+        projects = sch_gen.core_projects(core_sch) if core_sch.exists() else []
+        sch_gen.write_core(core.build(), [m], out, projects=projects)
+    else:
+        sch_gen.add_project(core_sch, m.name)
     sch = sch_gen.write_module(m, out)
     folder = sch.parent
     symbols = {p.item.symbol.split(":")[0] for _, p in m.all_parts()} | {"power"}
@@ -94,30 +106,48 @@ def generate(m: Module, modules: list[Module], out: Path, force_route: bool = Fa
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="scripts/hwgen", description=__doc__.split("\n")[0])
-    ap.add_argument("modules", nargs="*", help=f"modules to generate (default: all: {', '.join(MODULES)})")
+    ap.add_argument("modules", nargs="*",
+                    help=f"modules to scaffold (default: every description without a board; "
+                         f"descriptions: {', '.join(MODULES)})")
     ap.add_argument("--out", type=Path, default=HARDWARE, help="hardware folder to write (default hardware/)")
     ap.add_argument("--route", action="store_true", help="run freerouting even if route.ses is current")
+    ap.add_argument("--force", action="store_true",
+                    help="overwrite an existing board from its description (its KiCad edits are lost)")
+    ap.add_argument("--core", action="store_true",
+                    help="rewrite the shared core sheet from modules/core.py (keeps every project)")
     args = ap.parse_args(argv)
-    names = args.modules or list(MODULES)
-    unknown = [n for n in names if n not in MODULES]
+    unknown = [n for n in args.modules if n not in MODULES]
     if unknown:
-        print(f"hwgen: unknown module(s) {', '.join(unknown)}; known: {', '.join(MODULES)}",
+        print(f"hwgen: no description for {', '.join(unknown)} (scripts/r2ptools/kicad/modules/); "
+              f"known: {', '.join(MODULES)}. A board without one is edited in KiCad (docs/hardware.md).",
               file=sys.stderr)
+        return 2
+    exists = [n for n in (args.modules or MODULES) if (args.out / n / f"{n}.kicad_sch").exists()]
+    names = args.modules or [n for n in MODULES if n not in exists]
+    if not names:
+        print("hwgen: nothing to scaffold: every description already has its board under "
+              f"{args.out} (edit those in KiCad; --force regenerates one from its description)")
+        return 0
+    refused = [n for n in names if n in exists]
+    if refused and not args.force:
+        print(f"hwgen: {', '.join(str(args.out / n) for n in refused)}: the board exists and its KiCad files "
+              "are the source now (edit them in KiCad 9, docs/hardware.md). --force overwrites them "
+              "from the description, losing every edit made in KiCad.", file=sys.stderr)
         return 2
     if len(names) > 1:
         # one fresh process per module: pcbnew's footprint-library cache draws on the seeded
         # UUID generator, so a module built after another in the same process would get other
         # UUIDs (and another footprint order, DSN and route key) than one built alone
+        flags = [f for f, on in (("--route", args.route), ("--force", args.force), ("--core", args.core)) if on]
         for n in names:
             cmd = [sys.executable, "-m", "r2ptools.kicad.generate", n, "--out", str(args.out.resolve())]
-            if subprocess.run(cmd + (["--route"] if args.route else []),
-                              cwd=Path(__file__).resolve().parents[2]).returncode:
+            if subprocess.run(cmd + flags, cwd=Path(__file__).resolve().parents[2]).returncode:
                 return 1
         return 0
     modules = build_all()
     by_name = {m.name: m for m in modules}
     for n in names:
-        t = generate(by_name[n], modules, args.out, force_route=args.route)
+        t = generate(by_name[n], args.out, force_route=args.route, rewrite_core=args.core)
         print(f"hwgen: {n}: " + ", ".join(f"{k} {v:.1f} s" for k, v in t.items()))
     return 0
 

@@ -10,7 +10,9 @@ from pathlib import Path
 
 from .design import Module, Sheet
 from .drawing import DrawnSheetWriter
+from . import sexpr
 from .schematic import Instance, SheetWriter, sheet_symbol, uid, write
+from .sexpr import Q
 
 CORE_FILE = "../core/core.kicad_sch"
 
@@ -51,13 +53,42 @@ def write_module(m: Module, out: Path, writer: type[SheetWriter] = DrawnSheetWri
 
 
 def write_core(core: Sheet, modules: list[Module], out: Path,
-               writer: type[SheetWriter] = DrawnSheetWriter) -> Path:
-    """The shared sheet, instantiated once by each module."""
-    inst = [Instance(m.name, child_path(m.name, core.name)) for m in modules
-            if any(u.sheet.name == core.name for u in m.root.children)]
+               writer: type[SheetWriter] = DrawnSheetWriter, projects: list[str] = ()) -> Path:
+    """The shared sheet, instantiated once by each module (and by each of `projects`: boards
+    that use the core but are no longer generated from a description)."""
+    names = sorted({m.name for m in modules if any(u.sheet.name == core.name for u in m.root.children)}
+                   | set(projects))
+    inst = [Instance(n, child_path(n, core.name)) for n in names]
     w = writer(core, core.name, inst, core.title, core.revision, {p.name for p in core.ports})
     folder = out / core.name
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{core.name}.kicad_sch"
     write(path, w.document())
     return path
+
+
+def core_projects(core_sch: Path) -> list[str]:
+    """The projects whose references the shared sheet records."""
+    tree = sexpr.parse(core_sch.read_text())
+    return sorted({str(proj[1]) for sym in sexpr.find_all(tree, "symbol")
+                   for inst in sexpr.find_all(sym, "instances")
+                   for proj in sexpr.find_all(inst, "project")})
+
+
+def add_project(core_sch: Path, project: str, core_name: str = "core") -> bool:
+    """Records a new board's use of the shared sheet (KiCad keeps each project's references in
+    the sheet file): every symbol gets the references it has in the other projects. The sheet
+    itself (a person's edits included) is left as it is. True if the file changed."""
+    tree = sexpr.parse(core_sch.read_text())
+    changed = False
+    for sym in sexpr.find_all(tree, "symbol"):
+        inst = sexpr.find(sym, "instances")
+        if inst is None or any(str(p[1]) == project for p in sexpr.find_all(inst, "project")):
+            continue
+        first = sexpr.find(sexpr.find(inst, "project"), "path")
+        inst.append(["project", Q(project),
+                     ["path", Q(child_path(project, core_name)), *first[2:]]])
+        changed = True
+    if changed:
+        write(core_sch, tree)
+    return changed

@@ -6,14 +6,14 @@ rail's capacitors. Below: one block per sensor channel, jack on the left, series
 divider and filter, the ADC net leaving for the core on the right; beside them the ESD array
 shared by the four inputs. Right: the core sheet's box (page 2), its pins labelled with the
 nets of this sheet. Grid units of 2.54 mm (drawing.py); the numbers in the notes come from
-proximity.py (`switch_limit_ma()`, `sensor_budget()` and the divider's values).
+calc/proximity.py (`switch_limit_ma()`, `sensor_budget()`) and the divider's values below.
 """
 from __future__ import annotations
 
 import math
 
 from ..design import At, Block
-from . import proximity as prox
+from ..calc import proximity as prox
 
 A = At
 
@@ -25,8 +25,8 @@ DRAWING = {
     "F101": A(10, 12, 90), "C101": A(19, 13.5), "R101": A(23, 15.5),
     "U101": A(33, 13), "R111": A(39, 14.5), "R110": A(44, 17.5), "TP106": A(50, 19),
     "C102": A(48, 13.5), "C103": A(54, 13.5), "TP101": A(58, 12),
-    # PWR_FLAGs: +5V_MOD's on F101's output pin, the bus rails' in free space
-    "flag:+5V": A(6, 22), "flag:GND": A(12, 21), "flag:+5V_MOD": A(11.5, 12),
+    # PWR_FLAGs, in a row under the bus tap (each with its wire and label to the right)
+    "flag:+5V": A(6, 21), "flag:GND": A(14, 21), "flag:+5V_MOD": A(22, 21),
     # ESD array for the four inputs
     "U102": A(98, 47),
     # the core sheet's box (page 2)

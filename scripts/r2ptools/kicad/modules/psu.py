@@ -321,6 +321,8 @@ def build(core: Sheet) -> Module:
     s.part("R117", "R_10k", {"1": "+5V", "2": "VOUT_SENSE"})
     s.part("R118", "R_10k", {"1": "VOUT_SENSE", "2": "GND"})
     s.part("C117", "C_100n", {"1": "VOUT_SENSE", "2": "GND"})
+    from . import psu_sheet           # the drawing imports calc/psu.py's numbers
+    s.drawing, s.blocks = psu_sheet.DRAWING, psu_sheet.BLOCKS
 
     m = Module(NAME, TITLE, REVISION, s, tracks=core_mod.bus_tracks(extend_to=52.4) + power_tracks(),
                vias=power_vias(), places=PLACES, seed=3, dru_rules=ipc2221b_rules(),
