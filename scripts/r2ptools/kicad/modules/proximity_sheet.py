@@ -83,7 +83,8 @@ BLOCKS = [
 # the channels are identical: each note sits by the parts it sizes, in one channel's block
 BLOCKS[1].notes.append((44, 38, f"Every channel: 56 k in series, 100 k to GND (R102-R109):\n"
                                 f"5 V reads 5 x 100 / 156 = {5 * _ratio:.2f} V at the ADC (MaxBotix"
-                                f" HRLV\nreaches ~0.98 Vcc); an unplugged input reads 0 V (no sensor)."))
+                                f" HRLV\nreaches ~0.98 Vcc); an unplugged input reads 0 V"
+                                " (no sensor)."))
 BLOCKS[2].notes.append((44, 53, f"Source 56 k || 100 k = {_r_src:.0f} k with {_C_NF:g} nF"
                                 f" (C104-C107):\npole 1 / (2 pi R C) = {_pole_hz:.0f} Hz, above the"
                                 f" Sharp's 26 Hz\nupdates; settled to 0.1 % in 7 tau ="
