@@ -2,7 +2,7 @@
 
 Run `scripts/py -m r2ptools.kicad.calc.psu` for the table (value, limit, margin). The component
 values this file assumes are listed in `BOARD_VALUES` (reference → value); tests/test_hardware.py
-checks them against the board description (modules/psu.py), so the calculation and the board
+checks them against the board's KiCad schematic (hardware/psu/psu.kicad_sch), so the calculation and the board
 cannot drift apart. Datasheet figures carry their source; figures that are estimates say so.
 
 Sources: LM76005 SNVSBK5 (buck), TPS1663 SLVSET9 (eFuse TPS16630), INA293 SBOSA06, SMBJ40A
@@ -83,7 +83,7 @@ R_HOTPLUG_MIN = 0.05          # Ω: Q101 + shunt + connector + cable + ESR, a lo
 # --- IPC-2221B table 6-1, B2 (external conductors, uncoated, sea level to 3050 m) --------------
 IPC2221B_B2 = [(15, 0.1), (30, 0.1), (50, 0.6), (100, 0.6), (150, 0.6), (170, 1.25)]
 
-# --- the values on the board (reference → value, SI units); checked against modules/psu.py -----
+# --- the values on the board (reference → value, SI units); checked against psu.kicad_sch ------
 BOARD_VALUES = {
     "R102": 0.010,            # shunt
     "R104": 150e3, "R105": 10e3,          # VIN_SENSE divider

@@ -1,16 +1,16 @@
-"""The board descriptions: the common core sheet and one module per file.
+"""Board descriptions `scripts/hwgen` scaffolds new boards from: the common core and one module
+per file (`<module>.py`, its drawing in `<module>_sheet.py`).
 
-`MODULES` lists every generated board folder under hardware/ in a fixed order; the core sheet
-file is shared by all of them and records each one's references (so it is always written with
-the full list, whichever board is being regenerated).
+A board's KiCad files are its source once scaffolded, and its description is then deleted (git
+keeps it): psu's and proximity's are gone; `template` stays as the example a new module copies
+(tests/test_hardware.py scaffolds it into a scratch folder). `MODULES` lists the descriptions.
 """
 from __future__ import annotations
 
 from ..design import Module
-from . import core, proximity, psu, template
+from . import core, psu, template
 
 MODULES = {
-    "proximity": proximity.build,
     "psu": psu.build,
     "template": template.build,
 }
