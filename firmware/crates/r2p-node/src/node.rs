@@ -613,6 +613,7 @@ impl<
             r.too_long,
             r.no_slot,
             r.bad_length,
+            r.bad_crc,
         ]
         .iter()
         .fold(s.bad_syncs, |a, &b| a.saturating_add(b))

@@ -23,6 +23,7 @@ pub mod id;
 pub mod laxity;
 pub mod schedule;
 pub mod srt;
+pub mod transfer_crc;
 
 pub use controller::{CanController, Micros, TxMode, TxOutcome, TxResult};
 pub use cycle::{CycleConfig, SlotClock, Sync};
@@ -42,6 +43,7 @@ pub mod selftest {
         crate::id::tests::SUITE,
         crate::laxity::tests::SUITE,
         crate::frame::tests::SUITE,
+        crate::transfer_crc::tests::SUITE,
         crate::fragment::tests::SUITE,
         crate::srt::tests::SUITE,
         crate::cycle::tests::SUITE,
