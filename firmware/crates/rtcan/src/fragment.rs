@@ -49,6 +49,12 @@ pub const fn frame_count(len: usize) -> Option<usize> {
     }
 }
 
+/// True if a frame with fragment counter `fragment` ends its message: 0 (a single-frame
+/// message) or 1 (the last frame of a longer one).
+pub const fn is_last_frame(fragment: u8) -> bool {
+    fragment <= 1
+}
+
 /// Why a payload cannot be fragmented.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FragmentError {
