@@ -17,6 +17,7 @@ extern crate std;
 pub mod controller;
 pub mod cycle;
 pub mod failover;
+pub mod filter_banks;
 pub mod fragment;
 pub mod frame;
 pub mod id;
@@ -49,5 +50,6 @@ pub mod selftest {
         crate::cycle::tests::SUITE,
         crate::schedule::tests::SUITE,
         crate::failover::tests::SUITE,
+        crate::filter_banks::tests::SUITE,
     ];
 }
