@@ -64,15 +64,24 @@ pub struct Fit {
 /// `widened` tells the caller to accept everything instead. Filters that another one covers
 /// take no bank.
 pub fn fit(wanted: &[Filter], out: &mut [Filter]) -> Fit {
-    let mut used = 0;
-    let mut widened = false;
+    let mut fit = Fit { used: 0, widened: false };
     for w in wanted {
+        fit = fit_one(out, fit, *w);
+    }
+    fit
+}
+
+/// Adds one wanted filter to the banks `out[..so_far.used]` (as [`fit`] does for each): for a
+/// node that builds its list on the fly, without a buffer.
+pub fn fit_one(out: &mut [Filter], so_far: Fit, w: Filter) -> Fit {
+    let Fit { mut used, mut widened } = so_far;
+    {
         if w.value & w.mask & !ID_BITS != 0 {
-            continue; // demands a bit above the 29-bit identifier: accepts no frame
+            return so_far; // demands a bit above the 29-bit identifier: accepts no frame
         }
         let w = Filter { value: w.value & w.mask & ID_BITS, mask: w.mask & ID_BITS };
         if out[..used].iter().any(|f| f.covers(&w)) {
-            continue;
+            return so_far;
         }
         // Filters the new one covers are dropped: it replaces them.
         let mut k = 0;
@@ -85,8 +94,7 @@ pub fn fit(wanted: &[Filter], out: &mut [Filter]) -> Fit {
         used = k;
         if used < out.len() {
             out[used] = w;
-            used += 1;
-            continue;
+            return Fit { used: used + 1, widened };
         }
         if out.is_empty() {
             return Fit { used: 0, widened: true };
