@@ -45,7 +45,8 @@ pub(crate) mod tests {
     use rtcan::{FrameId, Laxity};
 
     fn raw(laxity: u8, message: u16, fragment: u8) -> u32 {
-        FrameId { laxity: Laxity::from_code(laxity), message: MessageId(message), fragment }.to_raw()
+        FrameId { laxity: Laxity::from_code(laxity), message: MessageId(message), fragment }
+            .to_raw()
     }
 
     r2p_testkit::suite! {

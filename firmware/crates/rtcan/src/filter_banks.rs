@@ -138,7 +138,8 @@ pub(crate) mod tests {
     use crate::laxity::Laxity;
 
     fn id(laxity: u8, message: u16, fragment: u8) -> u32 {
-        FrameId { laxity: Laxity::from_code(laxity), message: MessageId(message), fragment }.to_raw()
+        FrameId { laxity: Laxity::from_code(laxity), message: MessageId(message), fragment }
+            .to_raw()
     }
 
     const SYNCS: Filter = Filter { value: 0, mask: ID_BITS & !(0xFF << 7) };

@@ -165,13 +165,11 @@ struct Parts {
 /// parallel never share one — and wires the nodes for free-slot policy `$policy`.
 macro_rules! rig {
     ($policy:expr) => {{
-        static SA: Topic<'static, Scan, { pool_size(&[8], 1) }, 1> =
-            Topic::new("scan_a", [0; 7]);
+        static SA: Topic<'static, Scan, { pool_size(&[8], 1) }, 1> = Topic::new("scan_a", [0; 7]);
         static SAP: Publisher<'static, Scan> =
             Publisher::new(&SA, Class::AsyncRealTime { deadline_us: SRT_DEADLINE_US });
         static SAO: RemoteSubscriber<'static, Scan, 8> = RemoteSubscriber::new(&SAP);
-        static SB: Topic<'static, Scan, { pool_size(&[8], 1) }, 1> =
-            Topic::new("scan_b", [0; 7]);
+        static SB: Topic<'static, Scan, { pool_size(&[8], 1) }, 1> = Topic::new("scan_b", [0; 7]);
         static SBP: Publisher<'static, Scan> =
             Publisher::new(&SB, Class::AsyncRealTime { deadline_us: SRT_DEADLINE_US });
         static SBO: RemoteSubscriber<'static, Scan, 8> = RemoteSubscriber::new(&SBP);
@@ -179,13 +177,11 @@ macro_rules! rig {
         static HP: Publisher<'static, u16> =
             Publisher::new(&H, Class::SyncRealTime { period_us: CYCLE_US as u32 });
         static HO: RemoteSubscriber<'static, u16, 2> = RemoteSubscriber::new(&HP);
-        static MA: Topic<'static, Scan, { pool_size(&[8], 1) }, 1> =
-            Topic::new("scan_a", [0; 7]);
+        static MA: Topic<'static, Scan, { pool_size(&[8], 1) }, 1> = Topic::new("scan_a", [0; 7]);
         static MAP: Publisher<'static, Scan> = Publisher::new(&MA, Class::NonRealTime);
         static MAI: RemotePublisher<'static, Scan> = RemotePublisher::new(&MAP, &MA);
         static MAS: Subscriber<'static, Scan, 8> = Subscriber::new();
-        static MB: Topic<'static, Scan, { pool_size(&[8], 1) }, 1> =
-            Topic::new("scan_b", [0; 7]);
+        static MB: Topic<'static, Scan, { pool_size(&[8], 1) }, 1> = Topic::new("scan_b", [0; 7]);
         static MBP: Publisher<'static, Scan> = Publisher::new(&MB, Class::NonRealTime);
         static MBI: RemotePublisher<'static, Scan> = RemotePublisher::new(&MBP, &MB);
         static MBS: Subscriber<'static, Scan, 8> = Subscriber::new();
@@ -283,12 +279,22 @@ fn contend(parts: Parts, traffic: Traffic) -> Outcome {
         }
         t += CYCLE_US;
         rig.run(&mut [&mut m, &mut a, &mut b], t);
-        got.extend(core::iter::from_fn(|| got_a.try_recv()).map(|v| u32::from(v[0]) | u32::from(v[1]) << 16));
-        got.extend(core::iter::from_fn(|| got_b.try_recv()).map(|v| u32::from(v[0]) | u32::from(v[1]) << 16));
+        got.extend(
+            core::iter::from_fn(|| got_a.try_recv())
+                .map(|v| u32::from(v[0]) | u32::from(v[1]) << 16),
+        );
+        got.extend(
+            core::iter::from_fn(|| got_b.try_recv())
+                .map(|v| u32::from(v[0]) | u32::from(v[1]) << 16),
+        );
     }
     rig.run(&mut [&mut m, &mut a, &mut b], t + 10 * CYCLE_US);
-    got.extend(core::iter::from_fn(|| got_a.try_recv()).map(|v| u32::from(v[0]) | u32::from(v[1]) << 16));
-    got.extend(core::iter::from_fn(|| got_b.try_recv()).map(|v| u32::from(v[0]) | u32::from(v[1]) << 16));
+    got.extend(
+        core::iter::from_fn(|| got_a.try_recv()).map(|v| u32::from(v[0]) | u32::from(v[1]) << 16),
+    );
+    got.extend(
+        core::iter::from_fn(|| got_b.try_recv()).map(|v| u32::from(v[0]) | u32::from(v[1]) << 16),
+    );
 
     // Check every frame of the run on the trace.
     let seen = Seen::of(&rig.bus);
