@@ -32,7 +32,7 @@ PRIMITIVES = {
 }
 _FIELD = re.compile(r"^(?P<type>[a-z0-9]+)(?:\[(?P<n>\d+)\])?\s+(?P<name>[a-z][a-z0-9_]*)\s*(?:#\s*(?P<doc>.*))?$")
 _TYPE_NAME = re.compile(r"^[A-Z][A-Za-z0-9]*$")
-MAX_SIZE = 1024  # one RTCAN message
+MAX_SIZE = 1014  # one RTCAN message (rtcan::fragment::MAX_MESSAGE_LEN: 127 frames less the transfer CRC)
 
 
 class SchemaError(ValueError):

@@ -48,7 +48,7 @@ mod generated;
 pub use generated::*;
 
 /// Largest message a schema may describe: one RTCAN message (`MAX_SIZE` in msgs.py).
-pub const MAX_SIZE: usize = 1024;
+pub const MAX_SIZE: usize = 1014;
 
 /// A message type generated from a `.msg` schema.
 pub trait R2pMessage: Copy + Sized {

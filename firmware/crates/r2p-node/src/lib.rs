@@ -26,6 +26,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod hw_filters;
 pub mod node;
 pub mod params;
 pub mod remote;
@@ -53,6 +54,7 @@ pub mod selftest {
     /// Every suite of the crate, in the order a runner should run them.
     pub const ALL: &[&[r2p_testkit::Case]] = &[
         crate::wire::tests::SUITE,
+        crate::hw_filters::tests::SUITE,
         crate::params::tests::SUITE,
         crate::remote::tests::SUITE,
         crate::tests::SUITE,

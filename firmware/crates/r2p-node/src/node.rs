@@ -417,6 +417,9 @@ pub struct Node<
     slot_tx: SlotTx<usize>,
     /// Last sync heard or sent (boot time before the first).
     last_sync: Micros,
+    /// Fingerprint of the subscribed streams the controller's acceptance filters were last
+    /// programmed for (`hw_filters`); `None` before the first time.
+    filters_for: Option<u32>,
 }
 
 impl<
@@ -469,6 +472,7 @@ impl<
             scheduler: Scheduler::new(config.hrt_slots, config.cycle.slots),
             master: None,
             slot_tx: SlotTx::new(&config.cycle, config.free_slots),
+            filters_for: None,
             last_sync: 0,
         })
     }
@@ -613,6 +617,7 @@ impl<
             r.too_long,
             r.no_slot,
             r.bad_length,
+            r.bad_crc,
         ]
         .iter()
         .fold(s.bad_syncs, |a, &b| a.saturating_add(b))
@@ -637,8 +642,29 @@ impl<
         self.send(&Message::ParamSet { target: target.get(), index, value })
     }
 
+    /// Programs the controller's acceptance filters for the syncs, the management streams and
+    /// the subscribed (or requested) streams, when those changed (docs/architecture.md; `hw_filters`).
+    fn program_filters<C: CanController + ?Sized>(&mut self, can: &mut C) {
+        let subscribed = || {
+            // A requested stream too: its first frames may follow the grant back to back.
+            self.imports.iter().filter_map(|s| match s.state {
+                ImportState::Subscribed { message, .. } => Some(message),
+                ImportState::Requested { from, index, .. } => Some(from.message_id(index)),
+                _ => None,
+            })
+        };
+        let fingerprint = crate::hw_filters::fingerprint(subscribed());
+        if self.filters_for == Some(fingerprint) {
+            return;
+        }
+        let (banks, fit) = crate::hw_filters::banks(subscribed());
+        can.set_filters(&banks[..fit.used]);
+        self.filters_for = Some(fingerprint);
+    }
+
     /// Receives what the controller has, runs the protocol's timers, sends what is due.
     pub fn poll<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
+        self.program_filters(can);
         while let Some(r) = can.try_receive() {
             self.on_frame(&r);
         }
@@ -1060,6 +1086,7 @@ impl<
     ///    is free and a window of its own.
     pub fn slot_tick<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
         self.start(now);
+        self.program_filters(can);
         if self.slot_tx.at_guard(now) {
             self.slot_tx.on_guard(can);
             if !self.at_boundary(now) {

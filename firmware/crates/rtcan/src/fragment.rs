@@ -1,11 +1,14 @@
 //! Fragmentation and reassembly: messages of up to [`MAX_MESSAGE_LEN`] bytes over 8-byte frames.
 //!
-//! A message of `n` bytes travels as [`frame_count`]`(n)` frames, at least one: every frame but
-//! the last carries exactly 8 bytes, the last carries the rest (1–8 bytes, or 0 for the empty
-//! message, which is one empty frame). The identifier's fragment counter says how many frames
-//! still follow: the first frame carries `frames − 1`, so a receiver learns the length in frames
-//! from it, and the last frame carries 0. A length that is a multiple of 8 ends with a full
-//! frame, never with an empty one.
+//! A message of at most 8 bytes is one frame with fragment counter 0. A longer one travels as its
+//! payload followed by its transfer CRC ([`crate::transfer_crc`], 2 bytes), cut into
+//! [`frame_count`]`(n)` ≥ 2 frames: every frame but the last carries exactly 8 bytes, the last
+//! the rest (1–8). The identifier's fragment counter says how many frames are left including this
+//! one: the first frame of a multi-frame message carries the frame count, the last carries 1.
+//! Counter 0 therefore always means a whole single-frame message and never the end of a longer
+//! one, so a repeated last frame cannot be mistaken for a new message nor a new message for a
+//! repeated last frame; the transfer CRC tells a receiver that the frames it joined are one
+//! message (a lost frame, or the tail of a message taken for a whole one, changes it).
 //!
 //! [`Reassembler`] puts frames back together in a fixed number of slots, one per message ID
 //! (a message ID is one publisher's stream, so it also names the source). It checks order,
@@ -16,12 +19,23 @@
 use crate::controller::Micros;
 use crate::frame::{Frame, MAX_PAYLOAD};
 use crate::id::{FrameId, MessageId, MAX_FRAGMENT};
+use crate::transfer_crc::{self, CRC_LEN};
 
-/// Most frames in one message: the fragment counter runs from 127 down to 0.
-pub const MAX_FRAGMENTS: usize = MAX_FRAGMENT as usize + 1;
+/// Most frames in one message: a multi-frame message's counter runs from 127 down to 1.
+pub const MAX_FRAGMENTS: usize = MAX_FRAGMENT as usize;
 
-/// Longest message: [`MAX_FRAGMENTS`] frames of 8 bytes.
-pub const MAX_MESSAGE_LEN: usize = MAX_FRAGMENTS * MAX_PAYLOAD;
+/// Longest message: [`MAX_FRAGMENTS`] frames of 8 bytes less the transfer CRC.
+pub const MAX_MESSAGE_LEN: usize = MAX_FRAGMENTS * MAX_PAYLOAD - CRC_LEN;
+
+/// Bytes a message of `len` bytes takes on the wire: the payload, and the transfer CRC if it
+/// needs more than one frame.
+pub const fn wire_len(len: usize) -> usize {
+    if len <= MAX_PAYLOAD {
+        len
+    } else {
+        len + CRC_LEN
+    }
+}
 
 /// How many frames a message of `len` bytes takes (1 for the empty message), or `None` if it is
 /// longer than [`MAX_MESSAGE_LEN`].
@@ -31,8 +45,14 @@ pub const fn frame_count(len: usize) -> Option<usize> {
     } else if len == 0 {
         Some(1)
     } else {
-        Some(len.div_ceil(MAX_PAYLOAD))
+        Some(wire_len(len).div_ceil(MAX_PAYLOAD))
     }
+}
+
+/// True if a frame with fragment counter `fragment` ends its message: 0 (a single-frame
+/// message) or 1 (the last frame of a longer one).
+pub const fn is_last_frame(fragment: u8) -> bool {
+    fragment <= 1
 }
 
 /// Why a payload cannot be fragmented.
@@ -44,12 +64,13 @@ pub enum FragmentError {
 
 /// The frames of one message, first to last, produced on demand (no buffer).
 ///
-/// Every frame has the template's laxity and message ID; the fragment counter counts down from
-/// `frames − 1` to 0.
+/// Every frame has the template's laxity and message ID; the fragment counter is 0 for a
+/// single-frame message and counts down from `frames` to 1 otherwise.
 #[derive(Clone, Debug)]
 pub struct Fragments<'a> {
     template: FrameId,
     payload: &'a [u8],
+    crc: [u8; CRC_LEN],
     total: usize,
     remaining: usize,
 }
@@ -58,7 +79,13 @@ pub struct Fragments<'a> {
 /// fragment field is ignored).
 pub fn fragments(template: FrameId, payload: &[u8]) -> Result<Fragments<'_>, FragmentError> {
     match frame_count(payload.len()) {
-        Some(total) => Ok(Fragments { template, payload, total, remaining: total }),
+        Some(total) => Ok(Fragments {
+            template,
+            payload,
+            crc: if total > 1 { transfer_crc::of(payload).to_be_bytes() } else { [0; CRC_LEN] },
+            total,
+            remaining: total,
+        }),
         None => Err(FragmentError::TooLong(payload.len())),
     }
 }
@@ -78,13 +105,22 @@ impl Iterator for Fragments<'_> {
             return None;
         }
         let index = self.total - self.remaining;
+        let counter = if self.total == 1 { 0 } else { self.remaining };
         self.remaining -= 1;
         let start = index * MAX_PAYLOAD;
-        let end = (start + MAX_PAYLOAD).min(self.payload.len());
-        let chunk = self.payload.get(start..end).unwrap_or(&[]);
-        // `remaining` < MAX_FRAGMENTS, so it fits the 7-bit counter and the chunk fits a frame.
-        let id = FrameId { fragment: self.remaining as u8, ..self.template };
-        Frame::new(id, chunk).ok()
+        let end = (start + MAX_PAYLOAD).min(wire_len(self.payload.len()));
+        // The wire bytes start..end: payload bytes, then (multi-frame only) the CRC's.
+        let mut chunk = [0u8; MAX_PAYLOAD];
+        for (k, b) in chunk.iter_mut().enumerate().take(end.saturating_sub(start)) {
+            let at = start + k;
+            *b = match self.payload.get(at) {
+                Some(&p) => p,
+                None => self.crc.get(at - self.payload.len()).copied().unwrap_or(0),
+            };
+        }
+        // `counter` ≤ MAX_FRAGMENT, so it fits the 7-bit counter and the chunk fits a frame.
+        let id = FrameId { fragment: counter as u8, ..self.template };
+        Frame::new(id, chunk.get(..end.saturating_sub(start))?).ok()
     }
 
     fn size_hint(&self) -> (usize, Option<usize>) {
@@ -98,8 +134,8 @@ impl core::iter::FusedIterator for Fragments<'_> {}
 /// What a receiver knows about the length of the messages of a stream.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Expect {
-    /// Any length: the first frame's counter gives the number of frames. A message whose first
-    /// frames were lost can then be taken for a shorter one (see the spec).
+    /// Any length: the first frame's counter gives the number of frames (the transfer CRC
+    /// rejects a message whose first frames were lost).
     Any,
     /// Every message of the stream is exactly this many bytes (a topic's fixed size): frames that
     /// cannot belong to such a message are dropped, so a lost first frame is always detected.
@@ -119,13 +155,13 @@ pub struct Message<'a> {
 ///
 /// `completed` counts messages delivered; the others count input dropped. Frame-level counters
 /// (`duplicate`, `foreign`, `bad_length`, `no_slot`) count frames; message-level counters
-/// (`out_of_order`, `truncated`, `timed_out`, `too_long`) count messages given up.
+/// (`out_of_order`, `truncated`, `timed_out`, `too_long`, `bad_crc`) count messages given up.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ReassemblyStats {
     /// Messages delivered whole.
     pub completed: u32,
-    /// Frames identical to one already taken for the message in progress (or to the last frame
-    /// of the message just completed): dropped, the message goes on.
+    /// Frames identical to the frame just taken for the stream (CAN's double reception):
+    /// dropped, the message goes on.
     pub duplicate: u32,
     /// Frames that continue a message whose start was never taken (lost, dropped or abandoned),
     /// or whose counter cannot be the first of a message of the expected length.
@@ -145,9 +181,12 @@ pub struct ReassemblyStats {
     /// First frames dropped because every slot was busy with a partial message.
     pub no_slot: u32,
     /// Frames whose length is wrong for their position: a non-last frame shorter than 8 bytes,
-    /// an empty last frame of a multi-frame message, or a length that contradicts
+    /// a multi-frame message too short to need its frames, or a length that contradicts
     /// [`Expect::Exactly`]. Dropped without disturbing the message in progress.
     pub bad_length: u32,
+    /// Multi-frame messages complete in shape whose transfer CRC did not match: frames of
+    /// different messages joined (frames lost between them), never delivered.
+    pub bad_crc: u32,
 }
 
 fn bump(counter: &mut u32) {
@@ -168,9 +207,10 @@ enum State {
     Free,
     /// A message is being received: its first frame had counter `first`, `next` is expected.
     Receiving { first: u8, next: u8 },
-    /// Between messages: the last frame seen on the stream had counter `last` and is kept for
-    /// duplicate detection. `last > 0` means the message it belonged to was given up: frames with
-    /// lower counters continue it and are foreign.
+    /// Between messages: the last frame seen on the stream had counter `last` ≥ 1 and is kept
+    /// for duplicate detection. `last = 1` after a message ended; `last > 1` means the message
+    /// it belonged to was given up: frames with counters from 1 to `last − 1` continue it and
+    /// are foreign.
     Between { last: u8 },
 }
 
@@ -182,6 +222,9 @@ struct Slot<const BUF: usize> {
     last_at: Micros,
     last_len: u8,
     last_data: [u8; MAX_PAYLOAD],
+    /// Transfer CRC over the message's bytes taken so far.
+    crc: u16,
+    /// The payload; the transfer CRC's bytes past `BUF` are checked, not stored.
     buf: [u8; BUF],
 }
 
@@ -192,6 +235,7 @@ impl<const BUF: usize> Slot<BUF> {
         last_at: 0,
         last_len: 0,
         last_data: [0; MAX_PAYLOAD],
+        crc: transfer_crc::INITIAL,
         buf: [0; BUF],
     };
 
@@ -205,6 +249,21 @@ impl<const BUF: usize> Slot<BUF> {
     fn last_frame_is(&self, data: &[u8]) -> bool {
         &self.last_data[..self.last_len as usize] == data
     }
+
+    /// Stores the message bytes `off..off + data.len()` and runs the CRC over them; false if
+    /// they reach past the buffer by more than the CRC.
+    fn store(&mut self, off: usize, data: &[u8]) -> bool {
+        if off + data.len() > BUF + CRC_LEN {
+            return false;
+        }
+        for (k, &b) in data.iter().enumerate() {
+            if let Some(dst) = self.buf.get_mut(off + k) {
+                *dst = b;
+            }
+        }
+        self.crc = transfer_crc::update(self.crc, data);
+        true
+    }
 }
 
 enum Outcome {
@@ -215,7 +274,7 @@ enum Outcome {
 
 /// Reassembles messages from up to `SLOTS` streams at once, each up to `BUF` bytes long.
 ///
-/// Memory is `SLOTS × (BUF + ~24)` bytes, all inline. Feed it every data frame (not sync frames)
+/// Memory is `SLOTS × (BUF + ~26)` bytes, all inline. Feed it every data frame (not sync frames)
 /// with [`Reassembler::accept`]; call [`Reassembler::expire`] now and then so that partial
 /// messages of streams that went silent free their slots.
 pub struct Reassembler<const SLOTS: usize, const BUF: usize> {
@@ -300,7 +359,7 @@ impl<const SLOTS: usize, const BUF: usize> Reassembler<SLOTS, BUF> {
                         bump(&mut self.stats.duplicate);
                         return Outcome::Nothing;
                     }
-                    if c < last {
+                    if c != 0 && c < last {
                         // Continues a message that was given up.
                         bump(&mut self.stats.foreign);
                         slot.state = State::Between { last: c };
@@ -333,39 +392,39 @@ impl<const SLOTS: usize, const BUF: usize> Reassembler<SLOTS, BUF> {
                 bump(&mut self.stats.bad_length);
                 return Outcome::Nothing;
             }
-            let off = usize::from(first.saturating_sub(c)) * MAX_PAYLOAD;
+            let off = usize::from(first - c) * MAX_PAYLOAD;
             let end = off + data.len();
-            let Some(dst) = slot.buf.get_mut(off..end) else {
+            slot.record(data, at);
+            if !slot.store(off, data) {
                 bump(&mut self.stats.too_long);
                 slot.state = State::Between { last: c };
-                slot.record(data, at);
                 return Outcome::Nothing;
-            };
-            dst.copy_from_slice(data);
-            slot.record(data, at);
-            if c == 0 {
-                bump(&mut self.stats.completed);
-                slot.state = State::Between { last: 0 };
-                return Outcome::InSlot(i, end);
             }
-            slot.state = State::Receiving { first, next: c - 1 };
+            if c > 1 {
+                slot.state = State::Receiving { first, next: c - 1 };
+                return Outcome::Nothing;
+            }
+            slot.state = State::Between { last: 1 };
+            if slot.crc != transfer_crc::RESIDUE {
+                bump(&mut self.stats.bad_crc);
+                return Outcome::Nothing;
+            }
+            bump(&mut self.stats.completed);
+            return Outcome::InSlot(i, end - CRC_LEN);
+        }
+        if c == next + 1 && slot.last_frame_is(data) {
+            // The frame just taken, again: CAN's double reception.
+            bump(&mut self.stats.duplicate);
             return Outcome::Nothing;
         }
-        if c < next {
+        if c != 0 && c < next {
             // Frames next..c+1 are missing: this message cannot complete.
             bump(&mut self.stats.out_of_order);
             slot.state = State::Between { last: c };
             slot.record(data, at);
             return Outcome::Nothing;
         }
-        // c > next: a frame we already took again, or the first frame of a new message.
-        if c <= first {
-            let off = usize::from(first.saturating_sub(c)) * MAX_PAYLOAD;
-            if slot.buf.get(off..off + MAX_PAYLOAD) == Some(data) {
-                bump(&mut self.stats.duplicate);
-                return Outcome::Nothing;
-            }
-        }
+        // A single-frame message, or a first frame: the sender started a new message.
         if let Err(r) = first_frame_len(c, data.len(), expect) {
             // Cannot start a message: garbage, the message in progress goes on.
             if !matches!(r, Refusal::TooLong) {
@@ -414,11 +473,9 @@ impl<const SLOTS: usize, const BUF: usize> Reassembler<SLOTS, BUF> {
             return Outcome::Nothing;
         }
         if c == 0 {
-            // A single-frame message: needs no slot.
+            // A single-frame message: needs no slot, leaves the stream's history as it was
+            // (a repetition of the last frame of a multi-frame message is still recognised).
             bump(&mut self.stats.completed);
-            if let Some(i) = found {
-                self.slots[i].state = State::Free;
-            }
             let n = data.len().min(MAX_PAYLOAD);
             self.single[..n].copy_from_slice(&data[..n]);
             self.single_len = n;
@@ -429,12 +486,12 @@ impl<const SLOTS: usize, const BUF: usize> Reassembler<SLOTS, BUF> {
             return Outcome::Nothing;
         };
         let slot = &mut self.slots[i];
-        let Some(dst) = slot.buf.get_mut(..data.len()) else {
+        slot.crc = transfer_crc::INITIAL;
+        if !slot.store(0, data) {
             // Unreachable: BUF >= min_len > 8 = data.len(); refuse rather than panic.
             bump(&mut self.stats.too_long);
             return Outcome::Nothing;
-        };
-        dst.copy_from_slice(data);
+        }
         slot.id = id;
         slot.state = State::Receiving { first: c, next: c - 1 };
         slot.record(data, at);
@@ -444,11 +501,11 @@ impl<const SLOTS: usize, const BUF: usize> Reassembler<SLOTS, BUF> {
     /// Remembers that the rest of a refused message (frames below `c`) is to be dropped as
     /// foreign, if a slot can be had without giving up a partial message.
     fn skip_rest(&mut self, found: Option<usize>, id: MessageId, c: u8, data: &[u8], at: Micros) {
-        let slot = found.or_else(|| if c > 0 { self.allocate() } else { None });
+        let slot = found.or_else(|| if c > 1 { self.allocate() } else { None });
         if let Some(i) = slot {
             let s = &mut self.slots[i];
             s.id = id;
-            s.state = if c > 0 { State::Between { last: c } } else { State::Free };
+            s.state = if c > 1 { State::Between { last: c } } else { State::Free };
             s.record(data, at);
         }
     }
@@ -480,34 +537,44 @@ impl ReassemblyStats {
             too_long: 0,
             no_slot: 0,
             bad_length: 0,
+            bad_crc: 0,
         }
     }
 }
 
-/// Checks a frame with counter `c` and `len` bytes as a message's first frame; returns the
-/// fewest bytes the message can have.
+/// Fewest wire bytes of a multi-frame message: one more than a single frame holds, and the CRC.
+const MIN_MULTI_WIRE: usize = MAX_PAYLOAD + 1 + CRC_LEN;
+
+/// Checks a frame with counter `c` and `len` bytes as a message's first frame (or a whole
+/// single-frame message, `c` = 0); returns the fewest payload bytes the message can have.
 fn first_frame_len(c: u8, len: usize, expect: Expect) -> Result<usize, Refusal> {
     match expect {
         Expect::Any => {
             if c == 0 {
                 Ok(len)
+            } else if c == 1 {
+                // A last frame: its message's start was never taken.
+                Err(Refusal::Foreign)
             } else if len != MAX_PAYLOAD {
                 Err(Refusal::BadLength)
             } else {
-                Ok(usize::from(c) * MAX_PAYLOAD + 1)
+                let fewest_wire = (usize::from(c) - 1) * MAX_PAYLOAD + 1;
+                Ok(fewest_wire.max(MIN_MULTI_WIRE) - CRC_LEN)
             }
         }
         Expect::Exactly(n) => {
             let Some(frames) = frame_count(n) else {
                 return Err(Refusal::TooLong);
             };
-            let first = frames - 1;
             let c = usize::from(c);
-            let want = if c == 0 { n } else { MAX_PAYLOAD };
-            if c < first {
-                Err(Refusal::Foreign)
-            } else if c > first || len != want {
+            if frames == 1 {
+                // Single-frame messages: counter 0, n bytes.
+                return if c == 0 && len == n { Ok(n) } else { Err(Refusal::BadLength) };
+            }
+            if c == 0 || c > frames || (c == frames && len != MAX_PAYLOAD) {
                 Err(Refusal::BadLength)
+            } else if c < frames {
+                Err(Refusal::Foreign)
             } else {
                 Ok(n)
             }
@@ -515,15 +582,16 @@ fn first_frame_len(c: u8, len: usize, expect: Expect) -> Result<usize, Refusal> 
     }
 }
 
-/// True if `len` bytes is right for the frame with counter `c` of a message whose first frame
-/// had counter `first` (c < first).
+/// True if `len` bytes is right for the frame with counter `c` of a multi-frame message whose
+/// first frame had counter `first` (1 ≤ c < first).
 fn continuation_shape_ok(c: u8, first: u8, len: usize, expect: Expect) -> bool {
-    if c > 0 {
+    if c > 1 {
         return len == MAX_PAYLOAD;
     }
+    let before = usize::from(first - 1) * MAX_PAYLOAD;
     match expect {
-        Expect::Any => len >= 1,
-        Expect::Exactly(n) => n.checked_sub(usize::from(first) * MAX_PAYLOAD) == Some(len),
+        Expect::Any => len >= 1 && before + len >= MIN_MULTI_WIRE,
+        Expect::Exactly(n) => wire_len(n).checked_sub(before) == Some(len),
     }
 }
 
@@ -592,48 +660,61 @@ pub(crate) mod tests {
         }
 
         fn counter_counts_down_and_matches_the_spec_example() {
-            // docs/rtcan.md's example frame, SRT code 5, message 0x1234, fragment 2, is the
-            // FIRST of 3 fragments (0x0289_1A02); the last one has fragment 0.
+            // docs/rtcan.md's example: 20 bytes, SRT code 5, message 0x1234: 22 bytes with the
+            // transfer CRC, 3 frames with counters 3, 2, 1 (0x0289_1A03 first).
             let payload = [0xAB; 20];
             let frames = fragments(tmpl(0x1234), &payload).unwrap();
             assert_eq!(frames.frame_count(), 3);
             let mut counters = [0u8; 3];
             let mut lens = [0usize; 3];
             let mut raws = [0u32; 3];
+            let mut last = [0u8; 8];
             for (k, fr) in frames.enumerate() {
                 counters[k] = fr.id().fragment;
                 lens[k] = fr.len();
                 raws[k] = fr.id().to_raw();
+                last[..fr.len()].copy_from_slice(fr.payload());
             }
-            assert_eq!(counters, [2, 1, 0]);
-            assert_eq!(lens, [8, 8, 4]);
-            assert_eq!(raws, [0x0289_1A02, 0x0289_1A01, 0x0289_1A00]);
+            assert_eq!(counters, [3, 2, 1]);
+            assert_eq!(lens, [8, 8, 6]);
+            assert_eq!(raws, [0x0289_1A03, 0x0289_1A02, 0x0289_1A01]);
+            assert_eq!(&last[..4], &[0xAB; 4]);
+            assert_eq!(last[4..6], transfer_crc::of(&payload).to_be_bytes());
         }
 
-        fn multiples_of_eight_end_with_a_full_frame() {
+        fn lengths_take_the_crc_into_account() {
             assert_eq!(frame_count(0), Some(1));
             assert_eq!(frame_count(1), Some(1));
             assert_eq!(frame_count(8), Some(1));
             assert_eq!(frame_count(9), Some(2));
-            assert_eq!(frame_count(16), Some(2));
+            assert_eq!(frame_count(14), Some(2));
+            assert_eq!(frame_count(15), Some(3));
+            assert_eq!(frame_count(16), Some(3));
             assert_eq!(frame_count(MAX_MESSAGE_LEN), Some(MAX_FRAGMENTS));
             assert_eq!(frame_count(MAX_MESSAGE_LEN + 1), None);
-            let payload = [7u8; 16];
+            assert_eq!((wire_len(8), wire_len(9)), (8, 11));
+            // 14 bytes and the CRC fill two frames exactly: the last frame is full.
+            let payload = [7u8; 14];
             let mut it = fragments(tmpl(0x300), &payload).unwrap();
+            assert_eq!(it.next().map(|f| (f.id().fragment, f.len())), Some((2, 8)));
             assert_eq!(it.next().map(|f| (f.id().fragment, f.len())), Some((1, 8)));
-            assert_eq!(it.next().map(|f| (f.id().fragment, f.len())), Some((0, 8)));
             assert_eq!(it.next(), None);
+            // 15 bytes: the CRC's second byte alone in a third frame.
+            let payload = [7u8; 15];
+            let it = fragments(tmpl(0x300), &payload).unwrap();
+            assert_eq!(it.last().map(|f| (f.id().fragment, f.len())), Some((1, 1)));
         }
 
-        fn longest_message_has_128_frames_and_longer_is_refused() {
+        fn longest_message_has_127_frames_and_longer_is_refused() {
             let mut buf = [0u8; MAX_MESSAGE_LEN + 1];
+            assert_eq!(MAX_MESSAGE_LEN, 1014);
             assert_eq!(
                 fragments(tmpl(1), &buf).unwrap_err(),
                 FragmentError::TooLong(MAX_MESSAGE_LEN + 1)
             );
             let payload = pattern(3, &mut buf[..MAX_MESSAGE_LEN]);
             let mut it = fragments(tmpl(0x4321), payload).unwrap();
-            assert_eq!(it.len(), 128);
+            assert_eq!(it.len(), 127);
             assert_eq!(it.next().unwrap().id().fragment, MAX_FRAGMENT);
         }
 
@@ -673,84 +754,125 @@ pub(crate) mod tests {
 
         fn duplicates_are_dropped_and_counted() {
             let mut r: Reassembler<1, 64> = Reassembler::new(T);
-            let (f2, f1, f0) = (f(0x500, 2, &[1; 8]), f(0x500, 1, &[2; 8]), f(0x500, 0, &[3; 2]));
-            assert_eq!(r.accept(&f2, 0, Expect::Any), None);
-            assert_eq!(r.accept(&f2, 1, Expect::Any), None); // the same first frame again
-            assert_eq!(r.accept(&f1, 2, Expect::Any), None);
-            assert_eq!(r.accept(&f1, 3, Expect::Any), None); // the frame just taken, again
-            assert_eq!(r.accept(&f2, 3, Expect::Any), None); // an older one, again
-            let m = r.accept(&f0, 4, Expect::Any).unwrap();
-            assert_eq!(m.data, &[1, 1, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 2, 2, 3, 3]);
-            // CAN's classic double reception of a last frame: not a new one-frame message.
-            assert_eq!(r.accept(&f0, 5, Expect::Any), None);
+            let payload = [1, 1, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 2, 2, 3, 3];
+            let nth = |k| fragments(tmpl(0x500), &payload).unwrap().nth(k).unwrap();
+            let (f3, f2, f1) = (nth(0), nth(1), nth(2));
+            assert_eq!((f3.id().fragment, f1.id().fragment, f1.len()), (3, 1, 4));
+            assert_eq!(r.accept(&f3, 0, Expect::Any), None);
+            assert_eq!(r.accept(&f3, 1, Expect::Any), None); // the same first frame again
+            assert_eq!(r.accept(&f2, 2, Expect::Any), None);
+            assert_eq!(r.accept(&f2, 3, Expect::Any), None); // the frame just taken, again
+            let m = r.accept(&f1, 4, Expect::Any).unwrap();
+            assert_eq!(m.data, &payload);
+            // CAN's classic double reception of a last frame: not a new message.
+            assert_eq!(r.accept(&f1, 5, Expect::Any), None);
             let s = r.stats();
-            assert_eq!((s.completed, s.duplicate), (1, 4));
+            assert_eq!((s.completed, s.duplicate), (1, 3));
+            // A new single-frame message with the same bytes as that last frame has counter 0:
+            // it is a message, never taken for a repetition (the splice limit of old).
+            let same = f(0x500, 0, f1.payload());
+            assert_eq!(r.accept(&same, 6, Expect::Any).map(|m| m.data.len()), Some(4));
+            // Nor is a repeated last frame taken for one after a single-frame message.
+            assert_eq!(r.accept(&f1, 6, Expect::Any), None);
+            assert_eq!(r.stats().duplicate, 4);
             // A single-frame message cannot be told from its repetition: delivered again.
             let single = f(0x600, 0, &[9]);
             assert!(r.accept(&single, 6, Expect::Any).is_some());
             assert!(r.accept(&single, 6, Expect::Any).is_some());
+            assert_eq!(r.stats().completed, 4);
         }
 
         fn a_gap_abandons_the_message_and_its_rest_is_foreign() {
             let mut r: Reassembler<1, 64> = Reassembler::new(T);
-            assert_eq!(r.accept(&f(7 << 8, 3, &[1; 8]), 0, Expect::Any), None);
-            assert_eq!(r.accept(&f(7 << 8, 2, &[2; 8]), 0, Expect::Any), None);
-            // Frame 1 is lost; frame 0 reveals the gap.
-            assert_eq!(r.accept(&f(7 << 8, 0, &[4; 8]), 0, Expect::Any), None);
+            let mut buf = [0u8; 38];
+            let four = fragments(tmpl(7 << 8), pattern(1, &mut buf[..30])).unwrap();
+            for (k, fr) in four.enumerate() {
+                // Frame 2 (third of four) is lost; frame 1 reveals the gap.
+                if k != 2 {
+                    assert_eq!(r.accept(&fr, 0, Expect::Any), None);
+                }
+            }
             assert_eq!(r.stats().out_of_order, 1);
             // Next message of 2 frames, then a broken one whose rest must not pass as a message.
-            assert!(r.accept(&f(7 << 8, 1, &[5; 8]), 1, Expect::Any).is_none());
-            assert!(r.accept(&f(7 << 8, 0, &[6; 1]), 1, Expect::Any).is_some());
-            assert!(r.accept(&f(7 << 8, 4, &[1; 8]), 2, Expect::Any).is_none());
-            assert!(r.accept(&f(7 << 8, 2, &[1; 8]), 2, Expect::Any).is_none()); // gap
-            assert!(r.accept(&f(7 << 8, 1, &[1; 8]), 2, Expect::Any).is_none()); // foreign
-            assert!(r.accept(&f(7 << 8, 0, &[1; 8]), 2, Expect::Any).is_none()); // foreign
+            assert!(roundtrip(&mut r, 7 << 8, pattern(2, &mut buf[..10]), 1, Expect::Any));
+            let five = fragments(tmpl(7 << 8), pattern(3, &mut buf[..38])).unwrap();
+            for (k, fr) in five.enumerate() {
+                if k != 1 {
+                    // 5, (4 lost), 3: gap, 2 and 1: foreign.
+                    assert!(r.accept(&fr, 2, Expect::Any).is_none());
+                }
+            }
             let s = r.stats();
-            assert_eq!((s.completed, s.out_of_order, s.foreign), (1, 2, 2));
+            assert_eq!((s.completed, s.out_of_order, s.foreign, s.bad_crc), (1, 2, 2, 0));
         }
 
         fn exact_length_rejects_a_message_whose_start_was_lost() {
             let mut r: Reassembler<1, 64> = Reassembler::new(T);
             let e = Expect::Exactly(20);
-            // Frame 2 lost: frames 1 and 0 would look like a complete 2-frame message.
-            assert!(r.accept(&f(0x900, 1, &[2; 8]), 0, e).is_none());
-            assert!(r.accept(&f(0x900, 0, &[3; 4]), 0, e).is_none());
+            let payload = [5u8; 20];
+            let nth = |k| fragments(tmpl(0x900), &payload).unwrap().nth(k).unwrap();
+            let (f3, f2, f1) = (nth(0), nth(1), nth(2));
+            // Frame 3 lost: frames 2 and 1 would look like a complete 2-frame message.
+            assert!(r.accept(&f2, 0, e).is_none());
+            assert!(r.accept(&f1, 0, e).is_none());
             assert_eq!(r.stats().foreign, 2);
-            // Without the length the suffix passes: the documented limit of Expect::Any.
-            assert!(r.accept(&f(0x900, 1, &[2; 8]), 0, Expect::Any).is_none());
-            assert_eq!(r.accept(&f(0x900, 0, &[3; 4]), 0, Expect::Any).map(|m| m.data.len()), Some(12));
+            // Without the length the transfer CRC rejects the tail.
+            assert!(r.accept(&f2, 1, Expect::Any).is_none());
+            assert!(r.accept(&f1, 1, Expect::Any).is_none());
+            assert_eq!((r.stats().bad_crc, r.stats().completed), (1, 0));
             // Longer than expected, or a last frame of the wrong size: bad length.
-            assert!(r.accept(&f(0x900, 3, &[1; 8]), 1, e).is_none());
-            assert!(r.accept(&f(0x900, 2, &[1; 8]), 1, e).is_none());
-            assert!(r.accept(&f(0x900, 1, &[2; 8]), 1, e).is_none());
-            assert!(r.accept(&f(0x900, 0, &[3; 5]), 1, e).is_none());
-            assert_eq!(r.stats().bad_length, 2);
-            assert_eq!(r.accept(&f(0x900, 0, &[3; 4]), 1, e).map(|m| m.data.len()), Some(20));
+            assert!(r.accept(&f(0x900, 4, &[1; 8]), 2, e).is_none());
+            assert!(r.accept(&f3, 2, e).is_none());
+            assert!(r.accept(&f2, 2, e).is_none());
+            assert!(r.accept(&f(0x900, 1, &[3; 5]), 2, e).is_none());
+            // A single frame on a stream of 20-byte messages.
+            assert!(r.accept(&f(0x900, 0, &[3; 5]), 2, e).is_none());
+            assert_eq!(r.stats().bad_length, 3);
+            assert_eq!(r.accept(&f1, 2, e).map(|m| m.data), Some(&payload[..]));
+        }
+
+        fn frames_of_two_messages_joined_are_never_delivered() {
+            // The splice: the last frame of one message and the first frames of the next one
+            // of the stream are lost; the receiver sees 3, 2 of the first and 1 of the second.
+            let mut r: Reassembler<1, 64> = Reassembler::new(T);
+            let (a, b) = ([0x11u8; 20], [0x22u8; 20]);
+            for e in [Expect::Any, Expect::Exactly(20)] {
+                let mut fa = fragments(tmpl(0xA00), &a).unwrap();
+                let fb = fragments(tmpl(0xA00), &b).unwrap();
+                assert!(r.accept(&fa.next().unwrap(), 0, e).is_none());
+                assert!(r.accept(&fa.next().unwrap(), 0, e).is_none());
+                assert!(r.accept(&fb.last().unwrap(), 0, e).is_none());
+            }
+            let s = r.stats();
+            assert_eq!((s.bad_crc, s.completed), (2, 0));
+            // The stream goes on: its next message is delivered.
+            assert!(roundtrip(&mut r, 0xA00, &b, 1, Expect::Exactly(20)));
         }
 
         fn a_new_first_frame_truncates_the_message_in_progress() {
             let mut r: Reassembler<1, 64> = Reassembler::new(T);
-            assert!(r.accept(&f(0x700, 2, &[1; 8]), 0, Expect::Any).is_none());
-            assert!(r.accept(&f(0x700, 1, &[1; 8]), 0, Expect::Any).is_none());
+            let (a, b) = ([1u8; 20], [9u8; 20]);
+            let mut fa = fragments(tmpl(0x700), &a).unwrap();
+            assert!(r.accept(&fa.next().unwrap(), 0, Expect::Any).is_none());
+            assert!(r.accept(&fa.next().unwrap(), 0, Expect::Any).is_none());
             // The sender gave up (deadline missed) and starts the next message.
-            assert!(r.accept(&f(0x700, 2, &[9; 8]), 1, Expect::Any).is_none());
-            assert!(r.accept(&f(0x700, 1, &[8; 8]), 1, Expect::Any).is_none());
-            let m = r.accept(&f(0x700, 0, &[7; 3]), 1, Expect::Any).unwrap();
-            assert_eq!(&m.data[..9], &[9, 9, 9, 9, 9, 9, 9, 9, 8]);
+            assert!(roundtrip(&mut r, 0x700, &b, 1, Expect::Any));
             assert_eq!(r.stats().truncated, 1);
             assert_eq!(r.stats().completed, 1);
         }
 
         fn stale_partial_messages_time_out() {
             let mut r: Reassembler<2, 64> = Reassembler::new(1_000);
-            assert!(r.accept(&f(0x800, 1, &[1; 8]), 0, Expect::Any).is_none());
+            assert!(r.accept(&f(0x800, 2, &[1; 8]), 0, Expect::Any).is_none());
             assert_eq!(r.expire(1_000), 0); // exactly the timeout: still alive
             assert_eq!(r.partial_messages(), 1);
             assert_eq!(r.expire(1_001), 1);
             assert_eq!(r.partial_messages(), 0);
             // Timing out on arrival of a late frame: it then starts nothing useful.
-            assert!(r.accept(&f(0x801, 1, &[1; 8]), 2_000, Expect::Exactly(9)).is_none());
-            assert!(r.accept(&f(0x801, 0, &[1; 1]), 3_001, Expect::Exactly(9)).is_none());
+            let payload = [1u8; 9];
+            let mut it = fragments(tmpl(0x801), &payload).unwrap();
+            assert!(r.accept(&it.next().unwrap(), 2_000, Expect::Exactly(9)).is_none());
+            assert!(r.accept(&it.next().unwrap(), 3_001, Expect::Exactly(9)).is_none());
             let s = r.stats();
             assert_eq!((s.timed_out, s.foreign, s.completed), (2, 1, 0));
         }
@@ -763,7 +885,7 @@ pub(crate) mod tests {
             }
             let s = r.stats();
             assert_eq!((s.too_long, s.foreign, s.completed), (1, 3, 0));
-            // 16 bytes fit exactly.
+            // 16 bytes fit exactly (the CRC is checked, not stored).
             assert!(roundtrip(&mut r, 0x1000, &[6u8; 16], 1, Expect::Any));
             // 17 do not, and the last frame alone must not complete anything.
             let payload = [7u8; 17];
@@ -775,26 +897,32 @@ pub(crate) mod tests {
 
         fn no_free_slot_drops_and_counts_but_single_frames_still_pass() {
             let mut r: Reassembler<1, 32> = Reassembler::new(T);
-            assert!(r.accept(&f(0x100, 1, &[1; 8]), 0, Expect::Any).is_none());
-            assert!(r.accept(&f(0x101, 1, &[1; 8]), 0, Expect::Any).is_none());
+            assert!(r.accept(&f(0x100, 2, &[1; 8]), 0, Expect::Any).is_none());
+            assert!(r.accept(&f(0x101, 2, &[1; 8]), 0, Expect::Any).is_none());
             assert_eq!(r.stats().no_slot, 1);
             assert!(r.accept(&f(0x101, 0, &[1; 2]), 0, Expect::Any).is_some());
             assert!(r.accept(&f(0x100, 0, &[2; 2]), 0, Expect::Any).is_some());
             // A finished stream's history does not block a new stream.
-            assert!(r.accept(&f(0x102, 1, &[1; 8]), 1, Expect::Any).is_none());
+            assert!(r.accept(&f(0x102, 2, &[1; 8]), 1, Expect::Any).is_none());
             assert_eq!(r.partial_messages(), 1);
             assert_eq!(r.stats().no_slot, 1);
         }
 
         fn short_middle_frames_are_bad_length() {
             let mut r: Reassembler<1, 32> = Reassembler::new(T);
-            assert!(r.accept(&f(0x100, 2, &[1; 7]), 0, Expect::Any).is_none());
-            assert!(r.accept(&f(0x100, 2, &[1; 8]), 0, Expect::Any).is_none());
-            assert!(r.accept(&f(0x100, 1, &[1; 3]), 0, Expect::Any).is_none());
-            assert!(r.accept(&f(0x100, 1, &[1; 8]), 0, Expect::Any).is_none());
-            assert!(r.accept(&f(0x100, 0, &[]), 0, Expect::Any).is_none());
+            let payload = [4u8; 20];
+            let nth = |k| fragments(tmpl(0x100), &payload).unwrap().nth(k).unwrap();
+            assert!(r.accept(&f(0x100, 3, &[4; 7]), 0, Expect::Any).is_none());
+            assert!(r.accept(&nth(0), 0, Expect::Any).is_none());
+            assert!(r.accept(&f(0x100, 2, &[4; 3]), 0, Expect::Any).is_none());
+            assert!(r.accept(&nth(1), 0, Expect::Any).is_none());
+            assert!(r.accept(&f(0x100, 1, &[]), 0, Expect::Any).is_none());
             assert_eq!(r.stats().bad_length, 3);
-            assert_eq!(r.accept(&f(0x100, 0, &[2]), 0, Expect::Any).map(|m| m.data.len()), Some(17));
+            assert_eq!(r.accept(&nth(2), 0, Expect::Any).map(|m| m.data.len()), Some(20));
+            // Two frames whose bytes fit one: 7 payload bytes and the CRC; never sent so.
+            assert!(r.accept(&f(0x100, 2, &[4; 8]), 1, Expect::Any).is_none());
+            assert!(r.accept(&f(0x100, 1, &[4; 1]), 1, Expect::Any).is_none());
+            assert_eq!(r.stats().bad_length, 4);
         }
 
         fn arbitrary_frames_never_panic() {
@@ -848,9 +976,14 @@ mod proptests {
             let frames = frames_of(message, &payload);
             prop_assert_eq!(frames.len(), frame_count(payload.len()).unwrap());
             let joined: Vec<u8> = frames.iter().flat_map(|f| f.payload().iter().copied()).collect();
-            prop_assert_eq!(&joined, &payload);
+            let mut wire = payload.clone();
+            if frames.len() > 1 {
+                wire.extend_from_slice(&transfer_crc::of(&payload).to_be_bytes());
+            }
+            prop_assert_eq!(&joined, &wire);
             for (k, f) in frames.iter().enumerate() {
-                prop_assert_eq!(usize::from(f.id().fragment), frames.len() - 1 - k);
+                let counter = if frames.len() == 1 { 0 } else { frames.len() - k };
+                prop_assert_eq!(usize::from(f.id().fragment), counter);
                 prop_assert!(k + 1 == frames.len() || f.len() == 8);
             }
             let expect = if exact { Expect::Exactly(payload.len()) } else { Expect::Any };
@@ -1082,6 +1215,7 @@ mod vectors {
         too_long: u32,
         no_slot: u32,
         bad_length: u32,
+        bad_crc: u32,
     }
 
     fn hex_u32(s: &str) -> u32 {
@@ -1119,6 +1253,7 @@ mod vectors {
             too_long: s.too_long,
             no_slot: s.no_slot,
             bad_length: s.bad_length,
+            bad_crc: s.bad_crc,
         };
         assert_eq!(r.stats(), want, "{}", c.name);
     }

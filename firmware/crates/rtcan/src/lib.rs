@@ -17,12 +17,14 @@ extern crate std;
 pub mod controller;
 pub mod cycle;
 pub mod failover;
+pub mod filter_banks;
 pub mod fragment;
 pub mod frame;
 pub mod id;
 pub mod laxity;
 pub mod schedule;
 pub mod srt;
+pub mod transfer_crc;
 
 pub use controller::{CanController, Micros, TxMode, TxOutcome, TxResult};
 pub use cycle::{CycleConfig, SlotClock, Sync};
@@ -42,10 +44,12 @@ pub mod selftest {
         crate::id::tests::SUITE,
         crate::laxity::tests::SUITE,
         crate::frame::tests::SUITE,
+        crate::transfer_crc::tests::SUITE,
         crate::fragment::tests::SUITE,
         crate::srt::tests::SUITE,
         crate::cycle::tests::SUITE,
         crate::schedule::tests::SUITE,
         crate::failover::tests::SUITE,
+        crate::filter_banks::tests::SUITE,
     ];
 }

@@ -482,7 +482,7 @@ pub(crate) mod tests {
 
         fn full_queue_refuses_and_messages_are_all_or_nothing() {
             let mut q: TxQueue<3> = TxQueue::new(LIN);
-            q.push_message(MessageId(0x500), &[1; 16], srt(100)).unwrap(); // 2 frames
+            q.push_message(MessageId(0x500), &[1; 14], srt(100)).unwrap(); // 2 frames with the CRC
             assert_eq!(
                 q.push_message(MessageId(0x501), &[2; 9], srt(50)),
                 Err(PushError::Full { needed: 2, free: 1 })
@@ -491,15 +491,15 @@ pub(crate) mod tests {
             q.push_frame(one(0x502, 3), Urgency::Nrt).unwrap();
             assert_eq!(q.push_frame(one(0x503, 4), srt(1)), Err(PushError::Full { needed: 1, free: 0 }));
             assert_eq!(
-                q.push_message(MessageId(0x504), &[0; 1025], Urgency::Nrt),
-                Err(PushError::Fragment(FragmentError::TooLong(1025)))
+                q.push_message(MessageId(0x504), &[0; 1015], Urgency::Nrt),
+                Err(PushError::Fragment(FragmentError::TooLong(1015)))
             );
             assert_eq!(q.len(), 3);
         }
 
         fn fragments_leave_in_order_and_a_stream_never_overtakes_itself() {
             let mut q: TxQueue<16> = TxQueue::new(LIN);
-            let mut a = [0u8; 24];
+            let mut a = [0u8; 22]; // 3 frames with the transfer CRC
             for (i, b) in a.iter_mut().enumerate() {
                 *b = i as u8;
             }
@@ -516,13 +516,13 @@ pub(crate) mod tests {
             assert_eq!(
                 order,
                 [
+                    (0x601, 2, 0xDD),
                     (0x601, 1, 0xDD),
-                    (0x601, 0, 0xDD),
-                    (0x600, 2, 0),
-                    (0x600, 1, 8),
-                    (0x600, 0, 16),
+                    (0x600, 3, 0),
+                    (0x600, 2, 8),
+                    (0x600, 1, 16),
+                    (0x600, 2, 0xEE),
                     (0x600, 1, 0xEE),
-                    (0x600, 0, 0xEE),
                 ]
             );
             // ...but its own deadline still sets its laxity.
@@ -536,7 +536,7 @@ pub(crate) mod tests {
             let mut q: TxQueue<8> = TxQueue::new(LIN);
             q.push_message(MessageId(0x500), &[1; 12], srt(2_000)).unwrap(); // 2 frames
             let (t, f) = q.peek_ticket(0).unwrap();
-            assert_eq!((f.id().message.0, f.id().fragment, f.id().laxity.code()), (0x500, 1, 21));
+            assert_eq!((f.id().message.0, f.id().fragment, f.id().laxity.code()), (0x500, 2, 21));
             // Meanwhile: a more urgent message arrives, time passes.
             q.push_frame(one(0x501, 7), srt(500)).unwrap();
             assert_eq!(q.peek(100).unwrap().id().message.0, 0x501);
@@ -586,7 +586,7 @@ pub(crate) mod tests {
 
         fn expired_messages_are_removed_and_reported_once() {
             let mut q: TxQueue<16> = TxQueue::new(LIN);
-            q.push_message(MessageId(0x800), &[1; 24], srt(1_000)).unwrap(); // 3 frames
+            q.push_message(MessageId(0x800), &[1; 22], srt(1_000)).unwrap(); // 3 frames
             q.push_message(MessageId(0x801), &[2; 8], srt(1_000)).unwrap();
             q.push_message(MessageId(0x802), &[3; 8], srt(3_000)).unwrap();
             q.push_frame(one(0x803, 4), Urgency::Nrt).unwrap();
@@ -681,9 +681,14 @@ mod proptests {
                         let key = deadline.map_or(0, |d| {
                             model.iter().filter(|m| m.stream == stream && m.deadline.is_some()).map(|m| m.key).fold(d, u64::max)
                         });
-                        let chunks: Vec<&[u8]> = if n == 0 { std::vec![&[][..]] } else { payload.chunks(8).collect() };
+                        let mut wire = payload.clone();
+                        if frames > 1 {
+                            wire.extend_from_slice(&crate::transfer_crc::of(&payload).to_be_bytes());
+                        }
+                        let chunks: Vec<&[u8]> = if n == 0 { std::vec![&[][..]] } else { wire.chunks(8).collect() };
                         for (k, c) in chunks.iter().enumerate() {
-                            model.push(M { stream, deadline, key, seq, group: g, fragment: (chunks.len() - 1 - k) as u8, bytes: c.to_vec() });
+                            let fragment = if frames == 1 { 0 } else { (chunks.len() - k) as u8 };
+                            model.push(M { stream, deadline, key, seq, group: g, fragment, bytes: c.to_vec() });
                             seq += 1;
                         }
                     }

@@ -379,18 +379,18 @@ mod tests {
         let lines: Vec<String> = frames.iter().map(|f| report_line(&w.feed(f), &w, LOG)).collect();
         assert_eq!(
             lines[0],
-            "1700000000.000000 1F808003 NRT lax=63 msg=0100 frag=3   node 1 mgmt [8] 1100000000000000"
+            "1700000000.000000 1F808004 NRT lax=63 msg=0100 frag=4   node 1 mgmt [8] 1100000000000000"
         );
         assert_eq!(
             lines[3],
-            "1700000000.000600 1F808000 NRT lax=63 msg=0100 frag=0   node 1 (psu) mgmt [2] 0300 | \
+            "1700000000.000600 1F808001 NRT lax=63 msg=0100 frag=1   node 1 (psu) mgmt [4] 03007424 | \
              HEARTBEAT name=psu uid=000000000000000000000001 state=running uptime=7s tx_errors=1 \
              rx_errors=2 dropped=3"
         );
         let j = report_json(&w.feed(&frames[3]), &w, LOG);
         assert_eq!(j["kind"], "management");
         assert_eq!(j["class"], "NRT");
-        assert_eq!((j["message"].as_u64(), j["fragment"].as_u64()), (Some(0x100), Some(0)));
+        assert_eq!((j["message"].as_u64(), j["fragment"].as_u64()), (Some(0x100), Some(1)));
     }
 
     #[test]

@@ -353,7 +353,8 @@ pub(crate) mod tests {
         let payload: Vec<u8> = (1..=16).collect();
         let frames = topic(2, 2, Laxity::from_code(9), &payload, 9_000);
         let reports: Vec<_> = frames.iter().map(|f| w.feed(f)).collect();
-        match &reports[1].what {
+        assert_eq!(reports.len(), 3, "16 bytes and the transfer CRC");
+        match &reports[2].what {
             What::Topic { node: 2, index: 2, topic: Some(t), done: Some(d) } => {
                 assert_eq!(t.topic, "scan");
                 assert_eq!(d, &payload);

@@ -35,7 +35,7 @@ pub fn deliveries(traffic: &Traffic, run: &Run) -> Vec<Delivery> {
                 d.first_start_ns = start_ns;
             }
             d.frames += 1;
-            if fragment == 0 {
+            if rtcan::fragment::is_last_frame(fragment) {
                 d.end_ns = e.time_ns;
             }
         }

@@ -194,7 +194,7 @@ impl<'t> RtcanNode<'t> {
             let id = frame.id();
             let stream = stream_of(id.message);
             let k = *nth.entry(stream).or_insert(0);
-            if id.fragment == 0 {
+            if rtcan::fragment::is_last_frame(id.fragment) {
                 nth.insert(stream, k + 1);
             }
             if loaded.contains(&ticket) && !self.loaded.iter().any(|l| l.0 == ticket) {
@@ -233,7 +233,7 @@ impl<'t> RtcanNode<'t> {
                     .push(Sent { raw_id: id.to_raw(), what: Carried::Message { msg, fragment } });
                 // Unless the message expired while this frame was on the wire (then it was
                 // taken out of the queue and counted already).
-                if self.tx.remove(ticket) && fragment == 0 {
+                if self.tx.remove(ticket) && rtcan::fragment::is_last_frame(fragment) {
                     self.queued[stream_of(id.message)].pop_front();
                 }
             }

@@ -4,8 +4,8 @@
 //! every node's slot timer at the times `next_slot_at` asks for. They check what r2p-node's
 //! loopback test bus cannot: when frames start and end.
 //!
-//! The rig: M (rank 0, master) subscribes to `scan_a` from A and `scan_b` from B (SRT, 16-byte
-//! messages of two frames, 20 ms deadline) and to `torque` from A (HRT, every cycle). A and B
+//! The rig: M (rank 0, master) subscribes to `scan_a` from A and `scan_b` from B (SRT, 14-byte
+//! messages, two full frames with the transfer CRC, 20 ms deadline) and to `torque` from A (HRT, every cycle). A and B
 //! publish at the same slot boundary, so their frames contend for the same free slots.
 
 use std::collections::HashMap;
@@ -154,41 +154,37 @@ struct Parts {
     m: VNode<'static>,
     a: VNode<'static>,
     b: VNode<'static>,
-    scan_a: &'static Publisher<'static, [u32; 4]>,
-    scan_b: &'static Publisher<'static, [u32; 4]>,
+    scan_a: &'static Publisher<'static, Scan>,
+    scan_b: &'static Publisher<'static, Scan>,
     torque: &'static Publisher<'static, u16>,
-    got_a: &'static Subscriber<'static, [u32; 4], 8>,
-    got_b: &'static Subscriber<'static, [u32; 4], 8>,
+    got_a: &'static Subscriber<'static, Scan, 8>,
+    got_b: &'static Subscriber<'static, Scan, 8>,
 }
 
 /// Declares the rig's topics — statics of their own per expansion, so tests running in
 /// parallel never share one — and wires the nodes for free-slot policy `$policy`.
 macro_rules! rig {
     ($policy:expr) => {{
-        static SA: Topic<'static, [u32; 4], { pool_size(&[8], 1) }, 1> =
-            Topic::new("scan_a", [0; 4]);
-        static SAP: Publisher<'static, [u32; 4]> =
+        static SA: Topic<'static, Scan, { pool_size(&[8], 1) }, 1> = Topic::new("scan_a", [0; 7]);
+        static SAP: Publisher<'static, Scan> =
             Publisher::new(&SA, Class::AsyncRealTime { deadline_us: SRT_DEADLINE_US });
-        static SAO: RemoteSubscriber<'static, [u32; 4], 8> = RemoteSubscriber::new(&SAP);
-        static SB: Topic<'static, [u32; 4], { pool_size(&[8], 1) }, 1> =
-            Topic::new("scan_b", [0; 4]);
-        static SBP: Publisher<'static, [u32; 4]> =
+        static SAO: RemoteSubscriber<'static, Scan, 8> = RemoteSubscriber::new(&SAP);
+        static SB: Topic<'static, Scan, { pool_size(&[8], 1) }, 1> = Topic::new("scan_b", [0; 7]);
+        static SBP: Publisher<'static, Scan> =
             Publisher::new(&SB, Class::AsyncRealTime { deadline_us: SRT_DEADLINE_US });
-        static SBO: RemoteSubscriber<'static, [u32; 4], 8> = RemoteSubscriber::new(&SBP);
+        static SBO: RemoteSubscriber<'static, Scan, 8> = RemoteSubscriber::new(&SBP);
         static H: Topic<'static, u16, { pool_size(&[2], 1) }, 1> = Topic::new("torque", 0);
         static HP: Publisher<'static, u16> =
             Publisher::new(&H, Class::SyncRealTime { period_us: CYCLE_US as u32 });
         static HO: RemoteSubscriber<'static, u16, 2> = RemoteSubscriber::new(&HP);
-        static MA: Topic<'static, [u32; 4], { pool_size(&[8], 1) }, 1> =
-            Topic::new("scan_a", [0; 4]);
-        static MAP: Publisher<'static, [u32; 4]> = Publisher::new(&MA, Class::NonRealTime);
-        static MAI: RemotePublisher<'static, [u32; 4]> = RemotePublisher::new(&MAP, &MA);
-        static MAS: Subscriber<'static, [u32; 4], 8> = Subscriber::new();
-        static MB: Topic<'static, [u32; 4], { pool_size(&[8], 1) }, 1> =
-            Topic::new("scan_b", [0; 4]);
-        static MBP: Publisher<'static, [u32; 4]> = Publisher::new(&MB, Class::NonRealTime);
-        static MBI: RemotePublisher<'static, [u32; 4]> = RemotePublisher::new(&MBP, &MB);
-        static MBS: Subscriber<'static, [u32; 4], 8> = Subscriber::new();
+        static MA: Topic<'static, Scan, { pool_size(&[8], 1) }, 1> = Topic::new("scan_a", [0; 7]);
+        static MAP: Publisher<'static, Scan> = Publisher::new(&MA, Class::NonRealTime);
+        static MAI: RemotePublisher<'static, Scan> = RemotePublisher::new(&MAP, &MA);
+        static MAS: Subscriber<'static, Scan, 8> = Subscriber::new();
+        static MB: Topic<'static, Scan, { pool_size(&[8], 1) }, 1> = Topic::new("scan_b", [0; 7]);
+        static MBP: Publisher<'static, Scan> = Publisher::new(&MB, Class::NonRealTime);
+        static MBI: RemotePublisher<'static, Scan> = RemotePublisher::new(&MBP, &MB);
+        static MBS: Subscriber<'static, Scan, 8> = Subscriber::new();
         static MH: Topic<'static, u16, { pool_size(&[4], 1) }, 1> = Topic::new("torque", 0);
         static MHP: Publisher<'static, u16> = Publisher::new(&MH, Class::NonRealTime);
         static MHI: RemotePublisher<'static, u16> = RemotePublisher::new(&MHP, &MH);
@@ -217,7 +213,17 @@ fn tag(node: u32, k: u32) -> u32 {
     node << 16 | k
 }
 
-/// The tag in a frame of a `[u32; 4]` message (each fragment starts with an element).
+/// A scan message: 14 bytes, so that with its transfer CRC it fills two frames, and each frame
+/// starts with the tag (low and high halves in elements 0, 1 and 4, 5).
+type Scan = [u16; 7];
+
+/// A scan message carrying `tag`.
+fn scan(tag: u32) -> Scan {
+    let (lo, hi) = (tag as u16, (tag >> 16) as u16);
+    [lo, hi, lo, hi, lo, hi, lo]
+}
+
+/// The tag in a frame of a `Scan` message.
 fn tag_of(frame: &Frame) -> Option<u32> {
     let p = frame.payload();
     (p.len() == 8).then(|| u32::from_le_bytes([p[0], p[1], p[2], p[3]]))
@@ -266,19 +272,29 @@ fn contend(parts: Parts, traffic: Traffic) -> Outcome {
         torque.publish_with(|v| *v = k as u16).unwrap();
         for j in 0..per_cycle {
             let (x, y) = (tag(0, k * per_cycle + j), tag(1, k * per_cycle + j));
-            scan_a.publish_with(|v| *v = [x; 4]).unwrap();
-            scan_b.publish_with(|v| *v = [y; 4]).unwrap();
+            scan_a.publish_with(|v| *v = scan(x)).unwrap();
+            scan_b.publish_with(|v| *v = scan(y)).unwrap();
             published.insert(x, t);
             published.insert(y, t);
         }
         t += CYCLE_US;
         rig.run(&mut [&mut m, &mut a, &mut b], t);
-        got.extend(core::iter::from_fn(|| got_a.try_recv()).map(|v| v[0]));
-        got.extend(core::iter::from_fn(|| got_b.try_recv()).map(|v| v[0]));
+        got.extend(
+            core::iter::from_fn(|| got_a.try_recv())
+                .map(|v| u32::from(v[0]) | u32::from(v[1]) << 16),
+        );
+        got.extend(
+            core::iter::from_fn(|| got_b.try_recv())
+                .map(|v| u32::from(v[0]) | u32::from(v[1]) << 16),
+        );
     }
     rig.run(&mut [&mut m, &mut a, &mut b], t + 10 * CYCLE_US);
-    got.extend(core::iter::from_fn(|| got_a.try_recv()).map(|v| v[0]));
-    got.extend(core::iter::from_fn(|| got_b.try_recv()).map(|v| v[0]));
+    got.extend(
+        core::iter::from_fn(|| got_a.try_recv()).map(|v| u32::from(v[0]) | u32::from(v[1]) << 16),
+    );
+    got.extend(
+        core::iter::from_fn(|| got_b.try_recv()).map(|v| u32::from(v[0]) | u32::from(v[1]) << 16),
+    );
 
     // Check every frame of the run on the trace.
     let seen = Seen::of(&rig.bus);
@@ -415,9 +431,10 @@ fn a_frame_the_bus_kept_waiting_at_a_merged_window_end_is_withdrawn_too() {
 
 #[test]
 fn an_nrt_backlog_never_keeps_an_srt_message_out_of_the_queue() {
-    // A offers a log (NRT, 16 bytes: 2 frames) before its scan (SRT, 6 ms): a drain that
-    // served exports in order until the queue is full would let a 30-message log backlog (60
-    // frames, 15 ms of one frame per slot) keep the scan out of the queue, past its deadline.
+    // A offers a log (NRT, 16 bytes: 3 frames with the transfer CRC) before its scan (SRT,
+    // 6 ms): a drain that served exports in order until the queue is full would let a 30-message
+    // log backlog (90 frames, 15 ms at one frame per slot) keep the scan out of the queue, past
+    // its deadline.
     static L: Topic<'static, [u32; 4], { pool_size(&[32], 1) }, 1> = Topic::new("log", [0; 4]);
     static LP: Publisher<'static, [u32; 4]> = Publisher::new(&L, Class::NonRealTime);
     static LO: RemoteSubscriber<'static, [u32; 4], 32> = RemoteSubscriber::new(&LP);

@@ -64,7 +64,7 @@ fn a_merged_window_sends_a_three_frame_message_back_to_back() {
     assert_eq!(a.pending(), 3, "the message's three frames, at once");
     bus.run_until_idle(END_US * 1_000);
     let s = sent(&bus);
-    assert_eq!(s.iter().map(|f| f.2.id().fragment).collect::<Vec<_>>(), [2, 1, 0]);
+    assert_eq!(s.iter().map(|f| f.2.id().fragment).collect::<Vec<_>>(), [3, 2, 1]);
     for w in s.windows(2) {
         assert_eq!(w[1].0, w[0].0 + bus.frame_ns(&w[0].2), "no idle bus between fragments");
     }
@@ -139,7 +139,7 @@ fn a_frame_withdrawn_in_its_arbitration_is_not_overtaken() {
         .filter(|f| f.1 == 0)
         .map(|f| (f.2.id().message, f.2.id().fragment))
         .collect();
-    assert_eq!(from_a, [(X, 0), (M, 2), (M, 1), (M, 0)]);
+    assert_eq!(from_a, [(X, 0), (M, 3), (M, 2), (M, 1)]);
 }
 
 #[test]
@@ -175,5 +175,5 @@ fn after_a_withdrawal_nothing_is_loaded_until_every_fate_is_known() {
     }
     let fragments: Vec<u8> =
         sent(&bus).iter().filter(|f| f.1 == 0).map(|f| f.2.id().fragment).collect();
-    assert_eq!(fragments, [2, 1, 0]);
+    assert_eq!(fragments, [3, 2, 1]);
 }
