@@ -23,6 +23,8 @@ pub mod id;
 pub mod laxity;
 pub mod schedule;
 pub mod srt;
+pub mod time_counter;
+pub mod wire_bits;
 
 pub use controller::{CanController, Micros, TxMode, TxOutcome, TxResult};
 pub use cycle::{CycleConfig, SlotClock, Sync};
@@ -47,5 +49,7 @@ pub mod selftest {
         crate::cycle::tests::SUITE,
         crate::schedule::tests::SUITE,
         crate::failover::tests::SUITE,
+        crate::wire_bits::tests::SUITE,
+        crate::time_counter::tests::SUITE,
     ];
 }
