@@ -27,9 +27,9 @@ fn received_frames_carry_their_start_of_frame() {
     let mut tx = bus.port(0);
     let mut rx = BxCanPort::new(bus.port(1), 1_000_000);
     let mut got = Vec::new();
-    let mut t = 1_000_000u64;
+    let mut t = 1_006_000u64;
     for k in 0..400u64 {
-        let h = k.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x5555;
+        let h = k.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x6666;
         let len = (h >> 60) as usize % 9;
         let data: Vec<u8> = (0..len).map(|i| (h >> (8 * i)) as u8).collect();
         let f = Frame::from_raw((h >> 20) as u32 & 0x1FFF_FFFF, &data).unwrap();
@@ -64,6 +64,8 @@ fn received_frames_carry_their_start_of_frame() {
             exact_from = Some(i);
         }
     }
-    // A frame stamped with no latency relates the clocks for good, within the first few.
-    assert!(exact_from.is_some_and(|i| i < 20), "exact from {exact_from:?}");
+    println!("stamps exact from frame {exact_from:?} of {}", got.len());
+    // The first two frames' interrupts were late (this start time makes them so): their stamps
+    // are late by that; the first frame stamped with no latency relates the clocks for good.
+    assert_eq!(exact_from, Some(2));
 }
