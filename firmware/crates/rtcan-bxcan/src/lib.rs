@@ -25,7 +25,7 @@ use embassy_stm32::pac::can::vals::{Ide, Rtr};
 use rtcan::controller::{
     BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxOutcome, TxResult, TX_RESULTS,
 };
-use rtcan::time_counter::TimeCounter;
+use rtcan::time_counter::{valid_at_bits, TimeCounter};
 use rtcan::{CanController, Frame, FrameId};
 
 /// Filter banks RTCAN uses: all of the F103's, and CAN1's share on the F407 (split at 14).
@@ -83,8 +83,10 @@ pub struct BxCan<'d> {
     results: Results,
     /// Frames dropped on receive because they were not RTCAN frames (standard IDs, remote frames).
     pub foreign_frames: u32,
-    /// Relates the time-triggered counter to the node's clock.
-    counter: TimeCounter,
+    /// Relates the time-triggered counter to the node's clock (none at a bit rate whose bit
+    /// time is not a whole number of µs).
+    counter: Option<TimeCounter>,
+    bit_rate: u32,
 }
 
 impl<'d> BxCan<'d> {
@@ -114,6 +116,7 @@ impl<'d> BxCan<'d> {
             results: Results::new(),
             foreign_frames: 0,
             counter: TimeCounter::new(bit_rate),
+            bit_rate: bit_rate.max(1),
         };
         this.set_filters(&[Filter::ACCEPT_ALL]);
         this
@@ -234,7 +237,14 @@ impl CanController for BxCan<'_> {
                 continue;
             };
             let now = embassy_time::Instant::now().as_micros();
-            let at = self.counter.stamp_received(&frame, c.time, c.stamped_at, now);
+            let at = match &mut self.counter {
+                Some(tc) => tc.stamp_received(&frame, c.time, c.stamped_at, now),
+                // No whole-µs bit time: the interrupt's stamp less the frame's length (late by
+                // the interrupt's latency).
+                None => c.stamped_at.saturating_sub(u64::from(
+                    valid_at_bits(&frame) * (1_000_000 / self.bit_rate),
+                )),
+            };
             return Some(Received { frame, at });
         }
         None

@@ -84,6 +84,14 @@ pub struct RxStamp;
 
 impl<I: Interrupt> Handler<I> for RxStamp {
     unsafe fn on_interrupt() {
+        drain();
+    }
+}
+
+/// Empties both FIFOs into the ring (one copy for both interrupts).
+#[inline(never)]
+fn drain() {
+    {
         // First: this instant is the frame's valid point plus the interrupt's latency.
         let now = embassy_time::Instant::now().as_micros();
         critical_section::with(|cs| {

@@ -12,8 +12,9 @@
 //! elapsed since it, taken modulo 2¹⁶ bit times: exact as long as the frame is read within
 //! 65 536 bit times of its start (65.5 ms at 1 Mbit/s; the node reads every slot).
 //!
-//! Scaling: one count is one bit time, 1 µs at 1 Mbit/s, 1 000 000 / `bit_rate` µs in general;
-//! the node's clock is turned into bit times as ⌊t · bit_rate / 10⁶⌋.
+//! Scaling: one count is one bit time, 1 µs at 1 Mbit/s, 1 000 000 / `bit_rate` µs in general
+//! (bit rates whose bit time is a whole number of µs); the node's clock is turned into bit
+//! times as ⌊t / bit time⌋.
 
 use crate::controller::Micros;
 use crate::wire_bits::bits_to_eof_end;
@@ -35,26 +36,47 @@ pub fn valid_at_bits(frame: &Frame) -> u32 {
 /// Relates bxCAN's 16-bit bit-time counter to the node's µs clock (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TimeCounter {
-    bit_rate: u64,
+    /// µs per bit time.
+    us_per_bit: u32,
     /// (node clock in bit times − counter) mod 2¹⁶, the smallest sample seen; none before the
     /// first received frame.
     offset: Option<u16>,
 }
 
+/// `t` / `d` for `d` < 2¹⁶ with 32-bit divisions only (the Cortex-M3 divides 32-bit numbers in
+/// hardware; a 64-bit division would link ~900 bytes of software division into the image).
+fn div_small(t: u64, d: u32) -> u64 {
+    if d == 1 {
+        return t;
+    }
+    let mut q = 0u64;
+    let mut rem = 0u32;
+    for shift in [48, 32, 16, 0] {
+        let cur = rem << 16 | (t >> shift) as u32 & 0xffff;
+        q = q << 16 | u64::from(cur / d);
+        rem = cur % d;
+    }
+    q
+}
+
 impl TimeCounter {
-    /// A counter of a bus at `bit_rate` bit/s (1 … 1 000 000), not yet related to the clock.
-    pub const fn new(bit_rate: u32) -> Self {
-        Self { bit_rate: bit_rate as u64, offset: None }
+    /// A counter of a bus at `bit_rate` bit/s, not yet related to the clock; `None` unless a
+    /// bit time is a whole number of µs (1 Mbit/s, 500, 250, 125, 100, 50, 20, 10 kbit/s …).
+    pub const fn new(bit_rate: u32) -> Option<Self> {
+        if bit_rate == 0 || 1_000_000 % bit_rate != 0 || 1_000_000 / bit_rate >= 1 << 16 {
+            return None;
+        }
+        Some(Self { us_per_bit: 1_000_000 / bit_rate, offset: None })
     }
 
     /// The node's time `t` in whole bit times.
     fn bits(&self, t: Micros) -> u64 {
-        (u128::from(t) * u128::from(self.bit_rate) / 1_000_000) as u64
+        div_small(t, self.us_per_bit)
     }
 
-    /// Bit times `b` in µs (rounded up, so that a time and its bit agree at every bit rate).
+    /// Bit times `b` in µs.
     fn micros(&self, b: u64) -> Micros {
-        (u128::from(b) * 1_000_000).div_ceil(u128::from(self.bit_rate.max(1))) as Micros
+        b * Micros::from(self.us_per_bit)
     }
 
     /// (node clock − counter) mod 2¹⁶ for a frame captured at `capture` and found valid
@@ -123,7 +145,7 @@ pub(crate) mod tests {
             let f = sync();
             let len = Micros::from(valid_at_bits(&f));
             let phase = 0xFFF0;
-            let mut tc = TimeCounter::new(1_000_000);
+            let mut tc = TimeCounter::new(1_000_000).unwrap();
             assert_eq!(tc.start_of_frame(0, 0), None);
             // A frame stamped without delay relates the clocks; later ones are 3 µs late.
             tc.observe(&f, counter_at(500, phase, 1_000_000), 500 + len);
@@ -144,7 +166,7 @@ pub(crate) mod tests {
         fn the_smallest_interrupt_latency_sets_the_offset() {
             let f = sync();
             let len = Micros::from(valid_at_bits(&f));
-            let mut tc = TimeCounter::new(1_000_000);
+            let mut tc = TimeCounter::new(1_000_000).unwrap();
             // First frame stamped 9 µs late: its start of frame reads 9 µs late.
             let cap = counter_at(1_000, 77, 1_000_000);
             assert_eq!(tc.stamp_received(&f, cap, 1_000 + len + 9, 2_000), 1_009);
@@ -155,11 +177,24 @@ pub(crate) mod tests {
             assert_eq!(tc.stamp_received(&f, cap, 9_000 + len + 40, 9_500), 9_000);
         }
 
+        fn bit_rates_without_a_whole_us_bit_time_are_refused() {
+            assert!(TimeCounter::new(800_000).is_none());
+            assert!(TimeCounter::new(0).is_none());
+            assert!(TimeCounter::new(15).is_none());
+            assert!(TimeCounter::new(20).is_some());
+            // The 32-bit long division agrees with the 64-bit one.
+            for t in [0u64, 1, 65_535, 1 << 32, (1 << 40) + 12_345, u64::MAX] {
+                for d in [1u32, 2, 8, 10, 1_000, 50_000] {
+                    assert_eq!(div_small(t, d), t / u64::from(d), "{t} / {d}");
+                }
+            }
+        }
+
         fn other_bit_rates_scale_by_the_bit_time() {
             // 125 kbit/s: one count is 8 µs; the counter wraps every 524 ms.
             let f = sync();
             let len = Micros::from(valid_at_bits(&f)) * 8;
-            let mut tc = TimeCounter::new(125_000);
+            let mut tc = TimeCounter::new(125_000).unwrap();
             for sof in [8 * 65_530, 8 * 65_536, 8 * 65_541, 8 * 1_000_003] {
                 let cap = counter_at(sof, 12_345, 125_000);
                 assert_eq!(tc.stamp_received(&f, cap, sof + len, sof + 400_000), sof);
@@ -186,7 +221,7 @@ pub(crate) mod tests {
             ) {
                 let f = sync();
                 let len = Micros::from(valid_at_bits(&f));
-                let mut tc = TimeCounter::new(1_000_000);
+                let mut tc = TimeCounter::new(1_000_000).unwrap();
                 // An earlier frame stamped promptly relates the clocks.
                 let t0 = sof.saturating_sub(earlier);
                 tc.observe(&f, counter_at(t0, phase, 1_000_000), t0 + len);

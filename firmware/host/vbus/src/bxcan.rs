@@ -33,9 +33,15 @@ pub struct BxCanPort {
 
 impl BxCanPort {
     /// Wraps `port` of a bus running at `bit_rate` bit/s.
+    ///
+    /// # Panics
+    /// If a bit time at `bit_rate` is not a whole number of µs (the firmware's counter
+    /// extension supports those only).
     pub fn new(port: Port, bit_rate: u32) -> Self {
-        let phase = (port.index() as u64).wrapping_mul(40_503).wrapping_add(1_234) % TIME_COUNTER_MODULUS;
-        Self { port, bit_ns: 1_000_000_000 / u64::from(bit_rate), phase, counter: TimeCounter::new(bit_rate) }
+        let phase =
+            (port.index() as u64).wrapping_mul(40_503).wrapping_add(1_234) % TIME_COUNTER_MODULUS;
+        let counter = TimeCounter::new(bit_rate).expect("a bit rate with a whole-µs bit time");
+        Self { port, bit_ns: 1_000_000_000 / u64::from(bit_rate), phase, counter }
     }
 
     /// The wrapped port.
