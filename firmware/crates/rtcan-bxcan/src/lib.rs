@@ -231,7 +231,8 @@ impl CanController for BxCan<'_> {
     /// The oldest frame the receive interrupt captured, stamped at its start of frame.
     fn try_receive(&mut self) -> Option<Received> {
         while let Some(c) = rx_stamp::take() {
-            let Some(Ok(frame)) = c.raw_id.map(|id| Frame::from_raw(id, &c.data[..usize::from(c.len)]))
+            let Some(Ok(frame)) =
+                c.raw_id.map(|id| Frame::from_raw(id, &c.data[..usize::from(c.len)]))
             else {
                 self.foreign_frames = self.foreign_frames.wrapping_add(1);
                 continue;
@@ -241,9 +242,9 @@ impl CanController for BxCan<'_> {
                 Some(tc) => tc.stamp_received(&frame, c.time, c.stamped_at, now),
                 // No whole-µs bit time: the interrupt's stamp less the frame's length (late by
                 // the interrupt's latency).
-                None => c.stamped_at.saturating_sub(u64::from(
-                    valid_at_bits(&frame) * (1_000_000 / self.bit_rate),
-                )),
+                None => c
+                    .stamped_at
+                    .saturating_sub(u64::from(valid_at_bits(&frame) * (1_000_000 / self.bit_rate))),
             };
             return Some(Received { frame, at });
         }

@@ -41,13 +41,8 @@ struct Ring {
     overruns: u32,
 }
 
-static RX: Mutex<RefCell<Ring>> = Mutex::new(RefCell::new(Ring {
-    regs: None,
-    buf: [None; RING],
-    head: 0,
-    len: 0,
-    overruns: 0,
-}));
+static RX: Mutex<RefCell<Ring>> =
+    Mutex::new(RefCell::new(Ring { regs: None, buf: [None; RING], head: 0, len: 0, overruns: 0 }));
 
 /// Points the interrupt handler at `regs` and empties the ring.
 pub(crate) fn attach(regs: pac::can::Can) {

@@ -382,8 +382,9 @@ fn a_master_cut_off_the_bus_steps_down_and_the_standby_takes_over() {
     assert_eq!(sim.bus().port(0).bus_state(), BusState::ErrorPassive);
 
     let bound = u64::from(TAKEOVER_BASE_CYCLES + RANK_STEP_CYCLES) * CYCLE_NS;
-    assert!(sim.run_while(SLOT_NS, last_sync + bound + SLOT_NS, |s| s.node(2).role()
-        == Role::Master));
+    assert!(
+        sim.run_while(SLOT_NS, last_sync + bound + SLOT_NS, |s| s.node(2).role() == Role::Master)
+    );
     assert_eq!(sim.node(1).role(), Role::Slave);
     // Cut off, M keeps trying (rank 0 takes over first on its lonely segment) and stepping
     // down; none of its syncs went out, and the bus carries B's cycle only.
