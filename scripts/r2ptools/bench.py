@@ -44,6 +44,15 @@ def cortex_m3() -> list[dict]:
     return [r for r in json_lines(out) if r["bench"] == "cortex_m3_pubsub"]
 
 
+def slot_path() -> dict:
+    """Instructions from `Node::slot_tick` to the HRT frame's mailbox request (QEMU, -icount)."""
+    outdir = qemu.build(profile="release")
+    rc, out = qemu.run_image(outdir / "slot-path")
+    if rc != 0:
+        raise RuntimeError(f"QEMU slot-path image failed (exit {rc}):\n{out}")
+    return next(r for r in json_lines(out) if r["bench"] == "cortex_m3_slot_path")
+
+
 def host() -> list[dict]:
     p = subprocess.run(["cargo", "run", "-q", "--release", "--locked", "-p", "r2p-bench-host"],
                        cwd=ROOT / "firmware", capture_output=True, text=True, check=True)
@@ -368,6 +377,7 @@ def report_triskar2(rows: list[dict]) -> None:
 def main() -> int:
     try:
         m3 = cortex_m3()
+        sp = slot_path()
         hs = host()
         load_points, load_sim = rtcan_load()
         load_seeds = rtcan_seeds()
@@ -387,6 +397,13 @@ def main() -> int:
           f"≈{PAPER_CYCLES_1_SUB:.0f} cycles); each extra subscriber: +{slope:.0f} (linear)")
     print(f"at 72 MHz and one instruction per cycle (an upper bound) that is "
           f"{72e6 / one:,.0f} msg/s vs the paper's 86,600")
+
+    lo, hi = sp["to_request_min_insn"], sp["to_request_max_insn"]
+    print("\n=== Cortex-M3 (QEMU, -icount): the slot path, slot_tick to the HRT mailbox request")
+    print(f"{sp['hrt_requests']} HRT slots: {lo}–{hi} instructions to the request "
+          f"(whole slot_tick ≤ {sp['slot_tick_max_insn']}); at 72 MHz, ≥ {lo / 72:.1f}–{hi / 72:.1f} µs "
+          f"after the tick starts, spread ≥ {(hi - lo) / 72:.1f} µs (cycles ≥ instructions; "
+          f"flash wait states add) vs the paper's ±3 µs")
 
     print("\n=== host: messages per second, higher is better (this machine, median of 7)")
     print(f"{'subscribers':>11} {'R2P':>12} {'embassy-sync':>13} {'ratio':>6}")

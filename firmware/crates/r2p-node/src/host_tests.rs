@@ -516,7 +516,9 @@ mod tdma {
         while m.stats().syncs_sent == syncs {
             run_slots(&bus, &mut [&mut m, &mut a, &mut b], bus.now.get() + 250);
         }
-        let last_sync = bus.now.get() - 250;
+        // `syncs_sent` counts a sync when the controller reports it sent, at the master's next
+        // slot tick: the sync went out in the step before.
+        let last_sync = bus.now.get() - 500;
         bus.power(0, false);
         let bound = Micros::from(TAKEOVER_BASE_CYCLES + RANK_STEP_CYCLES) * CYCLE_US;
         while b.role() != Role::Master {

@@ -37,8 +37,10 @@ pub mod wire;
 mod host_tests;
 #[cfg(any(test, feature = "selftest"))]
 mod tdma_tests;
+/// The suite's loopback bus, public for the QEMU benchmark of the slot path (not an API).
 #[cfg(any(test, feature = "selftest"))]
-mod testbus;
+#[doc(hidden)]
+pub mod testbus;
 #[cfg(any(test, feature = "selftest"))]
 mod tests;
 

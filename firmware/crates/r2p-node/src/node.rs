@@ -261,7 +261,7 @@ pub struct NodeStats {
     pub sync_frames: u32,
     /// Frames with a sync identifier that are not a sync (payload not 8 bytes). Dropped.
     pub bad_syncs: u32,
-    /// Syncs this node sent as master.
+    /// Syncs this node sent as master that went out (the controller reported them sent).
     pub syncs_sent: u32,
     /// HRT frames sent in their reserved slots.
     pub hrt_sent: u32,
@@ -420,6 +420,8 @@ pub struct Node<
     /// Fingerprint of the subscribed streams the controller's acceptance filters were last
     /// programmed for (`hw_filters`); `None` before the first time.
     filters_for: Option<u32>,
+    /// As master: the sync loaded into the controller and when, until its result is taken.
+    sync_loaded: Option<(Micros, Sync)>,
 }
 
 impl<
@@ -474,6 +476,7 @@ impl<
             slot_tx: SlotTx::new(&config.cycle, config.free_slots),
             filters_for: None,
             last_sync: 0,
+            sync_loaded: None,
         })
     }
 
@@ -1113,7 +1116,9 @@ impl<
                 if ok {
                     self.clock.on_sync(now, &sync);
                     self.last_sync = now;
-                    bump(&mut self.stats.syncs_sent);
+                    // Its outcome comes from the controller (`on_done`); `syncs_sent` and the
+                    // failover count it then.
+                    self.sync_loaded = Some((now, sync));
                 }
                 let cycle_us = Micros::from(self.config.cycle.cycle_us);
                 m.cycle = m.cycle.wrapping_add(1);
@@ -1122,11 +1127,12 @@ impl<
                     m.next_sync = now + cycle_us; // the timer was late by a cycle: restart
                 }
                 self.master = Some(m);
-                let a = self.failover.on_sync_sent(now, &sync, ok);
-                self.apply(a);
                 if ok {
                     return;
                 }
+                // Not even loaded (mailboxes full, bus-off): a failed sync.
+                let a = self.failover.on_sync_sent(now, &sync, false);
+                self.apply(a);
             }
         }
 
@@ -1182,7 +1188,20 @@ impl<
                 bump(&mut self.stats.hrt_sent)
             }
             Done::Slotted { what: Slotted::Hrt(i), .. } => self.hrt_miss(i),
-            Done::Slotted { what: Slotted::Sync, .. } => {}
+            Done::Slotted { what: Slotted::Sync, outcome, .. } => {
+                // The controller's result of the sync loaded at `at`: sent (TXOK), or it lost
+                // arbitration, ended in an error frame (no ACK, bit error) or was withdrawn.
+                // More than L failures in a row make the master step down (docs/rtcan.md,
+                // "Master failover").
+                if let Some((at, sync)) = self.sync_loaded.take() {
+                    let sent = outcome == TxOutcome::Sent;
+                    if sent {
+                        bump(&mut self.stats.syncs_sent);
+                    }
+                    let a = self.failover.on_sync_sent(at, &sync, sent);
+                    self.apply(a);
+                }
+            }
             Done::Queued { ticket, outcome: TxOutcome::Sent, .. } => {
                 self.tx.remove(ticket);
                 bump(&mut self.stats.frames_sent);

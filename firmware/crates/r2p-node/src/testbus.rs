@@ -12,6 +12,8 @@
 //! that is not HRT in the sync slot or a reserved slot, or an HRT frame in a free slot, is a
 //! violation; HRT frames are logged with their cycle and slot.
 
+#![allow(clippy::new_without_default)] // a test rig, public only for the QEMU slot-path benchmark
+
 use core::cell::{Cell, RefCell};
 
 use heapless::{Deque, Vec};

@@ -8,17 +8,24 @@
 //! (`TXFP`) so RTCAN's own queue decides the order (the hardware's lowest-ID-first scheduling
 //! could swap a frame into a mailbox behind RTCAN's back). Error counters and bus-off come from
 //! the `ESR` register.
+//!
+//! Received frames are stamped at their start of frame: time-triggered mode's counter captured
+//! by the hardware, related to the node's clock by the receive interrupt ([`RxStamp`],
+//! `rtcan::time_counter`).
 #![no_std]
 #![warn(missing_docs)]
 
-use embassy_stm32::can::enums::TryReadError;
+mod rx_stamp;
+pub use rx_stamp::RxStamp;
+
 use embassy_stm32::can::filter::{BankConfig, Mask32};
-use embassy_stm32::can::{self, ExtendedId, Fifo, Id};
+use embassy_stm32::can::{self, ExtendedId, Fifo};
 use embassy_stm32::pac;
 use embassy_stm32::pac::can::vals::{Ide, Rtr};
 use rtcan::controller::{
     BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxOutcome, TxResult, TX_RESULTS,
 };
+use rtcan::time_counter::{valid_at_bits, TimeCounter};
 use rtcan::{CanController, Frame, FrameId};
 
 /// Filter banks RTCAN uses: all of the F103's, and CAN1's share on the F407 (split at 14).
@@ -76,6 +83,10 @@ pub struct BxCan<'d> {
     results: Results,
     /// Frames dropped on receive because they were not RTCAN frames (standard IDs, remote frames).
     pub foreign_frames: u32,
+    /// Relates the time-triggered counter to the node's clock (none at a bit rate whose bit
+    /// time is not a whole number of µs).
+    counter: Option<TimeCounter>,
+    bit_rate: u32,
 }
 
 impl<'d> BxCan<'d> {
@@ -86,8 +97,14 @@ impl<'d> BxCan<'d> {
     /// It also masks the transmit-mailbox-empty interrupt: embassy-stm32's handler for it
     /// acknowledges `RQCP`, which clears the `TXOK`/`ALST`/`TERR` bits this driver reads to
     /// report each frame's result. (The handler stays bound; it no longer fires.)
-    pub fn new(mut can: can::Can<'d>, regs: pac::can::Can) -> Self {
+    ///
+    /// Received frames reach the driver through [`RxStamp`], which the image binds to the
+    /// receive interrupts before embassy's handlers. `bit_rate` is the bus's (bit/s): the
+    /// time-triggered counter counts its bit times.
+    pub fn new(mut can: can::Can<'d>, regs: pac::can::Can, bit_rate: u32) -> Self {
         can.set_tx_fifo_scheduling(true);
+        enable_time_triggered_mode(regs);
+        rx_stamp::attach(regs);
         regs.ier().modify(|w| w.set_tmeie(false));
         regs.mcr().modify(|w| w.set_nart(false));
         regs.tsr().write(|w| (0..MAILBOXES).for_each(|i| w.set_rqcp(i, true)));
@@ -98,9 +115,17 @@ impl<'d> BxCan<'d> {
             seq: 0,
             results: Results::new(),
             foreign_frames: 0,
+            counter: TimeCounter::new(bit_rate),
+            bit_rate: bit_rate.max(1),
         };
         this.set_filters(&[Filter::ACCEPT_ALL]);
         this
+    }
+
+    /// Received frames lost because the driver did not take them from the receive
+    /// interrupt's ring in time.
+    pub fn rx_overruns(&self) -> u32 {
+        rx_stamp::overruns()
     }
 
     /// Moves the results of mailboxes that emptied since the last look into `results`, in
@@ -130,6 +155,28 @@ impl<'d> BxCan<'d> {
             };
             self.regs.tsr().write(|w| w.set_rqcp(i, true));
             self.results.push(TxResult { id, outcome });
+        }
+    }
+}
+
+/// Polls of `CAN_MSR.INAK` before giving up on entering or leaving initialisation mode (leaving
+/// waits for 11 recessive bits on the bus).
+const INIT_POLLS: u32 = 100_000;
+
+/// Sets `CAN_MCR.TTCM` (its counter then captures every frame's start of frame) in
+/// initialisation mode, then returns to normal mode.
+fn enable_time_triggered_mode(regs: pac::can::Can) {
+    regs.mcr().modify(|w| w.set_inrq(true));
+    for _ in 0..INIT_POLLS {
+        if regs.msr().read().inak() {
+            break;
+        }
+    }
+    regs.mcr().modify(|w| w.set_ttcm(true));
+    regs.mcr().modify(|w| w.set_inrq(false));
+    for _ in 0..INIT_POLLS {
+        if !regs.msr().read().inak() {
+            break;
         }
     }
 }
@@ -181,27 +228,27 @@ impl CanController for BxCan<'_> {
         self.results.pop()
     }
 
+    /// The oldest frame the receive interrupt captured, stamped at its start of frame.
     fn try_receive(&mut self) -> Option<Received> {
-        loop {
-            match self.can.try_read() {
-                Ok(env) => {
-                    let raw = match env.frame.id() {
-                        Id::Extended(id) if !env.frame.header().rtr() => id.as_raw(),
-                        _ => {
-                            self.foreign_frames = self.foreign_frames.wrapping_add(1);
-                            continue;
-                        }
-                    };
-                    match Frame::from_raw(raw, env.frame.data()) {
-                        Ok(frame) => return Some(Received { frame, at: env.ts.as_micros() }),
-                        Err(_) => self.foreign_frames = self.foreign_frames.wrapping_add(1),
-                    }
-                }
-                Err(TryReadError::Empty) => return None,
-                // A bus error is reflected in the error counters; keep reading.
-                Err(TryReadError::BusError(_)) => continue,
-            }
+        while let Some(c) = rx_stamp::take() {
+            let Some(Ok(frame)) =
+                c.raw_id.map(|id| Frame::from_raw(id, &c.data[..usize::from(c.len)]))
+            else {
+                self.foreign_frames = self.foreign_frames.wrapping_add(1);
+                continue;
+            };
+            let now = embassy_time::Instant::now().as_micros();
+            let at = match &mut self.counter {
+                Some(tc) => tc.stamp_received(&frame, c.time, c.stamped_at, now),
+                // No whole-µs bit time: the interrupt's stamp less the frame's length (late by
+                // the interrupt's latency).
+                None => c
+                    .stamped_at
+                    .saturating_sub(u64::from(valid_at_bits(&frame) * (1_000_000 / self.bit_rate))),
+            };
+            return Some(Received { frame, at });
         }
+        None
     }
 
     fn set_filters(&mut self, filters: &[Filter]) {

@@ -332,6 +332,30 @@ pub(crate) mod tests {
             assert_eq!(a.start_syncing.map(|s| s.epoch), Some(!s.epoch));
         }
 
+        fn a_sent_sync_resets_the_failure_count() {
+            // "More than L failures in a row": L failures, a success, L failures again keep
+            // the node master; only the (L + 1)-th consecutive one makes it step down.
+            let mut f = Failover::new(rank(0), T, 0);
+            let s = f.poll(40_000).start_syncing.unwrap();
+            let sync = Sync::new(s.cycle, 0, s.epoch);
+            let mut t = 40_000;
+            for _ in 0..3 {
+                for _ in 0..MAX_SYNC_LOSS {
+                    t += 10_000;
+                    assert!(f.on_sync_sent(t, &sync, false).is_empty());
+                }
+                t += 10_000;
+                assert!(f.on_sync_sent(t, &sync, true).is_empty());
+                assert_eq!(f.role(), Role::Master);
+            }
+            for _ in 0..MAX_SYNC_LOSS {
+                t += 10_000;
+                assert!(f.on_sync_sent(t, &sync, false).is_empty());
+            }
+            assert!(f.on_sync_sent(t + 10_000, &sync, false).stop_syncing);
+            assert_eq!(f.role(), Role::Slave);
+        }
+
         fn adjacent_ranks_with_worst_case_losses_never_both_master() {
             // The master syncs every T up to cycle 9 (at 90 000) and dies. A (rank 0) hears
             // every sync; B (rank 1) misses the last L of them and the first L of A's.

@@ -25,6 +25,8 @@ pub mod laxity;
 pub mod schedule;
 pub mod srt;
 pub mod transfer_crc;
+pub mod time_counter;
+pub mod wire_bits;
 
 pub use controller::{CanController, Micros, TxMode, TxOutcome, TxResult};
 pub use cycle::{CycleConfig, SlotClock, Sync};
@@ -51,5 +53,7 @@ pub mod selftest {
         crate::schedule::tests::SUITE,
         crate::failover::tests::SUITE,
         crate::filter_banks::tests::SUITE,
+        crate::wire_bits::tests::SUITE,
+        crate::time_counter::tests::SUITE,
     ];
 }

@@ -13,9 +13,10 @@
 //! board, e.g. per test); two boards must never share a topic static, or they would see each
 //! other's publications without the bus.
 //!
-//! Frames reach a node stamped with their start of frame (µs), as bxCAN's time-triggered mode
-//! stamps them ([`SimPort`]): the vbus stamps the end of EOF, and the slot clock wants the
-//! sync's start of frame.
+//! Frames reach a node as a bxCAN in time-triggered mode delivers them ([`SimPort`]): a 16-bit
+//! bit-time counter captured at the start of frame and a receive-interrupt stamp with a
+//! modelled latency; the firmware's own code (`rtcan::time_counter`) turns them into the start
+//! of frame the slot clock wants.
 
 pub mod boards;
 pub mod bridge;
@@ -30,10 +31,8 @@ use std::time::Duration;
 use r2p_canlink::candump::LogWriter;
 use r2p_canlink::{CanFrame, Stamped};
 use r2p_node::Node;
-use r2p_vbus::bits::{FrameBits, INTERMISSION_BITS};
-use r2p_vbus::{Bus, Config, Port};
-use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError};
-use rtcan::{CanController, Frame, Micros};
+use r2p_vbus::{Bus, Config};
+use rtcan::{CanController, Micros};
 
 /// Nanoseconds per microsecond.
 const NS_PER_US: u64 = 1_000;
@@ -92,54 +91,10 @@ pub enum Mode {
 /// the board's node (before the node's own tick at that time).
 pub type App<'a, N> = Box<dyn FnMut(Micros, &mut N) + 'a>;
 
-/// A port of the vbus as a board's controller sees it: every received frame is stamped with
-/// its start of frame (µs) instead of the end of its EOF.
-pub struct SimPort {
-    port: Port,
-    bit_ns: u64,
-}
-
-impl SimPort {
-    /// Wraps `port` of a bus running at `bit_rate` bit/s.
-    pub fn new(port: Port, bit_rate: u32) -> Self {
-        Self { port, bit_ns: 1_000_000_000 / u64::from(bit_rate) }
-    }
-
-    /// The wrapped port.
-    pub fn port(&self) -> &Port {
-        &self.port
-    }
-}
-
-impl CanController for SimPort {
-    fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
-        self.port.try_transmit(frame)
-    }
-    fn set_tx_mode(&mut self, mode: rtcan::TxMode) {
-        self.port.set_tx_mode(mode);
-    }
-    fn take_tx_result(&mut self) -> Option<rtcan::TxResult> {
-        self.port.take_tx_result()
-    }
-    fn try_receive(&mut self) -> Option<Received> {
-        let mut r = self.port.try_receive()?;
-        let bits = FrameBits::of(&r.frame).total() - INTERMISSION_BITS;
-        r.at = r.at.saturating_sub(u64::from(bits) * self.bit_ns / NS_PER_US);
-        Some(r)
-    }
-    fn set_filters(&mut self, filters: &[Filter]) {
-        self.port.set_filters(filters);
-    }
-    fn abort_pending(&mut self) -> usize {
-        self.port.abort_pending()
-    }
-    fn bus_state(&self) -> BusState {
-        self.port.bus_state()
-    }
-    fn error_counters(&self) -> ErrorCounters {
-        self.port.error_counters()
-    }
-}
+/// A port of the vbus as a board's controller sees it: a bxCAN in time-triggered mode and its
+/// driver ([`r2p_vbus::BxCanPort`]). Received frames carry the start of frame the firmware
+/// computes from the controller's counter capture and its receive-interrupt stamp.
+pub type SimPort = r2p_vbus::BxCanPort;
 
 /// One emulated board.
 struct Board<'a, N> {

@@ -10,7 +10,10 @@ use r2p_emu::{Mode, Sim};
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use r2p_node::{HrtState, ImportState, NoParams, RemotePublisher, RemoteSubscriber};
 use r2p_vbus::{Config, EventKind, FaultAction, FaultRule};
+use rtcan::controller::BusState;
+use rtcan::cycle::MAX_SYNC_LOSS;
 use rtcan::failover::{Role, RANK_STEP_CYCLES, TAKEOVER_BASE_CYCLES};
+use rtcan::CanController;
 use rtcan::{Frame, Laxity, Micros, Sync};
 
 const CYCLE_NS: u64 = 10_000_000;
@@ -349,4 +352,77 @@ fn a_rebooted_board_rejoins_and_resubscribes() {
     let got = sim.node(2).stats().published - published;
     assert!((29..=31).contains(&got), "{got} messages in 200 ms");
     assert!(sim.node(2).peer_count() >= 2, "B sees the other boards again");
+}
+
+/// Syncs on the bus from `from_ns` on: (start of frame ns, sender port).
+fn syncs_from(sim: &Sim<'static, EmuNode>, from_ns: u64) -> Vec<(u64, usize)> {
+    syncs(sim).into_iter().filter(|s| s.0 >= from_ns).collect()
+}
+
+#[test]
+fn a_master_cut_off_the_bus_steps_down_and_the_standby_takes_over() {
+    // M alone on its own segment: nobody acknowledges its frames, every sync ends in an error
+    // frame (error-passive, not bus-off: ISO 11898-1's no-ACK exception). The controller tells
+    // it so; after L + 1 failed syncs in a row it steps down, and B (rank 1) takes over.
+    let (mut sim, _, _, _) = rig!(5);
+    sim.run_until(500 * MS);
+    assert_eq!(sim.node(0).role(), Role::Master);
+    let sent_before = sim.node(0).stats().syncs_sent;
+    assert!(sent_before > 40, "{sent_before} syncs before the cut");
+
+    sim.run_until(503 * MS + SLOT_NS / 2);
+    let last_sync = syncs(&sim).last().unwrap().0;
+    sim.bus().set_segment(0, 1);
+    // Steps down after its (L + 1)-th failed sync, in the cycle after it (its result is taken
+    // at the next slot tick).
+    let down_by = last_sync + u64::from(MAX_SYNC_LOSS + 2) * CYCLE_NS;
+    assert!(sim.run_while(SLOT_NS, down_by, |s| s.node(0).role() != Role::Master));
+    assert!(sim.now_ns() > last_sync + u64::from(MAX_SYNC_LOSS) * CYCLE_NS, "not before L + 1");
+    assert_eq!(sim.node(0).stats().syncs_sent, sent_before + 1, "failed syncs are not counted");
+    assert_eq!(sim.bus().port(0).bus_state(), BusState::ErrorPassive);
+
+    let bound = u64::from(TAKEOVER_BASE_CYCLES + RANK_STEP_CYCLES) * CYCLE_NS;
+    assert!(
+        sim.run_while(SLOT_NS, last_sync + bound + SLOT_NS, |s| s.node(2).role() == Role::Master)
+    );
+    assert_eq!(sim.node(1).role(), Role::Slave);
+    // Cut off, M keeps trying (rank 0 takes over first on its lonely segment) and stepping
+    // down; none of its syncs went out, and the bus carries B's cycle only.
+    let b_start = sim.now_ns();
+    sim.run_for(200 * MS);
+    assert_eq!(sim.node(0).stats().syncs_sent, sent_before + 1);
+    assert_ne!(sim.bus().port(0).bus_state(), BusState::BusOff);
+    let on_bus = syncs_from(&sim, b_start);
+    assert!(on_bus.len() >= 19 && on_bus.iter().all(|s| s.1 == 2), "{on_bus:?}");
+}
+
+#[test]
+fn a_cut_off_master_comes_back_while_the_standby_is_master() {
+    let (mut sim, _, _, _) = rig!(6);
+    sim.run_until(500 * MS);
+    sim.bus().set_segment(0, 1);
+    sim.run_until(700 * MS);
+    assert_eq!(sim.node(2).role(), Role::Master);
+    assert_ne!(sim.node(0).stats().syncs_sent, 0);
+
+    // M rejoins: it may be syncing on its own at that instant. Whoever hears another master's
+    // sync steps down; the ranks order the takeover; one master remains.
+    sim.bus().heal();
+    let healed = sim.now_ns();
+    sim.run_for(500 * MS);
+    let masters: Vec<_> = (0..3).filter(|&i| sim.node(i).role() == Role::Master).collect();
+    assert_eq!(masters.len(), 1, "one master: {masters:?}");
+    let master_port = sim.port_of(masters[0]);
+    // The last 300 ms: one sender, one sync per cycle, on one grid.
+    let tail = syncs_from(&sim, healed + 200 * MS);
+    assert!(tail.iter().all(|s| s.1 == master_port), "{tail:?}");
+    assert_eq!(tail.len(), 30);
+    for w in tail.windows(2) {
+        assert!((w[1].0 - w[0].0).abs_diff(CYCLE_NS) <= SLOT_NS, "sync period {}", w[1].0 - w[0].0);
+    }
+    // Never two masters' syncs in one cycle after the merge settled, and HRT is back in its
+    // slot, on the surviving master's calendar.
+    let phase = granted(&sim);
+    assert!(check_hrt_slots(&sim, healed + 300 * MS, phase.slot, 0) >= 9);
+    assert!((0..3).all(|i| sim.node(i).role() != Role::Candidate));
 }

@@ -851,6 +851,11 @@ impl Port {
         lock(&self.inner).nodes[self.index].mailboxes.iter().flatten().count()
     }
 
+    /// The bus's virtual time, ns (what this board's clock reads).
+    pub fn now_ns(&self) -> u64 {
+        lock(&self.inner).now
+    }
+
     /// Frames waiting in the receive FIFO.
     pub fn rx_len(&self) -> usize {
         lock(&self.inner).nodes[self.index].fifo.len()

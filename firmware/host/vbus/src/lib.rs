@@ -33,9 +33,11 @@
 
 pub mod bits;
 mod bus;
+pub mod bxcan;
 mod rng;
 
 pub use bits::FrameBits;
+pub use bxcan::BxCanPort;
 pub use bus::{
     Bus, Config, ErrorCause, Event, EventKind, FaultAction, FaultRule, Port, TxOrder, MAILBOXES,
 };

@@ -14,9 +14,8 @@ use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use r2p_node::{
     FreeSlots, HrtState, ImportState, NoParams, Node, NodeConfig, RemotePublisher, RemoteSubscriber,
 };
-use r2p_vbus::bits::{FrameBits, INTERMISSION_BITS};
-use r2p_vbus::{Bus, Config, EventKind, Port};
-use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxResult};
+use r2p_vbus::bits::INTERMISSION_BITS;
+use r2p_vbus::{Bus, BxCanPort, Config, EventKind};
 use rtcan::{CanController, CycleConfig, Frame, Laxity, LaxityEncoding, Micros, Sync};
 
 /// 4 ms cycles of 16 slots of 250 µs (250 bit times at 1 Mbit/s).
@@ -32,51 +31,17 @@ const SLOT_US: Micros = CYCLE_US / CYCLE.slots as Micros;
 const SRT_DEADLINE_US: u32 = 6_000;
 const LAXITY: LaxityEncoding = LaxityEncoding::Linear { tick_us: 100 };
 
-/// A port of the virtual bus as bxCAN's time-triggered mode stamps received frames: at their
-/// start of frame (the vbus stamps the end of EOF), as the slot clock wants syncs.
-struct SofPort(Port);
-
-impl CanController for SofPort {
-    fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
-        self.0.try_transmit(frame)
-    }
-    fn set_tx_mode(&mut self, mode: TxMode) {
-        self.0.set_tx_mode(mode);
-    }
-    fn take_tx_result(&mut self) -> Option<TxResult> {
-        self.0.take_tx_result()
-    }
-    fn try_receive(&mut self) -> Option<Received> {
-        let mut r = self.0.try_receive()?;
-        // 1 Mbit/s: one bit per µs.
-        r.at -= Micros::from(FrameBits::of(&r.frame).total() - INTERMISSION_BITS);
-        Some(r)
-    }
-    fn set_filters(&mut self, filters: &[Filter]) {
-        self.0.set_filters(filters);
-    }
-    fn abort_pending(&mut self) -> usize {
-        self.0.abort_pending()
-    }
-    fn bus_state(&self) -> BusState {
-        self.0.bus_state()
-    }
-    fn error_counters(&self) -> ErrorCounters {
-        self.0.error_counters()
-    }
-}
-
 /// The bus and each node's port and next wake-up (ns).
 struct Rig {
     bus: Bus,
-    ports: Vec<SofPort>,
+    ports: Vec<BxCanPort>,
     wake: Vec<u64>,
 }
 
 impl Rig {
     fn new(nodes: usize, ports: usize) -> Self {
         let bus = Bus::new(ports, Config::default());
-        let ports = (0..nodes).map(|i| SofPort(bus.port(i))).collect();
+        let ports = (0..nodes).map(|i| BxCanPort::new(bus.port(i), CYCLE.bit_rate)).collect();
         Self { bus, ports, wake: std::vec![0; nodes] }
     }
 

@@ -18,8 +18,8 @@ use rtcan_bxcan::BxCan;
 mod footprint_core;
 
 bind_interrupts!(struct Irqs {
-    USB_LP_CAN1_RX0 => Rx0InterruptHandler<CAN>;
-    CAN1_RX1 => Rx1InterruptHandler<CAN>;
+    USB_LP_CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN>;
+    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN>;
     CAN1_SCE => SceInterruptHandler<CAN>;
     USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
 });
@@ -46,6 +46,6 @@ async fn main(spawner: Spawner) {
     let mut can = Can::new(p.CAN, p.PA11, p.PA12, Irqs);
     can.modify_config().set_bitrate(1_000_000);
     can.enable().await;
-    let can = BxCan::new(can, pac::CAN);
+    let can = BxCan::new(can, pac::CAN, 1_000_000);
     footprint_core::run(spawner, can, embassy_stm32::uid::uid());
 }

@@ -32,8 +32,8 @@ mod board {
 use module_core::{drive, ModuleNode};
 
 bind_interrupts!(struct Irqs {
-    USB_LP_CAN1_RX0 => Rx0InterruptHandler<CAN>;
-    CAN1_RX1 => Rx1InterruptHandler<CAN>;
+    USB_LP_CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN>;
+    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN>;
     CAN1_SCE => SceInterruptHandler<CAN>;
     USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
 });
@@ -128,7 +128,7 @@ async fn main(spawner: Spawner) {
     let config = r2p_app_imu::node_config(embassy_stm32::uid::uid(), &PARAMS);
     let mut node = ModuleNode::new(config, &PARAMS).unwrap();
     app.register(&mut node).unwrap();
-    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN));
+    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN, 1_000_000));
 
     spawner.spawn(run(app, Io { imu, initialised, leds }, flash)).unwrap();
 }

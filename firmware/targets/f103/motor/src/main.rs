@@ -44,8 +44,8 @@ use bridge::Bridge;
 use sensors::Sensors;
 
 bind_interrupts!(struct Irqs {
-    USB_LP_CAN1_RX0 => Rx0InterruptHandler<CAN>;
-    CAN1_RX1 => Rx1InterruptHandler<CAN>;
+    USB_LP_CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN>;
+    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN>;
     CAN1_SCE => SceInterruptHandler<CAN>;
     USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
     ADC1_2 => adc::InterruptHandler<ADC1>;
@@ -139,7 +139,7 @@ async fn main(_spawner: Spawner) {
     let config = NodeConfig::new(embassy_stm32::uid::uid(), names.node);
     let mut node = ModuleNode::new(config, &PARAMS).expect("valid node configuration");
     ep.register(&mut node).expect("room for the motor's topics on its node");
-    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN));
+    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN, 1_000_000));
 
     interrupt::USART2.set_priority(CONTROL_PRIORITY);
     CONTROL_EXECUTOR.start(interrupt::USART2).spawn(control(ep, sensors, bridge, leds)).unwrap();

@@ -17,8 +17,8 @@ use rtcan_bxcan::BxCan;
 mod footprint_core;
 
 bind_interrupts!(struct Irqs {
-    CAN1_RX0 => Rx0InterruptHandler<CAN1>;
-    CAN1_RX1 => Rx1InterruptHandler<CAN1>;
+    CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN1>;
+    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN1>;
     CAN1_SCE => SceInterruptHandler<CAN1>;
     CAN1_TX => TxInterruptHandler<CAN1>;
 });
@@ -48,6 +48,6 @@ async fn main(spawner: Spawner) {
     let mut can = Can::new(p.CAN1, p.PB8, p.PB9, Irqs);
     can.modify_config().set_bitrate(1_000_000);
     can.enable().await;
-    let can = BxCan::new(can, pac::CAN1);
+    let can = BxCan::new(can, pac::CAN1, 1_000_000);
     footprint_core::run(spawner, can, embassy_stm32::uid::uid());
 }

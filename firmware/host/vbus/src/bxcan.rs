@@ -1,0 +1,104 @@
+//! A port as an STM32 bxCAN in time-triggered mode hands received frames to its driver, and
+//! the driver's start-of-frame correction on top ([`BxCanPort`]).
+//!
+//! The hardware half is a model: the bus knows each frame's start of frame; bxCAN captures its
+//! 16-bit bit-time counter there (`CAN_RDTxR.TIME`), the counter having started at an
+//! arbitrary phase; the receive interrupt stamps the node's clock when the frame becomes valid
+//! (one bit before the end of EOF) plus an interrupt latency drawn per frame: none for three
+//! frames in four, 1 … [`MAX_RX_LATENCY_US`] µs for the others. The driver half is firmware: [`rtcan::time_counter::TimeCounter`], the
+//! same code `rtcan-bxcan` runs on the modules, turns the capture into the node's µs. Nothing
+//! here subtracts a frame's length from a timestamp on the firmware's behalf.
+
+use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxResult};
+use rtcan::time_counter::{TimeCounter, TIME_COUNTER_MODULUS};
+use rtcan::{CanController, Frame, Micros};
+
+use crate::bits::FrameBits;
+use crate::Port;
+
+/// Longest receive-interrupt latency the model draws, µs: the message-pending interrupt
+/// waiting behind the slot timer's (higher-priority) handler and a critical section.
+pub const MAX_RX_LATENCY_US: u64 = 5;
+
+/// A vbus port seen through a bxCAN in time-triggered mode and its driver: received frames
+/// carry their start of frame in the node's µs, computed by the firmware from the counter.
+pub struct BxCanPort {
+    port: Port,
+    bit_ns: u64,
+    /// The counter's value at bus time 0 (it runs from the controller's start, at a phase
+    /// unrelated to the node's clock).
+    phase: u64,
+    counter: TimeCounter,
+}
+
+impl BxCanPort {
+    /// Wraps `port` of a bus running at `bit_rate` bit/s.
+    ///
+    /// # Panics
+    /// If a bit time at `bit_rate` is not a whole number of µs (the firmware's counter
+    /// extension supports those only).
+    pub fn new(port: Port, bit_rate: u32) -> Self {
+        let phase =
+            (port.index() as u64).wrapping_mul(40_503).wrapping_add(1_234) % TIME_COUNTER_MODULUS;
+        let counter = TimeCounter::new(bit_rate).expect("a bit rate with a whole-µs bit time");
+        Self { port, bit_ns: 1_000_000_000 / u64::from(bit_rate), phase, counter }
+    }
+
+    /// The wrapped port.
+    pub fn port(&self) -> &Port {
+        &self.port
+    }
+
+    /// The driver's relation of the counter to the node's clock.
+    pub fn time_counter(&self) -> &TimeCounter {
+        &self.counter
+    }
+
+    /// What the hardware hands the driver for the oldest received frame: the frame, the
+    /// counter captured at its start of frame and the node's time (µs) the receive interrupt
+    /// stamped, never after `now_us` (the interrupt ran before the frame is read).
+    pub fn receive_captured(&mut self, now_us: Micros) -> Option<(Frame, u16, Micros)> {
+        let r = self.port.try_receive()?;
+        let end_ns = r.at * 1_000;
+        let bits = FrameBits::of(&r.frame).to_eof_end();
+        let sof_ns = end_ns - u64::from(bits) * self.bit_ns;
+        let capture = ((sof_ns / self.bit_ns + self.phase) % TIME_COUNTER_MODULUS) as u16;
+        let valid_us = (end_ns - self.bit_ns) / 1_000;
+        let h = (r.at ^ (self.port.index() as u64) << 48).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        // Mostly prompt (the core idle or in a task); one frame in four waits 1 … max µs
+        // behind a higher-priority handler.
+        let latency = if h >> 62 == 0 { 1 + (h >> 40) % MAX_RX_LATENCY_US } else { 0 };
+        Some((r.frame, capture, (valid_us + latency).min(now_us)))
+    }
+}
+
+impl CanController for BxCanPort {
+    fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
+        self.port.try_transmit(frame)
+    }
+    fn set_tx_mode(&mut self, mode: TxMode) {
+        self.port.set_tx_mode(mode);
+    }
+    fn take_tx_result(&mut self) -> Option<TxResult> {
+        self.port.take_tx_result()
+    }
+    /// The firmware's path: the counter capture extended to the node's µs.
+    fn try_receive(&mut self) -> Option<Received> {
+        let now = self.port.now_ns() / 1_000;
+        let (frame, capture, stamped) = self.receive_captured(now)?;
+        let at = self.counter.stamp_received(&frame, capture, stamped, now);
+        Some(Received { frame, at })
+    }
+    fn set_filters(&mut self, filters: &[Filter]) {
+        self.port.set_filters(filters);
+    }
+    fn abort_pending(&mut self) -> usize {
+        self.port.abort_pending()
+    }
+    fn bus_state(&self) -> BusState {
+        self.port.bus_state()
+    }
+    fn error_counters(&self) -> ErrorCounters {
+        self.port.error_counters()
+    }
+}

@@ -1,0 +1,167 @@
+//! Cortex-M3 benchmark under QEMU (run by `scripts/bench`): instructions from the slot timer's
+//! call of `Node::slot_tick` to the HRT frame's mailbox request (`try_transmit`), the path a
+//! slot timer's compare interrupt runs before the frame can start, and of the whole call.
+//!
+//! A master and a module with an HRT stream every cycle on the suite's loopback bus; the
+//! module also receives the master's frames and the stream's subscriber, so its receive queue
+//! is not empty at its slot boundaries. Instructions are counted with SysTick under `-icount`,
+//! calibrated on 10 000 `nop`s as in `bench`.
+#![no_std]
+#![no_main]
+
+use core::cell::Cell;
+use core::fmt::Write;
+
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m::peripheral::SYST;
+use cortex_m_semihosting::{debug, hio};
+use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
+use r2p_node::testbus::{run_slots, uid, Bus, TestNode};
+use r2p_node::{HrtState, NoParams, NodeConfig, RemotePublisher, RemoteSubscriber};
+use r2p_qemu_tests as _;
+use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxResult};
+use rtcan::{CanController, CycleConfig, Frame, Laxity, Micros};
+
+const RELOAD: u32 = 0x00FF_FFFF;
+const CYCLE: CycleConfig = CycleConfig { bit_rate: 1_000_000, cycle_us: 4_000, slots: 16 };
+
+fn now_ticks() -> u32 {
+    SYST::get_current()
+}
+
+#[inline(never)]
+fn ten_thousand_nops() {
+    // SAFETY: only `nop`s.
+    unsafe {
+        core::arch::asm!(".rept 10000", "nop", ".endr", options(nomem, nostack, preserves_flags));
+    }
+}
+
+/// A controller that notes the SysTick value when an HRT frame is requested.
+struct Timed<C> {
+    inner: C,
+    hrt_at: Cell<Option<u32>>,
+}
+
+impl<C: CanController> CanController for Timed<C> {
+    fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
+        if frame.id().laxity == Laxity::HRT && frame.id().message.0 >= 0x100 {
+            self.hrt_at.set(Some(now_ticks()));
+        }
+        self.inner.try_transmit(frame)
+    }
+    fn set_tx_mode(&mut self, mode: TxMode) {
+        self.inner.set_tx_mode(mode)
+    }
+    fn take_tx_result(&mut self) -> Option<TxResult> {
+        self.inner.take_tx_result()
+    }
+    fn try_receive(&mut self) -> Option<Received> {
+        self.inner.try_receive()
+    }
+    fn set_filters(&mut self, filters: &[Filter]) {
+        self.inner.set_filters(filters)
+    }
+    fn abort_pending(&mut self) -> usize {
+        self.inner.abort_pending()
+    }
+    fn bus_state(&self) -> BusState {
+        self.inner.bus_state()
+    }
+    fn error_counters(&self) -> ErrorCounters {
+        self.inner.error_counters()
+    }
+}
+
+fn config(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
+    NodeConfig {
+        heartbeat_period_us: 20_000,
+        request_timeout_us: 30_000,
+        cycle: CYCLE,
+        rank,
+        hrt_slots: 2,
+        ..NodeConfig::new(uid(n), name)
+    }
+}
+
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    let mut p = cortex_m::Peripherals::take().unwrap();
+    p.SYST.set_clock_source(SystClkSource::Core);
+    p.SYST.set_reload(RELOAD);
+    p.SYST.clear_current();
+    p.SYST.enable_counter();
+    let mut out = hio::hstdout().unwrap();
+    let t0 = now_ticks();
+    (0..10).for_each(|_| ten_thousand_nops());
+    let nops = t0.wrapping_sub(now_ticks()) & RELOAD;
+    let insn_per_tick = 100_000.0f64 / nops as f64;
+
+    static A_T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("setpoint", 0);
+    static A_PUB: Publisher<'static, u32> =
+        Publisher::new(&A_T, Class::SyncRealTime { period_us: 4_000 });
+    static A_OUT: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&A_PUB);
+    static M_T: Topic<'static, u32, { pool_size(&[4], 1) }, 1> = Topic::new("setpoint", 0);
+    static M_PUB: Publisher<'static, u32> = Publisher::new(&M_T, Class::NonRealTime);
+    static M_IN: RemotePublisher<'static, u32> = RemotePublisher::new(&M_PUB, &M_T);
+    static M_SUB: Subscriber<'static, u32, 4> = Subscriber::new();
+    A_T.advertise(&A_PUB).unwrap();
+    A_T.subscribe(&A_OUT).unwrap();
+    M_T.advertise(&M_PUB).unwrap();
+    M_T.subscribe(&M_SUB).unwrap();
+
+    let bus = Bus::<2>::slotted(CYCLE);
+    let mut m = TestNode::new(config(1, "psu", Some(0)), &NoParams).unwrap();
+    let mut a = TestNode::new(config(2, "motor", None), &NoParams).unwrap();
+    a.export(&A_OUT).unwrap();
+    m.import(&M_IN).unwrap();
+    run_slots(&bus, &mut [&mut m, &mut a], 150_000);
+    if !matches!(a.hrt_state(0), Some(HrtState::Granted { .. })) {
+        let _ = writeln!(out, "slot-path: the HRT stream was not granted");
+        debug::exit(debug::EXIT_FAILURE);
+    }
+
+    // 400 cycles: A publishes every cycle; time A's slot ticks.
+    let step = Micros::from(CYCLE.slot_us());
+    let (mut to_request_max, mut to_request_min, mut whole_max, mut requests) =
+        (0u32, u32::MAX, 0u32, 0u32);
+    let end = bus.now.get() + 400 * Micros::from(CYCLE.cycle_us);
+    while bus.now.get() < end {
+        let now = bus.now.get();
+        if now % Micros::from(CYCLE.cycle_us) == 0 {
+            let _ = A_PUB.publish_with(|v| *v = now as u32);
+        }
+        m.slot_tick(now, &mut bus.port(0));
+        let mut can = Timed { inner: bus.port(1), hrt_at: Cell::new(None) };
+        let start = now_ticks();
+        a.slot_tick(now, &mut can);
+        let stop = now_ticks();
+        whole_max = whole_max.max(start.wrapping_sub(stop) & RELOAD);
+        if let Some(at) = can.hrt_at.get() {
+            let t = start.wrapping_sub(at) & RELOAD;
+            to_request_max = to_request_max.max(t);
+            to_request_min = to_request_min.min(t);
+            requests += 1;
+        }
+        while M_SUB.try_recv().is_some() {}
+        bus.arbitrate();
+        bus.now.set(now + step);
+    }
+    if requests < 390 {
+        let _ = writeln!(out, "slot-path: only {requests} HRT requests in 400 cycles");
+        debug::exit(debug::EXIT_FAILURE);
+    }
+    let insn = |t: u32| (t as f64 * insn_per_tick) as u32;
+    let _ = writeln!(
+        out,
+        "{{\"bench\":\"cortex_m3_slot_path\",\"hrt_requests\":{},\"to_request_min_insn\":{},\"to_request_max_insn\":{},\"slot_tick_max_insn\":{}}}",
+        requests,
+        insn(to_request_min),
+        insn(to_request_max),
+        insn(whole_max)
+    );
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
