@@ -24,8 +24,8 @@ pub mod id;
 pub mod laxity;
 pub mod schedule;
 pub mod srt;
-pub mod transfer_crc;
 pub mod time_counter;
+pub mod transfer_crc;
 pub mod wire_bits;
 
 pub use controller::{CanController, Micros, TxMode, TxOutcome, TxResult};

@@ -37,10 +37,10 @@ pub mod bxcan;
 mod rng;
 
 pub use bits::FrameBits;
-pub use bxcan::BxCanPort;
 pub use bus::{
     Bus, Config, ErrorCause, Event, EventKind, FaultAction, FaultRule, Port, TxOrder, MAILBOXES,
 };
+pub use bxcan::BxCanPort;
 
 #[cfg(test)]
 mod tests {

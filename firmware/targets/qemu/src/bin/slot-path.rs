@@ -128,7 +128,7 @@ fn main() -> ! {
     let end = bus.now.get() + 400 * Micros::from(CYCLE.cycle_us);
     while bus.now.get() < end {
         let now = bus.now.get();
-        if now % Micros::from(CYCLE.cycle_us) == 0 {
+        if now.is_multiple_of(Micros::from(CYCLE.cycle_us)) {
             let _ = A_PUB.publish_with(|v| *v = now as u32);
         }
         m.slot_tick(now, &mut bus.port(0));
