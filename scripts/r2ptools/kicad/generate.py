@@ -117,7 +117,15 @@ def main(argv: list[str] | None = None) -> int:
     modules = build_all()
     by_name = {m.name: m for m in modules}
     for n in names:
-        t = generate(by_name[n], modules, args.out, force_route=args.route)
+        try:
+            t = generate(by_name[n], modules, args.out, force_route=args.route)
+        except route.RoutingError as e:          # the message says what to do
+            print(f"hwgen: {n}: {e}", file=sys.stderr)
+            return 1
+        except OSError as e:
+            print(f"hwgen: {n}: cannot write {e.filename or args.out}: {e.strerror}; pass a "
+                  "writable folder with --out", file=sys.stderr)
+            return 1
         print(f"hwgen: {n}: " + ", ".join(f"{k} {v:.1f} s" for k, v in t.items()))
     return 0
 
