@@ -104,6 +104,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"hwgen: unknown module(s) {', '.join(unknown)}; known: {', '.join(MODULES)}",
               file=sys.stderr)
         return 2
+    try:                                     # before minutes of building: is --out usable?
+        args.out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        print(f"hwgen: cannot write {e.filename or args.out}: {e.strerror}; pass a writable "
+              "folder with --out", file=sys.stderr)
+        return 1
     if len(names) > 1:
         # one fresh process per module: pcbnew's footprint-library cache draws on the seeded
         # UUID generator, so a module built after another in the same process would get other
