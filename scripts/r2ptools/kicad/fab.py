@@ -194,7 +194,11 @@ def main(argv: list[str] | None = None) -> int:
                   f"{args.hardware}: {', '.join(have) or 'none'}", file=sys.stderr)
             return 2
         dest = (args.out or args.hardware) / n / "fab"
-        files = package(src, dest)
+        try:
+            files = package(src, dest)
+        except RuntimeError as e:            # a missing tool or model package: the message says what to do
+            print(f"fab: {n}: {e}", file=sys.stderr)
+            return 2
         print(f"fab: {n}: {len(files)} files in {dest}")
     return 0
 
