@@ -155,3 +155,11 @@ def estimate(lines: list[Line], joints: dict[str, Joints], fees: Fees, boards: i
     parts = sum((l.unit_price * len(l.refs) for l in lines), Decimal(0)) * n
     return Estimate(boards, kind, parts, setup, stencil, fees.any["extended_part_loading"] * extended,
                     smt, tht_cost, extended, smd, tht)
+
+
+if __name__ == "__main__":
+    import sys
+    print("r2ptools.assembly_cost is the library behind bom/README.md's assembled-cost table; "
+          "regenerate the table with: scripts/bom generate  (check it with: scripts/bom check)",
+          file=sys.stderr)
+    sys.exit(2)

@@ -51,7 +51,6 @@ C1210 = "Capacitor_SMD:C_1210_3225Metric"
 _ITEMS = [
     # key, symbol, footprint, value, MPN
     # --- resistors, 0603 1 % thick film (UNI-ROYAL 0603WAF), JLCPCB basic parts
-    ("R_120", R, R0603, "120", "0603WAF1200T5E"),
     ("R_1k", R, R0603, "1k", "0603WAF1001T5E"),
     ("R_10k", R, R0603, "10k", "0603WAF1002T5E"),
     ("R_47k", R, R0603, "47k", "0603WAF4702T5E"),
@@ -65,7 +64,6 @@ _ITEMS = [
     ("R_174k", R, R0603, "174k", "0603WAF1743T5E"),
     ("R_60R4", R, R0805, "60.4", "0805W8F604JT5E"),        # split CAN termination, 0.125 W
     # --- capacitors
-    ("C_22p", C, C0603, "22pF C0G", "0603CG220J500NT"),
     ("C_30p", C, C0603, "30pF C0G", "0603CG300J500NT"),
     ("C_4n7", C, C0603, "4.7nF", "0603B472K500NT"),
     ("C_10n", C, C0603, "10nF", "0603B103K500NT"),
@@ -97,8 +95,6 @@ _ITEMS = [
      "Connector_PinHeader_1.27mm:PinHeader_2x05_P1.27mm_Vertical_SMD", "SWD", "FTSH-105-01-L-DV-K"),
     ("SW_TACT", "Switch:SW_Push", "Button_Switch_SMD:SW_Push_1P1T_XKB_TS-1187A",
      "TS-1187A", "TS-1187A-B-A-B"),
-    ("SW_SLIDE", "Switch:SW_SPDT", "Button_Switch_SMD:SW_SPDT_Shouhan_MSK12C02",
-     "MSK12C02", "MSK12C02"),
     ("SW_DIP_2", "Switch:SW_DIP_x02",
      "Button_Switch_SMD:SW_DIP_SPSTx02_Slide_KingTek_DSHP02TS_W7.62mm_P1.27mm", "DSHP02TS",
      "DSHP02TSGER"),
@@ -134,8 +130,6 @@ _ITEMS = [
      "R2P:JST_PH_S3B-PH-K_1x03_P2.00mm_Horizontal", "PH 3p", "S3B-PH-K-S(LF)(SN)"),
     ("SRV05-4", "Power_Protection:SRV05-4", "Package_TO_SOT_SMD:SOT-23-6", "SRV05-4",
      "SRV05-4-P-T7"),
-    ("TPS2065C", "Power_Management:TPS2065CDBV", "Package_TO_SOT_SMD:SOT-23-5", "TPS2065C",
-     "TPS2065CDBVR"),
     # KiCad has no TPS2553 symbol; ROHM's BD2222G is pin for pin the same SOT-23-6 switch
     # (1 IN, 2 GND, 3 EN active high, 4 open-drain fault, 5 ILIM, 6 OUT)
     ("TPS2553", "Power_Management:BD2222G", "Package_TO_SOT_SMD:SOT-23-6", "TPS2553",

@@ -9,6 +9,7 @@ missing or disagrees with bom/parts.csv.
 """
 from __future__ import annotations
 
+import argparse
 import json
 import subprocess
 import sys
@@ -160,11 +161,28 @@ def check(folder: Path) -> Report:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = argv if argv is not None else sys.argv[1:]
-    folders = [Path(a) for a in args] or boards()
+    ap = argparse.ArgumentParser(prog="scripts/py -m r2ptools.kicad.check",
+                                 description=__doc__.split("\n")[0])
+    ap.add_argument("boards", nargs="*", type=Path, metavar="BOARD_DIR",
+                    help="board folders, each holding <name>.kicad_sch and <name>.kicad_pcb "
+                         "(default: every hardware/*/ with a .kicad_pro)")
+    args = ap.parse_args(argv)
+    folders = args.boards or boards()
+    for f in folders:
+        missing = [p.name for p in (f / f"{f.name}.kicad_sch", f / f"{f.name}.kicad_pcb")
+                   if not p.is_file()]
+        if missing:
+            print(f"check: {f} is not a board folder: no {' or '.join(missing)} in it; pass a "
+                  f"folder such as hardware/psu (boards: {', '.join(b.name for b in boards())})",
+                  file=sys.stderr)
+            return 2
     bad = 0
     for f in folders:
-        r = check(f)
+        try:
+            r = check(f)
+        except RuntimeError as e:      # kicad-cli could not load a file: its own message says why
+            print(f"check: {f}: {e}", file=sys.stderr)
+            return 2
         for p in r.problems:
             print(p)
         print(f"{f.name}: {'OK' if r.ok else 'FAILED'} ({len(r.problems)} problems, "

@@ -187,10 +187,18 @@ def main(argv: list[str] | None = None) -> int:
     for n in names:
         src = args.hardware / n
         if not (src / f"{n}.kicad_pcb").exists():
-            print(f"fab: no board {src / (n + '.kicad_pcb')}", file=sys.stderr)
+            have = [b for b in FAB_BOARDS if (args.hardware / b / f"{b}.kicad_pcb").exists()]
+            how = (f"generate it with scripts/hwgen {n}" if n in FAB_BOARDS
+                   else f"{n} is not one of the boards ({', '.join(FAB_BOARDS)})")
+            print(f"fab: no board {src / (n + '.kicad_pcb')}: {how}; boards present in "
+                  f"{args.hardware}: {', '.join(have) or 'none'}", file=sys.stderr)
             return 2
         dest = (args.out or args.hardware) / n / "fab"
-        files = package(src, dest)
+        try:
+            files = package(src, dest)
+        except RuntimeError as e:            # a missing tool or model package: the message says what to do
+            print(f"fab: {n}: {e}", file=sys.stderr)
+            return 2
         print(f"fab: {n}: {len(files)} files in {dest}")
     return 0
 

@@ -128,6 +128,12 @@ def main(argv: list[str] | None = None) -> int:
         print("hwgen: nothing to scaffold: every description already has its board under "
               f"{args.out} (edit those in KiCad; --force regenerates one from its description)")
         return 0
+    try:                                     # before minutes of building: is --out usable?
+        args.out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        print(f"hwgen: cannot write {e.filename or args.out}: {e.strerror}; pass a writable "
+              "folder with --out", file=sys.stderr)
+        return 1
     refused = [n for n in names if n in exists]
     if refused and not args.force:
         print(f"hwgen: {', '.join(str(args.out / n) for n in refused)}: the board exists and its KiCad files "
@@ -147,7 +153,15 @@ def main(argv: list[str] | None = None) -> int:
     modules = build_all()
     by_name = {m.name: m for m in modules}
     for n in names:
-        t = generate(by_name[n], args.out, force_route=args.route, rewrite_core=args.core)
+        try:
+            t = generate(by_name[n], args.out, force_route=args.route, rewrite_core=args.core)
+        except route.RoutingError as e:          # the message says what to do
+            print(f"hwgen: {n}: {e}", file=sys.stderr)
+            return 1
+        except OSError as e:
+            print(f"hwgen: {n}: cannot write {e.filename or args.out}: {e.strerror}; pass a "
+                  "writable folder with --out", file=sys.stderr)
+            return 1
         print(f"hwgen: {n}: " + ", ".join(f"{k} {v:.1f} s" for k, v in t.items()))
     return 0
 

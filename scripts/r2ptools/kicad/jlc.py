@@ -61,12 +61,16 @@ OVERRIDES = [
 
 DISPUTED = {
     r"SOT-23(-\d)?": (
-        "the tools disagree: KiBot 1.9.1's table says 180, JLCKicadTools' cpl_rotations_db.csv "
-        "(master 50ab537, 2024-09, the table kicad-jlcpcb-tools downloads) says -90 after a "
-        "checked upload, and LCSC's own SOT-23-5 footprint (pins 1-3 along the bottom) fits -90; "
-        "JLC's 0° is the part's orientation on its reel, which varies by maker"),
+        "180 (used) has most of the evidence: KiBot 1.9.1's table, the jlcpcba rotations file, "
+        "kicad-jlcpcb-tools' default ^SOT-23-6 180 (Bouni/kicad-jlcpcb-tools#472) and a reported "
+        "upload that came out 180° off without it (Combinatix/JLCPCB-Basic-Parts#1); "
+        "JLCKicadTools' cpl_rotations_db.csv says -90 after one checked upload "
+        "(matthewlai/JLCKicadTools#105), and its maintainer answered there that JLC's 0° follows "
+        "each part's orientation on its reel, so no footprint table can be right for every maker: "
+        "look at every SOT-23 in the preview"),
     r"PinHeader_2x05_P1\.27mm_Vertical(_SMD)?": (
-        "the tools disagree: KiBot 1.9.1's table says -90, JLCKicadTools master says +90"),
+        "the tools disagree: KiBot 1.9.1's table says -90, JLCKicadTools master says +90; no "
+        "upload report found either way (2026-11)"),
 }
 """Footprints whose correction the field's tables disagree on: the CPL uses KiBot's, and the
 checklist asks for these to be looked at first in JLC's placement preview."""
