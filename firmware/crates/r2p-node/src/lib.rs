@@ -33,7 +33,11 @@ pub mod slot_tx;
 pub mod wire;
 
 #[cfg(test)]
+mod heartbeat_tests;
+#[cfg(test)]
 mod host_tests;
+#[cfg(test)]
+mod hrt_stream_tests;
 #[cfg(any(test, feature = "selftest"))]
 mod tdma_tests;
 #[cfg(any(test, feature = "selftest"))]
