@@ -27,6 +27,7 @@
 extern crate std;
 
 pub mod node;
+mod node_send;
 pub mod params;
 pub mod remote;
 pub mod slot_tx;
