@@ -398,6 +398,18 @@ mod host_tests {
     }
 
     #[test]
+    #[should_panic(expected = "too many handles")]
+    fn sharing_a_draft_as_u32_max_handles_panics_instead_of_marking_it_written() {
+        // `u32::MAX` is the *writing* state: a count that reached it would let a draft and
+        // handles meet. No topic has that many subscribers, but the bound is the guard.
+        static T: Topic<'static, u32, 1, 1> = Topic::new("t", 0);
+        static P: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
+        let draft = P.try_alloc().unwrap();
+        let shares = draft.share(u32::MAX as usize);
+        core::mem::forget(shares);
+    }
+
+    #[test]
     fn take_hands_out_each_slot_once() {
         let pool: Pool<[Slot<u32>; 3]> = Pool::new(0);
         let pool: &Pool<[Slot<u32>]> = &pool;
