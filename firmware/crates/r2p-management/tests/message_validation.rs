@@ -2,8 +2,10 @@
 //! the full allowed length round-trip, values and bus classes with no meaning are refused with
 //! the tag that was wrong, and every bus class of an advertisement round-trips.
 
-use r2p_management::message::{BusClass, DecodeError, Message, Value, ENCODED_MAX, NAME_MAX, TOPIC_MAX, UID_LEN};
 use r2p_management::message::ModuleState;
+use r2p_management::message::{
+    BusClass, DecodeError, Message, Value, ENCODED_MAX, NAME_MAX, TOPIC_MAX, UID_LEN,
+};
 
 fn encode(m: &Message) -> heapless::Vec<u8, ENCODED_MAX> {
     let mut buf = [0u8; ENCODED_MAX];

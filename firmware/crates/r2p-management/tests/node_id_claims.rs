@@ -27,7 +27,12 @@ fn module_1000() -> (NodeIdAllocator, NodeId) {
 fn the_first_id_is_one_plus_the_uids_fnv1a_modulo_254() {
     // Independent values (FNV-1a 32 of the 12 bytes, computed outside this crate): a tool that
     // knows a module's unique ID knows where it starts.
-    for (n, hash, first) in [(0u32, 0xe23c_62b5u32, 140u8), (1, 0xe13c_6122, 237), (1000, 0xa03f_cc66, 11), (0xDEAD_BEEF, 0xb3ab_0d13, 130)] {
+    for (n, hash, first) in [
+        (0u32, 0xe23c_62b5u32, 140u8),
+        (1, 0xe13c_6122, 237),
+        (1000, 0xa03f_cc66, 11),
+        (0xDEAD_BEEF, 0xb3ab_0d13, 130),
+    ] {
         assert_eq!(fnv1a(&uid(n)), hash, "fnv1a of uid {n}");
         assert_eq!(initial_node_id(&uid(n)), id(first), "first ID of uid {n}");
         assert_eq!(NodeIdAllocator::new(uid(n)).node_id(), id(first));

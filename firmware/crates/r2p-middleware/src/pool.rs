@@ -9,8 +9,8 @@
 //! - **shared(n)** (`1 ≤ n < WRITING`): `n` [`Msg`] handles refer to it and nobody writes it.
 //!
 //! The transitions are atomic read-modify-writes (on a Cortex-M3, `LDREX`/`STREX`; no
-//! critical section), all in [`slots`](crate::slots) where the loom tests check them: `take` moves free → writing with a compare-and-swap, so one slot goes
-//! to one draft; publishing stores the number of handles it is about to hand out, once;
+//! critical section), all in `slots.rs`: `take` moves free → writing with a compare-and-swap,
+//! so one slot goes to one draft; publishing stores the number of handles it is about to hand out, once;
 //! `Msg::clone` adds one; dropping a handle subtracts one, and the handle that brings the
 //! count to zero has freed the slot (like `Arc`). The count is exactly the number of live
 //! handles at every moment, so a slot is free only when nobody can reach it.
@@ -22,7 +22,9 @@
 //! only when its last handle is dropped, so the two kinds of access never overlap. Memory
 //! ordering: every release is a `Release` RMW and `take`'s compare-and-swap is `Acquire`, so
 //! all reads through the handles of a slot happen before the next draft of it is written; the
-//! written draft reaches subscribers through their queues' locks.
+//! written draft reaches subscribers through their queues' locks. The loom tests of
+//! `slots.rs` (`make loom`) check this and the waiting `alloc`'s wake-up under every
+//! interleaving the orderings allow.
 
 use core::fmt;
 use core::mem::ManuallyDrop;
@@ -371,8 +373,8 @@ pub(crate) mod tests {
 #[cfg(test)]
 mod host_tests {
     use super::*;
-    use core::sync::atomic::Ordering;
     use crate::{Callback, Class, Subscriber, Topic, TopicInfo};
+    use core::sync::atomic::Ordering;
 
     #[test]
     #[should_panic(expected = "already free")]

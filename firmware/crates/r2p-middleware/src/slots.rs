@@ -124,7 +124,8 @@ impl<T: Copy + Send + Sync, const N: usize> Pool<[Slot<T>; N]> {
     /// and a draft can be filled field by field, as in the paper's Listing 1).
     #[cfg(not(loom))]
     pub(crate) const fn new(init: T) -> Self {
-        let mut slots = [const { Slot { refs: AtomicU32::new(FREE), data: DataCell::uninit() } }; N];
+        let mut slots =
+            [const { Slot { refs: AtomicU32::new(FREE), data: DataCell::uninit() } }; N];
         let mut i = 0;
         while i < N {
             slots[i] = Slot::new(init);

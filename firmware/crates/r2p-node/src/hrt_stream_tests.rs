@@ -58,8 +58,8 @@ fn two_streams_sharing_a_slot_each_send_only_in_their_own_cycles() {
     L2.subscribe(&S2).unwrap();
 
     let bus = Bus::<3>::slotted(CYCLE);
-    let mut m = TestNode::new(NodeConfig { hrt_slots: 1, ..tdma(1, "psu", Some(0)) }, &NoParams)
-        .unwrap();
+    let mut m =
+        TestNode::new(NodeConfig { hrt_slots: 1, ..tdma(1, "psu", Some(0)) }, &NoParams).unwrap();
     let mut a = TestNode::new(tdma(2, "a", None), &NoParams).unwrap();
     let mut b = TestNode::new(tdma(3, "b", None), &NoParams).unwrap();
     a.export(&O1).unwrap();
@@ -94,7 +94,10 @@ fn two_streams_sharing_a_slot_each_send_only_in_their_own_cycles() {
     }
     let got1: heapless::Vec<u8, 8> = core::iter::from_fn(|| S1.try_recv()).map(|v| *v).collect();
     let got2: heapless::Vec<u8, 8> = core::iter::from_fn(|| S2.try_recv()).map(|v| *v).collect();
-    assert_eq!((got1.as_slice(), got2.as_slice()), (&[0, 1, 2, 3, 4, 5][..], &[100, 101, 102, 103, 104, 105][..]));
+    assert_eq!(
+        (got1.as_slice(), got2.as_slice()),
+        (&[0, 1, 2, 3, 4, 5][..], &[100, 101, 102, 103, 104, 105][..])
+    );
     assert_eq!((a.stats().hrt_sent, a.stats().hrt_missed), (12, 0));
     assert_eq!(bus.violations(), 0);
 }

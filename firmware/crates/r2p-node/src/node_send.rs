@@ -7,8 +7,14 @@
 use crate::Node;
 
 #[allow(dead_code)]
-fn node_is_send<'a, const E: usize, const I: usize, const T: usize, const R: usize, const B: usize>()
-{
+fn node_is_send<
+    'a,
+    const E: usize,
+    const I: usize,
+    const T: usize,
+    const R: usize,
+    const B: usize,
+>() {
     fn send<X: Send>() {}
     send::<Node<'a, E, I, T, R, B>>();
 }

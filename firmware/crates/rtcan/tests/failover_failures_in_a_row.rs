@@ -52,6 +52,7 @@ fn the_count_restarts_at_the_good_sync_then_l_plus_one_in_a_row_step_down() {
     assert!(a.stop_syncing && a.re_register, "L + 1 failures in a row: step down");
     assert_eq!(f.role(), Role::Slave);
     // It competes again from its last sync that went out, like every standby that heard it.
-    let expected = good + rtcan::failover::takeover_delay_us(rtcan::failover::Rank::new(0).unwrap(), CYCLE_US);
+    let expected =
+        good + rtcan::failover::takeover_delay_us(rtcan::failover::Rank::new(0).unwrap(), CYCLE_US);
     assert_eq!(f.takeover_at(), Some(expected));
 }

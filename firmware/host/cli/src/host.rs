@@ -12,9 +12,9 @@
 //! NRT frames go out when the bus lets them, like an SRT/NRT frame that lost arbitration.
 //! [`crate::session::Session`] drives it.
 
+use std::collections::VecDeque;
 use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering::Relaxed};
 use std::sync::{Mutex, MutexGuard};
-use std::collections::VecDeque;
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
 use r2p_canlink::CanFrame;
@@ -276,10 +276,7 @@ impl HostNode {
 
     /// Messages received on the import since the last call, oldest first.
     pub fn take_messages(&mut self) -> Vec<Vec<u8>> {
-        self.import
-            .as_ref()
-            .map(|(i, _)| locked(&i.got).drain(..).collect())
-            .unwrap_or_default()
+        self.import.as_ref().map(|(i, _)| locked(&i.got).drain(..).collect()).unwrap_or_default()
     }
 
     /// Offers `topic` of type `ty` on the bus with `class` (advertised at the next step).
