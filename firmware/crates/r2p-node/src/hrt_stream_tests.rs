@@ -24,7 +24,7 @@ fn granted(n: &TestNode<'_>, export: usize) -> Phase {
 }
 
 /// Puts management message `msg` on node `from`'s management stream.
-fn inject<const P: usize>(bus: &Bus<P>, from: u8, msg: &Message) {
+pub(crate) fn inject<const P: usize>(bus: &Bus<P>, from: u8, msg: &Message) {
     let mut buf = [0u8; ENCODED_MAX];
     let n = msg.encode(&mut buf).unwrap();
     let stream = NodeId::new(from).unwrap().management();

@@ -39,6 +39,8 @@ mod heartbeat_tests;
 mod host_tests;
 #[cfg(test)]
 mod hrt_stream_tests;
+#[cfg(test)]
+mod import_request_tests;
 #[cfg(any(test, feature = "selftest"))]
 mod tdma_tests;
 #[cfg(any(test, feature = "selftest"))]
