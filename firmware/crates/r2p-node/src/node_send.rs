@@ -7,14 +7,7 @@
 use crate::Node;
 
 #[allow(dead_code)]
-fn node_is_send<
-    'a,
-    const E: usize,
-    const I: usize,
-    const T: usize,
-    const R: usize,
-    const B: usize,
->() {
+fn node_is_send<const E: usize, const I: usize, const T: usize, const R: usize, const B: usize>() {
     fn send<X: Send>() {}
-    send::<Node<'a, E, I, T, R, B>>();
+    send::<Node<'static, E, I, T, R, B>>();
 }
