@@ -33,7 +33,7 @@ test: setup ## Run every test (Rust, QEMU Cortex-M3, lint, pytest) with one summ
 bench: setup ## Benchmarks: core instructions/message on a Cortex-M3 (QEMU) and msg/s on the host vs embassy-sync, footprint
 	@scripts/bench
 
-mutants: setup ## Mutation testing of the core crates (long: ~1 h): caught/viable per crate, goal 90 % (docs/mutants.md)
+mutants: setup ## Mutation testing of the core crates (long: ~5 h): detected/viable per crate, goal 90 % (docs/mutants.md)
 	@scripts/mutants
 
 loom: setup ## Model-check the message pool's atomics with loom (host; its own build, ~1-4 min)
