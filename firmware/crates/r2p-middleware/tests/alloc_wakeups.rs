@@ -2,11 +2,45 @@
 //! comes back (docs/middleware.md): a message published to nobody, a draft dropped, the last
 //! handle of a message dropped. A missed wake-up would leave it waiting for ever.
 
-use core::pin::pin;
-use core::task::Poll;
+use core::future::Future;
+use core::pin::{pin, Pin};
+use core::task::{Context, Poll};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::task::{Wake, Waker};
 
-use embassy_futures::poll_once;
 use r2p_middleware::{Class, Publisher, Subscriber, Topic, TopicInfo};
+
+/// An executor's view of a waiting task: its future and whether its waker was woken (an
+/// executor polls a task again only then).
+struct Task {
+    woken: Arc<Flag>,
+    waker: Waker,
+}
+
+struct Flag(AtomicBool);
+
+impl Wake for Flag {
+    fn wake(self: Arc<Self>) {
+        self.0.store(true, Ordering::SeqCst);
+    }
+}
+
+impl Task {
+    fn new() -> Self {
+        let woken = Arc::new(Flag(AtomicBool::new(false)));
+        Task { waker: Waker::from(woken.clone()), woken }
+    }
+
+    fn poll<F: Future>(&self, f: Pin<&mut F>) -> Poll<F::Output> {
+        self.woken.0.store(false, Ordering::SeqCst);
+        f.poll(&mut Context::from_waker(&self.waker))
+    }
+
+    fn woken(&self) -> bool {
+        self.woken.0.load(Ordering::SeqCst)
+    }
+}
 
 const NRT: Class = Class::NonRealTime;
 
@@ -19,10 +53,12 @@ fn publishing_to_no_subscriber_wakes_a_waiting_alloc() {
     let held = P.try_alloc().unwrap();
     let mut last = P.try_alloc().unwrap();
     *last = 9;
+    let task = Task::new();
     let mut waiting = pin!(P.alloc());
-    assert!(poll_once(waiting.as_mut()).is_pending(), "the pool is empty");
+    assert!(task.poll(waiting.as_mut()).is_pending(), "the pool is empty");
     assert_eq!(P.publish(last).delivered, 0);
-    match poll_once(waiting.as_mut()) {
+    assert!(task.woken(), "the publication to nobody woke the waiting alloc");
+    match task.poll(waiting.as_mut()) {
         Poll::Ready(m) => assert_eq!(*m, 9, "the waiting alloc got the slot just published"),
         Poll::Pending => panic!("alloc still waiting after a publication to nobody freed a slot"),
     }
@@ -34,10 +70,12 @@ fn dropping_a_draft_wakes_a_waiting_alloc() {
     static T: Topic<'static, u32, 1, 1> = Topic::new("t", 0);
     static P: Publisher<'static, u32> = Publisher::new(&T, NRT);
     let draft = P.try_alloc().unwrap();
+    let task = Task::new();
     let mut waiting = pin!(P.alloc());
-    assert!(poll_once(waiting.as_mut()).is_pending());
+    assert!(task.poll(waiting.as_mut()).is_pending());
     drop(draft);
-    assert!(poll_once(waiting.as_mut()).is_ready(), "the dropped draft's slot went to alloc");
+    assert!(task.woken(), "the dropped draft woke the waiting alloc");
+    assert!(task.poll(waiting.as_mut()).is_ready(), "the dropped draft's slot went to alloc");
 }
 
 #[test]
@@ -52,11 +90,13 @@ fn the_last_handle_dropped_wakes_a_waiting_alloc() {
     P2.publish_with(|m| *m = 1).unwrap();
     let drafts = [P2.try_alloc().unwrap(), P2.try_alloc().unwrap(), P2.try_alloc().unwrap()];
     assert_eq!(T2.free_slots(), 0);
+    let task = Task::new();
     let mut waiting = pin!(P2.alloc());
-    assert!(poll_once(waiting.as_mut()).is_pending());
+    assert!(task.poll(waiting.as_mut()).is_pending());
     drop(A.try_recv().unwrap());
-    assert!(poll_once(waiting.as_mut()).is_pending(), "B still holds the message");
+    assert!(!task.woken(), "B still holds the message: nothing to wake for");
     drop(B.try_recv().unwrap());
-    assert!(poll_once(waiting.as_mut()).is_ready(), "the last handle freed the slot for alloc");
+    assert!(task.woken(), "the last handle woke the waiting alloc");
+    assert!(task.poll(waiting.as_mut()).is_ready(), "the last handle freed the slot for alloc");
     drop(drafts);
 }
