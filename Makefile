@@ -4,7 +4,7 @@
 SHELL := /bin/bash
 PY := scripts/py
 
-.PHONY: all setup firmware fab enclosures check test bench help clean
+.PHONY: all setup firmware fab enclosures check test bench mutants loom help clean
 
 all: setup ## Set up if needed, build every artifact (firmware images, fab packages, cases), print a summary
 	@$(PY) -m r2ptools.build
@@ -32,6 +32,12 @@ test: setup ## Run every test (Rust, QEMU Cortex-M3, lint, pytest) with one summ
 
 bench: setup ## Benchmarks: core instructions/message on a Cortex-M3 (QEMU) and msg/s on the host vs embassy-sync, footprint
 	@scripts/bench
+
+mutants: setup ## Mutation testing of the core crates (long: ~5 h): detected/viable per crate, goal 90 % (docs/mutants.md)
+	@scripts/mutants
+
+loom: setup ## Model-check the message pool's atomics with loom (host; its own build, ~1-4 min)
+	@cd firmware && RUSTFLAGS="--cfg loom" CARGO_TARGET_DIR=target/loom cargo test --locked -q --release -p r2p-middleware --lib
 
 help: ## List the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -E 's/^([a-z-]+):.*## (.*)/  make \1\t\2/' | expand -t 20

@@ -13,7 +13,7 @@ def test_second_run_does_no_work():
     p = run(SETUP)
     assert p.returncode == 0, p.stdout
     steps = [l for l in p.stdout.splitlines() if l.startswith("setup: ") and "(" in l]
-    assert [l.split()[1] for l in steps] == ["apt", "rust", "python", "models3d", "fuzz", "freerouting"]
+    assert [l.split()[1] for l in steps] == ["apt", "rust", "python", "models3d", "fuzz", "mutants", "freerouting"]
     for line in steps:
         assert "up to date" in line or "skipped" in line, line
     assert p.stdout.rstrip().endswith("setup: done")

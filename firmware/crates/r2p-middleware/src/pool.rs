@@ -9,8 +9,8 @@
 //! - **shared(n)** (`1 ≤ n < WRITING`): `n` [`Msg`] handles refer to it and nobody writes it.
 //!
 //! The transitions are atomic read-modify-writes (on a Cortex-M3, `LDREX`/`STREX`; no
-//! critical section): `take` moves free → writing with a compare-and-swap, so one slot goes
-//! to one draft; publishing stores the number of handles it is about to hand out, once;
+//! critical section), all in `slots.rs`: `take` moves free → writing with a compare-and-swap,
+//! so one slot goes to one draft; publishing stores the number of handles it is about to hand out, once;
 //! `Msg::clone` adds one; dropping a handle subtracts one, and the handle that brings the
 //! count to zero has freed the slot (like `Arc`). The count is exactly the number of live
 //! handles at every moment, so a slot is free only when nobody can reach it.
@@ -22,148 +22,18 @@
 //! only when its last handle is dropped, so the two kinds of access never overlap. Memory
 //! ordering: every release is a `Release` RMW and `take`'s compare-and-swap is `Acquire`, so
 //! all reads through the handles of a slot happen before the next draft of it is written; the
-//! written draft reaches subscribers through their queues' locks.
+//! written draft reaches subscribers through their queues' locks. The loom tests of
+//! `slots.rs` (`make loom`) check this and the waiting `alloc`'s wake-up under every
+//! interleaving the orderings allow.
 
-use core::cell::{RefCell, UnsafeCell};
 use core::fmt;
-use core::mem::{ManuallyDrop, MaybeUninit};
+use core::mem::ManuallyDrop;
 use core::ops::{Deref, DerefMut};
-use core::sync::atomic::{fence, AtomicBool, AtomicU32, Ordering};
 use core::task::Context;
 
-use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
-use embassy_sync::blocking_mutex::Mutex;
-use embassy_sync::waitqueue::WakerRegistration;
-
 use crate::publisher::Publisher;
-
-/// `refs` of a free slot.
-const FREE: u32 = 0;
-/// `refs` of a slot held by a draft; also the bound on the number of handles of a message.
-const WRITING: u32 = u32::MAX;
-
-/// One message and its state (see the module docs).
-pub(crate) struct Slot<T> {
-    refs: AtomicU32,
-    data: UnsafeCell<MaybeUninit<T>>,
-}
-
-// SAFETY: the slot data is reached only through `Msg` (shared `&T`, possibly from several
-// execution contexts at once: needs `T: Sync`) and `MsgMut` (exclusive `&mut T` in whatever
-// context holds the draft, after which others read it: needs `T: Send`). The state in `refs`,
-// changed only by atomic operations, guarantees that the two never overlap (module docs).
-// Slots are made only by `Pool::new`, which requires `T: Send + Sync`, so the impl needs no
-// bound of its own; without one, the handles are `Send + Sync` for every `T`, as they were
-// when they reached the pool through a `dyn` trait object.
-unsafe impl<T> Sync for Slot<T> {}
-
-impl<T> Slot<T> {
-    #[inline(always)]
-    fn ptr(&self) -> *mut T {
-        // `MaybeUninit<T>` is `repr(transparent)`: a pointer to it is a pointer to the `T`.
-        self.data.get().cast::<T>()
-    }
-
-    /// Drops `n ≥ 1` handles at once; `true` if they were the last (the slot is free now).
-    #[inline(always)]
-    fn release(&self, n: u32) -> bool {
-        let before = self.refs.fetch_sub(n, Ordering::Release);
-        if before == n {
-            return true;
-        }
-        // Only a bug in this crate can get here (a handle outliving its count): stop before
-        // anything reads or writes the slot. (A free slot that wrapped to `WRITING` is never
-        // handed out again, so the pool is not corrupted further.)
-        assert!(before > n && before != WRITING, "release: slot is already free");
-        false
-    }
-}
-
-/// The non-real-time publisher waiting in `alloc` for a slot, if any.
-struct Waiter {
-    /// Set (under the lock) when a waker is registered: lets a release that frees a slot skip
-    /// the lock when nobody waits, which is the normal case.
-    waiting: AtomicBool,
-    waker: Mutex<CriticalSectionRawMutex, RefCell<WakerRegistration>>,
-}
-
-/// A pool of message slots: `Pool<[Slot<T>; N]>` in a topic, seen as `Pool<[Slot<T>]>` by
-/// publishers and handles, so they need not carry its size.
-pub(crate) struct Pool<S: ?Sized> {
-    waiter: Waiter,
-    slots: S,
-}
-
-impl<T: Copy + Send + Sync, const N: usize> Pool<[Slot<T>; N]> {
-    /// A pool whose slots all start as copies of `init` (so every slot is always initialised
-    /// and a draft can be filled field by field, as in the paper's Listing 1).
-    pub(crate) const fn new(init: T) -> Self {
-        let mut slots = [const {
-            Slot { refs: AtomicU32::new(FREE), data: UnsafeCell::new(MaybeUninit::uninit()) }
-        }; N];
-        let mut i = 0;
-        while i < N {
-            slots[i].data = UnsafeCell::new(MaybeUninit::new(init));
-            i += 1;
-        }
-        Pool {
-            waiter: Waiter {
-                waiting: AtomicBool::new(false),
-                waker: Mutex::new(RefCell::new(WakerRegistration::new())),
-            },
-            slots,
-        }
-    }
-}
-
-impl<T> Pool<[Slot<T>]> {
-    /// Free → writing for the first free slot, if any.
-    #[inline]
-    fn try_take(&self) -> Option<&Slot<T>> {
-        self.slots.iter().find(|s| {
-            s.refs.load(Ordering::Relaxed) == FREE
-                && s.refs
-                    .compare_exchange(FREE, WRITING, Ordering::Acquire, Ordering::Relaxed)
-                    .is_ok()
-        })
-    }
-
-    /// Free → writing; `None` if no slot is free (then registers `cx`'s waker, if given, to be
-    /// woken when one is freed).
-    #[inline]
-    fn take(&self, cx: Option<&mut Context<'_>>) -> Option<&Slot<T>> {
-        if let Some(slot) = self.try_take() {
-            return Some(slot);
-        }
-        let cx = cx?;
-        self.waiter.waker.lock(|w| {
-            w.borrow_mut().register(cx.waker());
-            self.waiter.waiting.store(true, Ordering::Relaxed);
-        });
-        // Pairs with the fence in `freed`: either that release sees `waiting` and wakes us,
-        // or we see the slot it freed now (store-buffering with sequentially consistent
-        // fences: the two cannot both miss).
-        fence(Ordering::SeqCst);
-        self.try_take()
-    }
-
-    /// Called after a slot became free: wakes the waiting `alloc`, if any.
-    #[inline]
-    fn freed(&self) {
-        fence(Ordering::SeqCst);
-        if self.waiter.waiting.load(Ordering::Relaxed) {
-            self.waiter.waker.lock(|w| {
-                self.waiter.waiting.store(false, Ordering::Relaxed);
-                w.borrow_mut().wake();
-            });
-        }
-    }
-
-    /// Number of free slots now.
-    pub(crate) fn free(&self) -> usize {
-        self.slots.iter().filter(|s| s.refs.load(Ordering::Relaxed) == FREE).count()
-    }
-}
+use crate::slots::WRITING;
+pub(crate) use crate::slots::{Pool, Slot};
 
 /// A published message: a shared, reference-counted handle to a slot of its topic's pool.
 ///
@@ -171,6 +41,13 @@ impl<T> Pool<[Slot<T>]> {
 /// Dropping the last handle returns the slot to the pool (what the paper's `release()` did by
 /// hand). `Clone` adds a handle (and keeps the slot out of the pool a little longer: see the
 /// sizing rule in [`pool_size`](crate::pool_size)).
+///
+/// A handle is shared across execution contexts only if the message type allows it:
+///
+/// ```compile_fail
+/// fn shared<X: Sync>() {}
+/// shared::<r2p_middleware::Msg<'static, core::cell::Cell<u8>>>(); // `Cell` is not `Sync`
+/// ```
 pub struct Msg<'a, T> {
     slot: &'a Slot<T>,
     origin: &'a Publisher<'a, T>,
@@ -192,17 +69,14 @@ impl<T> Deref for Msg<'_, T> {
         // SAFETY: this handle keeps the slot *shared* (count ≥ 1) for as long as the returned
         // borrow of `self` lives; a shared slot is never written (only a *writing* slot has a
         // `MsgMut`) and every slot was initialised by `Pool::new`.
-        unsafe { &*self.slot.ptr() }
+        unsafe { &*self.slot.read_ptr() }
     }
 }
 
 impl<T> Clone for Msg<'_, T> {
     #[inline]
     fn clone(&self) -> Self {
-        // Relaxed, as for `Arc`: the new handle comes from an existing one, so the slot is
-        // already shared and stays so.
-        let before = self.slot.refs.fetch_add(1, Ordering::Relaxed);
-        assert!(before != FREE && before < WRITING - 1, "too many handles");
+        self.slot.add_handle();
         Msg { slot: self.slot, origin: self.origin }
     }
 }
@@ -290,13 +164,8 @@ impl<'a, T> MsgMut<'a, T> {
             Ok(n) if n < WRITING => n,
             _ => panic!("too many handles"),
         };
-        if n == 0 {
-            slot.refs.store(FREE, Ordering::Release);
+        if slot.publish(n) {
             origin.pool().freed();
-        } else {
-            // Release: with the subscribers' queue locks, orders the draft's writes before
-            // any read through a handle.
-            slot.refs.store(n, Ordering::Release);
         }
         Shares { slot, origin, left: n }
     }
@@ -308,7 +177,7 @@ impl<T> Deref for MsgMut<'_, T> {
     fn deref(&self) -> &T {
         // SAFETY: the slot is *writing* and this draft is its only handle (see `deref_mut`);
         // the shared borrow of `self` excludes a concurrent `&mut` through it.
-        unsafe { &*self.slot.ptr() }
+        unsafe { &*self.slot.read_ptr() }
     }
 }
 
@@ -319,14 +188,13 @@ impl<T> DerefMut for MsgMut<'_, T> {
         // gave it to this one `MsgMut` (not `Clone`); no `Msg` exists for a writing slot, and
         // the slot leaves *writing* only by consuming this draft (`share`) or dropping it. So
         // the `&mut` borrow of `self` is the only access to the slot while it lives.
-        unsafe { &mut *self.slot.ptr() }
+        unsafe { &mut *self.slot.write_ptr() }
     }
 }
 
 impl<T> Drop for MsgMut<'_, T> {
     fn drop(&mut self) {
-        let before = self.slot.refs.swap(FREE, Ordering::Release);
-        assert_eq!(before, WRITING, "draft of a slot not being written");
+        self.slot.abandon();
         self.origin.pool().freed();
     }
 }
@@ -506,6 +374,7 @@ pub(crate) mod tests {
 mod host_tests {
     use super::*;
     use crate::{Callback, Class, Subscriber, Topic, TopicInfo};
+    use core::sync::atomic::Ordering;
 
     #[test]
     #[should_panic(expected = "already free")]
@@ -528,6 +397,18 @@ mod host_tests {
         drop(draft.share(1)); // nobody took the handle: released, the slot is free again
         slot.refs.store(1, Ordering::Relaxed); // pretend a handle exists
         drop(MsgMut { slot, origin: &P });
+    }
+
+    #[test]
+    #[should_panic(expected = "too many handles")]
+    fn sharing_a_draft_as_u32_max_handles_panics_instead_of_marking_it_written() {
+        // `u32::MAX` is the *writing* state: a count that reached it would let a draft and
+        // handles meet. No topic has that many subscribers, but the bound is the guard.
+        static T: Topic<'static, u32, 1, 1> = Topic::new("t", 0);
+        static P: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
+        let draft = P.try_alloc().unwrap();
+        let shares = draft.share(u32::MAX as usize);
+        core::mem::forget(shares);
     }
 
     #[test]

@@ -28,13 +28,20 @@ extern crate std;
 
 pub mod hw_filters;
 pub mod node;
+mod node_send;
 pub mod params;
 pub mod remote;
 pub mod slot_tx;
 pub mod wire;
 
 #[cfg(test)]
+mod heartbeat_tests;
+#[cfg(test)]
 mod host_tests;
+#[cfg(test)]
+mod hrt_stream_tests;
+#[cfg(test)]
+mod import_request_tests;
 #[cfg(any(test, feature = "selftest"))]
 mod tdma_tests;
 /// The suite's loopback bus, public for the QEMU benchmark of the slot path (not an API).

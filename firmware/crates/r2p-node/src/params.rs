@@ -10,8 +10,9 @@ use r2p_management::message::{ParamFault, Value};
 ///
 /// The store decides what is valid: `set` checks the index, the value's type, writability and
 /// range, and on any error changes nothing. Methods take `&self` (use interior mutability) so
-/// the application can read its parameters while the node holds the store.
-pub trait ParamStore {
+/// the application can read its parameters while the node holds the store. `Sync`: the
+/// application and the node (on the bus's interrupt executor) use it from two contexts.
+pub trait ParamStore: Sync {
     /// The current value of parameter `index`.
     fn get(&self, index: u16) -> Result<Value, ParamFault>;
     /// Checks `value` and, if valid, applies it; returns the value now held.

@@ -19,8 +19,9 @@ use rtcan::Micros;
 use crate::wire::{Wire, WireError};
 
 /// A local topic the node offers on the bus, without its type (implemented by
-/// [`RemoteSubscriber`]).
-pub trait Export {
+/// [`RemoteSubscriber`]). `Sync`: the application publishes into it while the node, on the bus's
+/// interrupt executor, reads it; the bound lets the compiler check that a node may move there.
+pub trait Export: Sync {
     /// The topic's name.
     fn topic(&self) -> &'static str;
     /// [`Wire::TYPE_HASH`] of its messages.
@@ -45,8 +46,8 @@ pub trait Export {
 }
 
 /// A remote topic the node subscribes to for a local topic, without its type (implemented by
-/// [`RemotePublisher`]).
-pub trait Import {
+/// [`RemotePublisher`]). `Sync` for the same reason as [`Export`].
+pub trait Import: Sync {
     /// The topic's name (the same on both modules).
     fn topic(&self) -> &'static str;
     /// [`Wire::TYPE_HASH`] of the local type.
@@ -215,12 +216,12 @@ impl<'a, T: Wire + Copy + Send + Sync, const Q: usize> Export for RemoteSubscrib
 /// ```
 pub struct RemotePublisher<'a, T> {
     publisher: &'a Publisher<'a, T>,
-    topic: &'a dyn TopicInfo,
+    topic: &'a (dyn TopicInfo + Sync),
 }
 
 impl<'a, T> RemotePublisher<'a, T> {
     /// Publishes on `topic` (the topic `publisher` was made for) what the bus brings.
-    pub const fn new(publisher: &'a Publisher<'a, T>, topic: &'a dyn TopicInfo) -> Self {
+    pub const fn new(publisher: &'a Publisher<'a, T>, topic: &'a (dyn TopicInfo + Sync)) -> Self {
         Self { publisher, topic }
     }
 }

@@ -12,8 +12,9 @@
 //! NRT frames go out when the bus lets them, like an SRT/NRT frame that lost arbitration.
 //! [`crate::session::Session`] drives it.
 
-use std::cell::{Cell, RefCell};
 use std::collections::VecDeque;
+use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering::Relaxed};
+use std::sync::{Mutex, MutexGuard};
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
 use r2p_canlink::CanFrame;
@@ -59,12 +60,18 @@ fn run_uid() -> [u8; UID_LEN] {
     uid
 }
 
+/// The queue behind a lock: `Import` and `Export` are `Sync` (a module's node runs in another
+/// context than its application); a panic elsewhere leaves the queue usable.
+fn locked<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// The local end of an import: keeps every message's bytes for the CLI.
 pub struct DynImport {
     topic: &'static str,
     hash: u32,
     size: usize,
-    got: RefCell<VecDeque<Vec<u8>>>,
+    got: Mutex<VecDeque<Vec<u8>>>,
 }
 
 impl Import for DynImport {
@@ -84,7 +91,7 @@ impl Import for DynImport {
         if bytes.len() != self.size {
             return Err(ImportError::Decode(WireError::BadLength));
         }
-        let mut q = self.got.borrow_mut();
+        let mut q = locked(&self.got);
         if q.len() >= QUEUE {
             return Err(ImportError::PoolEmpty);
         }
@@ -99,16 +106,17 @@ pub struct DynExport {
     hash: u32,
     size: usize,
     class: Class,
-    active: Cell<usize>,
-    queue: RefCell<VecDeque<Vec<u8>>>,
-    misses: Cell<u32>,
+    active: AtomicUsize,
+    queue: Mutex<VecDeque<Vec<u8>>>,
+    misses: AtomicU32,
 }
 
 impl DynExport {
     /// Queues a message for the bus; false if nobody is subscribed or the queue is full.
     fn publish(&self, bytes: Vec<u8>) -> bool {
-        let mut q = self.queue.borrow_mut();
-        if self.active.get() == 0 || q.len() >= self.active.get() {
+        let mut q = locked(&self.queue);
+        let active = self.active.load(Relaxed);
+        if active == 0 || q.len() >= active {
             return false;
         }
         q.push_back(bytes);
@@ -131,16 +139,16 @@ impl Export for DynExport {
     }
     fn activate(&self, queue_len: u8) {
         let asked = usize::from(queue_len).clamp(1, QUEUE);
-        self.active.set(self.active.get().max(asked));
+        self.active.fetch_max(asked, Relaxed);
     }
     fn active_len(&self) -> usize {
-        self.active.get()
+        self.active.load(Relaxed)
     }
     fn pending(&self) -> usize {
-        self.queue.borrow().len()
+        locked(&self.queue).len()
     }
     fn pop_encoded(&self, buf: &mut [u8]) -> Option<Result<(usize, Option<Micros>), WireError>> {
-        let bytes = self.queue.borrow_mut().pop_front()?;
+        let bytes = locked(&self.queue).pop_front()?;
         Some(match buf.get_mut(..bytes.len()) {
             Some(out) => {
                 out.copy_from_slice(&bytes);
@@ -150,7 +158,7 @@ impl Export for DynExport {
         })
     }
     fn report_deadline_miss(&self) {
-        self.misses.set(self.misses.get() + 1);
+        self.misses.fetch_add(1, Relaxed);
     }
 }
 
@@ -268,10 +276,7 @@ impl HostNode {
 
     /// Messages received on the import since the last call, oldest first.
     pub fn take_messages(&mut self) -> Vec<Vec<u8>> {
-        self.import
-            .as_ref()
-            .map(|(i, _)| i.got.borrow_mut().drain(..).collect())
-            .unwrap_or_default()
+        self.import.as_ref().map(|(i, _)| locked(&i.got).drain(..).collect()).unwrap_or_default()
     }
 
     /// Offers `topic` of type `ty` on the bus with `class` (advertised at the next step).
@@ -281,9 +286,9 @@ impl HostNode {
             hash: ty.hash,
             size: ty.size,
             class,
-            active: Cell::new(0),
-            queue: RefCell::new(VecDeque::new()),
-            misses: Cell::new(0),
+            active: AtomicUsize::new(0),
+            queue: Mutex::new(VecDeque::new()),
+            misses: AtomicU32::new(0),
         }));
         self.node
             .export(e)
@@ -299,7 +304,7 @@ impl HostNode {
 
     /// Deadline misses of published SRT messages.
     pub fn deadline_misses(&self) -> u32 {
-        self.export.map_or(0, |e| e.misses.get())
+        self.export.map_or(0, |e| e.misses.load(Relaxed))
     }
 
     /// Frames and messages not yet handed to the link.
@@ -349,7 +354,7 @@ impl HostNode {
                     topic: leak_name(topic),
                     hash: *type_hash,
                     size: usize::from(*size),
-                    got: RefCell::new(VecDeque::new()),
+                    got: Mutex::new(VecDeque::new()),
                 }));
                 match self.node.import(i) {
                     Ok(_) => self.import = Some((i, info)),

@@ -98,14 +98,10 @@ pub fn led_status() -> leds::Status {
 /// the node (an `async fn`'s arguments are stored twice in its future; the node is ~3 KB).
 static NODE: StaticCell<ModuleNode> = StaticCell::new();
 
-/// The node, handed once from `main` to the bus task on the interrupt executor.
+/// The node, handed once from `main` to the bus task on the interrupt executor: `Send` because
+/// a `Node` is (its parameter store, exports and imports are `Sync`, which the compiler checks
+/// where they are registered), so no `unsafe` claim is needed.
 struct BusNode(&'static mut ModuleNode);
-
-// SAFETY: a `Node` is not `Send` only because it holds `&dyn ParamStore`, `&dyn Export` and
-// `&dyn Import`, trait objects without a `Sync` bound. What they point to is `Sync` in fact:
-// statics (`FlashParams`, `RemoteSubscriber`, `RemotePublisher`) whose state sits behind
-// critical-section mutexes. After the hand-over only the bus task uses the node.
-unsafe impl Send for BusNode {}
 
 /// The bus: the node driven by the TDMA slot timer at interrupt priority (a rank-0 PSU sends
 /// the syncs; every other module follows them, as every node of a bus with a cycle must).

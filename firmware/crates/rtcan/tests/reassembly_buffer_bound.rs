@@ -1,0 +1,51 @@
+//! A reassembler with `BUF`-byte buffers (docs/rtcan.md, "Fragmentation"): a message of `BUF`
+//! bytes is delivered, and one that cannot fit is refused at its first frame — counted as too
+//! long, holding no slot while its other frames pass — because the first frame's counter already
+//! says how long the message is at least. A slot held by a message that can never complete would
+//! starve the streams that can.
+
+use rtcan::{fragments, Expect, FrameId, Laxity, MessageId, Reassembler};
+
+const BUF: usize = 24;
+
+fn frames(stream: u16, len: usize) -> Vec<rtcan::Frame> {
+    let template = FrameId { laxity: Laxity::NRT, message: MessageId(stream), fragment: 0 };
+    let bytes: Vec<u8> = (0..len).map(|i| i as u8).collect();
+    fragments(template, &bytes).unwrap().collect()
+}
+
+#[test]
+fn a_message_of_the_buffers_size_is_delivered_and_one_byte_more_is_refused_at_once() {
+    let mut r: Reassembler<1, BUF> = Reassembler::new(10_000);
+    let mut at = 0;
+    let mut delivered = Vec::new();
+    for f in frames(0x0201, BUF) {
+        at += 100;
+        if let Some(m) = r.accept(&f, at, Expect::Any) {
+            delivered.push(m.data.to_vec());
+        }
+    }
+    assert_eq!(delivered, vec![(0..BUF).map(|i| i as u8).collect::<Vec<u8>>()]);
+
+    // BUF + 1 bytes: refused as soon as its first frame arrives; the one slot stays free.
+    let long = frames(0x0202, BUF + 1);
+    at += 100;
+    assert!(r.accept(&long[0], at, Expect::Any).is_none());
+    assert_eq!(r.stats().too_long, 1, "refused at the first frame");
+    assert_eq!(r.partial_messages(), 0, "no slot held by a message that cannot fit");
+    // Meanwhile another stream's message is reassembled in the free slot.
+    let other = frames(0x0203, 12);
+    let mut got = None;
+    for (k, f) in other.iter().enumerate() {
+        at += 100;
+        if let Some(m) = r.accept(f, at, Expect::Any) {
+            got = Some(m.data.len());
+        }
+        if let Some(rest) = long.get(k + 1) {
+            at += 100;
+            assert!(r.accept(rest, at, Expect::Any).is_none(), "the long message's frames pass");
+        }
+    }
+    assert_eq!(got, Some(12));
+    assert_eq!((r.stats().too_long, r.stats().completed), (1, 2));
+}

@@ -1,0 +1,51 @@
+//! How far from where a slave's clock expects it a sync may arrive and still continue the cycle
+//! (docs/rtcan.md, `SYNC_TOLERANCE_PPM` = 0.5 % of the elapsed cycles): a master whose crystal
+//! drifts or whose sync was delayed within that keeps its slaves' slot grids; beyond it the
+//! clock re-phases as for a new master. And the mask of a cycle's slots has one bit per slot.
+
+use rtcan::cycle::{CycleConfig, SlotClock, SYNC_TOLERANCE_PPM};
+use rtcan::Sync;
+
+/// A clock that heard syncs 0 and 1 of 10 ms cycles; then sync 2 comes `late_us` late.
+fn third_sync_late_by(late_us: u64) -> bool {
+    let mut clk = SlotClock::new(CycleConfig::DEFAULT);
+    clk.on_sync(0, &Sync::new(0, 0, false));
+    clk.on_sync(10_000, &Sync::new(1, 0, false));
+    clk.on_sync(20_000 + late_us, &Sync::new(2, 0, false)).continuous
+}
+
+#[test]
+fn a_sync_within_half_a_percent_of_a_cycle_continues_it_and_beyond_does_not() {
+    assert_eq!(SYNC_TOLERANCE_PPM, 5_000);
+    // 0.5 % of 10 ms = 50 µs.
+    for late in [0, 10, 30, 45, 49, 50] {
+        assert!(third_sync_late_by(late), "{late} µs late is within 0.5 %");
+    }
+    for late in [51, 55, 100, 1_000] {
+        assert!(!third_sync_late_by(late), "{late} µs late is beyond 0.5 %");
+    }
+}
+
+#[test]
+fn the_tolerance_grows_with_the_cycles_elapsed_since_the_last_sync() {
+    // Sync 2 lost: sync 3 comes two cycles after sync 1, with twice the tolerance (100 µs).
+    let late3 = |late_us: u64| {
+        let mut clk = SlotClock::new(CycleConfig::DEFAULT);
+        clk.on_sync(0, &Sync::new(0, 0, false));
+        clk.on_sync(10_000, &Sync::new(1, 0, false));
+        clk.on_sync(30_000 + late_us, &Sync::new(3, 0, false))
+    };
+    let info = late3(90);
+    assert!(info.continuous && info.missed == 1, "{info:?}");
+    assert!(!late3(110).continuous);
+}
+
+#[test]
+fn the_mask_of_all_slots_has_one_bit_per_slot() {
+    let mask = |slots| CycleConfig { slots, ..CycleConfig::DEFAULT }.all_slots();
+    assert_eq!(mask(2), 0b11);
+    assert_eq!(mask(16), 0xFFFF);
+    assert_eq!(mask(60), (1 << 60) - 1);
+    assert_eq!(mask(63), u64::MAX >> 1);
+    assert_eq!(mask(64), u64::MAX);
+}
