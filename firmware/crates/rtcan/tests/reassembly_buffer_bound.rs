@@ -1,8 +1,10 @@
 //! A reassembler with `BUF`-byte buffers (docs/rtcan.md, "Fragmentation"): a message of `BUF`
-//! bytes is delivered, and one that cannot fit is refused at its first frame — counted as too
-//! long, holding no slot while its other frames pass — because the first frame's counter already
-//! says how long the message is at least. A slot held by a message that can never complete would
-//! starve the streams that can.
+//! bytes is delivered; one whose first frame already shows it cannot fit (its counter is the
+//! message's frame count, so it says how long the message is at least) is refused at that frame,
+//! counted as too long and holding no slot while its other frames pass — a slot held by a
+//! message that can never complete would starve the streams that can; and one byte more than
+//! `BUF`, which the counter cannot tell from `BUF`, is refused when its bytes run over, never
+//! delivered.
 
 use rtcan::{fragments, Expect, FrameId, Laxity, MessageId, Reassembler};
 
@@ -15,7 +17,7 @@ fn frames(stream: u16, len: usize) -> Vec<rtcan::Frame> {
 }
 
 #[test]
-fn a_message_of_the_buffers_size_is_delivered_and_one_byte_more_is_refused_at_once() {
+fn a_message_of_the_buffers_size_is_delivered_and_a_longer_one_never_is() {
     let mut r: Reassembler<1, BUF> = Reassembler::new(10_000);
     let mut at = 0;
     let mut delivered = Vec::new();
@@ -27,8 +29,9 @@ fn a_message_of_the_buffers_size_is_delivered_and_one_byte_more_is_refused_at_on
     }
     assert_eq!(delivered, vec![(0..BUF).map(|i| i as u8).collect::<Vec<u8>>()]);
 
-    // BUF + 1 bytes: refused as soon as its first frame arrives; the one slot stays free.
-    let long = frames(0x0202, BUF + 1);
+    // BUF + 8 bytes: one frame more than BUF needs, refused as soon as its first frame arrives;
+    // the one slot stays free.
+    let long = frames(0x0202, BUF + 8);
     at += 100;
     assert!(r.accept(&long[0], at, Expect::Any).is_none());
     assert_eq!(r.stats().too_long, 1, "refused at the first frame");
@@ -48,4 +51,16 @@ fn a_message_of_the_buffers_size_is_delivered_and_one_byte_more_is_refused_at_on
     }
     assert_eq!(got, Some(12));
     assert_eq!((r.stats().too_long, r.stats().completed), (1, 2));
+
+    for rest in &long[other.len() + 1..] {
+        at += 100;
+        assert!(r.accept(rest, at, Expect::Any).is_none(), "the long message's frames pass");
+    }
+    // BUF + 1 bytes: as many frames as BUF, so taken in; refused when its last bytes run over.
+    for f in frames(0x0204, BUF + 1) {
+        at += 100;
+        assert!(r.accept(&f, at, Expect::Any).is_none(), "never delivered");
+    }
+    assert_eq!((r.stats().too_long, r.stats().completed), (2, 2), "{:?}", r.stats());
+    assert_eq!(r.partial_messages(), 0, "its slot is free again");
 }
