@@ -23,11 +23,11 @@ connection point is exact); symbol rotations are KiCad's (counter-clockwise on s
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from . import libsym, sexpr
-from .design import GLOBAL_NETS, At, Block, Part, Sheet
-from .schematic import SheetWriter, _prop, uid
+from .design import GLOBAL_NETS, Part, Sheet
+from .schematic import SheetWriter, _prop, part_fields, snap, uid
 from .sexpr import Q
 
 G = 254          # one grid unit (2.54 mm) in 0.01 mm
@@ -223,7 +223,6 @@ class DrawnSheetWriter(SheetWriter):
         self.canvas = Canvas()
         self.placed: list[Placed] = []
         self.power_n = 0
-        self.label_points: list[tuple[str, Pt, Pt]] = []
 
     # --- symbols ------------------------------------------------------------------------------
     def _emit_symbol(self, pl: Placed, value: str, fields: dict[str, str], in_bom: bool = True,
@@ -267,16 +266,6 @@ class DrawnSheetWriter(SheetWriter):
                            ["exclude_from_sim", "no"], ["in_bom", "yes" if in_bom else "no"],
                            ["on_board", "yes" if on_board else "no"], ["dnp", "no"],
                            ["uuid", Q(uid(self.key, pl.ref))], *props, *pins, inst])
-
-    def _part_fields(self, part: Part) -> tuple[dict[str, str], bool]:
-        it = part.item
-        if not it.on_bom:        # a test pad: on the board, off the BOM, no part fields
-            return {"Footprint": it.footprint, "Datasheet": "~",
-                    "Description": "bare copper test pad (no part)"}, False
-        row = it.row
-        return {"Footprint": it.footprint, "Datasheet": row["Datasheet"] or "~",
-                "Description": row["Description"], "MPN": it.mpn,
-                "Manufacturer": row["Manufacturer"], "LCSC": row["LCSC"]}, True
 
     def _power(self, net: str, p: Pt, out: Pt) -> None:
         """The rail's symbol at `p`, pointing along `out` (GND natively down, rails up)."""
@@ -422,7 +411,7 @@ class DrawnSheetWriter(SheetWriter):
             for pin in pl.pins:
                 self.canvas.mark(pin.p, pin.net or f"~nc/{pl.ref}/{pin.number}")
         for pl in self.placed:
-            fields, on_bom = self._part_fields(pl.part)
+            fields, on_bom = part_fields(pl.part)
             self._emit_symbol(pl, pl.part.value, fields, in_bom=on_bom, on_board=True)
         self._blocks()
         # group pins: (net, block) -> pins
@@ -512,20 +501,11 @@ class DrawnSheetWriter(SheetWriter):
         sub = Sheet(self.sheet.name, self.sheet.title, parts=parts, ports=self.sheet.ports,
                     flags=flags)
         w = SheetWriter(sub, self.key, self.instances, self.title, self.revision, self.ports)
-        flag_n = 0
-        for obj, x, y in w._layout():
-            if isinstance(obj, str):
-                flag_n += 1
-                w._symbol("power:PWR_FLAG", f"#FLG{self.key[:3].upper()}{flag_n:02d}", "PWR_FLAG",
-                          x, y + bottom * 2.54 + 10, {"Footprint": "", "Datasheet": "~",
-                                                      "Description": ""},
-                          {"1": obj}, in_bom=False, tag=f"flag/{obj}")
-                continue
-            w._symbol(obj.item.symbol, obj.ref, obj.value, x, y + bottom * 2.54 + 10,
-                      self._part_fields(obj)[0], obj.nets, in_bom=obj.item.on_bom, on_board=True)
+        w.y_offset = snap(bottom * 2.54 + 10)
+        w.build()
         self.items += w.items
         self.lib_ids += [l for l in w.lib_ids if l not in self.lib_ids]
-        self.height = max(self.height, bottom * 2.54 + 10 + w.height)
+        self.height = max(self.height, w.y_offset + w.height)
 
     def document(self, sheet_uses=None, root=False) -> list:
         items = self.items if self.items else self.build()

@@ -50,6 +50,19 @@ def _prop(key: str, value: str, x: float, y: float, hide: bool, justify: str | N
     return ["property", Q(key), Q(value), ["at", sexpr.num(x), sexpr.num(y), "0"], eff]
 
 
+def part_fields(part: Part) -> tuple[dict[str, str], bool]:
+    """A part's symbol fields (from bom/parts.csv) and whether it is on the BOM: a test pad is on
+    the board, off the BOM, with no part fields."""
+    it = part.item
+    if not it.on_bom:
+        return {"Footprint": it.footprint, "Datasheet": "~",
+                "Description": "bare copper test pad (no part)"}, False
+    row = it.row
+    return {"Footprint": it.footprint, "Datasheet": row["Datasheet"] or "~",
+            "Description": row["Description"], "MPN": it.mpn,
+            "Manufacturer": row["Manufacturer"], "LCSC": row["LCSC"]}, True
+
+
 def _extent(lib_id: str) -> tuple[float, float, float, float]:
     """Pin extent in schematic coordinates relative to the symbol origin: x0, y0, x1, y1."""
     ps = libsym.pins(lib_id)
@@ -77,6 +90,7 @@ class SheetWriter:
         self.lib_ids: list[str] = []
         self.width = 0.0
         self.height = 0.0
+        self.y_offset = 0.0            # mm, on the grid: packs the sheet below a drawing
 
     # --- layout -------------------------------------------------------------------------------
     def _layout(self) -> list[tuple[Part | str, float, float]]:
@@ -97,7 +111,7 @@ class SheetWriter:
                 x = 0.0
                 y += row_h
                 row_h = 0.0
-            placed.append((obj, snap(20 + x - ox), snap(30 + y - oy)))
+            placed.append((obj, snap(20 + x - ox), snap(30 + y - oy) + self.y_offset))
             x += w
             row_h = max(row_h, h)
         self.width = row_w + 40
@@ -167,18 +181,9 @@ class SheetWriter:
                              x, y, {"Footprint": "", "Datasheet": "~", "Description": ""},
                              {"1": obj}, in_bom=False, tag=f"flag/{obj}")
                 continue
-            it = obj.item
-            if not it.on_bom:        # a test pad: on the board, off the BOM, no part fields
-                self._symbol(it.symbol, obj.ref, obj.value, x, y,
-                             {"Footprint": it.footprint, "Datasheet": "~",
-                              "Description": "bare copper test pad (no part)"},
-                             obj.nets, in_bom=False, on_board=True)
-                continue
-            row = it.row
-            fields = {"Footprint": it.footprint, "Datasheet": row["Datasheet"] or "~",
-                      "Description": row["Description"], "MPN": it.mpn,
-                      "Manufacturer": row["Manufacturer"], "LCSC": row["LCSC"]}
-            self._symbol(it.symbol, obj.ref, obj.value, x, y, fields, obj.nets)
+            fields, on_bom = part_fields(obj)
+            self._symbol(obj.item.symbol, obj.ref, obj.value, x, y, fields, obj.nets,
+                         in_bom=on_bom, on_board=True)
         return self.items
 
     def document(self, sheet_uses: list[list] | None = None, root: bool = False) -> list:
