@@ -34,6 +34,11 @@ def main(argv: list[str] | None = None) -> int:
     if len(args) != 2:
         print("usage: netcompare A.kicad_sch B.kicad_sch", file=sys.stderr)
         return 2
+    missing = [x for x in args if not Path(x).is_file()]
+    if missing:
+        print(f"netcompare: no schematic {', '.join(missing)}: give two .kicad_sch files "
+              "(e.g. hardware/psu/psu.kicad_sch)", file=sys.stderr)
+        return 2
     a, b = (netlist.export(Path(x)) for x in args)
     diffs = differences(a, b)
     for d in diffs:
