@@ -54,10 +54,10 @@ impl CanController for Port {
                 q.push_back(Received { frame: *frame, at });
             }
         }
-        self.done.push_back(rtcan::controller::TxResult {
-            id: frame.id(),
-            outcome: rtcan::controller::TxOutcome::Sent,
-        });
+        self.done.push_back(rtcan::controller::TxResult::new(
+            frame.id(),
+            rtcan::controller::TxOutcome::Sent,
+        ));
         Ok(())
     }
     fn set_tx_mode(&mut self, _: rtcan::controller::TxMode) {}

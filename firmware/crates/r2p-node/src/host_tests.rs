@@ -49,7 +49,7 @@ impl CanController for Loopback {
         if self.results.len() == rtcan::controller::TX_RESULTS {
             self.results.pop_front();
         }
-        self.results.push_back(TxResult { id: frame.id(), outcome: rtcan::TxOutcome::Sent });
+        self.results.push_back(TxResult::new(frame.id(), rtcan::TxOutcome::Sent));
         Ok(())
     }
     fn set_tx_mode(&mut self, _: TxMode) {}

@@ -1188,7 +1188,7 @@ impl<
                 bump(&mut self.stats.hrt_sent)
             }
             Done::Slotted { what: Slotted::Hrt(i), .. } => self.hrt_miss(i),
-            Done::Slotted { what: Slotted::Sync, outcome, .. } => {
+            Done::Slotted { what: Slotted::Sync, outcome, start_of_frame, .. } => {
                 // The controller's result of the sync loaded at `at`: sent (TXOK), or it lost
                 // arbitration, ended in an error frame (no ACK, bit error) or was withdrawn.
                 // More than L failures in a row make the master step down (docs/rtcan.md,
@@ -1197,6 +1197,14 @@ impl<
                     let sent = outcome == TxOutcome::Sent;
                     if sent {
                         bump(&mut self.stats.syncs_sent);
+                    }
+                    // The cycle starts at the sync's start of frame, for the master as for
+                    // the slaves that stamp it on reception.
+                    if let (true, Some(sof)) = (sent, start_of_frame) {
+                        if self.master.is_some() {
+                            self.clock.restamp_last_sync(sync.cycle, sof);
+                            self.last_sync = self.last_sync.max(sof);
+                        }
                     }
                     let a = self.failover.on_sync_sent(at, &sync, sent);
                     self.apply(a);

@@ -61,6 +61,8 @@ pub enum Done<T> {
         id: FrameId,
         /// Its outcome.
         outcome: TxOutcome,
+        /// Its start of frame, if it was sent and the controller stamps transmissions.
+        start_of_frame: Option<Micros>,
     },
     /// A queued (SRT/NRT) frame: if it went out, remove `ticket` from the queue; otherwise it
     /// stays there.
@@ -225,7 +227,12 @@ impl<T: Copy> SlotTx<T> {
         while let Some(r) = can.take_tx_result() {
             let d = if let Some((what, _)) = self.slotted.filter(|&(_, id)| id == r.id) {
                 self.slotted = None;
-                Done::Slotted { what, id: r.id, outcome: r.outcome }
+                Done::Slotted {
+                    what,
+                    id: r.id,
+                    outcome: r.outcome,
+                    start_of_frame: r.start_of_frame,
+                }
             } else if let Some(j) = self.queued.iter().position(|q| q.is_some_and(|q| q.1 == r.id))
             {
                 // Loaded frames have distinct identifiers (`load_queued`).

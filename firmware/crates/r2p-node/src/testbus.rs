@@ -121,7 +121,7 @@ impl<const PORTS: usize> Bus<PORTS> {
         if r[me].is_full() {
             r[me].pop_front();
         }
-        let _ = r[me].push_back(TxResult { id: frame.id(), outcome });
+        let _ = r[me].push_back(TxResult::new(frame.id(), outcome));
     }
 
     pub fn is_on(&self, me: usize) -> bool {

@@ -16,62 +16,32 @@ use embassy_stm32::interrupt::typelevel::{Handler, Interrupt};
 use embassy_stm32::pac;
 use embassy_stm32::pac::can::vals::{Ide, Rtr};
 
-/// Frames the ring holds: both hardware FIFOs' worth.
-const RING: usize = 6;
+use crate::rx_ring::{Captured, RxRing};
 
-/// A frame as the interrupt read it from a FIFO mailbox.
-#[derive(Clone, Copy)]
-pub(crate) struct Captured {
-    /// 29-bit identifier; `None` for a standard-identifier or remote frame (not RTCAN).
-    pub raw_id: Option<u32>,
-    pub len: u8,
-    pub data: [u8; 8],
-    /// The time-triggered counter at the frame's start of frame.
-    pub time: u16,
-    /// The node's clock (µs) when the interrupt ran.
-    pub stamped_at: u64,
-}
-
-struct Ring {
+struct Rx {
     regs: Option<pac::can::Can>,
-    buf: [Option<Captured>; RING],
-    head: usize,
-    len: usize,
-    /// Frames lost because the driver did not take them in time.
-    overruns: u32,
+    ring: RxRing,
 }
 
-static RX: Mutex<RefCell<Ring>> =
-    Mutex::new(RefCell::new(Ring { regs: None, buf: [None; RING], head: 0, len: 0, overruns: 0 }));
+static RX: Mutex<RefCell<Rx>> = Mutex::new(RefCell::new(Rx { regs: None, ring: RxRing::new() }));
 
 /// Points the interrupt handler at `regs` and empties the ring.
 pub(crate) fn attach(regs: pac::can::Can) {
     critical_section::with(|cs| {
         let mut r = RX.borrow_ref_mut(cs);
         r.regs = Some(regs);
-        r.head = 0;
-        r.len = 0;
+        r.ring.clear();
     });
 }
 
 /// The oldest captured frame.
 pub(crate) fn take() -> Option<Captured> {
-    critical_section::with(|cs| {
-        let mut r = RX.borrow_ref_mut(cs);
-        if r.len == 0 {
-            return None;
-        }
-        let head = r.head;
-        let c = r.buf[head].take();
-        r.head = (head + 1) % RING;
-        r.len -= 1;
-        c
-    })
+    critical_section::with(|cs| RX.borrow_ref_mut(cs).ring.take())
 }
 
 /// Frames dropped because the ring was full.
 pub(crate) fn overruns() -> u32 {
-    critical_section::with(|cs| RX.borrow_ref(cs).overruns)
+    critical_section::with(|cs| RX.borrow_ref(cs).ring.overruns())
 }
 
 /// The receive interrupts' handler (bind it to RX0 and RX1, before embassy's).
@@ -86,39 +56,29 @@ impl<I: Interrupt> Handler<I> for RxStamp {
 /// Empties both FIFOs into the ring (one copy for both interrupts).
 #[inline(never)]
 fn drain() {
-    {
-        // First: this instant is the frame's valid point plus the interrupt's latency.
-        let now = embassy_time::Instant::now().as_micros();
-        critical_section::with(|cs| {
-            let mut r = RX.borrow_ref_mut(cs);
-            let Some(regs) = r.regs else { return };
-            for fifo in 0..2 {
-                while regs.rfr(fifo).read().fmp() != 0 {
-                    let mb = regs.rx(fifo);
-                    let rir = mb.rir().read();
-                    let rdtr = mb.rdtr().read();
-                    let lo = mb.rdlr().read().0.to_le_bytes();
-                    let hi = mb.rdhr().read().0.to_le_bytes();
-                    regs.rfr(fifo).modify(|w| w.set_rfom(true));
-                    let raw_id = (rir.ide() == Ide::EXTENDED && rir.rtr() == Rtr::DATA)
-                        .then(|| (u32::from(rir.stid()) & 0x7ff) << 18 | (rir.exid() & 0x3_ffff));
-                    let data = [lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]];
-                    let c = Captured {
-                        raw_id,
-                        len: rdtr.dlc().min(8),
-                        data,
-                        time: rdtr.time(),
-                        stamped_at: now,
-                    };
-                    if r.len == RING {
-                        r.overruns = r.overruns.wrapping_add(1);
-                        continue;
-                    }
-                    let at = (r.head + r.len) % RING;
-                    r.buf[at] = Some(c);
-                    r.len += 1;
-                }
+    // First: this instant is the frame's valid point plus the interrupt's latency.
+    let now = embassy_time::Instant::now().as_micros();
+    critical_section::with(|cs| {
+        let mut r = RX.borrow_ref_mut(cs);
+        let Some(regs) = r.regs else { return };
+        for fifo in 0..2 {
+            while regs.rfr(fifo).read().fmp() != 0 {
+                let mb = regs.rx(fifo);
+                let rir = mb.rir().read();
+                let rdtr = mb.rdtr().read();
+                let lo = mb.rdlr().read().0.to_le_bytes();
+                let hi = mb.rdhr().read().0.to_le_bytes();
+                regs.rfr(fifo).modify(|w| w.set_rfom(true));
+                let raw_id = (rir.ide() == Ide::EXTENDED && rir.rtr() == Rtr::DATA)
+                    .then(|| (u32::from(rir.stid()) & 0x7ff) << 18 | (rir.exid() & 0x3_ffff));
+                r.ring.push(Captured {
+                    raw_id,
+                    len: rdtr.dlc().min(8),
+                    data: [lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]],
+                    time: rdtr.time(),
+                    stamped_at: now,
+                });
             }
-        });
-    }
+        }
+    });
 }

@@ -70,9 +70,20 @@ pub struct TxResult {
     pub id: FrameId,
     /// Sent, or why not.
     pub outcome: TxOutcome,
+    /// A sent frame's start of frame in the node's µs, where the controller captures it (bxCAN
+    /// in time-triggered mode: `CAN_TDTxR.TIME`); `None` otherwise. The master anchors its
+    /// cycle at its sync's start of frame, as the slaves do, rather than at the instant it
+    /// loaded the sync (the code from its clock read to the mailbox request takes ~20 µs on a
+    /// 72 MHz Cortex-M3).
+    pub start_of_frame: Option<Micros>,
 }
 
 impl TxResult {
+    /// A result without a start-of-frame stamp.
+    pub const fn new(id: FrameId, outcome: TxOutcome) -> Self {
+        Self { id, outcome, start_of_frame: None }
+    }
+
     /// True if the frame went out.
     pub const fn sent(&self) -> bool {
         matches!(self.outcome, TxOutcome::Sent)

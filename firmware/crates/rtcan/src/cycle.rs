@@ -353,6 +353,23 @@ impl SlotClock {
         info
     }
 
+    /// The master's own sync of `cycle` (its counter byte) went out with its start of frame at
+    /// `at`, as the controller reports it: re-anchors the cycle there, where the slaves anchor
+    /// it. ([`Self::on_sync`] was fed the instant the sync was loaded, earlier by the code and
+    /// the controller's latency up to the mailbox request.) Ignored unless that sync is the
+    /// last one fed and `at` lies in its slot, after the instant it was fed.
+    pub fn restamp_last_sync(&mut self, cycle: u8, at: Micros) {
+        let Some((t0, c0)) = self.last else { return };
+        let in_its_slot = at >= t0 && at - t0 < Micros::from(self.config.slot_us());
+        if c0 as u8 != cycle || !in_its_slot {
+            return;
+        }
+        let newest = (self.hist_head + PERIOD_WINDOW - 1) % PERIOD_WINDOW;
+        self.last = Some((at, c0));
+        self.hist_at[newest] = at;
+        self.estimate_period();
+    }
+
     fn push_history(&mut self, at: Micros, cycle: u32) {
         self.hist_at[self.hist_head] = at;
         self.hist_cycle[self.hist_head] = cycle;
@@ -360,7 +377,14 @@ impl SlotClock {
         if self.hist_len < PERIOD_WINDOW {
             self.hist_len += 1;
         }
+        self.estimate_period();
+    }
+
+    /// The period over the syncs in the history window.
+    fn estimate_period(&mut self) {
         if self.hist_len >= 2 {
+            let newest = (self.hist_head + PERIOD_WINDOW - 1) % PERIOD_WINDOW;
+            let (at, cycle) = (self.hist_at[newest], self.hist_cycle[newest]);
             let oldest = (self.hist_head + PERIOD_WINDOW - self.hist_len) % PERIOD_WINDOW;
             let cycles = cycle.wrapping_sub(self.hist_cycle[oldest]) as u64;
             let dt = at - self.hist_at[oldest];
@@ -559,6 +583,34 @@ pub(crate) mod tests {
             // Re-phase: the next sync arrives 3 µs late; slot times follow it.
             clk.on_sync(last + 10_013, &Sync::new(270, 0, false));
             assert_eq!(clk.slot_start(270, 0), Some(last + 10_013));
+        }
+
+        fn a_sent_syncs_start_of_frame_re_anchors_the_masters_cycle() {
+            // The master feeds its syncs as it loads them; each starts 22 µs later on the wire.
+            let mut clk = SlotClock::new(CycleConfig::DEFAULT);
+            for c in 0..4u32 {
+                let loaded = 1_000 + u64::from(c) * 10_000;
+                clk.on_sync(loaded, &Sync::new(c, 0, false));
+                assert_eq!(clk.slot_start(c, 0), Some(loaded));
+                clk.restamp_last_sync(c as u8, loaded + 22);
+                assert_eq!(clk.slot_start(c, 0), Some(loaded + 22));
+                assert_eq!(clk.slot_start(c, 1), Some(loaded + 22 + 167));
+            }
+            assert_eq!(clk.period_q8(), 10_000 << 8, "a constant latency leaves the period");
+            // Not the last sync, before its anchor, or past its slot: ignored.
+            let last = 30_000 + 1_022;
+            for (cycle, at) in [(2u8, last + 5), (3, last - 1), (3, last + 166)] {
+                let mut c = clk.clone();
+                c.restamp_last_sync(cycle, at);
+                assert_eq!(c.slot_start(3, 0), Some(last), "{cycle} {at}");
+            }
+            let mut c = clk.clone();
+            c.restamp_last_sync(3, last + 165);
+            assert_eq!(c.slot_start(3, 0), Some(last + 165), "the slot's last µs");
+            // Before any sync: nothing to re-anchor.
+            let mut fresh = SlotClock::new(CycleConfig::DEFAULT);
+            fresh.restamp_last_sync(0, 5);
+            assert_eq!(fresh.state(5), ClockState::Unsynced);
         }
 
         fn clock_free_runs_then_stops() {

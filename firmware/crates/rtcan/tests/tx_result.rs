@@ -8,7 +8,7 @@ use rtcan::{FrameId, Laxity, MessageId};
 #[test]
 fn only_a_sent_outcome_counts_as_sent() {
     let id = FrameId { laxity: Laxity::NRT, message: MessageId(0x0101), fragment: 0 };
-    let sent = |outcome| TxResult { id, outcome }.sent();
+    let sent = |outcome| TxResult::new(id, outcome).sent();
     assert!(sent(TxOutcome::Sent));
     for outcome in [TxOutcome::LostArbitration, TxOutcome::Error, TxOutcome::Aborted] {
         assert!(!sent(outcome), "{outcome:?}");

@@ -187,7 +187,7 @@ impl CanController for Controller<'_> {
         match self.link.send(&f) {
             Ok(()) => {
                 self.sent += 1;
-                self.done.push_back(TxResult { id: frame.id(), outcome: TxOutcome::Sent });
+                self.done.push_back(TxResult::new(frame.id(), TxOutcome::Sent));
                 Ok(())
             }
             Err(e) => {

@@ -213,7 +213,7 @@ impl<'t> RtcanNode<'t> {
             self.counters.retries += 1;
         }
         match done {
-            Done::Slotted { what, id, outcome: TxOutcome::Sent } => {
+            Done::Slotted { what, id, outcome: TxOutcome::Sent, .. } => {
                 let what = match what {
                     Slotted::Sync => Carried::Sync,
                     Slotted::Hrt(msg) => Carried::Message { msg, fragment: 0 },

@@ -215,8 +215,9 @@ struct Node {
     sending: bool,
     tx_mode: TxMode,
     tx_order: TxOrder,
-    /// Results of finished frames not taken yet, oldest first (at most `TX_RESULTS`).
-    results: VecDeque<TxResult>,
+    /// Results of finished frames not taken yet, oldest first (at most `TX_RESULTS`), with a
+    /// sent frame's start of frame (ns).
+    results: VecDeque<(TxResult, Option<u64>)>,
 }
 
 impl Node {
@@ -253,14 +254,15 @@ impl Node {
         self.results.clear();
     }
 
-    /// Frees mailbox `i` if it still holds the frame loaded as `seq`, and records `outcome`.
-    fn finish(&mut self, i: usize, seq: u64, outcome: TxOutcome) -> bool {
+    /// Frees mailbox `i` if it still holds the frame loaded as `seq`, and records `outcome`
+    /// (and, for a sent frame, its start of frame `sof_ns`).
+    fn finish(&mut self, i: usize, seq: u64, outcome: TxOutcome, sof_ns: Option<u64>) -> bool {
         let Some(m) = self.mailboxes[i].filter(|m| m.seq == seq) else { return false };
         self.mailboxes[i] = None;
         if self.results.len() == TX_RESULTS {
             self.results.pop_front();
         }
-        self.results.push_back(TxResult { id: m.frame.id(), outcome });
+        self.results.push_back((TxResult::new(m.frame.id(), outcome), sof_ns));
         true
     }
 
@@ -469,7 +471,7 @@ impl Inner {
         let n = &mut self.nodes[w.port];
         let frame = n.mailboxes[w.mailbox].filter(|m| m.seq == w.seq).map(|m| m.frame);
         if let Some(frame) = frame {
-            n.finish(w.mailbox, w.seq, TxOutcome::LostArbitration);
+            n.finish(w.mailbox, w.seq, TxOutcome::LostArbitration, None);
             self.log(w.at, w.port, EventKind::LostArbitration { start_ns: w.start, frame });
         }
     }
@@ -588,7 +590,7 @@ impl Inner {
                 let n = &mut self.nodes[f.sender];
                 n.tec = n.tec.saturating_sub(1);
                 if let Source::Mailbox(i, seq) = f.source {
-                    n.finish(i, seq, TxOutcome::Sent);
+                    n.finish(i, seq, TxOutcome::Sent, Some(f.start));
                 }
                 self.log(
                     f.end,
@@ -611,7 +613,7 @@ impl Inner {
                     }
                     if f.aborted || n.tx_mode == TxMode::OneShot {
                         if let Source::Mailbox(i, seq) = f.source {
-                            n.finish(i, seq, TxOutcome::Error);
+                            n.finish(i, seq, TxOutcome::Error, None);
                         }
                     }
                 }
@@ -861,6 +863,27 @@ impl Port {
         lock(&self.inner).nodes[self.index].fifo.len()
     }
 
+    /// [`CanController::try_transmit`] for a driver that takes `delay_ns` from the caller's
+    /// clock read to the mailbox request: the frame competes for the bus from then on.
+    pub fn transmit_after(&mut self, frame: &Frame, delay_ns: u64) -> Result<(), TxError> {
+        let mut g = lock(&self.inner);
+        let (now, seq) = (g.now, g.seq);
+        let n = &mut g.nodes[self.index];
+        if !n.active() {
+            return Err(TxError::BusOff);
+        }
+        let slot = n.mailboxes.iter_mut().find(|m| m.is_none()).ok_or(TxError::MailboxesFull)?;
+        *slot = Some(Mailbox { frame: *frame, loaded_at: now + delay_ns, seq });
+        g.seq += 1;
+        Ok(())
+    }
+
+    /// The oldest finished frame's result with, if it was sent, its start of frame on the bus
+    /// (ns): what a controller that timestamps transmissions captures.
+    pub fn take_tx_result_with_start(&mut self) -> Option<(TxResult, Option<u64>)> {
+        lock(&self.inner).nodes[self.index].results.pop_front()
+    }
+
     /// Sets the order in which the port's mailboxes go out (kept across power cycles, like
     /// the driver setting it at every start).
     pub fn set_tx_order(&mut self, order: TxOrder) {
@@ -872,16 +895,7 @@ impl CanController for Port {
     /// Loads `frame` at the current virtual time. A powered-off port reports
     /// [`TxError::BusOff`]. Mailboxes take part in arbitration in the port's [`TxOrder`].
     fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
-        let mut g = lock(&self.inner);
-        let (now, seq) = (g.now, g.seq);
-        let n = &mut g.nodes[self.index];
-        if !n.active() {
-            return Err(TxError::BusOff);
-        }
-        let slot = n.mailboxes.iter_mut().find(|m| m.is_none()).ok_or(TxError::MailboxesFull)?;
-        *slot = Some(Mailbox { frame: *frame, loaded_at: now, seq });
-        g.seq += 1;
-        Ok(())
+        self.transmit_after(frame, 0)
     }
 
     /// One setting for the port's mailboxes, read when a frame loses arbitration or fails;
@@ -892,8 +906,11 @@ impl CanController for Port {
 
     /// A one-shot loser's result is there from the end of the bit where it lost; a sent frame's
     /// from its end of EOF; a failed one's from the end of its error delimiter.
+    ///
+    /// A plain port is a controller without transmit timestamps (`start_of_frame: None`);
+    /// [`crate::BxCanPort`] adds bxCAN's.
     fn take_tx_result(&mut self) -> Option<TxResult> {
-        lock(&self.inner).nodes[self.index].results.pop_front()
+        self.take_tx_result_with_start().map(|(r, _)| r)
     }
 
     fn try_receive(&mut self) -> Option<Received> {
@@ -933,7 +950,7 @@ impl CanController for Port {
             .collect();
         waiting.sort_unstable();
         for &(seq, i) in &waiting {
-            n.finish(i, seq, TxOutcome::Aborted);
+            n.finish(i, seq, TxOutcome::Aborted, None);
         }
         waiting.len()
     }

@@ -5,9 +5,12 @@
 //! 16-bit bit-time counter there (`CAN_RDTxR.TIME`), the counter having started at an
 //! arbitrary phase; the receive interrupt stamps the node's clock when the frame becomes valid
 //! (one bit before the end of EOF) plus an interrupt latency drawn per frame: none for three
-//! frames in four, 1 … [`MAX_RX_LATENCY_US`] µs for the others. The driver half is firmware: [`rtcan::time_counter::TimeCounter`], the
-//! same code `rtcan-bxcan` runs on the modules, turns the capture into the node's µs. Nothing
-//! here subtracts a frame's length from a timestamp on the firmware's behalf.
+//! frames in four, 1 … [`MAX_RX_LATENCY_US`] µs for the others. Transmitted frames are
+//! captured at their start of frame too (`CAN_TDTxR.TIME`), and a frame reaches its mailbox
+//! [`BxCanPort::with_load_latency`] after the firmware read its clock (the code of the slot
+//! path between the two). The driver half is firmware: [`rtcan::time_counter::TimeCounter`],
+//! the same code `rtcan-bxcan` runs on the modules, turns a capture into the node's µs.
+//! Nothing here subtracts a frame's length from a timestamp on the firmware's behalf.
 
 use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxResult};
 use rtcan::time_counter::{TimeCounter, TIME_COUNTER_MODULUS};
@@ -29,6 +32,8 @@ pub struct BxCanPort {
     /// unrelated to the node's clock).
     phase: u64,
     counter: TimeCounter,
+    /// From the caller's clock read to the mailbox request (ns).
+    load_latency_ns: u64,
 }
 
 impl BxCanPort {
@@ -41,7 +46,22 @@ impl BxCanPort {
         let phase =
             (port.index() as u64).wrapping_mul(40_503).wrapping_add(1_234) % TIME_COUNTER_MODULUS;
         let counter = TimeCounter::new(bit_rate).expect("a bit rate with a whole-µs bit time");
-        Self { port, bit_ns: 1_000_000_000 / u64::from(bit_rate), phase, counter }
+        let bit_ns = 1_000_000_000 / u64::from(bit_rate);
+        Self { port, bit_ns, phase, counter, load_latency_ns: 0 }
+    }
+
+    /// Frames reach their mailbox `us` after [`CanController::try_transmit`] is called: the
+    /// time the firmware's code takes from reading its clock (the instant it decided to send)
+    /// to the transmit request. On a module that is the slot path, ~1 600 instructions
+    /// (`make bench`, QEMU slot-path bench), about 22 µs at 72 MHz.
+    pub fn with_load_latency(mut self, us: u64) -> Self {
+        self.load_latency_ns = us * 1_000;
+        self
+    }
+
+    /// The counter's value at bus time `t_ns` (what bxCAN captures at a start of frame then).
+    fn capture_at(&self, t_ns: u64) -> u16 {
+        ((t_ns / self.bit_ns + self.phase) % TIME_COUNTER_MODULUS) as u16
     }
 
     /// The wrapped port.
@@ -61,8 +81,7 @@ impl BxCanPort {
         let r = self.port.try_receive()?;
         let end_ns = r.at * 1_000;
         let bits = FrameBits::of(&r.frame).to_eof_end();
-        let sof_ns = end_ns - u64::from(bits) * self.bit_ns;
-        let capture = ((sof_ns / self.bit_ns + self.phase) % TIME_COUNTER_MODULUS) as u16;
+        let capture = self.capture_at(end_ns - u64::from(bits) * self.bit_ns);
         let valid_us = (end_ns - self.bit_ns) / 1_000;
         let h = (r.at ^ (self.port.index() as u64) << 48).wrapping_mul(0x9E37_79B9_7F4A_7C15);
         // Mostly prompt (the core idle or in a task); one frame in four waits 1 … max µs
@@ -74,13 +93,20 @@ impl BxCanPort {
 
 impl CanController for BxCanPort {
     fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
-        self.port.try_transmit(frame)
+        self.port.transmit_after(frame, self.load_latency_ns)
     }
     fn set_tx_mode(&mut self, mode: TxMode) {
         self.port.set_tx_mode(mode);
     }
+    /// A sent frame's start of frame: its `TIME` capture extended by the firmware's counter
+    /// (none until a received frame related the counter to the node's clock).
     fn take_tx_result(&mut self) -> Option<TxResult> {
-        self.port.take_tx_result()
+        let (mut r, sof_ns) = self.port.take_tx_result_with_start()?;
+        if let Some(sof_ns) = sof_ns {
+            let now = self.port.now_ns() / 1_000;
+            r.start_of_frame = self.counter.start_of_frame(self.capture_at(sof_ns), now);
+        }
+        Some(r)
     }
     /// The firmware's path: the counter capture extended to the node's µs.
     fn try_receive(&mut self) -> Option<Received> {

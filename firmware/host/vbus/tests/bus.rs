@@ -224,7 +224,7 @@ fn abort_pending_counts_frames_not_on_the_wire() {
     bus.step(); // start of frame: port 0 will win
                 // 0x3 waits in a mailbox; 0x2 is sending its identifier until the bit where it loses.
     assert_eq!(p1.abort_pending(), 1);
-    let result = |id, outcome| TxResult { id: FrameId::from_raw(id).unwrap(), outcome };
+    let result = |id, outcome| TxResult::new(FrameId::from_raw(id).unwrap(), outcome);
     assert_eq!(results(&mut p1), [result(0x3, TxOutcome::Aborted)]);
     let loses = u64::from(r2p_vbus::bits::arbitration_loss_bits(0x1, 0x2)) * 1_000;
     assert_eq!(bus.step(), Some(loses));
@@ -273,10 +273,7 @@ fn one_shot_losers_are_withdrawn_at_the_bit_where_they_lose() {
         let mut port = bus.port(p + 1);
         assert_eq!(port.pending(), 1, "still loaded before the bit where it loses");
         assert_eq!(bus.step(), Some(u64::from(bits) * 1_000));
-        assert_eq!(
-            results(&mut port),
-            [TxResult { id: f.id(), outcome: TxOutcome::LostArbitration }]
-        );
+        assert_eq!(results(&mut port), [TxResult::new(f.id(), TxOutcome::LostArbitration)]);
         assert_eq!(port.pending(), 0);
     }
     bus.run_until_idle(MS);
@@ -307,7 +304,7 @@ fn a_one_shot_frame_that_fails_is_withdrawn_and_reported() {
     bus.run_until_idle(MS);
     assert_eq!(bus.frames().count(), 0, "not retransmitted");
     assert_eq!(a.pending(), 0);
-    assert_eq!(results(&mut a), [TxResult { id: f.id(), outcome: TxOutcome::Error }]);
+    assert_eq!(results(&mut a), [TxResult::new(f.id(), TxOutcome::Error)]);
     assert_eq!(a.error_counters().tx, 8);
     // Back to retransmission: the same fault is retried until it goes out.
     a.set_tx_mode(TxMode::Retransmit);
@@ -315,7 +312,7 @@ fn a_one_shot_frame_that_fails_is_withdrawn_and_reported() {
     a.try_transmit(&f).unwrap();
     bus.run_until_idle(2 * MS);
     assert_eq!(bus.frames().count(), 1);
-    assert_eq!(results(&mut a), [TxResult { id: f.id(), outcome: TxOutcome::Sent }]);
+    assert_eq!(results(&mut a), [TxResult::new(f.id(), TxOutcome::Sent)]);
 }
 
 #[test]

@@ -40,8 +40,15 @@ struct Rig {
 
 impl Rig {
     fn new(nodes: usize, ports: usize) -> Self {
+        Self::with_load_latency(nodes, ports, 0)
+    }
+
+    /// Every node's frames reach their mailbox `us` after the node read its clock.
+    fn with_load_latency(nodes: usize, ports: usize, us: u64) -> Self {
         let bus = Bus::new(ports, Config::default());
-        let ports = (0..nodes).map(|i| BxCanPort::new(bus.port(i), CYCLE.bit_rate)).collect();
+        let ports = (0..nodes)
+            .map(|i| BxCanPort::new(bus.port(i), CYCLE.bit_rate).with_load_latency(us))
+            .collect();
         Self { bus, ports, wake: std::vec![0; nodes] }
     }
 
@@ -441,4 +448,30 @@ fn an_nrt_backlog_never_keeps_an_srt_message_out_of_the_queue() {
     assert_eq!(a.stats().deadline_misses, 0);
     let logs = core::iter::from_fn(|| MLS.try_recv()).count();
     assert_eq!(logs, 30, "the log backlog still goes out, after");
+}
+
+/// The slot path of a module takes ~22 µs from the slot timer's clock read to the mailbox
+/// request (QEMU slot-path bench, 72 MHz), so the master's sync starts that much after the
+/// instant it decided to send it. Slaves anchor the cycle at the sync's start of frame; the
+/// master must too (bxCAN's transmit stamp), or its slot grid runs ahead of everyone else's
+/// and its HRT frames start early in their slot as the others see it.
+#[test]
+fn the_master_anchors_its_cycle_where_the_slaves_do_at_its_syncs_start_of_frame() {
+    const LOAD_US: u64 = 22;
+    let Parts { mut m, mut a, mut b, .. } = rig!(FreeSlots::Single);
+    let mut rig = Rig::with_load_latency(3, 3, LOAD_US);
+    rig.run(&mut [&mut m, &mut a, &mut b], 200_000);
+    let sof = Seen::of(&rig.bus).cycles.last().expect("the master syncs").0;
+    let now = rig.bus.now() / 1_000;
+    for (name, node) in [("master", &m), ("slave a", &a), ("slave b", &b)] {
+        let rtcan::cycle::ClockState::Running(p) = node.clock().state(now) else {
+            panic!("{name}: no cycle")
+        };
+        // The cycle the last sync started, as each node's clock places it.
+        let start = node.clock().slot_start(p.cycle, 0).expect("running");
+        let slot1 = node.clock().slot_start(p.cycle, 1).expect("running");
+        assert!(start <= now && now - start < CYCLE_US, "{name}: {start} {now}");
+        assert_eq!(start, sof, "{name}: cycle start vs the sync's start of frame on the bus");
+        assert_eq!(slot1, sof + SLOT_US, "{name}: slot 1");
+    }
 }
