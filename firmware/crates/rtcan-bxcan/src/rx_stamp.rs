@@ -53,32 +53,33 @@ impl<I: Interrupt> Handler<I> for RxStamp {
     }
 }
 
-/// Empties both FIFOs into the ring (one copy for both interrupts).
+/// Empties both FIFOs into the ring (one copy for both interrupts). The FIFOs are this
+/// interrupt's alone; only the ring is shared with the driver, so each frame's push is its
+/// own short critical section, and the slot timer's interrupt (above this one) is held back
+/// by one push at most, never by a whole drain.
 #[inline(never)]
 fn drain() {
     // First: this instant is the frame's valid point plus the interrupt's latency.
     let now = embassy_time::Instant::now().as_micros();
-    critical_section::with(|cs| {
-        let mut r = RX.borrow_ref_mut(cs);
-        let Some(regs) = r.regs else { return };
-        for fifo in 0..2 {
-            while regs.rfr(fifo).read().fmp() != 0 {
-                let mb = regs.rx(fifo);
-                let rir = mb.rir().read();
-                let rdtr = mb.rdtr().read();
-                let lo = mb.rdlr().read().0.to_le_bytes();
-                let hi = mb.rdhr().read().0.to_le_bytes();
-                regs.rfr(fifo).modify(|w| w.set_rfom(true));
-                let raw_id = (rir.ide() == Ide::EXTENDED && rir.rtr() == Rtr::DATA)
-                    .then(|| (u32::from(rir.stid()) & 0x7ff) << 18 | (rir.exid() & 0x3_ffff));
-                r.ring.push(Captured {
-                    raw_id,
-                    len: rdtr.dlc().min(8),
-                    data: [lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]],
-                    time: rdtr.time(),
-                    stamped_at: now,
-                });
-            }
+    let Some(regs) = critical_section::with(|cs| RX.borrow_ref(cs).regs) else { return };
+    for fifo in 0..2 {
+        while regs.rfr(fifo).read().fmp() != 0 {
+            let mb = regs.rx(fifo);
+            let rir = mb.rir().read();
+            let rdtr = mb.rdtr().read();
+            let lo = mb.rdlr().read().0.to_le_bytes();
+            let hi = mb.rdhr().read().0.to_le_bytes();
+            regs.rfr(fifo).modify(|w| w.set_rfom(true));
+            let raw_id = (rir.ide() == Ide::EXTENDED && rir.rtr() == Rtr::DATA)
+                .then(|| (u32::from(rir.stid()) & 0x7ff) << 18 | (rir.exid() & 0x3_ffff));
+            let c = Captured {
+                raw_id,
+                len: rdtr.dlc().min(8),
+                data: [lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]],
+                time: rdtr.time(),
+                stamped_at: now,
+            };
+            critical_section::with(|cs| RX.borrow_ref_mut(cs).ring.push(c));
         }
-    });
+    }
 }

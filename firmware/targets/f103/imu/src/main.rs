@@ -128,7 +128,7 @@ async fn main(spawner: Spawner) {
     let config = r2p_app_imu::node_config(embassy_stm32::uid::uid(), &PARAMS);
     let mut node = ModuleNode::new(config, &PARAMS).unwrap();
     app.register(&mut node).unwrap();
-    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN, 1_000_000));
+    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN, 1_000_000), p.TIM2);
 
     spawner.spawn(run(app, Io { imu, initialised, leds }, flash)).unwrap();
 }

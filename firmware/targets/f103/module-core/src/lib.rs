@@ -1,11 +1,15 @@
 //! `module_core`: what every R2P module image on the STM32F103 shares (used by the psu,
-//! proximity and motor images): clocks from the board file, the node on
-//! an interrupt executor driven by the TDMA slot timer, parameters in the last two flash pages,
-//! the node's state for the status LEDs, reboot on request.
+//! proximity, motor and imu images): clocks from the board file, the node on an interrupt
+//! executor driven by the TDMA slot timer (TIM2's compare, [`slot_timer`]), parameters in the
+//! last two flash pages, the node's state for the status LEDs, reboot on request.
 //!
 //! Nodes are tasks with priorities, as in the footprint image (targets/shared/footprint_core.rs):
 //! the bus runs on an interrupt executor that preempts the application's 1 kHz step in thread
 //! mode.
+//!
+//! Interrupt priorities: the slot timer (and with it the bus executor) alone at the highest;
+//! the CAN receive interrupts and the time driver (TIM4) one below, so that neither holds a
+//! slot boundary back except for their short critical sections.
 #![no_std]
 
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
@@ -15,8 +19,9 @@ use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::{Flex, Input, Level, Output, Pin};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
+use embassy_stm32::peripherals::TIM2;
 use embassy_stm32::{rcc, time::Hertz, Config, Peri};
-use embassy_time::{Instant, Timer};
+use embassy_time::Instant;
 use r2p_module::{leds, FlashParams};
 use r2p_node::node::STARTING_HEARTBEATS;
 use r2p_node::{Node, NodeConfig};
@@ -26,7 +31,9 @@ use rtcan_bxcan::BxCan;
 use static_cell::StaticCell;
 
 mod flash_layout;
+pub mod slot_timer;
 pub use flash_layout::PARAMS_BASE;
+use slot_timer::SlotTimer;
 
 /// The node of a module image: up to 4 exports and 2 imports, 32 queued frames, 4 streams in
 /// reassembly, messages up to 64 bytes.
@@ -63,14 +70,9 @@ pub fn clocks(hse_hz: u32, pll_mul: u32) -> Config {
     config
 }
 
-/// The high-priority executor the bus runs on, woken through an interrupt no module uses.
+/// The high-priority executor the bus runs on: in the slot timer's interrupt (TIM2), which
+/// runs it at each compare and when the executor pends it.
 static BUS_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
-
-#[interrupt]
-unsafe fn USART3() {
-    // SAFETY: the interrupt is reserved for this executor (started in `start_bus`).
-    unsafe { BUS_EXECUTOR.on_interrupt() }
-}
 
 const RUNNING: u8 = 1;
 const SYNCED: u8 = 2;
@@ -106,7 +108,7 @@ struct BusNode(&'static mut ModuleNode);
 /// The bus: the node driven by the TDMA slot timer at interrupt priority (a rank-0 PSU sends
 /// the syncs; every other module follows them, as every node of a bus with a cycle must).
 #[embassy_executor::task]
-async fn bus(node: BusNode, mut can: BxCan<'static>, running_after_us: u64) {
+async fn bus(node: BusNode, mut can: BxCan<'static>, mut timer: SlotTimer, running_after_us: u64) {
     let node = node.0;
     let (mut frames, mut last_frame_at) = (0u32, None::<u64>);
     loop {
@@ -133,16 +135,25 @@ async fn bus(node: BusNode, mut can: BxCan<'static>, running_after_us: u64) {
         }
         LED_INPUTS.fetch_and(STORAGE_FAULT, Ordering::Relaxed);
         LED_INPUTS.fetch_or(bits, Ordering::Relaxed);
-        Timer::at(Instant::from_micros(node.next_slot_at(now))).await;
+        timer.wait_until(node.next_slot_at(now)).await;
     }
 }
 
-/// Starts the node on the bus executor.
-pub fn start_bus(node: ModuleNode, config: &NodeConfig, can: BxCan<'static>) {
+/// Starts the node on the bus executor, its slot boundaries from TIM2's compare.
+pub fn start_bus(
+    node: ModuleNode,
+    config: &NodeConfig,
+    can: BxCan<'static>,
+    tim2: Peri<'static, TIM2>,
+) {
     let running_after_us = u64::from(STARTING_HEARTBEATS) * u64::from(config.heartbeat_period_us);
-    interrupt::USART3.set_priority(Priority::P6);
+    for irq in [interrupt::USB_LP_CAN1_RX0, interrupt::CAN1_RX1, interrupt::TIM4] {
+        irq.set_priority(Priority::P1);
+    }
+    interrupt::TIM2.set_priority(Priority::P0);
     let node = BusNode(NODE.init(node));
-    BUS_EXECUTOR.start(interrupt::USART3).spawn(bus(node, can, running_after_us)).unwrap();
+    let timer = SlotTimer::new(tim2);
+    BUS_EXECUTOR.start(interrupt::TIM2).spawn(bus(node, can, timer, running_after_us)).unwrap();
 }
 
 /// Loads the parameters from flash (defaults where nothing valid is stored).

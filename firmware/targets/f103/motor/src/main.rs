@@ -139,7 +139,7 @@ async fn main(_spawner: Spawner) {
     let config = NodeConfig::new(embassy_stm32::uid::uid(), names.node);
     let mut node = ModuleNode::new(config, &PARAMS).expect("valid node configuration");
     ep.register(&mut node).expect("room for the motor's topics on its node");
-    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN, 1_000_000));
+    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN, 1_000_000), p.TIM2);
 
     interrupt::USART2.set_priority(CONTROL_PRIORITY);
     CONTROL_EXECUTOR.start(interrupt::USART2).spawn(control(ep, sensors, bridge, leds)).unwrap();

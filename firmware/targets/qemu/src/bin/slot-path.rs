@@ -1,6 +1,10 @@
 //! Cortex-M3 benchmark under QEMU (run by `scripts/bench`): instructions from the slot timer's
 //! call of `Node::slot_tick` to the HRT frame's mailbox request (`try_transmit`), the path a
 //! slot timer's compare interrupt runs before the frame can start, and of the whole call.
+//! Then the same slots as a module runs them (`module-core`'s `slot_timer`): the node in a task
+//! of an interrupt executor, the compare interrupt waking it and running the executor in the
+//! same interrupt; counted from the instruction that pends the interrupt (standing in for the
+//! timer's compare event) to the mailbox request.
 //!
 //! A master and a module with an HRT stream every cycle on the suite's loopback bus; the
 //! module also receives the master's frames and the stream's subscriber, so its receive queue
@@ -11,10 +15,17 @@
 
 use core::cell::Cell;
 use core::fmt::Write;
+use core::future::poll_fn;
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use core::task::Poll;
 
+use cortex_m::interrupt::InterruptNumber;
 use cortex_m::peripheral::syst::SystClkSource;
-use cortex_m::peripheral::SYST;
+use cortex_m::peripheral::{NVIC, SYST};
+use cortex_m_rt::exception;
 use cortex_m_semihosting::{debug, hio};
+use embassy_executor::InterruptExecutor;
+use embassy_sync::waitqueue::AtomicWaker;
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use r2p_node::testbus::{run_slots, uid, Bus, TestNode};
 use r2p_node::{HrtState, NoParams, NodeConfig, RemotePublisher, RemoteSubscriber};
@@ -36,6 +47,82 @@ fn ten_thousand_nops() {
         core::arch::asm!(".rept 10000", "nop", ".endr", options(nomem, nostack, preserves_flags));
     }
 }
+
+/// The executor the node's task runs on, in the "compare" interrupt (IRQ 0 of the lm3s6965).
+static EXECUTOR: InterruptExecutor = InterruptExecutor::new();
+/// The compare event happened (set before the interrupt is pended).
+static COMPARE: AtomicBool = AtomicBool::new(false);
+/// Compare events handled by the interrupt.
+static EVENTS: AtomicU32 = AtomicU32::new(0);
+static SLOT_WAKER: AtomicWaker = AtomicWaker::new();
+/// SysTick when the HRT frame of the current slot was requested (`u32::MAX`: none).
+static REQUESTED_AT: AtomicU32 = AtomicU32::new(u32::MAX);
+
+/// IRQ 0, the slot timer's interrupt here.
+#[derive(Clone, Copy)]
+struct CompareIrq;
+
+// SAFETY: 0 is a device interrupt of the lm3s6965 (its vector is cortex-m-rt's default table).
+unsafe impl InterruptNumber for CompareIrq {
+    fn number(self) -> u16 {
+        0
+    }
+}
+
+/// Device interrupts: IRQ 0 is the slot timer's compare, as `module-core`'s `TIM2` handler:
+/// wake the bus task, run the executor.
+#[exception]
+unsafe fn DefaultHandler(irqn: i16) {
+    if irqn == 0 {
+        if COMPARE.swap(false, Ordering::Relaxed) {
+            EVENTS.fetch_add(1, Ordering::Relaxed);
+            SLOT_WAKER.wake();
+        }
+        // SAFETY: IRQ 0 is reserved for this executor.
+        unsafe { EXECUTOR.on_interrupt() }
+    }
+}
+
+/// The bus task: every slot, waits for the compare, then ticks the module (timed) and the
+/// master, as a module's `bus` task waits for its `SlotTimer`.
+#[embassy_executor::task]
+async fn bus_task(bus: Bus<2>, mut m: TestNode<'static>, mut a: TestNode<'static>) {
+    let step = Micros::from(CYCLE.slot_us());
+    let mut seen = EVENTS.load(Ordering::Relaxed);
+    loop {
+        poll_fn(|cx| {
+            SLOT_WAKER.register(cx.waker());
+            let events = EVENTS.load(Ordering::Relaxed);
+            if events == seen {
+                Poll::Pending
+            } else {
+                seen = events;
+                Poll::Ready(())
+            }
+        })
+        .await;
+        let now = bus.now.get();
+        if now.is_multiple_of(Micros::from(CYCLE.cycle_us)) {
+            let _ = A_PUB.publish_with(|v| *v = now as u32);
+        }
+        let mut can = Timed { inner: bus.port(1), hrt_at: Cell::new(None) };
+        a.slot_tick(now, &mut can);
+        REQUESTED_AT.store(can.hrt_at.get().unwrap_or(u32::MAX), Ordering::Relaxed);
+        m.slot_tick(now, &mut bus.port(0));
+        while M_SUB.try_recv().is_some() {}
+        bus.arbitrate();
+        bus.now.set(now + step);
+    }
+}
+
+static A_T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("setpoint", 0);
+static A_PUB: Publisher<'static, u32> =
+    Publisher::new(&A_T, Class::SyncRealTime { period_us: 4_000 });
+static A_OUT: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&A_PUB);
+static M_T: Topic<'static, u32, { pool_size(&[4], 1) }, 1> = Topic::new("setpoint", 0);
+static M_PUB: Publisher<'static, u32> = Publisher::new(&M_T, Class::NonRealTime);
+static M_IN: RemotePublisher<'static, u32> = RemotePublisher::new(&M_PUB, &M_T);
+static M_SUB: Subscriber<'static, u32, 4> = Subscriber::new();
 
 /// A controller that notes the SysTick value when an HRT frame is requested.
 struct Timed<C> {
@@ -97,14 +184,6 @@ fn main() -> ! {
     let nops = t0.wrapping_sub(now_ticks()) & RELOAD;
     let insn_per_tick = 100_000.0f64 / nops as f64;
 
-    static A_T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("setpoint", 0);
-    static A_PUB: Publisher<'static, u32> =
-        Publisher::new(&A_T, Class::SyncRealTime { period_us: 4_000 });
-    static A_OUT: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&A_PUB);
-    static M_T: Topic<'static, u32, { pool_size(&[4], 1) }, 1> = Topic::new("setpoint", 0);
-    static M_PUB: Publisher<'static, u32> = Publisher::new(&M_T, Class::NonRealTime);
-    static M_IN: RemotePublisher<'static, u32> = RemotePublisher::new(&M_PUB, &M_T);
-    static M_SUB: Subscriber<'static, u32, 4> = Subscriber::new();
     A_T.advertise(&A_PUB).unwrap();
     A_T.subscribe(&A_OUT).unwrap();
     M_T.advertise(&M_PUB).unwrap();
@@ -151,14 +230,38 @@ fn main() -> ! {
         let _ = writeln!(out, "slot-path: only {requests} HRT requests in 400 cycles");
         debug::exit(debug::EXIT_FAILURE);
     }
+
+    // The same slots from the compare interrupt: the nodes move into the bus task.
+    EXECUTOR.start(CompareIrq).spawn(bus_task(bus, m, a)).unwrap();
+    let (mut irq_max, mut irq_min, mut irq_requests) = (0u32, u32::MAX, 0u32);
+    for _ in 0..400 * u32::from(CYCLE.slots) {
+        REQUESTED_AT.store(u32::MAX, Ordering::Relaxed);
+        COMPARE.store(true, Ordering::Relaxed);
+        let start = now_ticks();
+        NVIC::pend(CompareIrq);
+        let at = REQUESTED_AT.load(Ordering::Relaxed);
+        if at != u32::MAX {
+            let t = start.wrapping_sub(at) & RELOAD;
+            irq_max = irq_max.max(t);
+            irq_min = irq_min.min(t);
+            irq_requests += 1;
+        }
+    }
+    if irq_requests < 390 {
+        let _ = writeln!(out, "slot-path: only {irq_requests} HRT requests from the interrupt");
+        debug::exit(debug::EXIT_FAILURE);
+    }
     let insn = |t: u32| (t as f64 * insn_per_tick) as u32;
     let _ = writeln!(
         out,
-        "{{\"bench\":\"cortex_m3_slot_path\",\"hrt_requests\":{},\"to_request_min_insn\":{},\"to_request_max_insn\":{},\"slot_tick_max_insn\":{}}}",
+        "{{\"bench\":\"cortex_m3_slot_path\",\"hrt_requests\":{},\"to_request_min_insn\":{},\"to_request_max_insn\":{},\"slot_tick_max_insn\":{},\"irq_hrt_requests\":{},\"irq_to_request_min_insn\":{},\"irq_to_request_max_insn\":{}}}",
         requests,
         insn(to_request_min),
         insn(to_request_max),
-        insn(whole_max)
+        insn(whole_max),
+        irq_requests,
+        insn(irq_min),
+        insn(irq_max)
     );
     debug::exit(debug::EXIT_SUCCESS);
     loop {

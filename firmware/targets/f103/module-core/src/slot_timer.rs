@@ -1,0 +1,119 @@
+//! The TDMA slot timer: slot boundaries from a compare of TIM2, whose interrupt runs the bus
+//! executor at once, so the path from the boundary to the mailbox request is one interrupt and
+//! the node's `slot_tick` — not embassy's timer queue and a second interrupt to pend the
+//! executor (issue 16, docs/rtcan.md "The slot timer on a module").
+//!
+//! TIM2 counts the time driver's 1 MHz ticks (TIM4, same APB1 clock and prescaler), so a slot
+//! boundary in the node's µs is a compare value less a constant offset, measured once at
+//! start. The two prescalers run at a fixed phase to each other: the offset may be one tick
+//! off, a constant bias below 1 µs, not jitter.
+
+use core::future::poll_fn;
+use core::task::Poll;
+
+use embassy_stm32::interrupt;
+use embassy_stm32::pac;
+use embassy_stm32::peripherals::TIM2;
+use embassy_stm32::time::Hertz;
+use embassy_stm32::timer::low_level::Timer;
+use embassy_stm32::Peri;
+use embassy_sync::waitqueue::AtomicWaker;
+use embassy_time::{Instant, TICK_HZ};
+
+use crate::BUS_EXECUTOR;
+
+const _: () = assert!(TICK_HZ == 1_000_000, "the slot timer counts the time driver's µs ticks");
+
+/// Furthest ahead a compare is set: three quarters of the 16-bit counter, so that a target is
+/// never mistaken for one a wrap earlier.
+const MAX_AHEAD_TICKS: u64 = 0xC000;
+
+/// The bus task waiting for the compare.
+static SLOT_WAKER: AtomicWaker = AtomicWaker::new();
+
+/// TIM2's compare on channel 1 as the bus's slot timer.
+pub struct SlotTimer {
+    /// Owns TIM2 (and keeps its clock enabled).
+    _tim: Timer<'static, TIM2>,
+    /// (time driver ticks − TIM2 count) mod 2¹⁶.
+    offset: u16,
+}
+
+impl SlotTimer {
+    /// Starts TIM2 at the time driver's tick rate, free-running over 16 bits, and relates it
+    /// to the node's clock.
+    pub fn new(tim: Peri<'static, TIM2>) -> Self {
+        let mut t = Timer::new(tim);
+        t.set_tick_freq(Hertz(TICK_HZ as u32));
+        let r = pac::TIM2;
+        r.arr().write(|w| w.set_arr(u16::MAX));
+        r.dier().write(|w| w.set_ccie(0, false));
+        t.start();
+        Self { _tim: t, offset: relate() }
+    }
+
+    /// Returns at the node's time `at` (µs), woken by the compare interrupt (at once if `at`
+    /// has passed).
+    pub async fn wait_until(&mut self, at: u64) {
+        let r = pac::TIM2;
+        loop {
+            let now = Instant::now().as_ticks();
+            if at <= now {
+                return;
+            }
+            let target = at.min(now + MAX_AHEAD_TICKS);
+            r.ccr(0).write(|w| w.set_ccr((target as u16).wrapping_sub(self.offset)));
+            r.sr().write(|w| {
+                w.0 = !0;
+                w.set_ccif(0, false);
+            });
+            r.dier().modify(|w| w.set_ccie(0, true));
+            // The counter may have passed the compare value while it was written.
+            if Instant::now().as_ticks() >= target {
+                r.dier().modify(|w| w.set_ccie(0, false));
+                continue;
+            }
+            poll_fn(|cx| {
+                SLOT_WAKER.register(cx.waker());
+                if r.dier().read().ccie(0) {
+                    Poll::Pending
+                } else {
+                    Poll::Ready(())
+                }
+            })
+            .await;
+            if target == at {
+                return;
+            }
+        }
+    }
+}
+
+/// (time driver ticks − TIM2 count) mod 2¹⁶, read between two equal readings of the clock.
+fn relate() -> u16 {
+    loop {
+        let before = Instant::now().as_ticks();
+        let cnt = pac::TIM2.cnt().read().cnt();
+        if Instant::now().as_ticks() == before {
+            return (before as u16).wrapping_sub(cnt);
+        }
+    }
+}
+
+/// The compare: wakes the bus task and runs the bus executor in this interrupt. (The executor
+/// also pends this interrupt when the task is woken; that second entry finds no compare and
+/// nothing to run.)
+#[interrupt]
+unsafe fn TIM2() {
+    let r = pac::TIM2;
+    if r.sr().read().ccif(0) && r.dier().read().ccie(0) {
+        r.dier().modify(|w| w.set_ccie(0, false));
+        r.sr().write(|w| {
+            w.0 = !0;
+            w.set_ccif(0, false);
+        });
+        SLOT_WAKER.wake();
+    }
+    // SAFETY: the interrupt is reserved for the bus executor (started in `start_bus`).
+    unsafe { BUS_EXECUTOR.on_interrupt() }
+}
