@@ -39,7 +39,10 @@ pub use endpoints::{names, Endpoints, Names, Storage, NAMES};
 use r2p_node::{NodeConfig, ParamStore};
 
 /// The IMU module's node configuration: its name from the `instance` parameter, no master
-/// rank.
+/// rank, the modules' slot lead.
 pub fn node_config(uid: [u8; 12], params: &dyn ParamStore) -> NodeConfig {
-    NodeConfig::new(uid, names(params).node)
+    NodeConfig {
+        slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
+        ..NodeConfig::new(uid, names(params).node)
+    }
 }

@@ -41,5 +41,8 @@ use r2p_node::{NodeConfig, ParamStore};
 /// The proximity module's node configuration: its name from the `instance` parameter, no
 /// master rank.
 pub fn node_config(uid: [u8; 12], params: &dyn ParamStore) -> NodeConfig {
-    NodeConfig::new(uid, names(params).node)
+    NodeConfig {
+        slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
+        ..NodeConfig::new(uid, names(params).node)
+    }
 }

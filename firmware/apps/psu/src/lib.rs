@@ -39,5 +39,9 @@ use r2p_node::{NodeConfig, ParamStore};
 /// The PSU's node configuration: its name from the `instance` parameter, master rank 0 (the
 /// PSU is in every robot, so it drives the bus's TDMA cycle by default).
 pub fn node_config(uid: [u8; 12], params: &dyn ParamStore) -> NodeConfig {
-    NodeConfig { rank: Some(0), ..NodeConfig::new(uid, names(params).node) }
+    NodeConfig {
+        rank: Some(0),
+        slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
+        ..NodeConfig::new(uid, names(params).node)
+    }
 }

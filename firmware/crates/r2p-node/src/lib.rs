@@ -51,7 +51,9 @@ pub mod testbus;
 #[cfg(any(test, feature = "selftest"))]
 mod tests;
 
-pub use node::{Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats};
+pub use node::{
+    Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats, MODULE_SLOT_LEAD_US,
+};
 pub use params::{NoParams, Param, ParamStore, RamParams, Typed};
 pub use remote::{Export, Import, ImportError, RemotePublisher, RemoteSubscriber};
 pub use slot_tx::{FreeSlots, SlotTx};

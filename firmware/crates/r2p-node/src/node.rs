@@ -76,7 +76,19 @@ pub struct NodeConfig {
     /// How the node sends SRT/NRT frames in the free slots (slotted mode): merged windows
     /// with retransmission, or one one-shot frame per free slot.
     pub free_slots: FreeSlots,
+    /// How long before a slot boundary the slot timer calls [`Node::slot_tick`] (µs), which
+    /// then acts for the boundary: the time the MCU takes from the timer's interrupt to the
+    /// mailbox request, so the slot's frame reaches the controller at the boundary rather than
+    /// that late (a worst-case frame, 160 µs, plus a 29 µs path would not fit a 166 µs slot).
+    /// 0 on the host; [`MODULE_SLOT_LEAD_US`] on the modules.
+    pub slot_lead_us: u32,
 }
+
+/// The modules' slot lead: the F103's slot path at 72 MHz, from the compare interrupt to the
+/// HRT frame's mailbox request, 1 984–2 084 instructions under QEMU (`make bench`, the
+/// slot-path image), 27.6–28.9 µs at one cycle per instruction; the shortest, rounded down, so
+/// that a frame never reaches its mailbox before its boundary.
+pub const MODULE_SLOT_LEAD_US: u32 = 27;
 
 impl NodeConfig {
     /// Defaults: heartbeat every 100 ms, subscription retried after 300 ms, reassembly timeout
@@ -95,6 +107,7 @@ impl NodeConfig {
             rank: None,
             hrt_slots: 30,
             free_slots: FreeSlots::Merged,
+            slot_lead_us: 0,
         }
     }
 }
@@ -722,7 +735,16 @@ impl<
             |s| matches!(s.state, ImportState::Subscribed { message, .. } if message == id.message),
         );
         let Some(import) = subscribed.map(|s| s.import) else {
-            bump(&mut self.stats.unknown_frames);
+            // A stream this node asked for runs already for other subscribers, and its frames
+            // pass the filters (programmed at the request) before the publisher's answer
+            // arrives: not unknown, only early.
+            let requested = self.imports.iter().any(|s| {
+                matches!(s.state, ImportState::Requested { from, index, .. }
+                    if from.message_id(index) == id.message)
+            });
+            if !requested {
+                bump(&mut self.stats.unknown_frames);
+            }
             return;
         };
         if let Some(m) = self.rx.accept(&r.frame, r.at, Expect::Exactly(import.size())) {
@@ -1087,7 +1109,11 @@ impl<
     ///    urgent SRT/NRT frame for the window the slot opens ([`FreeSlots`]). Without a cycle
     ///    (no sync heard for `sync_timeout_us`, or none since boot for that long) every slot
     ///    is free and a window of its own.
+    ///
+    /// `now` is the time the timer fired; the node acts for `now` + [`NodeConfig::slot_lead_us`],
+    /// the time its frames reach the controller.
     pub fn slot_tick<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
+        let now = now + Micros::from(self.config.slot_lead_us);
         self.start(now);
         self.program_filters(can);
         if self.slot_tx.at_guard(now) {
@@ -1225,8 +1251,14 @@ impl<
     /// When the slot timer should call [`slot_tick`](Self::slot_tick) next: the next slot
     /// boundary of the cycle as this node's clock sees it (as master: of its own cycle), or one
     /// nominal slot later while no cycle runs — or before it, the latest start of the window
-    /// of a frame the node has loaded.
+    /// of a frame the node has loaded; [`NodeConfig::slot_lead_us`] early.
     pub fn next_slot_at(&self, now: Micros) -> Micros {
+        let lead = Micros::from(self.config.slot_lead_us);
+        self.next_boundary(now + lead).saturating_sub(lead).max(now)
+    }
+
+    /// The next boundary (or guard) after `now`, in the time the node acts for.
+    fn next_boundary(&self, now: Micros) -> Micros {
         let slot_us = Micros::from(self.config.cycle.slot_us().max(1));
         let by_clock = match self.clock.state(now) {
             ClockState::Running(p) => {

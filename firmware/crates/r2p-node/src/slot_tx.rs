@@ -104,10 +104,17 @@ struct Window {
 /// Queued frames a node keeps in its controller in a merged window: bxCAN's three mailboxes.
 pub const QUEUED_MAX: usize = 3;
 
-/// What [`SlotTx::settle`] returns: the slotted frame's and every queued frame's fate.
-pub type Settled<T> = [Option<Done<T>>; 1 + QUEUED_MAX];
+/// Slotted frames a node keeps in its controller: this slot's, and the previous slot's while
+/// it is still on the wire — the slot timer runs its path ahead of the boundary
+/// (`NodeConfig::slot_lead_us`), so a frame that fills its slot (a sync, a worst-case HRT
+/// frame) may not have ended when the next slot's frame is loaded; it ends before that frame's
+/// mailbox request, which the transmit FIFO orders behind it anyway.
+pub const SLOTTED_MAX: usize = 2;
 
-/// The node's transmit state in slotted mode: at most one slotted (sync/HRT) frame or up to
+/// What [`SlotTx::settle`] returns: the slotted frames' and every queued frame's fate.
+pub type Settled<T> = [Option<Done<T>>; SLOTTED_MAX + QUEUED_MAX];
+
+/// The node's transmit state in slotted mode: at most [`SLOTTED_MAX`] slotted (sync/HRT) frames or up to
 /// [`QUEUED_MAX`] queued frames (one with [`FreeSlots::Single`]) in the controller, in load
 /// order, their window, and the controller's transmit mode.
 #[derive(Clone, Debug)]
@@ -115,7 +122,7 @@ pub struct SlotTx<T> {
     policy: FreeSlots,
     slots: u8,
     frame_us: Micros,
-    slotted: Option<(Slotted<T>, FrameId)>,
+    slotted: [Option<(Slotted<T>, FrameId)>; SLOTTED_MAX],
     queued: [Option<(Ticket, FrameId)>; QUEUED_MAX],
     window: Option<Window>,
     late: bool,
@@ -132,7 +139,7 @@ impl<T: Copy> SlotTx<T> {
             policy,
             slots: cycle.slots,
             frame_us: cycle.frame_us() as Micros,
-            slotted: None,
+            slotted: [None; SLOTTED_MAX],
             queued: [None; QUEUED_MAX],
             window: None,
             late: false,
@@ -150,6 +157,10 @@ impl<T: Copy> SlotTx<T> {
     /// window's latest start), not a slot boundary.
     pub fn at_guard(&self, now: Micros) -> bool {
         self.has_queued() && self.window.is_some_and(|w| now >= w.guard && now < w.end)
+    }
+
+    fn has_slotted(&self) -> bool {
+        self.slotted.iter().any(Option::is_some)
     }
 
     fn has_queued(&self) -> bool {
@@ -184,13 +195,13 @@ impl<T: Copy> SlotTx<T> {
         can: &mut C,
         tx: &TxQueue<N>,
     ) -> Settled<T> {
-        let mut done: Settled<T> = [None; 1 + QUEUED_MAX];
-        if self.slotted.is_none() && !self.has_queued() {
+        let mut done: Settled<T> = [None; SLOTTED_MAX + QUEUED_MAX];
+        if !self.has_slotted() && !self.has_queued() {
             return done;
         }
         let n = self.take_results(can, &mut done, 0);
         let inside = self.policy == FreeSlots::Merged && self.window.is_some_and(|w| now < w.end);
-        if !inside || !self.still_next(now, tx, &done) || self.slotted.is_some() {
+        if !inside || !self.still_next(now, tx, &done) || self.has_slotted() {
             can.abort_pending();
             self.take_results(can, &mut done, n);
             self.draining = true;
@@ -225,8 +236,8 @@ impl<T: Copy> SlotTx<T> {
         mut n: usize,
     ) -> usize {
         while let Some(r) = can.take_tx_result() {
-            let d = if let Some((what, _)) = self.slotted.filter(|&(_, id)| id == r.id) {
-                self.slotted = None;
+            let mine = self.slotted.iter_mut().find(|s| s.is_some_and(|(_, id)| id == r.id));
+            let d = if let Some((what, _)) = mine.and_then(|s| s.take()) {
                 Done::Slotted {
                     what,
                     id: r.id,
@@ -272,14 +283,12 @@ impl<T: Copy> SlotTx<T> {
         what: Slotted<T>,
         frame: &Frame,
     ) -> bool {
-        if self.slotted.is_some() {
-            return false;
-        }
+        let Some(free) = self.slotted.iter().position(|s| s.is_none()) else { return false };
         self.set_mode(can, TxMode::OneShot);
         if can.try_transmit(frame).is_err() {
             return false;
         }
-        self.slotted = Some((what, frame.id()));
+        self.slotted[free] = Some((what, frame.id()));
         true
     }
 

@@ -54,6 +54,7 @@ pub fn tdma(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
         cycle: CYCLE,
         rank,
         hrt_slots: 4,
+        slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
         ..NodeConfig::new(uid(n), name)
     }
 }

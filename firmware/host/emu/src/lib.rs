@@ -96,6 +96,13 @@ pub type App<'a, N> = Box<dyn FnMut(Micros, &mut N) + 'a>;
 /// computes from the controller's counter capture and its receive-interrupt stamp.
 pub type SimPort = r2p_vbus::BxCanPort;
 
+/// µs from a board's clock read to its frame's mailbox request: the module's slot path from
+/// the compare interrupt (`make bench`, QEMU slot-path image: 1 984–2 084 instructions,
+/// 27.6–28.9 µs at 72 MHz and one cycle per instruction), its longest rounded up. Every
+/// emulated frame reaches its mailbox this much after the node's tick; the boards' firmware
+/// ticks [`r2p_node::MODULE_SLOT_LEAD_US`] (the shortest path) before each boundary.
+pub const SLOT_PATH_US: u64 = 29;
+
 /// One emulated board.
 struct Board<'a, N> {
     node: N,
@@ -157,7 +164,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
         let bit_rate = self.bus.config().bit_rate;
         self.boards.push(Board {
             node,
-            port: SimPort::new(self.bus.port(port), bit_rate),
+            port: SimPort::new(self.bus.port(port), bit_rate).with_load_latency(SLOT_PATH_US),
             app,
             wake_ns: self.now_ns,
             app_ns: self.now_ns,

@@ -98,7 +98,14 @@ fn node(
     params: &'static dyn ParamStore,
 ) -> Result<BoardNode, String> {
     let name: &'static str = Box::leak(ctx.module.name.clone().into_boxed_str());
-    let config = NodeConfig { uid: ctx.module.uid.0, name, cycle: ctx.cycle, ..config };
+    // Every board runs the modules' slot timer (the emulated port models its path).
+    let config = NodeConfig {
+        uid: ctx.module.uid.0,
+        name,
+        cycle: ctx.cycle,
+        slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
+        ..config
+    };
     BoardNode::new(config, params).map_err(|e| format!("node: {e:?}"))
 }
 

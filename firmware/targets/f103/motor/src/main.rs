@@ -136,7 +136,10 @@ async fn main(_spawner: Spawner) {
     module_core::load_params(&PARAMS, &mut flash);
     let names = Names::from_params(&PARAMS);
     let ep = r2p_app_motor::endpoints!(names);
-    let config = NodeConfig::new(embassy_stm32::uid::uid(), names.node);
+    let config = NodeConfig {
+        slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
+        ..NodeConfig::new(embassy_stm32::uid::uid(), names.node)
+    };
     let mut node = ModuleNode::new(config, &PARAMS).expect("valid node configuration");
     ep.register(&mut node).expect("room for the motor's topics on its node");
     module_core::start_bus(node, &config, BxCan::new(can, pac::CAN, 1_000_000), p.TIM2);
