@@ -31,6 +31,10 @@ from . import ROOT
 
 CARGO_MUTANTS = ROOT / ".tools" / "cargo-mutants" / "bin" / "cargo-mutants"
 CRATES = ["r2p-management", "r2p-middleware", "rtcan", "r2p-node"]
+# Packages whose tests exercise a crate beyond its own, run on its mutants too: the node's
+# slot policy is tested on the bit-accurate virtual bus (r2p-vbus's node_slot_policy.rs: when
+# frames start and end), which the node's own loopback test bus cannot show.
+TESTED_BY = {"r2p-node": ["r2p-vbus"]}
 CACHE = ROOT / ".cache" / "mutants"
 GOAL_PCT = 90.0
 
@@ -57,7 +61,8 @@ def run_crate(crate: str, extra: list[str]) -> tuple[dict, float]:
     env = {**os.environ, "TMPDIR": str(scratch_dir()),
            # One target dir for every run: dependencies build once, not once per copy.
            "CARGO_TARGET_DIR": str(CACHE / "target")}
-    cmd = [str(CARGO_MUTANTS), "mutants", "--dir", str(ROOT / "firmware"), "-p", crate,
+    tests = [a for pkg in [crate, *TESTED_BY.get(crate, [])] for a in ("--test-package", pkg)]
+    cmd = [str(CARGO_MUTANTS), "mutants", "--dir", str(ROOT / "firmware"), "-p", crate, *tests,
            "--jobs", "1", "--no-shuffle", "--output", str(out), *extra]
     t0 = time.monotonic()
     p = subprocess.run(cmd, cwd=ROOT / "firmware", env=env)

@@ -27,6 +27,48 @@ pub fn tdma(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
 }
 
 r2p_testkit::suite! {
+    fn with_a_slot_lead_the_timer_fires_that_early_and_the_node_acts_for_the_boundary() {
+        // A master alone, driven as its slot timer would: at the times `next_slot_at` asks for.
+        let lead: u32 = 27;
+        let bus = Bus::<1>::slotted(CYCLE);
+        let config = NodeConfig { slot_lead_us: lead, ..tdma(1, "psu", Some(0)) };
+        let mut m = TestNode::new(config, &NoParams).unwrap();
+        let mut t: Micros = 0;
+        let (mut ticks, mut on_grid) = (0u32, 0u32);
+        while t < 60_000 {
+            bus.now.set(t);
+            m.slot_tick(t, &mut bus.port(0));
+            bus.arbitrate();
+            if m.role() == Role::Master {
+                // Every tick is `lead` before a slot boundary of the master's own cycle.
+                let acts_for = t + Micros::from(lead);
+                let rtcan::cycle::ClockState::Running(p) = m.clock().state(acts_for) else {
+                    panic!("the master's clock runs")
+                };
+                ticks += 1;
+                if m.clock().slot_start(p.cycle, p.slot) == Some(acts_for) {
+                    on_grid += 1;
+                }
+            }
+            t = m.next_slot_at(t).max(t + 1);
+        }
+        assert!(ticks >= 4 * u32::from(CYCLE.slots), "{ticks} ticks as master");
+        assert_eq!(on_grid, ticks, "ticks {} µs before a boundary", lead);
+        // Without a lead the same node ticks on the boundaries themselves.
+        let bus = Bus::<1>::slotted(CYCLE);
+        let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
+        let mut t: Micros = 0;
+        while t < 60_000 {
+            bus.now.set(t);
+            m.slot_tick(t, &mut bus.port(0));
+            bus.arbitrate();
+            if let (Role::Master, rtcan::cycle::ClockState::Running(p)) = (m.role(), m.clock().state(t)) {
+                assert_eq!(m.clock().slot_start(p.cycle, p.slot), Some(t));
+            }
+            t = m.next_slot_at(t).max(t + 1);
+        }
+    }
+
     fn an_hrt_topic_reaches_the_subscriber_in_its_slot_every_second_cycle() {
         // A publishes `setpoint` every 2 cycles (8 ms, HRT); B subscribes; M is the master.
         static A_T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("setpoint", 0);
