@@ -214,6 +214,25 @@ pub(crate) mod tests {
             assert_eq!(p.param(3).unwrap().name, "enabled");
         }
 
+        fn every_type_accepts_both_bounds_and_refuses_one_step_past_them() {
+            let p = RamParams::new([
+                Param::u32("rate_hz", 100, 1, 1000),
+                Param::i32("offset", 0, -10, 10),
+                Param::f32("gain", 0.5, 0.0, 2.0),
+            ]);
+            for (i, lo, hi, below, above) in [
+                (0, Value::U32(1), Value::U32(1000), Value::U32(0), Value::U32(1001)),
+                (1, Value::I32(-10), Value::I32(10), Value::I32(-11), Value::I32(11)),
+                (2, Value::F32(0.0), Value::F32(2.0), Value::F32(-1e-6), Value::F32(2.000_001)),
+            ] {
+                assert_eq!(p.set(i, lo), Ok(lo), "{i}: the minimum is allowed");
+                assert_eq!(p.set(i, hi), Ok(hi), "{i}: the maximum is allowed");
+                assert_eq!(p.set(i, below), Err(ParamFault::OutOfRange), "{i}");
+                assert_eq!(p.set(i, above), Err(ParamFault::OutOfRange), "{i}");
+                assert_eq!(p.get(i), Ok(hi), "{i}: a refused value is not applied");
+            }
+        }
+
         fn typed_reads_fall_back_to_the_table_then_to_zero() {
             const TABLE: [Param; 4] = [
                 Param::u32("rate_hz", 100, 1, 1000),
