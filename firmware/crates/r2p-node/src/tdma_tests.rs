@@ -69,6 +69,59 @@ r2p_testkit::suite! {
         }
     }
 
+    fn a_node_takes_in_only_the_streams_it_subscribed_to_and_the_bus_protocol() {
+        // A publishes `setpoint` (to B) and `odometry` (to M); B must not see odometry's frames:
+        // its controller's filters keep them out (r2p_node::hw_filters), so nothing reaches it
+        // that it would have to count as unknown.
+        static A_S: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("setpoint", 0);
+        static A_SP: Publisher<'static, u32> = Publisher::new(&A_S, Class::NonRealTime);
+        static A_SO: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&A_SP);
+        static A_O: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("odometry", 0);
+        static A_OP: Publisher<'static, u32> = Publisher::new(&A_O, Class::NonRealTime);
+        static A_OO: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&A_OP);
+        static B_S: Topic<'static, u32, { pool_size(&[4], 1) }, 1> = Topic::new("setpoint", 0);
+        static B_SP: Publisher<'static, u32> = Publisher::new(&B_S, Class::NonRealTime);
+        static B_SI: RemotePublisher<'static, u32> = RemotePublisher::new(&B_SP, &B_S);
+        static B_SS: Subscriber<'static, u32, 4> = Subscriber::new();
+        static M_O: Topic<'static, u32, { pool_size(&[4], 1) }, 1> = Topic::new("odometry", 0);
+        static M_OP: Publisher<'static, u32> = Publisher::new(&M_O, Class::NonRealTime);
+        static M_OI: RemotePublisher<'static, u32> = RemotePublisher::new(&M_OP, &M_O);
+        static M_OS: Subscriber<'static, u32, 4> = Subscriber::new();
+        A_S.advertise(&A_SP).unwrap();
+        A_S.subscribe(&A_SO).unwrap();
+        A_O.advertise(&A_OP).unwrap();
+        A_O.subscribe(&A_OO).unwrap();
+        B_S.advertise(&B_SP).unwrap();
+        B_S.subscribe(&B_SS).unwrap();
+        M_O.advertise(&M_OP).unwrap();
+        M_O.subscribe(&M_OS).unwrap();
+
+        let bus = Bus::<3>::slotted(CYCLE);
+        let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
+        let mut a = TestNode::new(tdma(2, "motor", None), &NoParams).unwrap();
+        let mut b = TestNode::new(tdma(3, "control", None), &NoParams).unwrap();
+        a.export(&A_SO).unwrap();
+        a.export(&A_OO).unwrap();
+        b.import(&B_SI).unwrap();
+        m.import(&M_OI).unwrap();
+        run_slots(&bus, &mut [&mut m, &mut a, &mut b], 150_000);
+        assert!(matches!(b.import_state(0), Some(ImportState::Subscribed { .. })));
+        assert!(matches!(m.import_state(0), Some(ImportState::Subscribed { .. })));
+        let end = bus.now.get() + 40 * CYCLE_US;
+        let mut k = 0u32;
+        while bus.now.get() < end {
+            let _ = A_SP.publish_with(|v| *v = k);
+            let _ = A_OP.publish_with(|v| *v = k);
+            k += 1;
+            run_slots(&bus, &mut [&mut m, &mut a, &mut b], bus.now.get() + CYCLE_US);
+            while M_OS.try_recv().is_some() {}
+            while B_SS.try_recv().is_some() {}
+        }
+        assert!(m.stats().published >= 30, "M took odometry in: {:?}", m.stats());
+        assert!(b.stats().published >= 30, "B took setpoints in: {:?}", b.stats());
+        assert_eq!(b.stats().unknown_frames, 0, "B saw odometry's frames: {:?}", b.stats());
+    }
+
     fn an_hrt_topic_reaches_the_subscriber_in_its_slot_every_second_cycle() {
         // A publishes `setpoint` every 2 cycles (8 ms, HRT); B subscribes; M is the master.
         static A_T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("setpoint", 0);
