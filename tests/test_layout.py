@@ -2,6 +2,7 @@
 import re
 
 from conftest import ROOT, run
+from r2ptools import manifest
 
 FOLDERS = {
     # folder: words its licence statement must contain
@@ -33,8 +34,10 @@ def test_every_top_level_folder_is_in_the_map():
 
 
 def test_every_module_has_its_hardware_folder():
-    for module in ("psu", "motor", "imu", "proximity", "gateway"):
-        assert (ROOT / "hardware" / module / "README.md").is_file(), module
+    modules = manifest.load(ROOT)   # also checks every entry against the files it names
+    assert {"psu", "motor", "imu", "proximity", "gateway"} <= {m.name for m in modules}
+    for m in modules:
+        assert (ROOT / m.hardware / "README.md").is_file(), m.name
 
 
 def test_readme_gives_exactly_the_two_commands():
