@@ -88,3 +88,12 @@ def test_the_checker_command_reports_errors(tmp_path, capsys):
     assert manifest.main([str(ROOT)]) == 0
     assert manifest.main([str(tree(tmp_path, TEXT.replace("fab = true\ncase", "fab = 1\ncase", 1)))]) == 1
     assert "`fab` must be true or false" in capsys.readouterr().err
+
+
+def test_a_module_in_the_tree_without_an_entry_is_refused(tmp_path):
+    # proximity's entry removed: its board, board file and app are still there
+    start = TEXT.index('[[module]]\nname = "proximity"')
+    text = TEXT[:start] + TEXT[TEXT.index("[[module]]", start + 1):]
+    e = error(tmp_path, text)
+    assert e == ("modules.toml: hardware/proximity/proximity.kicad_pro belongs to module 'proximity', "
+                 "which has no [[module]] entry; add one (docs/adding-a-module.md) or remove the files"), e

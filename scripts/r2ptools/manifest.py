@@ -163,7 +163,24 @@ def load(root: Path = ROOT, check_tree: bool = True) -> list[Module]:
         if check_tree:
             _check_tree(root, m, fail)
         out.append(m)
+    if check_tree:
+        _check_unlisted(root, where, {m.name for m in out})
     return out
+
+
+def _check_unlisted(root: Path, where: Path, listed: set[str]) -> None:
+    """A module's rooms without its entry: the tools that find boards by folder (check-pins,
+    bom, enclosures, the board checks) would see a module the manifest's readers do not."""
+    rooms = [(d.name, f"hardware/{d.name}/{d.name}.kicad_pro") for d in sorted((root / "hardware").glob("*/"))
+             if (d / f"{d.name}.kicad_pro").is_file()]
+    rooms += [(f.stem, f"firmware/boards/{f.name}") for f in sorted((root / "firmware" / "boards").glob("*.toml"))
+              if not f.stem.startswith("core-")]
+    rooms += [(d.name, f"firmware/apps/{d.name}/") for d in sorted((root / "firmware" / "apps").glob("*/"))
+              if d.name != "base"]   # base: the robot-level nodes the emulated gateway runs
+    for name, path in rooms:
+        if name not in listed:
+            raise ManifestError(f"{where}: {path} belongs to module {name!r}, which has no [[module]] "
+                                f"entry; add one (docs/adding-a-module.md) or remove the files")
 
 
 def _mcus(root: Path) -> dict[str, tuple[int, int]]:
