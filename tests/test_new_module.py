@@ -59,9 +59,19 @@ def changed(before: dict[str, str], after: dict[str, str], listed: list[str]) ->
     return out
 
 
+WORK = ROOT / ".cache" / "new-module"
+"""Where the copy goes: always the same folder, so that cargo's target dir beside it stays valid
+across runs (a test binary keeps the CARGO_MANIFEST_DIR it was built with, and cargo does not
+rebuild it when only the checkout's path changes)."""
+
+
 @pytest.fixture(scope="module")
-def scaffolded(tmp_path_factory):
-    repo = copy_repo(tmp_path_factory.mktemp("repo"))
+def scaffolded():
+    repo = WORK / "repo"
+    if repo.exists():
+        shutil.rmtree(repo)
+    repo.mkdir(parents=True)
+    copy_repo(repo)
     before = snapshot(repo)
     p = run([str(repo / "scripts" / "new-module"), NAME], cwd=repo)
     assert p.returncode == 0, p.stdout
@@ -101,7 +111,7 @@ def test_the_board_passes_its_checks_and_the_pins_agree(scaffolded):
 def test_the_application_tests_and_the_image_build(scaffolded):
     repo, _, _ = scaffolded
     # Reuse the repository's compiled dependencies (the copy's own crates are rebuilt).
-    env = {"CARGO_TARGET_DIR": str(ROOT / ".cache" / "new-module-target")}
+    env = {"CARGO_TARGET_DIR": str(WORK / "target")}
     p = run(["cargo", "test", "--offline", "-p", f"r2p-app-{NAME}", "-p", "r2p-boardgen",
              "-p", "r2p-world", "--test", "manifest", "--lib"], cwd=repo / "firmware", env=env)
     assert p.returncode == 0, p.stdout[-3000:]
@@ -115,6 +125,16 @@ def test_the_application_tests_and_the_image_build(scaffolded):
     assert p.returncode == 0, p.stdout[-3000:]
     assert re.search(rf"^{NAME} .* ok$", p.stdout, re.M), p.stdout[-2000:]
     assert (repo / "firmware" / "images" / f"{NAME}.bin").stat().st_size > 30_000
+
+
+def test_its_case_generates_and_fits(scaffolded):
+    # `case = true`: make's enclosure stage makes it from the board.
+    repo, _, _ = scaffolded
+    p = run([str(repo / "scripts" / "enclosures"), "generate", NAME], cwd=repo)
+    assert p.returncode == 0, p.stdout[-2000:]
+    assert (repo / "enclosures" / NAME / f"{NAME}-assembly.step").is_file()
+    p = run([str(repo / "scripts" / "enclosures"), "check", NAME], cwd=repo)
+    assert p.returncode == 0, p.stdout[-2000:]
 
 
 @pytest.mark.parametrize("name, says", [

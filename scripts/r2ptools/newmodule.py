@@ -194,7 +194,7 @@ path is docs/adding-a-module.md.
 
 
 def manifest_entry(root: Path, name: str, kind: str) -> None:
-    t = next(m for m in manifest.load(root) if m.name == TEMPLATE)
+    t = next(m for m in manifest.load(root, check_tree=False) if m.name == TEMPLATE)
     i = t.image
     with (root / manifest.FILE).open("a") as f:
         f.write(f"""
