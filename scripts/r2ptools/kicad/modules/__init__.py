@@ -11,6 +11,7 @@ descriptions.
 """
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import sys
 from pathlib import Path
@@ -18,7 +19,7 @@ from types import ModuleType
 
 from ... import ROOT, manifest
 from ..design import Module
-from . import core, psu
+from . import core
 
 
 def _load(path: Path) -> ModuleType:
@@ -48,10 +49,12 @@ def description_file(name: str) -> Path | None:
 
 
 def _descriptions() -> dict:
-    found = {"psu": psu.build}
+    found = {}
     for m in manifest.load(check_tree=False):
         if (f := description_file(m.name)) is not None:
             found[m.name] = _load(f).build
+        elif Path(__file__).with_name(f"{m.name}.py").is_file():   # not moved yet (psu.py)
+            found[m.name] = importlib.import_module(f".{m.name}", __package__).build
     return found
 
 
