@@ -9,6 +9,7 @@ import pytest
 
 from conftest import ROOT
 from r2ptools import assembly_cost as ac
+from r2ptools.kicad import fab
 
 FEES = ROOT / "bom" / "jlcpcb-fees.toml"
 
@@ -99,7 +100,7 @@ def test_a_malformed_fee_file_is_a_clear_error(tmp_path, text, complaint):
 
 def test_the_readme_states_the_assembled_cost_of_every_board():
     text = (ROOT / "bom" / "README.md").read_text()
-    for board in ("proximity", "psu"):
+    for board in fab.FAB_BOARDS:
         row = next(l for l in text.splitlines() if l.startswith(f"| {board} | economic")
                    or l.startswith(f"| {board} | standard"))
         per10, per100 = (Decimal(x) for x in row.strip("| ").split(" | ")[-2:])

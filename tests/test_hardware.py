@@ -27,6 +27,7 @@ if shutil.which("kicad-cli") is None:
     pytest.fail("kicad-cli is not installed: run scripts/setup (installs KiCad 9)", pytrace=False)
 
 from r2ptools.kicad import check, fab, libsym, netlist  # noqa: E402
+from r2ptools import manifest  # noqa: E402
 
 HARDWARE = ROOT / "hardware"
 BOARDS = check.boards()
@@ -52,7 +53,8 @@ def _board_file(module: str) -> dict[str, str]:
     return pins
 
 
-@pytest.mark.parametrize("module", ["proximity", "psu"])
+@pytest.mark.parametrize("module", [m.name for m in manifest.load(check_tree=False)
+                                    if m.board_file and (HARDWARE / m.name / f"{m.name}.kicad_sch").is_file()])
 def test_mcu_pins_carry_the_board_file_signals(module):
     net = netlist.export(HARDWARE / module / f"{module}.kicad_sch")
     pad_names = {p.number: p.name for p in libsym.pins("MCU_ST_STM32F1:STM32F103CBTx")}

@@ -1,7 +1,9 @@
 """What a newcomer relies on finding: the folder map, a licence per folder, `make help`."""
 import re
+from pathlib import Path
 
 from conftest import ROOT, run
+from r2ptools import manifest
 
 FOLDERS = {
     # folder: words its licence statement must contain
@@ -33,8 +35,10 @@ def test_every_top_level_folder_is_in_the_map():
 
 
 def test_every_module_has_its_hardware_folder():
-    for module in ("psu", "motor", "imu", "proximity", "gateway"):
-        assert (ROOT / "hardware" / module / "README.md").is_file(), module
+    modules = manifest.load(ROOT)   # also checks every entry against the files it names
+    assert {"psu", "motor", "imu", "proximity", "gateway"} <= {m.name for m in modules}
+    for m in modules:
+        assert (ROOT / m.hardware / "README.md").is_file(), m.name
 
 
 def test_readme_gives_exactly_the_two_commands():
@@ -51,3 +55,30 @@ def test_make_help_lists_every_target_with_one_line():
     assert sorted(listed) == sorted(phony)
     for line in p.stdout.splitlines():
         assert len(line.split(None, 2)) == 3, f"target without a description: {line}"
+
+
+def _table_cells(readme: str) -> set[str]:
+    """What the first cell of every table row names in backticks."""
+    return {name for m in re.finditer(r"^\| (`[^|]+`) \|", readme, re.M)
+            for name in re.findall(r"`([^`]+)`", m.group(1))}
+
+
+def test_firmware_readme_lists_every_crate():
+    listed = _table_cells((ROOT / "firmware" / "README.md").read_text())
+    fw = ROOT / "firmware"
+    files = run(["git", "ls-files", "firmware/**Cargo.toml"]).stdout.split()
+    crates = {str(Path(f).parent.relative_to("firmware")) for f in files
+              if "[package]" in (ROOT / f).read_text()}
+    assert crates - listed == set(), "crates missing from firmware/README.md's table"
+    assert {c for c in listed if "/" in c or c == "fuzz"} - crates == set(), "rows without a crate"
+    assert (fw / "apps" / "template" / "Cargo.toml").is_file()
+
+
+def test_scripts_readme_lists_every_script():
+    listed = _table_cells((ROOT / "scripts" / "README.md").read_text())
+    scripts = {p.name for p in (ROOT / "scripts").iterdir()
+               if p.is_file() and p.name not in ("README.md", "LICENSE.md")}
+    scripts |= {f"{d}/{p.name}" for d in ("python", "freerouting")
+                for p in (ROOT / "scripts" / d).iterdir() if p.name != "requirements.lock"}
+    missing = scripts - listed
+    assert missing == set(), "scripts missing from scripts/README.md's table"

@@ -10,15 +10,13 @@ import subprocess
 import sys
 import time
 
-from . import ROOT, firmware
-from .kicad.fab import FAB_BOARDS
-
-MODULES = ["psu", "motor", "imu", "proximity", "gateway"]
+from . import ROOT, firmware, manifest
 
 
 def module_images() -> dict[str, str]:
     names = {i.name for i in firmware.manifest()}
-    return {m: ("in firmware/images.toml" if m in names else "not yet: no module firmware") for m in MODULES}
+    return {m.name: ("in modules.toml" if m.name in names else "not yet: no module firmware")
+            for m in manifest.load()}
 
 
 def main() -> int:
@@ -56,15 +54,19 @@ def main() -> int:
         if state.startswith("not yet"):
             print(f"{m:<18} {state}")
     print("\nfab packages (hardware/<module>/fab)")
-    for m in MODULES:
+    modules = manifest.load()
+    for mod in modules:
+        m = mod.name
         zip_file = ROOT / "hardware" / m / "fab" / f"{m}-gerbers.zip"
-        if m in FAB_BOARDS and zip_file.exists():
+        if mod.fab and zip_file.exists():
             print(f"{m:<18} {zip_file.relative_to(ROOT)} ({zip_file.stat().st_size / 1024:.0f} KiB), "
                   f"JLC BOM and CPL, iBOM, assembly PDF and checklist, schematic PDF, renders")
+        elif (ROOT / mod.pcb).exists():
+            print(f"{m:<18} not made: `fab = false` in modules.toml")
         else:
-            print(f"{m:<18} not yet: no hardware/{m}/{m}.kicad_pcb")
+            print(f"{m:<18} not yet: no {mod.pcb}")
     print("\nenclosures (enclosures/<module>)")
-    for m in MODULES:
+    for m in (m.name for m in modules):
         step = ROOT / "enclosures" / m / f"{m}-assembly.step"
         print(f"{m:<18} " + (f"enclosures/{m}/: {m}-base.stl, {m}-lid.stl, {m}-assembly.step, {m}.png"
                              if step.exists() else "not yet: needs the module's board"))

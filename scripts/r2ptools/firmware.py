@@ -1,4 +1,4 @@
-"""Builds the MCU firmware images listed in firmware/images.toml, reproducibly, and sizes them.
+"""Builds the MCU firmware images listed in firmware/images.toml and modules.toml, reproducibly, and sizes them.
 
 For each image: `cargo build --release --locked` in its workspace with path prefixes remapped
 (the repository to /r2p, cargo's home to /cargo, by scripts/rustc-reproducible), so an image built from any folder by any user
@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from . import ROOT
+from . import manifest as modules
 
 IMAGES_DIR = Path("firmware") / "images"
 
@@ -39,12 +40,19 @@ class Image:
 
 
 def manifest(root: Path = ROOT) -> list[Image]:
+    """The images to build: firmware/images.toml's own (the core's footprints), then each
+    module's image from the module manifest (modules.toml), which lists modules once."""
     data = tomllib.loads((root / "firmware" / "images.toml").read_text())
     out = []
     for i in data.get("image", []):
         mcu = data["mcu"][i["mcu"]]
         out.append(Image(i["name"], i["workspace"], i["package"], i["mcu"], mcu["target"],
                          mcu["flash"], mcu["ram"], i["budget_flash"], i["budget_ram"]))
+    for m in modules.load(root, check_tree=False):
+        if m.image:
+            i, mcu = m.image, data["mcu"][m.image.mcu]
+            out.append(Image(m.name, i.workspace, i.package, i.mcu, mcu["target"], mcu["flash"],
+                             mcu["ram"], i.budget_flash, i.budget_ram))
     return out
 
 
@@ -113,17 +121,17 @@ def over_budget(img: Image, s: Size) -> list[str]:
     errs = []
     if s.flash > img.budget_flash:
         errs.append(f"{img.name}: flash {s.flash} B exceeds its budget of {img.budget_flash} B "
-                    f"(firmware/images.toml): shrink the image or raise the budget with a reason")
+                    f"(firmware/images.toml, modules.toml for a module): shrink the image or raise the budget with a reason")
     if s.ram > img.budget_ram:
         errs.append(f"{img.name}: static RAM {s.ram} B exceeds its budget of {img.budget_ram} B "
-                    f"(firmware/images.toml): shrink the image or raise the budget with a reason")
+                    f"(firmware/images.toml, modules.toml for a module): shrink the image or raise the budget with a reason")
     return errs
 
 
 # Where `verify` rebuilds: another folder, so a path leaking into an image shows up as a
 # difference. It persists (and keeps its cargo target dirs) so that reruns are incremental.
 VERIFY_COPY = ROOT / ".cache" / "reproducible-copy"
-COPIED = ["rust-toolchain.toml", "rustfmt.toml", "firmware"]
+COPIED = ["rust-toolchain.toml", "rustfmt.toml", "modules.toml", "firmware"]
 
 
 def sync_copy(src: Path, dst: Path) -> None:
@@ -205,7 +213,7 @@ def main(argv: list[str] | None = None) -> int:
     imgs = manifest(root)
     unknown = set(args.names) - {i.name for i in imgs}
     if unknown:
-        print(f"firmware: no image named {', '.join(sorted(unknown))} in firmware/images.toml; "
+        print(f"firmware: no image named {', '.join(sorted(unknown))} in firmware/images.toml or modules.toml; "
               f"known: {', '.join(i.name for i in imgs)}", file=sys.stderr)
         return 2
     out = (args.out or root / IMAGES_DIR).resolve()

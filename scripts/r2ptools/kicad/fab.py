@@ -30,13 +30,14 @@ import sys
 import zipfile
 from pathlib import Path
 
-from .. import ROOT
+from .. import ROOT, manifest
 from . import assembly, ibom, jlc, models3d
 from .kicadcli import run as _kicad
 
 HARDWARE = ROOT / "hardware"
-FAB_BOARDS = ["proximity", "psu"]
-"""Boards with a committed fab package (the template is checked but not manufactured)."""
+FAB_BOARDS = [m.name for m in manifest.load(check_tree=False) if m.fab]
+"""Boards with a committed fab package: `fab = true` in modules.toml (the template is checked but
+not manufactured)."""
 
 GERBER_LAYERS = ["F.Cu", "B.Cu", "F.Paste", "B.Paste", "F.SilkS", "B.SilkS", "F.Mask", "B.Mask",
                  "Edge.Cuts"]

@@ -4,8 +4,8 @@
 
 The KiCad files under hardware/ are the hardware's source: a person edits them in KiCad 9 and
 the checks read them (docs/hardware.md, "Changing a board"). This tool writes the first version
-of a new board from a Python description (`modules/<module>.py`, its drawing in
-`<module>_sheet.py`) and then steps aside: a board that already has its `.kicad_sch` is refused,
+of a new board from a Python description (`hardware/<module>/<module>.py`, its drawing in
+`<module>_sheet.py`; psu's still in `modules/`) and then steps aside: a board that already has its `.kicad_sch` is refused,
 unless `--force` (which overwrites it and every edit made in KiCad since; meant for a board
 still being scaffolded). For each module (default: every description without a board yet) it
 writes, under DIR (default hardware/):
@@ -118,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     unknown = [n for n in args.modules if n not in MODULES]
     if unknown:
-        print(f"hwgen: no description for {', '.join(unknown)} (scripts/r2ptools/kicad/modules/); "
+        print(f"hwgen: no description for {', '.join(unknown)} (hardware/<module>/<module>.py, listed in modules.toml); "
               f"known: {', '.join(MODULES)}. A board without one is edited in KiCad (docs/hardware.md).",
               file=sys.stderr)
         return 2

@@ -132,10 +132,27 @@ mod tests {
 
     const BASE: &str = "[board]\nmcu = \"STM32F103CBT6\"\npackage = \"LQFP48\"\nhse_hz = 8_000_000\nsysclk_hz = 72_000_000\n[pins]\nPA11 = { signal = \"CAN_RX\", mode = \"alternate\", function = \"CAN_RX\" }\n";
 
+    /// The modules with a board file, from the module manifest (modules.toml, the one list).
+    fn manifest_board_files() -> Vec<(String, PathBuf)> {
+        let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../..");
+        let text = std::fs::read_to_string(root.join("modules.toml")).unwrap();
+        let manifest: toml::Table = toml::from_str(&text).unwrap();
+        let modules = manifest["module"].as_array().unwrap();
+        modules
+            .iter()
+            .filter_map(|m| {
+                let file = m.get("board_file")?.as_str()?;
+                Some((m["name"].as_str()?.to_string(), root.join(file)))
+            })
+            .collect()
+    }
+
     #[test]
     fn every_module_board_file_loads_and_generates() {
-        for module in ["psu", "proximity", "motor"] {
-            let b = Board::load(&boards_dir().join(format!("{module}.toml"))).unwrap();
+        let modules = manifest_board_files();
+        assert!(modules.len() >= 4, "{modules:?}");
+        for (module, file) in modules {
+            let b = Board::load(&file).unwrap();
             assert_eq!(b.module, module);
             assert_eq!(b.mcu, "STM32F103CBT6");
             assert_eq!(b.pins["PA11"].signal, "CAN_RX", "{module} inherits the core's CAN pins");

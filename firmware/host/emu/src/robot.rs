@@ -123,6 +123,7 @@ impl EmuRobot {
             BoardKind::Proximity => boards::proximity(ctx),
             BoardKind::Gateway => boards::gateway(ctx),
             BoardKind::Imu => boards::imu(ctx),
+            BoardKind::Template => boards::template(ctx),
         }
         .map_err(|e| format!("{}: {e}", module.name))
     }

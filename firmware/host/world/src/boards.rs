@@ -20,6 +20,9 @@ pub enum BoardKind {
     /// IMU: an LSM6DSO on SPI, reading the base's motion (no pin-level signals: the
     /// emulator's SPI and LSM6DSO models sit between the firmware and [`crate::imu`]).
     Imu,
+    /// The module template (firmware/apps/template: heartbeat, one topic), and the stub model of
+    /// a module `scripts/new-module` scaffolds until it gets its own: nothing in the world.
+    Template,
 }
 
 /// How the world sees a signal.
@@ -102,12 +105,13 @@ pub const PROXIMITY_SIGNALS: &[SignalSpec] = &[
 
 impl BoardKind {
     /// Every kind, in robot-file order.
-    pub const ALL: [BoardKind; 5] = [
+    pub const ALL: [BoardKind; 6] = [
         BoardKind::Psu,
         BoardKind::Motor,
         BoardKind::Proximity,
         BoardKind::Gateway,
         BoardKind::Imu,
+        BoardKind::Template,
     ];
 
     /// The name the robot file uses.
@@ -118,6 +122,7 @@ impl BoardKind {
             BoardKind::Proximity => "proximity",
             BoardKind::Gateway => "gateway",
             BoardKind::Imu => "imu",
+            BoardKind::Template => "template",
         }
     }
 
@@ -132,7 +137,7 @@ impl BoardKind {
             BoardKind::Psu => PSU_SIGNALS,
             BoardKind::Motor => MOTOR_SIGNALS,
             BoardKind::Proximity => PROXIMITY_SIGNALS,
-            BoardKind::Gateway | BoardKind::Imu => &[],
+            BoardKind::Gateway | BoardKind::Imu | BoardKind::Template => &[],
         }
     }
 
@@ -153,6 +158,7 @@ impl BoardKind {
             BoardKind::Motor => Some("motor.toml"),
             BoardKind::Proximity => Some("proximity.toml"),
             BoardKind::Imu => Some("imu.toml"),
+            BoardKind::Template => Some("template.toml"),
             BoardKind::Gateway => None,
         }
     }

@@ -166,6 +166,8 @@ pub enum Wiring {
         /// Its pose on the base (the sensor's x along the pose's heading, z up).
         mount: Pose,
     },
+    /// The module template (or a new module's stub model): nothing in the world.
+    Template,
 }
 
 /// A parameter value as a robot file gives it (the emulator checks it against the module's
@@ -216,6 +218,7 @@ impl Module {
             Wiring::Proximity { .. } => BoardKind::Proximity,
             Wiring::Gateway => BoardKind::Gateway,
             Wiring::Imu { .. } => BoardKind::Imu,
+            Wiring::Template => BoardKind::Template,
         }
     }
 }
@@ -939,6 +942,7 @@ fn validate_module(
             Wiring::Proximity { rangers }
         }
         BoardKind::Gateway => Wiring::Gateway,
+        BoardKind::Template => Wiring::Template,
         BoardKind::Imu => Wiring::Imu { mount: m.pose.unwrap_or_default().pose() },
     };
     let mut params = Vec::new();

@@ -80,6 +80,7 @@ enum Link {
     Proximity { channels: [Option<usize>; 4], switch: SensorSwitch },
     Gateway,
     Imu { imu: usize },
+    Template,
 }
 
 #[derive(Clone, Debug)]
@@ -318,6 +319,7 @@ impl World {
                     Link::Proximity { channels, switch }
                 }
                 Wiring::Gateway => Link::Gateway,
+                Wiring::Template => Link::Template,
                 Wiring::Imu { mount } => {
                     let stream = STREAM_IMU + 2 * imus.len() as u64;
                     imus.push(Imu::new(ImuParams::LSM6DSO, *mount, robot.seed, stream));

@@ -12,6 +12,7 @@ mod motor;
 mod params;
 mod proximity;
 mod psu;
+mod template;
 
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -32,6 +33,7 @@ pub use motor::motor;
 pub use params::store_params;
 pub use proximity::proximity;
 pub use psu::psu;
+pub use template::template;
 
 use crate::robot::{BoardFlash, BoardNode};
 use crate::App;

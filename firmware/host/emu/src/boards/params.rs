@@ -27,6 +27,7 @@ pub fn store_params(module: &Module, robot: &Robot, flash: &mut BoardFlash) -> R
         BoardKind::Motor => store(r2p_app_motor::params::DEFAULTS, &values, flash),
         BoardKind::Gateway => store(r2p_app_base::params::DEFAULTS, &values, flash),
         BoardKind::Imu => store(r2p_app_imu::params::DEFAULTS, &values, flash),
+        BoardKind::Template => store(r2p_app_template::params::DEFAULTS, &values, flash),
     };
     r.map_err(|e| format!("{} ({}): {e}", module.name, robot.file.display()))
 }

@@ -1,18 +1,22 @@
 """hardware/template: the starting point of a new module, and a board in its own right.
 
 It is the common core with the fused bus tap and nothing else: every free MCU pin is marked
-no-connect and the area below the core is empty. A new module copies this file to
-`modules/<name>.py`, adds its parts (references from 101) and places them in the free area
-(y > 42 mm and the bottom edge for connectors), maps the MCU pins it uses to the signal names
-of its firmware board file, and registers itself in `modules/__init__.py` (docs/hardware.md).
-Built and checked like every module, so the template itself is known to pass ERC and DRC.
+no-connect and the area below the core is empty. The board's generator input lives here, in its
+own folder (its drawing in `template_sheet.py`); the generator (`scripts/hwgen`, shared tooling in
+scripts/r2ptools/kicad) finds it through the module manifest. A new module described in Python
+copies both files to `hardware/<name>/<name>.py` and `<name>_sheet.py`, adds its parts
+(references from 101) and places them in the free area (y > 42 mm and the bottom edge for
+connectors), and maps the MCU pins it uses to the signal names of its firmware board file
+(docs/hardware.md). Built and checked like every module, so the template itself is known to pass
+ERC and DRC.
 """
 from __future__ import annotations
 
-from ..design import Module, Place, Sheet, Track, Via
-from . import core as core_mod
-from .common import (BUS_TAP_PLACE, bus_tap, bus_tap_track, core_tracks, frame_texts,
-                     tvs_track)
+from r2ptools.kicad.design import Module, Place, Sheet, Track, Via
+from r2ptools.kicad.modules import core as core_mod
+from r2ptools.kicad.modules import drawing_of
+from r2ptools.kicad.modules.common import (BUS_TAP_PLACE, bus_tap, bus_tap_track, core_tracks,
+                                           frame_texts, tvs_track)
 
 NAME = "template"
 TITLE = "R2P module template"
@@ -34,8 +38,8 @@ def build(core: Sheet) -> Module:
     pins = {p: "" for p in core_mod.FREE_GPIO}
     pins["V5_IN"] = "+5V_MOD"
     s.use(core, pins)
-    from . import template_sheet
-    s.drawing, s.blocks = template_sheet.DRAWING, template_sheet.BLOCKS
+    sheet = drawing_of(__file__)
+    s.drawing, s.blocks = sheet.DRAWING, sheet.BLOCKS
     m = Module(NAME, TITLE, REVISION, s,
                tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks(),
                        *led_bus_track()],

@@ -5,7 +5,7 @@ signals reach the MCU through the core box's pins (docs/hardware.md). Grid units
 """
 from __future__ import annotations
 
-from ..design import At, Block
+from r2ptools.kicad.design import At, Block
 
 DRAWING = {
     "F101": At(20, 14, 90),
