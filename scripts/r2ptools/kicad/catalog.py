@@ -108,8 +108,11 @@ _ITEMS = [
     # --- psu
     ("XT30", "Connector_Generic:Conn_01x02", "R2P:AMASS_XT30PW-M_1x02_P2.50mm_Horizontal",
      "XT30 IN", "XT30PW-M"),
-    ("SUD50P06-15", "Transistor_FET:SUD50P06-15", "Package_TO_SOT_SMD:TO-252-2", "SUD50P06-15",
-     "SUD50P06-15-GE3"),
+    # Vishay's SQD50P06-15L (AEC-Q101) on KiCad's SUD50P06-15 symbol: the same TO-252 part family
+    # and pinout (1 G, 2 D tab, 3 S), -60 V, 15.5/20 mohm at -10/-4.5 V, +-20 V gate; LCSC C3281500
+    # is the number other public JLC BOMs give for it (README errata)
+    ("SQD50P06-15L", "Transistor_FET:SUD50P06-15", "Package_TO_SOT_SMD:TO-252-2", "SQD50P06-15L",
+     "SQD50P06-15L_GE3"),
     ("FUSE_5A_SLOW", "Device:Fuse", "Fuse:Fuse_Littelfuse-NANO2-451_453", "5A T 125V", "0452005.MRL"),
     ("Z_15V", "Device:D_Zener", "Diode_SMD:D_SOD-123", "15V", "BZT52C15"),
     ("SMBJ40A", "Device:D_TVS", "Diode_SMD:D_SMB", "SMBJ40A", "SMBJ40A"),

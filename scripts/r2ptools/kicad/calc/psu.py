@@ -63,7 +63,7 @@ TVS_VBR_MIN = 44.4            # at 1 mA, 25 °C (JEDEC SMBJ40A; BORN lists 44.4�
 TVS_VBR_MAX = 51.1
 TVS_VC, TVS_IPP = 64.5, 9.3   # clamp at the rated 10/1000 µs pulse (600 W)
 TVS_ALPHA = 0.001             # VBR temperature coefficient, 1/K (SMBJ family, 40 V: ~0.1 %/K)
-Q101_VDS = 60.0               # SUD50P06-15: -60 V
+Q101_VDS = 60.0               # SQD50P06-15L: -60 V
 CIN_RATED = 100.0             # CL32B225KCJSNNE and CL10B104KC8NNNC: 100 V
 CIN_DC_BIAS_FACTOR = 0.45     # estimate: remaining capacitance of the 100 V 1210 X7R at 42 V
                               # (Samsung curve: -77 % at 80 V; about -55 % at 42 V)

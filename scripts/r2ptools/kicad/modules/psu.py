@@ -33,6 +33,15 @@ REVISION = "B"
 FIDUCIALS = [(1.8, 40.0), (22.3, 19.4), (57.5, 40.5)]
 """Three board-only fiducials, clear of the PSU's parts."""
 
+BUCK_DY = -0.45
+"""How far U102, its top-row parts and L101 moved up to make room for C103 on the top side."""
+
+
+def _up(points: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """Points of copper that moved with the buck (BUCK_DY)."""
+    return [(x, round(y + BUCK_DY, 3)) for x, y in points]
+
+
 P = Place
 PLACES = {
     # --- test pads (TP1-TP8 the core's, TP101-TP105 the PSU's): a grid right of the buck, and
@@ -43,35 +52,41 @@ PLACES = {
     "TP7": P(53.5, 38.0, 0), "TP8": P(57.0, 38.0, 0), "TP102": P(55.4, 34.1, 0),
     "TP101": P(48.5, 44.3, 0), "TP103": P(35.5, 29.5, 0), "TP104": P(35.5, 32.0, 0),
     "TP105": P(38.0, 29.5, 0),
-    # core rev B parts: the +5V TVS right of BUS OUT's pins, VDDA's 1 uF under its 10 nF
-    "D5": P(47.0, 20.3, 0), "C11": P(12.9, 30.3, 90, True),
+    # core rev B parts: the +5V TVS right of BUS OUT's pins, VDDA's 1 uF beside its 10 nF (C6)
+    "D5": P(44.1, 20.3, 0), "C11": P(11.2, 30.3, 90),
     # --- power stage (bottom edge and right side)
     "J101": P(12.4, 37.15, 180), "Q101": P(28.87, 46.3, 180),
     "D102": P(31.3, 40.3, 180), "R102": P(38.8, 44.3, 0), "U101": P(37.2, 40.2, 0),
     "D101": P(38.5, 46.9, 0), "R101": P(38.5, 49.0, 0),
-    "U102": P(43.0, 39.5, 270),
-    "C101": P(43.9, 43.85, 0), "C102": P(43.9, 47.2, 0),
+    # every part on the top side (one-sided economic PCBA at JLCPCB): the buck, its top-row
+    # parts and L101 sit BUCK_DY higher than in the first layout so that the HF input capacitor
+    # C103 fits between the PVIN/PGND pins and the bulk capacitors C101/C102
+    "U102": P(43.0, 39.5 + BUCK_DY, 270),
+    # C103 straddles PVIN (pins 20-22) and PGND (24-26), 0.6 mm below them: the smallest loop
+    "C103": P(43.9, 42.53, 0),
+    "C101": P(43.9, 44.97, 0), "C102": P(43.9, 48.28, 0),
     # U102's top-row parts, left to right as their pins: SS (11), BIAS (9), VCC (8), BOOT (6)
-    "C110": P(38.9, 35.16, 90), "C116": P(40.5, 35.16, 90), "C108": P(42.1, 35.16, 90),
-    "C109": P(43.7, 35.16, 90),
+    "C110": P(38.9, 35.16 + BUCK_DY, 90), "C116": P(40.5, 35.16 + BUCK_DY, 90),
+    "C108": P(42.1, 35.16 + BUCK_DY, 90), "C109": P(43.7, 35.16 + BUCK_DY, 90),
     "R108": P(37.6, 37.6, 0), "R109": P(34.5, 37.1, 0),
     "R104": P(31.5, 36.4, 90), "R105": P(29.7, 36.4, 90), "C106": P(27.9, 36.4, 90),
-    # the fuse on the back, under the XT30's body, in the battery + line to Q101's drain tab
-    "F101": P(22.0, 43.2, 180, True),
-    # the HF input capacitor on the back, between the PVIN trunk's via and the PGND trunk's via
-    "C103": P(44.0, 45.5, 180, True),
+    # the fuse upright between the XT30's + pin and Q101's drain tab, right above the tab
+    "F101": P(24.05, 38.7, 270),
     "R106": P(47.2, 48.0, 90), "R107": P(49.4, 48.0, 90), "C104": P(51.2, 48.0, 90),
-    "L101": P(47.5, 28.2, 0),
+    "L101": P(47.5, 28.2 + BUCK_DY, 0),
     "C111": P(56.85, 20.3, 0), "C112": P(56.85, 24.0, 0), "C113": P(56.85, 27.7, 0),
     "C114": P(56.85, 31.4, 0),
     "U103": P(56.05, 13.5, 90),
-    # eFuse set-up parts on the back: UVLO/OVP/dV/dt under the output trunk, below the eFuse's
-    # bottom pin row; ILIM above its top row (the top row's other pins escape through vias there)
-    "R112": P(55.2, 19.5, 180, True), "R113": P(58.3, 19.5, 180, True),
-    "R114": P(58.3, 21.15, 180, True), "C115": P(55.2, 22.95, 180, True),
-    "R116": P(58.3, 8.7, 0, True),
+    # eFuse set-up parts in a row between D5 and the output capacitors, reached from the bottom
+    # pin row's vias on the back (the +5V_BUCK feed fills the row on top); R_ILIM above the top
+    # row's left end, between BUS OUT and the mounting hole: right above the ILIM pin (11) it
+    # would wall in BUS_EN (13), whose only way out is up to a via there
+    "C115": P(48.45, 20.88, 270), "R114": P(50.05, 20.88, 270), "R113": P(51.65, 20.88, 270),
+    "R112": P(53.25, 20.88, 270),
+    "R116": P(54.0, 8.3, 180),
     "R110": P(31.6, 33.2, 0), "R111": P(28.5, 33.2, 0),
-    "R103": P(25.0, 39.6, 270), "C105": P(23.2, 39.6, 270),
+    # the IIN_SENSE filter beside the amplifier, where F101 took its first place
+    "R103": P(34.3, 35.1, 180), "C105": P(38.6, 32.2, 0),
     "R117": P(4.0, 16.6, 0), "R118": P(1.9, 36.9, 90), "C117": P(3.7, 36.9, 90),
     # --- core parts moved to make room (the core's schematic is unchanged)
     "D2": P(2.2, 9.6, 180), "R4": P(5.3, 9.6, 0), "D3": P(2.2, 11.6, 180), "R5": P(5.3, 11.6, 0),
@@ -79,8 +94,8 @@ PLACES = {
     "SW1": P(3.95, 23.0, 90), "SW2": P(3.95, 31.0, 90),
     "U1": P(19.0, 26.0, 0), "C3": P(14.6, 19.6, 0), "R1": P(18.4, 19.6, 0), "C4": P(25.5, 19.9, 0),
     "C6": P(12.9, 30.3, 90), "C5": P(25.4, 33.1, 0), "R2": P(22.3, 33.1, 0),
-    "Y1": P(10.4, 25.2, 0), "C1": P(10.4, 28.7, 0), "C2": P(10.4, 21.7, 0),
-    "C10": P(10.4, 30.6, 0),
+    "Y1": P(10.4, 25.2, 0), "C1": P(8.8, 28.7, 0), "C2": P(10.4, 21.7, 0),
+    "C10": P(8.8, 30.6, 0),
     "U2": P(16.0, 33.1, 0), "C8": P(12.0, 33.6, 0), "C7": P(19.3, 33.1, 90),
     "U3": P(28.8, 26.5, 0), "C9": P(28.8, 30.4, 0),
     "J4": P(36.8, 22.7, 90),
@@ -98,34 +113,33 @@ def power_tracks() -> list[Track]:
     L101's far pad, and the eFuse input is fed from the same trunk."""
     T = Track
     return [
-        # battery +: XT30 pin 2, on the back under the connector body, through F101 and six vias
-        # up to Q101's drain tab
-        T("VBAT_CONN", [(17.4, 37.15), (17.4, 43.2), (19.545, 43.2)], 3.0, "B.Cu"),
-        T("VBAT_IN", [(24.455, 43.2), (26.3, 43.2), (26.3, 46.0)], 3.0, "B.Cu"),
+        # battery +: XT30 pin 2 across to F101's upper pad, F101's lower pad down into Q101's
+        # drain tab
+        T("VBAT_CONN", [(17.4, 36.25), (24.05, 36.25)], 2.0),
+        T("VBAT_IN", [(24.05, 41.15), (24.05, 42.4), (25.4, 43.75), (25.4, 45.0)], 2.4),
         # Q101 source to the shunt, and to the TVS
         T("VIN_PROT", [(33.9, 44.0), (35.6, 44.0), (35.9, 44.3), (37.34, 44.3)], 1.8),
         T("VIN_PROT", [(33.9, 44.0), (33.9, 41.5), (33.3, 40.3)], 1.2),
         # shunt to the input capacitors, up to PVIN (neck to the 0.5 mm-pitch pins)
         T("VIN_BUCK", [(40.26, 44.3), (42.6, 44.3)], 1.8),
-        T("VIN_BUCK", [(42.6, 48.3), (42.6, 42.9)], 2.0),
-        T("VIN_BUCK", [(42.6, 42.9), (43.0, 42.5), (43.0, 41.36)], 0.9),
-        T("VIN_BUCK", [(42.5, 41.36), (43.5, 41.36)], 0.3),
+        T("VIN_BUCK", [(42.6, 48.3), (42.6, 43.1)], 2.0),
+        # the neck passes through C103's VIN pad, the PGND stub through its GND pad: C103's loop
+        # is the pins, its pads and 0.6 mm of copper
+        T("VIN_BUCK", [(42.6, 43.1), (43.0, 42.7), (43.0, 41.36 + BUCK_DY)], 0.9),
+        T("VIN_BUCK", _up([(42.5, 41.36), (43.5, 41.36)]), 0.3),
         # power ground of the hot loop: PGND pins to the capacitor returns (vias to both pours)
-        T("GND", [(44.5, 41.36), (45.5, 41.36)], 0.3),
-        T("GND", [(45.0, 41.36), (45.0, 42.1), (45.4, 42.5), (45.4, 48.6)], 1.2),
+        T("GND", _up([(44.5, 41.36), (45.5, 41.36)]), 0.3),
+        T("GND", [(45.0, 41.36 + BUCK_DY), (45.0, 42.1), (45.4, 42.5), (45.4, 48.6)], 1.2),
         # small-signal pins of U102 to their parts, fanned out from the 0.5 mm pitch by hand
-        # C103 on the back: PVIN trunk via to pad 1, pad 2 to the PGND trunk via
-        T("VIN_BUCK", [(42.6, 45.5), (43.22, 45.5)], 0.6, "B.Cu"),
-        T("GND", [(44.78, 45.5), (45.4, 45.5)], 0.6, "B.Cu"),
-        T("GND", [(41.0, 41.36), (41.0, 40.3)], 0.2),                  # SYNC/MODE: auto mode
-        T("BOOT", [(43.7, 35.94), (43.7, 36.6), (43.05, 36.95), (43.05, 37.64)], 0.25),
-        T("VCC_BUCK", [(42.1, 35.94), (42.0, 36.5), (42.0, 37.64)], 0.25),
+        T("GND", _up([(41.0, 41.36), (41.0, 40.3)]), 0.2),             # SYNC/MODE: auto mode
+        T("BOOT", _up([(43.7, 35.94), (43.7, 36.6), (43.05, 36.95), (43.05, 37.64)]), 0.25),
+        T("VCC_BUCK", _up([(42.1, 35.94), (42.0, 36.5), (42.0, 37.64)]), 0.25),
         # BIAS to +5V_BUCK (SNVSBK5 §5 for a 5 V output) with C116 at the pin
-        T("+5V_BUCK", [(40.5, 35.94), (41.5, 36.7), (41.5, 37.64)], 0.25),
-        T("SS_BUCK", [(38.9, 35.94), (39.6, 36.9), (40.5, 36.9), (40.5, 37.64)], 0.25),
-        T("GND", [(38.9, 34.38), (38.9, 33.6), (42.1, 33.6), (42.1, 34.38)], 0.3),
-        T("GND", [(40.5, 34.38), (40.5, 33.6)], 0.3),
-        T("SW", [(43.7, 34.38), (45.4, 34.38)], 0.4),
+        T("+5V_BUCK", _up([(40.5, 35.94), (41.5, 36.7), (41.5, 37.64)]), 0.25),
+        T("SS_BUCK", _up([(38.9, 35.94), (39.6, 36.9), (40.5, 36.9), (40.5, 37.64)]), 0.25),
+        T("GND", _up([(38.9, 34.38), (38.9, 33.6), (42.1, 33.6), (42.1, 34.38)]), 0.3),
+        T("GND", _up([(40.5, 34.38), (40.5, 33.6)]), 0.3),
+        T("SW", _up([(43.7, 34.38), (45.4, 34.38)]), 0.4),
         T("VIN_PROT", [(31.5, 37.225), (31.5, 38.2), (32.6, 39.3)], 0.3),
         T("VIN_PROT", [(36.85, 46.9), (36.85, 45.0)], 0.5),            # D101 (gate zener)
         # bus voltage divider top (R117) to BUS IN's +5V pin 7, between the jack's GND pins 6 and 8
@@ -133,24 +147,16 @@ def power_tracks() -> list[Track]:
         # Kelvin sense lines from the shunt's pads to the amplifier inputs
         T("VIN_PROT", [(36.06, 41.15), (36.7, 41.8), (37.34, 43.45)], 0.25),
         T("VIN_BUCK", [(38.34, 41.15), (39.2, 42.0), (40.0, 43.4)], 0.25),
-        # current-sense amplifier output under D102 (B.Cu) to its RC filter R103/C105
-        T("IIN_AMP", [(36.06, 39.25), (35.6, 38.3)], 0.25),
-        T("IIN_AMP", [(35.6, 38.3), (25.0, 37.7)], 0.25, "B.Cu"),
-        T("IIN_AMP", [(25.0, 37.7), (25.0, 38.775)], 0.25),
-        # eFuse bottom-row set-up pins down to the back-side parts (the +5V_BUCK feed fills the row)
+        # eFuse bottom-row set-up pins down to vias (the +5V_BUCK feed fills the row on top); the
+        # router takes them on the back to the set-up parts' row
         T("EFUSE_UV", [(57.02, 16.45), (57.02, 17.4), (57.15, 18.05)], 0.25),
         T("EFUSE_OV", [(57.67, 16.45), (57.67, 17.4), (58.0, 18.05)], 0.25),
         T("EFUSE_DVDT", [(58.97, 16.45), (58.97, 17.4), (58.85, 18.05)], 0.25),
-        # ... and on the back to the UVLO/OVP divider chain R112-R113-R114
-        T("EFUSE_UV", [(56.025, 19.5), (56.6, 18.9), (57.15, 18.4), (57.15, 18.05)], 0.25, "B.Cu"),
-        T("EFUSE_UV", [(57.15, 18.4), (57.475, 18.9), (57.475, 19.5)], 0.25, "B.Cu"),
-        T("EFUSE_OV", [(58.0, 18.05), (58.0, 18.5), (58.6, 18.9), (59.125, 19.5)], 0.25, "B.Cu"),
-        T("EFUSE_OV", [(59.125, 19.5), (59.125, 20.32), (57.475, 20.32), (57.475, 21.15)], 0.25,
-          "B.Cu"),
-        T("+5V_BUCK", [(54.375, 19.5), (54.4, 20.4)], 0.3, "B.Cu"),
+        # the UVLO divider's top (R112 pad 1) up into the eFuse's +5V_BUCK feed
+        T("+5V_BUCK", [(53.25, 20.1), (53.25, 19.2)], 0.4),
         # EN (pin 18) out between the PGND pins and the PVIN trunk's 0.6 mm, on the back to the
         # divider: R106's EN pad (via A) and R107's (via B)
-        T("EN_BUCK", [(41.5, 41.36), (41.5, 41.95), (40.6, 42.6)], 0.25),
+        T("EN_BUCK", [(41.5, 41.36 + BUCK_DY), (41.5, 41.6), (40.6, 42.6)], 0.25),
         T("EN_BUCK", [(40.6, 42.6), (40.6, 43.8), (47.4, 43.8), (47.4, 46.1), (50.2, 46.1),
                       (50.2, 48.0)], 0.25, "B.Cu"),
         T("EN_BUCK", [(47.4, 46.1), (47.2, 46.5), (47.2, 47.17)], 0.25),
@@ -161,15 +167,15 @@ def power_tracks() -> list[Track]:
         T("VIN_BUCK", [(42.1, 47.35), (42.1, 49.2), (48.05, 49.2)], 0.3, "B.Cu"),
         T("VIN_BUCK", [(48.05, 49.2), (47.2, 48.825)], 0.3),
         # switch node: the SW pins to L101
-        T("SW", [(43.5, 37.64), (45.5, 37.64)], 0.3),
-        T("SW", [(45.25, 37.64), (45.25, 36.9)], 0.8),
-        T("SW", [(45.4, 36.9), (45.4, 29.0), (43.03, 28.2)], 2.0),
+        T("SW", _up([(43.5, 37.64), (45.5, 37.64)]), 0.3),
+        T("SW", _up([(45.25, 37.64), (45.25, 36.9)]), 0.8),
+        T("SW", _up([(45.4, 36.9), (45.4, 29.0), (43.03, 28.2)]), 2.0),
         # buck output: L101 to the output capacitors' trunk, up to the eFuse inputs
-        T("+5V_BUCK", [(51.97, 28.2), (55.37, 28.2)], 2.5),
+        T("+5V_BUCK", _up([(51.97, 28.2), (55.37, 28.2)]), 2.5),
         T("+5V_BUCK", [(55.375, 31.4), (55.4, 34.1)], 0.6),             # TP102 below C114
         # BIAS's via (under the top-row parts) on the back to TP102's track
-        T("+5V_BUCK", [(41.0, 36.5), (41.9, 35.6), (53.9, 35.6), (55.4, 34.1), (55.4, 33.2)], 0.4,
-          "B.Cu"),
+        T("+5V_BUCK", [(41.0, 36.5 + BUCK_DY), (41.45, 35.6), (53.9, 35.6), (55.4, 34.1),
+                       (55.4, 33.2)], 0.4, "B.Cu"),
         T("+5V_BUCK", [(55.37, 31.4), (55.37, 19.4)], 2.5),
         T("+5V_BUCK", [(55.37, 19.4), (54.4, 18.6), (53.13, 18.6)], 1.5),
         T("+5V_BUCK", [(53.13, 18.6), (53.13, 16.45)], 0.45),
@@ -185,19 +191,16 @@ def power_vias() -> list[Via]:
     out = [Via("+5V", x, y, 0.8, 0.4) for x in (50.4, 51.4, 52.4) for y in (9.5, 10.5)]
     # thermal vias in U102's exposed pad (2 x 5 at 0.9 x 0.8 mm; KiCad's _ThermalVias variant
     # drills 0.2 mm, below the fab's 0.3 mm), the hot-loop ground, the output returns
-    out += [Via("GND", x, y, 0.6, 0.3) for x in (41.3, 42.15, 43.0, 43.85, 44.7) for y in (39.05, 39.95)]
-    out += [Via("VIN_BUCK", 42.6, 45.5, 0.7, 0.3), Via("GND", 45.4, 45.5, 0.7, 0.3)]   # C103
-    # battery +: F101's output up to Q101's drain tab (3.1 A over six 0.4 mm vias)
-    out += [Via("VBAT_IN", x, y, 0.8, 0.4) for x in (25.3, 26.3, 27.3) for y in (44.6, 45.8)]
+    out += [Via("GND", x, y + BUCK_DY, 0.6, 0.3) for x in (41.3, 42.15, 43.0, 43.85, 44.7)
+            for y in (39.05, 39.95)]
     out += [Via("GND", 46.7, y, 0.6, 0.3) for y in (42.9, 45.1)]
-    out += [Via("GND", 40.5, 33.0, 0.6, 0.3)]
-    out += [Via("+5V_BUCK", 41.0, 36.5, 0.6, 0.3), Via("+5V_BUCK", 55.4, 33.2, 0.6, 0.3)]   # BIAS
+    out += [Via("GND", 40.5, 33.0 + BUCK_DY, 0.6, 0.3)]
+    out += [Via("+5V_BUCK", 41.0, 36.5 + BUCK_DY, 0.6, 0.3),
+            Via("+5V_BUCK", 55.4, 33.2, 0.6, 0.3)]                                   # BIAS
     out += [Via("EN_BUCK", x, y, 0.6, 0.3) for x, y in ((40.6, 42.6), (47.4, 46.1), (50.2, 48.0))]
     out += [Via("VIN_BUCK", 42.1, 47.35, 0.7, 0.3), Via("VIN_BUCK", 48.05, 49.2, 0.7, 0.3)]
     out += [Via(n, x, 18.05, 0.7, 0.3) for n, x in (("EFUSE_UV", 57.15), ("EFUSE_OV", 58.0),
                                                      ("EFUSE_DVDT", 58.85))]
-    out += [Via("+5V_BUCK", 54.4, 20.4, 0.7, 0.3)]
-    out += [Via("IIN_AMP", 35.6, 38.3, 0.7, 0.3), Via("IIN_AMP", 25.0, 37.7, 0.7, 0.3)]
     out += [Via("GND", x, y, 0.6, 0.3) for x in (53.8, 55.2, 56.9, 58.3) for y in (12.6, 14.4)]
     out += [Via("GND", 59.0, y, 0.6, 0.3) for y in (22.2, 25.9, 29.6, 33.3)]
     return out
@@ -260,7 +263,7 @@ def build(core: Sheet) -> Module:
     # 5 A time-lag fuse: carries the 3.1 A worst-case input current (6 V, bus at its limit) at
     # 63 % of its rating and rides through the input capacitors' hot-plug surge (calc/psu.py)
     s.part("F101", "FUSE_5A_SLOW", {"1": "VBAT_CONN", "2": "VBAT_IN"})
-    s.part("Q101", "SUD50P06-15", {"D": "VBAT_IN", "S": "VIN_PROT", "G": "Q_GATE"})
+    s.part("Q101", "SQD50P06-15L", {"D": "VBAT_IN", "S": "VIN_PROT", "G": "Q_GATE"})
     s.part("D101", "Z_15V", {"K": "VIN_PROT", "A": "Q_GATE"})
     s.part("R101", "R_100k", {"1": "Q_GATE", "2": "GND"})
     # pad 1 of D_SMB is the cathode
