@@ -63,6 +63,11 @@ _ITEMS = [
     ("R_6k8", R, R0603, "6.8k", "0603WAF6801T5E"),
     ("R_174k", R, R0603, "174k", "0603WAF1743T5E"),
     ("R_60R4", R, R0805, "60.4", "0805W8F604JT5E"),        # split CAN termination, 0.125 W
+    # --- resistors, 0603 0.1 % 25 ppm/K thin film (YAGEO RT0603BRD), JLCPCB extended parts: the
+    # buck's feedback divider, where 1 % parts alone would take VOUT out of the bus's 5.00 V ± 2 %
+    # (calc/psu.py, "VOUT worst case"); LCSC numbers as public JLC BOMs give them (README errata)
+    ("R_102k_0.1%", R, R0603, "102k 0.1%", "RT0603BRD07102KL"),
+    ("R_25k5_0.1%", R, R0603, "25.5k 0.1%", "RT0603BRD0725K5L"),
     # --- capacitors
     ("C_30p", C, C0603, "30pF C0G", "0603CG300J500NT"),
     ("C_4n7", C, C0603, "4.7nF", "0603B472K500NT"),

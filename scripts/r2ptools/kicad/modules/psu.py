@@ -163,8 +163,9 @@ def power_tracks() -> list[Track]:
         T("EN_BUCK", [(50.2, 48.0), (49.4, 48.83)], 0.25),
         # TP101 (VIN_BUCK) down between the EN divider's resistors to the feed's via
         T("VIN_BUCK", [(48.5, 44.3), (48.05, 45.2), (48.05, 49.2)], 0.3),
-        # EN divider feed: under the hot-loop ground on B.Cu
-        T("VIN_BUCK", [(42.1, 47.35), (42.1, 49.2), (48.05, 49.2)], 0.3, "B.Cu"),
+        # EN divider feed: under the hot-loop ground on B.Cu, from a via at the feed track's left
+        # edge beside C102's pad (a via in the pad would wick its solder away)
+        T("VIN_BUCK", [(41.4, 47.9), (41.4, 49.2), (48.05, 49.2)], 0.3, "B.Cu"),
         T("VIN_BUCK", [(48.05, 49.2), (47.2, 48.825)], 0.3),
         # switch node: the SW pins to L101
         T("SW", _up([(43.5, 37.64), (45.5, 37.64)]), 0.3),
@@ -198,7 +199,7 @@ def power_vias() -> list[Via]:
     out += [Via("+5V_BUCK", 41.0, 36.5 + BUCK_DY, 0.6, 0.3),
             Via("+5V_BUCK", 55.4, 33.2, 0.6, 0.3)]                                   # BIAS
     out += [Via("EN_BUCK", x, y, 0.6, 0.3) for x, y in ((40.6, 42.6), (47.4, 46.1), (50.2, 48.0))]
-    out += [Via("VIN_BUCK", 42.1, 47.35, 0.7, 0.3), Via("VIN_BUCK", 48.05, 49.2, 0.7, 0.3)]
+    out += [Via("VIN_BUCK", 41.4, 47.9, 0.7, 0.3), Via("VIN_BUCK", 48.05, 49.2, 0.7, 0.3)]
     out += [Via(n, x, 18.05, 0.7, 0.3) for n, x in (("EFUSE_UV", 57.15), ("EFUSE_OV", 58.0),
                                                      ("EFUSE_DVDT", 58.85))]
     out += [Via("GND", x, y, 0.6, 0.3) for x in (53.8, 55.2, 56.9, 58.3) for y in (12.6, 14.4)]
@@ -294,8 +295,8 @@ def build(core: Sheet) -> Module:
     s.part("C116", "C_1u", {"1": "+5V_BUCK", "2": "GND"})          # BIAS decoupling at the pin
     s.part("C109", "C_470n", {"1": "BOOT", "2": "SW"})
     s.part("C110", "C_22n", {"1": "SS_BUCK", "2": "GND"})
-    s.part("R108", "R_100k", {"1": "+5V_BUCK", "2": "FB_BUCK"})
-    s.part("R109", "R_24k9", {"1": "FB_BUCK", "2": "GND"})
+    s.part("R108", "R_102k_0.1%", {"1": "+5V_BUCK", "2": "FB_BUCK"})
+    s.part("R109", "R_25k5_0.1%", {"1": "FB_BUCK", "2": "GND"})
     s.part("L101", "L_10u", {"1": "SW", "2": "+5V_BUCK"})
     for i in range(4):
         s.part(f"C{111 + i}", "C_22u_25V", {"1": "+5V_BUCK", "2": "GND"})
