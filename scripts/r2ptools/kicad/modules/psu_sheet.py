@@ -24,6 +24,13 @@ _ROWS = {r.what: r for r in calc.rows()}
 _BV = calc.BOARD_VALUES
 
 
+def _en(reading: str) -> str:
+    """Buck start/stop input voltages under EN reading A or B (calc/psu.py: not verified)."""
+    start, stop = (next(r.value.split()[0] for w, r in _ROWS.items() if w.startswith(f"buck {k}, EN reading {reading}"))
+                   for k in ("start", "stop"))
+    return f"{start}/{stop} V"
+
+
 def _v(what: str) -> str:
     """The value calc/psu.py prints for the row `what` (a KeyError if the row is renamed)."""
     return _ROWS[what].value
@@ -106,13 +113,13 @@ BLOCKS = [
     Block("Buck converter LM76005 (60 V, 400 kHz, synchronous)", 74, 6.5, 160, 42, notes=[
         (75, 41, f"C101-C103: {_ROWS['input ripple at duty 0.5, 2.5 A rated'].note} at 42 V:\n"
                  f"{_v('input ripple at duty 0.5, 2.5 A rated')} (duty 0.5, 2.5 A).\n"
-                 f"EN: start = {calc.BUCK_EN_RISE} V × (1 + R106/R107) = {_v('buck start (EN rising)')},\n"
-                 f"stop {_v('buck stop (EN falling)')}; soft start C110 × {calc.BUCK_VFB:.1f} V /"
+                 f"EN start/stop {_en('A')} ({_en('B')} at 1.2 V),\n"
+                 f"soft start C110 × {calc.BUCK_VFB:.1f} V /"
                  f" {calc.BUCK_ISS * 1e6:.0f} µA ="
                  f" {_v('soft start t = C_SS V_FB / I_SS')}."),
-        (110, 41, f"VOUT = VFB (1 + R108/R109)\n= {calc.BUCK_VFB:.1f} V × (1 + {_BV['R108'] / 1e3:g}k/"
-                  f"{_BV['R109'] / 1e3:g}k) ="
-                  f" {_v('VOUT = VFB (1 + R108/R109)')}\n"
+        (110, 41, f"VOUT = VFB (1 + R108/R109) = {_v('VOUT typical = VFB (1 + R108/R109)')}\n"
+                  f"{_BV['R108'] / 1e3:g}k/{_BV['R109'] / 1e3:g}k {calc.FB_RES_TOL:.1%}: "
+                  f"{_v('VOUT worst case (reference range, resistor tolerance)')} worst\n"
                   "BOOT 470 nF 25 V; BIAS on +5V_BUCK,\nC116 1 µF at the pin (SNVSBK5 §5)."),
         (133, 33, f"L101 10 µH: ripple {_v('inductor ripple at max input, f min')} at"
                   f" {calc.VIN_MAX:.1f} V,\n{calc.BUCK_FSW_MIN / 1e3:.0f} kHz"
