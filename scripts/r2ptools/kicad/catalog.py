@@ -130,7 +130,7 @@ _ITEMS = [
     # TPS16630PWPR on KiCad's TPS26631PWP symbol: KiCad has no TPS1663 symbol; the HTSSOP-20
     # pinouts agree pin for pin (SLVSET9 table 6-1 vs SLVSDO8) except that the TPS16630 has no
     # B_GATE/DRV (its pins 4, 5 and 17 are NC), calls IN_SYS P_IN (6) and has PGOOD on 16 (the
-    # symbol's PGTH). psu.py wires the pins by what the TPS16630 has there.
+    # symbol's PGTH). hardware/psu/psu.kicad_sch wires the pins by what the TPS16630 has there.
     ("TPS16630", "Power_Management:TPS26631PWP",
      "R2P:HTSSOP-20-1EP_4.4x6.5mm_P0.65mm_EP3.4x6.5mm", "TPS16630", "TPS16630PWPR"),
     # --- proximity

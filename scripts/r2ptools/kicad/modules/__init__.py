@@ -2,17 +2,15 @@
 per file (`<module>.py`, its drawing in `<module>_sheet.py`).
 
 A board's KiCad files are its source once scaffolded, and its description is then deleted (git
-keeps it): proximity's is gone; psu's stays until its one-sided revision B layout is routed
-(issue 14); `template` stays as the example a new module copies (tests/test_hardware.py
-scaffolds it into a scratch folder). `MODULES` lists the descriptions.
+keeps it): proximity's and psu's are gone; `template` stays as the example a new module copies
+(tests/test_hardware.py scaffolds it into a scratch folder). `MODULES` lists the descriptions.
 """
 from __future__ import annotations
 
 from ..design import Module
-from . import core, psu, template
+from . import core, template
 
 MODULES = {
-    "psu": psu.build,
     "template": template.build,
 }
 
