@@ -105,3 +105,16 @@ def test_the_readme_states_the_assembled_cost_of_every_board():
                    or l.startswith(f"| {board} | standard"))
         per10, per100 = (Decimal(x) for x in row.strip("| ").split(" | ")[-2:])
         assert per10 > per100 > 0
+
+
+@pytest.mark.parametrize("board", ["proximity", "psu"])
+def test_every_shipped_board_is_a_one_sided_economic_order(board):
+    """A single SMD part on the back turns the order into a two-sided standard PCBA (about 60 USD
+    more per order, bom/README.md): every part of a shipped board stays on the top side. Copper
+    that is not placed (test pads, fiducials: not in the CPL) may sit on the back."""
+    from r2ptools.kicad import jlc
+    pcb = ROOT / "hardware" / board / f"{board}.kicad_pcb"
+    joints = ac.board_joints(pcb)
+    placed, _ = jlc.parts(pcb)
+    back = sorted(p.ref for p in placed if p.bottom and joints[p.ref].smd)
+    assert not back, f"{board}: SMD parts on the back make a standard PCBA order: {back}"

@@ -389,6 +389,34 @@ def test_psu_calculation_catches_a_drifted_value(monkeypatch):
     assert not rows["eFuse limit 18/R_ILIM"].ok, "4.6 A out of one jack must fail the bus rule"
 
 
+def test_psu_output_worst_case_is_checked_not_the_typical(monkeypatch):
+    """The VOUT row checks the reference's min-max and the feedback resistors' tolerance against
+    the bus's 4.90-5.10 V: revision B's first pair (100 k / 24.9 k, 1 %) was 5.05 V typical and
+    passed a typical check, yet reaches 5.18 V; 1 % parts fail even on the centred pair."""
+    from r2ptools.kicad.calc import psu as calc
+    worst = "VOUT worst case (reference range, resistor tolerance)"
+    assert {r.what: r for r in calc.rows()}[worst].ok
+    monkeypatch.setitem(calc.BOARD_VALUES, "R108", 100e3)
+    monkeypatch.setitem(calc.BOARD_VALUES, "R109", 24.9e3)
+    monkeypatch.setattr(calc, "FB_RES_TOL", 0.01)
+    rows = {r.what: r for r in calc.rows()}
+    assert rows["VOUT typical = VFB (1 + R108/R109)"].ok and not rows[worst].ok
+    monkeypatch.setitem(calc.BOARD_VALUES, "R108", 102e3)
+    monkeypatch.setitem(calc.BOARD_VALUES, "R109", 25.5e3)
+    assert not {r.what: r for r in calc.rows()}[worst].ok, "1 % parts: the band is too wide"
+
+
+def test_psu_buck_starts_from_the_emptiest_pack_under_both_en_readings(monkeypatch):
+    """The LM76005's EN thresholds are not verified: the start/stop rows exist for both readings,
+    and a start above VIN_MIN (an EN divider sized for the 1.2 V reading, read at 2.1 V) fails."""
+    from r2ptools.kicad.calc import psu as calc
+    rows = [r for r in calc.rows() if r.what.startswith(("buck start, EN reading", "buck stop, EN reading"))]
+    assert len(rows) == 4 and all(r.ok for r in rows)
+    monkeypatch.setitem(calc.BOARD_VALUES, "R107", 26.1e3)
+    bad = [r.what for r in calc.rows() if r.what.startswith("buck start") and not r.ok]
+    assert bad == ["buck start, EN reading A (2.1 V / 1.72 V, this file's)"], bad
+
+
 def test_psu_high_voltage_clearance_rule_catches_a_violation(tmp_path):
     """psu.kicad_dru's IPC-2221B rule: a GND via 0.4 mm from a battery-side pad is a DRC error
     (0.4 mm passes the fab's 0.127 mm and the 0.15 mm class clearance, so only the rule sees it)."""
@@ -416,6 +444,36 @@ def test_psu_high_voltage_clearance_rule_catches_a_violation(tmp_path):
     b.Add(via)
     pcbnew.SaveBoard(str(pcb), b)
     assert ipc_errors(), "a GND via 0.4 mm from VIN_BUCK must break the 0.6 mm rule"
+
+
+@pytest.mark.parametrize("board", ["psu", "proximity", "template"])
+def test_no_via_sits_in_an_smd_pad(board):
+    """An open via in a pad wicks the joint's solder down the barrel (revision A had a VIN_BUCK via
+    in C102's pad); the exposed pads' thermal vias are the only vias allowed in copper pads."""
+    assert not check.vias_in_pads(HARDWARE / board / f"{board}.kicad_pcb")
+
+
+def test_a_via_in_a_pad_is_reported_and_thermal_vias_are_not(tmp_path):
+    """The check is real: a via dropped into C102's VIN_BUCK pad is named; U102's ten thermal vias
+    in its exposed pad are not."""
+    import pcbnew
+    pcb = tmp_path / "psu.kicad_pcb"
+    shutil.copyfile(HARDWARE / "psu" / "psu.kicad_pcb", pcb)
+    b = pcbnew.LoadBoard(str(pcb))
+    u102 = b.FindFootprintByReference("U102")
+    ep = max((p for p in u102.Pads() if p.IsOnCopperLayer()), key=lambda p: p.GetSizeX() * p.GetSizeY())
+    thermal = [v for v in b.GetTracks() if v.GetClass() == "PCB_VIA" and ep.HitTest(v.GetPosition(), 0)]
+    assert len(thermal) == 10, "U102's exposed pad keeps its ten thermal vias"
+    pad = next(p for p in b.FindFootprintByReference("C102").Pads() if p.GetNetname().endswith("VIN_BUCK"))
+    via = pcbnew.PCB_VIA(b)
+    via.SetPosition(pad.GetPosition())
+    via.SetWidth(pcbnew.FromMM(0.6))
+    via.SetDrill(pcbnew.FromMM(0.3))
+    via.SetNet(pad.GetNet())
+    b.Add(via)
+    pcbnew.SaveBoard(str(pcb), b)
+    faults = check.vias_in_pads(pcb)
+    assert len(faults) == 1 and "inside C102 pad" in faults[0], faults
 # --- revision B: parts that are not assembled ---------------------------------------------------
 
 def test_test_pads_and_fiducials_are_on_the_board_but_on_no_bom_or_placement_file(tmp_path):

@@ -63,6 +63,11 @@ _ITEMS = [
     ("R_6k8", R, R0603, "6.8k", "0603WAF6801T5E"),
     ("R_174k", R, R0603, "174k", "0603WAF1743T5E"),
     ("R_60R4", R, R0805, "60.4", "0805W8F604JT5E"),        # split CAN termination, 0.125 W
+    # --- resistors, 0603 0.1 % 25 ppm/K thin film (YAGEO RT0603BRD), JLCPCB extended parts: the
+    # buck's feedback divider, where 1 % parts alone would take VOUT out of the bus's 5.00 V ± 2 %
+    # (calc/psu.py, "VOUT worst case"); LCSC numbers as public JLC BOMs give them (README errata)
+    ("R_102k_0.1%", R, R0603, "102k 0.1%", "RT0603BRD07102KL"),
+    ("R_25k5_0.1%", R, R0603, "25.5k 0.1%", "RT0603BRD0725K5L"),
     # --- capacitors
     ("C_30p", C, C0603, "30pF C0G", "0603CG300J500NT"),
     ("C_4n7", C, C0603, "4.7nF", "0603B472K500NT"),
@@ -108,8 +113,11 @@ _ITEMS = [
     # --- psu
     ("XT30", "Connector_Generic:Conn_01x02", "R2P:AMASS_XT30PW-M_1x02_P2.50mm_Horizontal",
      "XT30 IN", "XT30PW-M"),
-    ("SUD50P06-15", "Transistor_FET:SUD50P06-15", "Package_TO_SOT_SMD:TO-252-2", "SUD50P06-15",
-     "SUD50P06-15-GE3"),
+    # Vishay's SQD50P06-15L (AEC-Q101) on KiCad's SUD50P06-15 symbol: the same TO-252 part family
+    # and pinout (1 G, 2 D tab, 3 S), -60 V, 15.5/20 mohm at -10/-4.5 V, +-20 V gate; LCSC C3281500
+    # is the number other public JLC BOMs give for it (README errata)
+    ("SQD50P06-15L", "Transistor_FET:SUD50P06-15", "Package_TO_SOT_SMD:TO-252-2", "SQD50P06-15L",
+     "SQD50P06-15L_GE3"),
     ("FUSE_5A_SLOW", "Device:Fuse", "Fuse:Fuse_Littelfuse-NANO2-451_453", "5A T 125V", "0452005.MRL"),
     ("Z_15V", "Device:D_Zener", "Diode_SMD:D_SOD-123", "15V", "BZT52C15"),
     ("SMBJ40A", "Device:D_TVS", "Diode_SMD:D_SMB", "SMBJ40A", "SMBJ40A"),
@@ -122,7 +130,7 @@ _ITEMS = [
     # TPS16630PWPR on KiCad's TPS26631PWP symbol: KiCad has no TPS1663 symbol; the HTSSOP-20
     # pinouts agree pin for pin (SLVSET9 table 6-1 vs SLVSDO8) except that the TPS16630 has no
     # B_GATE/DRV (its pins 4, 5 and 17 are NC), calls IN_SYS P_IN (6) and has PGOOD on 16 (the
-    # symbol's PGTH). psu.py wires the pins by what the TPS16630 has there.
+    # symbol's PGTH). hardware/psu/psu.kicad_sch wires the pins by what the TPS16630 has there.
     ("TPS16630", "Power_Management:TPS26631PWP",
      "R2P:HTSSOP-20-1EP_4.4x6.5mm_P0.65mm_EP3.4x6.5mm", "TPS16630", "TPS16630PWPR"),
     # --- proximity

@@ -4,8 +4,8 @@
 
 Reads KiCad's JSON reports (exit status alone does not say whether there were violations) and
 prints one line per problem. Exit status 1 if any board has an ERC error, any DRC error or
-warning, an unconnected item, a parity difference, or a symbol whose MPN/Manufacturer/LCSC is
-missing or disagrees with bom/parts.csv.
+warning, an unconnected item, a parity difference, a via inside an SMD pad (vias_in_pads), or a
+symbol whose MPN/Manufacturer/LCSC is missing or disagrees with bom/parts.csv.
 """
 from __future__ import annotations
 
@@ -69,6 +69,42 @@ def drc(pcb: Path) -> dict:
         _run(["kicad-cli", "pcb", "drc", "--format", "json", "--severity-all", "--schematic-parity",
               "-o", str(out), str(pcb)])
         return json.loads(out.read_text())
+
+
+def _exposed_pad(fp, pad) -> bool:
+    """A package's exposed (thermal) pad: vias in it are the datasheet's thermal vias, not a fault.
+
+    Told by size, as the footprint libraries do not flag it: a pad of a part with five or more
+    pads, at least four times the area of the part's median pad (QFN/HTSSOP exposed pads are
+    10-50 times their pins; a two-terminal part's pads are never exposed pads)."""
+    areas = sorted(p.GetSizeX() * p.GetSizeY() for p in fp.Pads() if p.IsOnCopperLayer())
+    return len(areas) >= 5 and pad.GetSizeX() * pad.GetSizeY() >= 4 * areas[len(areas) // 2]
+
+
+def vias_in_pads(pcb: Path) -> list[str]:
+    """Vias whose drill reaches into an SMD pad's copper (exposed pads excepted).
+
+    An open hole in a pad wicks the pad's solder paste down the barrel during reflow: the joint
+    starves (a tombstoned or dry capacitor) and solder balls out on the back. JLCPCB's standard
+    process does not fill and cap vias, so a via belongs beside the pad, joined by copper."""
+    import pcbnew
+
+    b = pcbnew.LoadBoard(str(pcb))
+    origin = b.GetDesignSettings().GetAuxOrigin()
+    pads = [(fp, p) for fp in b.GetFootprints() for p in fp.Pads()   # paste-only apertures aside
+            if p.GetAttribute() == pcbnew.PAD_ATTRIB_SMD and p.IsOnCopperLayer()]
+    faults = []
+    for v in b.GetTracks():
+        if v.GetClass() != "PCB_VIA":
+            continue
+        at, r = v.GetPosition(), v.GetDrillValue() // 2
+        for fp, p in pads:
+            if p.HitTest(at, r) and not _exposed_pad(fp, p):
+                x, y = pcbnew.ToMM(at.x - origin.x), pcbnew.ToMM(at.y - origin.y)
+                faults.append(f"via ({v.GetNetname()}, {pcbnew.ToMM(v.GetDrillValue()):.2f} mm drill) "
+                              f"at ({x:.2f}, {y:.2f}) mm is inside {fp.GetReference()} pad "
+                              f"{p.GetNumber()}: move it beside the pad and join it with copper")
+    return faults
 
 
 def _items(v: dict) -> str:
@@ -154,6 +190,7 @@ def check(folder: Path) -> Report:
         r.problems.append(f"{name}: DRC unconnected: {v['description']} ({_items(v)})")
     for v in d["schematic_parity"]:
         r.problems.append(f"{name}: parity {v['type']}: {v['description']} ({_items(v)})")
+    r.problems += [f"{name}: via in pad: {f}" for f in vias_in_pads(pcb)]
     bom_warnings: list[str] = []
     r.problems += [f"{name}: BOM {p}" for p in bom_fields(sch, bom_warnings)]
     r.warnings += [f"{name}: BOM {w}" for w in bom_warnings]

@@ -27,8 +27,14 @@ BUCK_VIN_ABS_MAX = 65.0       # §6.1 PVIN/VIN
 BUCK_VIN_MAX = 60.0           # §6.3 recommended
 BUCK_VFB = 1.006              # §6.5 feedback reference, typ (README errata: source)
 BUCK_VFB_RANGE = (0.987, 1.017)         # §6.5 min/max over temperature
-BUCK_EN_RISE = 2.1            # §6.5 V_EN-VOUT-H, precision enable (typ)
-BUCK_EN_HYS = 0.38            # §6.5 V_EN-VOUT-HYS (typ)
+BUCK_EN_RISE = 2.1            # §6.5 V_EN-VOUT-H, precision enable (typ): NOT VERIFIED (README)
+BUCK_EN_HYS = 0.38            # §6.5 V_EN-VOUT-HYS (typ): NOT VERIFIED
+BUCK_EN_READINGS = {          # EN (rising, falling) thresholds: the LM76005's own figure was not
+    # found (SNVSBK5A §6.5 unreachable); the design must be safe under both readings
+    "A (2.1 V / 1.72 V, this file's)": (BUCK_EN_RISE, BUCK_EN_RISE - BUCK_EN_HYS),
+    "B (1.218 V / 0.99 V, LM76002/3 SNVSAK0)": (1.218, 0.99),
+}
+BUCK_DROPOUT_V = 5.3          # input below which the 5 V output falls out of regulation (estimate)
 BUCK_ISS = 2.0e-6             # §6.5 soft-start charging current (typ)
 BUCK_FSW, BUCK_FSW_MIN = 400e3, 350e3   # §6.5 RT open: 400 kHz typ, 350 kHz min
 BUCK_IOUT_RATED = 5.0
@@ -55,6 +61,8 @@ EFUSE_ABS_MAX = 67.0                    # §7.1 IN, OUT
 EFUSE_RON_MAX = 0.053                   # §7.5 over temperature
 BUS_JACK_MAX = 3.0            # docs/bus.md: ≤ 3.0 A out of either jack (both jacks are in parallel)
 V_BUS = 5.10                  # bus voltage at the eFuse, for power (FB tolerance included)
+BUS_V_BAND = (4.90, 5.10)     # docs/bus.md: 5.00 V ± 2 % at the PSU's output
+FB_RES_TOL = 0.001            # R108/R109: YAGEO RT0603BRD 0.1 %, 25 ppm/K thin film
 MODULE_5V_A = 0.10            # the PSU's own draw from +5V_BUCK (MCU, CAN, LEDs, LDO), generous
 
 # --- input protection -------------------------------------------------------------------------
@@ -63,7 +71,7 @@ TVS_VBR_MIN = 44.4            # at 1 mA, 25 °C (JEDEC SMBJ40A; BORN lists 44.4�
 TVS_VBR_MAX = 51.1
 TVS_VC, TVS_IPP = 64.5, 9.3   # clamp at the rated 10/1000 µs pulse (600 W)
 TVS_ALPHA = 0.001             # VBR temperature coefficient, 1/K (SMBJ family, 40 V: ~0.1 %/K)
-Q101_VDS = 60.0               # SUD50P06-15: -60 V
+Q101_VDS = 60.0               # SQD50P06-15L: -60 V
 CIN_RATED = 100.0             # CL32B225KCJSNNE and CL10B104KC8NNNC: 100 V
 CIN_DC_BIAS_FACTOR = 0.45     # estimate: remaining capacitance of the 100 V 1210 X7R at 42 V
                               # (Samsung curve: -77 % at 80 V; about -55 % at 42 V)
@@ -88,7 +96,7 @@ BOARD_VALUES = {
     "R102": 0.010,            # shunt
     "R104": 150e3, "R105": 10e3,          # VIN_SENSE divider
     "R106": 100e3, "R107": 56e3,          # buck EN/UVLO divider
-    "R108": 100e3, "R109": 24.9e3,        # buck FB divider
+    "R108": 102e3, "R109": 25.5e3,        # buck FB divider, 0.1 %
     "C110": 22e-9,            # soft start
     "C109": 470e-9,           # bootstrap
     "C116": 1e-6,             # BIAS
@@ -121,6 +129,12 @@ def ipc2221b_b2(volts: float) -> float:
         if volts <= top:
             return mm
     raise ValueError(f"{volts} V is above the table rows this board uses")
+
+
+def vout_band(r_top: float, r_bottom: float, tol: float) -> tuple[float, float]:
+    """The buck's output over the reference's min–max and both resistors at their tolerance."""
+    return (BUCK_VFB_RANGE[0] * (1 + r_top * (1 - tol) / (r_bottom * (1 + tol))),
+            BUCK_VFB_RANGE[1] * (1 + r_top * (1 + tol) / (r_bottom * (1 - tol))))
 
 
 def rows() -> list[Row]:
@@ -169,13 +183,28 @@ def rows() -> list[Row]:
 
     # --- buck: output, enable, soft start
     vout = BUCK_VFB * (1 + v["R108"] / v["R109"])
-    add(Row("VOUT = VFB (1 + R108/R109)", f"{vout:.3f} V", "5.0 V ± 2 % (bus)",
-            abs(vout - 5.0) < 0.1, f"reference {BUCK_VFB_RANGE[0]:.3f}–{BUCK_VFB_RANGE[1]:.3f} V + 1 % resistors"))
+    add(Row("VOUT typical = VFB (1 + R108/R109)", f"{vout:.3f} V", "5.0 V ± 2 % (bus)",
+            BUS_V_BAND[0] <= vout <= BUS_V_BAND[1], f"reference typ {BUCK_VFB:.3f} V"))
+    lo, hi = vout_band(v["R108"], v["R109"], FB_RES_TOL)
+    add(Row("VOUT worst case (reference range, resistor tolerance)", f"{lo:.3f}–{hi:.3f} V",
+            f"{BUS_V_BAND[0]:.2f}–{BUS_V_BAND[1]:.2f} V (docs/bus.md)",
+            BUS_V_BAND[0] <= lo and hi <= BUS_V_BAND[1],
+            f"reference {BUCK_VFB_RANGE[0]:.3f}–{BUCK_VFB_RANGE[1]:.3f} V, R108/R109 ±{FB_RES_TOL:.1%}; "
+            f"centre {(lo + hi) / 2:.3f} V"))
     en = 1 + v["R106"] / v["R107"]
     vstart, vstop = BUCK_EN_RISE * en, (BUCK_EN_RISE - BUCK_EN_HYS) * en
-    add(Row("buck start (EN rising)", f"{vstart:.2f} V", f"≤ {VIN_MIN:.1f} V", vstart <= VIN_MIN,
-            "typical thresholds"))
-    add(Row("buck stop (EN falling)", f"{vstop:.2f} V", "below dropout (~5.3 V)", vstop < 5.3))
+    # EN thresholds not verified: start/stop under both readings (README errata: measure them)
+    efuse_uv_min = EFUSE_VTH[0] * (v["R112"] + v["R113"] + v["R114"]) / (v["R113"] + v["R114"])
+    for reading, (rise, fall) in BUCK_EN_READINGS.items():
+        start, stop = rise * en, fall * en
+        add(Row(f"buck start, EN reading {reading}", f"{start:.2f} V", f"≤ VIN_MIN {VIN_MIN:.1f} V",
+                start <= VIN_MIN, "starts from the emptiest 2S pack"))
+        below = start < BUCK_DROPOUT_V
+        add(Row(f"buck stop, EN reading {reading}", f"{stop:.2f} V ({stop / 2:.2f} V/cell on 2S)",
+                f"< dropout ~{BUCK_DROPOUT_V} V and < start", stop < min(BUCK_DROPOUT_V, start),
+                ("starts in dropout: +5V_BUCK follows VIN; " if below else "") +
+                f"the eFuse's UVLO holds the bus off until +5V_BUCK ≥ {efuse_uv_min:.2f} V; below "
+                "VIN_MIN the firmware's UNDER_VOLTAGE (6.0 V) flags the pack"))
     add(Row("EN pin at max input", f"{VIN_MAX / en:.1f} V", "≤ VIN (EN is VIN-rated)", True))
     tss = v["C110"] * BUCK_VFB / BUCK_ISS
     add(Row("soft start t = C_SS V_FB / I_SS", f"{tss * 1e3:.1f} ms", "≥ 2 ms", tss >= 2e-3))

@@ -4,14 +4,12 @@ by every board, so it stays here with the generator) and one description per mod
 A module's description is its board's generator input, so it lives in the module's folder:
 `hardware/<module>/<module>.py`, its drawing in `<module>_sheet.py` beside it, found through the
 module manifest (modules.toml). A board's KiCad files are its source once scaffolded, and its
-description is then deleted (git keeps it): proximity's is gone; `template` stays as the example
-a new module copies (tests/test_hardware.py scaffolds it into a scratch folder); psu's is still
-here (`psu.py`) until its one-sided revision B layout is routed (issue 14). `MODULES` lists the
-descriptions.
+description is then deleted (git keeps it): proximity's and psu's are gone; `template` stays as
+the example a new module copies (tests/test_hardware.py scaffolds it into a scratch folder).
+`MODULES` lists the descriptions.
 """
 from __future__ import annotations
 
-import importlib
 import importlib.util
 import sys
 from pathlib import Path
@@ -53,8 +51,6 @@ def _descriptions() -> dict:
     for m in manifest.load(check_tree=False):
         if (f := description_file(m.name)) is not None:
             found[m.name] = _load(f).build
-        elif Path(__file__).with_name(f"{m.name}.py").is_file():   # not moved yet (psu.py)
-            found[m.name] = importlib.import_module(f".{m.name}", __package__).build
     return found
 
 
