@@ -32,8 +32,8 @@ use rtcan::frame::MAX_PAYLOAD;
 use rtcan::schedule::{occurs, Reject};
 use rtcan::{
     CanController, CycleConfig, Expect, Failover, Frame, FrameId, Laxity, LaxityEncoding,
-    MessageId, Micros, Period, Phase, Reassembler, ReassemblyStats, Scheduler, SlotClock, Sync,
-    TxQueue, Urgency,
+    MessageId, Micros, Period, Phase, Reassembler, ReassemblyStats, Scheduler, SlotClock,
+    SyncFrame, TxQueue, Urgency,
 };
 
 use crate::params::ParamStore;
@@ -434,7 +434,7 @@ pub struct Node<
     /// programmed for (`hw_filters`); `None` before the first time.
     filters_for: Option<u32>,
     /// As master: the sync loaded into the controller and when, until its result is taken.
-    sync_loaded: Option<(Micros, Sync)>,
+    sync_loaded: Option<(Micros, SyncFrame)>,
 }
 
 impl<
@@ -704,7 +704,7 @@ impl<
         let id = r.frame.id();
         if id.sync_cycle().is_some() {
             bump(&mut self.stats.sync_frames);
-            match Sync::from_frame(&r.frame) {
+            match SyncFrame::from_frame(&r.frame) {
                 Ok(sync) if CYCLE => self.on_sync(r.at, &sync),
                 Ok(_) => {}
                 Err(_) => bump(&mut self.stats.bad_syncs),
@@ -1137,7 +1137,7 @@ impl<
         if let Some(mut m) = self.master {
             if now >= m.next_sync {
                 let sync =
-                    Sync::new(m.cycle, self.scheduler.mask(m.cycle.wrapping_add(1)), m.epoch);
+                    SyncFrame::new(m.cycle, self.scheduler.mask(m.cycle.wrapping_add(1)), m.epoch);
                 let ok = self.slot_tx.load_slotted(can, Slotted::Sync, &sync.to_frame());
                 if ok {
                     self.clock.on_sync(now, &sync);
@@ -1343,7 +1343,7 @@ impl<
         now
     }
 
-    fn on_sync(&mut self, at: Micros, sync: &Sync) {
+    fn on_sync(&mut self, at: Micros, sync: &SyncFrame) {
         self.clock.on_sync(at, sync);
         self.last_sync = at;
         let a = self.failover.on_sync(at, sync);

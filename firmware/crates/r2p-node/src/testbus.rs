@@ -20,7 +20,7 @@ use heapless::{Deque, Vec};
 use rtcan::controller::{
     BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxOutcome, TxResult, TX_RESULTS,
 };
-use rtcan::{CanController, CycleConfig, Frame, Laxity, MessageId, Micros, Sync};
+use rtcan::{CanController, CycleConfig, Frame, Laxity, MessageId, Micros, SyncFrame};
 
 use crate::Node;
 
@@ -174,7 +174,7 @@ impl<const PORTS: usize> Bus<PORTS> {
     fn check(&self, frame: &Frame) {
         let Some(s) = &self.slots else { return };
         let now = self.now.get();
-        if let Ok(sync) = Sync::from_frame(frame) {
+        if let Ok(sync) = SyncFrame::from_frame(frame) {
             let number = s.cycle.get().map_or(0, |(_, n)| n + 1);
             let mask = match s.next.get() {
                 Some((n, m))

@@ -4,7 +4,7 @@
 
 use r2p_node::{FreeSlots, SlotTx};
 use rtcan::cycle::{ClockState, CycleConfig, SlotClock};
-use rtcan::Sync;
+use rtcan::SyncFrame;
 
 /// 4 ms cycles of 16 slots of 250 µs.
 const CYCLE: CycleConfig = CycleConfig { bit_rate: 1_000_000, cycle_us: 4_000, slots: 16 };
@@ -13,8 +13,8 @@ const CYCLE: CycleConfig = CycleConfig { bit_rate: 1_000_000, cycle_us: 4_000, s
 fn a_merged_window_ends_at_the_next_reserved_slot_or_the_cycles_end() {
     let mut clock = SlotClock::new(CYCLE);
     // The sync of cycle 1 announces the reservations of cycle 2: slots 5 and 9.
-    clock.on_sync(0, &Sync::new(0, 0, false));
-    clock.on_sync(4_000, &Sync::new(1, (1 << 5) | (1 << 9), false));
+    clock.on_sync(0, &SyncFrame::new(0, 0, false));
+    clock.on_sync(4_000, &SyncFrame::new(1, (1 << 5) | (1 << 9), false));
     let at = |us| match clock.state(us) {
         ClockState::Running(p) => p,
         other => panic!("{other:?}"),

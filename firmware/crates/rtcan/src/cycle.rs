@@ -180,7 +180,7 @@ pub enum SyncError {
 /// is slot 8·j + b: byte 0 bit 1 = slot 1, byte 7 bit 7 = slot 63. Bit 0 would be the sync
 /// slot's reservation, which is implicit; it carries the master's epoch bit instead.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Sync {
+pub struct SyncFrame {
     /// Cycle counter (low byte of the master's cycle number) of the cycle this sync starts.
     pub cycle: u8,
     /// Reservations of the next cycle; bit 0 (the sync slot) always reads as reserved.
@@ -189,7 +189,7 @@ pub struct Sync {
     pub epoch: bool,
 }
 
-impl Sync {
+impl SyncFrame {
     /// The sync of cycle `cycle` (only the low byte is sent) announcing `reservations`.
     pub const fn new(cycle: u32, reservations: u64, epoch: bool) -> Self {
         Self { cycle: cycle as u8, reservations: reservations | EPOCH_BIT, epoch }
@@ -314,7 +314,7 @@ impl SlotClock {
     ///
     /// The sync's start of frame is the start of its cycle: drivers timestamp syncs at SOF
     /// (bxCAN's time-triggered mode does) or subtract the frame's length.
-    pub fn on_sync(&mut self, at: Micros, sync: &Sync) -> SyncInfo {
+    pub fn on_sync(&mut self, at: Micros, sync: &SyncFrame) -> SyncInfo {
         let counter = sync.cycle;
         let mut info = SyncInfo { cycle: counter as u32, continuous: false, missed: 0 };
         if let Some((t0, c0)) = self.last {
@@ -519,23 +519,23 @@ pub(crate) mod tests {
         }
 
         fn sync_frame_roundtrips() {
-            let s = Sync::new(0x1_2345, (1 << 1) | (1 << 63), true);
+            let s = SyncFrame::new(0x1_2345, (1 << 1) | (1 << 63), true);
             let f = s.to_frame();
             assert_eq!(f.id().to_raw(), 0x45 << 7);
             assert_eq!(f.payload(), &[0x03, 0, 0, 0, 0, 0, 0, 0x80]);
-            let d = Sync::from_frame(&f).unwrap();
+            let d = SyncFrame::from_frame(&f).unwrap();
             assert_eq!(d, s);
             assert_eq!(d.reservations, (1 << 0) | (1 << 1) | (1 << 63));
-            let e = Sync::new(7, 0, false);
+            let e = SyncFrame::new(7, 0, false);
             assert_eq!(e.payload(), [0; 8]);
-            assert_eq!(Sync::from_frame(&e.to_frame()).unwrap().reservations, 1);
+            assert_eq!(SyncFrame::from_frame(&e.to_frame()).unwrap().reservations, 1);
         }
 
         fn non_sync_frames_are_rejected() {
             let data = FrameId::from_raw(0x100 << 7).unwrap();
-            assert_eq!(Sync::from_frame(&Frame::new(data, &[0; 8]).unwrap()), Err(SyncError::NotSync));
+            assert_eq!(SyncFrame::from_frame(&Frame::new(data, &[0; 8]).unwrap()), Err(SyncError::NotSync));
             let short = Frame::new(FrameId::sync(3), &[0; 4]).unwrap();
-            assert_eq!(Sync::from_frame(&short), Err(SyncError::Length(4)));
+            assert_eq!(SyncFrame::from_frame(&short), Err(SyncError::Length(4)));
         }
 
         fn clock_follows_syncs() {
@@ -543,7 +543,7 @@ pub(crate) mod tests {
             let mut clk = SlotClock::new(c);
             assert_eq!(clk.state(0), ClockState::Unsynced);
             let t0 = 1_000_000;
-            let info = clk.on_sync(t0, &Sync::new(10, 0b110, false));
+            let info = clk.on_sync(t0, &SyncFrame::new(10, 0b110, false));
             assert!(!info.continuous);
             assert_eq!(info.cycle, 10);
             let pos = |clk: &SlotClock, t| match clk.state(t) {
@@ -559,7 +559,7 @@ pub(crate) mod tests {
             assert_eq!(clk.slot_start(11, 2), Some(t0 + 10_334));
             assert_eq!(clk.mask(10), UNKNOWN_MASK);
             assert_eq!(clk.mask(11), 0b111);
-            let info = clk.on_sync(t0 + 10_000, &Sync::new(11, 0b1000, false));
+            let info = clk.on_sync(t0 + 10_000, &SyncFrame::new(11, 0b1000, false));
             assert!(info.continuous);
             assert_eq!((info.cycle, info.missed), (11, 0));
             assert_eq!(clk.mask(11), 0b111);
@@ -571,7 +571,7 @@ pub(crate) mod tests {
             let mut clk = SlotClock::new(CycleConfig::DEFAULT);
             let mut t = 5_000;
             for c in 0..20u32 {
-                let info = clk.on_sync(t, &Sync::new(250 + c, 0, false));
+                let info = clk.on_sync(t, &SyncFrame::new(250 + c, 0, false));
                 assert_eq!(info.cycle, 250 + c);
                 assert_eq!(info.continuous, c > 0);
                 t += 10_010;
@@ -581,7 +581,7 @@ pub(crate) mod tests {
             let last = t - 10_010;
             assert_eq!(clk.slot_start(270, 30), Some(last + 10_010 + 5_005));
             // Re-phase: the next sync arrives 3 µs late; slot times follow it.
-            clk.on_sync(last + 10_013, &Sync::new(270, 0, false));
+            clk.on_sync(last + 10_013, &SyncFrame::new(270, 0, false));
             assert_eq!(clk.slot_start(270, 0), Some(last + 10_013));
         }
 
@@ -590,7 +590,7 @@ pub(crate) mod tests {
             let mut clk = SlotClock::new(CycleConfig::DEFAULT);
             for c in 0..4u32 {
                 let loaded = 1_000 + u64::from(c) * 10_000;
-                clk.on_sync(loaded, &Sync::new(c, 0, false));
+                clk.on_sync(loaded, &SyncFrame::new(c, 0, false));
                 assert_eq!(clk.slot_start(c, 0), Some(loaded));
                 clk.restamp_last_sync(c as u8, loaded + 22);
                 assert_eq!(clk.slot_start(c, 0), Some(loaded + 22));
@@ -616,8 +616,8 @@ pub(crate) mod tests {
         fn clock_free_runs_then_stops() {
             let c = CycleConfig::DEFAULT;
             let mut clk = SlotClock::new(c);
-            clk.on_sync(0, &Sync::new(0, 0, false));
-            clk.on_sync(10_000, &Sync::new(1, 0, false));
+            clk.on_sync(0, &SyncFrame::new(0, 0, false));
+            clk.on_sync(10_000, &SyncFrame::new(1, 0, false));
             // Syncs 2 and 3 lost: free-running.
             assert!(clk.hrt_allowed(29_999));
             assert!(matches!(clk.state(25_000), ClockState::Running(SlotPosition { cycle: 2, free_run: 1, .. })));
@@ -627,14 +627,14 @@ pub(crate) mod tests {
             assert_eq!(clk.slot_start(4, 0), None);
             // A sync after FREE_RUN_CYCLES missed ones is still continuous; after more it is not.
             let mut clk2 = clk.clone();
-            let info = clk2.on_sync(40_000, &Sync::new(4, 0, false));
+            let info = clk2.on_sync(40_000, &SyncFrame::new(4, 0, false));
             assert_eq!((info.cycle, info.continuous, info.missed), (4, true, 2));
             let mut clk3 = clk.clone();
-            let info = clk3.on_sync(50_000, &Sync::new(5, 0, false));
+            let info = clk3.on_sync(50_000, &SyncFrame::new(5, 0, false));
             assert!(!info.continuous);
             assert_eq!(info.cycle, 5);
             assert_eq!(clk3.period_q8(), 10_000 << 8);
-            let info = clk.on_sync(30_000, &Sync::new(3, 0b10, false));
+            let info = clk.on_sync(30_000, &SyncFrame::new(3, 0b10, false));
             assert_eq!((info.cycle, info.continuous, info.missed), (3, true, 1));
             assert_eq!(clk.mask(3), UNKNOWN_MASK);
             assert_eq!(clk.mask(4), 0b11);
@@ -642,13 +642,13 @@ pub(crate) mod tests {
 
         fn counter_jump_is_a_discontinuity() {
             let mut clk = SlotClock::new(CycleConfig::DEFAULT);
-            clk.on_sync(0, &Sync::new(5, 0, false));
-            clk.on_sync(10_000, &Sync::new(6, 0, false));
-            let info = clk.on_sync(20_000, &Sync::new(100, 0, true));
+            clk.on_sync(0, &SyncFrame::new(5, 0, false));
+            clk.on_sync(10_000, &SyncFrame::new(6, 0, false));
+            let info = clk.on_sync(20_000, &SyncFrame::new(100, 0, true));
             assert!(!info.continuous);
             assert_eq!(info.cycle, 100);
             // Phase jump: right counter, 2 ms early.
-            let info = clk.on_sync(28_000, &Sync::new(101, 0, true));
+            let info = clk.on_sync(28_000, &SyncFrame::new(101, 0, true));
             assert!(!info.continuous);
             assert_eq!(info.cycle, 101);
             assert_eq!(clk.slot_start(101, 0), Some(28_000));
@@ -716,13 +716,13 @@ mod vectors {
             }
         }
         for s in &f.syncs {
-            let sync = Sync::new(s.cycle, hex(&s.reservations), s.epoch);
+            let sync = SyncFrame::new(s.cycle, hex(&s.reservations), s.epoch);
             let frame = sync.to_frame();
             assert_eq!(frame.id().to_raw() as u64, hex(&s.id), "cycle {}", s.cycle);
             let data: [u8; 8] = hex(&s.data).to_be_bytes();
             assert_eq!(frame.payload(), &data, "cycle {}", s.cycle);
             assert_eq!(
-                Sync::from_frame(&Frame::from_raw(hex(&s.id) as u32, &data).unwrap()),
+                SyncFrame::from_frame(&Frame::from_raw(hex(&s.id) as u32, &data).unwrap()),
                 Ok(sync)
             );
         }

@@ -26,7 +26,7 @@
 //! two masters ever sync in the same cycle.
 
 use crate::controller::Micros;
-use crate::cycle::{Sync, MAX_SYNC_LOSS};
+use crate::cycle::{SyncFrame, MAX_SYNC_LOSS};
 
 /// Cycles of silence before the rank-0 standby takes over: L + 2.
 pub const TAKEOVER_BASE_CYCLES: u32 = MAX_SYNC_LOSS + 2;
@@ -193,7 +193,7 @@ impl Failover {
     }
 
     /// A sync frame from another node was received at `now`.
-    pub fn on_sync(&mut self, now: Micros, sync: &Sync) -> Actions {
+    pub fn on_sync(&mut self, now: Micros, sync: &SyncFrame) -> Actions {
         let mut a = Actions::default();
         if self.role == Role::Master {
             a.stop_syncing = true;
@@ -215,7 +215,7 @@ impl Failover {
     }
 
     /// As master: the sync of the current cycle was sent (`ok`) or could not be sent.
-    pub fn on_sync_sent(&mut self, now: Micros, sync: &Sync, ok: bool) -> Actions {
+    pub fn on_sync_sent(&mut self, now: Micros, sync: &SyncFrame, ok: bool) -> Actions {
         let mut a = Actions::default();
         if self.role != Role::Master {
             return a;
@@ -282,34 +282,34 @@ pub(crate) mod tests {
 
         fn syncs_keep_a_standby_slave_and_losses_are_tolerated() {
             let mut f = Failover::new(rank(0), T, 0);
-            let a = f.on_sync(1_000, &Sync::new(7, 0, true));
+            let a = f.on_sync(1_000, &SyncFrame::new(7, 0, true));
             assert!(a.re_register, "first sync: register");
-            assert!(f.on_sync(11_000, &Sync::new(8, 0, true)).is_empty());
+            assert!(f.on_sync(11_000, &SyncFrame::new(8, 0, true)).is_empty());
             // Two syncs lost, the third arrives: still the same master.
             assert!(f.poll(40_999).is_empty());
             assert_eq!(f.role(), Role::Slave);
             // Even polled right before the third sync is handled, rank 0 does not take over.
             assert!(f.poll(41_000).is_empty());
-            assert!(f.on_sync(41_000, &Sync::new(11, 0, true)).is_empty());
+            assert!(f.on_sync(41_000, &SyncFrame::new(11, 0, true)).is_empty());
             assert_eq!(f.takeover_at(), Some(81_000));
         }
 
         fn epoch_flip_or_counter_restart_means_re_register() {
             let mut f = Failover::new(None, T, 0);
-            f.on_sync(0, &Sync::new(200, 0, false));
-            assert!(f.on_sync(10_000, &Sync::new(201, 0, true)).re_register);
-            assert!(!f.on_sync(20_000, &Sync::new(202, 0, true)).re_register);
-            assert!(f.on_sync(30_000, &Sync::new(0, 0, true)).re_register);
+            f.on_sync(0, &SyncFrame::new(200, 0, false));
+            assert!(f.on_sync(10_000, &SyncFrame::new(201, 0, true)).re_register);
+            assert!(!f.on_sync(20_000, &SyncFrame::new(202, 0, true)).re_register);
+            assert!(f.on_sync(30_000, &SyncFrame::new(0, 0, true)).re_register);
             // Lost for longer than the timeout: re-register even with the same epoch.
             f.poll(66_000);
             assert!(!f.synced());
-            assert!(f.on_sync(70_000, &Sync::new(4, 0, true)).re_register);
+            assert!(f.on_sync(70_000, &SyncFrame::new(4, 0, true)).re_register);
         }
 
         fn master_steps_down_on_a_foreign_sync() {
             let mut f = Failover::new(rank(3), T, 0);
             assert!(f.poll(190_000).start_syncing.is_some());
-            let a = f.on_sync(195_000, &Sync::new(9, 0, true));
+            let a = f.on_sync(195_000, &SyncFrame::new(9, 0, true));
             assert!(a.stop_syncing && a.re_register);
             assert_eq!(f.role(), Role::Slave);
             assert_eq!(f.takeover_at(), Some(195_000 + 190_000));
@@ -318,7 +318,7 @@ pub(crate) mod tests {
         fn master_steps_down_after_failed_syncs() {
             let mut f = Failover::new(rank(0), T, 0);
             let s = f.poll(40_000).start_syncing.unwrap();
-            let sync = Sync::new(s.cycle, 0, s.epoch);
+            let sync = SyncFrame::new(s.cycle, 0, s.epoch);
             assert!(f.on_sync_sent(40_000, &sync, true).is_empty());
             for k in 1..=MAX_SYNC_LOSS as u64 {
                 assert!(f.on_sync_sent(40_000 + k * 10_000, &sync, false).is_empty());
@@ -337,7 +337,7 @@ pub(crate) mod tests {
             // the node master; only the (L + 1)-th consecutive one makes it step down.
             let mut f = Failover::new(rank(0), T, 0);
             let s = f.poll(40_000).start_syncing.unwrap();
-            let sync = Sync::new(s.cycle, 0, s.epoch);
+            let sync = SyncFrame::new(s.cycle, 0, s.epoch);
             let mut t = 40_000;
             for _ in 0..3 {
                 for _ in 0..MAX_SYNC_LOSS {
@@ -363,9 +363,9 @@ pub(crate) mod tests {
             let mut b = Failover::new(rank(1), T, 0);
             for c in 0..10u32 {
                 let at = c as Micros * 10_000;
-                a.on_sync(at, &Sync::new(c, 0, false));
+                a.on_sync(at, &SyncFrame::new(c, 0, false));
                 if c < 10 - MAX_SYNC_LOSS {
-                    b.on_sync(at, &Sync::new(c, 0, false));
+                    b.on_sync(at, &SyncFrame::new(c, 0, false));
                 }
             }
             let mut t = 90_000;
@@ -380,7 +380,7 @@ pub(crate) mod tests {
                 if a.role() == Role::Master && (t - 130_000) % 10_000 == 0 {
                     a_syncs += 1;
                     if a_syncs > MAX_SYNC_LOSS {
-                        b.on_sync(t, &Sync::new(a_syncs - 1, 0, true));
+                        b.on_sync(t, &SyncFrame::new(a_syncs - 1, 0, true));
                     }
                 }
                 t += 1_000;
@@ -395,14 +395,14 @@ pub(crate) mod tests {
             let mut a = Failover::new(rank(0), T, 0);
             for c in 240..=254u32 {
                 let at = 1_000_000 - (254 - c as Micros) * 10_000;
-                n.on_sync(at, &Sync::new(c, 0, true));
+                n.on_sync(at, &SyncFrame::new(c, 0, true));
                 if c <= 254 - MAX_SYNC_LOSS {
-                    a.on_sync(at, &Sync::new(c, 0, true));
+                    a.on_sync(at, &SyncFrame::new(c, 0, true));
                 }
             }
             let start = a.poll(1_020_000).start_syncing.unwrap();
             assert_eq!((start.cycle, start.epoch), (0, false));
-            let r = n.on_sync(1_020_000, &Sync::new(start.cycle, 0, start.epoch));
+            let r = n.on_sync(1_020_000, &SyncFrame::new(start.cycle, 0, start.epoch));
             assert!(r.re_register);
         }
 
@@ -410,12 +410,12 @@ pub(crate) mod tests {
             let mut a = Failover::new(rank(0), T, 0);
             let mut b = Failover::new(rank(1), T, 0);
             for f in [&mut a, &mut b] {
-                f.on_sync(5_000, &Sync::new(1, 0, false));
+                f.on_sync(5_000, &SyncFrame::new(1, 0, false));
             }
             assert!(a.poll(45_000).start_syncing.is_some());
             // b hears a's first sync before its own time (95 000) and stays slave.
             assert!(b.poll(45_000).is_empty());
-            let r = b.on_sync(45_000, &Sync::new(0, 0, true));
+            let r = b.on_sync(45_000, &SyncFrame::new(0, 0, true));
             assert!(r.re_register);
             assert_eq!(b.role(), Role::Slave);
             assert!(b.poll(94_999).is_empty());
@@ -552,7 +552,7 @@ mod proptests {
                 if last_sender.is_some_and(|s| s != m) {
                     assert!(t >= last_sync_at + T as Micros, "two masters' syncs within a cycle");
                 }
-                let sync = Sync::new(cycle, 0, epoch);
+                let sync = SyncFrame::new(cycle, 0, epoch);
                 assert!(nodes[m].f.on_sync_sent(t, &sync, true).is_empty());
                 last_sync_at = t;
                 last_sender = Some(m);

@@ -29,7 +29,7 @@ pub mod transfer_crc;
 pub mod wire_bits;
 
 pub use controller::{CanController, Micros, TxMode, TxOutcome, TxResult};
-pub use cycle::{CycleConfig, SlotClock, Sync};
+pub use cycle::{CycleConfig, SlotClock, SyncFrame};
 pub use failover::Failover;
 pub use fragment::{fragments, Expect, Reassembler, ReassemblyStats};
 pub use frame::Frame;

@@ -4,15 +4,15 @@
 
 use rtcan::cycle::MAX_SYNC_LOSS;
 use rtcan::failover::Role;
-use rtcan::{Failover, Sync};
+use rtcan::{Failover, SyncFrame};
 
 const CYCLE_US: u32 = 10_000;
 
 /// A rank-0 node that took over and sent its first sync; returns it and that sync.
-fn master() -> (Failover, Sync, u64) {
+fn master() -> (Failover, SyncFrame, u64) {
     let mut f = Failover::new(rtcan::failover::Rank::new(0), CYCLE_US, 0);
     let s = f.poll(40_000).start_syncing.expect("rank 0 takes over after L + 2 silent cycles");
-    let sync = Sync::new(s.cycle, 0, s.epoch);
+    let sync = SyncFrame::new(s.cycle, 0, s.epoch);
     assert!(f.on_sync_sent(40_000, &sync, true).is_empty());
     (f, sync, 40_000)
 }
@@ -61,7 +61,7 @@ fn the_count_restarts_at_the_good_sync_then_l_plus_one_in_a_row_step_down() {
 fn the_epoch_is_the_current_masters_and_a_takeover_flips_it() {
     let mut f = Failover::new(rtcan::failover::Rank::new(1), CYCLE_US, 0);
     assert_eq!(f.epoch(), None, "no master heard yet");
-    f.on_sync(10_000, &Sync::new(4, 0, true));
+    f.on_sync(10_000, &SyncFrame::new(4, 0, true));
     assert_eq!(f.epoch(), Some(true), "the epoch of the master heard");
     // The master goes silent: this standby takes over with the other epoch.
     let at = f.takeover_at().unwrap();

@@ -4,14 +4,14 @@
 //! clock re-phases as for a new master. And the mask of a cycle's slots has one bit per slot.
 
 use rtcan::cycle::{CycleConfig, SlotClock, SYNC_TOLERANCE_PPM};
-use rtcan::Sync;
+use rtcan::SyncFrame;
 
 /// A clock that heard syncs 0 and 1 of 10 ms cycles; then sync 2 comes `late_us` late.
 fn third_sync_late_by(late_us: u64) -> bool {
     let mut clk = SlotClock::new(CycleConfig::DEFAULT);
-    clk.on_sync(0, &Sync::new(0, 0, false));
-    clk.on_sync(10_000, &Sync::new(1, 0, false));
-    clk.on_sync(20_000 + late_us, &Sync::new(2, 0, false)).continuous
+    clk.on_sync(0, &SyncFrame::new(0, 0, false));
+    clk.on_sync(10_000, &SyncFrame::new(1, 0, false));
+    clk.on_sync(20_000 + late_us, &SyncFrame::new(2, 0, false)).continuous
 }
 
 #[test]
@@ -31,9 +31,9 @@ fn the_tolerance_grows_with_the_cycles_elapsed_since_the_last_sync() {
     // Sync 2 lost: sync 3 comes two cycles after sync 1, with twice the tolerance (100 µs).
     let late3 = |late_us: u64| {
         let mut clk = SlotClock::new(CycleConfig::DEFAULT);
-        clk.on_sync(0, &Sync::new(0, 0, false));
-        clk.on_sync(10_000, &Sync::new(1, 0, false));
-        clk.on_sync(30_000 + late_us, &Sync::new(3, 0, false))
+        clk.on_sync(0, &SyncFrame::new(0, 0, false));
+        clk.on_sync(10_000, &SyncFrame::new(1, 0, false));
+        clk.on_sync(30_000 + late_us, &SyncFrame::new(3, 0, false))
     };
     let info = late3(90);
     assert!(info.continuous && info.missed == 1, "{info:?}");

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 
 use r2p_management::message::{BusClass, Message, ModuleState, ParamFault, SubscribeResult, Value};
 use r2p_management::NodeId;
-use rtcan::{Class, FrameId, LaxityEncoding, Sync};
+use rtcan::{Class, FrameId, LaxityEncoding, SyncFrame};
 use serde_json::{json, Map, Value as Json};
 
 use crate::types::MsgType;
@@ -201,7 +201,7 @@ fn class_name(id: &FrameId) -> &'static str {
 }
 
 /// Slots a sync's mask reserves, as `1,2,5` (`-` for none).
-fn slots_text(sync: &Sync) -> String {
+fn slots_text(sync: &SyncFrame) -> String {
     let slots: Vec<String> =
         (1..64).filter(|s| sync.reservations & (1u64 << s) != 0).map(|s| s.to_string()).collect();
     if slots.is_empty() {
@@ -396,7 +396,7 @@ mod tests {
     #[test]
     fn syncs_and_topics_are_decoded() {
         let mut w = Watcher::new();
-        let sync = Sync::new(0x45, 0b110, false).to_frame();
+        let sync = SyncFrame::new(0x45, 0b110, false).to_frame();
         let s = Stamped {
             time: Duration::from_micros(5),
             frame: CanFrame::extended(sync.id().to_raw(), sync.payload()).unwrap(),

@@ -10,7 +10,7 @@ use r2p_canlink::{CanFrame, Stamped};
 use r2p_management::message::{BusClass, Message, ModuleState, UID_LEN};
 use r2p_management::{DecodeError, NodeId, MANAGEMENT_INDEX};
 use rtcan::cycle::SyncError;
-use rtcan::{Expect, Frame, FrameId, Reassembler, Sync};
+use rtcan::{Expect, Frame, FrameId, Reassembler, SyncFrame};
 
 use crate::types::MsgType;
 
@@ -85,7 +85,7 @@ pub enum What {
     /// An 11-bit frame: not RTCAN.
     Standard,
     /// A sync frame (or a frame with a sync identifier and another length).
-    Sync(Result<Sync, usize>),
+    Sync(Result<SyncFrame, usize>),
     /// A frame of a node's management stream; `done` is the message it completes.
     Management {
         /// Sender.
@@ -195,7 +195,7 @@ impl Watcher {
         report.id = Some(id);
         let at = s.time.as_micros() as u64;
         report.what = if id.message.is_reserved_for_sync() {
-            match Sync::from_frame(&frame) {
+            match SyncFrame::from_frame(&frame) {
                 Ok(sync) => What::Sync(Ok(sync)),
                 Err(SyncError::Length(n)) => What::Sync(Err(n)),
                 Err(_) => What::Reserved,
@@ -369,11 +369,11 @@ pub(crate) mod tests {
     #[test]
     fn syncs_standard_frames_and_reserved_ids_are_told_apart() {
         let mut w = Watcher::new();
-        let sync = Sync::new(0x45, 0b110, true).to_frame();
+        let sync = SyncFrame::new(0x45, 0b110, true).to_frame();
         let s = |f: CanFrame| Stamped { time: Duration::ZERO, frame: f };
         let r = w.feed(&s(CanFrame::extended(sync.id().to_raw(), sync.payload()).unwrap()));
         assert_eq!(r.id.unwrap().to_raw(), 0x2280);
-        assert!(matches!(r.what, What::Sync(Ok(Sync { cycle: 0x45, epoch: true, .. }))));
+        assert!(matches!(r.what, What::Sync(Ok(SyncFrame { cycle: 0x45, epoch: true, .. }))));
         let r = w.feed(&s(CanFrame::extended(0x2280, &[1, 2]).unwrap()));
         assert_eq!(r.what, What::Sync(Err(2)));
         let r = w.feed(&s(CanFrame::standard(0x123, &[]).unwrap()));

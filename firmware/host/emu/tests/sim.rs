@@ -14,7 +14,7 @@ use rtcan::controller::BusState;
 use rtcan::cycle::MAX_SYNC_LOSS;
 use rtcan::failover::{Role, RANK_STEP_CYCLES, TAKEOVER_BASE_CYCLES};
 use rtcan::CanController;
-use rtcan::{Frame, Laxity, Micros, Sync};
+use rtcan::{Frame, Laxity, Micros, SyncFrame};
 
 const CYCLE_NS: u64 = 10_000_000;
 const SLOT_NS: u64 = 250_000;
@@ -114,7 +114,7 @@ fn hrt_frames(sim: &Sim<'static, EmuNode>) -> Vec<(u64, u64, Frame)> {
         .into_iter()
         .filter_map(|e| match e.kind {
             EventKind::Sent { start_ns, frame, .. }
-                if frame.id().laxity == Laxity::HRT && Sync::from_frame(&frame).is_err() =>
+                if frame.id().laxity == Laxity::HRT && SyncFrame::from_frame(&frame).is_err() =>
             {
                 Some((start_ns, e.time_ns, frame))
             }
@@ -129,7 +129,7 @@ fn syncs(sim: &Sim<'static, EmuNode>) -> Vec<(u64, usize)> {
         .trace()
         .into_iter()
         .filter_map(|e| match e.kind {
-            EventKind::Sent { start_ns, frame, .. } if Sync::from_frame(&frame).is_ok() => {
+            EventKind::Sent { start_ns, frame, .. } if SyncFrame::from_frame(&frame).is_ok() => {
                 Some((start_ns, e.port))
             }
             _ => None,

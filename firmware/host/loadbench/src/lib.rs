@@ -4,7 +4,7 @@
 //! ([`r2p_vbus`]: exact frame lengths with stuffing, bitwise arbitration), in virtual time.
 //!
 //! The RTCAN nodes use the protocol crate itself — [`rtcan::TxQueue`] (EDF order, laxity
-//! codes in identifiers), [`rtcan::SlotClock`] on the master's [`rtcan::Sync`] frames,
+//! codes in identifiers), [`rtcan::SlotClock`] on the master's [`rtcan::SyncFrame`] frames,
 //! [`rtcan::Scheduler`] phases — and the node runtime's slot transmit path
 //! ([`r2p_node::SlotTx`]: windows, one-shot or merged, latest-start guard, results), driven slot
 //! by slot as the node runtime drives them ([`rtcan_node`]). The baseline ([`fixed_node`]) gives every stream a static rate-monotonic

@@ -23,8 +23,8 @@ use rtcan::cycle::{ClockState, SYNC_SLOT};
 use rtcan::id::{EXTENDED_ID_MAX, MESSAGE_ID_SHIFT, SYNC_MESSAGE_IDS};
 use rtcan::schedule::occurs;
 use rtcan::{
-    CanController, Frame, FrameId, Laxity, MessageId, Micros, SlotClock, Sync, Ticket, TxQueue,
-    Urgency,
+    CanController, Frame, FrameId, Laxity, MessageId, Micros, SlotClock, SyncFrame, Ticket,
+    TxQueue, Urgency,
 };
 
 use crate::publish::Publishers;
@@ -141,7 +141,7 @@ impl<'t> RtcanNode<'t> {
             self.on_done(done);
         }
         while let Some(r) = self.can.try_receive() {
-            if let (None, Ok(sync)) = (self.master, Sync::from_frame(&r.frame)) {
+            if let (None, Ok(sync)) = (self.master, SyncFrame::from_frame(&r.frame)) {
                 let first = self.clock.state(r.at) == ClockState::Unsynced;
                 if !self.clock.on_sync(r.at, &sync).continuous && !first {
                     self.counters.resyncs += 1;
@@ -153,7 +153,7 @@ impl<'t> RtcanNode<'t> {
         if let Some(mut m) = self.master {
             if now >= m.next_sync {
                 let mask = self.traffic.mask(m.cycle.wrapping_add(1));
-                let sync = Sync::new(m.cycle, mask, false);
+                let sync = SyncFrame::new(m.cycle, mask, false);
                 let ok = self.slot_tx.load_slotted(&mut self.can, Slotted::Sync, &sync.to_frame());
                 if ok {
                     self.clock.on_sync(now, &sync);

@@ -7,7 +7,7 @@ use r2p_loadbench::{point, run, Policy, Setup, SetupError, Traffic};
 use r2p_node::FreeSlots;
 use r2p_vbus::bits::INTERMISSION_BITS;
 use r2p_vbus::{EventKind, FrameBits};
-use rtcan::{Laxity, Sync};
+use rtcan::{Laxity, SyncFrame};
 
 /// The RTCAN policies (the node runtime's default and both free-slot policies).
 const RTCAN: [Policy; 3] = [Policy::Rtcan, Policy::RtcanOneShot, Policy::RtcanMerged];
@@ -127,7 +127,7 @@ fn check_windows(setup: &Setup, policy: Policy) -> std::collections::HashMap<(u6
     for e in &r.trace {
         let EventKind::Sent { start_ns, frame, .. } = e.kind else { continue };
         let start = start_ns / 1_000;
-        if let Ok(sync) = Sync::from_frame(&frame) {
+        if let Ok(sync) = SyncFrame::from_frame(&frame) {
             let continuous = start_of_cycle.is_some_and(|c| start - c == u64::from(cycle.cycle_us));
             start_of_cycle = Some(start);
             mask = next_mask.filter(|_| continuous);

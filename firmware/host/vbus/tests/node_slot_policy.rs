@@ -16,7 +16,7 @@ use r2p_node::{
 };
 use r2p_vbus::bits::INTERMISSION_BITS;
 use r2p_vbus::{Bus, BxCanPort, Config, EventKind};
-use rtcan::{CanController, CycleConfig, Frame, Laxity, LaxityEncoding, Micros, Sync};
+use rtcan::{CanController, CycleConfig, Frame, Laxity, LaxityEncoding, Micros, SyncFrame};
 
 /// 4 ms cycles of 16 slots of 250 µs (250 bit times at 1 Mbit/s).
 const CYCLE: CycleConfig = CycleConfig { bit_rate: 1_000_000, cycle_us: 4_000, slots: 16 };
@@ -87,7 +87,7 @@ impl Seen {
         let mut announced = None;
         for e in bus.trace() {
             let EventKind::Sent { start_ns, frame, .. } = e.kind else { continue };
-            if let Ok(sync) = Sync::from_frame(&frame) {
+            if let Ok(sync) = SyncFrame::from_frame(&frame) {
                 let at = start_ns / 1_000;
                 let continuous = cycles.last().is_some_and(|c| at - c.0 == CYCLE_US);
                 cycles.push((at, announced.filter(|_| continuous)));
@@ -284,7 +284,7 @@ fn contend(parts: Parts, traffic: Traffic) -> Outcome {
         let Some((cycle, slot, mask)) = seen.slot_of(start) else { continue };
         let slot_start = cycle + Micros::from(slot) * SLOT_US;
         let id = frame.id();
-        if Sync::from_frame(&frame).is_ok() || !sent {
+        if SyncFrame::from_frame(&frame).is_ok() || !sent {
             if !sent {
                 out.lost += 1;
             }
