@@ -178,6 +178,19 @@ pub enum ImportState {
     },
 }
 
+impl ImportState {
+    /// The stream whose frames this import takes in: the one it receives, or the one it asked
+    /// for (its first frames may follow the publisher's answer back to back, or run already
+    /// for other subscribers).
+    fn stream(&self) -> Option<MessageId> {
+        match *self {
+            ImportState::Subscribed { message, .. } => Some(message),
+            ImportState::Requested { from, index, .. } => Some(from.message_id(index)),
+            _ => None,
+        }
+    }
+}
+
 /// Where an HRT export's reservation stands ([`Node::hrt_state`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HrtState {
@@ -661,14 +674,7 @@ impl<
     /// Programs the controller's acceptance filters for the syncs, the management streams and
     /// the subscribed (or requested) streams, when those changed (docs/architecture.md; `hw_filters`).
     fn program_filters<C: CanController + ?Sized>(&mut self, can: &mut C) {
-        let subscribed = || {
-            // A requested stream too: its first frames may follow the grant back to back.
-            self.imports.iter().filter_map(|s| match s.state {
-                ImportState::Subscribed { message, .. } => Some(message),
-                ImportState::Requested { from, index, .. } => Some(from.message_id(index)),
-                _ => None,
-            })
-        };
+        let subscribed = || self.imports.iter().filter_map(|s| s.state.stream());
         let fingerprint = crate::hw_filters::fingerprint(subscribed());
         if self.filters_for == Some(fingerprint) {
             return;
@@ -738,10 +744,7 @@ impl<
             // A stream this node asked for runs already for other subscribers, and its frames
             // pass the filters (programmed at the request) before the publisher's answer
             // arrives: not unknown, only early.
-            let requested = self.imports.iter().any(|s| {
-                matches!(s.state, ImportState::Requested { from, index, .. }
-                    if from.message_id(index) == id.message)
-            });
+            let requested = self.imports.iter().any(|s| s.state.stream() == Some(id.message));
             if !requested {
                 bump(&mut self.stats.unknown_frames);
             }
