@@ -613,6 +613,22 @@ pub(crate) mod tests {
             assert_eq!(fresh.state(5), ClockState::Unsynced);
         }
 
+        fn a_reset_clock_forgets_the_old_masters_cycle() {
+            // After a master change the node resets its clock: the old cycle's grid, period
+            // estimate and reservations must not carry over to the new master's syncs.
+            let mut clk = SlotClock::new(CycleConfig::DEFAULT);
+            for c in 0..4u32 {
+                clk.on_sync(u64::from(c) * 10_010, &SyncFrame::new(c, 0b110, false));
+            }
+            assert_eq!(clk.period_q8(), 10_010 << 8);
+            clk.reset();
+            assert_eq!(clk.state(40_040), ClockState::Unsynced);
+            assert_eq!(clk.period_q8(), 10_000 << 8, "back to the nominal period");
+            let info = clk.on_sync(40_040, &SyncFrame::new(4, 0, true));
+            assert!(!info.continuous, "the first sync of a new master starts afresh");
+            assert_eq!(clk.mask(4), UNKNOWN_MASK);
+        }
+
         fn clock_free_runs_then_stops() {
             let c = CycleConfig::DEFAULT;
             let mut clk = SlotClock::new(c);
