@@ -613,6 +613,22 @@ pub(crate) mod tests {
             assert_eq!(fresh.state(5), ClockState::Unsynced);
         }
 
+        fn the_period_is_estimated_from_the_restamped_starts_of_frame() {
+            // Latencies that vary from sync to sync: the estimate spans the window's oldest and
+            // newest starts of frame, not the instants the syncs were loaded.
+            let mut clk = SlotClock::new(CycleConfig::DEFAULT);
+            let sof = |c: u64| c * 10_000 + 20 + (c * 7) % 11;
+            let cycles = 3 * PERIOD_WINDOW as u64;
+            for c in 0..cycles {
+                clk.on_sync(c * 10_000, &SyncFrame::new(c as u32, 0, false));
+                clk.restamp_last_sync(c as u8, sof(c));
+            }
+            let (newest, oldest) = (cycles - 1, cycles - PERIOD_WINDOW as u64);
+            let span = sof(newest) - sof(oldest);
+            assert_eq!(clk.period_q8(), (span << 8) / (newest - oldest));
+            assert_eq!(clk.slot_start(newest as u32, 0), Some(sof(newest)));
+        }
+
         fn a_reset_clock_forgets_the_old_masters_cycle() {
             // After a master change the node resets its clock: the old cycle's grid, period
             // estimate and reservations must not carry over to the new master's syncs.
