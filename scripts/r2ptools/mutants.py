@@ -9,7 +9,7 @@ detected (the suite does not pass: a hang, usually a wait that never ends), as i
 Stryker, and is shown in its own column. Mutants proved equivalent are excluded by name in firmware/.cargo/mutants.toml,
 each with its reason there and in docs/mutants.md.
 
-    scripts/mutants [CRATE ...] [--file GLOB] [--re REGEX] [--shard K/N] [--goal PCT]
+    scripts/mutants [CRATE ...] [--file GLOB] [--exclude GLOB] [--re REGEX] [--shard K/N] [--goal PCT]
 
 `--shard K/N` runs every N-th mutant (round robin over the crate's list, so every file is
 sampled): a quicker estimate of a crate's ratio, stated as a sample in the table.
@@ -59,8 +59,10 @@ def run_crate(crate: str, extra: list[str]) -> tuple[dict, float]:
     shutil.rmtree(out / "mutants.out", ignore_errors=True)
     out.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, "TMPDIR": str(scratch_dir()),
-           # One target dir for every run: dependencies build once, not once per copy.
-           "CARGO_TARGET_DIR": str(CACHE / "target")}
+           # One target dir per crate for all its mutants: dependencies build once, not once per
+           # copy, and two crates can run side by side (one per core) without waiting on
+           # each other's build lock.
+           "CARGO_TARGET_DIR": str(CACHE / "target" / crate)}
     tests = [a for pkg in [crate, *TESTED_BY.get(crate, [])] for a in ("--test-package", pkg)]
     cmd = [str(CARGO_MUTANTS), "mutants", "--dir", str(ROOT / "firmware"), "-p", crate, *tests,
            "--jobs", "1", "--no-shuffle", "--output", str(out), *extra]
@@ -94,6 +96,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="mutants", description=__doc__.splitlines()[0])
     ap.add_argument("crates", nargs="*", help=f"crates (default: {' '.join(CRATES)})")
     ap.add_argument("--file", action="append", default=[], help="only mutate files matching this glob")
+    ap.add_argument("--exclude", action="append", default=[],
+                    help="skip files matching this glob (e.g. one measured whole before)")
     ap.add_argument("--re", action="append", default=[], help="only mutants whose name matches")
     ap.add_argument("--shard", help="K/N: only mutants i with i %% N == K (a sample)")
     ap.add_argument("--goal", type=float, default=GOAL_PCT, help="caught/viable %% each crate must reach")
@@ -107,6 +111,7 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
         return 2
     extra = [a for f in args.file for a in ("--file", f)] + [a for r in args.re for a in ("--re", r)]
+    extra += [a for f in args.exclude for a in ("--exclude", f)]
     if args.shard:
         extra += ["--shard", args.shard, "--sharding", "round-robin"]
     rows, below = [], []

@@ -1,15 +1,16 @@
 //! An import asks a publisher once per advertisement it acts on (docs/middleware.md, "Remote
 //! topics"): the same advertisement heard again while the request is pending (advertisements
 //! repeat for late joiners) does not send a second SUBSCRIBE_REQUEST; only the request timeout
-//! does.
+//! does; and the stream asked for is taken in from the request on.
 
-use r2p_management::message::{BusClass, Message};
-use r2p_middleware::{pool_size, Class, Publisher, Topic};
+use r2p_management::message::{BusClass, Message, SubscribeResult};
+use r2p_management::NodeId;
+use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use rtcan::controller::CanController;
-use rtcan::{Expect, Reassembler};
+use rtcan::{fragments, Expect, FrameId, Laxity, Reassembler};
 
 use crate::hrt_stream_tests::inject;
-use crate::node::NodeConfig;
+use crate::node::{ImportState, NodeConfig};
 use crate::testbus::{run, uid, Bus, TestNode};
 use crate::{NoParams, RemotePublisher, Wire};
 
@@ -52,4 +53,53 @@ fn a_repeated_advertisement_does_not_repeat_a_pending_subscription_request() {
         }
     }
     assert_eq!(requests, 1, "one request for one publisher's advertisement");
+}
+
+#[test]
+fn the_first_message_right_behind_the_publishers_answer_is_taken_in() {
+    // The filters admit the asked-for stream from the request on: a publisher whose stream
+    // already runs for other subscribers sends its next frame right behind its answer, before
+    // the subscriber has read the answer (and reprogrammed its filters).
+    static L: Topic<'static, u32, { pool_size(&[1], 1) }, 1> = Topic::new("speed", 0);
+    static LP: Publisher<'static, u32> = Publisher::new(&L, Class::NonRealTime);
+    static IN: RemotePublisher<'static, u32> = RemotePublisher::new(&LP, &L);
+    static S: Subscriber<'static, u32, 1> = Subscriber::new();
+    L.subscribe(&S).unwrap();
+    let bus = Bus::<1>::new();
+    let config = NodeConfig { heartbeat_period_us: 10_000, ..NodeConfig::new(uid(1), "control") };
+    let mut b = TestNode::new(config, &NoParams).unwrap();
+    b.import(&IN).unwrap();
+    run(&bus, &mut [&mut b], 5_000);
+    let publisher = NodeId::new(0x40).unwrap();
+    let topic = || heapless::String::try_from("speed").unwrap();
+    let type_hash = <u32 as Wire>::TYPE_HASH;
+    let class = BusClass::Nrt;
+    inject(
+        &bus,
+        publisher.get(),
+        &Message::Advertise { topic: topic(), type_hash, size: 4, index: 1, class },
+    );
+    run(&bus, &mut [&mut b], 10_000);
+    assert!(matches!(b.import_state(0), Some(ImportState::Requested { .. })));
+
+    let stream = publisher.message_id(1);
+    let (target, result) = (b.node_id().get(), SubscribeResult::Ok);
+    inject(
+        &bus,
+        publisher.get(),
+        &Message::SubscribeResponse { target, topic: topic(), result, message_id: stream.0 },
+    );
+    let mut data = [0u8; 4];
+    42u32.encode(&mut data).unwrap();
+    let template = FrameId { laxity: Laxity::NRT, message: stream, fragment: 0 };
+    for f in fragments(template, &data).unwrap() {
+        bus.inject(f);
+    }
+    run(&bus, &mut [&mut b], 15_000);
+    assert_eq!(
+        b.import_state(0),
+        Some(ImportState::Subscribed { from: publisher, message: stream })
+    );
+    assert_eq!(S.try_recv().as_deref(), Some(&42), "the first message is not lost");
+    assert_eq!(b.stats().unknown_frames, 0);
 }

@@ -35,6 +35,10 @@ pub mod slot_tx;
 pub mod wire;
 
 #[cfg(test)]
+mod addressing_tests;
+#[cfg(test)]
+mod advertising_tests;
+#[cfg(test)]
 mod heartbeat_tests;
 #[cfg(test)]
 mod host_tests;

@@ -359,13 +359,10 @@ impl NodeSet {
     fn contains(&self, n: NodeId) -> bool {
         self.0[usize::from(n.get() / 32)] & (1 << (n.get() % 32)) != 0
     }
-    fn set(&mut self, n: NodeId, on: bool) {
-        let w = &mut self.0[usize::from(n.get() / 32)];
-        if on {
-            *w |= 1 << (n.get() % 32);
-        } else {
-            *w &= !(1 << (n.get() % 32));
-        }
+    /// Nodes are never removed: a peer that leaves stays known (its return in `Starting`
+    /// state is what triggers advertisements), and an asked node may still answer.
+    fn insert(&mut self, n: NodeId) {
+        self.0[usize::from(n.get() / 32)] |= 1 << (n.get() % 32);
     }
     fn len(&self) -> usize {
         self.0.iter().map(|w| w.count_ones() as usize).sum()
@@ -660,14 +657,14 @@ impl<
     /// Reads parameter `index` of `target`; the answer comes as [`Event::ParamValue`] or
     /// [`Event::ParamError`].
     pub fn get_param(&mut self, target: NodeId, index: u16) -> Result<(), NodeError> {
-        self.asked.set(target, true);
+        self.asked.insert(target);
         self.send(&Message::ParamGet { target: target.get(), index })
     }
 
     /// Sets parameter `index` of `target`; the answer comes as [`Event::ParamValue`] (the value
     /// now held) or [`Event::ParamError`] (refused, unchanged).
     pub fn set_param(&mut self, target: NodeId, index: u16, value: Value) -> Result<(), NodeError> {
-        self.asked.set(target, true);
+        self.asked.insert(target);
         self.send(&Message::ParamSet { target: target.get(), index, value })
     }
 
@@ -957,7 +954,7 @@ impl<
                 if !self.peers.contains(from) || state == ModuleState::Starting {
                     self.readvertise();
                 }
-                self.peers.set(from, true);
+                self.peers.insert(from);
             }
             Message::Reboot { target } if for_me(target) || target == NodeId::BROADCAST => {
                 self.reboot = true;

@@ -1,0 +1,163 @@
+//! Management requests are addressed (docs/middleware.md, "The management protocol"): on a
+//! bus of several modules of the same kind, a parameter write, a subscription request or its
+//! answer meant for one module must change nothing on the others, and answers a node did not
+//! ask for are bus traffic, not events of its application.
+
+use r2p_management::message::{BusClass, Message, SubscribeResult, Value};
+use r2p_management::NodeId;
+use r2p_middleware::{pool_size, Class, Publisher, Topic};
+use rtcan::controller::CanController;
+use rtcan::{Expect, Reassembler};
+
+use crate::hrt_stream_tests::inject;
+use crate::node::{Event, ImportState, NodeConfig};
+use crate::remote::Export;
+use crate::testbus::{run, uid, Bus, TestNode};
+use crate::{NoParams, Param, ParamStore, RamParams, RemotePublisher, RemoteSubscriber, Wire};
+
+fn config(n: u32, name: &'static str) -> NodeConfig {
+    NodeConfig { heartbeat_period_us: 10_000, ..NodeConfig::new(uid(n), name) }
+}
+
+fn events(node: &mut TestNode<'_>) -> std::vec::Vec<Event> {
+    core::iter::from_fn(|| node.next_event()).collect()
+}
+
+/// The management messages other than heartbeats and advertisements that `port` saw from
+/// node `by`.
+fn answers<const P: usize>(bus: &Bus<P>, port: usize, by: NodeId) -> std::vec::Vec<Message> {
+    let mut r: Reassembler<4, 64> = Reassembler::new(1_000_000);
+    let mut port = bus.port(port);
+    let mut out = std::vec::Vec::new();
+    while let Some(rx) = port.try_receive() {
+        let Some(m) = r.accept(&rx.frame, rx.at, Expect::Any) else { continue };
+        if NodeId::of(rx.frame.id().message).map(|(from, _)| from) != Some(by) {
+            continue;
+        }
+        match Message::decode(m.data) {
+            Ok(Message::Heartbeat { .. } | Message::Advertise { .. }) | Err(_) => {}
+            Ok(msg) => out.push(msg),
+        }
+    }
+    out
+}
+
+#[test]
+fn requests_for_another_module_change_nothing_here() {
+    static PARAMS: RamParams<1> = RamParams::new([Param::u32("rate_hz", 100, 1, 1_000)]);
+    static T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("speed", 0);
+    static P: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
+    static OUT: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&P);
+    T.subscribe(&OUT).unwrap();
+    // Port 0: the module; port 1 listens.
+    let bus = Bus::<2>::new();
+    let mut module = TestNode::new(config(1, "motor"), &PARAMS).unwrap();
+    module.export(&OUT).unwrap();
+    run(&bus, &mut [&mut module], 20_000);
+    let _ = events(&mut module);
+    let me = module.node_id();
+    let _ = answers(&bus, 1, me);
+    let other = if me.get() == 0x41 { 0x42 } else { 0x41 };
+
+    // A tool (0x40) talks to another motor module (`other`) on the same bus.
+    let type_hash = <u32 as Wire>::TYPE_HASH;
+    let topic = || heapless::String::try_from("speed").unwrap();
+    inject(&bus, 0x40, &Message::ParamSet { target: other, index: 0, value: Value::U32(7) });
+    inject(&bus, 0x40, &Message::ParamGet { target: other, index: 0 });
+    inject(
+        &bus,
+        0x40,
+        &Message::SubscribeRequest { target: other, topic: topic(), type_hash, queue_len: 2 },
+    );
+    run(&bus, &mut [&mut module], 40_000);
+    assert_eq!(answers(&bus, 1, me), [], "nothing answered for {other:#x}");
+    assert_eq!(events(&mut module), [], "no event for another module's requests");
+    assert_eq!(PARAMS.get(0), Ok(Value::U32(100)), "another module's parameter write not applied");
+    assert_eq!(OUT.active_len(), 0, "another module's subscriber not added");
+
+    // The same requests addressed to it are answered (what the checks above rely on).
+    inject(&bus, 0x40, &Message::ParamSet { target: me.get(), index: 0, value: Value::U32(7) });
+    inject(&bus, 0x40, &Message::ParamGet { target: me.get(), index: 0 });
+    inject(
+        &bus,
+        0x40,
+        &Message::SubscribeRequest { target: me.get(), topic: topic(), type_hash, queue_len: 2 },
+    );
+    run(&bus, &mut [&mut module], 60_000);
+    let value = Value::U32(7);
+    let answered = answers(&bus, 1, me);
+    assert_eq!(
+        answered[..2],
+        [Message::ParamValue { index: 0, value }, Message::ParamValue { index: 0, value }]
+    );
+    assert!(matches!(
+        answered[2],
+        Message::SubscribeResponse { target: 0x40, result: SubscribeResult::Ok, .. }
+    ));
+    assert_eq!(PARAMS.get(0), Ok(value));
+    assert_eq!(OUT.active_len(), 2);
+}
+
+#[test]
+fn answers_a_node_did_not_ask_for_are_not_its_events() {
+    static T: Topic<'static, u32, { pool_size(&[1], 1) }, 1> = Topic::new("speed", 0);
+    static LP: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
+    static IN: RemotePublisher<'static, u32> = RemotePublisher::new(&LP, &T);
+    let bus = Bus::<1>::new();
+    let mut tool = TestNode::new(config(1, "tool"), &NoParams).unwrap();
+    tool.import(&IN).unwrap();
+    run(&bus, &mut [&mut tool], 20_000);
+    let _ = events(&mut tool);
+    let me = tool.node_id().get();
+    let (asked, stranger) = (NodeId::new(0x50).unwrap(), NodeId::new(0x51).unwrap());
+    let value = Value::U32(3);
+    let fault = r2p_management::message::ParamFault::UnknownIndex;
+    tool.get_param(asked, 0).unwrap();
+
+    // The stranger advertises `speed`: the tool asks it for a subscription.
+    let type_hash = <u32 as Wire>::TYPE_HASH;
+    let topic = || heapless::String::try_from("speed").unwrap();
+    let ad =
+        Message::Advertise { topic: topic(), type_hash, size: 4, index: 1, class: BusClass::Nrt };
+    inject(&bus, stranger.get(), &ad);
+    run(&bus, &mut [&mut tool], 30_000);
+    assert!(
+        matches!(tool.import_state(0), Some(ImportState::Requested { from, .. }) if from == stranger)
+    );
+
+    // Answers this tool did not ask for: parameters of a module it never asked (another
+    // tool's), and the stranger's subscription answer to another node.
+    inject(&bus, stranger.get(), &Message::ParamValue { index: 0, value });
+    inject(&bus, stranger.get(), &Message::ParamError { index: 1, fault });
+    let message_id = stranger.message_id(1).0;
+    let result = SubscribeResult::Ok;
+    inject(
+        &bus,
+        stranger.get(),
+        &Message::SubscribeResponse { target: me ^ 1, topic: topic(), result, message_id },
+    );
+    run(&bus, &mut [&mut tool], 40_000);
+    assert_eq!(events(&mut tool), []);
+    assert!(matches!(tool.import_state(0), Some(ImportState::Requested { .. })));
+    inject(
+        &bus,
+        stranger.get(),
+        &Message::SubscribeResponse { target: me, topic: topic(), result, message_id },
+    );
+    run(&bus, &mut [&mut tool], 45_000);
+    let message = stranger.message_id(1);
+    assert_eq!(tool.import_state(0), Some(ImportState::Subscribed { from: stranger, message }));
+    let _ = events(&mut tool);
+
+    // The module it asked answers: both kinds are events.
+    inject(&bus, asked.get(), &Message::ParamValue { index: 0, value });
+    inject(&bus, asked.get(), &Message::ParamError { index: 1, fault });
+    run(&bus, &mut [&mut tool], 60_000);
+    assert_eq!(
+        events(&mut tool),
+        [
+            Event::ParamValue { from: asked, index: 0, value },
+            Event::ParamError { from: asked, index: 1, fault },
+        ]
+    );
+}
