@@ -46,6 +46,8 @@ mod host_tests;
 mod hrt_stream_tests;
 #[cfg(test)]
 mod import_request_tests;
+#[cfg(test)]
+mod registration_bounds_tests;
 #[cfg(any(test, feature = "selftest"))]
 mod tdma_tests;
 /// The suite's loopback bus, public for the QEMU benchmark of the slot path (not an API).
