@@ -47,6 +47,8 @@ mod hrt_stream_tests;
 #[cfg(test)]
 mod import_request_tests;
 #[cfg(test)]
+mod master_timing_tests;
+#[cfg(test)]
 mod registration_bounds_tests;
 #[cfg(any(test, feature = "selftest"))]
 mod tdma_tests;
