@@ -104,6 +104,8 @@ fn tx_pending_counts_the_frames_waiting_for_the_controller() {
     node.tick(2_000);
     // 20 bytes + the 2-byte transfer CRC in frames of 8 bytes: 3 frames.
     assert_eq!(node.tx_pending(), 3, "encoded, not yet handed to the controller");
-    node.transmit(2_000, &mut bus.port(0));
+    let sent_before = node.stats().frames_sent;
+    assert_eq!(node.transmit(2_000, &mut bus.port(0)), 3, "frames handed over");
     assert_eq!(node.tx_pending(), 0);
+    assert_eq!(node.stats().frames_sent, sent_before + 3);
 }
