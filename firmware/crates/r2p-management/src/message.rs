@@ -57,7 +57,10 @@ pub enum ModuleState {
     Bootloader = 3,
 }
 
-/// The traffic class a publisher asks for on the bus.
+/// The traffic class a publisher asks for on the bus, as ADVERTISE carries it: the publisher's
+/// `r2p_middleware::Class` with an HRT period counted in communication cycles (the unit the
+/// master's calendar uses, fixed once the node has checked it is a power of two of its cycle)
+/// rather than in µs. A frame's identifier only shows `rtcan::FrameClass`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BusClass {
     /// Synchronous real-time: HRT, one message every `period_cycles` communication cycles.

@@ -15,6 +15,12 @@ use crate::Error;
 
 /// A publisher's real-time class: how it behaves when the pool is empty, and what the
 /// transport must guarantee for its messages.
+///
+/// This is the traffic class an application names. The bus carries it in two other forms,
+/// each with its own type because each knows less: the class a topic is advertised with
+/// (`r2p_management::message::BusClass`, the period counted in the bus's cycles) and the class
+/// a frame's identifier shows (`rtcan::FrameClass`, without period or deadline). This crate
+/// depends on neither: a publisher's class means the same on a module without a bus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Class {
     /// Never expires (logging, parameters): `alloc` waits for a free slot.

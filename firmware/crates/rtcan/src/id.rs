@@ -12,7 +12,7 @@
 //! A sync frame is laxity 0, fragment 0 and a message ID below [`SYNC_MESSAGE_IDS`]: the
 //! message ID's low byte carries the cycle counter.
 
-use crate::laxity::Laxity;
+use crate::laxity::{FrameClass, Laxity};
 
 /// Width of the laxity field.
 pub const LAXITY_BITS: u32 = 6;
@@ -40,17 +40,6 @@ impl MessageId {
     pub const fn is_reserved_for_sync(self) -> bool {
         self.0 < SYNC_MESSAGE_IDS
     }
-}
-
-/// The traffic class of a frame, read from its laxity field.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Class {
-    /// Hard real-time: periodic, sent only in its reserved TDMA slot (laxity 0).
-    Hrt,
-    /// Soft real-time: deadline-driven, sent in free slots; laxity 1..=62.
-    Srt,
-    /// Non-real-time: best effort, lowest priority (laxity 63), never promoted.
-    Nrt,
 }
 
 /// A decoded RTCAN identifier.
@@ -107,7 +96,7 @@ impl FrameId {
     }
 
     /// The traffic class.
-    pub const fn class(self) -> Class {
+    pub const fn class(self) -> FrameClass {
         self.laxity.class()
     }
 
@@ -131,7 +120,7 @@ pub(crate) mod tests {
             let id = FrameId::new(Laxity::from_code(5), MessageId(0x1234), 2).unwrap();
             assert_eq!(id.to_raw(), (5 << 23) | (0x1234 << 7) | 2);
             assert_eq!(id.to_raw(), 0x0289_1A02);
-            assert_eq!(id.class(), Class::Srt);
+            assert_eq!(id.class(), FrameClass::Srt);
         }
 
         fn every_extended_id_roundtrips() {
@@ -154,10 +143,10 @@ pub(crate) mod tests {
         }
 
         fn classes_follow_laxity_field() {
-            assert_eq!(FrameId::from_raw(0x0000_1000).unwrap().class(), Class::Hrt);
-            assert_eq!(FrameId::from_raw(1 << 23).unwrap().class(), Class::Srt);
-            assert_eq!(FrameId::from_raw(62 << 23).unwrap().class(), Class::Srt);
-            assert_eq!(FrameId::from_raw(EXTENDED_ID_MAX).unwrap().class(), Class::Nrt);
+            assert_eq!(FrameId::from_raw(0x0000_1000).unwrap().class(), FrameClass::Hrt);
+            assert_eq!(FrameId::from_raw(1 << 23).unwrap().class(), FrameClass::Srt);
+            assert_eq!(FrameId::from_raw(62 << 23).unwrap().class(), FrameClass::Srt);
+            assert_eq!(FrameId::from_raw(EXTENDED_ID_MAX).unwrap().class(), FrameClass::Nrt);
         }
 
         fn more_urgent_wins_arbitration() {
@@ -221,9 +210,9 @@ mod vectors {
             assert_eq!(id.message, MessageId(hex(&c.message_id) as u16), "{}", c.raw);
             assert_eq!(id.fragment, c.fragment, "{}", c.raw);
             let class = match id.class() {
-                Class::Hrt => "HRT",
-                Class::Srt => "SRT",
-                Class::Nrt => "NRT",
+                FrameClass::Hrt => "HRT",
+                FrameClass::Srt => "SRT",
+                FrameClass::Nrt => "NRT",
             };
             assert_eq!(class, c.class, "{}", c.raw);
             assert_eq!(id.sync_cycle(), c.sync_cycle, "{}", c.raw);

@@ -9,7 +9,20 @@
 //!   octave per code, fine near the deadline and reaching ~39 000 ticks. It is defined by the
 //!   integer table [`LOG_THRESHOLDS`], so every implementation encodes identically.
 
-use crate::id::Class;
+/// The traffic class of a frame: what its identifier's laxity field says, and all that a node
+/// can tell about any frame on the wire. Distinct from a publisher's class
+/// (`r2p_middleware::Class`, which carries the period or deadline the sender schedules by) and
+/// from the class a topic is advertised with (`r2p_management::message::BusClass`, its period
+/// in cycles of the bus).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameClass {
+    /// Hard real-time: periodic, sent only in its reserved TDMA slot (laxity 0).
+    Hrt,
+    /// Soft real-time: deadline-driven, sent in free slots; laxity 1..=62.
+    Srt,
+    /// Non-real-time: best effort, lowest priority (laxity 63), never promoted.
+    Nrt,
+}
 
 /// The 6-bit laxity field of an RTCAN identifier.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -35,11 +48,11 @@ impl Laxity {
     }
 
     /// The traffic class the code stands for.
-    pub const fn class(self) -> Class {
+    pub const fn class(self) -> FrameClass {
         match self.0 {
-            0 => Class::Hrt,
-            63 => Class::Nrt,
-            _ => Class::Srt,
+            0 => FrameClass::Hrt,
+            63 => FrameClass::Nrt,
+            _ => FrameClass::Srt,
         }
     }
 }

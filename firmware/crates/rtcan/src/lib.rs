@@ -33,8 +33,8 @@ pub use cycle::{CycleConfig, SlotClock, SyncFrame};
 pub use failover::Failover;
 pub use fragment::{fragments, Expect, Reassembler, ReassemblyStats};
 pub use frame::Frame;
-pub use id::{Class, FrameId, IdError, MessageId};
-pub use laxity::{Laxity, LaxityEncoding};
+pub use id::{FrameId, IdError, MessageId};
+pub use laxity::{FrameClass, Laxity, LaxityEncoding};
 pub use schedule::{next_reserved, Period, Phase, Scheduler};
 pub use srt::{Missed, Ticket, TxQueue, Urgency};
 

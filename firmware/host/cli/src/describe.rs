@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 
 use r2p_management::message::{BusClass, Message, ModuleState, ParamFault, SubscribeResult, Value};
 use r2p_management::NodeId;
-use rtcan::{Class, FrameId, LaxityEncoding, SyncFrame};
+use rtcan::{FrameClass, FrameId, LaxityEncoding, SyncFrame};
 use serde_json::{json, Map, Value as Json};
 
 use crate::types::MsgType;
@@ -194,9 +194,9 @@ pub fn hex(b: &[u8]) -> String {
 
 fn class_name(id: &FrameId) -> &'static str {
     match id.class() {
-        Class::Hrt => "HRT",
-        Class::Srt => "SRT",
-        Class::Nrt => "NRT",
+        FrameClass::Hrt => "HRT",
+        FrameClass::Srt => "SRT",
+        FrameClass::Nrt => "NRT",
     }
 }
 
@@ -229,7 +229,7 @@ pub fn report_line(r: &Report, w: &Watcher, laxity: LaxityEncoding) -> String {
     };
     let lax = id.laxity.code();
     let lax = match id.class() {
-        Class::Srt => format!("{lax}(>={})", micros_text(laxity.lower_bound_us(id.laxity))),
+        FrameClass::Srt => format!("{lax}(>={})", micros_text(laxity.lower_bound_us(id.laxity))),
         _ => lax.to_string(),
     };
     let mut line = format!(
@@ -293,7 +293,7 @@ pub fn report_json(r: &Report, w: &Watcher, laxity: LaxityEncoding) -> Json {
     if let Some(id) = r.id {
         o.insert("class".into(), json!(class_name(&id)));
         o.insert("laxity".into(), json!(id.laxity.code()));
-        if id.class() == Class::Srt {
+        if id.class() == FrameClass::Srt {
             o.insert("min_remaining_us".into(), json!(laxity.lower_bound_us(id.laxity)));
         }
         o.insert("message".into(), json!(id.message.0));

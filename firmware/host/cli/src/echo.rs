@@ -9,7 +9,7 @@ use clap::Args;
 use r2p_node::Event;
 use serde_json::json;
 
-use crate::cli::{emit, BusArgs};
+use crate::args::{emit, BusArgs};
 use crate::describe::{hex, result_name};
 use crate::error::CliError;
 use crate::listing::sorted_topics;

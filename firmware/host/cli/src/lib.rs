@@ -9,8 +9,10 @@
 //!   is learnt at run time, and the [`session::Session`] that drives it beside the watcher;
 //! - [`types`]: the message types, found by type hash, decoded and encoded;
 //! - the commands: [`monitor`], [`listing`] (`nodes`, `topics`), [`echo`], [`publish`]
-//!   (`pub`), [`param`], [`traces`] (`replay`, `convert`); [`cli`] parses the command line.
+//!   (`pub`), [`param`], [`traces`] (`replay`, `convert`), [`sim`]; [`args`]: the bus options
+//!   and output they share; [`cli`] parses the command line and runs them.
 
+pub mod args;
 pub mod cli;
 pub mod describe;
 pub mod echo;

@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::json;
 
-use crate::cli::{emit, BusArgs};
+use crate::args::{emit, BusArgs};
 use crate::describe::{class_json, class_text, hex, state_name};
 use crate::error::CliError;
 use crate::session::Session;

@@ -12,7 +12,7 @@ use r2p_canlink::replay::Format;
 use r2p_canlink::Stamped;
 use rtcan::LaxityEncoding;
 
-use crate::cli::{emit, parse_laxity, parse_seconds, BusArgs};
+use crate::args::{emit, parse_laxity, parse_seconds, BusArgs};
 use crate::describe::{report_json, report_line};
 use crate::error::CliError;
 use crate::session::Session;

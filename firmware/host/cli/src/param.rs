@@ -10,7 +10,7 @@ use r2p_management::NodeId;
 use r2p_node::Event;
 use serde_json::json;
 
-use crate::cli::{emit, BusArgs};
+use crate::args::{emit, BusArgs};
 use crate::describe::{fault_name, value_json};
 use crate::error::CliError;
 use crate::session::Session;

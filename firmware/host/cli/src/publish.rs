@@ -10,7 +10,7 @@ use clap::Args;
 use r2p_middleware::Class;
 use r2p_node::Event;
 
-use crate::cli::BusArgs;
+use crate::args::BusArgs;
 use crate::error::CliError;
 use crate::session::Session;
 use crate::types::MsgType;

@@ -10,7 +10,7 @@ use clap::Args;
 use r2p_emu::robot::EmuRobot;
 use r2p_emu::serve::{self, Serve};
 
-use crate::cli::{emit, parse_seconds, BusArgs, DEFAULT_SOCKETCAND};
+use crate::args::{emit, parse_seconds, BusArgs, DEFAULT_SOCKETCAND};
 use crate::error::CliError;
 
 /// `r2p sim` options.

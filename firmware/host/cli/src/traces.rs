@@ -9,7 +9,7 @@ use std::time::Instant;
 use clap::Args;
 use r2p_canlink::replay::{read_trace, replay as replay_frames, write_trace, Format, Pacing};
 
-use crate::cli::{open_link, BusArgs};
+use crate::args::{open_link, BusArgs};
 use crate::error::CliError;
 
 /// `r2p replay` options.

@@ -12,7 +12,7 @@ fn passes() {
 
 fn fails_on_purpose() {
     let id = rtcan::FrameId::from_raw(63 << 23).unwrap();
-    assert_eq!(id.class(), rtcan::Class::Hrt, "deliberate failure: an NRT frame is not HRT");
+    assert_eq!(id.class(), rtcan::FrameClass::Hrt, "deliberate failure: an NRT frame is not HRT");
 }
 
 #[cortex_m_rt::entry]

@@ -1,0 +1,249 @@
+//! HRT streams (docs/middleware.md, "The TDMA cycle and HRT streams"): an export of class
+//! `SyncRealTime` asks the master for a slot when its first remote subscriber arrives
+//! (HRT_REQUEST / HRT_GRANT), the master answers from its calendar, and the stream's newest
+//! message is loaded in each reserved slot.
+
+use heapless::String;
+use r2p_management::message::{HrtResult, Message, SubscribeResult};
+use r2p_management::{NodeId, MANAGEMENT_INDEX};
+use rtcan::frame::MAX_PAYLOAD;
+use rtcan::schedule::Reject;
+use rtcan::{CanController, Frame, FrameId, Laxity, MessageId, Micros, Period, Phase};
+
+use super::stats::bump;
+use super::{Event, Node};
+use crate::slot_tx::Slotted;
+#[cfg(doc)]
+use rtcan::Scheduler;
+
+/// HRT streams a node's calendar holds when it is master ([`Scheduler`] capacity).
+pub const MASTER_STREAMS: usize = 16;
+
+/// Where an HRT export's reservation stands ([`Node::hrt_state`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtState {
+    /// No remote subscriber yet: nothing reserved.
+    Idle,
+    /// To be asked for at the next slot (first subscriber, or re-registration after a master
+    /// change or a node-ID move) once a master is heard.
+    Wanted,
+    /// Asked the master at `since`; asked again every `request_timeout_us`.
+    Requested {
+        /// When the request was (last) queued.
+        since: Micros,
+    },
+    /// Sending in slot `phase.slot` of the cycles c with c mod period = `phase.offset`.
+    Granted {
+        /// The reserved phase.
+        phase: Phase,
+    },
+    /// The master refused (the subscriber got `NoSlot`); a new subscription asks again.
+    Refused(HrtResult),
+}
+
+#[derive(Clone, Copy)]
+pub(super) struct HrtStream {
+    pub(super) period: Period,
+    pub(super) state: HrtState,
+    /// A subscriber waiting for the reservation before it is answered (others ask again).
+    pub(super) waiting: Option<(NodeId, u8)>,
+}
+
+impl<
+        'a,
+        const EXPORTS: usize,
+        const IMPORTS: usize,
+        const TXQ: usize,
+        const RX: usize,
+        const BUF: usize,
+    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF>
+{
+    /// Where HRT export `export`'s reservation stands (`None` for other exports).
+    pub fn hrt_state(&self, export: usize) -> Option<HrtState> {
+        self.exports.get(export).and_then(|e| e.hrt).map(|h| h.state)
+    }
+
+    /// HRT_REQUEST (answered as master) and HRT_GRANT (for this node's streams).
+    pub(super) fn on_hrt_management(&mut self, from: NodeId, msg: Message) {
+        let me = self.ids.node_id();
+        match msg {
+            Message::HrtRequest { message_id, period_cycles, frames } if self.master.is_some() => {
+                let message = MessageId(message_id);
+                let granted = match NodeId::of(message) {
+                    Some((owner, index)) if owner == from && index != MANAGEMENT_INDEX => {
+                        if frames != 1 {
+                            Err(HrtResult::TooManyFrames)
+                        } else {
+                            self.scheduler
+                                .register(message, u32::from(period_cycles))
+                                .map_err(hrt_result)
+                        }
+                    }
+                    _ => Err(HrtResult::Conflict),
+                };
+                let (offset, slot, result) = match granted {
+                    Ok(p) => (p.offset, p.slot, HrtResult::Ok),
+                    Err(r) => (0, 0, r),
+                };
+                let _ = self.send(&Message::HrtGrant {
+                    message_id,
+                    period_cycles,
+                    offset,
+                    slot,
+                    result,
+                });
+            }
+            Message::HrtGrant { message_id, period_cycles, offset, slot, result } => {
+                let Some((owner, index)) = NodeId::of(MessageId(message_id)) else {
+                    bump(&mut self.stats.unexpected);
+                    return;
+                };
+                if owner != me {
+                    return; // another node's grant
+                }
+                let i = usize::from(index).wrapping_sub(1);
+                let asked = self.exports.get(i).and_then(|e| e.hrt).is_some_and(|h| {
+                    matches!(h.state, HrtState::Requested { .. })
+                        && h.period.cycles() == u32::from(period_cycles)
+                });
+                let slots = self.config.cycle.slots;
+                let valid = result != HrtResult::Ok
+                    || (u32::from(offset) < u32::from(period_cycles) && slot > 0 && slot < slots);
+                if !asked || !valid {
+                    bump(&mut self.stats.unexpected);
+                    return;
+                }
+                let r =
+                    if result == HrtResult::Ok { Ok(Phase { offset, slot }) } else { Err(result) };
+                self.on_grant(i, r);
+            }
+            _ => {}
+        }
+    }
+
+    /// The calendar holding this node's reservations is gone (new master, new epoch) or their
+    /// message IDs changed: ask again.
+    pub(super) fn re_register(&mut self) {
+        for e in self.exports.iter_mut() {
+            if let Some(h) = e.hrt.as_mut() {
+                if matches!(h.state, HrtState::Granted { .. } | HrtState::Requested { .. }) {
+                    h.state = HrtState::Wanted;
+                }
+            }
+        }
+    }
+
+    /// Asks for the reservations that are wanted (or whose request timed out) while a master
+    /// is heard; as master, registers them in its own calendar.
+    pub(super) fn register_hrt(&mut self, now: Micros) {
+        if self.master.is_none() && !(self.failover.synced() && self.clock.hrt_allowed(now)) {
+            return;
+        }
+        let timeout = Micros::from(self.config.request_timeout_us);
+        let me = self.ids.node_id();
+        for i in 0..self.exports.len() {
+            let Some(h) = self.exports[i].hrt else { continue };
+            let due = match h.state {
+                HrtState::Wanted => true,
+                HrtState::Requested { since } => now.saturating_sub(since) >= timeout,
+                _ => false,
+            };
+            if !due {
+                continue;
+            }
+            let message = me.message_id(i as u8 + 1);
+            let cycles = h.period.cycles();
+            if self.master.is_some() {
+                let r = self.scheduler.register(message, cycles).map_err(hrt_result);
+                self.exports[i].hrt =
+                    Some(HrtStream { state: HrtState::Requested { since: now }, ..h });
+                self.on_grant(i, r);
+            } else {
+                let msg = Message::HrtRequest {
+                    message_id: message.0,
+                    period_cycles: cycles as u16,
+                    frames: 1,
+                };
+                if self.send(&msg).is_err() {
+                    break; // retried at the next slot
+                }
+                self.exports[i].hrt =
+                    Some(HrtStream { state: HrtState::Requested { since: now }, ..h });
+            }
+        }
+    }
+
+    /// The master answered HRT export `i`'s request; answers the subscriber waiting for it.
+    fn on_grant(&mut self, i: usize, r: Result<Phase, HrtResult>) {
+        let Some(mut h) = self.exports[i].hrt else { return };
+        let waiting = h.waiting.take();
+        let e = self.exports[i].export;
+        let me = self.ids.node_id();
+        let (state, result, message_id) = match r {
+            Ok(phase) => {
+                (HrtState::Granted { phase }, SubscribeResult::Ok, me.message_id(i as u8 + 1).0)
+            }
+            Err(res) => {
+                bump(&mut self.stats.hrt_refused);
+                (HrtState::Refused(res), SubscribeResult::NoSlot, 0)
+            }
+        };
+        h.state = state;
+        self.exports[i].hrt = Some(h);
+        let Some((from, queue_len)) = waiting else { return };
+        if result == SubscribeResult::Ok {
+            e.activate(queue_len);
+            self.event(Event::RemoteSubscriber { export: i, from, queue_len });
+        }
+        let _ = self.send(&Message::SubscribeResponse {
+            target: from.get(),
+            topic: String::try_from(e.topic()).unwrap_or_default(),
+            result,
+            message_id,
+        });
+    }
+
+    /// Loads HRT export `i`'s newest message in its reserved slot; older ones missed their
+    /// deadline (each occurrence carries one message: the implicit deadline is the period).
+    pub(super) fn send_hrt<C: CanController + ?Sized>(&mut self, i: usize, can: &mut C) {
+        let e = self.exports[i].export;
+        let id = FrameId {
+            laxity: Laxity::HRT,
+            message: self.ids.node_id().message_id(i as u8 + 1),
+            fragment: 0,
+        };
+        let mut buf = [0u8; MAX_PAYLOAD];
+        let mut frame = None;
+        while let Some(encoded) = e.pop_encoded(&mut buf) {
+            if frame.is_some() {
+                bump(&mut self.stats.deadline_misses);
+                e.report_deadline_miss(); // superseded by a newer message
+            }
+            match encoded.ok().and_then(|(n, _)| Frame::new(id, &buf[..n]).ok()) {
+                Some(f) => frame = Some(f),
+                None => bump(&mut self.stats.bad_payloads),
+            }
+        }
+        let Some(frame) = frame else { return };
+        if self.slot_tx.load_slotted(can, Slotted::Hrt(i), &frame) {
+            bump(&mut self.stats.queued);
+        } else {
+            self.hrt_miss(i);
+        }
+    }
+
+    pub(super) fn hrt_miss(&mut self, i: usize) {
+        bump(&mut self.stats.hrt_missed);
+        bump(&mut self.stats.deadline_misses);
+        self.exports[i].export.report_deadline_miss();
+    }
+}
+
+fn hrt_result(r: Reject) -> HrtResult {
+    match r {
+        Reject::NotHarmonic => HrtResult::NotHarmonic,
+        Reject::NoFreePhase => HrtResult::NoFreePhase,
+        Reject::Full => HrtResult::Full,
+        Reject::ReservedId | Reject::Conflict => HrtResult::Conflict,
+    }
+}

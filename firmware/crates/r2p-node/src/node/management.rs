@@ -1,0 +1,324 @@
+//! The management protocol (docs/middleware.md, "Management state machines"): heartbeats,
+//! advertisements, subscription requests and answers, reboot and parameter requests. Each
+//! message is queued on the module's management stream; HRT registrations, which only make
+//! sense within a cycle, are in `hrt.rs`.
+
+use heapless::String;
+use r2p_management::message::{
+    BusClass, Message, ModuleState, SubscribeResult, Value, ENCODED_MAX,
+};
+use r2p_management::{NodeId, MANAGEMENT_INDEX};
+use r2p_middleware::Class;
+use rtcan::{MessageId, Micros, Urgency};
+
+use super::stats::bump;
+use super::{Event, HrtState, ImportState, Node, NodeError};
+
+/// Heartbeats sent with state `Starting` after boot (peers re-advertise to a starting module).
+pub const STARTING_HEARTBEATS: u32 = 2;
+
+/// A set of node IDs (bit n = node n).
+#[derive(Clone, Copy, Default)]
+pub(super) struct NodeSet([u32; 8]);
+
+impl NodeSet {
+    pub(super) fn contains(&self, n: NodeId) -> bool {
+        self.0[usize::from(n.get() / 32)] & (1 << (n.get() % 32)) != 0
+    }
+    /// Nodes are never removed: a peer that leaves stays known (its return in `Starting`
+    /// state is what triggers advertisements), and an asked node may still answer.
+    pub(super) fn insert(&mut self, n: NodeId) {
+        self.0[usize::from(n.get() / 32)] |= 1 << (n.get() % 32);
+    }
+    pub(super) fn len(&self) -> usize {
+        self.0.iter().map(|w| w.count_ones() as usize).sum()
+    }
+}
+
+impl<
+        'a,
+        const EXPORTS: usize,
+        const IMPORTS: usize,
+        const TXQ: usize,
+        const RX: usize,
+        const BUF: usize,
+    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF>
+{
+    /// Asks `target` (or every node: 255) to reboot.
+    pub fn request_reboot(&mut self, target: u8) -> Result<(), NodeError> {
+        self.send(&Message::Reboot { target })
+    }
+
+    /// Reads parameter `index` of `target`; the answer comes as [`Event::ParamValue`] or
+    /// [`Event::ParamError`].
+    pub fn get_param(&mut self, target: NodeId, index: u16) -> Result<(), NodeError> {
+        self.asked.insert(target);
+        self.send(&Message::ParamGet { target: target.get(), index })
+    }
+
+    /// Sets parameter `index` of `target`; the answer comes as [`Event::ParamValue`] (the value
+    /// now held) or [`Event::ParamError`] (refused, unchanged).
+    pub fn set_param(&mut self, target: NodeId, index: u16, value: Value) -> Result<(), NodeError> {
+        self.asked.insert(target);
+        self.send(&Message::ParamSet { target: target.get(), index, value })
+    }
+
+    /// The next event, oldest first.
+    pub fn next_event(&mut self) -> Option<Event> {
+        self.events.pop_front()
+    }
+
+    /// True once if a REBOOT for this module arrived since the last call.
+    pub fn take_reboot_request(&mut self) -> bool {
+        core::mem::take(&mut self.reboot)
+    }
+
+    /// The state heartbeats report once the first [`STARTING_HEARTBEATS`] are sent (default
+    /// `Running`).
+    pub fn set_state(&mut self, state: ModuleState) {
+        self.state = state;
+    }
+
+    pub(super) fn advertisement(&self, i: usize) -> Message {
+        let e = self.exports[i].export;
+        let class = match (e.class(), self.exports[i].hrt) {
+            (_, Some(h)) => BusClass::Hrt { period_cycles: h.period.cycles() as u16 },
+            (Class::AsyncRealTime { deadline_us }, _) => BusClass::Srt { deadline_us },
+            _ => BusClass::Nrt,
+        };
+        Message::Advertise {
+            topic: String::try_from(e.topic()).unwrap_or_default(),
+            type_hash: e.type_hash(),
+            size: e.size() as u16,
+            index: i as u8 + 1,
+            class,
+        }
+    }
+
+    /// Queues a management message on this module's management stream.
+    pub(super) fn send(&mut self, msg: &Message) -> Result<(), NodeError> {
+        let mut buf = [0u8; ENCODED_MAX];
+        let n =
+            msg.encode(&mut buf).map_err(|_| NodeError::TooLarge { size: 0, max: ENCODED_MAX })?;
+        let stream = self.ids.node_id().management();
+        self.tx.push_message(stream, &buf[..n], Urgency::Nrt).map_err(|_| {
+            bump(&mut self.stats.tx_overflow);
+            NodeError::TxFull
+        })
+    }
+
+    pub(super) fn event(&mut self, e: Event) {
+        if self.events.push_back(e).is_err() {
+            bump(&mut self.stats.events_lost);
+        }
+    }
+
+    /// Asks `from` for import `i` (advertised on its stream `index`).
+    pub(super) fn request(&mut self, i: usize, from: NodeId, index: u8, now: Micros) {
+        let import = self.imports[i].import;
+        let msg = Message::SubscribeRequest {
+            target: from.get(),
+            topic: String::try_from(import.topic()).unwrap_or_default(),
+            type_hash: import.type_hash(),
+            queue_len: import.queue_len().min(usize::from(u8::MAX)) as u8,
+        };
+        // If the queue is full the request is retried after the timeout like a lost one.
+        let _ = self.send(&msg);
+        self.imports[i].state = ImportState::Requested { from, index, since: now };
+    }
+
+    fn readvertise(&mut self) {
+        for e in self.exports.iter_mut() {
+            e.advertise = true;
+        }
+    }
+
+    pub(super) fn on_management(&mut self, from: NodeId, msg: Message, now: Micros) {
+        let me = self.ids.node_id();
+        let for_me = |target: u8| target == me.get();
+        match msg {
+            Message::Heartbeat { uid, state, .. } => {
+                if uid == self.config.uid {
+                    return; // our own heartbeat echoed back
+                }
+                if let Some(new) = self.ids.on_heartbeat(from, &uid) {
+                    self.readvertise();
+                    self.re_register(); // the streams' message IDs changed
+                    self.next_heartbeat = now; // claim the new ID at once
+                    self.event(Event::NodeIdChanged(new));
+                }
+                // A module that just arrived or is starting (again) missed our advertisements.
+                // Every `Starting` heartbeat counts, not only the first of a start: a tool
+                // that leaves within its start and a new one that takes its node ID look the
+                // same from here, and the second heartbeat of a start retries a lost first.
+                if !self.peers.contains(from) || state == ModuleState::Starting {
+                    self.readvertise();
+                }
+                self.peers.insert(from);
+            }
+            Message::Reboot { target } if for_me(target) || target == NodeId::BROADCAST => {
+                self.reboot = true;
+                self.event(Event::RebootRequested { from });
+            }
+            Message::Advertise { topic, type_hash, size, index, .. } => {
+                if from == me {
+                    return; // a module with our node ID: the conflict is being settled
+                }
+                for i in 0..self.imports.len() {
+                    let import = self.imports[i].import;
+                    if import.topic() != topic.as_str() {
+                        continue;
+                    }
+                    if index == MANAGEMENT_INDEX {
+                        bump(&mut self.stats.unexpected);
+                        continue;
+                    }
+                    if type_hash != import.type_hash() || usize::from(size) != import.size() {
+                        bump(&mut self.stats.type_mismatches);
+                        let result = SubscribeResult::TypeMismatch;
+                        self.imports[i].state = ImportState::Refused { from, result };
+                        self.event(Event::SubscriptionRefused { import: i, from, result });
+                        continue;
+                    }
+                    let already = match self.imports[i].state {
+                        ImportState::Subscribed { message, .. } => {
+                            message == from.message_id(index)
+                        }
+                        ImportState::Requested { from: f, index: x, .. } => f == from && x == index,
+                        _ => false,
+                    };
+                    if !already {
+                        self.request(i, from, index, now);
+                    }
+                }
+            }
+            Message::SubscribeRequest { target, topic, type_hash, queue_len } if for_me(target) => {
+                if from == me {
+                    return;
+                }
+                let found = self.exports.iter().position(|e| e.export.topic() == topic.as_str());
+                let (result, message_id) = match found {
+                    None => (SubscribeResult::UnknownTopic, 0),
+                    Some(i) if self.exports[i].export.type_hash() != type_hash => {
+                        bump(&mut self.stats.type_mismatches);
+                        (SubscribeResult::TypeMismatch, 0)
+                    }
+                    Some(i) => {
+                        if let Some(h) = self.exports[i].hrt.as_mut() {
+                            if !matches!(h.state, HrtState::Granted { .. }) {
+                                // Answered when the master grants or refuses the slot.
+                                h.waiting = Some((from, queue_len));
+                                if matches!(h.state, HrtState::Idle | HrtState::Refused(_)) {
+                                    h.state = HrtState::Wanted;
+                                }
+                                return;
+                            }
+                        }
+                        self.exports[i].export.activate(queue_len);
+                        self.event(Event::RemoteSubscriber { export: i, from, queue_len });
+                        (SubscribeResult::Ok, me.message_id(i as u8 + 1).0)
+                    }
+                };
+                let _ = self.send(&Message::SubscribeResponse {
+                    target: from.get(),
+                    topic,
+                    result,
+                    message_id,
+                });
+            }
+            Message::SubscribeResponse { target, topic, result, message_id } if for_me(target) => {
+                let asked = self.imports.iter().position(|s| {
+                    s.import.topic() == topic.as_str()
+                        && matches!(s.state, ImportState::Requested { from: f, .. } if f == from)
+                });
+                let Some(i) = asked else {
+                    bump(&mut self.stats.unexpected);
+                    return;
+                };
+                if result != SubscribeResult::Ok {
+                    if result == SubscribeResult::TypeMismatch {
+                        bump(&mut self.stats.type_mismatches);
+                    }
+                    self.imports[i].state = ImportState::Refused { from, result };
+                    self.event(Event::SubscriptionRefused { import: i, from, result });
+                    return;
+                }
+                let message = MessageId(message_id);
+                match NodeId::of(message) {
+                    Some((owner, index)) if owner == from && index != MANAGEMENT_INDEX => {
+                        self.imports[i].state = ImportState::Subscribed { from, message };
+                        self.event(Event::Subscribed { import: i, from, message });
+                    }
+                    _ => bump(&mut self.stats.unexpected), // not a stream of the publisher
+                }
+            }
+            Message::ParamGet { target, index } if for_me(target) => {
+                let reply = match self.params.get(index) {
+                    Ok(value) => Message::ParamValue { index, value },
+                    Err(fault) => Message::ParamError { index, fault },
+                };
+                let _ = self.send(&reply);
+            }
+            Message::ParamSet { target, index, value } if for_me(target) => {
+                let reply = match self.params.set(index, value) {
+                    Ok(value) => {
+                        self.event(Event::ParamChanged { index, value });
+                        Message::ParamValue { index, value }
+                    }
+                    Err(fault) => Message::ParamError { index, fault },
+                };
+                let _ = self.send(&reply);
+            }
+            Message::ParamValue { index, value } if self.asked.contains(from) => {
+                self.event(Event::ParamValue { from, index, value });
+            }
+            Message::ParamError { index, fault } if self.asked.contains(from) => {
+                self.event(Event::ParamError { from, index, fault });
+            }
+            // Requests for other nodes and answers to other nodes' requests: bus traffic.
+            _ => {}
+        }
+    }
+}
+
+/// `us / 1_000_000`, saturated to `u32`, without the 64-bit division routine (about 1 KiB on a
+/// Cortex-M3): `⌊us / 10⁶⌋ = ⌊⌊us / 64⌋ / 15 625⌋`, the second by long division in 16-bit
+/// digits so every step fits the hardware's 32-bit divide.
+pub(super) fn whole_seconds(us: Micros) -> u32 {
+    const D: u32 = 15_625;
+    let x = us >> 6;
+    let (mut q, mut r) = (0u64, 0u32);
+    for shift in [48, 32, 16, 0] {
+        let cur = (r << 16) | ((x >> shift) as u32 & 0xFFFF);
+        q = (q << 16) | u64::from(cur / D);
+        r = cur % D;
+    }
+    u32::try_from(q).unwrap_or(u32::MAX)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn edges() {
+        for us in [0, 1, 999_999, 1_000_000, 1_000_001, 63, 64, 15_625 * 64 - 1] {
+            assert_eq!(u64::from(whole_seconds(us)), us / 1_000_000);
+        }
+        let max = u64::from(u32::MAX) * 1_000_000;
+        assert_eq!(whole_seconds(max + 999_999), u32::MAX);
+        assert_eq!(whole_seconds(max - 1), u32::MAX - 1);
+        assert_eq!(whole_seconds(max + 1_000_000), u32::MAX);
+        assert_eq!(whole_seconds(u64::MAX), u32::MAX);
+    }
+
+    proptest! {
+        #[test]
+        fn matches_division(us in any::<u64>(), small in 0u64..(1 << 40)) {
+            for x in [us, small] {
+                prop_assert_eq!(whole_seconds(x), (x / 1_000_000).min(u64::from(u32::MAX)) as u32);
+            }
+        }
+    }
+}

@@ -1,0 +1,252 @@
+//! The TDMA cycle (docs/middleware.md, "The TDMA cycle and HRT streams"): the slot timer's
+//! path, which follows the master's syncs (or sends them as master), settles what the
+//! controller did with the last slot's frame, and loads the next slot's. A node that only polls
+//! (`node.rs`) links none of it.
+
+use rtcan::controller::TxOutcome;
+use rtcan::cycle::{ClockState, SYNC_SLOT};
+use rtcan::failover::{sync_timeout_us, Actions, Role};
+use rtcan::schedule::occurs;
+use rtcan::{CanController, Micros, SlotClock, SyncFrame};
+
+use super::stats::bump;
+use super::{HrtState, Node};
+use crate::slot_tx::{Done, Slotted};
+#[cfg(doc)]
+use crate::{FreeSlots, NodeConfig};
+
+/// The cycle this node runs as master.
+#[derive(Clone, Copy)]
+pub(super) struct MasterCycle {
+    pub(super) cycle: u32,
+    pub(super) next_sync: Micros,
+    pub(super) epoch: bool,
+}
+
+impl<
+        'a,
+        const EXPORTS: usize,
+        const IMPORTS: usize,
+        const TXQ: usize,
+        const RX: usize,
+        const BUF: usize,
+    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF>
+{
+    /// This node's role in the cycle (master, standby candidate or slave).
+    pub fn role(&self) -> Role {
+        self.failover.role()
+    }
+
+    /// The node's view of the cycle.
+    pub fn clock(&self) -> &SlotClock {
+        &self.clock
+    }
+
+    /// The slot timer: call at every slot boundary and at the latest start of a loaded frame's
+    /// window, both as [`next_slot_at`](Self::next_slot_at) says, with `now` that time.
+    ///
+    /// At a loaded frame's latest start, it only withdraws the frame if it has not started. At
+    /// a slot boundary, in order:
+    ///
+    /// 1. the controller's results: an SRT/NRT frame that went out leaves the queue, one that
+    ///    did not stays in it with its deadline (and is loaded again with its laxity for then);
+    ///    an HRT frame that did not go out is a missed occurrence;
+    /// 2. take received frames (syncs feed the [`SlotClock`] and the failover state machine);
+    /// 3. the protocol's timers ([`tick`](Self::tick)), master takeover, HRT registrations;
+    /// 4. as master, at a cycle's start: send the sync with the next cycle's reservations;
+    /// 5. load this slot's frame: in slot 0 nothing (the sync's); in a reserved slot this
+    ///    node's HRT frame if the slot is its stream's, else nothing; in a free slot the most
+    ///    urgent SRT/NRT frame for the window the slot opens ([`FreeSlots`]). Without a cycle
+    ///    (no sync heard for `sync_timeout_us`, or none since boot for that long) every slot
+    ///    is free and a window of its own.
+    ///
+    /// `now` is the time the timer fired; the node acts for `now` + [`NodeConfig::slot_lead_us`],
+    /// the time its frames reach the controller.
+    pub fn slot_tick<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
+        let now = now + Micros::from(self.config.slot_lead_us);
+        self.start(now);
+        self.program_filters(can);
+        if self.slot_tx.at_guard(now) {
+            self.slot_tx.on_guard(can);
+            if !self.at_boundary(now) {
+                return;
+            }
+        }
+        for done in self.slot_tx.settle(now, can, &self.tx).into_iter().flatten() {
+            self.on_done(done);
+        }
+        while let Some(r) = can.try_receive() {
+            self.receive::<true>(&r);
+        }
+        self.errors = can.error_counters();
+        self.tick(now);
+        let a = self.failover.poll(now);
+        self.apply(a);
+        self.register_hrt(now);
+
+        if let Some(mut m) = self.master {
+            if now >= m.next_sync {
+                let sync =
+                    SyncFrame::new(m.cycle, self.scheduler.mask(m.cycle.wrapping_add(1)), m.epoch);
+                let ok = self.slot_tx.load_slotted(can, Slotted::Sync, &sync.to_frame());
+                if ok {
+                    self.clock.on_sync(now, &sync);
+                    self.last_sync = now;
+                    // Its outcome comes from the controller (`on_done`); `syncs_sent` and the
+                    // failover count it then.
+                    self.sync_loaded = Some((now, sync));
+                }
+                let cycle_us = Micros::from(self.config.cycle.cycle_us);
+                m.cycle = m.cycle.wrapping_add(1);
+                m.next_sync += cycle_us;
+                if m.next_sync <= now {
+                    m.next_sync = now + cycle_us; // the timer was late by a cycle: restart
+                }
+                self.master = Some(m);
+                if ok {
+                    return;
+                }
+                // Not even loaded (mailboxes full, bus-off): a failed sync.
+                let a = self.failover.on_sync_sent(now, &sync, false);
+                self.apply(a);
+            }
+        }
+
+        match self.clock.state(now) {
+            ClockState::Running(p) if p.slot == SYNC_SLOT => {}
+            ClockState::Running(p) if self.clock.mask(p.cycle) & (1 << p.slot) != 0 => {
+                let mine = self.exports.iter().position(|e| {
+                    e.hrt.is_some_and(|h| match h.state {
+                        HrtState::Granted { phase } => {
+                            phase.slot == p.slot && occurs(h.period, phase, p.cycle)
+                        }
+                        _ => false,
+                    })
+                });
+                if let Some(i) = mine {
+                    self.send_hrt(i, can);
+                }
+            }
+            ClockState::Running(p) => {
+                if let Some(end) = self.slot_tx.window_end(&self.clock, p) {
+                    self.send_queued(now, end, can);
+                }
+            }
+            ClockState::Unsynced | ClockState::Lost => {
+                let quiet = now.saturating_sub(self.last_sync);
+                if quiet >= sync_timeout_us(self.config.cycle.cycle_us) {
+                    // No cycle on the bus: every slot is free.
+                    let slot_us = Micros::from(self.config.cycle.slot_us());
+                    self.send_queued(now, now + slot_us, can);
+                }
+            }
+        }
+    }
+
+    /// True if `now` is a slot boundary (a slot's start as the clock sees it, or the master's
+    /// next sync), not only a loaded frame's latest start (they meet when a slot is exactly
+    /// one worst-case frame long).
+    fn at_boundary(&self, now: Micros) -> bool {
+        let slot_start = match self.clock.state(now) {
+            ClockState::Running(p) => self.clock.slot_start(p.cycle, p.slot),
+            _ => None,
+        };
+        slot_start == Some(now) || self.master.is_some_and(|m| now >= m.next_sync)
+    }
+
+    /// A loaded frame's fate (step 1 of [`slot_tick`](Self::slot_tick)).
+    fn on_done(&mut self, done: Done<usize>) {
+        if done.is_retry(self.slot_tx.policy()) {
+            bump(&mut self.stats.slot_retries);
+        }
+        match done {
+            Done::Slotted { what: Slotted::Hrt(_), outcome: TxOutcome::Sent, .. } => {
+                bump(&mut self.stats.hrt_sent)
+            }
+            Done::Slotted { what: Slotted::Hrt(i), .. } => self.hrt_miss(i),
+            Done::Slotted { what: Slotted::Sync, outcome, start_of_frame, .. } => {
+                // The controller's result of the sync loaded at `at`: sent (TXOK), or it lost
+                // arbitration, ended in an error frame (no ACK, bit error) or was withdrawn.
+                // More than L failures in a row make the master step down (docs/rtcan.md,
+                // "Master failover").
+                if let Some((at, sync)) = self.sync_loaded.take() {
+                    let sent = outcome == TxOutcome::Sent;
+                    if sent {
+                        bump(&mut self.stats.syncs_sent);
+                    }
+                    // The cycle starts at the sync's start of frame, for the master as for
+                    // the slaves that stamp it on reception.
+                    if let (true, Some(sof)) = (sent, start_of_frame) {
+                        if self.master.is_some() {
+                            self.clock.restamp_last_sync(sync.cycle, sof);
+                            self.last_sync = self.last_sync.max(sof);
+                        }
+                    }
+                    let a = self.failover.on_sync_sent(at, &sync, sent);
+                    self.apply(a);
+                }
+            }
+            Done::Queued { ticket, outcome: TxOutcome::Sent, .. } => {
+                self.tx.remove(ticket);
+                bump(&mut self.stats.frames_sent);
+            }
+            Done::Queued { late, .. } => {
+                if late {
+                    bump(&mut self.stats.late_withdrawals);
+                }
+            }
+        }
+    }
+
+    /// When the slot timer should call [`slot_tick`](Self::slot_tick) next: the next slot
+    /// boundary of the cycle as this node's clock sees it (as master: of its own cycle), or one
+    /// nominal slot later while no cycle runs — or before it, the latest start of the window
+    /// of a frame the node has loaded; [`NodeConfig::slot_lead_us`] early.
+    pub fn next_slot_at(&self, now: Micros) -> Micros {
+        let lead = Micros::from(self.config.slot_lead_us);
+        self.next_boundary(now + lead).saturating_sub(lead).max(now)
+    }
+
+    /// The next boundary (or guard) after `now`, in the time the node acts for.
+    fn next_boundary(&self, now: Micros) -> Micros {
+        let slot_us = Micros::from(self.config.cycle.slot_us().max(1));
+        let by_clock = match self.clock.state(now) {
+            ClockState::Running(p) => {
+                self.clock.slot_start(p.cycle, p.slot + 1).unwrap_or(now + slot_us)
+            }
+            // No cycle: the nominal slot after the last boundary (a loaded frame's window).
+            _ => self.slot_tx.window_end_loaded().filter(|&e| e > now).unwrap_or(now + slot_us),
+        };
+        let boundary = match self.master {
+            Some(m) => by_clock.min(m.next_sync.max(now)),
+            None => by_clock,
+        };
+        self.slot_tx.next_wake(now, boundary)
+    }
+
+    pub(super) fn on_sync(&mut self, at: Micros, sync: &SyncFrame) {
+        self.clock.on_sync(at, sync);
+        self.last_sync = at;
+        let a = self.failover.on_sync(at, sync);
+        self.apply(a);
+    }
+
+    fn apply(&mut self, a: Actions) {
+        if let Some(s) = a.start_syncing {
+            self.master = Some(MasterCycle { cycle: s.cycle, next_sync: s.at, epoch: s.epoch });
+            self.scheduler.clear();
+            self.clock.reset();
+        }
+        if a.stop_syncing {
+            self.master = None;
+        }
+        if a.re_register {
+            self.re_register();
+        }
+    }
+
+    /// Loads the most urgent SRT/NRT frame for the window ending at `end` (one at a time).
+    fn send_queued<C: CanController + ?Sized>(&mut self, now: Micros, end: Micros, can: &mut C) {
+        self.slot_tx.load_queued(now, end, can, &self.tx);
+    }
+}

@@ -1,0 +1,233 @@
+//! Exports and imports: the local topics a node offers on the bus and the remote ones it
+//! subscribes to, where each subscription stands, and how published messages enter the
+//! transmit queue with their publisher's class.
+
+use r2p_management::message::{is_topic_char, SubscribeResult, TOPIC_MAX};
+use r2p_management::NodeId;
+use r2p_middleware::Class;
+use rtcan::fragment::{frame_count, MAX_MESSAGE_LEN};
+use rtcan::frame::MAX_PAYLOAD;
+use rtcan::{MessageId, Micros, Period, Urgency};
+
+use super::hrt::HrtStream;
+use super::stats::bump;
+use super::{HrtState, Node, NodeError};
+use crate::remote::{Export, Import};
+
+/// Where a local subscription to a remote topic stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImportState {
+    /// No module advertised the topic yet.
+    Waiting,
+    /// Asked `from` (which advertised it on its stream `index`); asked again every
+    /// `request_timeout_us` until it answers.
+    Requested {
+        /// The publisher's node.
+        from: NodeId,
+        /// The stream index it advertised.
+        index: u8,
+        /// When the request was (last) queued.
+        since: Micros,
+    },
+    /// Receiving the topic on `message`.
+    Subscribed {
+        /// The publisher's node.
+        from: NodeId,
+        /// The stream's message ID, as the publisher assigned it.
+        message: MessageId,
+    },
+    /// The publisher's topic has another type (checked locally from its ADVERTISE, or answered
+    /// by the publisher), or it refused. A later ADVERTISE is looked at again.
+    Refused {
+        /// The publisher's node.
+        from: NodeId,
+        /// Why.
+        result: SubscribeResult,
+    },
+}
+
+impl ImportState {
+    /// The stream whose frames this import takes in: the one it receives, or the one it asked
+    /// for (its first frames may follow the publisher's answer back to back, or run already
+    /// for other subscribers).
+    pub(super) fn stream(&self) -> Option<MessageId> {
+        match *self {
+            ImportState::Subscribed { message, .. } => Some(message),
+            ImportState::Requested { from, index, .. } => Some(from.message_id(index)),
+            _ => None,
+        }
+    }
+}
+
+pub(super) struct ExportSlot<'a> {
+    pub(super) export: &'a dyn Export,
+    pub(super) advertise: bool,
+    pub(super) hrt: Option<HrtStream>,
+}
+
+pub(super) struct ImportSlot<'a> {
+    pub(super) import: &'a dyn Import,
+    pub(super) state: ImportState,
+}
+
+impl<
+        'a,
+        const EXPORTS: usize,
+        const IMPORTS: usize,
+        const TXQ: usize,
+        const RX: usize,
+        const BUF: usize,
+    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF>
+{
+    /// Offers a local topic on the bus through its remote subscriber; returns its stream index
+    /// (1…): the stream's message ID is `node ID << 8 | index`. It is advertised at the next
+    /// [`tick`](Self::tick).
+    ///
+    /// A `Class::SyncRealTime { period_us }` publisher becomes an HRT stream: its period must
+    /// be a power of two (1…256) of cycles ([`NodeError::HrtPeriod`]) and its messages must fit
+    /// one frame (8 bytes). Its slot is asked of the master when the first remote module
+    /// subscribes; it is sent only by [`slot_tick`](Self::slot_tick).
+    pub fn export(&mut self, export: &'a dyn Export) -> Result<u8, NodeError> {
+        check_topic(export.topic())?;
+        let max = self.max_export_size();
+        if export.size() > max {
+            return Err(NodeError::TooLarge { size: export.size(), max });
+        }
+        let hrt = match export.class() {
+            Class::SyncRealTime { period_us } => {
+                let cycle_us = self.config.cycle.cycle_us;
+                let bad = NodeError::HrtPeriod { period_us, cycle_us };
+                if cycle_us == 0 || period_us % cycle_us != 0 {
+                    return Err(bad);
+                }
+                let period = Period::from_cycles(period_us / cycle_us).map_err(|_| bad)?;
+                if export.size() > MAX_PAYLOAD {
+                    return Err(NodeError::TooLarge { size: export.size(), max: MAX_PAYLOAD });
+                }
+                Some(HrtStream { period, state: HrtState::Idle, waiting: None })
+            }
+            _ => None,
+        };
+        if self.exports.iter().any(|e| e.export.topic() == export.topic()) {
+            return Err(NodeError::DuplicateTopic);
+        }
+        if self.exports.len() >= usize::from(u8::MAX) {
+            return Err(NodeError::TooMany);
+        }
+        self.exports
+            .push(ExportSlot { export, advertise: true, hrt })
+            .map_err(|_| NodeError::TooMany)?;
+        Ok(self.exports.len() as u8)
+    }
+
+    /// Subscribes a local topic to the remote topic of the same name through its remote
+    /// publisher; returns its import index. The subscription is asked for when a module
+    /// advertises the topic with the same type hash and size.
+    pub fn import(&mut self, import: &'a dyn Import) -> Result<usize, NodeError> {
+        check_topic(import.topic())?;
+        if import.size() > BUF {
+            return Err(NodeError::TooLarge { size: import.size(), max: BUF });
+        }
+        if self.imports.iter().any(|i| i.import.topic() == import.topic()) {
+            return Err(NodeError::DuplicateTopic);
+        }
+        self.imports
+            .push(ImportSlot { import, state: ImportState::Waiting })
+            .map_err(|_| NodeError::TooMany)?;
+        Ok(self.imports.len() - 1)
+    }
+
+    /// The largest message an export may have: it must fit the encoding buffer and, as one
+    /// message, the transmit queue.
+    fn max_export_size(&self) -> usize {
+        BUF.min(TXQ * 8).min(MAX_MESSAGE_LEN)
+    }
+
+    /// Where import `import` stands.
+    pub fn import_state(&self, import: usize) -> Option<ImportState> {
+        self.imports.get(import).map(|i| i.state)
+    }
+
+    /// Moves published messages from the remote subscribers into the transmit queue, as far
+    /// as it has room for whole messages (the rest wait in the remote subscriber's queue).
+    ///
+    /// NRT messages leave half the queue free ([`nrt_reserve`]): under overload NRT frames
+    /// cannot leave, and without a reserve a backlog of them would fill the queue and keep an
+    /// SRT message out of it — out of arbitration — until it expired (docs/rtcan.md, "Under
+    /// load").
+    pub(super) fn drain_exports(&mut self, now: Micros) {
+        let me = self.ids.node_id();
+        let mut buf = [0u8; BUF];
+        for (i, slot) in self.exports.iter().enumerate() {
+            let e = slot.export;
+            if e.active_len() == 0 || slot.hrt.is_some() {
+                continue; // HRT streams go in their reserved slots (`slot_tick`)
+            }
+            let frames = frame_count(e.size()).unwrap_or(usize::MAX);
+            let reserve =
+                if e.class().deadline_us().is_none() { nrt_reserve(TXQ, frames) } else { 0 };
+            let message = me.message_id(i as u8 + 1);
+            while e.pending() > 0 && self.tx.free() >= frames.saturating_add(reserve) {
+                let Some(encoded) = e.pop_encoded(&mut buf) else { break };
+                let Ok((n, at)) = encoded else {
+                    bump(&mut self.stats.bad_payloads);
+                    continue;
+                };
+                let urgency = match e.class().deadline_us() {
+                    None => Urgency::Nrt,
+                    Some(d) => {
+                        Urgency::Srt { deadline: at.unwrap_or(now).saturating_add(Micros::from(d)) }
+                    }
+                };
+                if matches!(urgency, Urgency::Srt { deadline } if deadline <= now) {
+                    bump(&mut self.stats.deadline_misses);
+                    e.report_deadline_miss();
+                    continue;
+                }
+                match self.tx.push_message(message, &buf[..n], urgency) {
+                    Ok(()) => bump(&mut self.stats.queued),
+                    Err(_) => bump(&mut self.stats.tx_overflow),
+                }
+            }
+        }
+    }
+}
+
+/// Frames of a `txq`-frame transmit queue an NRT message of `frames` frames must leave free
+/// for SRT messages: half the queue, less if the message could not enter an empty queue then.
+pub const fn nrt_reserve(txq: usize, frames: usize) -> usize {
+    let half = txq / 2;
+    let room = txq.saturating_sub(frames);
+    if half < room {
+        half
+    } else {
+        room
+    }
+}
+
+fn check_topic(name: &str) -> Result<(), NodeError> {
+    if name.is_empty() || name.len() > TOPIC_MAX || !name.bytes().all(is_topic_char) {
+        Err(NodeError::BadTopicName)
+    } else {
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::nrt_reserve;
+
+    #[test]
+    fn half_the_queue_unless_the_message_could_never_enter() {
+        assert_eq!(nrt_reserve(32, 2), 16);
+        assert_eq!(nrt_reserve(32, 8), 16);
+        // A message of 6 frames in an 8-frame queue enters an empty queue: reserve 2, not 4.
+        assert_eq!(nrt_reserve(8, 6), 2);
+        assert_eq!(nrt_reserve(8, 8), 0);
+        for txq in 8..64 {
+            for frames in 1..=txq {
+                assert!(frames + nrt_reserve(txq, frames) <= txq, "{txq} {frames}");
+            }
+        }
+    }
+}
