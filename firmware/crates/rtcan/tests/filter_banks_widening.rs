@@ -38,3 +38,18 @@ fn the_management_filter_takes_every_nodes_management_stream_only() {
             && !g.accepts(raw(9, 0x4513, 1))
     );
 }
+
+#[test]
+fn a_filter_already_covered_takes_no_bank() {
+    use rtcan::filter_banks::{fit, Fit};
+    let s = Filter::stream(MessageId(0x4301));
+    let mut out = [Filter::ACCEPT_ALL; 4];
+    // Two imports of one stream, and a stream inside a merged filter.
+    assert_eq!(fit(&[s, s], &mut out), Fit { used: 1, widened: false });
+    let merged = s.merge(Filter::stream(MessageId(0x4303)));
+    assert_eq!(
+        fit(&[merged, Filter::stream(MessageId(0x4303)), s], &mut out),
+        Fit { used: 1, widened: false }
+    );
+    assert!(merged.covers(&s) && !s.covers(&merged));
+}
