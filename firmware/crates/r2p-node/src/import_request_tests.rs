@@ -1,7 +1,7 @@
-//! An import asks a publisher once per advertisement it acts on (docs/middleware.md, "Remote
-//! topics"): the same advertisement heard again while the request is pending (advertisements
-//! repeat for late joiners) does not send a second SUBSCRIBE_REQUEST; only the request timeout
-//! does; and the stream asked for is taken in from the request on.
+//! An import's subscription as the bus drives it (docs/middleware.md, "Remote topics"): it asks
+//! a publisher once per advertisement it acts on (advertisements repeat for late joiners; only
+//! the request timeout, another publisher or a moved stream asks again), takes in the asked
+//! stream from the request on, and takes only the asked publisher's answer for the asked topic.
 
 use r2p_management::message::{BusClass, Message, SubscribeResult};
 use r2p_management::NodeId;
