@@ -217,8 +217,14 @@ fn only_the_asked_publishers_answer_for_the_asked_topic_is_taken() {
     run(&bus, &mut [&mut b], 15_000);
     assert_eq!(b.stats().unexpected, unexpected + 2);
     assert!(matches!(b.import_state(0), Some(ImportState::Requested { from, .. }) if from == a));
-    inject(&bus, a.get(), &respond(me, "speed", SubscribeResult::Ok, a.message_id(1)));
+    // The asked one names a stream that is not its own, or its management stream.
+    inject(&bus, a.get(), &respond(me, "speed", SubscribeResult::Ok, other.message_id(1)));
+    inject(&bus, a.get(), &respond(me, "speed", SubscribeResult::Ok, a.management()));
     run(&bus, &mut [&mut b], 20_000);
+    assert_eq!(b.stats().unexpected, unexpected + 4);
+    assert!(matches!(b.import_state(0), Some(ImportState::Requested { from, .. }) if from == a));
+    inject(&bus, a.get(), &respond(me, "speed", SubscribeResult::Ok, a.message_id(1)));
+    run(&bus, &mut [&mut b], 25_000);
     assert_eq!(
         b.import_state(0),
         Some(ImportState::Subscribed { from: a, message: a.message_id(1) })

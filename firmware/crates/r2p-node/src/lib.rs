@@ -39,9 +39,13 @@ mod addressing_tests;
 #[cfg(test)]
 mod advertising_tests;
 #[cfg(test)]
+mod guard_tests;
+#[cfg(test)]
 mod heartbeat_tests;
 #[cfg(test)]
 mod host_tests;
+#[cfg(test)]
+mod hrt_master_tests;
 #[cfg(test)]
 mod hrt_stream_tests;
 #[cfg(test)]

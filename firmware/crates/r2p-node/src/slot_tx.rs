@@ -360,11 +360,6 @@ impl<T: Copy> SlotTx<T> {
         true
     }
 
-    /// The end of the loaded queued frames' window, if any is loaded.
-    pub fn window_end_loaded(&self) -> Option<Micros> {
-        self.window.map(|w| w.end)
-    }
-
     /// When the slot timer must fire next: `boundary`, or before it the loaded frame's guard
     /// if that is still ahead.
     pub fn next_wake(&self, now: Micros, boundary: Micros) -> Micros {

@@ -210,13 +210,13 @@ impl<
     /// The next boundary (or guard) after `now`, in the time the node acts for.
     fn next_boundary(&self, now: Micros) -> Micros {
         let slot_us = Micros::from(self.config.cycle.slot_us().max(1));
+        // No cycle: a nominal slot after this tick. Ticks without a cycle are boundaries, or
+        // guards of a loaded window, after which `next_wake` returns the window's end.
         let by_clock = match self.clock.state(now) {
-            ClockState::Running(p) => {
-                self.clock.slot_start(p.cycle, p.slot + 1).unwrap_or(now + slot_us)
-            }
-            // No cycle: the nominal slot after the last boundary (a loaded frame's window).
-            _ => self.slot_tx.window_end_loaded().filter(|&e| e > now).unwrap_or(now + slot_us),
-        };
+            ClockState::Running(p) => self.clock.slot_start(p.cycle, p.slot + 1),
+            _ => None,
+        }
+        .unwrap_or(now + slot_us);
         let boundary = match self.master {
             Some(m) => by_clock.min(m.next_sync.max(now)),
             None => by_clock,
