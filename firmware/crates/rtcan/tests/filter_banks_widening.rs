@@ -53,3 +53,15 @@ fn a_filter_already_covered_takes_no_bank() {
     );
     assert!(merged.covers(&s) && !s.covers(&merged));
 }
+
+#[test]
+fn with_the_banks_full_the_closest_pair_is_merged() {
+    use rtcan::filter_banks::{fit, Fit};
+    let (far, a, b) = (MessageId(0x1005), MessageId(0x4301), MessageId(0x4303));
+    let mut out = [Filter::ACCEPT_ALL; 2];
+    let fit = fit(&[Filter::stream(far), Filter::stream(a), Filter::stream(b)], &mut out);
+    assert_eq!(fit, Fit { used: 2, widened: true });
+    // 0x4301 and 0x4303 share a bank (one free bit); 0x1005 keeps its own, exact.
+    assert!(out.contains(&Filter::stream(far)), "{out:?}");
+    assert!(out.contains(&Filter::stream(a).merge(Filter::stream(b))), "{out:?}");
+}
