@@ -195,3 +195,101 @@ fn only_a_grant_that_answers_the_request_with_a_slot_of_the_cycle_is_taken() {
     let phase = granted(&a, 0);
     assert!(phase.offset < 2 && (1..CYCLE.slots).contains(&phase.slot), "{phase:?}");
 }
+
+#[test]
+fn an_occurrence_that_cannot_go_out_is_a_missed_deadline_its_publisher_hears_of() {
+    // A's controller refuses frames for four periods (its mailboxes stay full: e.g. a bus it
+    // cannot win, or a stuck transceiver): each of those occurrences is an HRT miss.
+    static T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("setpoint", 0);
+    static P: Publisher<'static, u32> = Publisher::new(&T, EVERY_2);
+    static OUT: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&P);
+    static L: Topic<'static, u32, { pool_size(&[4], 1) }, 1> = Topic::new("setpoint", 0);
+    static LP: Publisher<'static, u32> = Publisher::new(&L, Class::NonRealTime);
+    static IN: RemotePublisher<'static, u32> = RemotePublisher::new(&LP, &L);
+    static SUB: Subscriber<'static, u32, 4> = Subscriber::new();
+    T.advertise(&P).unwrap();
+    T.subscribe(&OUT).unwrap();
+    L.subscribe(&SUB).unwrap();
+    let bus = Bus::<3>::slotted(CYCLE);
+    let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
+    let mut a = TestNode::new(tdma(2, "motor", None), &NoParams).unwrap();
+    let mut b = TestNode::new(tdma(3, "control", None), &NoParams).unwrap();
+    a.export(&OUT).unwrap();
+    b.import(&IN).unwrap();
+    run_slots(&bus, &mut [&mut m, &mut a, &mut b], 150_000);
+    granted(&a, 0);
+
+    bus.unplug(1, true);
+    for v in 0..4 {
+        P.publish_with(|m| *m = v).unwrap();
+        let until = bus.now.get() + 2 * CYCLE_US; // one period
+        run_slots(&bus, &mut [&mut m, &mut a, &mut b], until);
+    }
+    assert_eq!((a.stats().hrt_sent, a.stats().hrt_missed), (0, 4));
+    assert_eq!(a.stats().deadline_misses, 4);
+    assert_eq!(P.stats().deadline_misses, 4, "the publisher heard of each");
+    assert!(SUB.try_recv().is_none());
+    bus.unplug(1, false);
+    P.publish_with(|m| *m = 9).unwrap();
+    let until = bus.now.get() + 2 * CYCLE_US;
+    run_slots(&bus, &mut [&mut m, &mut a, &mut b], until);
+    assert_eq!(SUB.try_recv().map(|v| *v), Some(9), "its slot is still its own");
+}
+
+#[test]
+fn an_unanswered_hrt_request_is_asked_again_after_the_request_timeout() {
+    // A master that syncs but never answers (its HRT_GRANTs are lost): A asks again every
+    // `request_timeout_us` (30 ms here), not at every slot and not never.
+    use rtcan::controller::CanController;
+    use rtcan::{Expect, Reassembler, SyncFrame};
+
+    use crate::Wire;
+
+    static T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("setpoint", 0);
+    static P: Publisher<'static, u32> = Publisher::new(&T, EVERY_2);
+    static OUT: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&P);
+    T.subscribe(&OUT).unwrap();
+    let bus = Bus::<2>::slotted(CYCLE);
+    let mut a = TestNode::new(tdma(2, "motor", None), &NoParams).unwrap();
+    a.export(&OUT).unwrap();
+    let slot_us = rtcan::Micros::from(CYCLE.slot_us());
+    let mut r: Reassembler<4, 64> = Reassembler::new(1_000_000);
+    let mut requests = std::vec::Vec::new();
+    let mut t = 0;
+    while t < 130_000 {
+        bus.now.set(t);
+        if t % CYCLE_US == 0 {
+            bus.inject(SyncFrame::new((t / CYCLE_US) as u32, 0, false).to_frame());
+        }
+        if t == 20_000 {
+            // A module subscribes: A needs its slot.
+            let topic = heapless::String::try_from("setpoint").unwrap();
+            let type_hash = <u32 as Wire>::TYPE_HASH;
+            inject(
+                &bus,
+                0x40,
+                &Message::SubscribeRequest {
+                    target: a.node_id().get(),
+                    topic,
+                    type_hash,
+                    queue_len: 1,
+                },
+            );
+        }
+        a.slot_tick(t, &mut bus.port(0));
+        bus.arbitrate();
+        let mut port = bus.port(1);
+        while let Some(rx) = port.try_receive() {
+            if let Some(m) = r.accept(&rx.frame, rx.at, Expect::Any) {
+                if let Ok(Message::HrtRequest { .. }) = Message::decode(m.data) {
+                    requests.push(rx.at);
+                }
+            }
+        }
+        t += slot_us;
+    }
+    assert_eq!(requests.len(), 4, "at {requests:?}");
+    // Queued every 30 ms; each goes out in a free slot within a cycle of being queued.
+    let spacing = 30_000 - CYCLE_US..30_000 + CYCLE_US;
+    assert!(requests.windows(2).all(|w| spacing.contains(&(w[1] - w[0]))), "{requests:?}");
+}

@@ -154,9 +154,8 @@ impl<
             let message = me.message_id(i as u8 + 1);
             let cycles = h.period.cycles();
             if self.master.is_some() {
+                // The master answers itself at once: `on_grant` sets the state.
                 let r = self.scheduler.register(message, cycles).map_err(hrt_result);
-                self.exports[i].hrt =
-                    Some(HrtStream { state: HrtState::Requested { since: now }, ..h });
                 self.on_grant(i, r);
             } else {
                 let msg = Message::HrtRequest {
