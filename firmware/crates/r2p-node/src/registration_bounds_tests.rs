@@ -1,7 +1,7 @@
 //! The limits of `export` and `import` are inclusive (docs/middleware.md, "Remote topics"): a
 //! message of exactly the largest size goes through (one frame for HRT, the node's buffer
 //! otherwise), one byte more is refused, and an HRT period must be a whole power-of-two
-//! number of cycles.
+//! number of cycles; a topic name has 1 to 32 characters.
 
 use r2p_middleware::{Class, Publisher, Topic};
 
@@ -52,4 +52,29 @@ fn an_hrt_period_between_powers_of_two_of_the_cycle_is_refused() {
     let mut a = node();
     assert_eq!(a.export(&OUT), Err(NodeError::HrtPeriod { period_us: 15_000, cycle_us: 10_000 }));
     assert_eq!(a.export(&OUT2), Ok(1), "two cycles");
+}
+
+#[test]
+fn topic_names_of_one_to_32_characters_are_taken() {
+    const LONGEST: &str = "robot/base/wheel_left/speed_rpm1"; // 32
+    const TOO_LONG: &str = "robot/base/wheel_left/speed_rpm12"; // 33
+    static A: Topic<'static, u32, 2, 1> = Topic::new(LONGEST, 0);
+    static A_PUB: Publisher<'static, u32> = Publisher::new(&A, Class::NonRealTime);
+    static A_OUT: RemoteSubscriber<'static, u32, 1> = RemoteSubscriber::new(&A_PUB);
+    static A_IN: RemotePublisher<'static, u32> = RemotePublisher::new(&A_PUB, &A);
+    static B: Topic<'static, u32, 2, 1> = Topic::new(TOO_LONG, 0);
+    static B_PUB: Publisher<'static, u32> = Publisher::new(&B, Class::NonRealTime);
+    static B_OUT: RemoteSubscriber<'static, u32, 1> = RemoteSubscriber::new(&B_PUB);
+    static B_IN: RemotePublisher<'static, u32> = RemotePublisher::new(&B_PUB, &B);
+    static E: Topic<'static, u32, 2, 1> = Topic::new("", 0);
+    static E_PUB: Publisher<'static, u32> = Publisher::new(&E, Class::NonRealTime);
+    static E_OUT: RemoteSubscriber<'static, u32, 1> = RemoteSubscriber::new(&E_PUB);
+    assert_eq!((LONGEST.len(), TOO_LONG.len()), (32, 33));
+    let mut a = node();
+    assert_eq!(a.export(&A_OUT), Ok(1));
+    assert_eq!(a.export(&B_OUT), Err(NodeError::BadTopicName));
+    assert_eq!(a.export(&E_OUT), Err(NodeError::BadTopicName));
+    let mut b = node();
+    assert_eq!(b.import(&A_IN), Ok(0));
+    assert_eq!(b.import(&B_IN), Err(NodeError::BadTopicName));
 }
