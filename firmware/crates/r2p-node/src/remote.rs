@@ -281,6 +281,7 @@ pub(crate) mod tests {
             assert_eq!(T.max_queue_len(), 2);
             R.activate(200);
             assert_eq!(R.active_len(), 3, "capped at the sink's capacity");
+            assert_eq!(R.missed(), 0);
             for v in 1..=4 {
                 P.publish_with(|m| *m = v).unwrap();
             }
