@@ -1,0 +1,44 @@
+//! A sender gives up a message midway (its deadline passed with frames still queued) and
+//! starts the next one (docs/rtcan.md, "Duplicate or new?"): the next message's first frame may
+//! carry the counter just above the one the receiver expects, as a repeated frame would; only a
+//! frame equal, bit for bit, to the last one taken is a duplicate, so the new message is
+//! delivered and the given-up one never is.
+
+use rtcan::{fragments, Expect, Frame, FrameId, Laxity, MessageId, Reassembler};
+
+fn message(fill: u8, len: usize) -> Vec<Frame> {
+    let template = FrameId { laxity: Laxity::NRT, message: MessageId(0x4302), fragment: 0 };
+    fragments(template, &vec![fill; len]).unwrap().collect()
+}
+
+#[test]
+fn a_new_message_right_after_a_given_up_one_is_delivered() {
+    let mut r: Reassembler<1, 32> = Reassembler::new(10_000);
+    let given_up = message(0xAA, 20); // counters 3, 2, 1
+    let next = message(0x55, 10); // counters 2, 1
+    assert_eq!((given_up[0].id().fragment, next[0].id().fragment), (3, 2));
+    let mut delivered = Vec::new();
+    let mut at = 0;
+    for f in given_up[..2].iter().chain(&next) {
+        at += 200;
+        if let Some(m) = r.accept(f, at, Expect::Any) {
+            delivered.push(m.data.to_vec());
+        }
+    }
+    assert_eq!(delivered, [vec![0x55; 10]]);
+    assert_eq!(r.stats().duplicate, 0);
+}
+
+#[test]
+fn a_repeated_frame_is_still_a_duplicate() {
+    let mut r: Reassembler<1, 32> = Reassembler::new(10_000);
+    let m = message(0x42, 20);
+    let mut delivered = 0;
+    let mut at = 0;
+    // CAN's double reception of each frame, the last one included.
+    for f in [&m[0], &m[0], &m[1], &m[1], &m[2], &m[2]] {
+        at += 200;
+        delivered += usize::from(r.accept(f, at, Expect::Any).is_some());
+    }
+    assert_eq!((delivered, r.stats().duplicate), (1, 3));
+}
