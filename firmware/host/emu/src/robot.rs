@@ -14,8 +14,6 @@ use std::cell::RefCell;
 use std::path::Path;
 use std::rc::Rc;
 
-use r2p_module::RamFlash;
-use r2p_node::Node;
 use r2p_vbus::Config;
 use r2p_world::robot::{Module, Robot};
 use r2p_world::BoardKind;
@@ -23,13 +21,8 @@ use r2p_world::World;
 use rtcan::CycleConfig;
 
 use crate::boards::{self, Probe};
+pub use crate::boards::{BoardFlash, BoardNode};
 use crate::{App, Mode, Sim};
-
-/// Every emulated board's node runtime: room for each module's topics.
-pub type BoardNode = Node<'static, 8, 8, 64, 16, 64>;
-
-/// A board's parameter flash: two 1 KiB pages, as the F103's last two.
-pub type BoardFlash = RamFlash<2048, 1024>;
 
 /// One board of the robot.
 pub struct BoardInfo {

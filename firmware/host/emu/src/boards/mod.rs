@@ -18,9 +18,9 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use r2p_module::leds::Status;
-use r2p_module::FlashParams;
+use r2p_module::{FlashParams, RamFlash};
 use r2p_node::node::STARTING_HEARTBEATS;
-use r2p_node::{NodeConfig, ParamStore};
+use r2p_node::{Node, NodeConfig, ParamStore};
 use r2p_world::robot::{Module, Robot};
 use r2p_world::World;
 use rtcan::cycle::ClockState;
@@ -35,8 +35,13 @@ pub use proximity::proximity;
 pub use psu::psu;
 pub use template::template;
 
-use crate::robot::{BoardFlash, BoardNode};
 use crate::App;
+
+/// Every emulated board's node runtime: room for each module's topics.
+pub type BoardNode = Node<'static, 8, 8, 64, 16, 64>;
+
+/// A board's parameter flash: two 1 KiB pages, as the F103's last two.
+pub type BoardFlash = RamFlash<2048, 1024>;
 
 /// What the robot-level application computed, for tests, plots and tools.
 #[derive(Clone, Debug, Default)]

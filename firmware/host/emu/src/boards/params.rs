@@ -8,7 +8,7 @@ use r2p_world::ranger::RangerKind;
 use r2p_world::robot::{Module, ParamValue, RangerMount, Robot, Wiring};
 use r2p_world::BoardKind;
 
-use crate::robot::BoardFlash;
+use super::BoardFlash;
 
 /// Stores `module`'s parameters from the robot file (and, for the gateway's base controller,
 /// the base geometry of the robot) in `flash`. Errors name the parameter and what is valid.
