@@ -21,8 +21,8 @@ import pytest
 
 from conftest import ROOT, run
 
-from r2ptools.enclosure import board, checks, fit, generate, heights, layout, mesh, params, solid
-from r2ptools.enclosure.design import DESIGN
+from r2ptools.enclosure import board_facts, checks, fit, generate, heights, layout, mesh, params, solid
+from r2ptools.enclosure.case_rules import DESIGN
 
 FIXTURE_DIR = ROOT / "tests" / "fixtures" / "enclosure"
 FIXTURE_PCB = FIXTURE_DIR / "fixture.kicad_pcb"
@@ -59,7 +59,7 @@ def fixture_params(fixture_case) -> dict:
 # --- reading the board ---------------------------------------------------------------------------
 
 def test_board_facts_come_from_the_kicad_file():
-    b = board.read(FIXTURE_PCB, DESIGN)
+    b = board_facts.read(FIXTURE_PCB, DESIGN)
     # The board sits at (100, 100) on the page: the frame is its own top-left corner.
     assert (b.width, b.height, b.thickness, b.corner_r) == (60.0, 50.0, 1.6, 2.0)
     assert [(h.x, h.y, h.d) for h in b.holes] == [(4, 4, 3.2), (56, 4, 3.2), (4, 46, 3.2), (56, 46, 3.2)]
@@ -106,23 +106,23 @@ def test_bad_boards_get_specific_errors(tmp_path):
         for fp in list(b.GetFootprints()):
             if fp.GetReference().startswith("H"):
                 b.Remove(fp)
-    with pytest.raises(board.BoardError, match="no mounting holes"):
-        board.read(_fixture_variant(tmp_path, no_holes), DESIGN)
+    with pytest.raises(board_facts.BoardError, match="no mounting holes"):
+        board_facts.read(_fixture_variant(tmp_path, no_holes), DESIGN)
 
     def unknown_part(b, mf):
         mf.place(b, "Relay_SMD", "Relay_DPDT_Omron_G6K-2F-Y", "K1", 30, 40)
-    with pytest.raises(board.BoardError, match=r"K1 \(Relay_SMD:Relay_DPDT_Omron_G6K-2F-Y\): no height"):
-        board.read(_fixture_variant(tmp_path, unknown_part), DESIGN)
+    with pytest.raises(board_facts.BoardError, match=r"K1 \(Relay_SMD:Relay_DPDT_Omron_G6K-2F-Y\): no height"):
+        board_facts.read(_fixture_variant(tmp_path, unknown_part), DESIGN)
 
     def led_under_pad(b, mf):
         mf.place(b, "LED_SMD", "LED_0603_1608Metric", "D9", 15.0, 25.0, 0, "LED")
-    with pytest.raises(board.BoardError, match=r"LED D9 .* stacking pad"):
-        layout.layout(board.read(_fixture_variant(tmp_path, led_under_pad), DESIGN), DESIGN)
+    with pytest.raises(board_facts.BoardError, match=r"LED D9 .* stacking pad"):
+        layout.layout(board_facts.read(_fixture_variant(tmp_path, led_under_pad), DESIGN), DESIGN)
 
     def corner_connector(b, mf):
         mf.place(b, "Connector_JST", "JST_PH_B2B-PH-K_1x02_P2.00mm_Vertical", "J9", 54.5, 45.6)  # ~1 mm from two edges
-    with pytest.raises(board.BoardError, match="J9 is as close to the .* set its R2P_EDGE"):
-        board.read(_fixture_variant(tmp_path, corner_connector), DESIGN)
+    with pytest.raises(board_facts.BoardError, match="J9 is as close to the .* set its R2P_EDGE"):
+        board_facts.read(_fixture_variant(tmp_path, corner_connector), DESIGN)
 
 
 def test_missing_board_is_named(tmp_path):

@@ -2,7 +2,7 @@
 //
 // Every number comes from a module's generated enclosures/<module>/board.scad
 // (scripts/enclosures generate: board facts read from the .kicad_pcb + the design rules in
-// scripts/r2ptools/enclosure/design.py); this file only turns them into solids. The cadquery
+// scripts/r2ptools/enclosure/case_rules.py); this file only turns them into solids. The cadquery
 // model (scripts/r2ptools/enclosure/solid.py) builds the same solids from the same numbers and
 // the tests hold the two to 0.1 % in volume.
 //

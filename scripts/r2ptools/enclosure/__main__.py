@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 from .. import ROOT
-from . import board, checks, generate, render
+from . import board_facts, checks, generate, render
 
 
 def modules(hardware: Path) -> dict[str, Path]:
@@ -53,7 +53,7 @@ def cmd_generate(ap, args) -> int:
         t = time.monotonic()
         try:
             r = generate.generate(pcb, source_of(m), args.out, png=not args.no_png)
-        except (board.BoardError, render.RenderError) as e:
+        except (board_facts.BoardError, render.RenderError) as e:
             print(f"enclosures: {m}: {e}", file=sys.stderr)
             failed.append(m)
             continue

@@ -16,8 +16,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import ROOT_LIB, board, fit, layout, mesh, params, render, solid
-from .design import DESIGN, Design
+from . import ROOT_LIB, board_facts, fit, layout, mesh, params, render, solid
+from .case_rules import DESIGN, Design
 
 PLA_DENSITY = 1.24   # g/cm^3, for the README's mass estimate (PETG: 1.27)
 
@@ -37,7 +37,7 @@ def files(module: str) -> list[str]:
 
 
 def parameters(pcb: Path, source: str, design: Design = DESIGN) -> dict:
-    b = board.read(pcb, design)
+    b = board_facts.read(pcb, design)
     return params.document(source, design.as_dict(), b.as_dict(), layout.layout(b, design))
 
 

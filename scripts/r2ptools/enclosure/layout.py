@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import math
 
-from .board import Board, BoardError, Part
-from .design import Design
+from .board_facts import Board, BoardError, Part
+from .case_rules import Design
 from . import lidplan
 from .lidplan import r4, rects_overlap
 

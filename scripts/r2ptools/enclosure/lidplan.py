@@ -10,8 +10,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .board import BoardError
-from .design import Design
+from .board_facts import BoardError
+from .case_rules import Design
 from . import textfit
 
 Rect = list[float]          # [x0, y0, x1, y1]

@@ -8,6 +8,10 @@
 //! - [`filters`]: median and first-order low-pass filters for sensor channels;
 //! - [`leds`]: the status LED patterns every module shows the same way;
 //! - `readme` (feature `std`): what the READMEs' generated sections share.
+//!
+//! Not `module-core` (firmware/targets/f103/module-core: what every F103 module *image* adds
+//! around its application: clocks, the bus executor, the slot timer, flash and LED drivers),
+//! nor `hardware/core` (the KiCad sheet every module *board* shares).
 #![no_std]
 #![warn(missing_docs)]
 

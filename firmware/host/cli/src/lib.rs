@@ -1,7 +1,7 @@
 //! `r2p`, the R2P host tool: watches and talks to an R2P robot's CAN bus — a real one through
 //! SocketCAN, an emulated one (or any socketcand server) over TCP, or a recorded trace.
 //!
-//! - [`link`]: where frames come from ([`socketcand`] client, SocketCAN, an in-process hub,
+//! - [`link`]: where frames come from ([`socketcand_client`], SocketCAN, an in-process hub,
 //!   a trace);
 //! - [`watch`]: a passive decoder of the bus (RTCAN identifiers, management messages,
 //!   advertised topics, nodes), and [`describe`]: its lines and JSON;
@@ -25,7 +25,7 @@ pub mod param;
 pub mod publish;
 pub mod session;
 pub mod sim;
-pub mod socketcand;
+pub mod socketcand_client;
 pub mod traces;
 pub mod types;
 pub mod watch;

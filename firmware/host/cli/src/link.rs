@@ -10,7 +10,7 @@ use r2p_canlink::replay::read_trace;
 use r2p_canlink::{CanFrame, Hub, ParticipantId, Stamped, Subscription};
 
 use crate::error::CliError;
-use crate::socketcand;
+use crate::socketcand_client;
 
 /// What [`Link::recv`] got.
 #[derive(Debug)]
@@ -45,12 +45,12 @@ pub trait Link {
 }
 
 /// A socketcand connection.
-pub struct SocketcandLink(socketcand::Client);
+pub struct SocketcandLink(socketcand_client::Client);
 
 impl SocketcandLink {
     /// Connects to `addr` and opens `channel`.
     pub fn connect(addr: &str, channel: &str) -> Result<Self, CliError> {
-        socketcand::Client::connect(addr, channel).map(Self)
+        socketcand_client::Client::connect(addr, channel).map(Self)
     }
 }
 

@@ -15,7 +15,7 @@ use std::path::Path;
 use std::rc::Rc;
 
 use r2p_vbus::Config;
-use r2p_world::robot::{Module, Robot};
+use r2p_world::robot_file::{Module, Robot};
 use r2p_world::BoardKind;
 use r2p_world::World;
 use rtcan::CycleConfig;

@@ -3,7 +3,7 @@
 //! doing what the Triskar2 tests check. Prints the numbers (`--nocapture`).
 
 use r2p_emu::robot::EmuRobot;
-use r2p_world::robot::Robot;
+use r2p_world::robot_file::Robot;
 
 const S: u64 = 1_000_000_000;
 

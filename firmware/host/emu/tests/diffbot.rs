@@ -8,7 +8,7 @@ use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use r2p_msgs::{Imu, WheelSetpoint};
 use r2p_node::{NoParams, NodeConfig, RemotePublisher, RemoteSubscriber};
 use r2p_world::imu::ImuParams;
-use r2p_world::robot::Robot;
+use r2p_world::robot_file::Robot;
 use rtcan::CycleConfig;
 
 const MS: u64 = 1_000_000;

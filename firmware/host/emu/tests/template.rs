@@ -5,7 +5,7 @@
 use r2p_emu::robot::{BoardNode, EmuRobot};
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use r2p_node::{NoParams, NodeConfig, RemotePublisher};
-use r2p_world::robot::Robot;
+use r2p_world::robot_file::Robot;
 use rtcan::failover::Role;
 use rtcan::CycleConfig;
 

@@ -5,7 +5,7 @@ use r2p_emu::robot::{BoardNode, EmuRobot};
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use r2p_msgs::{Battery, Proximity, PsuEvent, WheelSetpoint, WheelState};
 use r2p_node::{ImportState, NoParams, NodeConfig, RemotePublisher, RemoteSubscriber};
-use r2p_world::robot::{ParamValue, Robot};
+use r2p_world::robot_file::{ParamValue, Robot};
 use rtcan::failover::Role;
 use rtcan::CycleConfig;
 

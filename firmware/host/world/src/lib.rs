@@ -35,11 +35,11 @@ pub mod noise;
 pub mod obstacles;
 pub mod psu;
 pub mod ranger;
-pub mod robot;
+pub mod robot_file;
 pub mod sensor_switch;
 pub mod world;
 
 pub use boards::{BoardKind, SignalKind};
 pub use geometry::{Pose, Twist, Vec2};
-pub use robot::{Robot, RobotError, Uid};
+pub use robot_file::{Robot, RobotError, Uid};
 pub use world::{IoError, World};

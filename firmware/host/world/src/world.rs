@@ -34,7 +34,7 @@ use crate::noise::Noise;
 use crate::obstacles::Obstacles;
 use crate::psu::{supply_voltage, Psu, PsuParams};
 use crate::ranger::Ranger;
-use crate::robot::{Robot, Uid, Wiring};
+use crate::robot_file::{Robot, Uid, Wiring};
 use crate::sensor_switch::SensorSwitch;
 
 /// Longest sub-step, ns: 50 µs, one PWM period. The electrical step is exact for any length

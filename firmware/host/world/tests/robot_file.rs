@@ -8,7 +8,7 @@ use std::path::Path;
 use r2p_world::boards::BoardKind;
 use r2p_world::kinematics::Layout;
 use r2p_world::ranger::RangerKind;
-use r2p_world::robot::Wiring;
+use r2p_world::robot_file::Wiring;
 use r2p_world::{Robot, RobotError};
 
 use common::triskar_path;

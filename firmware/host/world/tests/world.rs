@@ -79,7 +79,7 @@ trait Radius {
     fn layout_radius(&self) -> f64;
 }
 
-impl Radius for r2p_world::robot::BaseSpec {
+impl Radius for r2p_world::robot_file::BaseSpec {
     fn layout_radius(&self) -> f64 {
         match self.layout {
             r2p_world::kinematics::Layout::Omni { wheel_radius, .. } => wheel_radius,

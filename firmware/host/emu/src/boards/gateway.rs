@@ -7,7 +7,7 @@ use r2p_app_base::endpoints::Names;
 use r2p_app_base::{params, App, Endpoints};
 use r2p_msgs::Twist2D;
 use r2p_node::{NodeConfig, ParamStore};
-use r2p_world::robot::Wiring;
+use r2p_world::robot_file::Wiring;
 
 use super::{load_params, node, persist, Booted, Ctx};
 
@@ -60,7 +60,7 @@ fn names(ctx: &Ctx<'_>) -> Result<Names, String> {
     let mut ranges = "proximity/ranges";
     for m in &ctx.robot.modules {
         let instance = m.params.iter().find(|(n, _)| n == "instance").map_or(0, |(_, v)| match v {
-            r2p_world::robot::ParamValue::Int(i) => *i as u32,
+            r2p_world::robot_file::ParamValue::Int(i) => *i as u32,
             _ => 0,
         });
         match &m.wiring {

@@ -21,7 +21,7 @@ use r2p_module::leds::Status;
 use r2p_module::{FlashParams, RamFlash};
 use r2p_node::node::STARTING_HEARTBEATS;
 use r2p_node::{Node, NodeConfig, ParamStore};
-use r2p_world::robot::{Module, Robot};
+use r2p_world::robot_file::{Module, Robot};
 use r2p_world::World;
 use rtcan::cycle::ClockState;
 use rtcan::failover::Role;

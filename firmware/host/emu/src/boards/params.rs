@@ -5,7 +5,7 @@ use r2p_module::FlashParams;
 use r2p_node::{Param, ParamStore};
 use r2p_world::kinematics::Layout;
 use r2p_world::ranger::RangerKind;
-use r2p_world::robot::{Module, ParamValue, RangerMount, Robot, Wiring};
+use r2p_world::robot_file::{Module, ParamValue, RangerMount, Robot, Wiring};
 use r2p_world::BoardKind;
 
 use super::BoardFlash;

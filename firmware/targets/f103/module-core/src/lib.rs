@@ -7,6 +7,11 @@
 //! the bus runs on an interrupt executor that preempts the application's 1 kHz step in thread
 //! mode.
 //!
+//! Three things are called a module's "core"; this is the firmware one, for the F103 images
+//! only (it uses embassy-stm32). Not `r2p-module` (firmware/crates/r2p-module: the HAL-free
+//! parts every module *application* shares, on the MCU and in the emulator), nor
+//! `hardware/core` (the KiCad sheet every module *board* shares: MCU, CAN, bus jacks).
+//!
 //! Interrupt priorities: the slot timer (and with it the bus executor) alone at the highest;
 //! the CAN receive interrupts and the time driver (TIM4) one below, so that neither holds a
 //! slot boundary back except for their short critical sections.
