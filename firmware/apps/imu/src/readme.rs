@@ -6,8 +6,8 @@
 use core::fmt::Write;
 use std::string::String;
 
-use r2p_middleware::{Class, TopicInfo};
-use r2p_module::readme::value_cell;
+use r2p_middleware::TopicInfo;
+use r2p_module::readme::{class_cell, line, value_cell};
 use r2p_msgs::{Imu, R2pMessage};
 use r2p_node::RamParams;
 
@@ -40,7 +40,7 @@ pub fn render() -> String {
         ep.imu.name(),
         Imu::NAME,
         Imu::SIZE,
-        class(ep.imu_pub.class()),
+        class_cell(ep.imu_pub.class(), None),
     );
     line(w, "");
     line(w, "Instance *n* > 0 names the node and the topic `imu`*n*.");
@@ -73,19 +73,6 @@ pub fn render() -> String {
     line(w, "");
     line(w, END);
     s
-}
-
-fn line(w: &mut String, s: &str) {
-    w.push_str(s);
-    w.push('\n');
-}
-
-fn class(c: Class) -> String {
-    match c {
-        Class::NonRealTime => "NRT".into(),
-        Class::AsyncRealTime { deadline_us } => std::format!("SRT, deadline {deadline_us} µs"),
-        Class::SyncRealTime { period_us } => std::format!("HRT, period {period_us} µs"),
-    }
 }
 
 /// `text` with the generated section replaced by `section`; `None` without both markers.

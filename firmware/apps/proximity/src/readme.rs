@@ -6,8 +6,8 @@
 use core::fmt::Write;
 use std::string::String;
 
-use r2p_middleware::{Class, TopicInfo};
-use r2p_module::readme::value_cell;
+use r2p_middleware::TopicInfo;
+use r2p_module::readme::{class_cell, line, value_cell};
 use r2p_msgs::{Obstacle, Proximity, R2pMessage};
 use r2p_node::RamParams;
 
@@ -40,7 +40,7 @@ pub fn render() -> String {
          (`SENSOR_PWR_FAULT`) reports over-current |",
         ep.ranges.name(),
         Proximity::NAME,
-        class(ep.ranges_pub.class()),
+        class_cell(ep.ranges_pub.class(), Some("obstacle_deadline_ms")),
     );
     let _ = writeln!(
         w,
@@ -48,7 +48,7 @@ pub fn render() -> String {
          distance; once per approach |",
         ep.obstacle.name(),
         Obstacle::NAME,
-        class(ep.obstacle_pub.class()),
+        class_cell(ep.obstacle_pub.class(), Some("obstacle_deadline_ms")),
     );
     line(w, "");
     line(w, "Instance *n* > 0 names the node `proximity`*n* and prefixes its topics the same way.");
@@ -99,23 +99,8 @@ pub fn render() -> String {
     s
 }
 
-fn line(w: &mut String, s: &str) {
-    w.push_str(s);
-    w.push('\n');
-}
-
 fn round3(x: f32) -> f32 {
     (x * 1000.0).round() / 1000.0
-}
-
-fn class(c: Class) -> String {
-    match c {
-        Class::NonRealTime => "NRT".into(),
-        Class::AsyncRealTime { deadline_us } => {
-            std::format!("SRT, deadline {} ms (`obstacle_deadline_ms`)", deadline_us / 1000)
-        }
-        Class::SyncRealTime { period_us } => std::format!("HRT, period {period_us} µs"),
-    }
 }
 
 /// `text` with the generated section replaced by `section`; `None` without both markers.

@@ -6,8 +6,8 @@
 use core::fmt::Write;
 use std::string::String;
 
-use r2p_middleware::{Class, TopicInfo};
-use r2p_module::readme::value_cell;
+use r2p_middleware::TopicInfo;
+use r2p_module::readme::{class_cell, line, value_cell};
 use r2p_msgs::{Battery, BusPower, PsuEvent, PsuState, R2pMessage};
 use r2p_node::RamParams;
 
@@ -37,7 +37,7 @@ pub fn render() -> String {
         ep.battery,
         Battery::NAME,
         "publishes",
-        class(ep.battery_pub.class()),
+        class_cell(ep.battery_pub.class(), Some("event_deadline_ms")),
         "every 1/`battery_rate_hz`: voltage and current (low-pass `filter_tau_ms`), charge used \
          since boot, remaining time (0xFFFFFFFF = unknown)",
     );
@@ -46,7 +46,7 @@ pub fn render() -> String {
         ep.state,
         PsuState::NAME,
         "publishes",
-        class(ep.state_pub.class()),
+        class_cell(ep.state_pub.class(), Some("event_deadline_ms")),
         "with `battery`: output on, latched fault, under-voltage, bus voltage",
     );
     topic(
@@ -54,7 +54,7 @@ pub fn render() -> String {
         ep.event,
         PsuEvent::NAME,
         "publishes",
-        class(ep.event_pub.class()),
+        class_cell(ep.event_pub.class(), Some("event_deadline_ms")),
         "over-current, under-voltage, voltage recovered, output off (command, over-current, \
          eFuse fault), output on",
     );
@@ -97,11 +97,6 @@ pub fn render() -> String {
     s
 }
 
-fn line(w: &mut String, s: &str) {
-    w.push_str(s);
-    w.push('\n');
-}
-
 fn topic(
     w: &mut String,
     t: &dyn TopicInfo,
@@ -111,16 +106,6 @@ fn topic(
     what: &str,
 ) {
     let _ = writeln!(w, "| `{}` | `{ty}` | {dir} | {} | {what} |", t.name(), class.as_ref());
-}
-
-fn class(c: Class) -> String {
-    match c {
-        Class::NonRealTime => "NRT".into(),
-        Class::AsyncRealTime { deadline_us } => {
-            std::format!("SRT, deadline {} ms (`event_deadline_ms`)", deadline_us / 1000)
-        }
-        Class::SyncRealTime { period_us } => std::format!("HRT, period {period_us} µs"),
-    }
 }
 
 /// `text` with the generated section replaced by `section`; `None` without both markers.

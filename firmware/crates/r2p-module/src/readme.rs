@@ -6,6 +6,7 @@ use std::format;
 use std::string::String;
 
 use r2p_management::message::Value;
+use r2p_middleware::Class;
 
 /// A parameter value for a table: its type's name and the value.
 pub fn value_cell(v: Value) -> (&'static str, String) {
@@ -14,6 +15,26 @@ pub fn value_cell(v: Value) -> (&'static str, String) {
         Value::U32(x) => ("u32", format!("{x}")),
         Value::I32(x) => ("i32", format!("{x}")),
         Value::F32(x) => ("f32", format!("{x}")),
+    }
+}
+
+/// Appends `s` and a line break to the section being written.
+pub fn line(w: &mut String, s: &str) {
+    w.push_str(s);
+    w.push('\n');
+}
+
+/// A publisher's class for the topics table. `deadline_param` names the parameter an SRT
+/// deadline comes from, if one does: the deadline is then given in ms, as that parameter
+/// sets it; otherwise in µs.
+pub fn class_cell(c: Class, deadline_param: Option<&str>) -> String {
+    match (c, deadline_param) {
+        (Class::NonRealTime, _) => "NRT".into(),
+        (Class::AsyncRealTime { deadline_us }, Some(p)) => {
+            format!("SRT, deadline {} ms (`{p}`)", deadline_us / 1000)
+        }
+        (Class::AsyncRealTime { deadline_us }, None) => format!("SRT, deadline {deadline_us} µs"),
+        (Class::SyncRealTime { period_us }, _) => format!("HRT, period {period_us} µs"),
     }
 }
 
@@ -54,6 +75,19 @@ mod tests {
         );
         assert_eq!(splice("x\n<!-- B -->\n", "<!-- B", "<!-- E -->", ""), None);
         assert_eq!(splice("x\n<!-- E -->\n", "<!-- B", "<!-- E -->", ""), None);
+    }
+
+    #[test]
+    fn classes_read_as_the_topics_table_shows_them() {
+        assert_eq!(class_cell(Class::NonRealTime, Some("x_ms")), "NRT");
+        let srt = Class::AsyncRealTime { deadline_us: 3_000 };
+        assert_eq!(
+            class_cell(srt, Some("obstacle_deadline_ms")),
+            "SRT, deadline 3 ms (`obstacle_deadline_ms`)"
+        );
+        assert_eq!(class_cell(srt, None), "SRT, deadline 3000 µs");
+        let hrt = Class::SyncRealTime { period_us: 10_000 };
+        assert_eq!(class_cell(hrt, None), "HRT, period 10000 µs");
     }
 
     #[test]
