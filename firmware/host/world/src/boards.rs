@@ -6,7 +6,49 @@
 //! Levels are electrical, as at the pin: `true` = high. An active-low input such as
 //! `DRV_FAULT` reads `false` while its fault is present.
 
-/// A module kind, as the robot file names it.
+/// A module the emulator runs, as modules.toml lists it: a robot file's `kind` is its `name`,
+/// and its `emulator` entry names the [`BoardKind`] that models it. The table
+/// ([`MODULE_KINDS`]) is generated from modules.toml by build.rs, so a module that
+/// `scripts/new-module` adds (`emulator = "template"`) is a kind at once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ModuleKind {
+    /// The module's name in modules.toml, and the robot file's `kind`.
+    pub name: &'static str,
+    /// Its `emulator` entry: the name of the model that runs it.
+    pub emulator: &'static str,
+    /// The line of modules.toml with that entry, for error messages.
+    pub line: u32,
+}
+
+include!(concat!(env!("OUT_DIR"), "/module_kinds.rs"));
+
+impl ModuleKind {
+    /// The module of modules.toml called `name`, if the emulator runs it.
+    pub fn named(name: &str) -> Option<&'static ModuleKind> {
+        MODULE_KINDS.iter().find(|k| k.name == name)
+    }
+
+    /// The model that runs this module; an `emulator` entry that names no model is an error
+    /// naming the manifest's line and the models there are.
+    pub fn model(&self) -> Result<BoardKind, String> {
+        BoardKind::from_name(self.emulator).ok_or_else(|| {
+            let models: Vec<_> =
+                BoardKind::ALL.iter().map(|k| format!("\"{}\"", k.name())).collect();
+            format!(
+                "modules.toml:{}: module `{}`: the emulator has no model `{}`; use one of {} \
+                 (\"template\" until the module has its own, docs/adding-a-module.md)",
+                self.line,
+                self.name,
+                self.emulator,
+                models.join(", ")
+            )
+        })
+    }
+}
+
+/// An emulator model: the code that wires a kind of board to the world (its signals here, its
+/// `Wiring` in a robot file, its boot function in firmware/host/emu). Modules name the model
+/// that runs them in modules.toml ([`ModuleKind`]); several may share one.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum BoardKind {
     /// Power supply: battery to 5 V bus, sync master.
@@ -104,7 +146,7 @@ pub const PROXIMITY_SIGNALS: &[SignalSpec] = &[
 ];
 
 impl BoardKind {
-    /// Every kind, in robot-file order.
+    /// Every model.
     pub const ALL: [BoardKind; 6] = [
         BoardKind::Psu,
         BoardKind::Motor,

@@ -39,7 +39,7 @@ pub mod robot_file;
 pub mod sensor_switch;
 pub mod world;
 
-pub use boards::{BoardKind, SignalKind};
+pub use boards::{BoardKind, ModuleKind, SignalKind, MODULE_KINDS};
 pub use geometry::{Pose, Twist, Vec2};
 pub use robot_file::{Robot, RobotError, Uid};
 pub use world::{IoError, World};

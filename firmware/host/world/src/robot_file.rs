@@ -11,7 +11,7 @@ use serde::Deserialize;
 
 use crate::base::BaseParams;
 use crate::battery::{BatteryParams, Chemistry};
-use crate::boards::BoardKind;
+use crate::boards::{BoardKind, ModuleKind, MODULE_KINDS};
 use crate::geometry::{Pose, Vec2};
 use crate::hbridge::HBridgeParams;
 use crate::kinematics::Layout;
@@ -840,14 +840,19 @@ fn validate_module(
     battery: &str,
 ) -> Result<Module, RobotError> {
     let key = |k: &str| format!("modules[{i}].{k}");
-    let kind = BoardKind::from_name(&m.kind).ok_or_else(|| {
-        let known: Vec<_> = BoardKind::ALL.iter().map(|k| format!("\"{}\"", k.name())).collect();
+    let module = ModuleKind::named(&m.kind).ok_or_else(|| {
+        let known: Vec<_> = MODULE_KINDS.iter().map(|k| format!("\"{}\"", k.name)).collect();
         ctx.err(
             key("kind"),
             format!("unknown module kind `{}`", m.kind),
-            format!("use one of {}", known.join(", ")),
+            format!(
+                "use one of {} (the modules of modules.toml with an `emulator` entry)",
+                known.join(", ")
+            ),
         )
     })?;
+    let kind =
+        module.model().map_err(|e| ctx.err(key("kind"), e, "or give this module another kind"))?;
     ctx.check(!m.name.trim().is_empty(), &key("name"), "a non-empty name")?;
     let uid = Uid::parse(&m.uid).ok_or_else(|| {
         ctx.err(

@@ -86,7 +86,9 @@ fn unknown_module_kind_lists_the_kinds() {
     let e = refuse(&edit("kind = \"gateway\"", "kind = \"lidar\""));
     assert_eq!(e.key, "modules[5].kind");
     assert!(e.problem.contains("`lidar`"), "{e}");
-    assert!(e.fix.contains("\"psu\", \"motor\", \"proximity\", \"gateway\", \"imu\""), "{e}");
+    // The kinds are modules.toml's modules with an emulator model, in its order.
+    assert!(e.fix.contains("\"psu\", \"motor\", \"imu\", \"proximity\", \"gateway\""), "{e}");
+    assert!(e.fix.contains("modules.toml"), "{e}");
 }
 
 #[test]
