@@ -79,3 +79,30 @@ fn a_module_runs_on_the_model_its_entry_names_and_an_unknown_model_names_the_lin
     assert!(e.contains("\"template\""), "{e}");
     assert_eq!(ModuleKind::named("lidar"), None);
 }
+
+#[test]
+fn every_module_without_wiring_of_its_own_can_be_named_in_a_robot_file() {
+    // diffbot.toml's robot plus one module of each such kind: the template and the gateway
+    // here; in a repository where scripts/new-module added a module, that module too
+    // (tests/test_new_module.py runs this test there).
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../robots/diffbot.toml");
+    let mut text = std::fs::read_to_string(path).unwrap();
+    let extra: Vec<&ModuleKind> = MODULE_KINDS
+        .iter()
+        .filter(|k| matches!(k.model(), Ok(BoardKind::Template | BoardKind::Gateway)))
+        .collect();
+    assert!(extra.iter().any(|k| k.name == "template"), "{extra:?}");
+    for (i, k) in extra.iter().enumerate() {
+        text += &format!(
+            "\n[[modules]]\nkind = \"{}\"\nname = \"extra{i}\"\nuid = \"0000000000000000000000{:02X}\"\n",
+            k.name,
+            0xA0 + i
+        );
+    }
+    let robot =
+        r2p_world::Robot::parse(&text, "with-extras.toml").unwrap_or_else(|e| panic!("{e}"));
+    for (i, k) in extra.iter().enumerate() {
+        let m = robot.modules.iter().find(|m| m.name == format!("extra{i}")).unwrap();
+        assert_eq!(Ok(m.kind()), k.model(), "{}", k.name);
+    }
+}
