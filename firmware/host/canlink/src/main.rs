@@ -1,7 +1,6 @@
 //! `r2p-canlink`: runs an in-memory CAN hub with a socketcand server so that CAN tools
 //! (python-can's `socketcand` interface, socketcand clients) can join it. See `--help`.
 
-use std::fs::File;
 use std::net::SocketAddr;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -11,8 +10,8 @@ use std::time::{Duration, Instant};
 
 use r2p_canlink::hub::DEFAULT_QUEUE;
 use r2p_canlink::server::DEFAULT_ADDR;
-use r2p_canlink::service::{listen_error, spawn_logger, StopConditions};
-use r2p_canlink::{BroadcastHub, CanFrame, Config, Hub, Server};
+use r2p_canlink::service::{HubService, StopConditions};
+use r2p_canlink::{BroadcastHub, CanFrame, Config, Hub};
 
 const HELP: &str = "\
 r2p-canlink: lets CAN tools join R2P's emulated bus over TCP (no SocketCAN needed)
@@ -144,44 +143,16 @@ fn spawn_heartbeat(hub: Arc<BroadcastHub>, hb: Heartbeat, stop: Arc<AtomicBool>)
 
 fn serve(opts: Options) -> Result<(), String> {
     let stop_when = StopConditions::install(opts.watch_stdin);
-    let hub = Arc::new(BroadcastHub::new());
-    let stop = Arc::new(AtomicBool::new(false));
-
-    let logger = match &opts.log {
-        Some(path) => {
-            let file = File::options()
-                .create(true)
-                .append(true)
-                .open(path)
-                .map_err(|e| format!("cannot open log {path}: {e}"))?;
-            Some(spawn_logger(
-                hub.clone(),
-                file,
-                opts.channel.clone(),
-                stop.clone(),
-                opts.queue.max(DEFAULT_QUEUE),
-            ))
-        }
-        None => None,
-    };
-
+    let mut service =
+        HubService::new(opts.log.as_deref(), &opts.channel, opts.queue.max(DEFAULT_QUEUE))?;
     let config = Config { addr: opts.addr, channel: opts.channel.clone(), queue: opts.queue };
-    let server = match Server::start(config, hub.clone()) {
-        Ok(s) => s,
-        Err(e) => {
-            stop.store(true, Ordering::SeqCst);
-            if let Some(l) = logger {
-                let _ = l.join();
-            }
-            return Err(listen_error(opts.addr, &e, "another r2p-canlink or socketcand"));
-        }
-    };
+    let server = service.listen(config, "another r2p-canlink or socketcand")?;
     eprintln!("r2p-canlink: socketcand on {} channel {}", server.local_addr(), opts.channel);
 
     let heartbeats: Vec<_> = opts
         .heartbeats
         .into_iter()
-        .map(|hb| spawn_heartbeat(hub.clone(), hb, stop.clone()))
+        .map(|hb| spawn_heartbeat(service.hub.clone(), hb, service.stop.clone()))
         .collect();
 
     let why = loop {
@@ -191,7 +162,7 @@ fn serve(opts: Options) -> Result<(), String> {
         thread::sleep(Duration::from_millis(50));
     };
 
-    stop.store(true, Ordering::SeqCst);
+    service.stopping();
     for h in heartbeats {
         let _ = h.join();
     }
@@ -203,18 +174,14 @@ fn serve(opts: Options) -> Result<(), String> {
         stats.errors.load(Ordering::Relaxed),
     );
     server.shutdown();
+    let hub = service.hub.clone();
     let mut summary = format!(
         "r2p-canlink: stopped ({why}): {} frames on the bus, {clients} clients, {frames_in} frames from clients, \
          {frames_out} to clients, {errors} errors, {} frames dropped",
         hub.sent(),
         hub.dropped()
     );
-    if let Some(l) = logger {
-        match l.join() {
-            Ok(Ok(_)) => {}
-            Ok(Err(e)) => return Err(format!("writing the log: {e}")),
-            Err(_) => return Err("the log writer panicked".into()),
-        }
+    if service.finish()? {
         summary.push_str(", log written");
     }
     eprintln!("{summary}");

@@ -1,6 +1,7 @@
 //! What a program serving the hub needs around the server, shared by `r2p-canlink` and
 //! `r2p-emu`: knowing when to stop (SIGINT/SIGTERM or standard input closing), a candump
-//! logger on the hub, and a clear message when the listening address cannot be used.
+//! logger on the hub, a clear message when the listening address cannot be used, and
+//! [`HubService`], which starts and stops the three in the one right order.
 
 use std::fs::File;
 use std::io::{self, BufWriter, Read};
@@ -12,6 +13,7 @@ use std::time::Duration;
 
 use crate::candump::LogWriter;
 use crate::hub::{BroadcastHub, Hub};
+use crate::server::{Config, Server};
 
 #[cfg(unix)]
 mod signals {
@@ -141,5 +143,66 @@ pub fn listen_error(addr: SocketAddr, e: &io::Error, others: &str) -> String {
         }
         io::ErrorKind::AddrNotAvailable => format!("{addr} is not an address of this machine"),
         _ => format!("cannot listen on {addr}: {e}"),
+    }
+}
+
+/// A hub, its optional candump log and its socketcand server: how `r2p-canlink serve` and
+/// `r2p-emu`'s real-time run (`r2p sim --realtime`) start and stop their service.
+pub struct HubService {
+    /// The bus every participant joins.
+    pub hub: Arc<BroadcastHub>,
+    /// Set when the service stops; threads serving the hub (the logger, heartbeats) watch it.
+    pub stop: Arc<AtomicBool>,
+    logger: Option<JoinHandle<io::Result<u64>>>,
+}
+
+impl HubService {
+    /// A hub and, with `log`, a logger appending every frame it carries to that candump log
+    /// (bus name `channel`, a queue of `queue` frames).
+    pub fn new(log: Option<&str>, channel: &str, queue: usize) -> Result<Self, String> {
+        let hub = Arc::new(BroadcastHub::new());
+        let stop = Arc::new(AtomicBool::new(false));
+        let logger = match log {
+            Some(path) => {
+                let file = File::options()
+                    .create(true)
+                    .append(true)
+                    .open(path)
+                    .map_err(|e| format!("cannot open log {path}: {e}"))?;
+                Some(spawn_logger(hub.clone(), file, channel.into(), stop.clone(), queue))
+            }
+            None => None,
+        };
+        Ok(Self { hub, stop, logger })
+    }
+
+    /// Starts the socketcand server on the hub. If it cannot listen, stops the logger and says
+    /// why, naming `others` as what may hold the address.
+    pub fn listen(&mut self, config: Config, others: &str) -> Result<Server, String> {
+        let addr = config.addr;
+        Server::start(config, self.hub.clone()).map_err(|e| {
+            self.stop.store(true, Ordering::SeqCst);
+            if let Some(l) = self.logger.take() {
+                let _ = l.join();
+            }
+            listen_error(addr, &e, others)
+        })
+    }
+
+    /// Sets [`stop`](Self::stop) (call before shutting the server down, as the threads
+    /// serving the hub end with it).
+    pub fn stopping(&self) {
+        self.stop.store(true, Ordering::SeqCst);
+    }
+
+    /// Waits for the log to be written; true if there is one.
+    pub fn finish(mut self) -> Result<bool, String> {
+        self.stopping();
+        match self.logger.take().map(JoinHandle::join) {
+            None => Ok(false),
+            Some(Ok(Ok(_))) => Ok(true),
+            Some(Ok(Err(e))) => Err(format!("writing the log: {e}")),
+            Some(Err(_)) => Err("the log writer panicked".into()),
+        }
     }
 }

@@ -4,15 +4,14 @@
 use std::fs::File;
 use std::io::BufWriter;
 use std::net::SocketAddr;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 use r2p_canlink::hub::DEFAULT_QUEUE;
 use r2p_canlink::pcap::write_pcap;
-use r2p_canlink::service::{listen_error, spawn_logger, StopConditions};
+use r2p_canlink::service::{HubService, StopConditions};
 use r2p_canlink::socketcan::SocketCanBridge;
-use r2p_canlink::{BroadcastHub, Config, Server, Stamped};
+use r2p_canlink::{Config, Stamped};
 
 use crate::bridge::Bridge;
 use crate::{Runtime, Sim};
@@ -76,26 +75,8 @@ pub fn run_realtime<N: Runtime>(
     opts: &Serve,
 ) -> Result<String, String> {
     let stop_when = StopConditions::install(opts.watch_stdin);
-    let hub = Arc::new(BroadcastHub::new());
-    let stop = Arc::new(AtomicBool::new(false));
-
-    let logger = match &opts.log {
-        Some(path) => {
-            let file = File::options()
-                .create(true)
-                .append(true)
-                .open(path)
-                .map_err(|e| format!("cannot open log {path}: {e}"))?;
-            Some(spawn_logger(
-                hub.clone(),
-                file,
-                opts.channel.clone(),
-                stop.clone(),
-                16 * DEFAULT_QUEUE,
-            ))
-        }
-        None => None,
-    };
+    let mut service = HubService::new(opts.log.as_deref(), &opts.channel, 16 * DEFAULT_QUEUE)?;
+    let hub = service.hub.clone();
     let kernel_can = match &opts.socketcan {
         Some(iface) => Some(
             SocketCanBridge::start(iface, hub.clone(), DEFAULT_QUEUE)
@@ -104,16 +85,7 @@ pub fn run_realtime<N: Runtime>(
         None => None,
     };
     let config = Config { addr: opts.addr, channel: opts.channel.clone(), queue: DEFAULT_QUEUE };
-    let server = match Server::start(config, hub.clone()) {
-        Ok(s) => s,
-        Err(e) => {
-            stop.store(true, Ordering::SeqCst);
-            if let Some(l) = logger {
-                let _ = l.join();
-            }
-            return Err(listen_error(opts.addr, &e, "another r2p-emu, r2p-canlink or socketcand"));
-        }
-    };
+    let server = service.listen(config, "another r2p-emu, r2p-canlink or socketcand")?;
     eprintln!(
         "r2p-emu: {what} in real time, socketcand on {} channel {}",
         server.local_addr(),
@@ -131,7 +103,7 @@ pub fn run_realtime<N: Runtime>(
         None => false,
     });
 
-    stop.store(true, Ordering::SeqCst);
+    service.stopping();
     let clients = server.stats().clients.load(Ordering::Relaxed);
     server.shutdown();
     let s = bridge.stats();
@@ -149,12 +121,7 @@ pub fn run_realtime<N: Runtime>(
         bridge.overflows(),
         s.max_lag_us,
     );
-    if let Some(l) = logger {
-        match l.join() {
-            Ok(Ok(_)) => {}
-            Ok(Err(e)) => return Err(format!("writing the log: {e}")),
-            Err(_) => return Err("the log writer panicked".into()),
-        }
+    if service.finish()? {
         summary.push_str(", log written");
     }
     if let Some(b) = kernel_can {
