@@ -134,6 +134,20 @@ pub fn spawn_logger(
     })
 }
 
+/// The value of `--socketcand`: the address to listen on.
+pub fn parse_listen_addr(v: &str) -> Result<SocketAddr, String> {
+    v.parse().map_err(|_| format!("--socketcand {v}: expected IP:PORT, e.g. 127.0.0.1:29536"))
+}
+
+/// The value of `--channel`: a bus name as socketcand's `< open NAME >` carries it (no blanks,
+/// no angle brackets).
+pub fn parse_channel(v: &str) -> Result<String, String> {
+    if v.is_empty() || v.contains(|c: char| c.is_whitespace() || c == '<' || c == '>') {
+        return Err(format!("--channel {v:?}: not a bus name"));
+    }
+    Ok(v.into())
+}
+
 /// The message for a server that cannot listen on `addr`; `others` names what else might hold
 /// the port (e.g. "another r2p-canlink or socketcand").
 pub fn listen_error(addr: SocketAddr, e: &io::Error, others: &str) -> String {

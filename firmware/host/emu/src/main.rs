@@ -5,6 +5,7 @@ use std::net::SocketAddr;
 use std::process::ExitCode;
 
 use r2p_canlink::server::DEFAULT_ADDR;
+use r2p_canlink::service::{parse_channel, parse_listen_addr};
 use r2p_emu::{demo, serve};
 
 const HELP: &str = "\
@@ -75,19 +76,8 @@ fn parse_args(args: &[String]) -> Result<Options, String> {
         let mut value = || it.next().cloned().ok_or_else(|| format!("{arg} needs a value"));
         match arg.as_str() {
             "--realtime" => opts.realtime = true,
-            "--socketcand" => {
-                let v = value()?;
-                opts.addr = v.parse().map_err(|_| {
-                    format!("--socketcand {v}: expected IP:PORT, e.g. 127.0.0.1:29536")
-                })?;
-            }
-            "--channel" => {
-                let v = value()?;
-                if v.is_empty() || v.contains(|c: char| c.is_whitespace() || c == '<' || c == '>') {
-                    return Err(format!("--channel {v:?}: not a bus name"));
-                }
-                opts.channel = v;
-            }
+            "--socketcand" => opts.addr = parse_listen_addr(&value()?)?,
+            "--channel" => opts.channel = parse_channel(&value()?)?,
             "--log" => opts.log = Some(value()?),
             "--seconds" => {
                 let v = value()?;
