@@ -7,16 +7,13 @@
 #![no_main]
 
 use embassy_executor::Spawner;
-use embassy_stm32::can::{
-    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
-};
+use embassy_stm32::can::Can;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::Output;
 use embassy_stm32::mode::Blocking as BlockingMode;
-use embassy_stm32::peripherals::CAN;
+use embassy_stm32::pac;
 use embassy_stm32::spi::{self, Spi, MODE_3};
 use embassy_stm32::time::Hertz;
-use embassy_stm32::{bind_interrupts, pac};
 use embassy_time::{Duration, Instant, Ticker, Timer};
 use embedded_hal_bus::spi::{ExclusiveDevice, NoDelay};
 use panic_halt as _;
@@ -31,12 +28,9 @@ mod board {
 
 use module_core::{drive, ModuleNode};
 
-bind_interrupts!(struct Irqs {
-    USB_LP_CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN>;
-    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN>;
-    CAN1_SCE => SceInterruptHandler<CAN>;
-    USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
-});
+module_core::bind_can_interrupts!(
+    struct Irqs {}
+);
 
 static PARAMS: FlashParams<{ params::COUNT }> =
     FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);

@@ -40,6 +40,38 @@ pub mod slot_timer;
 pub use flash_layout::PARAMS_BASE;
 use slot_timer::SlotTimer;
 
+/// Binds a module image's interrupts, as `embassy_stm32::bind_interrupts!` does, with the
+/// bxCAN's four that every image needs written once: the receive FIFOs through
+/// `rtcan_bxcan::RxStamp` (which stamps each frame's start of frame) before embassy's
+/// handlers. Any others the image needs follow in the braces, in `bind_interrupts!`'s form:
+///
+/// ```ignore
+/// module_core::bind_can_interrupts!(struct Irqs {
+///     ADC1_2 => adc::InterruptHandler<ADC1>;
+/// });
+/// ```
+#[macro_export]
+macro_rules! bind_can_interrupts {
+    (struct $name:ident { $($others:tt)* }) => {
+        $crate::__private::embassy_stm32::bind_interrupts!(struct $name {
+            USB_LP_CAN1_RX0 => $crate::__private::rtcan_bxcan::RxStamp,
+                $crate::__private::embassy_stm32::can::Rx0InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
+            CAN1_RX1 => $crate::__private::rtcan_bxcan::RxStamp,
+                $crate::__private::embassy_stm32::can::Rx1InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
+            CAN1_SCE => $crate::__private::embassy_stm32::can::SceInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
+            USB_HP_CAN1_TX => $crate::__private::embassy_stm32::can::TxInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
+            $($others)*
+        });
+    };
+}
+
+/// What [`bind_can_interrupts!`] names from the image's point of view (not an API).
+#[doc(hidden)]
+pub mod __private {
+    pub use embassy_stm32;
+    pub use rtcan_bxcan;
+}
+
 /// The node of a module image: up to 4 exports and 2 imports, 32 queued frames, 4 streams in
 /// reassembly, messages up to 64 bytes.
 pub type ModuleNode = Node<'static, 4, 2, 32, 4, 64>;

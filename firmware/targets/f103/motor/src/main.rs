@@ -23,15 +23,13 @@ use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 use embassy_executor::{InterruptExecutor, Spawner};
 use embassy_stm32::adc;
-use embassy_stm32::can::{
-    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
-};
+use embassy_stm32::can::Can;
 use embassy_stm32::flash::Flash;
 use embassy_stm32::gpio::Output;
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
-use embassy_stm32::peripherals::{ADC1, CAN};
-use embassy_stm32::{bind_interrupts, pac};
+use embassy_stm32::pac;
+use embassy_stm32::peripherals::ADC1;
 use embassy_time::{Duration, Instant, Ticker, Timer};
 use module_core::{drive, ModuleNode};
 use panic_halt as _;
@@ -43,11 +41,7 @@ use rtcan_bxcan::BxCan;
 use bridge::Bridge;
 use sensors::Sensors;
 
-bind_interrupts!(struct Irqs {
-    USB_LP_CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN>;
-    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN>;
-    CAN1_SCE => SceInterruptHandler<CAN>;
-    USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
+module_core::bind_can_interrupts!(struct Irqs {
     ADC1_2 => adc::InterruptHandler<ADC1>;
 });
 

@@ -8,13 +8,11 @@
 
 use embassy_executor::Spawner;
 use embassy_stm32::adc::{self, Adc, SampleTime};
-use embassy_stm32::can::{
-    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
-};
+use embassy_stm32::can::Can;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::{Input, Output};
-use embassy_stm32::peripherals::{ADC1, CAN, PA0, PA1, PA2, PA3};
-use embassy_stm32::{bind_interrupts, pac, Peri};
+use embassy_stm32::peripherals::{ADC1, PA0, PA1, PA2, PA3};
+use embassy_stm32::{pac, Peri};
 use embassy_time::{Duration, Instant, Ticker};
 use panic_halt as _;
 use r2p_app_proximity::{params, App, Sample, Storage};
@@ -27,11 +25,7 @@ mod board {
 
 use module_core::{asserted, drive, ModuleNode};
 
-bind_interrupts!(struct Irqs {
-    USB_LP_CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN>;
-    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN>;
-    CAN1_SCE => SceInterruptHandler<CAN>;
-    USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
+module_core::bind_can_interrupts!(struct Irqs {
     ADC1_2 => adc::InterruptHandler<ADC1>;
 });
 

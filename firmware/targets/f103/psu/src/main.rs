@@ -7,13 +7,11 @@
 
 use embassy_executor::Spawner;
 use embassy_stm32::adc::{self, Adc, SampleTime};
-use embassy_stm32::can::{
-    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
-};
+use embassy_stm32::can::Can;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::{Input, Output};
-use embassy_stm32::peripherals::{ADC1, CAN, PA0, PA1, PA2};
-use embassy_stm32::{bind_interrupts, pac, Peri};
+use embassy_stm32::peripherals::{ADC1, PA0, PA1, PA2};
+use embassy_stm32::{pac, Peri};
 use embassy_time::{Duration, Instant, Ticker};
 use panic_halt as _;
 use r2p_app_psu::{params, App, Sample, Storage};
@@ -24,13 +22,9 @@ mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
 }
 
-use module_core::{drive, ModuleNode};
+use module_core::{asserted, drive, ModuleNode};
 
-bind_interrupts!(struct Irqs {
-    USB_LP_CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN>;
-    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN>;
-    CAN1_SCE => SceInterruptHandler<CAN>;
-    USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
+module_core::bind_can_interrupts!(struct Irqs {
     ADC1_2 => adc::InterruptHandler<ADC1>;
 });
 
@@ -51,11 +45,6 @@ struct Io {
     bus_fault: Input<'static>,
     bus_en: Output<'static>,
     leds: [Output<'static>; 3],
-}
-
-/// Whether an input is asserted, given the board file's `active`.
-fn asserted(input: &Input<'static>, active_low: bool) -> bool {
-    input.is_high() != active_low
 }
 
 /// The application: one step per millisecond in thread mode; parameters persisted every

@@ -6,13 +6,10 @@
 #![no_main]
 
 use embassy_executor::Spawner;
-use embassy_stm32::can::{
-    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
-};
+use embassy_stm32::can::Can;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::Output;
-use embassy_stm32::peripherals::CAN;
-use embassy_stm32::{bind_interrupts, pac};
+use embassy_stm32::pac;
 use embassy_time::{Duration, Instant, Ticker};
 use panic_halt as _;
 use r2p_app_template::{params, App, Sample, Storage};
@@ -25,12 +22,9 @@ mod board {
 
 use module_core::{drive, ModuleNode};
 
-bind_interrupts!(struct Irqs {
-    USB_LP_CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN>;
-    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN>;
-    CAN1_SCE => SceInterruptHandler<CAN>;
-    USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
-});
+module_core::bind_can_interrupts!(
+    struct Irqs {}
+);
 
 static PARAMS: FlashParams<{ params::COUNT }> =
     FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
