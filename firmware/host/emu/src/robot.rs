@@ -110,15 +110,7 @@ impl EmuRobot {
             boot_us: self.sim.now_us(),
             probe: self.probe.clone(),
         };
-        match module.kind() {
-            BoardKind::Psu => boards::psu(ctx),
-            BoardKind::Motor => boards::motor(ctx),
-            BoardKind::Proximity => boards::proximity(ctx),
-            BoardKind::Gateway => boards::gateway(ctx),
-            BoardKind::Imu => boards::imu(ctx),
-            BoardKind::Template => boards::template(ctx),
-        }
-        .map_err(|e| format!("{}: {e}", module.name))
+        boards::boot(module.kind(), ctx).map_err(|e| format!("{}: {e}", module.name))
     }
 
     /// Reboots the board called `name` (a reset: RAM state gone, parameters kept in flash).

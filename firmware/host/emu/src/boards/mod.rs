@@ -2,9 +2,10 @@
 //! these read the world; where it drives its outputs, these drive the world. Everything else
 //! (node runtime, parameters, application) is the module's firmware crate, unchanged.
 //!
-//! Adding a module kind: write its `boot` function here (read the signals its board file names
-//! from the world into the application's `Sample`, apply its `Command`), and give the world a
-//! model of what the board is wired to (firmware/host/world).
+//! Adding a model: write its boot function here (read the signals its board file names from
+//! the world into the application's `Sample`, apply its `Command`) and name it in [`boot`],
+//! and give the world a model of what the board is wired to (firmware/host/world). A module
+//! without a model of its own runs the template's (`emulator = "template"` in modules.toml).
 
 mod gateway;
 mod imu;
@@ -22,7 +23,7 @@ use r2p_module::{FlashParams, RamFlash};
 use r2p_node::node::STARTING_HEARTBEATS;
 use r2p_node::{Node, NodeConfig, ParamStore};
 use r2p_world::robot_file::{Module, Robot};
-use r2p_world::World;
+use r2p_world::{BoardKind, World};
 use rtcan::cycle::ClockState;
 use rtcan::failover::Role;
 use rtcan::{CycleConfig, Micros};
@@ -74,6 +75,19 @@ pub struct Ctx<'r> {
 
 /// A booted board: its node and its 1 kHz application step.
 pub type Booted = (BoardNode, App<'static, BoardNode>);
+
+/// Boots a board of model `kind`: the one place that knows which boot function runs which
+/// model (a module's robot-file kind names its model through modules.toml).
+pub fn boot(kind: BoardKind, ctx: Ctx<'_>) -> Result<Booted, String> {
+    match kind {
+        BoardKind::Psu => psu(ctx),
+        BoardKind::Motor => motor(ctx),
+        BoardKind::Proximity => proximity(ctx),
+        BoardKind::Gateway => gateway(ctx),
+        BoardKind::Imu => imu(ctx),
+        BoardKind::Template => template(ctx),
+    }
+}
 
 fn leak<T>(x: T) -> &'static T {
     Box::leak(Box::new(x))
