@@ -5,10 +5,10 @@
 //! Each board runs the module's application crate (`r2p-app-psu`, `-motor`, `-proximity`, `-imu`; the
 //! gateway runs `r2p-app-base`, the robot-level nodes, until the gateway firmware lands) with
 //! the same node runtime and parameter store as on the MCU. Only the board-support layer
-//! differs: [`boards`](crate::boards) reads the world where the MCU reads its ADC, timers and
-//! pins, and applies the application's command to the world where the MCU drives its outputs.
-//! Parameters live in an emulated flash per board ([`RamFlash`]) that survives reboots; the
-//! robot file's `[modules.params]` are stored there before the first boot.
+//! differs: [`boards`] reads the world where the MCU reads its ADC, timers and pins, and
+//! applies the application's command to the world where the MCU drives its outputs.
+//! Parameters live in an emulated flash per board ([`BoardFlash`], a `RamFlash`) that survives
+//! reboots; the robot file's `[modules.params]` are stored there before the first boot.
 
 use std::cell::RefCell;
 use std::path::Path;
