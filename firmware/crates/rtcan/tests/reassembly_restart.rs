@@ -42,3 +42,22 @@ fn a_repeated_frame_is_still_a_duplicate() {
     }
     assert_eq!((delivered, r.stats().duplicate), (1, 3));
 }
+
+#[test]
+fn after_a_lost_frame_a_new_message_starting_at_the_same_counter_is_delivered() {
+    // A's frame 3 is lost: the message is given up at frame 2 (Between{2}); the sender's next
+    // message has two frames, so its first counter is 2 again, with other data.
+    let mut r: Reassembler<1, 32> = Reassembler::new(10_000);
+    let lost_one = message(0xAA, 30); // counters 4, 3, 2, 1
+    let next = message(0x55, 10); // counters 2, 1
+    let mut delivered = Vec::new();
+    let mut at = 0;
+    for f in [&lost_one[0], &lost_one[2], &next[0], &next[1]] {
+        at += 200;
+        if let Some(m) = r.accept(f, at, Expect::Any) {
+            delivered.push(m.data.to_vec());
+        }
+    }
+    assert_eq!(r.stats().out_of_order, 1);
+    assert_eq!(delivered, [vec![0x55; 10]]);
+}
