@@ -69,11 +69,11 @@ mod proptests;
 #[cfg(not(loom))]
 pub use pool::{Msg, MsgMut};
 #[cfg(not(loom))]
-pub use publisher::{Class, Delivery, Fault, Publisher, PublisherStats};
+pub use publisher::{Class, Fault, Publisher, PublisherStats};
 #[cfg(not(loom))]
 pub use subscriber::{Callback, Subscriber, Timeout};
 #[cfg(not(loom))]
-pub use topic::{Registry, Sink, Topic, TopicInfo};
+pub use topic::{Delivery, Registry, Sink, Topic, TopicInfo};
 
 /// Why a topic or registry refused a subscription, advertisement or registration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -10,6 +10,7 @@ use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::signal::Signal;
 
 use crate::pool::{MsgMut, Pool, Slot};
+pub use crate::topic::Delivery;
 use crate::topic::{Topic, TopicCore};
 use crate::Error;
 
@@ -76,15 +77,6 @@ pub struct PublisherStats {
     pub pool_empty: u32,
     /// Deadline misses reported by the transport.
     pub deadline_misses: u32,
-}
-
-/// What one `publish` did: how many subscribers got the message and how many missed it.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Delivery {
-    /// Subscribers that accepted a handle.
-    pub delivered: usize,
-    /// Subscribers whose queue was full.
-    pub missed: usize,
 }
 
 /// The counters of [`PublisherStats`], each an atomic so that publishing takes no lock for
@@ -246,6 +238,20 @@ impl<'a, T> Publisher<'a, T> {
     /// The latest fault since the last `fault`/`take_fault`, without waiting.
     pub fn take_fault(&self) -> Option<Fault> {
         self.fault.try_take()
+    }
+}
+
+/// Advertising is the publisher's registration with its topic; it lives here so that the topic
+/// module does not depend on publishers (topic.rs knows pools and sinks only).
+impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a, T, SLOTS, SUBS> {
+    /// Registers `publisher` (made with [`Publisher::new`] on this topic): reserves the slot
+    /// its draft occupies, so the sizing rule covers it. Mirrors the paper's
+    /// `node.advertise(&pub)`.
+    pub fn advertise(&self, publisher: &Publisher<'a, T>) -> Result<(), Error> {
+        if !publisher.is_on(self) {
+            return Err(Error::WrongTopic);
+        }
+        publisher.mark_advertised()
     }
 }
 

@@ -6,7 +6,6 @@ use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 
 use crate::pool::{Msg, MsgMut, Pool, Slot};
-use crate::publisher::{Delivery, Publisher};
 use crate::Error;
 
 /// Where a topic delivers its messages: a local [`Subscriber`](crate::Subscriber) queue, a
@@ -45,6 +44,15 @@ pub trait TopicInfo: Sync {
     fn subscriber_count(&self) -> usize;
     /// The longest subscriber queue: the length a remote publisher of this topic must buffer.
     fn max_queue_len(&self) -> usize;
+}
+
+/// What one `publish` did: how many subscribers got the message and how many missed it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Delivery {
+    /// Subscribers that accepted a handle.
+    pub delivered: usize,
+    /// Subscribers whose queue was full.
+    pub missed: usize,
 }
 
 /// The typed face of a topic that publishers use, erasing its pool and list sizes.
@@ -117,16 +125,6 @@ impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a,
     /// The pool, without its size, for the topic's publishers.
     pub(crate) const fn pool(&self) -> &Pool<[Slot<T>]> {
         &self.pool
-    }
-
-    /// Registers `publisher` (made with [`Publisher::new`] on this topic): reserves the slot
-    /// its draft occupies, so the sizing rule covers it. Mirrors the paper's
-    /// `node.advertise(&pub)`.
-    pub fn advertise(&self, publisher: &Publisher<'a, T>) -> Result<(), Error> {
-        if !publisher.is_on(self) {
-            return Err(Error::WrongTopic);
-        }
-        publisher.mark_advertised()
     }
 }
 
@@ -241,7 +239,7 @@ impl<const N: usize> Default for Registry<'_, N> {
 #[cfg(any(test, feature = "selftest"))]
 pub(crate) mod tests {
     use super::*;
-    use crate::{pool_size, Callback, Class, Subscriber};
+    use crate::{pool_size, Callback, Class, Publisher, Subscriber};
 
     const NRT: Class = Class::NonRealTime;
 
