@@ -73,7 +73,8 @@ pub enum Done<T> {
         id: FrameId,
         /// Its outcome.
         outcome: TxOutcome,
-        /// It was withdrawn at its window's latest start (the bus was busy until then).
+        /// It missed its window because the bus was busy at its latest start: withdrawn there,
+        /// or at the window's end after losing an arbitration it was in at the latest start.
         late: bool,
     },
 }
@@ -125,6 +126,7 @@ pub struct SlotTx<T> {
     slotted: [Option<(Slotted<T>, FrameId)>; SLOTTED_MAX],
     queued: [Option<(Ticket, FrameId)>; QUEUED_MAX],
     window: Option<Window>,
+    /// The guard of the loaded window has run: what is withdrawn from now on is late.
     late: bool,
     /// Withdrawn but still in the controller (on the wire or losing an arbitration): whether
     /// they go out is not known yet, so nothing is loaded behind them.
@@ -176,7 +178,11 @@ impl<T: Copy> SlotTx<T> {
     /// within the window).
     pub fn on_guard<C: CanController + ?Sized>(&mut self, can: &mut C) {
         // Only queued frames can be waiting: nothing else is loaded in a free slot.
-        self.late = can.abort_pending() > 0;
+        can.abort_pending();
+        // What is withdrawn from now on in this window missed it because the bus was busy: the
+        // frames taken back now, and one that was in an arbitration here (it cannot be taken
+        // back) and lost it, withdrawn at the window's end.
+        self.late = true;
         self.draining = true;
         if let Some(w) = &mut self.window {
             w.guard = w.end;

@@ -26,8 +26,8 @@ pub struct NodeStats {
     /// SRT/NRT frames that did not go out in their window — lost a one-shot arbitration, ended
     /// in an error, or were withdrawn at the latest start — and went back to the queue.
     pub slot_retries: u32,
-    /// Of those, the frames withdrawn at their window's latest start because the bus was busy
-    /// until then.
+    /// Of those, the frames withdrawn because the bus was busy at their window's latest start
+    /// (at it, or at the window's end after losing an arbitration they were in then).
     pub late_withdrawals: u32,
     /// HRT reservations the master refused to this node.
     pub hrt_refused: u32,
