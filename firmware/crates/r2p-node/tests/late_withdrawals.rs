@@ -108,13 +108,12 @@ fn frames_withdrawn_at_the_guard_are_late() {
 
 #[test]
 fn a_frame_in_an_arbitration_at_the_guard_that_loses_it_is_late_too() {
-    let (mut s, mut can, tx, guard) = loaded(1);
+    let (mut s, mut can, tx, _) = loaded(1);
     can.start(); // arbitrating at the guard: cannot be withdrawn
     s.on_guard(&mut can);
     can.end(TxOutcome::LostArbitration); // waits for the next arbitration
     let done = s.settle(1_000, &mut can, &tx); // the window's end withdraws it
     assert_eq!(fates(&done), [(TxOutcome::Aborted, true)]);
-    let _ = guard;
 }
 
 #[test]
