@@ -4,74 +4,16 @@
 //! end. Not a frame sent, and not one a merged window takes back at a slot boundary to load a
 //! more urgent frame before it.
 //!
-//! `SlotTx` against a controller model whose frames start, lose and end when the test says, as
-//! bxCAN's mailboxes do: a frame in an arbitration cannot be withdrawn; one that loses it waits
-//! for the next (retransmission mode) and can be withdrawn then.
+//! `SlotTx` against a model of bxCAN's mailboxes (tests/common).
 
-use std::collections::VecDeque;
+mod common;
 
+use common::Mailboxes;
 use r2p_node::slot_tx::{Done, SlotTx};
 use r2p_node::FreeSlots;
-use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError, TxMode};
-use rtcan::{
-    CanController, CycleConfig, Frame, LaxityEncoding, MessageId, Micros, TxOutcome, TxQueue,
-    TxResult, Urgency,
-};
+use rtcan::{CycleConfig, LaxityEncoding, MessageId, Micros, TxOutcome, TxQueue, Urgency};
 
 const CYCLE: CycleConfig = CycleConfig { bit_rate: 1_000_000, cycle_us: 4_000, slots: 16 };
-
-#[derive(Default)]
-struct Mailboxes {
-    waiting: VecDeque<Frame>,
-    on_wire: Option<Frame>,
-    results: VecDeque<TxResult>,
-}
-
-impl Mailboxes {
-    /// The oldest waiting frame starts (arbitration, then transmission).
-    fn start(&mut self) {
-        self.on_wire = self.waiting.pop_front();
-    }
-    /// The frame on the wire ends: sent, or lost its arbitration and waits again.
-    fn end(&mut self, outcome: TxOutcome) {
-        let f = self.on_wire.take().expect("a frame on the wire");
-        match outcome {
-            TxOutcome::LostArbitration => self.waiting.push_front(f),
-            _ => self.results.push_back(TxResult::new(f.id(), outcome)),
-        }
-    }
-}
-
-impl CanController for Mailboxes {
-    fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
-        if self.waiting.len() + usize::from(self.on_wire.is_some()) == 3 {
-            return Err(TxError::MailboxesFull);
-        }
-        self.waiting.push_back(*frame);
-        Ok(())
-    }
-    fn set_tx_mode(&mut self, _: TxMode) {}
-    fn take_tx_result(&mut self) -> Option<TxResult> {
-        self.results.pop_front()
-    }
-    fn try_receive(&mut self) -> Option<Received> {
-        None
-    }
-    fn set_filters(&mut self, _: &[Filter]) {}
-    fn abort_pending(&mut self) -> usize {
-        let n = self.waiting.len();
-        for f in self.waiting.drain(..) {
-            self.results.push_back(TxResult::new(f.id(), TxOutcome::Aborted));
-        }
-        n
-    }
-    fn bus_state(&self) -> BusState {
-        BusState::ErrorActive
-    }
-    fn error_counters(&self) -> ErrorCounters {
-        ErrorCounters { tx: 0, rx: 0 }
-    }
-}
 
 /// A merged window [0, 1000 µs) with `n` NRT frames of stream 0x4301 loaded.
 fn loaded(n: u8) -> (SlotTx<usize>, Mailboxes, TxQueue<8>, Micros) {

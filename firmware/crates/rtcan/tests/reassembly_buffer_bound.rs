@@ -64,3 +64,24 @@ fn a_message_of_the_buffers_size_is_delivered_and_a_longer_one_never_is() {
     assert_eq!((r.stats().too_long, r.stats().completed), (2, 2), "{:?}", r.stats());
     assert_eq!(r.partial_messages(), 0, "its slot is free again");
 }
+
+/// Whether a `B`-byte reassembler refuses `first` at once (too long, no slot held).
+fn refused_at_first<const B: usize>(first: &rtcan::Frame) -> bool {
+    let mut r: Reassembler<1, B> = Reassembler::new(10_000);
+    assert!(r.accept(first, 100, Expect::Any).is_none());
+    assert_eq!(r.partial_messages() == 0, r.stats().too_long == 1);
+    r.stats().too_long == 1
+}
+
+/// The fewest bytes a first frame with counter `c` announces: (c − 1) frames of 8 bytes and
+/// one more wire byte, less the 2-byte CRC, and never fewer than 9 (a multi-frame message
+/// carries more than one frame's 8).
+#[test]
+fn the_first_frame_tells_the_fewest_bytes_its_message_has() {
+    let two = frames(0x0301, 9);
+    assert_eq!(two.len(), 2);
+    assert!(refused_at_first::<8>(&two[0]) && !refused_at_first::<9>(&two[0]));
+    let three = frames(0x0302, 15);
+    assert_eq!(three.len(), 3);
+    assert!(refused_at_first::<14>(&three[0]) && !refused_at_first::<15>(&three[0]));
+}

@@ -61,3 +61,21 @@ fn after_a_lost_frame_a_new_message_starting_at_the_same_counter_is_delivered() 
     assert_eq!(r.stats().out_of_order, 1);
     assert_eq!(delivered, [vec![0x55; 10]]);
 }
+
+#[test]
+fn a_stray_last_frame_does_not_take_another_streams_history() {
+    // One slot; stream 0x4302's message ends (its last frame kept for duplicate detection).
+    // A last frame of stream 0x4303, whose start was never seen, is foreign and takes no slot:
+    // the repeated last frame of 0x4302 (CAN's double reception) is still known as one.
+    let mut r: Reassembler<1, 32> = Reassembler::new(10_000);
+    let m = message(0x42, 20);
+    let mut at = 0;
+    for f in &m {
+        at += 200;
+        r.accept(f, at, Expect::Any);
+    }
+    let stray = FrameId { laxity: Laxity::NRT, message: MessageId(0x4303), fragment: 1 };
+    assert!(r.accept(&Frame::new(stray, &[1, 2, 3]).unwrap(), at + 100, Expect::Any).is_none());
+    assert!(r.accept(&m[2], at + 200, Expect::Any).is_none());
+    assert_eq!((r.stats().completed, r.stats().foreign, r.stats().duplicate), (1, 1, 1));
+}
