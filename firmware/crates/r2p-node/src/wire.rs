@@ -199,7 +199,9 @@ pub(crate) mod tests {
             roundtrip(1.5f32);
             roundtrip(-2.25f64);
             roundtrip(true);
+            roundtrip(false);
             roundtrip(());
+            roundtrip([(); 3]); // events in a batch: zero bytes, like one
             roundtrip([1.0f32, 2.0, 3.0, 4.0]);
             roundtrip([[1u8, 2], [3, 4]]);
             roundtrip::<[u32; 0]>([]);
@@ -212,6 +214,7 @@ pub(crate) mod tests {
             assert_eq!(u32::decode(&[1, 2, 3]), Err(WireError::BadLength));
             assert_eq!(u32::decode(&[1, 2, 3, 4, 5]), Err(WireError::BadLength));
             assert_eq!(bool::decode(&[2]), Err(WireError::BadValue));
+            assert_eq!(<()>::decode(&[0]), Err(WireError::BadLength), "an event carries no bytes");
             assert_eq!(<[bool; 2]>::decode(&[1, 7]), Err(WireError::BadValue));
             assert_eq!(<[u16; 2]>::decode(&[0; 3]), Err(WireError::BadLength));
             assert_eq!(7u32.encode(&mut [0u8; 3]), Err(WireError::BufferTooSmall));
