@@ -62,6 +62,8 @@ mod tdma_tests;
 pub mod testbus;
 #[cfg(any(test, feature = "selftest"))]
 mod tests;
+#[cfg(test)]
+mod unslotted_tests;
 
 pub use node::{
     Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats, MODULE_SLOT_LEAD_US,
