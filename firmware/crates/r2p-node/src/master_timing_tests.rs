@@ -41,3 +41,33 @@ fn a_late_sync_delays_itself_not_the_cycles_after_it() {
         assert_eq!(at, expected, "sync {k}");
     }
 }
+
+#[test]
+fn a_sync_more_than_a_cycle_late_restarts_the_grid_from_itself() {
+    // The master's timer held off for 1.5 cycles (a debugger halt, a flash erase stalling the
+    // CPU): that sync goes out late and the cycle restarts from it — no burst of catch-up
+    // syncs, no gap.
+    let bus = Bus::<2>::slotted(CYCLE);
+    let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
+    let mut syncs: std::vec::Vec<Micros> = std::vec::Vec::new();
+    let (mut t, mut late_done) = (0, false);
+    while t < 120_000 {
+        if m.role() == Role::Master && !late_done && syncs.len() == 3 && t == syncs[2] + CYCLE_US {
+            t += CYCLE_US + CYCLE_US / 2;
+            late_done = true;
+        }
+        bus.now.set(t);
+        m.slot_tick(t, &mut bus.port(0));
+        bus.arbitrate();
+        while let Some(rx) = bus.port(1).try_receive() {
+            if SyncFrame::from_frame(&rx.frame).is_ok() {
+                syncs.push(rx.at);
+            }
+        }
+        t = m.next_slot_at(t).max(t + 1);
+    }
+    assert!(late_done && syncs.len() > 10, "{} syncs", syncs.len());
+    let gaps: std::vec::Vec<Micros> = syncs.windows(2).map(|w| w[1] - w[0]).collect();
+    assert_eq!(gaps[2], 2 * CYCLE_US + CYCLE_US / 2, "the late one");
+    assert!(gaps[3..].iter().all(|&g| g == CYCLE_US), "then whole cycles from it: {gaps:?}");
+}
