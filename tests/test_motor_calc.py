@@ -20,7 +20,7 @@ def test_every_design_row_holds(capsys):
     failing = [f"{r.what}: {r.value} vs {r.limit}" for r in calc.rows()
                if not r.ok and "traded" not in r.note]
     assert not failing, failing
-    assert calc.main() == 0
+    assert calc.main([]) == 0
     assert "FAIL" not in capsys.readouterr().out
 
 
@@ -90,3 +90,15 @@ def test_firmware_constants_are_read_from_their_sources():
                    "remove this marker")
 def test_firmware_agrees_with_the_board():
     assert calc.firmware_changes() == []
+
+
+def test_the_readme_table_is_the_calculations():
+    text = calc.README.read_text()
+    assert calc.readme_with_table(text) == text, \
+        "hardware/motor/README.md is stale: run scripts/py -m r2ptools.kicad.calc.motor --readme"
+
+
+def test_a_stale_readme_table_is_caught(monkeypatch):
+    text = calc.README.read_text()
+    monkeypatch.setitem(calc.DESIGN_VALUES, "N_BULK", 5)
+    assert calc.readme_with_table(text) != text
