@@ -9,7 +9,7 @@ Datasheet figures carry their source. A figure this file could not confirm says 
 and where two readings were found the design uses the worse one (both are given). Estimates
 (thermal coefficients, board convection) say so: they are what the first board must measure.
 
-Sources: TI CSD19535KTT SLPS588 (MOSFET; product summary, abs max, R_thJC read on ti.com), TI
+Sources: TI CSD19536KTT SLPS540C (MOSFET; electrical characteristics read on ti.com), TI
 DRV8350/DRV8353 SLVSDY6 (gate driver; IDRIVE, VDS_LVL, dead-time registers read on ti.com; the
 VM range from a third-party summary of the same datasheet), Allegro ACS725 (1.2 mΩ, 120 kHz read),
 TI TLV3011 SBOS290 (comparator with 1.242 V reference), Littelfuse SMCJ series (TVS), Amass XT60
@@ -34,7 +34,7 @@ I_CONT = 20.0                 # the paper: "a continuous 20 A current"
 I_PEAK = 30.0                 # peak, limited by the current sensor's range (below)
 PEAK_S = 10.0                 # how long the peak may last (heatsink heat capacity, below)
 T_AMB = 40.0                  # issue 19: junction limit checked at 40 °C ambient
-TJ_LIMIT = 110.0              # issue 19: junction ≤ 110 °C at 20 A (CSD19535KTT T_J max is 175 °C)
+TJ_LIMIT = 110.0              # issue 19: junction ≤ 110 °C at 20 A (the KTT family's T_J max is 175 °C)
 MOTOR_V_RATED = 36.0          # largest motor rating the module is for: back-EMF ≤ this at ≤ no-load speed
 MOTOR_L = 0.2e-3              # armature inductance, H (assumption: 70 W brushed motors are 0.1–0.3 mH)
 
@@ -50,22 +50,20 @@ ADC_COUNTS = 4096
 # capacitors): the firmware's timer set-up must stay centre-aligned (README, decisions).
 RIPPLE_HZ = 2 * PWM_HZ
 
-# --- MOSFETs: TI CSD19535KTT, 100 V N-channel, D2PAK (SLPS588) -----------------------------------
-FET = "CSD19535KTT"
-FET_VDS = 100.0               # abs max
-FET_RDS_TYP = 2.8e-3          # V_GS = 10 V, 25 °C, typ (product summary, ti.com)
-FET_RDS_READINGS = {          # max at 10 V, 25 °C: NOT VERIFIED (the electrical table was not read)
-    "A (3.4 mΩ, memory of SLPS588 §5.1)": 3.4e-3,
-    "B (4.1 mΩ, another project's MOSFET table)": 4.1e-3,
-}
-FET_RDS_MAX = max(FET_RDS_READINGS.values())            # design with the worse reading
+# --- MOSFETs: TI CSD19536KTT, 100 V N-channel, D2PAK (SLPS540C) --------------------------------
+FET = "CSD19536KTT"
+FET_VDS = 100.0               # BV_DSS min (§4.1, read)
+FET_RDS_TYP = 2.0e-3          # V_GS = 10 V, I_D = 100 A, 25 °C, typ (§4.1, read)
+FET_RDS_MAX = 2.4e-3          # the same, max (§4.1, read)
 FET_RDS_TC = 0.007            # 1/K: normalised R_DS(on) 1.7 at 125 °C (TI NexFET curves): estimate
-FET_QG, FET_QGD = 75e-9, 11e-9                          # at 10 V, typ (product summary, ti.com)
-FET_QGS = 25e-9               # NOT VERIFIED (another project's table); Q_gs2 taken as half of it
-FET_QRR = 435e-9              # body diode at 300 A/µs: NOT VERIFIED (another project's table)
-FET_VSD = 0.9                 # body diode at 20 A, hot: estimate (datasheet V_SD ≈ 0.9 V typ at 1 A·…)
-FET_RTH_JC = 0.5              # °C/W max (abs max table footnote, ti.com)
-FET_ID_PULSE = 400.0          # I_DM, abs max
+FET_QG, FET_QGD, FET_QGS = 118e-9, 17e-9, 37e-9         # at 10 V, V_DS 50 V, typ (§4.1, read);
+                              # Q_gs2 (plateau part of Q_gs) taken as half of Q_gs
+FET_QRR = 600e-9              # body diode: NOT VERIFIED (estimate: 435 nC read for the smaller
+                              # CSD19535KTT in another project's table, scaled up for the die)
+FET_VSD = 0.9                 # body diode at 20 A, hot: estimate
+FET_RTH_JC = 0.5              # °C/W max: NOT VERIFIED for this part (CSD19535KTT's 0.5, read;
+                              # the larger die of the CSD19536KTT should not be worse)
+FET_ID_PULSE = 400.0          # I_DM, abs max (the KTT family's, read for CSD19535KTT)
 
 # --- gate driver: TI DRV8350H (hardware interface, 6x PWM mode), SLVSDY6 -------------------------
 DRV = "DRV8350HRTVR"
@@ -75,7 +73,7 @@ DRV_VDRAIN_ABS = 102.0        # VDRAIN abs max (same source)
 DRV_IDRIVE_SRC, DRV_IDRIVE_SNK = 0.55, 1.1   # A: register levels 1000b (SLVSDY6 Table 16, read);
                               # the H variant's IDRIVE pin offers 7 of them: which, NOT VERIFIED
 DRV_DEAD_MIN = 100e-9         # H variant's inserted dead time (the SPI default, read): TIM1 adds its own
-DRV_VDS_LVL = 0.3             # V: VDS_OCP level (SLVSDY6 Table 17 lists 0.06–2 V; pin level NOT VERIFIED)
+DRV_VDS_LVL = 0.2             # V: VDS_OCP level (SLVSDY6 Table 17 lists 0.06–2 V; pin level NOT VERIFIED)
 DRV_VDS_TOL = 0.2             # ±20 % on the VDS comparator (estimate)
 DRV_VCP_MAX_A = 25e-3         # charge-pump (VCP) load capability (third-party summary: NOT VERIFIED)
 DRV_IQ = 8.5e-3               # VM operating current at 48 V (third-party summary)
@@ -173,9 +171,10 @@ class Row:
     note: str = ""
 
 
-def rds(tj: float, r25: float = FET_RDS_MAX) -> float:
-    """R_DS(on) at junction temperature `tj` (linear in T, 1.7 × at 125 °C)."""
-    return r25 * (1 + FET_RDS_TC * (tj - 25.0))
+def rds(tj: float, r25: float | None = None) -> float:
+    """R_DS(on) at junction temperature `tj` (linear in T, 1.7 × at 125 °C), from the 25 °C
+    maximum unless `r25` is given."""
+    return (FET_RDS_MAX if r25 is None else r25) * (1 + FET_RDS_TC * (tj - 25.0))
 
 
 def switching_times() -> tuple[float, float]:
@@ -366,8 +365,8 @@ def rows() -> list[Row]:
     tj_cold, _ = junction(I_CONT, VIN_MAX, rth_board_to_air())
     tj, p = junction(I_CONT, VIN_MAX, HEATSINK_RTH)
     total = sum(x for k, x in p.items() if k != "worst FET")
-    add(Row(f"R_DS(on) max, {FET}", f"{FET_RDS_MAX * 1e3:.1f} mΩ at 25 °C", "worse of two readings", True,
-            "NOT VERIFIED: " + ", ".join(FET_RDS_READINGS) + f"; {rds(tj) * 1e3:.1f} mΩ at T_J {tj:.0f} °C"))
+    add(Row(f"R_DS(on) max, {FET}", f"{FET_RDS_MAX * 1e3:.1f} mΩ at 25 °C", "SLPS540C §4.1", True,
+            f"{rds(tj) * 1e3:.1f} mΩ at T_J {tj:.0f} °C (×{1 + FET_RDS_TC * (tj - 25):.2f}, estimate)"))
     add(Row("switching times (Q_gs/2 + Q_gd) / IDRIVE", f"on {t_on * 1e9:.0f} ns, off {t_off * 1e9:.0f} ns",
             f"IDRIVE {DRV_IDRIVE_SRC * 1e3:.0f}/{DRV_IDRIVE_SNK * 1e3:.0f} mA", True,
             f"dv/dt {VIN_MAX / (FET_QGD / DRV_IDRIVE_SRC) / 1e9:.1f} V/ns at turn-on"))
