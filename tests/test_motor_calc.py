@@ -51,6 +51,7 @@ def test_a_changed_board_value_fails_its_row(monkeypatch, name, value, guarded):
     ("HALL_MV_PER_A", 90.0, "ACS725LLCTR-30AB-T ±30 A into the ADC"),   # the ACS711-15AB's gain
     ("HEATSINK_RTH", 6.0, "T_J worst FET at 20 A"),                     # a bare plate, not a finned sink
     ("PWM_HZ", 100e3, "T_J worst FET at 20 A"),                         # switching losses × 5
+    ("FET_RDS_MAX", 8e-3, "T_J worst FET at 20 A"),                     # a 8 mΩ MOSFET
     ("DEAD_TIME_S", 50e-9, "dead time vs turn-off"),                    # shoot-through
     ("TVS_VC", 82.4, "DRV8350 VM at the TVS clamp"),                    # SMCJ51A's clamp
     ("ENCODER_MA", 85.0, "from the bus"),                               # HEDS-5540 at its max
