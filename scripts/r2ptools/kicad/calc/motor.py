@@ -96,6 +96,7 @@ TVS_E_PULSE = 1500 * 1.4e-3   # J: 10/1000 µs pulse energy ≈ P_pk × 1.4 ms
 T_COLD = -20.0
 OV_REF = (1.230, 1.242, 1.254)   # TLV3011 reference (min, typ, max): ±1 % NOT VERIFIED
 RES_TOL = 0.01
+RES_0603_VMAX = 75.0          # UNI-ROYAL 0603WAF working voltage (bom/parts.csv, as calc/psu.py)
 LOOP_L = 10e-9                # commutation loop inductance, H: layout target (ceramics at the legs)
 
 # --- input capacitors --------------------------------------------------------------------------
@@ -147,8 +148,8 @@ PATH_RISE = 10.0              # °C allowed per path above the board (it is alre
 
 # --- sensing and logic -------------------------------------------------------------------------
 DESIGN_VALUES = {
-    "R_VMOT_TOP": 180e3, "R_VMOT_BOT": 10e3,           # VMOT_SENSE divider
-    "R_OV_TOP": 374e3, "R_OV_BOT": 10e3,               # over-voltage comparator divider
+    "R_VMOT_TOP": 150e3, "R_VMOT_BOT": 10e3,           # VMOT_SENSE divider: the PSU's VIN_SENSE parts
+    "R_OV_TOP": 375e3, "R_OV_BOT": 10e3,               # over-voltage divider: 174k + 174k + 27k in series
     "C_BULK_EACH": 1000e-6, "N_BULK": 4,
     "C_CER_EACH": 2.2e-6, "N_CER": 8,
     "C_VCP": 1e-6, "C_CP_FLY": 47e-9,                  # DRV835x charge pump (datasheet values)
@@ -331,7 +332,9 @@ def rows() -> list[Row]:
     add(Row("over-voltage trip (TLV3011 → DRV_FAULT: coast)", f"{ov_lo:.1f}–{ov_hi:.1f} V",
             f"> {VIN_MAX:.1f} V and < TVS V_BR min {TVS_VBR_MIN:.1f} V",
             ov_lo > VIN_MAX and ov_hi < TVS_VBR_MIN,
-            f"{ov_lo - VIN_MAX:+.1f} V over the input, {TVS_VBR_MIN - ov_hi:+.1f} V under the TVS"))
+            f"{ov_lo - VIN_MAX:+.1f} V over the input, {TVS_VBR_MIN - ov_hi:+.1f} V under the TVS at 25 °C "
+            f"(at {T_COLD:.0f} °C its V_BR may be {TVS_VBR_MIN * (1 + TVS_ALPHA * (T_COLD - 25)):.1f} V: "
+            "it then takes mA before the trip, harmlessly)"))
     vbr_cold = TVS_VBR_MIN * (1 + TVS_ALPHA * (T_COLD - 25))
     add(Row(f"TVS {TVS} min breakdown at {T_COLD:.0f} °C", f"{vbr_cold:.1f} V", f"> {VIN_MAX:.1f} V",
             vbr_cold > VIN_MAX, f"{vbr_cold - VIN_MAX:+.1f} V; stand-off {TVS_VRWM:.0f} V"))
@@ -468,6 +471,9 @@ def rows() -> list[Row]:
             fs > ov_hi, f"{VIN_MAX / g:.2f} V at {VIN_MAX:.1f} V; {fs / ADC_COUNTS * 1e3:.1f} mV/count"))
     inj = (TVS_VC - 3.6) / v["R_VMOT_TOP"] - 3.6 / v["R_VMOT_BOT"]
     add(Row("ADC pin injection at the TVS clamp", f"{max(inj, 0) * 1e3:.2f} mA", "≤ 5 mA (STM32F103)", inj < 5e-3))
+    add(Row("0603 VMOT_SENSE top resistor at the TVS clamp", f"{TVS_VC - 3.3:.1f} V", f"≤ {RES_0603_VMAX:.0f} V working",
+            TVS_VC - 3.3 <= RES_0603_VMAX, f"UNI-ROYAL 0603WAF; the over-voltage divider's three parts "
+            f"{(TVS_VC - OV_REF[0]) / 3:.0f} V each"))
 
     # --- encoder (PA6/PA7 are not 5 V tolerant)
     fc = 1 / (2 * math.pi * v["R_ENC_SERIES"] * v["C_ENC"])
