@@ -461,6 +461,10 @@ def rows() -> list[Row]:
     lsb = ADC_FS / ADC_COUNTS / (HALL_MV_PER_A / 1e3)
     add(Row("current resolution", f"{lsb * 1e3:.1f} mA/count", f"range ≥ ±{I_PEAK:.0f} A (issue 19)",
             HALL_RANGE >= I_PEAK, f"clips at ±{(ADC_FS / 2) / (HALL_MV_PER_A / 1e3):.1f} A"))
+    di_motor = VIN_MAX * 0.25 / (MOTOR_L * RIPPLE_HZ)
+    add(Row("motor current ripple at d = 0.5", f"{di_motor:.2f} A p-p", f"≤ 10 % of {I_CONT:.0f} A",
+            di_motor <= 0.1 * I_CONT, f"V d(1 − d) / (L · {RIPPLE_HZ / 1e3:.0f} kHz), L {MOTOR_L * 1e3:.1f} mH "
+            "(assumed): a centre sample reads the average"))
     add(Row("sensor bandwidth vs PWM", f"{HALL_BW_HZ / 1e3:.0f} kHz", f"> ripple {RIPPLE_HZ / 1e3:.0f} kHz",
             HALL_BW_HZ > RIPPLE_HZ, "it follows the ripple: sample at the PWM centre (TIM1 trigger)"))
 
