@@ -49,9 +49,9 @@ def test_a_changed_board_value_fails_its_row(monkeypatch, name, value, guarded):
 
 @pytest.mark.parametrize("name, value, guarded", [
     ("HALL_MV_PER_A", 90.0, "ACS725LLCTR-30AB-T ±30 A into the ADC"),   # the ACS711-15AB's gain
-    ("HEATSINK_RTH", 6.0, "T_J worst FET at 20 A"),                     # a bare plate, not a finned sink
+    ("HEATSINK_RTH", 8.0, "T_J worst FET at 20 A"),                     # a bare plate, not a finned sink
     ("PWM_HZ", 100e3, "T_J worst FET at 20 A"),                         # switching losses × 5
-    ("FET_RDS_MAX", 8e-3, "T_J worst FET at 20 A"),                     # a 8 mΩ MOSFET
+    ("FET_RDS_MAX", 12e-3, "T_J worst FET at 20 A"),                    # a 12 mΩ MOSFET
     ("DEAD_TIME_S", 50e-9, "dead time vs turn-off"),                    # shoot-through
     ("TVS_VC", 82.4, "DRV8350 VM at the TVS clamp"),                    # SMCJ51A's clamp
     ("ENCODER_MA", 85.0, "from the bus"),                               # HEDS-5540 at its max
@@ -79,9 +79,12 @@ def test_the_peak_is_bounded_by_heat_and_by_the_sensor(monkeypatch):
 def test_firmware_constants_are_read_from_their_sources():
     fw = calc.firmware_assumptions()
     assert set(fw) == {"HALL_MV_PER_A", "VMOT_DIVIDER_TOP_OHM", "VMOT_DIVIDER_BOTTOM_OHM",
-                       "pwm_hz", "dead_time_s", "current_limit max"}
+                       "pwm_hz", "dead_time_s", "current_limit max", "bridge.rs PWM_HZ",
+                       "bridge.rs DEAD_TIME_NS"}
     # the board was designed around the firmware's PWM and dead time: those agree
-    assert fw["pwm_hz"] == calc.PWM_HZ and fw["dead_time_s"] == calc.DEAD_TIME_S
+    assert fw["pwm_hz"] == fw["bridge.rs PWM_HZ"] == calc.PWM_HZ
+    assert fw["dead_time_s"] == calc.DEAD_TIME_S
+    assert fw["bridge.rs DEAD_TIME_NS"] == pytest.approx(calc.DEAD_TIME_S)
     moved = dict(fw, pwm_hz=25_000.0)
     assert any(c.startswith("pwm_hz") for c in calc.firmware_changes(moved))
 

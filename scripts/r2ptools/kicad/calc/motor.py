@@ -38,17 +38,19 @@ TJ_LIMIT = 110.0              # issue 19: junction ≤ 110 °C at 20 A (the KTT 
 MOTOR_V_RATED = 36.0          # largest motor rating the module is for: back-EMF ≤ this at ≤ no-load speed
 MOTOR_L = 0.2e-3              # armature inductance, H (assumption: 70 W brushed motors are 0.1–0.3 mH)
 
-# --- firmware (firmware/host/world/src/hbridge.rs HBridgeParams::DEFAULT; frontend.rs) -----------
-PWM_HZ = 20_000.0             # TIM1 PWM frequency (above hearing)
+# --- firmware (targets/f103/motor/src/bridge.rs, host/world/src/hbridge.rs, apps/motor frontend.rs)
+PWM_HZ = 20_000.0             # TIM1 PWM frequency (above hearing), centre-aligned
 DEAD_TIME_S = 500e-9          # TIM1 dead time at each edge
 ADC_FS = 3.3                  # VDDA = VREF+ = the 3.3 V rail
 ADC_COUNTS = 4096
-# Centre-aligned PWM, both legs' pulses centred (dA = (1 + d)/2, dB = (1 − d)/2): the bridge
-# applies ±VMOT for |d| of each period and freewheels (both high or both low) for the rest, so the
-# supply sees pulses at 2 × PWM_HZ of height I and width |d|/(2 f). Edge-aligned complementary
-# drive would instead reverse the supply current every period (I rms ripple, twice the heat in the
-# capacitors): the firmware's timer set-up must stay centre-aligned (README, decisions).
-RIPPLE_HZ = 2 * PWM_HZ
+# The drive (firmware/targets/f103/motor/src/bridge.rs): sign-magnitude, centre-aligned. For a
+# positive duty leg A switches at d and leg B's low side stays on (the reverse for a negative
+# one); the current recirculates through the low sides between pulses. So one leg switches, the
+# supply sees one pulse of height I and width d per period (input ripple I √(d(1 − d)) at the
+# PWM frequency), and one low side carries I all the time. (Locked anti-phase, which the world
+# model also offers, switches both legs: twice the switching loss, ripple at 2 f.)
+SWITCHING_LEGS = 1
+RIPPLE_HZ = PWM_HZ
 
 # --- MOSFETs: TI CSD19536KTT, 100 V N-channel, D2PAK (SLPS540C) --------------------------------
 FET = "CSD19536KTT"
@@ -198,8 +200,9 @@ def leg_switching_loss(v: float, i: float) -> dict[str, float]:
 def losses(i: float, v: float, tj: float) -> dict[str, float]:
     """Power stage losses at motor current `i`, supply `v`, FET junctions at `tj`.
 
-    Conduction: at any time one FET of each leg carries i, so 2 i² R in all; the worst FET (a
-    diagonal at |d| → 1) carries i² R. Switching: both legs switch every period (centre-aligned).
+    Conduction: at any time one FET of each leg carries i, so 2 i² R in all. Switching: the
+    switching leg(s). The worst FET is taken as carrying i² R (the non-switching leg's low side
+    does) plus all of a switching leg's losses (its high side at d → 1): pessimistic.
     """
     r = rds(tj)
     sw = leg_switching_loss(v, i)
@@ -207,7 +210,7 @@ def losses(i: float, v: float, tj: float) -> dict[str, float]:
     i_cap = ripple_current(i)
     return {
         "conduction (4 FETs)": 2 * i * i * r,
-        "switching (2 legs)": 2 * leg,
+        f"switching ({SWITCHING_LEGS} leg{'s' if SWITCHING_LEGS > 1 else ''})": SWITCHING_LEGS * leg,
         "worst FET": i * i * r + leg,
         "gate drive (driver)": 4 * FET_QG * 11.0 * PWM_HZ + v * DRV_IQ,
         "ACS725": i * i * HALL_R,
@@ -286,6 +289,7 @@ def firmware_assumptions(root: Path | None = None) -> dict[str, float]:
     fe = (root / "firmware/apps/motor/src/frontend.rs").read_text()
     hb = (root / "firmware/host/world/src/hbridge.rs").read_text()
     pr = (root / "firmware/apps/motor/src/params.rs").read_text()
+    br = (root / "firmware/targets/f103/motor/src/bridge.rs").read_text()
 
     def num(pattern: str, text: str) -> float:
         m = re.search(pattern, text)
@@ -299,6 +303,8 @@ def firmware_assumptions(root: Path | None = None) -> dict[str, float]:
         "pwm_hz": num(r"pwm_hz: ([\d_.]+)", hb),
         "dead_time_s": num(r"dead_time_s: ([\d_.e-]+)", hb),
         "current_limit max": num(r"current_limit: f32 = [\d.]+, [\d.]+, ([\d.]+)", pr),
+        "bridge.rs PWM_HZ": num(r"const PWM_HZ: u32 = ([\d_]+)", br),
+        "bridge.rs DEAD_TIME_NS": num(r"const DEAD_TIME_NS: u32 = ([\d_]+)", br) * 1e-9,
     }
 
 
@@ -313,6 +319,8 @@ def firmware_changes(fw: dict[str, float] | None = None) -> list[str]:
         "pwm_hz": PWM_HZ,
         "dead_time_s": DEAD_TIME_S,
         "current_limit max": I_PEAK,
+        "bridge.rs PWM_HZ": PWM_HZ,
+        "bridge.rs DEAD_TIME_NS": DEAD_TIME_S,
     }
     return [f"{k}: firmware {fw[k]:g}, board {x:g}" for k, x in want.items()
             if not math.isclose(fw[k], x, rel_tol=1e-6)]
@@ -415,7 +423,7 @@ def rows() -> list[Row]:
     i_each = i_el / v["N_BULK"]
     rated = ELCAP_RIPPLE * ELCAP_FREQ_K
     add(Row(f"input ripple at {I_CONT:.0f} A, d = 0.5", f"{i_rip:.1f} A rms at {RIPPLE_HZ / 1e3:.0f} kHz",
-            "I √(d(1 − d)), worst d", True, "centre-aligned PWM (edge-aligned complementary: 20 A rms)"))
+            "I √(d(1 − d)), worst d", True, "sign-magnitude: one pulse per period (bipolar drive: up to 20 A rms)"))
     add(Row("per electrolytic", f"{i_each:.2f} A rms", f"≤ {rated:.2f} A ({ELCAP_RIPPLE} A × {ELCAP_FREQ_K})",
             i_each <= rated, f"{v['N_BULK']} × {ELCAP}; bank takes {i_el / i_rip:.0%}"))
     t_core = ELCAP_T_LOCAL + ELCAP_RIPPLE_RISE * (i_each / rated) ** 2
@@ -462,9 +470,10 @@ def rows() -> list[Row]:
     add(Row("current resolution", f"{lsb * 1e3:.1f} mA/count", f"range ≥ ±{I_PEAK:.0f} A (issue 19)",
             HALL_RANGE >= I_PEAK, f"clips at ±{(ADC_FS / 2) / (HALL_MV_PER_A / 1e3):.1f} A"))
     di_motor = VIN_MAX * 0.25 / (MOTOR_L * RIPPLE_HZ)
-    add(Row("motor current ripple at d = 0.5", f"{di_motor:.2f} A p-p", f"≤ 10 % of {I_CONT:.0f} A",
-            di_motor <= 0.1 * I_CONT, f"V d(1 − d) / (L · {RIPPLE_HZ / 1e3:.0f} kHz), L {MOTOR_L * 1e3:.1f} mH "
-            "(assumed): a centre sample reads the average"))
+    extra = (di_motor / math.sqrt(12) / I_CONT) ** 2
+    add(Row("motor current ripple at d = 0.5", f"{di_motor:.2f} A p-p", "extra copper loss ≤ 1 %",
+            extra <= 0.01, f"V d(1 − d) / (L f), L {MOTOR_L * 1e3:.1f} mH (assumed): +{extra:.2%} I²R in the "
+            f"winding; an unsynchronised sample errs by up to ±{di_motor / 2:.2f} A (sample at the PWM centre)"))
     add(Row("sensor bandwidth vs PWM", f"{HALL_BW_HZ / 1e3:.0f} kHz", f"> ripple {RIPPLE_HZ / 1e3:.0f} kHz",
             HALL_BW_HZ > RIPPLE_HZ, "it follows the ripple: sample at the PWM centre (TIM1 trigger)"))
 
