@@ -5,17 +5,17 @@ firmware constants the board disagrees with. There is no schematic yet: the comp
 in `DESIGN_VALUES`, keyed by their role; when hardware/motor/motor.kicad_sch exists they become
 reference designators and tests/test_hardware.py checks them against it, as for the PSU.
 
-Datasheet figures carry their source. A figure this file could not confirm says NOT VERIFIED,
-and where two readings were found the design uses the worse one (both are given). Estimates
-(thermal coefficients, board convection) say so: they are what the first board must measure.
+Datasheet figures carry their source. A figure this file could not confirm from the datasheet
+says NOT VERIFIED (and where it came from); estimates (thermal coefficients, board convection,
+the MOSFET's recovery charge) say so: they are what the first board must measure.
 
 Sources: TI CSD19536KTT SLPS540C (MOSFET; electrical characteristics read on ti.com), TI
 DRV8350/DRV8353 SLVSDY6 (gate driver; IDRIVE, VDS_LVL, dead-time registers read on ti.com; the
 VM range from a third-party summary of the same datasheet), Allegro ACS725 (1.2 mΩ, 120 kHz read),
 TI TLV3011 SBOS290 (comparator with 1.242 V reference), Littelfuse SMCJ series (TVS), Amass XT60
 (30 A), IPC-2221B §6.2 (conductor sizing equation), docs/bus.md §6 (200 mA per module, ground),
-firmware/apps/motor/src/frontend.rs and firmware/host/world/src/hbridge.rs (PWM, dead time,
-ADC, current scaling).
+firmware/targets/f103/motor/src/bridge.rs (PWM, dead time, sign-magnitude drive),
+firmware/apps/motor/src/frontend.rs and firmware/host/world/src/hbridge.rs (ADC, current scaling).
 """
 from __future__ import annotations
 
@@ -92,7 +92,8 @@ HALL_SWING = (0.2, 3.1)       # output range into the ADC at 3.3 V: estimate (ra
 # --- input protection ------------------------------------------------------------------------
 TVS = "SMCJ45A"               # 1500 W (10/1000 µs)
 TVS_VRWM, TVS_VBR_MIN, TVS_VBR_MAX = 45.0, 50.0, 55.3
-TVS_VC, TVS_IPP = 72.7, 20.6  # clamp at the rated pulse (JEDEC SMCJ table)
+TVS_VC, TVS_IPP = 72.7, 20.6  # clamp at the rated pulse; these four from the JEDEC SMCJ table as
+                              # remembered: NOT VERIFIED (no SMCJ datasheet was read)
 TVS_ALPHA = 0.001             # V_BR temperature coefficient, 1/K (as calc/psu.py)
 TVS_E_PULSE = 1500 * 1.4e-3   # J: 10/1000 µs pulse energy ≈ P_pk × 1.4 ms
 T_COLD = -20.0
