@@ -12,7 +12,7 @@ the MOSFET's recovery charge) say so: they are what the first board must measure
 Sources: TI CSD19536KTT SLPS540C (MOSFET; electrical characteristics read on ti.com), TI
 DRV8350/DRV8353 SLVSDY6 (gate driver; IDRIVE, VDS_LVL, dead-time registers read on ti.com; the
 VM range from a third-party summary of the same datasheet), Allegro ACS725 (1.2 mΩ, 120 kHz read),
-TI TLV3011 SBOS290 (comparator with 1.242 V reference), Littelfuse SMCJ series (TVS), Amass XT60
+TI TLV3011 SBOS300C (comparator with 1.242 V reference), Littelfuse SMCJ series (TVS), Amass XT60
 (30 A), IPC-2221B §6.2 (conductor sizing equation), docs/bus.md §6 (200 mA per module, ground),
 firmware/targets/f103/motor/src/bridge.rs (PWM, dead time, sign-magnitude drive),
 firmware/apps/motor/src/frontend.rs and firmware/host/world/src/hbridge.rs (ADC, current scaling).
