@@ -1,0 +1,595 @@
+"""hardware/motor revision A: the power stage of the DC motor module, from the datasheets' equations.
+
+Run `scripts/py -m r2ptools.kicad.calc.motor` for the table (value, limit, margin) and the list of
+firmware constants the board disagrees with. There is no schematic yet: the component values are
+in `DESIGN_VALUES`, keyed by their role; when hardware/motor/motor.kicad_sch exists they become
+reference designators and tests/test_hardware.py checks them against it, as for the PSU.
+
+Datasheet figures carry their source. A figure this file could not confirm from the datasheet
+says NOT VERIFIED (and where it came from); estimates (thermal coefficients, board convection,
+the MOSFET's recovery charge) say so: they are what the first board must measure.
+
+Sources: TI CSD19536KTT SLPS540C (MOSFET; electrical characteristics read on ti.com), TI
+DRV8350/DRV8353 SLVSDY6 (gate driver; IDRIVE, VDS_LVL, dead-time registers read on ti.com; the
+VM range from a third-party summary of the same datasheet), Allegro ACS725 (1.2 mΩ, 120 kHz read),
+TI TLV3011 SBOS300C (comparator with 1.242 V reference), Littelfuse SMCJ series (TVS), Amass XT60
+(30 A), IPC-2221B §6.2 (conductor sizing equation), docs/bus.md §6 (200 mA per module, ground),
+firmware/targets/f103/motor/src/bridge.rs (PWM, dead time, sign-magnitude drive),
+firmware/apps/motor/src/frontend.rs and firmware/host/world/src/hbridge.rs (ADC, current scaling).
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+# --- what the module is for --------------------------------------------------------------------
+VIN_NOM = 36.0                # the paper: "DC motors up to 36 V"
+LIION_MAX = 4.20 * 10 * 1.01  # 10S Li-ion on a charger at +1 % (as calc/psu.py): 42.42 V
+LEAD_ACID_MAX = 3 * 14.7      # 3 × 12 V lead-acid at absorption charge (14.7 V per block, cold)
+VIN_MAX = max(LIION_MAX, LEAD_ACID_MAX)                  # 44.1 V: highest steady input
+VIN_MIN = 10.0                # below: DRV835x VM range (9 V) with margin; firmware flags it
+I_CONT = 20.0                 # the paper: "a continuous 20 A current"
+I_PEAK = 30.0                 # peak, limited by the current sensor's range (below)
+PEAK_S = 10.0                 # how long the peak may last (heatsink heat capacity, below)
+T_AMB = 40.0                  # issue 19: junction limit checked at 40 °C ambient
+TJ_LIMIT = 110.0              # issue 19: junction ≤ 110 °C at 20 A (the KTT family's T_J max is 175 °C)
+MOTOR_V_RATED = 36.0          # largest motor rating the module is for: back-EMF ≤ this at ≤ no-load speed
+MOTOR_L = 0.2e-3              # armature inductance, H (assumption: 70 W brushed motors are 0.1–0.3 mH)
+
+# --- firmware (targets/f103/motor/src/bridge.rs, host/world/src/hbridge.rs, apps/motor frontend.rs)
+PWM_HZ = 20_000.0             # TIM1 PWM frequency (above hearing), centre-aligned
+DEAD_TIME_S = 500e-9          # TIM1 dead time at each edge
+ADC_FS = 3.3                  # VDDA = VREF+ = the 3.3 V rail
+ADC_COUNTS = 4096
+# The drive (firmware/targets/f103/motor/src/bridge.rs): sign-magnitude, centre-aligned. For a
+# positive duty leg A switches at d and leg B's low side stays on (the reverse for a negative
+# one); the current recirculates through the low sides between pulses. So one leg switches, the
+# supply sees one pulse of height I and width d per period (input ripple I √(d(1 − d)) at the
+# PWM frequency), and one low side carries I all the time. (Locked anti-phase, which the world
+# model also offers, switches both legs: twice the switching loss, ripple at 2 f.)
+SWITCHING_LEGS = 1
+RIPPLE_HZ = PWM_HZ
+
+# --- MOSFETs: TI CSD19536KTT, 100 V N-channel, D2PAK (SLPS540C) --------------------------------
+FET = "CSD19536KTT"
+FET_VDS = 100.0               # BV_DSS min (§4.1, read)
+FET_RDS_TYP = 2.0e-3          # V_GS = 10 V, I_D = 100 A, 25 °C, typ (§4.1, read)
+FET_RDS_MAX = 2.4e-3          # the same, max (§4.1, read)
+FET_RDS_TC = 0.007            # 1/K: normalised R_DS(on) 1.7 at 125 °C (TI NexFET curves): estimate
+FET_QG, FET_QGD, FET_QGS = 118e-9, 17e-9, 37e-9         # at 10 V, V_DS 50 V, typ (§4.1, read);
+                              # Q_gs2 (plateau part of Q_gs) taken as half of Q_gs
+FET_QRR = 600e-9              # body diode: NOT VERIFIED (estimate: 435 nC read for the smaller
+                              # CSD19535KTT in another project's table, scaled up for the die)
+FET_VSD = 0.9                 # body diode at 20 A, hot: estimate
+FET_RTH_JC = 0.5              # °C/W max: NOT VERIFIED for this part (CSD19535KTT's 0.5, read;
+                              # the larger die of the CSD19536KTT should not be worse)
+FET_ID_PULSE = 400.0          # I_DM, abs max (the KTT family's, read for CSD19535KTT)
+
+# --- gate driver: TI DRV8350H (hardware interface, 6x PWM mode), SLVSDY6 -------------------------
+DRV = "DRV8350HRTVR"
+DRV_VM_RANGE = (9.0, 75.0)    # VM recommended (third-party summary of SLVSDY6: NOT VERIFIED on ti.com)
+DRV_VM_ABS = 80.0             # VM abs max (same source: NOT VERIFIED)
+DRV_VDRAIN_ABS = 102.0        # VDRAIN abs max (same source)
+DRV_IDRIVE_SRC, DRV_IDRIVE_SNK = 0.55, 1.1   # A: register levels 1000b (SLVSDY6 Table 16, read);
+                              # the H variant's IDRIVE pin offers 7 of them: which, NOT VERIFIED
+DRV_DEAD_MIN = 100e-9         # H variant's inserted dead time (the SPI default, read): TIM1 adds its own
+DRV_VDS_LVL = 0.2             # V: VDS_OCP level (SLVSDY6 Table 17 lists 0.06–2 V; pin level NOT VERIFIED)
+DRV_VDS_TOL = 0.2             # ±20 % on the VDS comparator (estimate)
+DRV_VCP_MAX_A = 25e-3         # charge-pump (VCP) load capability (third-party summary: NOT VERIFIED)
+DRV_IQ = 8.5e-3               # VM operating current at 48 V (third-party summary)
+
+# --- current sensor: Allegro ACS725LLCTR-30AB-T, 3.3 V, ratiometric ------------------------------
+HALL = "ACS725LLCTR-30AB-T"
+HALL_RANGE = 30.0             # ± A, optimised range
+HALL_MV_PER_A = 44.0          # at VCC = 3.3 V: NOT VERIFIED (memory of the ACS725 selection table)
+HALL_BW_HZ = 120e3            # read (ACS725 features)
+HALL_R = 1.2e-3               # primary conductor resistance, read
+HALL_ICC_MAX = 14e-3          # NOT VERIFIED (10 mA typ)
+HALL_SWING = (0.2, 3.1)       # output range into the ADC at 3.3 V: estimate (rail-to-rail minus ~0.2 V)
+
+# --- input protection ------------------------------------------------------------------------
+TVS = "SMCJ45A"               # 1500 W (10/1000 µs)
+TVS_VRWM, TVS_VBR_MIN, TVS_VBR_MAX = 45.0, 50.0, 55.3
+TVS_VC, TVS_IPP = 72.7, 20.6  # clamp at the rated pulse; these four from the JEDEC SMCJ table as
+                              # remembered: NOT VERIFIED (no SMCJ datasheet was read)
+TVS_ALPHA = 0.001             # V_BR temperature coefficient, 1/K (as calc/psu.py)
+TVS_E_PULSE = 1500 * 1.4e-3   # J: 10/1000 µs pulse energy ≈ P_pk × 1.4 ms
+T_COLD = -20.0
+OV_REF = (1.230, 1.242, 1.254)   # TLV3011 reference (min, typ, max): ±1 % NOT VERIFIED
+RES_TOL = 0.01
+RES_0603_VMAX = 75.0          # UNI-ROYAL 0603WAF working voltage (bom/parts.csv, as calc/psu.py)
+LOOP_L = 10e-9                # commutation loop inductance, H: layout target (ceramics at the legs)
+
+# --- input capacitors --------------------------------------------------------------------------
+ELCAP = "63 V 1000 µF 16 × 25 mm low-ESR aluminium electrolytic, 105 °C"
+ELCAP_V, ELCAP_SURGE = 63.0, 79.0       # rated / surge (IEC 60384-4: 1.25 × for ≤ 315 V)
+ELCAP_RIPPLE = 2.7            # A rms at 100 kHz, 105 °C: the part MUST meet it (candidates NOT VERIFIED)
+ELCAP_FREQ_K = 0.95           # ripple multiplier at 40 kHz vs 100 kHz (typical tables): estimate
+ELCAP_ESR = 0.022             # Ω at 100 kHz, 20 °C: requirement (candidates' tables NOT VERIFIED)
+ELCAP_LIFE_H = 5000.0         # at 105 °C and rated ripple
+ELCAP_T_LOCAL = 65.0          # °C: board temperature at the capacitors at 20 A, 40 °C (estimate)
+ELCAP_RIPPLE_RISE = 5.0       # °C core rise at rated ripple (usual maker rule)
+CER = "CL32B225KCJSNNE"       # 2.2 µF 100 V X7R 1210 (Samsung, LCSC C55151, the PSU's)
+CER_DC_BIAS = 0.45            # remaining capacitance at ~44 V (as calc/psu.py at 42 V): estimate
+CER_ESR = 0.005
+CER_RIPPLE = 2.0              # A rms per 1210 (self-heating ~15 °C, maker curves): estimate
+LIFE_REQUIRED_H = 20_000.0    # at the worst continuous point (20 A, d = 0.5, 40 °C)
+
+# --- fuse --------------------------------------------------------------------------------------
+FUSE = "Littelfuse 0456030.ER (NANO2 456, 30 A)"
+FUSE_RATED = 30.0
+FUSE_VDC = 60.0               # DC voltage rating: NOT VERIFIED (the part MUST be rated ≥ VIN_MAX)
+FUSE_R = 1.6e-3               # cold resistance: NOT VERIFIED
+FUSE_I2T = 400.0              # melting I²t, A²s: NOT VERIFIED
+FUSE_DERATE = 0.75 * 0.90     # Littelfuse: ≤ 75 % of rating; ×0.9 at 60 °C (as calc/psu.py)
+FUSE_PULSE_FRACTION = 0.22
+R_HOTPLUG = 0.05              # Ω: cable, connector, ESR: a low bound (as calc/psu.py)
+
+# --- copper, thermal ---------------------------------------------------------------------------
+BOARD_MM = (112.0, 50.0)      # the 60 × 50 mm outline extended by one 52 mm hole pitch (README)
+CU_OUTER_UM, CU_INNER_UM = 70.0, 35.0   # 4-layer, 2 oz outer, 1 oz inner (JLC stack-up)
+CU_K = 390.0                  # W/(m·K)
+H_CONV = 12.0                 # W/(m²·K): natural convection + radiation, horizontal board: estimate
+VIA_DRILL, VIA_PLATING, BOARD_T = 0.3e-3, 25e-6, 1.6e-3
+VIAS_PER_FET = 40             # thermal vias under each D2PAK tab (8 × 5 at 1.2 mm pitch)
+PAD_T, PAD_K, PAD_MM2 = 0.5e-3, 3.0, 15.0 * 15.0        # gap pad under each tab, insulating
+HEATSINK_RTH = 2.0            # °C/W, sink to air: the heatsink MUST meet it (e.g. a 50 × 50 × 20 mm
+                              # finned extrusion, natural convection; catalogue value NOT VERIFIED)
+HEATSINK_J_PER_K = 90.0       # ~100 g of aluminium (0.9 J/(g·K))
+XT60_R = 0.5e-3               # Ω per contact pair: NOT VERIFIED (Amass lists ≤ 0.5 mΩ)
+XT60_RATED = 30.0             # A continuous (Amass)
+# high-current paths: (name, width mm on each outer layer, length mm, current A)
+PATHS = (
+    ("VMOT: XT60 → fuse → capacitors → legs", 8.0, 45.0, I_CONT),
+    ("GND: legs → capacitors → XT60", 8.0, 45.0, I_CONT),
+    ("motor A: leg → ACS725 → XT60", 6.0, 30.0, I_CONT),
+    ("motor B: leg → XT60", 6.0, 30.0, I_CONT),
+)
+PATH_RISE = 10.0              # °C allowed per path above the board (it is already warm)
+
+# --- sensing and logic -------------------------------------------------------------------------
+DESIGN_VALUES = {
+    "R_VMOT_TOP": 150e3, "R_VMOT_BOT": 10e3,           # VMOT_SENSE divider: the PSU's VIN_SENSE parts
+    "R_OV_TOP": 375e3, "R_OV_BOT": 10e3,               # over-voltage divider: 174k + 174k + 27k in series
+    "C_BULK_EACH": 1000e-6, "N_BULK": 4,
+    "C_CER_EACH": 2.2e-6, "N_CER": 8,
+    "C_VCP": 1e-6, "C_CP_FLY": 47e-9,                  # DRV835x charge pump (datasheet values)
+    "R_ENC_SERIES": 1e3, "C_ENC": 100e-12, "R_ENC_PULLUP": 2.2e3,
+    "R_FAULT_PULLUP": 10e3,
+}
+CORE_WORST_MA = 115.0         # docs/bus.md §6: the common core's share
+BUS_LIMIT_MA = 200.0
+ENCODER_MA = 60.0             # budget for a 5 V encoder (HEDS-5540 57 mA typ)
+ENCODER_MAX_HZ = 500 * 7000 / 60        # 500-line encoder at 7000 rpm motor speed, per channel
+LOGIC_MISC_MA = 2.0           # TLV3011, 74LVC2G17, pull-ups' share
+
+
+@dataclass
+class Row:
+    what: str
+    value: str
+    limit: str
+    ok: bool
+    note: str = ""
+
+
+def rds(tj: float, r25: float | None = None) -> float:
+    """R_DS(on) at junction temperature `tj` (linear in T, 1.7 × at 125 °C), from the 25 °C
+    maximum unless `r25` is given."""
+    return (FET_RDS_MAX if r25 is None else r25) * (1 + FET_RDS_TC * (tj - 25.0))
+
+
+def switching_times() -> tuple[float, float]:
+    """Turn-on and turn-off voltage transition times at the driver's IDRIVE (Q_gs2 + Q_gd) / I."""
+    q = FET_QGS / 2 + FET_QGD
+    return q / DRV_IDRIVE_SRC, q / DRV_IDRIVE_SNK
+
+
+def leg_switching_loss(v: float, i: float) -> dict[str, float]:
+    """One leg per PWM period: one hard turn-on and one turn-off, the body diode's recovery
+    and its conduction during both dead times."""
+    t_on, t_off = switching_times()
+    return {
+        "edges": 0.5 * v * i * (t_on + t_off) * PWM_HZ,
+        "recovery": FET_QRR * v * PWM_HZ,
+        "dead time": FET_VSD * i * 2 * max(DEAD_TIME_S, DRV_DEAD_MIN) * PWM_HZ,
+    }
+
+
+def losses(i: float, v: float, tj: float) -> dict[str, float]:
+    """Power stage losses at motor current `i`, supply `v`, FET junctions at `tj`.
+
+    Conduction: at any time one FET of each leg carries i, so 2 i² R in all. Switching: the
+    switching leg(s). The worst FET is taken as carrying i² R (the non-switching leg's low side
+    does) plus all of a switching leg's losses (its high side at d → 1): pessimistic.
+    """
+    r = rds(tj)
+    sw = leg_switching_loss(v, i)
+    leg = sum(sw.values())
+    i_cap = ripple_current(i)
+    return {
+        "conduction (4 FETs)": 2 * i * i * r,
+        f"switching ({SWITCHING_LEGS} leg{'s' if SWITCHING_LEGS > 1 else ''})": SWITCHING_LEGS * leg,
+        "worst FET": i * i * r + leg,
+        "gate drive (driver)": 4 * FET_QG * 11.0 * PWM_HZ + v * DRV_IQ,
+        "ACS725": i * i * HALL_R,
+        "fuse": (i ** 2) * FUSE_R,   # input current ≤ motor current (its rms, pessimistic)
+        "connectors (2 × XT60)": 2 * i * i * XT60_R,
+        "copper": sum(path_loss(w, l, a) for _, w, l, a in PATHS) * (i / I_CONT) ** 2,
+        "capacitor ESR": electrolytic_share(i_cap) ** 2 * ELCAP_ESR / DESIGN_VALUES["N_BULK"],
+    }
+
+
+def ripple_current(i: float, d: float = 0.5) -> float:
+    """Input capacitors' rms ripple: pulses of height i, duty |d| → i √(d (1 − d))."""
+    return i * math.sqrt(d * (1 - d))
+
+
+def bank_impedances(f: float = RIPPLE_HZ) -> tuple[complex, complex]:
+    """Electrolytic and ceramic banks at the ripple's fundamental."""
+    v = DESIGN_VALUES
+    w = 2 * math.pi * f
+    z_el = complex(ELCAP_ESR, -1 / (w * v["C_BULK_EACH"] * 0.8)) / v["N_BULK"]   # −20 % tolerance
+    c_cer = v["C_CER_EACH"] * CER_DC_BIAS
+    z_cer = complex(CER_ESR, -1 / (w * c_cer)) / v["N_CER"]
+    return z_el, z_cer
+
+
+def electrolytic_share(i_rms: float) -> float:
+    """The electrolytics' part of `i_rms`, all of it taken at the fundamental: pessimistic for
+    them (the ceramics take more of every harmonic)."""
+    z_el, z_cer = bank_impedances()
+    return i_rms * abs(z_cer / (z_el + z_cer))
+
+
+def ipc2221_external_amps(width_mm: float, thick_um: float, rise: float) -> float:
+    """IPC-2221B external conductor: I = 0.048 ΔT^0.44 A^0.725 (A in mil²)."""
+    area_mil2 = (width_mm / 0.0254) * (thick_um / 25.4)
+    return 0.048 * rise ** 0.44 * area_mil2 ** 0.725
+
+
+def path_loss(width_mm: float, length_mm: float, amps: float, t: float = 70.0) -> float:
+    """I²R of a path on both outer layers in parallel (copper at `t` °C)."""
+    rho = 1.72e-8 * (1 + 0.00393 * (t - 20))
+    area = 2 * width_mm * 1e-3 * CU_OUTER_UM * 1e-6
+    return amps ** 2 * rho * length_mm * 1e-3 / area
+
+
+def rth_vias() -> float:
+    one = BOARD_T / (CU_K * math.pi * ((VIA_DRILL / 2 + VIA_PLATING) ** 2 - (VIA_DRILL / 2) ** 2))
+    return one / VIAS_PER_FET
+
+
+def rth_board_to_air() -> float:
+    """The board alone as a fin: both faces, efficiency tanh(mL)/(mL) over the half length."""
+    w, h = (x * 1e-3 for x in BOARD_MM)
+    kt = CU_K * (2 * CU_OUTER_UM + 2 * CU_INNER_UM) * 1e-6
+    m = math.sqrt(2 * H_CONV / kt)
+    half = w / 2
+    eta = math.tanh(m * half) / (m * half)
+    return 1 / (H_CONV * 2 * w * h * eta)
+
+
+def junction(i: float, v: float, rth_sink: float) -> tuple[float, dict[str, float]]:
+    """Worst FET junction at ambient T_AMB, iterating R_DS(on)(T_J): every loss on the board goes
+    through `rth_sink` (heatsink or board copper) to air, the worst FET's own through its stack."""
+    stack = FET_RTH_JC + rth_vias() + (PAD_T / (PAD_K * PAD_MM2 * 1e-6) if rth_sink == HEATSINK_RTH else 0)
+    tj = 100.0
+    for _ in range(50):
+        p = losses(i, v, tj)
+        total = sum(x for k, x in p.items() if k != "worst FET")
+        tj = T_AMB + total * rth_sink + p["worst FET"] * stack
+    return tj, p
+
+
+def firmware_assumptions(root: Path | None = None) -> dict[str, float]:
+    """The constants the motor firmware and the world model assume, read from their sources."""
+    root = root or Path(__file__).resolve().parents[4]
+    fe = (root / "firmware/apps/motor/src/frontend.rs").read_text()
+    hb = (root / "firmware/host/world/src/hbridge.rs").read_text()
+    pr = (root / "firmware/apps/motor/src/params.rs").read_text()
+    br = (root / "firmware/targets/f103/motor/src/bridge.rs").read_text()
+
+    def num(pattern: str, text: str) -> float:
+        m = re.search(pattern, text)
+        if not m:
+            raise ValueError(f"firmware constant not found: {pattern!r}")
+        return float(m.group(1).replace("_", ""))
+    return {
+        "HALL_MV_PER_A": num(r"HALL_MV_PER_A: f32 = ([\d_.]+)", fe),
+        "VMOT_DIVIDER_TOP_OHM": num(r"VMOT_DIVIDER_TOP_OHM: f32 = ([\d_.]+)", fe),
+        "VMOT_DIVIDER_BOTTOM_OHM": num(r"VMOT_DIVIDER_BOTTOM_OHM: f32 = ([\d_.]+)", fe),
+        "pwm_hz": num(r"pwm_hz: ([\d_.]+)", hb),
+        "dead_time_s": num(r"dead_time_s: ([\d_.e-]+)", hb),
+        "current_limit max": num(r"current_limit: f32 = [\d.]+, [\d.]+, ([\d.]+)", pr),
+        "bridge.rs PWM_HZ": num(r"const PWM_HZ: u32 = ([\d_]+)", br),
+        "bridge.rs DEAD_TIME_NS": num(r"const DEAD_TIME_NS: u32 = ([\d_]+)", br) * 1e-9,
+    }
+
+
+def firmware_changes(fw: dict[str, float] | None = None) -> list[str]:
+    """What the firmware must change to match this board (empty when it agrees)."""
+    fw = fw or firmware_assumptions()
+    v = DESIGN_VALUES
+    want = {
+        "HALL_MV_PER_A": HALL_MV_PER_A,
+        "VMOT_DIVIDER_TOP_OHM": v["R_VMOT_TOP"],
+        "VMOT_DIVIDER_BOTTOM_OHM": v["R_VMOT_BOT"],
+        "pwm_hz": PWM_HZ,
+        "dead_time_s": DEAD_TIME_S,
+        "current_limit max": I_PEAK,
+        "bridge.rs PWM_HZ": PWM_HZ,
+        "bridge.rs DEAD_TIME_NS": DEAD_TIME_S,
+    }
+    return [f"{k}: firmware {fw[k]:g}, board {x:g}" for k, x in want.items()
+            if not math.isclose(fw[k], x, rel_tol=1e-6)]
+
+
+def rows() -> list[Row]:
+    v = DESIGN_VALUES
+    out: list[Row] = []
+    add = out.append
+
+    # --- voltages: steady, regeneration, ringing
+    add(Row("input range", f"{VIN_MIN:.0f}–{VIN_MAX:.1f} V", f"{VIN_NOM:.0f} V nominal", True,
+            f"10S Li-ion {LIION_MAX:.1f} V, 3 × 12 V lead-acid charging {LEAD_ACID_MAX:.1f} V"))
+    ov = v["R_OV_TOP"] / v["R_OV_BOT"]
+    ov_lo = OV_REF[0] * (1 + ov * (1 - RES_TOL) / (1 + RES_TOL))
+    ov_hi = OV_REF[2] * (1 + ov * (1 + RES_TOL) / (1 - RES_TOL))
+    add(Row("over-voltage trip (TLV3011 → DRV_FAULT: coast)", f"{ov_lo:.1f}–{ov_hi:.1f} V",
+            f"> {VIN_MAX:.1f} V and < TVS V_BR min {TVS_VBR_MIN:.1f} V",
+            ov_lo > VIN_MAX and ov_hi < TVS_VBR_MIN,
+            f"{ov_lo - VIN_MAX:+.1f} V over the input, {TVS_VBR_MIN - ov_hi:+.1f} V under the TVS at 25 °C "
+            f"(at {T_COLD:.0f} °C its V_BR may be {TVS_VBR_MIN * (1 + TVS_ALPHA * (T_COLD - 25)):.1f} V: "
+            "it then takes mA before the trip, harmlessly)"))
+    vbr_cold = TVS_VBR_MIN * (1 + TVS_ALPHA * (T_COLD - 25))
+    add(Row(f"TVS {TVS} min breakdown at {T_COLD:.0f} °C", f"{vbr_cold:.1f} V", f"> {VIN_MAX:.1f} V",
+            vbr_cold > VIN_MAX, f"{vbr_cold - VIN_MAX:+.1f} V; stand-off {TVS_VRWM:.0f} V"))
+    t_on, t_off = switching_times()
+    ring = LOOP_L * I_PEAK / t_off
+    add(Row("switch-node overshoot L_loop · I / t_off", f"{ring:.1f} V", "(added below)", True,
+            f"{LOOP_L * 1e9:.0f} nH loop, {I_PEAK:.0f} A in {t_off * 1e9:.0f} ns"))
+    add(Row("MOSFET V_DS at the over-voltage trip + overshoot", f"{ov_hi + ring:.1f} V",
+            f"≤ 80 % of {FET_VDS:.0f} V", ov_hi + ring <= 0.8 * FET_VDS, f"{(ov_hi + ring) / FET_VDS:.0%} of rating"))
+    add(Row("MOSFET V_DS at the TVS clamp + overshoot (a fault)", f"{TVS_VC + ring:.1f} V",
+            f"≤ {FET_VDS:.0f} V", TVS_VC + ring <= FET_VDS,
+            f"{(TVS_VC + ring) / FET_VDS:.0%} of rating; reached only when the trip has failed"))
+    add(Row("DRV8350 VM at the TVS clamp", f"{TVS_VC:.1f} V", f"≤ abs max {DRV_VM_ABS:.0f} V (NOT VERIFIED)",
+            TVS_VC <= DRV_VM_ABS, f"{DRV_VM_ABS - TVS_VC:.1f} V margin; VM is RC-filtered, away from the switch nodes"))
+    add(Row("DRV8350 VM at the over-voltage trip", f"{ov_hi:.1f} V", f"≤ {DRV_VM_RANGE[1]:.0f} V recommended",
+            ov_hi <= DRV_VM_RANGE[1]))
+    add(Row("electrolytics at the TVS clamp", f"{TVS_VC:.1f} V", f"≤ surge {ELCAP_SURGE:.0f} V ({ELCAP_V:.0f} V rated)",
+            TVS_VC <= ELCAP_SURGE and ov_hi <= ELCAP_V, f"at the trip {ov_hi / ELCAP_V:.0%} of rated"))
+    c_bulk = v["C_BULK_EACH"] * v["N_BULK"] * 0.8
+    e_l = 0.5 * MOTOR_L * I_PEAK ** 2
+    v_dump = math.sqrt(ov_hi ** 2 + 2 * e_l / c_bulk)
+    add(Row("coast at 30 A: winding energy into the bulk", f"{e_l * 1e3:.0f} mJ → {v_dump:.1f} V",
+            f"< TVS V_BR min {TVS_VBR_MIN:.0f} V", v_dump < TVS_VBR_MIN,
+            f"from the trip's {ov_hi:.1f} V into {c_bulk * 1e3:.1f} mF (−20 %); the TVS ({TVS_E_PULSE:.1f} J "
+            "rated) is for what this misses"))
+    add(Row("back-EMF when coasting (regeneration stops)", f"≤ {MOTOR_V_RATED:.0f} V",
+            f"< trip {ov_lo:.1f} V", MOTOR_V_RATED < ov_lo,
+            "motor rated ≤ 36 V, at most at its no-load speed: coasting diodes then cannot charge the bus"))
+
+    # --- MOSFETs and their heat
+    tj_cold, _ = junction(I_CONT, VIN_MAX, rth_board_to_air())
+    tj, p = junction(I_CONT, VIN_MAX, HEATSINK_RTH)
+    total = sum(x for k, x in p.items() if k != "worst FET")
+    add(Row(f"R_DS(on) max, {FET}", f"{FET_RDS_MAX * 1e3:.1f} mΩ at 25 °C", "SLPS540C §4.1", True,
+            f"{rds(tj) * 1e3:.1f} mΩ at T_J {tj:.0f} °C (×{1 + FET_RDS_TC * (tj - 25):.2f}, estimate)"))
+    add(Row("switching times (Q_gs/2 + Q_gd) / IDRIVE", f"on {t_on * 1e9:.0f} ns, off {t_off * 1e9:.0f} ns",
+            f"IDRIVE {DRV_IDRIVE_SRC * 1e3:.0f}/{DRV_IDRIVE_SNK * 1e3:.0f} mA", True,
+            f"dv/dt {VIN_MAX / (FET_QGD / DRV_IDRIVE_SRC) / 1e9:.1f} V/ns at turn-on"))
+    dead_need = t_off + 50e-9
+    add(Row("dead time vs turn-off + driver skew (50 ns)", f"{DEAD_TIME_S * 1e9:.0f} ns",
+            f"≥ {dead_need * 1e9:.0f} ns", DEAD_TIME_S >= dead_need,
+            f"body diode conducts the rest: {leg_switching_loss(VIN_MAX, I_CONT)['dead time']:.2f} W per leg"
+            f" at 20 A; 200 ns would leave {FET_VSD * I_CONT * 2 * 200e-9 * PWM_HZ:.2f} W"))
+    for k, x in p.items():
+        add(Row(f"loss at {I_CONT:.0f} A, {VIN_MAX:.1f} V: {k}", f"{x:.2f} W", "", True))
+    add(Row("board total at 20 A", f"{total:.1f} W", f"η {1 - total / (VIN_MAX * I_CONT * 0.95):.1%} at full duty",
+            True))
+    add(Row("T_J on board copper alone (no heatsink)", f"{tj_cold:.0f} °C",
+            f"≤ {TJ_LIMIT:.0f} °C: needs the heatsink", True,
+            f"board {BOARD_MM[0]:.0f} × {BOARD_MM[1]:.0f} mm as a fin, θ {rth_board_to_air():.1f} °C/W; "
+            f"continuous on copper alone {copper_only_rating():.1f} A"))
+    add(Row(f"T_J worst FET at {I_CONT:.0f} A, {T_AMB:.0f} °C, heatsink {HEATSINK_RTH} °C/W", f"{tj:.0f} °C",
+            f"≤ {TJ_LIMIT:.0f} °C", tj <= TJ_LIMIT,
+            f"{TJ_LIMIT - tj:.0f} °C margin; stack θ_JC {FET_RTH_JC} + vias {rth_vias():.1f} + pad "
+            f"{PAD_T / (PAD_K * PAD_MM2 * 1e-6):.1f} °C/W; sink at {T_AMB + total * HEATSINK_RTH:.0f} °C"))
+    tj_pk, p_pk = peak_junction(tj, p)
+    add(Row(f"T_J at the {I_PEAK:.0f} A peak for {PEAK_S:.0f} s", f"{tj_pk:.0f} °C", f"≤ {TJ_LIMIT:.0f} °C",
+            tj_pk <= TJ_LIMIT, f"sink +{(sum(x for k, x in p_pk.items() if k != 'worst FET') - total) * PEAK_S / HEATSINK_J_PER_K:.1f} °C "
+            f"in {PEAK_S:.0f} s ({HEATSINK_J_PER_K:.0f} J/K); stack settles in < 1 s"))
+    ocp = (DRV_VDS_LVL * (1 - DRV_VDS_TOL) / rds(tj), DRV_VDS_LVL * (1 + DRV_VDS_TOL) / rds(25, FET_RDS_TYP))
+    add(Row("VDS over-current trip (hot R max … cold R typ)", f"{ocp[0]:.0f}–{ocp[1]:.0f} A",
+            f"> peak {I_PEAK:.0f} A, < I_DM {FET_ID_PULSE:.0f} A", ocp[0] > I_PEAK and ocp[1] < FET_ID_PULSE,
+            f"VDS_LVL {DRV_VDS_LVL} V ±{DRV_VDS_TOL:.0%}: a short, not an overload (the firmware trips those)"))
+
+    # --- gate drive supply (charge pump: no bootstrap, 100 % duty allowed)
+    i_vcp = 2 * FET_QG * PWM_HZ
+    add(Row("charge pump load: 2 high sides Q_g f", f"{i_vcp * 1e3:.1f} mA", f"≤ {DRV_VCP_MAX_A * 1e3:.0f} mA (NOT VERIFIED)",
+            i_vcp <= 0.5 * DRV_VCP_MAX_A, f"{i_vcp / DRV_VCP_MAX_A:.0%}; no bootstrap refresh limit on duty"))
+    droop = FET_QG / (v["C_VCP"] * 0.5)
+    add(Row("VCP droop per high-side turn-on", f"{droop * 1e3:.0f} mV", "≤ 0.5 V (gate stays ≥ 10 V)",
+            droop <= 0.5, "1 µF 16 V 0603 X7R at ~11 V keeps ~50 %"))
+    add(Row("driver supply", f"VM from VMOT, {(DRV_IQ + 4 * FET_QG * PWM_HZ) * 1e3:.0f} mA", "not from the bus", True,
+            f"VM min {DRV_VM_RANGE[0]:.0f} V ≤ input min {VIN_MIN:.0f} V"))
+
+    # --- input capacitors
+    i_rip = ripple_current(I_CONT)
+    i_el = electrolytic_share(i_rip)
+    i_each = i_el / v["N_BULK"]
+    rated = ELCAP_RIPPLE * ELCAP_FREQ_K
+    add(Row(f"input ripple at {I_CONT:.0f} A, d = 0.5", f"{i_rip:.1f} A rms at {RIPPLE_HZ / 1e3:.0f} kHz",
+            "I √(d(1 − d)), worst d", True, "sign-magnitude: one pulse per period (bipolar drive: up to 20 A rms)"))
+    add(Row("per electrolytic", f"{i_each:.2f} A rms", f"≤ {rated:.2f} A ({ELCAP_RIPPLE} A × {ELCAP_FREQ_K})",
+            i_each <= rated, f"{v['N_BULK']} × {ELCAP}; bank takes {i_el / i_rip:.0%}"))
+    t_core = ELCAP_T_LOCAL + ELCAP_RIPPLE_RISE * (i_each / rated) ** 2
+    life = ELCAP_LIFE_H * 2 ** ((105 - t_core) / 10)
+    add(Row("electrolytic life at that point", f"{life:,.0f} h", f"≥ {LIFE_REQUIRED_H:,.0f} h", life >= LIFE_REQUIRED_H,
+            f"core {t_core:.0f} °C ({ELCAP_T_LOCAL:.0f} °C board, estimate); {ELCAP_LIFE_H:.0f} h at 105 °C, ×2 per 10 °C"))
+    z_el, z_cer = bank_impedances()
+    i_cer = i_rip * abs(z_el / (z_el + z_cer)) / v["N_CER"]
+    add(Row("per ceramic (fundamental share)", f"{i_cer:.2f} A rms", f"≤ {CER_RIPPLE} A (estimate)",
+            i_cer <= CER_RIPPLE, f"{v['N_CER']} × {CER}, {v['C_CER_EACH'] * CER_DC_BIAS * 1e6:.1f} µF each at 44 V: they close "
+            "the edges' loop (L_loop), the electrolytics store the ripple"))
+    dv = I_CONT * 0.25 / (c_bulk * RIPPLE_HZ) + I_CONT * abs(z_el)
+    add(Row("input voltage ripple", f"{dv:.2f} V p-p", "≤ 1 V", dv <= 1.0, "charge + ESR, bank alone"))
+
+    # --- fuse and hot-plug
+    add(Row(f"fuse {FUSE}", f"{I_CONT:.0f} A continuous", f"≤ {FUSE_RATED * FUSE_DERATE:.2f} A (75 %, 60 °C)",
+            I_CONT <= FUSE_RATED * FUSE_DERATE, f"DC rating {FUSE_VDC:.0f} V vs {VIN_MAX:.1f} V (NOT VERIFIED)"))
+    i2t = c_bulk / 0.8 * VIN_MAX ** 2 / (2 * R_HOTPLUG)
+    lim = FUSE_I2T * FUSE_PULSE_FRACTION
+    add(Row("hot-plug inrush I²t into the bulk", f"{i2t:.0f} A²s", f"≤ {lim:.0f} A²s (22 % of melting)",
+            i2t <= lim, f"melting I²t {FUSE_I2T:.0f} A²s NOT VERIFIED" if i2t <= lim else "traded: plug the module in with the robot's main switch off (README errata)"
+            if i2t > lim else ""))
+    add(Row("XT60 (battery male, motor female)", f"{I_CONT:.0f} A", f"≤ {XT60_RATED:.0f} A continuous",
+            I_CONT <= XT60_RATED, f"peak {I_PEAK:.0f} A at the rating"))
+    add(Row("ACS725 primary at 20 A", f"{I_CONT ** 2 * HALL_R:.2f} W", "≤ 0.5 W in SOIC-8 on 2 oz pours",
+            I_CONT ** 2 * HALL_R <= 0.5, "continuous 20 A through the leads: NOT VERIFIED (Allegro thermal curves)"))
+
+    # --- copper (IPC-2221B external, both outer layers)
+    for name, w, length, amps in PATHS:
+        cap = 2 * ipc2221_external_amps(w, CU_OUTER_UM, PATH_RISE)
+        cap_pk = 2 * ipc2221_external_amps(w, CU_OUTER_UM, 2 * PATH_RISE)
+        add(Row(f"copper {name}", f"{w:.0f} mm × 2 layers 2 oz: {cap:.0f} A", f"≥ {amps:.0f} A at +{PATH_RISE:.0f} °C",
+                cap >= amps and cap_pk >= I_PEAK,
+                f"{cap_pk:.0f} A at +{2 * PATH_RISE:.0f} °C (peak {I_PEAK:.0f} A); {path_loss(w, length, amps) * 1e3:.0f} mW "
+                f"over {length:.0f} mm (IPC-2221B; IPC-2152 chart check open)"))
+
+    # --- current sense
+    span = HALL_RANGE * HALL_MV_PER_A / 1e3
+    lo, hi = ADC_FS / 2 - span, ADC_FS / 2 + span
+    add(Row(f"{HALL} ±{HALL_RANGE:.0f} A into the ADC", f"{lo:.2f}–{hi:.2f} V",
+            f"within the output swing {HALL_SWING[0]}–{HALL_SWING[1]} V", HALL_SWING[0] <= lo and hi <= HALL_SWING[1],
+            f"{HALL_MV_PER_A:.0f} mV/A at 3.3 V (NOT VERIFIED); 0 A = VDDA/2 (ratiometric)"))
+    lsb = ADC_FS / ADC_COUNTS / (HALL_MV_PER_A / 1e3)
+    add(Row("current resolution", f"{lsb * 1e3:.1f} mA/count", f"range ≥ ±{I_PEAK:.0f} A (issue 19)",
+            HALL_RANGE >= I_PEAK, f"clips at ±{(ADC_FS / 2) / (HALL_MV_PER_A / 1e3):.1f} A"))
+    di_motor = VIN_MAX * 0.25 / (MOTOR_L * RIPPLE_HZ)
+    extra = (di_motor / math.sqrt(12) / I_CONT) ** 2
+    add(Row("motor current ripple at d = 0.5", f"{di_motor:.2f} A p-p", "extra copper loss ≤ 1 %",
+            extra <= 0.01, f"V d(1 − d) / (L f), L {MOTOR_L * 1e3:.1f} mH (assumed): +{extra:.2%} I²R in the "
+            f"winding; an unsynchronised sample errs by up to ±{di_motor / 2:.2f} A (sample at the PWM centre)"))
+    add(Row("sensor bandwidth vs PWM", f"{HALL_BW_HZ / 1e3:.0f} kHz", f"> ripple {RIPPLE_HZ / 1e3:.0f} kHz",
+            HALL_BW_HZ > RIPPLE_HZ, "it follows the ripple: sample at the PWM centre (TIM1 trigger)"))
+
+    # --- VMOT sense
+    g = (v["R_VMOT_TOP"] + v["R_VMOT_BOT"]) / v["R_VMOT_BOT"]
+    fs = ADC_FS * g
+    add(Row("VMOT_SENSE full scale", f"{fs:.1f} V (×1/{g:.0f})", f"> over-voltage trip {ov_hi:.1f} V",
+            fs > ov_hi, f"{VIN_MAX / g:.2f} V at {VIN_MAX:.1f} V; {fs / ADC_COUNTS * 1e3:.1f} mV/count"))
+    inj = (TVS_VC - 3.6) / v["R_VMOT_TOP"] - 3.6 / v["R_VMOT_BOT"]
+    add(Row("ADC pin injection at the TVS clamp", f"{max(inj, 0) * 1e3:.2f} mA", "≤ 5 mA (STM32F103)", inj < 5e-3))
+    add(Row("0603 VMOT_SENSE top resistor at the TVS clamp", f"{TVS_VC - 3.3:.1f} V", f"≤ {RES_0603_VMAX:.0f} V working",
+            TVS_VC - 3.3 <= RES_0603_VMAX, f"UNI-ROYAL 0603WAF; the over-voltage divider's three parts "
+            f"{(TVS_VC - OV_REF[0]) / 3:.0f} V each"))
+
+    # --- encoder (PA6/PA7 are not 5 V tolerant)
+    fc = 1 / (2 * math.pi * v["R_ENC_SERIES"] * v["C_ENC"])
+    add(Row("encoder filter corner", f"{fc / 1e6:.2f} MHz", f"≥ 10 × {ENCODER_MAX_HZ / 1e3:.0f} kHz",
+            fc >= 10 * ENCODER_MAX_HZ, "1 kΩ + 100 pF into a 74LVC2G17 at 3.3 V (inputs 5.5 V tolerant)"))
+    add(Row("encoder pin at a 5 V encoder", "3.3 V at PA6/PA7", "≤ VDD + 0.3 V (not FT pins)", True,
+            "the buffer, not the MCU, sees 5 V; SRV05-4 at the connector"))
+
+    # --- bus budget
+    pullups = 2 * 5.0 / v["R_ENC_PULLUP"] * 1e3
+    bus = CORE_WORST_MA + HALL_ICC_MAX * 1e3 + ENCODER_MA + LOGIC_MISC_MA + pullups
+    add(Row("from the bus (core, ACS725, encoder, pull-ups)", f"{bus:.0f} mA", f"≤ {BUS_LIMIT_MA:.0f} mA (docs/bus.md §6)",
+            bus <= BUS_LIMIT_MA, f"encoder budget {ENCODER_MA:.0f} mA (5 V); the driver runs from VMOT"))
+    return out
+
+
+def copper_only_rating() -> float:
+    """The continuous current at which T_J reaches the limit on board copper alone."""
+    lo, hi = 1.0, I_CONT
+    for _ in range(40):
+        mid = (lo + hi) / 2
+        if junction(mid, VIN_MAX, rth_board_to_air())[0] <= TJ_LIMIT:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def peak_junction(tj20: float, p20: dict[str, float]) -> tuple[float, dict[str, float]]:
+    """T_J after PEAK_S at I_PEAK starting from the 20 A steady state: the heatsink warms by its
+    heat capacity, the junction-to-sink stack is at its new steady state."""
+    stack = FET_RTH_JC + rth_vias() + PAD_T / (PAD_K * PAD_MM2 * 1e-6)
+    total20 = sum(x for k, x in p20.items() if k != "worst FET")
+    t_sink = T_AMB + total20 * HEATSINK_RTH
+    tj = tj20
+    for _ in range(50):
+        p = losses(I_PEAK, VIN_MAX, tj)
+        extra = sum(x for k, x in p.items() if k != "worst FET") - total20
+        tj = t_sink + extra * PEAK_S / HEATSINK_J_PER_K + p["worst FET"] * stack
+    return tj, p
+
+
+README_BEGIN = "<!-- BEGIN generated by scripts/py -m r2ptools.kicad.calc.motor --markdown: do not edit -->"
+README_END = "<!-- END generated -->"
+
+
+def markdown() -> str:
+    """The table as hardware/motor/README.md embeds it (tests/test_motor_calc.py keeps it current)."""
+    out = [README_BEGIN, "", "| | what | value | limit | note |", "|---|---|---|---|---|"]
+    for r in rows():
+        tag = "ok" if r.ok else "**traded**" if "traded" in r.note else "**FAIL**"
+        cells = (c.replace("|", "\\|") for c in (r.what, r.value, r.limit, r.note))
+        out.append(f"| {tag} | " + " | ".join(cells) + " |")
+    changes = firmware_changes()
+    out += ["", "Firmware constants this board changes: " +
+            ("; ".join(f"`{c}`" for c in changes) if changes else "none.")]
+    return "\n".join(out + ["", README_END])
+
+
+README = Path(__file__).resolve().parents[4] / "hardware/motor/README.md"
+
+
+def readme_with_table(text: str) -> str:
+    """`text` (the README) with its generated block replaced by the current table."""
+    try:
+        head, rest = text.split(README_BEGIN, 1)
+        _, tail = rest.split(README_END, 1)
+    except ValueError:
+        raise ValueError(f"{README}: the markers {README_BEGIN!r} … {README_END!r} are missing: "
+                         "put them where the table goes") from None
+    return head + markdown() + tail
+
+
+def write_readme() -> None:
+    README.write_text(readme_with_table(README.read_text()))
+
+
+def main(argv: list[str] | None = None) -> int:
+    import sys
+    argv = sys.argv[1:] if argv is None else argv
+    if argv == ["--markdown"]:
+        print(markdown())
+        return 0
+    if argv == ["--readme"]:
+        write_readme()
+        return 0
+    if argv:
+        print("usage: scripts/py -m r2ptools.kicad.calc.motor [--markdown | --readme]", file=sys.stderr)
+        return 2
+    rs = rows()
+    w = max(len(r.what) for r in rs)
+    wv = max(len(r.value) for r in rs)
+    wl = max(len(r.limit) for r in rs)
+    print("hardware/motor revision A power stage (r2ptools/kicad/calc/motor.py)\n")
+    for r in rs:
+        tag = "ok " if r.ok else "TRADE" if "traded" in r.note else "FAIL"
+        print(f"{tag:<5} {r.what:<{w}}  {r.value:<{wv}}  {r.limit:<{wl}}  {r.note}".rstrip())
+    changes = firmware_changes()
+    print("\nfirmware constants this board changes (firmware/apps/motor, firmware/host/world):")
+    print("\n".join(f"  {c}" for c in changes) if changes else "  none: the firmware agrees")
+    return 0 if all(r.ok or "traded" in r.note for r in rs) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
