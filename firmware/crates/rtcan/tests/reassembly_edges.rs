@@ -1,8 +1,9 @@
-//! A sender gives up a message midway (its deadline passed with frames still queued) and
-//! starts the next one (docs/rtcan.md, "Duplicate or new?"): the next message's first frame may
-//! carry the counter just above the one the receiver expects, as a repeated frame would; only a
-//! frame equal, bit for bit, to the last one taken is a duplicate, so the new message is
-//! delivered and the given-up one never is.
+//! Reassembly at the edges a real bus produces (docs/rtcan.md, "Fragmentation", "Duplicate or
+//! new?"): a sender gives up a message midway (its deadline passed with frames still queued)
+//! and starts the next, whose first counter may be the one a repeated frame would have; a frame
+//! is lost; a last frame arrives whose start was never seen, or one too short for its message.
+//! Only a frame equal, bit for bit, to the last one taken is a duplicate; a new message is
+//! delivered, a given-up one never is, and a malformed frame does not end a good message.
 
 use rtcan::{fragments, Expect, Frame, FrameId, Laxity, MessageId, Reassembler};
 
@@ -78,4 +79,18 @@ fn a_stray_last_frame_does_not_take_another_streams_history() {
     assert!(r.accept(&Frame::new(stray, &[1, 2, 3]).unwrap(), at + 100, Expect::Any).is_none());
     assert!(r.accept(&m[2], at + 200, Expect::Any).is_none());
     assert_eq!((r.stats().completed, r.stats().foreign, r.stats().duplicate), (1, 1, 1));
+}
+
+#[test]
+fn a_last_frame_too_short_for_its_message_is_dropped_and_the_message_goes_on() {
+    // A 2-frame message carries at least 9 bytes and its CRC: 11 wire bytes, so its last frame
+    // has at least 3. A 2-byte frame with counter 1 on the stream (another sender's, or a
+    // misconfigured one) is refused for its length; the real last frame then completes it.
+    let mut r: Reassembler<1, 32> = Reassembler::new(10_000);
+    let m = message(0x42, 12); // counters 2, 1: 8 + 6 wire bytes
+    let stray = Frame::new(FrameId { fragment: 1, ..m[1].id() }, &[0x42, 0x42]).unwrap();
+    assert!(r.accept(&m[0], 100, Expect::Any).is_none());
+    assert!(r.accept(&stray, 200, Expect::Any).is_none());
+    assert_eq!(r.stats().bad_length, 1);
+    assert_eq!(r.accept(&m[1], 300, Expect::Any).map(|d| d.data.to_vec()), Some(vec![0x42; 12]));
 }
