@@ -6,7 +6,7 @@ use r2p_management::message::{Message, PANIC_TEXT_MAX};
 use rtcan::controller::CanController;
 use rtcan::{Expect, Reassembler};
 
-use crate::node::{NodeConfig, PANIC_REPORT_EVERY};
+use crate::node::{short_location, NodeConfig, PANIC_REPORT_EVERY};
 use crate::testbus::{run, uid, Bus, TestNode};
 use crate::NoParams;
 
@@ -71,4 +71,20 @@ fn the_text_is_made_printable_and_cut_to_fit() {
     let long: std::string::String = "x".repeat(PANIC_TEXT_MAX + 10);
     let seen = listen(Some(&long), 1);
     assert_eq!(seen[1], "x".repeat(PANIC_TEXT_MAX));
+}
+
+#[test]
+fn the_location_is_shortened_to_the_crates_folder() {
+    // As panic-persist keeps a panic of a committed image (paths remapped by scripts/firmware).
+    let ours = "panicked at /r2p/firmware/apps/motor/src/lib.rs:120:9:\nindex out of bounds";
+    assert_eq!(short_location(ours), "apps/motor/src/lib.rs:120:9:\nindex out of bounds");
+    let dep = "panicked at /cargo/registry/src/index.crates.io-1949cf8c6b5b557f/\
+               embassy-stm32-0.6.0/src/can/bxcan/mod.rs:10:5:\nno mailbox";
+    assert_eq!(short_location(dep), "embassy-stm32-0.6.0/src/can/bxcan/mod.rs:10:5:\nno mailbox");
+    // A message that mentions /firmware/ after the location keeps it.
+    let msg = "src/lib.rs:1:1:\nsee /r2p/firmware/x";
+    assert_eq!(short_location(msg), msg);
+    assert_eq!(short_location("panicked at x.rs:1:1:\nboom"), "x.rs:1:1:\nboom");
+    let seen = listen(Some(ours), 1);
+    assert_eq!(seen, ["H", "apps/motor/src/lib.rs:120:9: index out of bounds"]);
 }
