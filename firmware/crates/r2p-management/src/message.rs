@@ -167,11 +167,12 @@ pub enum Message {
         /// Node ID to reboot.
         target: u8,
     },
-    /// "My last reset followed a panic": its location and message, kept across the reset, sent
+    /// "My last reset followed a panic": what the module kept of it across the reset, sent
     /// after the first heartbeat and every few after (until the next reset) so that a tool
     /// listening at any time hears it.
     PanicReport {
-        /// `file:line:column: message`, shortened to fit (printable ASCII).
+        /// Printable ASCII; from the modules' images, the calls found on the stack
+        /// (r2p-panic: `panic, calls: 08002a1e 0800b3c2 …`, innermost first).
         text: String<PANIC_TEXT_MAX>,
     },
     /// "I publish `topic` on my stream `index`."
@@ -608,7 +609,7 @@ pub(crate) mod tests {
             },
             Message::Reboot { target: 0x12 },
             Message::PanicReport {
-                text: String::try_from("apps/motor/src/lib.rs:120:9: index out of bounds").unwrap(),
+                text: String::try_from("panic, calls: 08002a1e 0800b3c2 08004f16").unwrap(),
             },
             Message::Advertise {
                 topic: String::try_from("motor1/speed").unwrap(),

@@ -45,7 +45,7 @@ pub use config::{NodeConfig, MODULE_SLOT_LEAD_US};
 pub use error::NodeError;
 pub use events::{Event, EVENT_QUEUE};
 pub use hrt::{HrtState, MASTER_STREAMS};
-pub use management::{short_location, PANIC_REPORT_EVERY, STARTING_HEARTBEATS};
+pub use management::{PANIC_REPORT_EVERY, STARTING_HEARTBEATS};
 pub use stats::NodeStats;
 pub use topics::{nrt_reserve, ImportState};
 

@@ -22,25 +22,6 @@ pub const STARTING_HEARTBEATS: u32 = 2;
 /// and heard by any tool that listens for a second (`r2p nodes`).
 pub const PANIC_REPORT_EVERY: u32 = 8;
 
-/// A panic's text from its crate's folder on: without `panicked at `, and without the folders
-/// above the crate in the file's path as the images are built (scripts/firmware remaps the
-/// repository to `/r2p` and cargo's home to `/cargo`): `/r2p/firmware/apps/motor/src/lib.rs`
-/// becomes `apps/motor/src/lib.rs`, `/cargo/registry/src/<index>/embassy-stm32-0.6.0/src/…`
-/// becomes `embassy-stm32-0.6.0/src/…`. Other text is kept.
-pub fn short_location(text: &str) -> &str {
-    const REGISTRY: &str = "/registry/src/";
-    const FIRMWARE: &str = "/firmware/";
-    let text = text.strip_prefix("panicked at ").unwrap_or(text);
-    let path = &text[..text.find(':').unwrap_or(text.len())];
-    let skip = if let Some(i) = path.find(REGISTRY) {
-        let index = i + REGISTRY.len();
-        path[index..].find('/').map_or(0, |j| index + j + 1)
-    } else {
-        path.rfind(FIRMWARE).map_or(0, |i| i + FIRMWARE.len())
-    };
-    &text[skip..]
-}
-
 /// A set of node IDs (bit n = node n).
 #[derive(Clone, Copy, Default)]
 pub(super) struct NodeSet([u32; 8]);
@@ -103,19 +84,18 @@ impl<
         self.state = state;
     }
 
-    /// Reports that this boot followed a panic, `text` being its location and message as the
-    /// panic's `Display` wrote them (`panicked at FILE:LINE:COLUMN:` and the message on the
-    /// next line), kept across the reset by the module: sent as PANIC_REPORT after the first
-    /// heartbeat and every [`PANIC_REPORT_EVERY`] heartbeats after. The `panicked at ` prefix
-    /// goes, and the file is shortened to its crate's folder ([`short_location`]) so that the
-    /// message fits; characters a management string cannot carry (line breaks, non-ASCII)
-    /// become spaces and `?`; the text is cut to [`PANIC_TEXT_MAX`] bytes.
-    pub fn set_panic_report(&mut self, text: &str) {
+    /// Reports that this boot followed a panic, `text` being what the module kept of it
+    /// across the reset (r2p-panic's report, `panic, calls: …`): sent as PANIC_REPORT after
+    /// the first heartbeat and every [`PANIC_REPORT_EVERY`] heartbeats after, until the next
+    /// reset. Bytes a management string cannot carry become a space (line breaks, tabs) or `?`
+    /// (one per non-ASCII character); the text is cut to [`PANIC_TEXT_MAX`] bytes.
+    pub fn set_panic_report(&mut self, text: &[u8]) {
         let mut s = String::new();
-        for c in short_location(text).chars() {
-            let c = match c {
-                c if c.is_ascii() && is_name_char(c as u8) => c,
-                '\n' | '\r' | '\t' => ' ',
+        for &b in text {
+            let c = match b {
+                b if is_name_char(b) => b as char,
+                b'\n' | b'\r' | b'\t' => ' ',
+                0x80..=0xBF => continue, // the rest of a UTF-8 sequence: one `?` for it
                 _ => '?',
             };
             if s.push(c).is_err() {

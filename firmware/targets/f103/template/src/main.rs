@@ -14,7 +14,6 @@ use embassy_stm32::gpio::Output;
 use embassy_stm32::peripherals::CAN;
 use embassy_stm32::{bind_interrupts, pac};
 use embassy_time::{Duration, Instant, Ticker};
-use panic_halt as _;
 use r2p_app_template::{params, App, Sample, Storage};
 use r2p_module::FlashParams;
 use rtcan_bxcan::BxCan;
