@@ -107,7 +107,7 @@ impl<
 
     /// After heartbeat number `self.heartbeats` was queued: the panic report, when it is due.
     pub(super) fn repeat_panic_report(&mut self) {
-        if self.heartbeats % PANIC_REPORT_EVERY == 0 {
+        if self.heartbeats.is_multiple_of(PANIC_REPORT_EVERY) {
             if let Some(text) = self.panic_report.clone() {
                 let _ = self.send(&Message::PanicReport { text }); // again at the next one due
             }

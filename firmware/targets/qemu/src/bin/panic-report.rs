@@ -55,7 +55,9 @@ fn finish(ok: bool, why: &str) -> ! {
         !ok as u8
     );
     debug::exit(if ok { debug::EXIT_SUCCESS } else { debug::EXIT_FAILURE });
-    loop {}
+    loop {
+        cortex_m::asm::wfi();
+    }
 }
 
 #[cortex_m_rt::entry]
