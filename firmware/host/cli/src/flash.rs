@@ -232,7 +232,12 @@ pub fn flash(
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
     let target = flash_target(root, &args.module)?;
-    let exe = find_probe_rs(root, args.probe_rs.as_deref(), path)?;
+    let exe = match find_probe_rs(root, args.probe_rs.as_deref(), path) {
+        Ok(exe) => exe,
+        // A dry run shows the commands even where probe-rs is not installed yet.
+        Err(_) if args.dry_run && args.probe_rs.is_none() => PathBuf::from("probe-rs"),
+        Err(e) => return Err(e),
+    };
     let download = download_args(&target, args, root);
     let reset = reset_args(&target, args);
     if args.dry_run {
@@ -544,6 +549,29 @@ mod tests {
             )
         );
         assert!(!log.exists());
+        std::fs::remove_dir_all(d).unwrap();
+    }
+
+    #[test]
+    fn a_dry_run_without_probe_rs_still_shows_the_commands() {
+        let d = scratch();
+        std::fs::create_dir_all(d.join("firmware/images")).unwrap();
+        std::fs::write(d.join("firmware/images.toml"), "").unwrap();
+        std::fs::write(d.join("firmware/images/psu.elf"), "").unwrap();
+        std::fs::write(
+            d.join("modules.toml"),
+            "[[module]]\nname = \"psu\"\nimage = { mcu = \"STM32F103CB\" }\n",
+        )
+        .unwrap();
+        let mut a = args("psu");
+        a.dry_run = true;
+        let mut out = Vec::new();
+        flash(&a, &d, None, &mut out).unwrap();
+        let out = String::from_utf8(out).unwrap();
+        assert!(out.starts_with("probe-rs download --chip STM32F103CB --verify "), "{out}");
+        a.dry_run = false;
+        let err = flash(&a, &d, None, &mut Vec::new()).unwrap_err().to_string();
+        assert!(err.starts_with("probe-rs is not installed"), "{err}");
         std::fs::remove_dir_all(d).unwrap();
     }
 
