@@ -166,6 +166,27 @@ mod tests {
     }
 
     #[test]
+    fn only_thumb_return_addresses_within_the_code_count() {
+        // Code where every pair of halfwords is a BL: only the word itself decides.
+        let bl = |a: u32| if a % 4 == 0 { 0xF000 } else { 0xF800 };
+        let text = 0x0800_0000..0x0800_1000;
+        let at = |ret: u32| call_before(ret + 1, &text, bl);
+        assert_eq!(at(0x0800_0004), Some(0x0800_0002), "the first place a call can end");
+        assert_eq!(at(0x0800_0002), None, "before it: the call would start before the code");
+        assert_eq!(at(0x07FF_FFF0), None);
+        assert_eq!(at(0x0800_1000), Some(0x0800_0FFE), "a call ending the code");
+        assert_eq!(at(0x0800_1002), None);
+        // 0xF000 is a BL's first halfword and a valid second one: code that is calls everywhere.
+        let calls = |_| 0xF000;
+        assert_eq!(call_before(0x0800_0101, &text, calls), Some(0x0800_00FE));
+        assert_eq!(
+            call_before(0x0800_0100, &text, calls),
+            None,
+            "no Thumb bit: not a return address"
+        );
+    }
+
+    #[test]
     fn a_report_reads_back_and_fits_a_panic_report_message() {
         let mut out = [0u8; 62]; // PANIC_TEXT_MAX, the longest PANIC_REPORT text
         let calls = [0x0800_2A1E, 0x0800_B3C2, 0x0800_4F16, 0x0800_0D5A, 0x0800_0120];
