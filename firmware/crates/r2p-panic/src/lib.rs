@@ -168,7 +168,7 @@ mod tests {
     #[test]
     fn only_thumb_return_addresses_within_the_code_count() {
         // Code where every pair of halfwords is a BL: only the word itself decides.
-        let bl = |a: u32| if a % 4 == 0 { 0xF000 } else { 0xF800 };
+        let bl = |a: u32| if a.is_multiple_of(4) { 0xF000 } else { 0xF800 };
         let text = 0x0800_0000..0x0800_1000;
         let at = |ret: u32| call_before(ret + 1, &text, bl);
         assert_eq!(at(0x0800_0004), Some(0x0800_0002), "the first place a call can end");
