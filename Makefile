@@ -4,7 +4,7 @@
 SHELL := /bin/bash
 PY := scripts/py
 
-.PHONY: all setup firmware fab enclosures check test bench mutants loom help clean
+.PHONY: all setup firmware fab enclosures check test bench mutants loom help clean flash probe-rs
 
 all: setup ## Set up if needed, build every artifact (firmware images, fab packages, cases), print a summary
 	@$(PY) -m r2ptools.build
@@ -38,6 +38,16 @@ mutants: setup ## Mutation testing of the core crates (long: ~5 h): detected/via
 
 loom: setup ## Model-check the message pool's atomics with loom (host; its own build, ~1-4 min)
 	@cd firmware && RUSTFLAGS="--cfg loom" CARGO_TARGET_DIR=target/loom cargo test --locked -q --release -p r2p-middleware --lib
+
+flash: ## Write a module's committed image through an SWD probe: make flash M=<module> (docs/flashing.md)
+	@test -n "$(M)" || { echo "make flash: name the module: make flash M=<module> (a module of modules.toml, e.g. M=motor)" >&2; exit 2; }
+	@test -x .tools/probe-rs/bin/probe-rs || command -v probe-rs >/dev/null || $(MAKE) --no-print-directory probe-rs
+	@scripts/r2p flash $(M)
+
+PROBE_RS_VERSION = $(shell sed -n 's/^probe-rs = .*"=\([0-9.]*\)".*/\1/p' firmware/tools/probe-rs/Cargo.toml)
+probe-rs: ## Install probe-rs (the pinned version, firmware/tools/probe-rs) into .tools/probe-rs: once, ~15 min on 2 cores
+	@echo "probe-rs: building probe-rs-tools $(PROBE_RS_VERSION) into .tools/probe-rs (once; ~15 min on 2 cores)"
+	cargo install probe-rs-tools --version $(PROBE_RS_VERSION) --locked --root .tools/probe-rs
 
 help: ## List the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -E 's/^([a-z-]+):.*## (.*)/  make \1\t\2/' | expand -t 20

@@ -66,6 +66,26 @@ def test_help_everywhere(built):
     assert p.returncode == 2 and "unrecognized subcommand" in p.stdout
 
 
+def test_flash_builds_the_probe_rs_commands_and_says_what_is_missing(built, tmp_path):
+    # A stand-in probe-rs that finds no probe (the machines running the tests have none).
+    fake = tmp_path / "probe-rs"
+    fake.write_text("#!/bin/sh\ncase \"$1\" in\n  --version) echo 'probe-rs 0.32.0';;\n"
+                    "  list) echo 'No debug probes were found.';;\n  *) exit 3;;\nesac\n")
+    fake.chmod(0o755)
+    p = run([str(R2P), "flash", "motor", "--probe-rs", str(fake), "--dry-run"], timeout=30)
+    assert p.returncode == 0, p.stdout
+    assert p.stdout.splitlines() == [
+        f"{fake} download --chip STM32F103CB --verify {ROOT}/firmware/images/motor.elf",
+        f"{fake} reset --chip STM32F103CB"]
+    p = run([str(R2P), "flash", "motor", "--probe-rs", str(fake)], timeout=30)
+    assert p.returncode == 1 and p.stdout.startswith("r2p: error: no debug probe found"), p.stdout
+    assert "docs/flashing.md" in p.stdout
+    p = run([str(R2P), "flash", "gateway"], timeout=30)
+    assert p.returncode == 1 and "module gateway has no firmware image yet" in p.stdout, p.stdout
+    p = run([str(R2P), "flash"], timeout=30)
+    assert p.returncode == 2 and "<MODULE>" in p.stdout
+
+
 def test_nodes_lists_the_demo_boards(demo):
     p = r2p(demo, "nodes")
     assert p.returncode == 0, p.stdout

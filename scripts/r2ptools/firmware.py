@@ -24,6 +24,8 @@ from . import ROOT
 from . import manifest as modules
 
 IMAGES_DIR = Path("firmware") / "images"
+DEFMT_LOG = "info"
+"""defmt's log level in the committed images (debug builds log everything: .cargo/config.toml)."""
 
 
 @dataclass
@@ -68,6 +70,9 @@ def reproducible_env(root: Path) -> dict[str, str]:
     env["R2P_CARGO_HOME"] = str(cargo_home())
     for var in ("RUSTFLAGS", "CARGO_ENCODED_RUSTFLAGS", "CARGO_BUILD_RUSTFLAGS"):
         env.pop(var, None)
+    # defmt's compile-time log filter: the committed images log at info and above (module-core's
+    # boot, reboot and storage messages); a DEFMT_LOG in the caller's environment must not change them.
+    env["DEFMT_LOG"] = DEFMT_LOG
     return env
 
 

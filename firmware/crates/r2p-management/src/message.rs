@@ -16,6 +16,8 @@ pub const TOPIC_MAX: usize = 32;
 pub const ENCODED_MAX: usize = 64;
 /// Bytes of an STM32 unique device ID.
 pub const UID_LEN: usize = 12;
+/// Longest panic report text: what is left of [`ENCODED_MAX`] after the type and length bytes.
+pub const PANIC_TEXT_MAX: usize = ENCODED_MAX - 2;
 
 /// Type bytes (docs/middleware.md, "Management protocol").
 pub mod ty {
@@ -23,6 +25,8 @@ pub mod ty {
     pub const HEARTBEAT: u8 = 0x11;
     /// [`super::Message::Reboot`]
     pub const REBOOT: u8 = 0x13;
+    /// [`super::Message::PanicReport`]
+    pub const PANIC_REPORT: u8 = 0x14;
     /// [`super::Message::Advertise`]
     pub const ADVERTISE: u8 = 0x21;
     /// [`super::Message::SubscribeRequest`]
@@ -162,6 +166,14 @@ pub enum Message {
     Reboot {
         /// Node ID to reboot.
         target: u8,
+    },
+    /// "My last reset followed a panic": what the module kept of it across the reset, sent
+    /// after the first heartbeat and every few after (until the next reset) so that a tool
+    /// listening at any time hears it.
+    PanicReport {
+        /// Printable ASCII; from the modules' images, the calls found on the stack
+        /// (r2p-panic: `panic, calls: 08002a1e 0800b3c2 …`, innermost first).
+        text: String<PANIC_TEXT_MAX>,
     },
     /// "I publish `topic` on my stream `index`."
     Advertise {
@@ -376,6 +388,7 @@ impl Message {
         match self {
             Message::Heartbeat { .. } => ty::HEARTBEAT,
             Message::Reboot { .. } => ty::REBOOT,
+            Message::PanicReport { .. } => ty::PANIC_REPORT,
             Message::Advertise { .. } => ty::ADVERTISE,
             Message::SubscribeRequest { .. } => ty::SUBSCRIBE_REQUEST,
             Message::SubscribeResponse { .. } => ty::SUBSCRIBE_RESPONSE,
@@ -403,6 +416,7 @@ impl Message {
                 w.u16(*dropped)?;
             }
             Message::Reboot { target } => w.u8(*target)?,
+            Message::PanicReport { text } => w.str(text)?,
             Message::Advertise { topic, type_hash, size, index, class } => {
                 w.str(topic)?;
                 w.u32(*type_hash)?;
@@ -497,6 +511,7 @@ impl Message {
                 }
             }
             ty::REBOOT => Message::Reboot { target: r.u8()? },
+            ty::PANIC_REPORT => Message::PanicReport { text: r.string(is_name_char)? },
             ty::ADVERTISE => {
                 let topic = r.string(is_topic_char)?;
                 let type_hash = r.u32()?;
@@ -581,7 +596,7 @@ impl Message {
 pub(crate) mod tests {
     use super::*;
 
-    pub(crate) fn samples() -> [Message; 11] {
+    pub(crate) fn samples() -> [Message; 12] {
         [
             Message::Heartbeat {
                 uid: [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12],
@@ -593,6 +608,9 @@ pub(crate) mod tests {
                 dropped: 7,
             },
             Message::Reboot { target: 0x12 },
+            Message::PanicReport {
+                text: String::try_from("panic, calls: 08002a1e 0800b3c2 08004f16").unwrap(),
+            },
             Message::Advertise {
                 topic: String::try_from("motor1/speed").unwrap(),
                 type_hash: 0xDEAD_BEEF,
@@ -701,6 +719,22 @@ pub(crate) mod tests {
                 Message::decode(&full),
                 Ok(Message::HrtGrant { result: HrtResult::Full, .. })
             ));
+        }
+
+        fn panic_report_layout_matches_spec() {
+            let mut buf = [0u8; ENCODED_MAX];
+            let report = Message::PanicReport { text: String::try_from("a.rs:7:1: x").unwrap() };
+            let n = report.encode(&mut buf).unwrap();
+            assert_eq!(&buf[..n], b"\x14\x0ba.rs:7:1: x");
+            // The longest text fills a management message exactly.
+            let long = [b'x'; PANIC_TEXT_MAX];
+            let text = String::try_from(core::str::from_utf8(&long).unwrap()).unwrap();
+            assert_eq!(Message::PanicReport { text }.encode(&mut buf), Ok(ENCODED_MAX));
+            // A newline (or any control byte) is not printable: refused.
+            assert_eq!(Message::decode(b"\x14\x03a\nb"), Err(DecodeError::BadString));
+            let mut over = [b'x'; ENCODED_MAX + 1];
+            over[..2].copy_from_slice(&[ty::PANIC_REPORT, PANIC_TEXT_MAX as u8 + 1]);
+            assert_eq!(Message::decode(&over), Err(DecodeError::BadString));
         }
 
         fn small_buffers_are_refused_not_overrun() {

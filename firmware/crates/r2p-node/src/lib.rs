@@ -53,6 +53,8 @@ mod import_request_tests;
 #[cfg(test)]
 mod master_timing_tests;
 #[cfg(test)]
+mod panic_report_tests;
+#[cfg(test)]
 mod registration_bounds_tests;
 #[cfg(any(test, feature = "selftest"))]
 mod tdma_tests;

@@ -45,12 +45,14 @@ pub use config::{NodeConfig, MODULE_SLOT_LEAD_US};
 pub use error::NodeError;
 pub use events::{Event, EVENT_QUEUE};
 pub use hrt::{HrtState, MASTER_STREAMS};
-pub use management::STARTING_HEARTBEATS;
+pub use management::{PANIC_REPORT_EVERY, STARTING_HEARTBEATS};
 pub use stats::NodeStats;
 pub use topics::{nrt_reserve, ImportState};
 
 use heapless::{Deque, String, Vec};
-use r2p_management::message::{is_name_char, Message, ModuleState, ENCODED_MAX, NAME_MAX};
+use r2p_management::message::{
+    is_name_char, Message, ModuleState, ENCODED_MAX, NAME_MAX, PANIC_TEXT_MAX,
+};
 use r2p_management::{NodeId, NodeIdAllocator, MANAGEMENT_INDEX};
 use rtcan::controller::{ErrorCounters, Received, TxMode};
 use rtcan::failover::{Failover, Rank};
@@ -99,6 +101,8 @@ pub struct Node<
     /// Nodes this module sent parameter requests to (their answers become events).
     asked: NodeSet,
     reboot: bool,
+    /// The panic that preceded this boot, repeated after heartbeats ([`Node::set_panic_report`]).
+    panic_report: Option<String<PANIC_TEXT_MAX>>,
     events: Deque<Event, EVENT_QUEUE>,
     stats: NodeStats,
     clock: SlotClock,
@@ -159,6 +163,7 @@ impl<
             peers: NodeSet::default(),
             asked: NodeSet::default(),
             reboot: false,
+            panic_report: None,
             events: Deque::new(),
             stats: NodeStats::default(),
             clock: SlotClock::new(config.cycle),
@@ -297,6 +302,7 @@ impl<
                 dropped: self.dropped().min(u16::MAX as u32) as u16,
             };
             if self.send(&hb).is_ok() {
+                self.repeat_panic_report();
                 self.heartbeats = self.heartbeats.saturating_add(1);
                 self.next_heartbeat =
                     now.saturating_add(Micros::from(self.config.heartbeat_period_us));

@@ -7,7 +7,7 @@ use clap::{Parser, Subcommand};
 use crate::args::{open_link, BusArgs};
 use crate::error::CliError;
 use crate::session::Session;
-use crate::{echo, listing, monitor, param, publish, sim, traces};
+use crate::{echo, flash, listing, monitor, param, publish, sim, traces};
 
 const ABOUT: &str = "R2P host tool: watch and talk to an R2P robot's CAN bus";
 
@@ -31,7 +31,8 @@ Examples:
   r2p param get motor 0
   r2p pub speed --type float32 1.5
   r2p --trace bus.log monitor        # offline, from a candump log or pcap
-  r2p convert bus.log bus.pcap       # for Wireshark";
+  r2p convert bus.log bus.pcap       # for Wireshark
+  r2p flash motor                    # firmware/images/motor.elf through an SWD probe";
 
 /// `r2p`: see `--help`.
 #[derive(Parser, Debug)]
@@ -71,6 +72,9 @@ pub enum Command {
     /// in real time (--realtime) serving socketcand on --socketcand's address and, with
     /// --socketcan IFACE, bridging to a kernel CAN interface
     Sim(sim::SimArgs),
+    /// Write a module's committed image (firmware/images/MODULE.elf) through an SWD probe with
+    /// probe-rs, then reset the module (docs/flashing.md)
+    Flash(flash::FlashArgs),
 }
 
 /// Runs a parsed command line, printing results to `out`.
@@ -86,6 +90,7 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Pub(args) => publish::run(&args, bus, Session::new(open_link(bus)?), out),
         Command::Param(cmd) => param::run(&cmd, bus, Session::new(open_link(bus)?), out),
         Command::Sim(args) => sim::run(&args, bus, out),
+        Command::Flash(args) => flash::run(&args, out),
     }
 }
 

@@ -106,6 +106,7 @@ pub fn message_text(m: &Message) -> String {
             state_name(*state)
         ),
         Message::Reboot { target } => format!("REBOOT target={}", target_text(*target)),
+        Message::PanicReport { text } => format!("PANIC_REPORT text={text:?}"),
         Message::Advertise { topic, type_hash, size, index, class } => format!(
             "ADVERTISE topic={topic} type={} size={size} stream={index} class={}",
             type_text(*type_hash, *size),
@@ -146,6 +147,7 @@ pub fn message_json(m: &Message) -> Json {
             "uptime_s": uptime_s, "tx_errors": tx_errors, "rx_errors": rx_errors, "dropped": dropped,
         }),
         Message::Reboot { target } => json!({"type": "REBOOT", "target": target}),
+        Message::PanicReport { text } => json!({"type": "PANIC_REPORT", "text": text.as_str()}),
         Message::Advertise { topic, type_hash, size, index, class } => {
             let name = MsgType::by_hash(*type_hash, usize::from(*size)).map(|t| t.name);
             json!({
@@ -462,6 +464,7 @@ mod tests {
             Message::ParamSet { target: 1, index: 4, value: Value::F32(1.5) },
             Message::ParamValue { index: 4, value: Value::I32(-3) },
             Message::ParamError { index: 4, fault: ParamFault::OutOfRange },
+            Message::PanicReport { text: "src/lib.rs:3:5: boom".try_into().unwrap() },
         ];
         let lines: Vec<String> = msgs.iter().map(message_text).collect();
         assert_eq!(lines[1], "REBOOT target=all");
@@ -474,6 +477,8 @@ mod tests {
             assert!(line.starts_with(j["type"].as_str().unwrap()), "{line}");
         }
         assert_eq!(message_json(&msgs[7])["value"], json!({"type": "f32", "value": 1.5}));
+        assert_eq!(lines[10], "PANIC_REPORT text=\"src/lib.rs:3:5: boom\"");
+        assert_eq!(message_json(&msgs[10])["text"], "src/lib.rs:3:5: boom");
     }
 
     #[test]

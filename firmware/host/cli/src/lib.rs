@@ -9,7 +9,7 @@
 //!   is learnt at run time, and the [`session::Session`] that drives it beside the watcher;
 //! - [`types`]: the message types, found by type hash, decoded and encoded;
 //! - the commands: [`monitor`], [`listing`] (`nodes`, `topics`), [`echo`], [`publish`]
-//!   (`pub`), [`param`], [`traces`] (`replay`, `convert`), [`sim`]; [`args`]: the bus options
+//!   (`pub`), [`param`], [`traces`] (`replay`, `convert`), [`sim`], [`flash`]; [`args`]: the bus options
 //!   and output they share; [`cli`] parses the command line and runs them.
 
 pub mod args;
@@ -17,6 +17,7 @@ pub mod cli;
 pub mod describe;
 pub mod echo;
 pub mod error;
+pub mod flash;
 pub mod host;
 pub mod link;
 pub mod listing;

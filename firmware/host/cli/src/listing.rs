@@ -50,15 +50,25 @@ fn node_row(n: &NodeInfo) -> Vec<String> {
         n.tx_errors.to_string(),
         n.rx_errors.to_string(),
         n.dropped.to_string(),
+        n.panic.clone().unwrap_or_else(|| "-".into()),
     ]
 }
 
 /// The `nodes` table (header first).
 pub fn nodes_table(w: &Watcher) -> Vec<String> {
-    let mut rows =
-        vec![["NODE", "NAME", "UNIQUE ID", "STATE", "UPTIME", "TX_ERR", "RX_ERR", "DROPPED"]
-            .map(String::from)
-            .to_vec()];
+    let mut rows = vec![[
+        "NODE",
+        "NAME",
+        "UNIQUE ID",
+        "STATE",
+        "UPTIME",
+        "TX_ERR",
+        "RX_ERR",
+        "DROPPED",
+        "LAST PANIC",
+    ]
+    .map(String::from)
+    .to_vec()];
     rows.extend(w.nodes().map(node_row));
     table(&rows)
 }
@@ -85,7 +95,7 @@ pub fn nodes(bus: &BusArgs, mut s: Session, out: &mut dyn Write) -> Result<(), C
             let j = json!({
                 "node": n.id, "name": n.name, "uid": hex(&n.uid), "state": state_name(n.state),
                 "uptime_s": n.uptime_s, "tx_errors": n.tx_errors, "rx_errors": n.rx_errors,
-                "dropped": n.dropped,
+                "dropped": n.dropped, "panic": n.panic,
             });
             emit(out, &j.to_string())?;
         }
@@ -169,7 +179,7 @@ mod tests {
     use super::*;
     use crate::types::MsgType;
     use crate::watch::tests::{advertise, heartbeat, management};
-    use r2p_management::message::BusClass;
+    use r2p_management::message::{BusClass, Message};
 
     #[test]
     fn tables_line_up() {
@@ -199,9 +209,9 @@ mod tests {
         assert_eq!(
             nodes_table(&w),
             [
-                "NODE  NAME   UNIQUE ID                 STATE    UPTIME  TX_ERR  RX_ERR  DROPPED",
-                "1     psu    000000000000000000000001  running  7s      1       2       3",
-                "2     motor  000000000000000000000002  running  7s      1       2       3",
+                "NODE  NAME   UNIQUE ID                 STATE    UPTIME  TX_ERR  RX_ERR  DROPPED  LAST PANIC",
+                "1     psu    000000000000000000000001  running  7s      1       2       3        -",
+                "2     motor  000000000000000000000002  running  7s      1       2       3        -",
             ]
         );
         let topics = sorted_topics(&w, None);
@@ -214,5 +224,34 @@ mod tests {
             ]
         );
         assert!(sorted_topics(&w, Some(2)).is_empty(), "the CLI's own topics are left out");
+    }
+
+    #[test]
+    fn nodes_show_the_panic_a_module_reported_until_it_boots_again() {
+        let mut w = Watcher::new();
+        let report =
+            Message::PanicReport { text: "panic, calls: 08002a1e 0800b3c2".try_into().unwrap() };
+        let mut rebooted = heartbeat("motor", 2);
+        if let Message::Heartbeat { uptime_s, .. } = &mut rebooted {
+            *uptime_s = 0;
+        }
+        let feed = |w: &mut Watcher, m: &Message, t: u64| {
+            for f in management(2, m, t) {
+                w.feed(&f);
+            }
+        };
+        feed(&mut w, &report, 500); // before any heartbeat: not yet a node, ignored
+        assert!(w.node(2).is_none());
+        feed(&mut w, &heartbeat("motor", 2), 1_000);
+        feed(&mut w, &report, 2_000);
+        feed(&mut w, &heartbeat("motor", 2), 3_000); // same boot: the report stands
+        assert_eq!(
+            nodes_table(&w)[1],
+            "2     motor  000000000000000000000002  running  7s      1       2       3        \
+             panic, calls: 08002a1e 0800b3c2"
+        );
+        feed(&mut w, &rebooted, 4_000); // uptime back to 0: a new boot, no report yet
+        assert_eq!(w.node(2).unwrap().panic, None);
+        assert!(nodes_table(&w)[1].ends_with("  -"));
     }
 }

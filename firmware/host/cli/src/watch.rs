@@ -43,6 +43,9 @@ pub struct NodeInfo {
     pub last_seen: Duration,
     /// Heartbeats heard.
     pub heartbeats: u64,
+    /// The panic its last reset followed, as its PANIC_REPORT says (none heard since it booted:
+    /// `None`).
+    pub panic: Option<String>,
 }
 
 /// A topic some node advertised.
@@ -228,7 +231,11 @@ impl Watcher {
     fn learn(&mut self, node: u8, msg: &Message, time: Duration) {
         match msg {
             Message::Heartbeat { uid, name, state, uptime_s, tx_errors, rx_errors, dropped } => {
-                let heartbeats = self.nodes.get(&node).map_or(0, |n| n.heartbeats) + 1;
+                let old = self.nodes.get(&node);
+                let heartbeats = old.map_or(0, |n| n.heartbeats) + 1;
+                // A report stands until the node boots again (its uptime goes back); the
+                // reports that follow a new panic's first heartbeat set it again.
+                let panic = old.filter(|n| n.uptime_s <= *uptime_s).and_then(|n| n.panic.clone());
                 self.nodes.insert(
                     node,
                     NodeInfo {
@@ -242,8 +249,14 @@ impl Watcher {
                         dropped: *dropped,
                         last_seen: time,
                         heartbeats,
+                        panic,
                     },
                 );
+            }
+            Message::PanicReport { text } => {
+                if let Some(n) = self.nodes.get_mut(&node) {
+                    n.panic = Some(text.to_string());
+                }
             }
             Message::Advertise { topic, type_hash, size, index, class } if *index != 0 => {
                 let info = TopicInfo {

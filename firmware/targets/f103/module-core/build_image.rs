@@ -1,7 +1,7 @@
 // The build script of every module image (included by <module>/build.rs): generates `board.rs`
 // from the module's board file (the single source of its pins), links with cortex-m-rt's script
 // (embassy-stm32's `memory-x` feature provides memory.x), and adds a linker check that the image
-// ends below the parameter pages.
+// ends below the parameter pages; links defmt's script (logs over RTT).
 
 include!("src/flash_layout.rs");
 
@@ -20,4 +20,5 @@ fn build_image(board: &str) {
     println!("cargo:rustc-link-arg-bins=--nmagic");
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
     println!("cargo:rustc-link-arg-bins=-Tparams.x");
+    println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
 }

@@ -16,7 +16,6 @@ use embassy_stm32::spi::{self, Spi, MODE_3};
 use embassy_stm32::time::Hertz;
 use embassy_time::{Duration, Instant, Ticker, Timer};
 use embedded_hal_bus::spi::{ExclusiveDevice, NoDelay};
-use panic_halt as _;
 use r2p_app_imu::{params, sensor, App, Storage};
 use r2p_drivers::lsm6dso::{Lsm6dso, SpiBus};
 use r2p_module::FlashParams;

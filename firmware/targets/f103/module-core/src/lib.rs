@@ -34,8 +34,13 @@ use rtcan::cycle::ClockState;
 use rtcan::failover::Role;
 use rtcan_bxcan::BxCan;
 use static_cell::StaticCell;
+// The global defmt logger: RTT, read by `probe-rs run` (`cargo run`, docs/flashing.md).
+use defmt_rtt as _;
+
+defmt::timestamp!("{=u64:us}", Instant::now().as_micros());
 
 mod flash_layout;
+mod panic;
 pub mod slot_timer;
 pub use flash_layout::PARAMS_BASE;
 use slot_timer::SlotTimer;
@@ -176,13 +181,19 @@ async fn bus(node: BusNode, mut can: BxCan<'static>, mut timer: SlotTimer, runni
     }
 }
 
-/// Starts the node on the bus executor, its slot boundaries from TIM2's compare.
+/// Starts the node on the bus executor, its slot boundaries from TIM2's compare; if this boot
+/// followed a panic, the node reports it (panic.rs).
 pub fn start_bus(
-    node: ModuleNode,
+    mut node: ModuleNode,
     config: &NodeConfig,
     can: BxCan<'static>,
     tim2: Peri<'static, TIM2>,
 ) {
+    if let Some(text) = r2p_panic::take_last() {
+        defmt::warn!("the last reset followed a panic: {=[u8]:a}", text);
+        node.set_panic_report(text);
+    }
+    defmt::info!("{=str}: on the bus as node {=u8}", config.name, node.node_id().get());
     let running_after_us = u64::from(STARTING_HEARTBEATS) * u64::from(config.heartbeat_period_us);
     for irq in [interrupt::USB_LP_CAN1_RX0, interrupt::CAN1_RX1, interrupt::TIM4] {
         irq.set_priority(Priority::P1);
@@ -196,6 +207,7 @@ pub fn start_bus(
 /// Loads the parameters from flash (defaults where nothing valid is stored).
 pub fn load_params<const N: usize>(params: &FlashParams<N>, flash: &mut Flash<'static, Blocking>) {
     if params.load(flash).is_err() {
+        defmt::warn!("parameters: reading them from flash failed, defaults used");
         LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
     }
 }
@@ -204,9 +216,11 @@ pub fn load_params<const N: usize>(params: &FlashParams<N>, flash: &mut Flash<'s
 /// full, stalls the CPU ~20 ms) and resets if a reboot was requested.
 pub fn persist<const N: usize>(params: &FlashParams<N>, flash: &mut Flash<'static, Blocking>) {
     if params.is_dirty() && params.commit(flash).is_err() {
+        defmt::warn!("parameters: storing in flash failed");
         LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
     }
     if REBOOT.load(Ordering::Relaxed) {
+        defmt::info!("rebooting: asked over the bus");
         cortex_m::peripheral::SCB::sys_reset();
     }
 }

@@ -32,7 +32,6 @@ use embassy_stm32::pac;
 use embassy_stm32::peripherals::ADC1;
 use embassy_time::{Duration, Instant, Ticker, Timer};
 use module_core::{drive, ModuleNode};
-use panic_halt as _;
 use r2p_app_motor::{params, App, Endpoints, Names, Sample};
 use r2p_module::FlashParams;
 use r2p_node::NodeConfig;

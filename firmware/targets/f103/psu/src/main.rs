@@ -13,7 +13,6 @@ use embassy_stm32::gpio::{Input, Output};
 use embassy_stm32::peripherals::{ADC1, PA0, PA1, PA2};
 use embassy_stm32::{pac, Peri};
 use embassy_time::{Duration, Instant, Ticker};
-use panic_halt as _;
 use r2p_app_psu::{params, App, Sample, Storage};
 use r2p_module::FlashParams;
 use rtcan_bxcan::BxCan;

@@ -11,7 +11,6 @@ use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::Output;
 use embassy_stm32::pac;
 use embassy_time::{Duration, Instant, Ticker};
-use panic_halt as _;
 use r2p_app_template::{params, App, Sample, Storage};
 use r2p_module::FlashParams;
 use rtcan_bxcan::BxCan;

@@ -1,0 +1,1 @@
+//! Never built: this package only pins the `probe-rs` crate (see Cargo.toml).
