@@ -33,8 +33,10 @@ CARGO_MUTANTS = ROOT / ".tools" / "cargo-mutants" / "bin" / "cargo-mutants"
 CRATES = ["r2p-management", "r2p-middleware", "rtcan", "r2p-node"]
 # Packages whose tests exercise a crate beyond its own, run on its mutants too: the node's
 # slot policy is tested on the bit-accurate virtual bus (r2p-vbus's node_slot_policy.rs: when
-# frames start and end), which the node's own loopback test bus cannot show.
-TESTED_BY = {"r2p-node": ["r2p-vbus"]}
+# frames start and end), which the node's own loopback test bus cannot show; rtcan's exact frame
+# length (wire_bits: CRC-15 and stuffing) is checked against the virtual bus's own bit-level
+# encoder (r2p-vbus's bxcan_timestamps.rs), an independent implementation.
+TESTED_BY = {"r2p-node": ["r2p-vbus"], "rtcan": ["r2p-vbus"]}
 CACHE = ROOT / ".cache" / "mutants"
 GOAL_PCT = 90.0
 

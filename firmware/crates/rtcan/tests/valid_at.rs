@@ -18,3 +18,15 @@ fn a_frame_is_valid_one_bit_before_the_end_of_its_eof() {
         assert!(valid_at_bits(&f) >= 54 + 8 * data.len() as u32 + TAIL_BITS - 1);
     }
 }
+
+#[test]
+fn the_counter_is_related_to_the_clock_by_the_first_received_frame() {
+    use rtcan::time_counter::TimeCounter;
+    let mut tc = TimeCounter::new(1_000_000).unwrap();
+    assert!(!tc.is_related() && tc.start_of_frame(100, 5_000).is_none());
+    let f =
+        Frame::new(FrameId { laxity: Laxity::NRT, message: MessageId(0x4301), fragment: 0 }, &[1])
+            .unwrap();
+    tc.observe(&f, 1_000, 1_000 + u64::from(valid_at_bits(&f)) + 3);
+    assert!(tc.is_related());
+}
