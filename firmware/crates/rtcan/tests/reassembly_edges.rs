@@ -94,3 +94,17 @@ fn a_last_frame_too_short_for_its_message_is_dropped_and_the_message_goes_on() {
     assert_eq!(r.stats().bad_length, 1);
     assert_eq!(r.accept(&m[1], 300, Expect::Any).map(|d| d.data.to_vec()), Some(vec![0x42; 12]));
 }
+
+#[test]
+fn a_fixed_size_stream_takes_only_single_frames_of_its_size() {
+    // A topic of 4-byte messages (Expect::Exactly(4)): one frame, counter 0, 4 bytes.
+    let id = |fragment| FrameId { laxity: Laxity::NRT, message: MessageId(0x4302), fragment };
+    let mut r: Reassembler<1, 32> = Reassembler::new(10_000);
+    assert!(r.accept(&Frame::new(id(0), &[1, 2, 3]).unwrap(), 100, Expect::Exactly(4)).is_none());
+    assert!(r
+        .accept(&Frame::new(id(2), &[1, 2, 3, 4]).unwrap(), 200, Expect::Exactly(4))
+        .is_none());
+    assert_eq!(r.stats().bad_length, 2);
+    let m = r.accept(&Frame::new(id(0), &[1, 2, 3, 4]).unwrap(), 300, Expect::Exactly(4));
+    assert_eq!(m.map(|m| m.data.to_vec()), Some(vec![1, 2, 3, 4]));
+}
