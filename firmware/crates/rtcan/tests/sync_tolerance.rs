@@ -49,3 +49,22 @@ fn the_mask_of_all_slots_has_one_bit_per_slot() {
     assert_eq!(mask(63), u64::MAX >> 1);
     assert_eq!(mask(64), u64::MAX);
 }
+
+#[test]
+fn a_cycle_whose_sync_came_off_time_has_its_reservations_unknown() {
+    use rtcan::cycle::UNKNOWN_MASK;
+    // Sync 1 announces slots 3 and 5 for cycle 2. Sync 2 comes on time: the announcement holds.
+    // If it comes 1 ms off (beyond the tolerance: another master, or a re-phased one), its
+    // cycle's reservations are not known: every slot counts as reserved (no frame risks an
+    // HRT slot) until the next sync announces them.
+    let announced = 1 << 3 | 1 << 5;
+    let run = |at2: u64| {
+        let mut clk = SlotClock::new(CycleConfig::DEFAULT);
+        clk.on_sync(0, &SyncFrame::new(0, 0, false));
+        clk.on_sync(10_000, &SyncFrame::new(1, announced, false));
+        clk.on_sync(at2, &SyncFrame::new(2, 0, false));
+        clk.mask(2)
+    };
+    assert_eq!(run(20_000) & !1, announced, "on time");
+    assert_eq!(run(21_000), UNKNOWN_MASK, "off time");
+}
