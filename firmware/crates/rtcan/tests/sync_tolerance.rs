@@ -68,3 +68,21 @@ fn a_cycle_whose_sync_came_off_time_has_its_reservations_unknown() {
     assert_eq!(run(20_000) & !1, announced, "on time");
     assert_eq!(run(21_000), UNKNOWN_MASK, "off time");
 }
+
+#[test]
+fn the_period_is_measured_over_the_whole_window_of_syncs() {
+    // A master whose crystal runs 0.05 % fast (9 995 µs cycles), its syncs jittering by ±15 µs:
+    // over the window of the last 8 syncs (7 cycles) the jitter of the two ends is divided by
+    // 7, so the estimate stays within 5 µs of the true period however the window slides.
+    let mut clk = SlotClock::new(CycleConfig::DEFAULT);
+    let jitter = [0i64, 15, -15, 10, -10, 15, -5, 12, -15, 5, 0, -12, 15, -15, 8, 3];
+    for (k, j) in jitter.iter().enumerate() {
+        let at = (k as i64 * 9_995 + j) as u64 + 100_000;
+        let info = clk.on_sync(at, &SyncFrame::new(k as u32, 0, false));
+        assert!(k == 0 || info.continuous, "sync {k}");
+        if k >= 7 {
+            let period = clk.period_q8() as f64 / 256.0;
+            assert!((period - 9_995.0).abs() <= 5.0, "after sync {k}: {period} µs");
+        }
+    }
+}
