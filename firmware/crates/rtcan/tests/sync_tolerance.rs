@@ -86,3 +86,22 @@ fn the_period_is_measured_over_the_whole_window_of_syncs() {
         }
     }
 }
+
+#[test]
+fn every_slot_the_clock_runs_in_has_a_start_time() {
+    // Free-running after its last sync (cycle 5 at 50 ms) for FREE_RUN_CYCLES cycles: in each
+    // of those cycles the clock's slot has a start (the slot timer is set from it), until the
+    // clock is lost.
+    use rtcan::cycle::{ClockState, FREE_RUN_CYCLES};
+    let mut clk = SlotClock::new(CycleConfig::DEFAULT);
+    for k in 0..=5u32 {
+        clk.on_sync(u64::from(k) * 10_000, &SyncFrame::new(k, 0, false));
+    }
+    for k in 0..=FREE_RUN_CYCLES {
+        let now = 50_000 + u64::from(k) * 10_000 + 3_300;
+        let ClockState::Running(p) = clk.state(now) else { panic!("running {k} cycles on") };
+        let start = clk.slot_start(p.cycle, p.slot).expect("a start for the slot it runs in");
+        assert!(start <= now && now - start <= 10_000 / 60 + 1, "{start} for {now}");
+    }
+    assert_eq!(clk.state(50_000 + u64::from(FREE_RUN_CYCLES + 1) * 10_000 + 1), ClockState::Lost);
+}
