@@ -11,16 +11,16 @@ use crate::tdma_tests::{tdma, CYCLE, CYCLE_US};
 use crate::testbus::{Bus, TestNode};
 use crate::NoParams;
 
-#[test]
-fn a_late_sync_delays_itself_not_the_cycles_after_it() {
+/// The times a lone master's syncs went out over 120 ms, its slot timer driven as
+/// `next_slot_at` asks except that the tick of its fourth sync as master fires `late_us` late.
+fn sync_times_with_fourth_sync_late_by(late_us: Micros) -> std::vec::Vec<Micros> {
     let bus = Bus::<2>::slotted(CYCLE); // port 1 listens
     let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
     let mut syncs: std::vec::Vec<Micros> = std::vec::Vec::new();
     let (mut t, mut late_done) = (0, false);
     while t < 120_000 {
         if m.role() == Role::Master && !late_done && syncs.len() == 3 && t == syncs[2] + CYCLE_US {
-            // The tick of the fourth sync as master comes 40 µs late.
-            t += 40;
+            t += late_us;
             late_done = true;
         }
         bus.now.set(t);
@@ -34,6 +34,12 @@ fn a_late_sync_delays_itself_not_the_cycles_after_it() {
         t = m.next_slot_at(t).max(t + 1);
     }
     assert!(late_done && syncs.len() > 10, "{} syncs", syncs.len());
+    syncs
+}
+
+#[test]
+fn a_late_sync_delays_itself_not_the_cycles_after_it() {
+    let syncs = sync_times_with_fourth_sync_late_by(40);
     let first = syncs[0];
     for (k, &at) in syncs.iter().enumerate() {
         let on_grid = first + k as Micros * CYCLE_US;
@@ -47,26 +53,7 @@ fn a_sync_more_than_a_cycle_late_restarts_the_grid_from_itself() {
     // The master's timer held off for 1.5 cycles (a debugger halt, a flash erase stalling the
     // CPU): that sync goes out late and the cycle restarts from it — no burst of catch-up
     // syncs, no gap.
-    let bus = Bus::<2>::slotted(CYCLE);
-    let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
-    let mut syncs: std::vec::Vec<Micros> = std::vec::Vec::new();
-    let (mut t, mut late_done) = (0, false);
-    while t < 120_000 {
-        if m.role() == Role::Master && !late_done && syncs.len() == 3 && t == syncs[2] + CYCLE_US {
-            t += CYCLE_US + CYCLE_US / 2;
-            late_done = true;
-        }
-        bus.now.set(t);
-        m.slot_tick(t, &mut bus.port(0));
-        bus.arbitrate();
-        while let Some(rx) = bus.port(1).try_receive() {
-            if SyncFrame::from_frame(&rx.frame).is_ok() {
-                syncs.push(rx.at);
-            }
-        }
-        t = m.next_slot_at(t).max(t + 1);
-    }
-    assert!(late_done && syncs.len() > 10, "{} syncs", syncs.len());
+    let syncs = sync_times_with_fourth_sync_late_by(CYCLE_US + CYCLE_US / 2);
     let gaps: std::vec::Vec<Micros> = syncs.windows(2).map(|w| w[1] - w[0]).collect();
     assert_eq!(gaps[2], 2 * CYCLE_US + CYCLE_US / 2, "the late one");
     assert!(gaps[3..].iter().all(|&g| g == CYCLE_US), "then whole cycles from it: {gaps:?}");
