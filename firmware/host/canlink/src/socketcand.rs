@@ -75,7 +75,7 @@ mod tests {
         assert_eq!(send("< send 12345678 8 0 1 2 3 4 5 6 7 >").len(), 8);
         assert!(send("< send 800 0 >").is_extended(), "above 7FF is extended");
         assert!(!send("< send 7FF 0 >").is_extended());
-        assert_eq!(parse_command("< open vcan0 >"), Ok(Command::Open("vcan0".into())));
+        assert_eq!(parse_command("< open vcan0 >"), Ok(Command::Open("vcan0")));
         assert_eq!(parse_command("< rawmode >"), Ok(Command::RawMode));
         assert_eq!(parse_command("<echo>"), Ok(Command::Echo));
         assert_eq!(parse_command("< bcmmode >"), Ok(Command::BcmMode));
