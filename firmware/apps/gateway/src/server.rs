@@ -33,6 +33,10 @@ const MAX_ERROR_TEXT: usize = 96;
 /// (r2p-canlink's server waits as long).
 pub const RAW_SETTLE_MS: u32 = 50;
 
+/// The bus name clients `open`: `vcan0`, as the emulator's r2p-canlink server calls it, so a
+/// tool's settings work on both.
+pub const CHANNEL: &str = r2p_socketcand::DEFAULT_CHANNEL;
+
 /// How a session ended (errors of the stream end it too: [`serve`]'s `Err`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Ended {

@@ -148,7 +148,7 @@ async fn addressing(stack: Stack<'static>, net: Net) {
 async fn client(stack: Stack<'static>, port: u16) -> ! {
     let mut rx = [0u8; 512];
     let mut tx = [0u8; 2048];
-    let config = server::Config { channel: r2p_socketcand_channel(), now_us: &now_us };
+    let config = server::Config { channel: server::CHANNEL, now_us: &now_us };
     loop {
         let mut socket = TcpSocket::new(stack, &mut rx, &mut tx);
         if socket.accept(port).await.is_err() {
@@ -159,10 +159,6 @@ async fn client(stack: Stack<'static>, port: u16) -> ! {
         let _ = socket.flush().await;
         socket.abort();
     }
-}
-
-fn r2p_socketcand_channel() -> &'static str {
-    "vcan0"
 }
 
 fn now_us() -> u64 {
@@ -182,7 +178,8 @@ async fn run(
     loop {
         let now = Instant::now().as_micros();
         let ip = stack.config_v4().map(|c| c.address.address().octets());
-        let net = NetState { link_up: stack.is_link_up(), ip, dhcp: FROM_DHCP.load(Ordering::Relaxed) };
+        let net =
+            NetState { link_up: stack.is_link_up(), ip, dhcp: FROM_DHCP.load(Ordering::Relaxed) };
         let c = app.step(now, &Sample { status: led_status(), net });
         let [status, bus, fault, link] = &mut leds;
         for (out, on, active_low) in [
@@ -283,7 +280,10 @@ async fn main(spawner: Spawner) {
     }
     interrupt::USART3.set_priority(Priority::P0);
     let can = BxCan::new(can, pac::CAN1, 1_000_000);
-    BUS_EXECUTOR.start(interrupt::USART3).spawn(bus(NODE.init(node), can, running_after_us)).unwrap();
+    BUS_EXECUTOR
+        .start(interrupt::USART3)
+        .spawn(bus(NODE.init(node), can, running_after_us))
+        .unwrap();
 
     // The network.
     static PACKETS: StaticCell<PacketQueue<4, 4>> = StaticCell::new();
