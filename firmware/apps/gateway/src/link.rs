@@ -153,12 +153,14 @@ impl BusLink {
         self.to_clients.immediate_publisher().publish_immediate(f);
     }
 
-    /// From a client: queues `frame` for the bus. Never waits.
-    pub fn send(&self, from: Source, frame: CanFrame, at_us: u64) -> Result<(), Refused> {
+    /// From a client: queues `frame` for the bus (stamped when it goes out). Never waits.
+    pub fn send(&self, from: Source, frame: CanFrame) -> Result<(), Refused> {
         if !frame.is_extended() {
             return Err(Refused::StandardId);
         }
-        self.from_clients.try_send(LinkFrame { frame, at_us, from }).map_err(|_| Refused::QueueFull)
+        self.from_clients
+            .try_send(LinkFrame { frame, at_us: 0, from })
+            .map_err(|_| Refused::QueueFull)
     }
 
     /// From the bus side: the oldest client frame waiting for the bus.

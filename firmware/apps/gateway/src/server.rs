@@ -46,13 +46,10 @@ pub enum Ended {
     Full,
 }
 
-/// What a session is told: the bus's name clients `open`, and the gateway's clock for
-/// stamping the frames clients send.
+/// What a session is told.
 pub struct Config<'a> {
-    /// The bus name clients `open` (`vcan0`, as the emulator's server).
+    /// The bus name clients `open` ([`CHANNEL`]).
     pub channel: &'a str,
-    /// µs of the gateway's clock now.
-    pub now_us: &'a dyn Fn() -> u64,
 }
 
 /// Serves one connected client until it closes the connection or the stream fails; `delay`
@@ -104,7 +101,7 @@ async fn session<S: Read + Write>(
                         flush(io, &mut out).await?;
                     }
                     let was_raw = raw.is_some();
-                    answer(action, link, config, me, &mut raw, &mut out);
+                    answer(action, link, me, &mut raw, &mut out);
                     if !was_raw && raw.is_some() {
                         flush(io, &mut out).await?;
                         delay.delay_ms(RAW_SETTLE_MS).await;
@@ -144,7 +141,6 @@ async fn session<S: Read + Write>(
 fn answer<'l, const N: usize>(
     action: Action,
     link: &'l BusLink,
-    config: &Config<'_>,
     me: Source,
     raw: &mut Option<BusSubscriber<'l>>,
     out: &mut TextBuf<N>,
@@ -159,7 +155,7 @@ fn answer<'l, const N: usize>(
         }
         Action::Refuse(e) => refuse(out, &e),
         Action::Send(frame) => {
-            if let Err(why) = link.send(me, frame, (config.now_us)()) {
+            if let Err(why) = link.send(me, frame) {
                 LinkStats::add(&link.stats.lost, 1);
                 refuse(out, &why);
             }
