@@ -47,7 +47,7 @@ def r2p(port: int, *args: str, timeout: str = "2"):
 def nodes(port: int) -> set[tuple[int, str]]:
     p = r2p(port, "nodes", "--json")
     assert p.returncode == 0, p.stdout
-    return {(n["id"], n["name"]) for n in map(json.loads, p.stdout.splitlines())}
+    return {(n["node"], n["name"]) for n in map(json.loads, p.stdout.splitlines())}
 
 
 def test_r2p_nodes_and_topics_through_the_gateway_as_through_canlink(robot):
