@@ -148,7 +148,7 @@ async fn addressing(stack: Stack<'static>, net: Net) {
 async fn client(stack: Stack<'static>, port: u16) -> ! {
     let mut rx = [0u8; 512];
     let mut tx = [0u8; 2048];
-    let config = server::Config { channel: server::CHANNEL, now_us: &now_us };
+    let config = server::Config { channel: server::CHANNEL };
     loop {
         let mut socket = TcpSocket::new(stack, &mut rx, &mut tx);
         if socket.accept(port).await.is_err() {
@@ -159,10 +159,6 @@ async fn client(stack: Stack<'static>, port: u16) -> ! {
         let _ = socket.flush().await;
         socket.abort();
     }
-}
-
-fn now_us() -> u64 {
-    Instant::now().as_micros()
 }
 
 /// The application: one step per millisecond; parameters persisted every 100 ms when changed.
