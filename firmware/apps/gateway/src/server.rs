@@ -16,7 +16,7 @@ use embassy_futures::select::{select, Either};
 use embassy_sync::pubsub::WaitResult;
 use embedded_hal_async::delay::DelayNs;
 use embedded_io_async::{Read, Write};
-use r2p_socketcand::format::{self, TextBuf, HI, MAX_FRAME_TEXT};
+use r2p_socketcand::format::{self, TextBuf, HI, MAX_ERROR_TEXT, MAX_FRAME_TEXT};
 use r2p_socketcand::{Action, Session, SessionError, Splitter};
 
 use crate::link::{BusLink, BusSubscriber, LinkStats, Source};
@@ -26,8 +26,6 @@ const READ_CHUNK: usize = 128;
 /// Bytes gathered before a write: a batch of frames, or the replies to one read.
 const OUT_BATCH: usize = 512;
 
-/// Room an `< error … >` with the longest error text takes.
-const MAX_ERROR_TEXT: usize = 96;
 /// Pause between the `< ok >` of `rawmode` and the first frame: python-can reads that `ok`
 /// with one `recv` and compares the whole of it, so frames must not arrive in the same read
 /// (r2p-canlink's server waits as long).

@@ -505,3 +505,13 @@ fn network_parameters_read_from_their_place_in_the_table() {
     assert!(joined.set(2 + params::TCP_PORT, Value::U32(70_000)).is_err(), "ports end at 65535");
     assert!(joined.set(2 + params::PREFIX_LEN, Value::U32(0)).is_err());
 }
+
+#[test]
+fn the_servers_own_refusals_fit_an_error_message() {
+    use crate::link::Refused;
+    use r2p_socketcand::format::{write_error, TextBuf, MAX_ERROR_TEXT};
+    for why in [Refused::QueueFull, Refused::StandardId] {
+        write_error(&mut TextBuf::<MAX_ERROR_TEXT>::new(), &why).expect("fits");
+    }
+    write_error(&mut TextBuf::<MAX_ERROR_TEXT>::new(), &"too many clients").expect("fits");
+}

@@ -16,6 +16,11 @@ pub const ECHO: &str = "< echo >";
 /// Longest `< frame … >` message: 8-digit ID, 20-digit seconds, 8 data bytes.
 pub const MAX_FRAME_TEXT: usize = "< frame ".len() + 8 + 1 + 20 + 1 + 6 + 1 + 2 * 8 + " >".len();
 
+/// Room any `< error … >` of a session takes (the longest: an unknown command's 32-byte word,
+/// 58 bytes); a server's own refusals must fit it too. The fuzz target `socketcand_session`
+/// checks it for arbitrary input.
+pub const MAX_ERROR_TEXT: usize = 96;
+
 /// `SECONDS.MICROSECONDS` (6 digits), as candump and socketcand write a time.
 pub fn write_time(out: &mut impl Write, t: Duration) -> fmt::Result {
     write!(out, "{}.{:06}", t.as_secs(), t.subsec_micros())
