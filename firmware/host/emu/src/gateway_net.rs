@@ -5,8 +5,8 @@
 //!
 //! The listening address stands in for the gateway's Ethernet port: while a [`GatewayServer`]
 //! listens, the gateway sees its link up with that address (in `gateway/status` and on its
-//! link LED). A gateway that reboots gets a new `BusLink`: new connections are served on it;
-//! connections made before the reboot stop receiving (on the MCU they would be reset).
+//! link LED). A gateway that reboots gets a new `BusLink`: the connections of the old one are
+//! closed, as a reset MCU's are, and new connections are served on the new one.
 
 use std::io;
 use std::net::{IpAddr, Shutdown, SocketAddr, TcpListener, TcpStream};
@@ -115,10 +115,18 @@ impl Drop for GatewayServer {
 
 fn accept_loop(listener: TcpListener, link: LinkSlot, stop: Arc<AtomicBool>) {
     let mut clients: Vec<(JoinHandle<()>, TcpStream)> = Vec::new();
+    let mut serving = None;
     while !stop.load(Ordering::SeqCst) {
+        let current = *link.lock().unwrap_or_else(|e| e.into_inner());
+        if current.map(|l| l as *const BusLink) != serving {
+            // The gateway rebooted: its connections went with its RAM.
+            for (_, s) in &clients {
+                let _ = s.shutdown(Shutdown::Both);
+            }
+            serving = current.map(|l| l as *const BusLink);
+        }
         match listener.accept() {
             Ok((stream, _)) => {
-                let current = *link.lock().unwrap_or_else(|e| e.into_inner());
                 let (Some(l), Ok(keep)) = (current, stream.try_clone()) else { continue };
                 match thread::Builder::new()
                     .name("gateway-client".into())

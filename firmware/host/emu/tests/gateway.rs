@@ -184,3 +184,27 @@ fn a_clients_frames_reach_the_bus_and_bad_input_is_answered() {
         "sent once, by the gateway"
     );
 }
+
+#[test]
+fn a_gateway_reboot_closes_its_connections_and_it_serves_again() {
+    let mut r = robot();
+    r.sim.run_until(500_000_000);
+    let server = r.serve_gateway("127.0.0.1:0".parse().unwrap()).unwrap();
+    let addr = server.local_addr();
+    let client = thread::spawn(move || {
+        let mut c = Client::raw(addr);
+        // Frames until the reboot, then the end of the connection (not a read timeout: 5 s).
+        while c.next().is_some() {}
+        let ended = Instant::now();
+        let mut again = Client::raw(addr);
+        (ended, again.next().expect("frames from the rebooted gateway"))
+    });
+    run_realtime(&mut r, Duration::from_millis(300), || false);
+    r.reboot("gateway").unwrap();
+    let rebooted = Instant::now();
+    run_realtime(&mut r, Duration::from_secs(10), || client.is_finished());
+    let (ended, frame) = client.join().unwrap();
+    assert!(ended.duration_since(rebooted) < Duration::from_secs(1), "closed by the reboot");
+    assert!(frame.starts_with("< frame "), "{frame}");
+    server.shutdown();
+}
