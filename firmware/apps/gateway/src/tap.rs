@@ -30,6 +30,9 @@ pub const CLIENT_TRIES: u8 = 3;
 /// Frames loaded and not yet reported, at most (bxCAN has 3 mailboxes; results untaken for
 /// longer are dropped by the controller, and so here).
 const IN_FLIGHT: usize = 6;
+/// A loaded frame with no result after this long never gets one (the controller was reset,
+/// went bus-off, or dropped the result): forgotten, so that client frames are loaded again.
+pub const STALE_US: Micros = 100_000;
 
 /// A frame loaded into a mailbox: whose, and the frame (the result carries only its ID).
 #[derive(Clone, Copy, Debug)]
@@ -37,6 +40,7 @@ struct Loaded {
     frame: Frame,
     owner: Option<Source>,
     tries: u8,
+    at: Micros,
 }
 
 /// The state the tap keeps between the node's calls. See the module documentation.
@@ -103,7 +107,7 @@ impl<C: CanController + ?Sized> Tapped<'_, '_, C> {
             let found = tap.in_flight.iter().position(|l| l.frame.id() == r.id);
             let loaded = found.and_then(|i| remove(&mut tap.in_flight, i));
             match loaded {
-                Some(Loaded { frame, owner: Some(client), tries }) => {
+                Some(Loaded { frame, owner: Some(client), tries, .. }) => {
                     if r.sent() {
                         let at = r.start_of_frame.unwrap_or(self.now);
                         tap.link.publish(to_link(&frame, at, client));
@@ -113,7 +117,7 @@ impl<C: CanController + ?Sized> Tapped<'_, '_, C> {
                         let _ = tap.loopback.push_back(Received { frame, at });
                         LinkStats::add(&tap.link.stats.frames_from_clients, 1);
                     } else if tries < CLIENT_TRIES {
-                        tap.retry = Some(Loaded { frame, owner: Some(client), tries });
+                        tap.retry = Some(Loaded { frame, owner: Some(client), tries, at: 0 });
                     } else {
                         LinkStats::add(&tap.link.stats.lost, 1);
                     }
@@ -134,13 +138,19 @@ impl<C: CanController + ?Sized> Tapped<'_, '_, C> {
 
     /// Loads the next client frame if nothing is in the mailboxes.
     fn load_client_frame(&mut self) {
+        let now = self.now;
+        while self.tap.in_flight.front().is_some_and(|l| now.saturating_sub(l.at) > STALE_US) {
+            if let Some(Loaded { owner: Some(_), .. }) = self.tap.in_flight.pop_front() {
+                LinkStats::add(&self.stats().lost, 1);
+            }
+        }
         if !self.tap.in_flight.is_empty() {
             return;
         }
         let next = self.tap.retry.take().or_else(|| {
             let f = self.tap.link.next_for_bus()?;
             match Frame::from_raw(f.frame.id(), f.frame.data()) {
-                Ok(frame) => Some(Loaded { frame, owner: Some(f.from), tries: 0 }),
+                Ok(frame) => Some(Loaded { frame, owner: Some(f.from), tries: 0, at: 0 }),
                 Err(_) => {
                     // `BusLink::send` lets extended frames only: cannot happen; count it.
                     LinkStats::add(&self.stats().lost, 1);
@@ -152,6 +162,7 @@ impl<C: CanController + ?Sized> Tapped<'_, '_, C> {
         match self.can.try_transmit(&l.frame) {
             Ok(()) => {
                 l.tries += 1;
+                l.at = self.now;
                 let _ = self.tap.in_flight.push_back(l);
             }
             Err(TxError::MailboxesFull) => self.tap.retry = Some(l),
@@ -183,7 +194,8 @@ impl<C: CanController + ?Sized> CanController for Tapped<'_, '_, C> {
         if tap.in_flight.is_full() {
             tap.in_flight.pop_front();
         }
-        let _ = tap.in_flight.push_back(Loaded { frame: *frame, owner: None, tries: 1 });
+        let at = self.now;
+        let _ = tap.in_flight.push_back(Loaded { frame: *frame, owner: None, tries: 1, at });
         Ok(())
     }
 

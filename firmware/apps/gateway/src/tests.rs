@@ -405,6 +405,21 @@ fn a_client_frame_that_loses_arbitration_is_tried_again_then_counted_lost() {
     assert_eq!(link.stats.frames_from_clients.load(Relaxed), 0);
 }
 
+#[test]
+fn a_frame_whose_result_never_comes_does_not_stop_the_clients_frames() {
+    let link: &'static BusLink = leak(BusLink::new());
+    let mut tap = BusTap::new(link);
+    let mut can = Scripted::default();
+    link.send(1, ext(0x1FA8_0003, &[1])).unwrap();
+    tap.run(0, &mut can, |c| c.try_transmit(&rt(0x0AAA_0001, &[])).unwrap());
+    // The controller is reset: the node's frame and its result are gone.
+    can.loaded.clear();
+    tap.run(50_000, &mut can, |_| {});
+    assert!(can.loaded.is_empty(), "still waiting for the node's result");
+    tap.run(50_000 + crate::tap::STALE_US + 1, &mut can, |_| {});
+    assert_eq!(can.loaded, [rt(0x1FA8_0003, &[1])], "the client's frame goes out after all");
+}
+
 // ---- the application ----
 
 fn rig() -> (
