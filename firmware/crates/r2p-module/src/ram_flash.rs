@@ -44,7 +44,8 @@ impl<const SIZE: usize, const PAGE: usize> RamFlash<SIZE, PAGE> {
     }
 
     /// Cuts the power after `bytes` more bytes have been programmed: the write in progress is
-    /// torn there and fails, as is every later write or erase until [`Self::power_on`].
+    /// torn there and fails, and so does every later write until [`Self::power_on`]; an erase
+    /// started with no bytes left is torn (half its first page erased) and fails.
     pub fn cut_power_after(&mut self, bytes: usize) {
         self.budget = Some(bytes);
     }
@@ -113,7 +114,12 @@ impl<const SIZE: usize, const PAGE: usize> NorFlash for RamFlash<SIZE, PAGE> {
             return Err(RamFlashError::NotAligned);
         }
         let r = self.range(from, (to - from) as usize)?;
-        if self.budget.is_some() {
+        if self.budget == Some(0) {
+            // Power lost during the erase: the page is left neither old nor erased (modelled as
+            // its first half erased, the rest as it was).
+            if !r.is_empty() {
+                self.bytes[r.start..r.start + PAGE / 2].fill(0xFF);
+            }
             return Err(RamFlashError::PowerCut);
         }
         self.bytes[r].fill(0xFF);
@@ -164,13 +170,25 @@ mod tests {
     }
 
     #[test]
+    fn erases_work_until_the_power_is_cut() {
+        let mut f: RamFlash<2048, 1024> = RamFlash::new();
+        f.write(0, &[0; 4]).unwrap();
+        f.cut_power_after(4);
+        f.erase(0, 1024).unwrap();
+        assert_eq!(&f.bytes()[..4], &[0xFF; 4]);
+    }
+
+    #[test]
     fn a_power_cut_tears_the_write_in_progress() {
         let mut f: RamFlash<1024, 1024> = RamFlash::new();
         f.cut_power_after(6);
         f.write(0, &[0; 4]).unwrap();
         assert_eq!(f.write(4, &[0; 4]), Err(RamFlashError::PowerCut));
         assert_eq!(&f.bytes()[..8], &[0, 0, 0, 0, 0, 0, 0xFF, 0xFF]);
+        f.bytes_mut()[512..516].copy_from_slice(&[1, 2, 3, 4]);
         assert_eq!(f.erase(0, 1024), Err(RamFlashError::PowerCut));
+        assert_eq!(&f.bytes()[..8], &[0xFF; 8], "the torn erase cleared the page's start");
+        assert_eq!(&f.bytes()[512..516], &[1, 2, 3, 4], "and left its end as it was");
         f.power_on();
         f.erase(0, 1024).unwrap();
     }
