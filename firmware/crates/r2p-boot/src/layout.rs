@@ -56,7 +56,7 @@ impl FlashMap {
     /// The partitions in flash order.
     pub fn partitions(&self) -> [Partition; 5] {
         let mut p = [self.bootloader, self.state, self.active, self.dfu, self.params];
-        p.sort_by_key(|p| p.offset);
+        p.sort_unstable_by_key(|p| p.offset);
         p
     }
 
@@ -83,6 +83,11 @@ impl FlashMap {
             return Err(MapError::StateTooSmall);
         }
         Ok(())
+    }
+
+    /// Where the bootloader's [`crate::api::BootApi`] table lies: the last bytes of its partition.
+    pub const fn api_offset(&self) -> u32 {
+        self.bootloader.end() - crate::api::API_LEN
     }
 
     /// The largest image (its code and data, without the trailer) the active slot takes.

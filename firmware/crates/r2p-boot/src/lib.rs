@@ -6,12 +6,14 @@
 //!   ed25519 signature;
 //! - [`verify_slot`] / [`verify_file`]: the checks before an image may run, in flash or in a
 //!   file, each failure a [`Refusal`] with its message;
+//! - [`api`]: the table by which the bootloader lends its check to the image it runs;
 //! - `sign` (feature `std`): signing and key derivation on the host.
 //!
 //! The swap itself, power-cut safe with rollback, is embassy-boot's; tests/power_cuts.rs drives
 //! it over these maps on an emulated F103 flash, cutting the power at every step.
 #![no_std]
 
+pub mod api;
 pub mod layout;
 mod refusal;
 #[cfg(feature = "std")]

@@ -57,3 +57,23 @@ pub fn sign(image: &[u8], meta: &Meta<'_>, seed: &[u8; 32]) -> Result<Vec<u8>, S
     out.extend_from_slice(&trailer.to_bytes());
     Ok(out)
 }
+
+/// Reads a key file as `r2p keygen` writes it (and firmware/keys/ holds): `#` comment lines, then
+/// 64 hexadecimal digits (a 32-byte seed or public key).
+pub fn parse_key_file(text: &str) -> Result<[u8; 32], &'static str> {
+    let hex: std::string::String = text
+        .lines()
+        .filter(|l| !l.trim_start().starts_with('#'))
+        .flat_map(|l| l.trim().chars())
+        .collect();
+    if hex.len() != 64 || !hex.bytes().all(|c| c.is_ascii_hexdigit()) {
+        return Err(
+            "expected 64 hexadecimal digits after the comment lines, as `r2p keygen` writes",
+        );
+    }
+    let mut key = [0; 32];
+    for (i, b) in key.iter_mut().enumerate() {
+        *b = u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).expect("checked hex digits");
+    }
+    Ok(key)
+}

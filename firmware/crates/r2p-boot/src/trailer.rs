@@ -76,7 +76,8 @@ impl Name {
     /// The name as text.
     pub fn as_str(&self) -> &str {
         let len = self.0.iter().position(|&c| c == 0).unwrap_or(NAME_LEN);
-        core::str::from_utf8(&self.0[..len]).unwrap_or("?")
+        // SAFETY: a Name holds printable ASCII only (checked where it is made), which is UTF-8.
+        unsafe { core::str::from_utf8_unchecked(&self.0[..len]) }
     }
 
     fn from_bytes(b: &[u8]) -> Option<Self> {

@@ -7,7 +7,7 @@ use r2p_boot::{verify_file, Expect, Refusal, Trailer, Version, SIGNED_LEN, TRAIL
 
 const SEED: [u8; 32] = [7; 32];
 const OTHER_SEED: [u8; 32] = [8; 32];
-const SLOT: u32 = 55 * 1024;
+const SLOT: u32 = 54 * 1024;
 
 fn meta() -> Meta<'static> {
     Meta { version: Version { major: 0, minor: 3, patch: 1 }, kind: "motor", mcu: "STM32F103CB" }
@@ -101,4 +101,25 @@ fn signing_refuses_what_cannot_be_signed() {
     assert_eq!(sign(&image(300), &long_kind, &SEED), Err(SignError::BadKind));
     let no_mcu = Meta { mcu: "", ..meta() };
     assert_eq!(sign(&image(300), &no_mcu, &SEED), Err(SignError::BadMcu));
+}
+
+#[test]
+fn the_development_key_pair_is_a_pair() {
+    use r2p_boot::sign::parse_key_file;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../keys");
+    let seed =
+        parse_key_file(&std::fs::read_to_string(dir.join("development.key")).unwrap()).unwrap();
+    let public =
+        parse_key_file(&std::fs::read_to_string(dir.join("development.pub")).unwrap()).unwrap();
+    assert_eq!(public_key(&seed), public);
+    assert_eq!(ed25519_dalek::SigningKey::from_bytes(&seed).verifying_key().to_bytes(), public);
+}
+
+#[test]
+fn key_files_are_hex_after_comments() {
+    use r2p_boot::sign::parse_key_file;
+    let k = parse_key_file(&format!("# a comment\n{}\n", "0a".repeat(32))).unwrap();
+    assert_eq!(k, [0x0a; 32]);
+    assert!(parse_key_file(&"0a".repeat(31)).is_err());
+    assert!(parse_key_file(&format!("{}zz", "0a".repeat(31))).is_err());
 }
