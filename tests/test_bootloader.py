@@ -4,6 +4,8 @@ import struct
 import subprocess
 import tomllib
 
+import pytest
+
 from conftest import ROOT
 
 IMAGES = ROOT / "firmware" / "images"
@@ -11,8 +13,13 @@ FLASH_BASE = 0x0800_0000
 API_LEN = 64  # r2p-boot's api::API_LEN
 
 
-def f103_map():
-    return tomllib.loads((ROOT / "firmware" / "images.toml").read_text())["mcu"]["STM32F103CB"]["partitions"]
+# image, MCU, the bootloader's RAM (its build.rs)
+BOOTLOADERS = [("bootloader-f103", "STM32F103CB", (0x2000_4000, 0x2000_5000)),
+               ("bootloader-f407", "STM32F407VG", (0x2001_C000, 0x2002_0000))]
+
+
+def flash_map(mcu):
+    return tomllib.loads((ROOT / "firmware" / "images.toml").read_text())["mcu"][mcu]["partitions"]
 
 
 def development_key() -> bytes:
@@ -30,9 +37,10 @@ def load_segments(elf):
     return segs
 
 
-def test_the_api_table_is_at_the_end_of_the_bootloader_partition_with_the_development_key():
-    boot = f103_map()["bootloader"]
-    image = (IMAGES / "bootloader-f103.bin").read_bytes()
+@pytest.mark.parametrize("name,mcu,ram", BOOTLOADERS)
+def test_the_api_table_is_at_the_end_of_the_bootloader_partition_with_the_development_key(name, mcu, ram):
+    boot = flash_map(mcu)["bootloader"]
+    image = (IMAGES / f"{name}.bin").read_bytes()
     at = boot["size"] - API_LEN
     magic, version, key, verify = struct.unpack_from("<II32sI", image, at)
     assert magic == int.from_bytes(b"R2PB", "little") and version == 1
@@ -41,21 +49,23 @@ def test_the_api_table_is_at_the_end_of_the_bootloader_partition_with_the_develo
     assert FLASH_BASE < verify < FLASH_BASE + at, "the check lies in the bootloader's code"
 
 
-def test_the_bootloader_keeps_to_its_partition_and_the_top_4_kib_of_ram():
-    boot = f103_map()["bootloader"]
-    for vaddr, paddr, filesz, memsz in load_segments(IMAGES / "bootloader-f103.elf"):
+@pytest.mark.parametrize("name,mcu,ram", BOOTLOADERS)
+def test_the_bootloader_keeps_to_its_partition_and_its_ram(name, mcu, ram):
+    boot = flash_map(mcu)["bootloader"]
+    for vaddr, paddr, filesz, memsz in load_segments(IMAGES / f"{name}.elf"):
         if filesz:
             assert FLASH_BASE + boot["offset"] <= paddr and paddr + filesz <= FLASH_BASE + boot["offset"] + boot["size"]
         if vaddr >= 0x2000_0000:
-            assert 0x2000_4000 <= vaddr and vaddr + memsz <= 0x2000_5000, hex(vaddr)
+            assert ram[0] <= vaddr and vaddr + memsz <= ram[1], hex(vaddr)
 
 
-def test_module_images_leave_the_bootloader_ram_alone():
-    # A module image's statics and its panic report (RAM that start-up leaves alone) lie below the
-    # bootloader's 4 KiB: otherwise the bootloader's stack would overwrite the report of a panic.
+@pytest.mark.parametrize("name,mcu,ram", BOOTLOADERS)
+def test_images_leave_the_bootloader_ram_alone(name, mcu, ram):
+    # An image's statics and its panic report (RAM that start-up leaves alone) lie below the
+    # bootloader's: otherwise the bootloader's stack would overwrite the report of a panic.
     from r2ptools import firmware
     for img in firmware.manifest():
-        if img.mcu == "STM32F103CB" and img.package != "bootloader":
+        if img.mcu == mcu and img.package != "bootloader":
             for vaddr, _, _, memsz in load_segments(IMAGES / f"{img.name}.elf"):
-                if vaddr >= 0x2000_0000:
-                    assert vaddr + memsz <= 0x2000_4000, f"{img.name}: RAM up to {vaddr + memsz:#x}"
+                if 0x2000_0000 <= vaddr < 0x2002_0000:
+                    assert vaddr + memsz <= ram[0], f"{img.name}: RAM up to {vaddr + memsz:#x}"
