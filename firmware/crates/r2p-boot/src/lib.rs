@@ -7,6 +7,8 @@
 //! - [`verify_slot`] / [`verify_file`]: the checks before an image may run, in flash or in a
 //!   file, each failure a [`Refusal`] with its message;
 //! - [`api`]: the table by which the bootloader lends its check to the image it runs;
+//! - [`transfer`] and [`sender`]: moving a signed image into a module's DFU slot over a lossy
+//!   link (go-back-N, resumable);
 //! - `sign` (feature `std`): signing and key derivation on the host.
 //!
 //! The swap itself, power-cut safe with rollback, is embassy-boot's; tests/power_cuts.rs drives
@@ -16,9 +18,11 @@
 pub mod api;
 pub mod layout;
 mod refusal;
+pub mod sender;
 #[cfg(feature = "std")]
 pub mod sign;
 mod trailer;
+pub mod transfer;
 mod verify;
 
 pub use refusal::Refusal;
