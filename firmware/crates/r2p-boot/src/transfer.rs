@@ -223,13 +223,16 @@ impl Receiver {
                     }
                 }
             }
-            Msg::End { id } if id == self.id && self.state == State::Receiving => {
-                if self.received == self.len && self.flush(dfu).is_ok() {
-                    self.state = match verify(dfu) {
-                        Ok(()) => State::Verified,
-                        Err(r) => State::Refused(r),
-                    };
-                }
+            Msg::End { id }
+                if id == self.id
+                    && self.state == State::Receiving
+                    && self.received == self.len
+                    && self.flush(dfu).is_ok() =>
+            {
+                self.state = match verify(dfu) {
+                    Ok(()) => State::Verified,
+                    Err(r) => State::Refused(r),
+                };
             }
             // Another transfer's message, a late one, or one after the end: the status says
             // where this receiver stands.
