@@ -9,6 +9,7 @@
 //! - [`api`]: the table by which the bootloader lends its check to the image it runs;
 //! - [`transfer`] and [`sender`]: moving a signed image into a module's DFU slot over a lossy
 //!   link (go-back-N, resumable);
+//! - [`trial`]: when a new image confirms itself, or gives up and is rolled back;
 //! - `sign` (feature `std`): signing and key derivation on the host.
 //!
 //! The swap itself, power-cut safe with rollback, is embassy-boot's; tests/power_cuts.rs drives
@@ -23,6 +24,7 @@ pub mod sender;
 pub mod sign;
 mod trailer;
 pub mod transfer;
+pub mod trial;
 mod verify;
 
 pub use refusal::Refusal;
