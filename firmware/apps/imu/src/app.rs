@@ -91,7 +91,7 @@ impl<'a> App<'a> {
         &self,
         node: &mut Node<'a, E, I, T, R, B>,
     ) -> Result<(), NodeError> {
-        node.export(self.ep.imu_out)?;
+        node.export(self.ep.imu.remote)?;
         Ok(())
     }
 
@@ -126,7 +126,7 @@ impl<'a> App<'a> {
         if now_us >= self.next_publish_us {
             self.next_publish_us = next_due(self.next_publish_us, now_us, cfg.period_us);
             let m = self.state;
-            self.ep.imu_pub.publish_with(|x| *x = m);
+            self.ep.imu.publisher.publish_with(|x| *x = m);
         }
         let mut status = sample.status;
         status.fault |= lost;

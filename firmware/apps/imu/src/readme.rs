@@ -37,10 +37,10 @@ pub fn render() -> String {
         "| `{}` | `{}` ({} bytes) | publishes | {} | every 1/`rate_hz`: angular rate (rad/s, bias \
          removed), specific force (m/s²), roll, pitch, yaw (rad), die temperature (°C), status \
          0 ok, 1 estimating the gyro bias, 2 no data |",
-        ep.imu.name(),
+        ep.imu.topic.name(),
         Imu::NAME,
         Imu::SIZE,
-        class_cell(ep.imu_pub.class(), None),
+        class_cell(ep.imu.publisher.class(), None),
     );
     line(w, "");
     line(w, "Instance *n* > 0 names the node and the topic `imu`*n*.");

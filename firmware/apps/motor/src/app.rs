@@ -301,7 +301,7 @@ impl<'a> App<'a> {
     }
 
     fn take_clear_commands(&mut self) {
-        while let Some(c) = self.ep.clear_sub.try_recv() {
+        while let Some(c) = self.ep.clear_faults.subscriber.try_recv() {
             let cleared = Faults(self.faults.0 & c.mask);
             if cleared.is_empty() {
                 continue;
@@ -325,7 +325,7 @@ impl<'a> App<'a> {
     }
 
     fn take_setpoints(&mut self, now_us: u64) {
-        while let Some(msg) = self.ep.setpoint_sub.try_recv() {
+        while let Some(msg) = self.ep.setpoint.subscriber.try_recv() {
             let Some(sp) = Setpoint::from_msg(&msg) else {
                 self.stats.bad_setpoints += 1;
                 continue;
@@ -390,7 +390,7 @@ impl<'a> App<'a> {
 
     fn event(&mut self, raised: Faults) {
         let (faults, current) = (self.faults.0, self.m.current);
-        let sent = self.ep.fault_pub.publish_with(|m| {
+        let sent = self.ep.fault.publisher.publish_with(|m| {
             *m = MotorFault { faults, raised: raised.0, current };
         });
         match sent {
@@ -446,7 +446,7 @@ impl<'a> App<'a> {
             current: self.current_filter.value().unwrap_or(0.0),
             faults: self.faults.0,
         };
-        match self.ep.state_pub.publish_with(|m| *m = state) {
+        match self.ep.state.publisher.publish_with(|m| *m = state) {
             Some(_) => self.stats.states += 1,
             None => self.stats.pool_empty += 1,
         }

@@ -71,8 +71,8 @@ impl<'a> App<'a> {
         &self,
         node: &mut Node<'a, E, I, T, R, B>,
     ) -> Result<(), NodeError> {
-        node.export(self.ep.ranges_out)?;
-        node.export(self.ep.obstacle_out)?;
+        node.export(self.ep.ranges.remote)?;
+        node.export(self.ep.obstacle.remote)?;
         Ok(())
     }
 
@@ -111,7 +111,7 @@ impl<'a> App<'a> {
         if now_us >= self.next_publish_us {
             self.next_publish_us = next_due(self.next_publish_us, now_us, cfg.period_us);
             let ranges = self.ranges();
-            self.ep.ranges_pub.publish_with(|m| *m = ranges);
+            self.ep.ranges.publisher.publish_with(|m| *m = ranges);
         }
         let [led_status, led_bus, led_fault] = leds::levels(sample.status, now_us / 1000);
         Command { sensor_power: cfg.sensor_power, led_status, led_bus, led_fault }
@@ -140,7 +140,7 @@ impl<'a> App<'a> {
             };
             let m = Obstacle { channel: channel as u8, distance };
             // SRT: never waits; an empty pool is counted by the publisher and retried next step.
-            if self.ep.obstacle_pub.publish_with(|o| *o = m).is_some() {
+            if self.ep.obstacle.publisher.publish_with(|o| *o = m).is_some() {
                 self.armed[channel] = false;
             }
         } else if !self.armed[channel] && clear {

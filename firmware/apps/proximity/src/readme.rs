@@ -38,17 +38,17 @@ pub fn render() -> String {
         "| `{}` | `{}` | publishes | {} | every 1/`rate_hz`: per channel a distance (m), or NaN with \
          status 1 too near, 2 too far, 3 no sensor; `supply_fault`: the sensors' 5 V switch \
          (`SENSOR_PWR_FAULT`) reports over-current |",
-        ep.ranges.name(),
+        ep.ranges.topic.name(),
         Proximity::NAME,
-        class_cell(ep.ranges_pub.class(), Some("obstacle_deadline_ms")),
+        class_cell(ep.ranges.publisher.class(), Some("obstacle_deadline_ms")),
     );
     let _ = writeln!(
         w,
         "| `{}` | `{}` | publishes | {} | a channel reads nearer than `obstacle_m`: its number and \
          distance; once per approach |",
-        ep.obstacle.name(),
+        ep.obstacle.topic.name(),
         Obstacle::NAME,
-        class_cell(ep.obstacle_pub.class(), Some("obstacle_deadline_ms")),
+        class_cell(ep.obstacle.publisher.class(), Some("obstacle_deadline_ms")),
     );
     line(w, "");
     line(w, "Instance *n* > 0 names the node `proximity`*n* and prefixes its topics the same way.");

@@ -34,33 +34,33 @@ pub fn render() -> String {
     line(w, "|---|---|---|---|---|");
     topic(
         w,
-        ep.battery,
+        ep.battery.topic,
         Battery::NAME,
         "publishes",
-        class_cell(ep.battery_pub.class(), Some("event_deadline_ms")),
+        class_cell(ep.battery.publisher.class(), Some("event_deadline_ms")),
         "every 1/`battery_rate_hz`: voltage and current (low-pass `filter_tau_ms`), charge used \
          since boot, remaining time (0xFFFFFFFF = unknown)",
     );
     topic(
         w,
-        ep.state,
+        ep.state.topic,
         PsuState::NAME,
         "publishes",
-        class_cell(ep.state_pub.class(), Some("event_deadline_ms")),
+        class_cell(ep.state.publisher.class(), Some("event_deadline_ms")),
         "with `battery`: output on, latched fault, under-voltage, bus voltage",
     );
     topic(
         w,
-        ep.event,
+        ep.event.topic,
         PsuEvent::NAME,
         "publishes",
-        class_cell(ep.event_pub.class(), Some("event_deadline_ms")),
+        class_cell(ep.event.publisher.class(), Some("event_deadline_ms")),
         "over-current, under-voltage, voltage recovered, output off (command, over-current, \
          eFuse fault), output on",
     );
     topic(
         w,
-        ep.power,
+        ep.power.topic,
         BusPower::NAME,
         "subscribes",
         "any",

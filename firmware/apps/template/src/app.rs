@@ -49,7 +49,7 @@ impl<'a> App<'a> {
         &self,
         node: &mut Node<'a, E, I, T, R, B>,
     ) -> Result<(), NodeError> {
-        node.export(self.ep.count_out).map(drop)
+        node.export(self.ep.count.remote).map(drop)
     }
 
     /// The endpoints (the topic to subscribe to on the module, the publisher's statistics).
@@ -66,7 +66,7 @@ impl<'a> App<'a> {
             let next = self.next_publish_us + period;
             self.next_publish_us = if next <= now_us { now_us + period } else { next };
             let steps = self.steps;
-            self.ep.count_pub.publish_with(|m| *m = steps);
+            self.ep.count.publisher.publish_with(|m| *m = steps);
         }
         let [led_status, led_bus, led_fault] = leds::levels(sample.status, now_us / 1000);
         Command { led_status, led_bus, led_fault }

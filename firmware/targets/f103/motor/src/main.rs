@@ -32,7 +32,7 @@ use embassy_stm32::pac;
 use embassy_stm32::peripherals::ADC1;
 use embassy_time::{Duration, Instant, Ticker, Timer};
 use module_core::{drive, ModuleNode};
-use r2p_app_motor::{params, App, Endpoints, Names, Sample};
+use r2p_app_motor::{params, App, Endpoints, Names, Sample, Storage};
 use r2p_module::FlashParams;
 use r2p_node::NodeConfig;
 use rtcan_bxcan::BxCan;
@@ -46,6 +46,7 @@ module_core::bind_can_interrupts!(struct Irqs {
 
 static PARAMS: FlashParams<{ params::COUNT }> =
     FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
+static ENDPOINTS: Storage = Storage::new();
 
 /// The control loop's executor: above the bus's (P6), below the hardware's interrupts.
 static CONTROL_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
@@ -128,7 +129,7 @@ async fn main(_spawner: Spawner) {
     let mut flash = Flash::new_blocking(p.FLASH);
     module_core::load_params(&PARAMS, &mut flash);
     let names = Names::from_params(&PARAMS);
-    let ep = r2p_app_motor::endpoints!(names);
+    let ep = ENDPOINTS.build(names);
     let config = NodeConfig {
         slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
         ..NodeConfig::new(embassy_stm32::uid::uid(), names.node)
