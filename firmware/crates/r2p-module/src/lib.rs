@@ -9,6 +9,7 @@
 //!   [`Inbound`] (imported and subscribed), built at boot in a `StaticCell`;
 //! - [`filters`]: median and first-order low-pass filters for sensor channels;
 //! - [`leds`]: the status LED patterns every module shows the same way;
+//! - [`param_doc`]: what each parameter means, for the README;
 //! - `readme` (feature `std`): what the READMEs' generated sections share.
 //!
 //! Not `module-core` (firmware/targets/f103/module-core: what every F103 module *image* adds
@@ -24,10 +25,12 @@ pub mod endpoints;
 pub mod filters;
 pub mod flash_params;
 pub mod leds;
+pub mod param_doc;
 pub mod ram_flash;
 #[cfg(any(test, feature = "std"))]
 pub mod readme;
 
 pub use endpoints::{Inbound, InboundCell, Outbound, OutboundCell};
 pub use flash_params::{CommitReport, FlashParams, LoadReport};
+pub use param_doc::ParamDoc;
 pub use ram_flash::RamFlash;
