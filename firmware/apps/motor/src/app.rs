@@ -2,8 +2,9 @@
 
 use r2p_module::filters::LowPass;
 use r2p_module::leds::{self, Status};
+use r2p_module::TopicNode;
 use r2p_msgs::{MotorFault, WheelState};
-use r2p_node::{Node, NodeError, ParamStore};
+use r2p_node::{NodeError, ParamStore};
 
 use crate::control::{Cascade, Measured, Setpoint, INNER_DT_S, OUTER_DIVIDER, OUTER_DT_S};
 use crate::encoder::{Encoder, Scale};
@@ -155,16 +156,7 @@ impl<'a> App<'a> {
     }
 
     /// Exports `state` and `fault` and imports `setpoint` and `clear_faults` on `node`.
-    pub fn register<
-        const E: usize,
-        const I: usize,
-        const T: usize,
-        const R: usize,
-        const B: usize,
-    >(
-        &self,
-        node: &mut Node<'a, E, I, T, R, B>,
-    ) -> Result<(), NodeError> {
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
         self.ep.register(node)
     }
 

@@ -20,9 +20,10 @@
 //! The fault event is SRT with a shorter deadline: the most urgent thing the module says.
 
 use r2p_middleware::{pool_size, Class, Error};
+use r2p_module::TopicNode;
 use r2p_module::{Inbound, InboundCell, Outbound, OutboundCell};
 use r2p_msgs::{FaultClear, MotorFault, WheelSetpoint, WheelState};
-use r2p_node::{Node, NodeError};
+use r2p_node::NodeError;
 
 use crate::names::Names;
 
@@ -114,16 +115,7 @@ impl<'a> Endpoints<'a> {
     /// Exports `state` and `fault` and imports `setpoint` and `clear_faults` on `node` (what
     /// [`App::register`](crate::App::register) does; usable where the node and the application
     /// are built in different tasks).
-    pub fn register<
-        const E: usize,
-        const I: usize,
-        const T: usize,
-        const R: usize,
-        const B: usize,
-    >(
-        &self,
-        node: &mut Node<'a, E, I, T, R, B>,
-    ) -> Result<(), NodeError> {
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
         node.export(self.state.remote)?;
         node.export(self.fault.remote)?;
         node.import(self.setpoint.remote)?;

@@ -1,8 +1,9 @@
 //! The proximity application: one step per millisecond, sans-IO.
 
 use r2p_module::leds;
+use r2p_module::TopicNode;
 use r2p_msgs::{Obstacle, Proximity};
-use r2p_node::{Node, NodeError, ParamStore};
+use r2p_node::{NodeError, ParamStore};
 
 use crate::channel::{Channel, Status};
 use crate::curves::curve;
@@ -61,16 +62,7 @@ impl<'a> App<'a> {
     }
 
     /// Exports `ranges` and `obstacle` on the module's node.
-    pub fn register<
-        const E: usize,
-        const I: usize,
-        const T: usize,
-        const R: usize,
-        const B: usize,
-    >(
-        &self,
-        node: &mut Node<'a, E, I, T, R, B>,
-    ) -> Result<(), NodeError> {
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
         node.export(self.ep.ranges.remote)?;
         node.export(self.ep.obstacle.remote)?;
         Ok(())

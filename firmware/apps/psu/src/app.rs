@@ -3,8 +3,9 @@
 use r2p_middleware::Publisher;
 use r2p_module::filters::LowPass;
 use r2p_module::leds;
+use r2p_module::TopicNode;
 use r2p_msgs::{Battery, PsuEvent, PsuState};
-use r2p_node::{Node, NodeError, ParamStore};
+use r2p_node::{NodeError, ParamStore};
 
 use crate::charge::{remaining_s, ChargeCounter};
 use crate::endpoints::Endpoints;
@@ -83,16 +84,7 @@ impl<'a> App<'a> {
     }
 
     /// Exports `battery`, `state` and `event` and imports `power` on the module's node.
-    pub fn register<
-        const E: usize,
-        const I: usize,
-        const T: usize,
-        const R: usize,
-        const B: usize,
-    >(
-        &self,
-        node: &mut Node<'a, E, I, T, R, B>,
-    ) -> Result<(), NodeError> {
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
         node.export(self.ep.battery.remote)?;
         node.export(self.ep.state.remote)?;
         node.export(self.ep.event.remote)?;

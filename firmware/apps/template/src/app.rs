@@ -1,7 +1,8 @@
 //! The template application: one step per millisecond, sans-IO.
 
 use r2p_module::leds;
-use r2p_node::{Node, NodeError, ParamStore};
+use r2p_module::TopicNode;
+use r2p_node::{NodeError, ParamStore};
 
 use crate::endpoints::Endpoints;
 use crate::params;
@@ -39,17 +40,8 @@ impl<'a> App<'a> {
     }
 
     /// Exports `count` on the module's node.
-    pub fn register<
-        const E: usize,
-        const I: usize,
-        const T: usize,
-        const R: usize,
-        const B: usize,
-    >(
-        &self,
-        node: &mut Node<'a, E, I, T, R, B>,
-    ) -> Result<(), NodeError> {
-        node.export(self.ep.count.remote).map(drop)
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
+        node.export(self.ep.count.remote)
     }
 
     /// The endpoints (the topic to subscribe to on the module, the publisher's statistics).

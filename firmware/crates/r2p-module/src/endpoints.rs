@@ -28,7 +28,7 @@
 use core::mem::MaybeUninit;
 
 use r2p_middleware::{Class, Error, Publisher, Subscriber, Topic};
-use r2p_node::{RemotePublisher, RemoteSubscriber};
+use r2p_node::{Export, Import, Node, NodeError, RemotePublisher, RemoteSubscriber};
 use static_cell::StaticCell;
 
 /// A topic the module publishes on the bus: `SLOTS` pool slots, room for `SUBS` subscribers
@@ -78,6 +78,26 @@ impl<T, const SLOTS: usize, const SUBS: usize, const QS: usize> Clone
 impl<T, const SLOTS: usize, const SUBS: usize, const QS: usize> Copy
     for Inbound<'_, T, SLOTS, SUBS, QS>
 {
+}
+
+/// A node, whatever its sizes, as an application registers its topics on it: an
+/// application's `register(&self, node: &mut impl TopicNode<'a>)` needs no const parameters.
+pub trait TopicNode<'a> {
+    /// Offers `topic` on the bus ([`Node::export`]).
+    fn export(&mut self, topic: &'a dyn Export) -> Result<(), NodeError>;
+    /// Subscribes to `topic` on the bus ([`Node::import`]).
+    fn import(&mut self, topic: &'a dyn Import) -> Result<(), NodeError>;
+}
+
+impl<'a, const E: usize, const I: usize, const T: usize, const R: usize, const B: usize>
+    TopicNode<'a> for Node<'a, E, I, T, R, B>
+{
+    fn export(&mut self, topic: &'a dyn Export) -> Result<(), NodeError> {
+        Node::export(self, topic).map(drop)
+    }
+    fn import(&mut self, topic: &'a dyn Import) -> Result<(), NodeError> {
+        Node::import(self, topic).map(drop)
+    }
 }
 
 /// Room for one [`Outbound`]: one `StaticCell` for its three objects.

@@ -30,7 +30,7 @@ pub mod ram_flash;
 #[cfg(any(test, feature = "std"))]
 pub mod readme;
 
-pub use endpoints::{Inbound, InboundCell, Outbound, OutboundCell};
+pub use endpoints::{Inbound, InboundCell, Outbound, OutboundCell, TopicNode};
 pub use flash_params::{CommitReport, FlashParams, LoadReport};
 pub use param_doc::ParamDoc;
 pub use ram_flash::RamFlash;
