@@ -8,7 +8,9 @@ use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
 
 use r2p_canlink::hub::DEFAULT_QUEUE;
-use r2p_canlink::service::{expect_command, HubService, ServiceOptions, StopConditions};
+use r2p_canlink::service::{
+    parse_command_line, run_main, unknown_option, HubService, ServiceOptions, StopConditions,
+};
 use r2p_canlink::{BroadcastHub, CanFrame, Config, Hub};
 
 const HELP: &str = "\
@@ -66,32 +68,24 @@ fn parse_heartbeat(s: &str) -> Result<Heartbeat, String> {
 }
 
 fn parse_args(args: &[String]) -> Result<Options, String> {
-    let mut opts = Options {
-        service: ServiceOptions::default(),
-        heartbeats: Vec::new(),
-        queue: DEFAULT_QUEUE,
-    };
-    let mut it = args.iter();
-    expect_command(&mut it, "serve")?;
-    while let Some(arg) = it.next() {
-        let mut value = || it.next().cloned().ok_or_else(|| format!("{arg} needs a value"));
-        if opts.service.take(arg, &mut value)? {
-            continue;
-        }
-        match arg.as_str() {
-            "--heartbeat" => opts.heartbeats.push(parse_heartbeat(&value()?)?),
+    let (mut service, mut heartbeats, mut queue) =
+        (ServiceOptions::default(), Vec::new(), DEFAULT_QUEUE);
+    parse_command_line(args, "serve", &mut service, |arg, value| {
+        match arg {
+            "--heartbeat" => heartbeats.push(parse_heartbeat(&value()?)?),
             "--queue" => {
                 let v = value()?;
-                opts.queue = v
+                queue = v
                     .parse()
                     .ok()
                     .filter(|&n| n > 0)
                     .ok_or(format!("--queue {v}: expected a positive number"))?;
             }
-            other => return Err(format!("unknown option {other} (try --help)")),
+            other => return Err(unknown_option(other)),
         }
-    }
-    Ok(opts)
+        Ok(())
+    })?;
+    Ok(Options { service, heartbeats, queue })
 }
 
 fn spawn_heartbeat(hub: Arc<BroadcastHub>, hb: Heartbeat, stop: Arc<AtomicBool>) -> JoinHandle<()> {
@@ -176,17 +170,5 @@ fn serve(opts: Options) -> Result<(), String> {
 }
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    if args.is_empty() || args.iter().any(|a| a == "--help" || a == "-h") {
-        print!("{HELP}");
-        return if args.is_empty() { ExitCode::from(2) } else { ExitCode::SUCCESS };
-    }
-    let result = parse_args(&args).and_then(serve);
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("r2p-canlink: error: {e}");
-            ExitCode::from(2)
-        }
-    }
+    run_main("r2p-canlink", HELP, |args| parse_args(args).and_then(serve))
 }

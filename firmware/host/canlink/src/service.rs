@@ -6,6 +6,7 @@
 use std::fs::File;
 use std::io::{self, BufWriter, Read};
 use std::net::SocketAddr;
+use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::{self, JoinHandle};
@@ -178,16 +179,56 @@ impl ServiceOptions {
     }
 }
 
-/// Checks that a program's arguments start with its one command, `command`.
-pub fn expect_command<'a>(
-    args: &mut impl Iterator<Item = &'a String>,
+/// Reads a program's command line: its one `command`, then options, the shared ones into
+/// `service` and every other through `own(option, value)`, where `value()` takes the option's
+/// value (or fails naming the option). `own` returns [`unknown_option`] for one it does not
+/// know.
+pub fn parse_command_line(
+    args: &[String],
     command: &str,
+    service: &mut ServiceOptions,
+    mut own: impl FnMut(&str, &mut dyn FnMut() -> Result<String, String>) -> Result<(), String>,
 ) -> Result<(), String> {
-    match args.next().map(String::as_str) {
-        Some(c) if c == command => Ok(()),
-        Some(other) => Err(format!("unknown command {other} (try --help)")),
-        None => Err("missing command (try --help)".into()),
+    let mut it = args.iter();
+    match it.next().map(String::as_str) {
+        Some(c) if c == command => {}
+        Some(other) => return Err(format!("unknown command {other} (try --help)")),
+        None => return Err("missing command (try --help)".into()),
     }
+    while let Some(arg) = it.next() {
+        let mut value = || it.next().cloned().ok_or_else(|| format!("{arg} needs a value"));
+        if !service.take(arg, &mut value)? {
+            own(arg, &mut value)?;
+        }
+    }
+    Ok(())
+}
+
+/// A serving program's `main` around `run`, which gets the arguments: no argument prints
+/// `help` (exit status 2), `--help` or `-h` prints it (0); an error is printed as
+/// "`name`: error: …" (2).
+pub fn run_main(
+    name: &str,
+    help: &str,
+    run: impl FnOnce(&[String]) -> Result<(), String>,
+) -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.is_empty() || args.iter().any(|a| a == "--help" || a == "-h") {
+        print!("{help}");
+        return if args.is_empty() { ExitCode::from(2) } else { ExitCode::SUCCESS };
+    }
+    match run(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("{name}: error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// The error for an option a program does not know.
+pub fn unknown_option(option: &str) -> String {
+    format!("unknown option {option} (try --help)")
 }
 
 /// The value of `--socketcand`: the address to listen on.
@@ -284,14 +325,14 @@ mod tests {
     fn parse(args: &[&str]) -> Result<(ServiceOptions, Vec<String>), String> {
         let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
         let (mut opts, mut rest) = (ServiceOptions::default(), Vec::new());
-        let mut it = args.iter();
-        expect_command(&mut it, "serve")?;
-        while let Some(arg) = it.next() {
-            let value = || it.next().cloned().ok_or_else(|| format!("{arg} needs a value"));
-            if !opts.take(arg, value)? {
-                rest.push(arg.clone());
+        parse_command_line(&args, "serve", &mut opts, |arg, value| {
+            match arg {
+                "--own" => rest.push(value()?),
+                "--flag" => rest.push(arg.into()),
+                other => return Err(unknown_option(other)),
             }
-        }
+            Ok(())
+        })?;
         Ok((opts, rest))
     }
 
@@ -301,12 +342,14 @@ mod tests {
             "serve",
             "--socketcand",
             "0.0.0.0:1234",
-            "--queue",
+            "--flag",
             "--channel",
             "can1",
             "--log",
             "x.log",
             "--no-stdin",
+            "--own",
+            "--log",
         ])
         .unwrap();
         assert_eq!(o.addr, "0.0.0.0:1234".parse().unwrap());
@@ -314,7 +357,7 @@ mod tests {
             (o.channel.as_str(), o.log.as_deref(), o.watch_stdin),
             ("can1", Some("x.log"), false)
         );
-        assert_eq!(rest, ["--queue"], "not one of the shared options: left to the program");
+        assert_eq!(rest, ["--flag", "--log"], "the program's own options, their values included");
         let d = parse(&["serve"]).unwrap().0;
         assert_eq!(d, ServiceOptions::default());
         assert_eq!(
@@ -330,6 +373,8 @@ mod tests {
             .unwrap_err()
             .contains("expected IP:PORT"));
         assert!(parse(&["serve", "--channel", "a b"]).unwrap_err().contains("not a bus name"));
+        assert_eq!(parse(&["serve", "--own"]).unwrap_err(), "--own needs a value");
+        assert_eq!(parse(&["serve", "--x"]).unwrap_err(), "unknown option --x (try --help)");
         assert_eq!(parse(&["demo"]).unwrap_err(), "unknown command demo (try --help)");
         assert_eq!(parse(&[]).unwrap_err(), "missing command (try --help)");
     }

@@ -3,7 +3,7 @@
 
 use std::process::ExitCode;
 
-use r2p_canlink::service::{expect_command, ServiceOptions};
+use r2p_canlink::service::{parse_command_line, run_main, unknown_option, ServiceOptions};
 use r2p_emu::{demo, serve};
 
 const HELP: &str = "\
@@ -54,18 +54,13 @@ struct Options {
 fn parse_args(args: &[String]) -> Result<Options, String> {
     let mut opts =
         Options { realtime: false, service: ServiceOptions::default(), seconds: None, seed: 0 };
-    let mut it = args.iter();
-    expect_command(&mut it, "demo")?;
-    while let Some(arg) = it.next() {
-        let mut value = || it.next().cloned().ok_or_else(|| format!("{arg} needs a value"));
-        if opts.service.take(arg, &mut value)? {
-            continue;
-        }
-        match arg.as_str() {
-            "--realtime" => opts.realtime = true,
+    let Options { realtime, service, seconds, seed } = &mut opts;
+    parse_command_line(args, "demo", service, |arg, value| {
+        match arg {
+            "--realtime" => *realtime = true,
             "--seconds" => {
                 let v = value()?;
-                opts.seconds = Some(
+                *seconds = Some(
                     v.parse()
                         .ok()
                         .filter(|&s: &f64| s > 0.0 && s < 1e6)
@@ -74,11 +69,12 @@ fn parse_args(args: &[String]) -> Result<Options, String> {
             }
             "--seed" => {
                 let v = value()?;
-                opts.seed = v.parse().map_err(|_| format!("--seed {v}: expected a number"))?;
+                *seed = v.parse().map_err(|_| format!("--seed {v}: expected a number"))?;
             }
-            other => return Err(format!("unknown option {other} (try --help)")),
+            other => return Err(unknown_option(other)),
         }
-    }
+        Ok(())
+    })?;
     if !opts.realtime && (opts.seconds.is_none() || opts.service.log.is_none()) {
         return Err("without --realtime, --seconds N and --log FILE are needed (try --help)".into());
     }
@@ -120,18 +116,7 @@ fn realtime(opts: &Options) -> Result<(), String> {
 }
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    if args.is_empty() || args.iter().any(|a| a == "--help" || a == "-h") {
-        print!("{HELP}");
-        return if args.is_empty() { ExitCode::from(2) } else { ExitCode::SUCCESS };
-    }
-    let result =
-        parse_args(&args).and_then(|o| if o.realtime { realtime(&o) } else { virtual_time(&o) });
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("r2p-emu: error: {e}");
-            ExitCode::from(2)
-        }
-    }
+    run_main("r2p-emu", HELP, |args| {
+        parse_args(args).and_then(|o| if o.realtime { realtime(&o) } else { virtual_time(&o) })
+    })
 }
