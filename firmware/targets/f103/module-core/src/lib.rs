@@ -8,12 +8,19 @@
 //! ```ignore
 //! let p = module_core::init::<{ board::HSE_HZ }, { board::SYSCLK_HZ }>();
 //! let pins = board::take_pins!(p);
-//! let leds = module_core::leds!(board, pins);                 // outputs first
-//! let can = module_core::enable_can(Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs)).await;
+//! let leds = module_core::leds!(board, pins); // outputs first
+//! let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
+//! module_core::enable_can(&mut can).await;
 //! let flash = module_core::load_params(&PARAMS, p.FLASH);
 //! let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
-//! module_core::start_bus(node_config(uid(), &PARAMS), &PARAMS, |n| app.register(n), can, p.TIM2);
-//! // and in the application's task: module_core::step_every_ms(&PARAMS, flash, async |now| ..)
+//! let config = node_config(uid(), &PARAMS);
+//! module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
+//! // and in the application's task, every millisecond:
+//! let mut ms = module_core::EveryMs::new(&PARAMS, flash);
+//! loop {
+//!     let command = app.step(ms.now(), &sample);
+//!     ms.next().await;
+//! }
 //! ```
 //!
 //! Nodes are tasks with priorities, as in the footprint image (targets/shared/footprint_core.rs):
