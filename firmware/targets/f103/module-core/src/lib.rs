@@ -43,7 +43,7 @@ use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use embassy_executor::InterruptExecutor;
 use embassy_stm32::can::Can;
 use embassy_stm32::flash::{Blocking, Flash};
-use embassy_stm32::gpio::{Flex, Input, Level, Output, Pin};
+use embassy_stm32::gpio::{Input, Level, Output};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
 use embassy_stm32::peripherals::{FLASH, TIM2};
@@ -61,9 +61,11 @@ use defmt_rtt as _;
 
 defmt::timestamp!("{=u64:us}", Instant::now().as_micros());
 
+mod analog;
 mod flash_layout;
 mod panic;
 pub mod slot_timer;
+pub use analog::{analog_input, AnalogInputs};
 pub use flash_layout::PARAMS_BASE;
 use slot_timer::SlotTimer;
 
@@ -359,12 +361,6 @@ macro_rules! leds {
             ],
         )
     };
-}
-
-/// Puts a pin in analog mode (the board file's `analog`; embassy's F1 ADC leaves pins as
-/// floating inputs): dropping a `Flex` leaves its pin disconnected, which is analog on the F1.
-pub fn analog(pin: &mut Peri<'static, impl Pin>) {
-    drop(Flex::new(pin.reborrow()));
 }
 
 /// Drives an output to its logical level (`on`), given the board file's `active`.

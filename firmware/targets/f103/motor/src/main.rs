@@ -84,7 +84,7 @@ async fn control(ep: Endpoints<'static>, mut sensors: Sensors, mut bridge: Bridg
 #[embassy_executor::main]
 async fn main(_spawner: Spawner) {
     let p = module_core::init::<{ board::HSE_HZ }, { board::SYSCLK_HZ }>();
-    let mut pins = board::take_pins!(p);
+    let pins = board::take_pins!(p);
 
     // Outputs first: the driver stays disabled and the LEDs take their boot levels at once.
     let drv_en = board::drv_en(pins.drv_en);
@@ -100,8 +100,6 @@ async fn main(_spawner: Spawner) {
             enable: drv_en,
         },
     );
-    module_core::analog(&mut pins.motor_current);
-    module_core::analog(&mut pins.vmot_sense);
     let sensors =
         Sensors::new(p.ADC1, pins.motor_current, pins.vmot_sense, p.TIM3, pins.enc_a, pins.enc_b);
 

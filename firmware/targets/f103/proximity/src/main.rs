@@ -7,13 +7,12 @@
 #![no_main]
 
 use embassy_executor::Spawner;
-use embassy_stm32::adc::{self, Adc, SampleTime};
+use embassy_stm32::adc::{self, SampleTime};
 use embassy_stm32::can::Can;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::{Input, Output};
-use embassy_stm32::peripherals::{ADC1, PA0, PA1, PA2, PA3};
-use embassy_stm32::Peri;
-use module_core::{asserted, drive, EveryMs, Leds};
+use embassy_stm32::peripherals::ADC1;
+use module_core::{analog_input, asserted, drive, AnalogInputs, EveryMs, Leds};
 use r2p_app_proximity::{params, App, Sample, Storage};
 use r2p_module::FlashParams;
 
@@ -35,11 +34,8 @@ const SAMPLE_TIME: SampleTime = SampleTime::CYCLES239_5;
 
 /// The board's I/O the application step reads and drives.
 struct Io {
-    adc: Adc<'static, ADC1>,
-    ch0: Peri<'static, PA0>,
-    ch1: Peri<'static, PA1>,
-    ch2: Peri<'static, PA2>,
-    ch3: Peri<'static, PA3>,
+    /// PROX_CH0 … PROX_CH3.
+    analog: AnalogInputs<4>,
     sensor_power: Output<'static>,
     sensor_fault: Input<'static>,
     leds: Leds,
@@ -50,14 +46,8 @@ struct Io {
 async fn run(mut app: App<'static>, mut io: Io, flash: Flash<'static, Blocking>) {
     let mut ms = EveryMs::new(&PARAMS, flash);
     loop {
-        let adc = [
-            io.adc.read(&mut io.ch0, SAMPLE_TIME).await,
-            io.adc.read(&mut io.ch1, SAMPLE_TIME).await,
-            io.adc.read(&mut io.ch2, SAMPLE_TIME).await,
-            io.adc.read(&mut io.ch3, SAMPLE_TIME).await,
-        ];
         let sample = Sample {
-            adc,
+            adc: io.analog.read().await,
             status: module_core::led_status(),
             supply_fault: asserted(&io.sensor_fault, board::SENSOR_PWR_FAULT_ACTIVE_LOW),
         };
@@ -71,21 +61,22 @@ async fn run(mut app: App<'static>, mut io: Io, flash: Flash<'static, Blocking>)
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
     let p = module_core::init::<{ board::HSE_HZ }, { board::SYSCLK_HZ }>();
-    let mut pins = board::take_pins!(p);
+    let pins = board::take_pins!(p);
 
     // Outputs first: the sensors' supply and the LEDs take their boot levels at once.
     let sensor_power = board::sensor_pwr_en(pins.sensor_pwr_en);
     let leds = module_core::leds!(board, pins);
-    module_core::analog(&mut pins.prox_ch0);
-    module_core::analog(&mut pins.prox_ch1);
-    module_core::analog(&mut pins.prox_ch2);
-    module_core::analog(&mut pins.prox_ch3);
     let io = Io {
-        adc: Adc::new(p.ADC1),
-        ch0: pins.prox_ch0,
-        ch1: pins.prox_ch1,
-        ch2: pins.prox_ch2,
-        ch3: pins.prox_ch3,
+        analog: AnalogInputs::new(
+            p.ADC1,
+            [
+                analog_input(pins.prox_ch0),
+                analog_input(pins.prox_ch1),
+                analog_input(pins.prox_ch2),
+                analog_input(pins.prox_ch3),
+            ],
+            SAMPLE_TIME,
+        ),
         sensor_power,
         sensor_fault: board::sensor_pwr_fault(pins.sensor_pwr_fault),
         leds,

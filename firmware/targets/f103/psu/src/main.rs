@@ -6,13 +6,12 @@
 #![no_main]
 
 use embassy_executor::Spawner;
-use embassy_stm32::adc::{self, Adc, SampleTime};
+use embassy_stm32::adc::{self, SampleTime};
 use embassy_stm32::can::Can;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::{Input, Output};
-use embassy_stm32::peripherals::{ADC1, PA0, PA1, PA2};
-use embassy_stm32::Peri;
-use module_core::{asserted, drive, EveryMs, Leds};
+use embassy_stm32::peripherals::ADC1;
+use module_core::{analog_input, asserted, drive, AnalogInputs, EveryMs, Leds};
 use r2p_app_psu::{params, App, Sample, Storage};
 use r2p_module::FlashParams;
 
@@ -34,10 +33,8 @@ const SAMPLE_TIME: SampleTime = SampleTime::CYCLES239_5;
 
 /// The board's I/O the application step reads and drives.
 struct Io {
-    adc: Adc<'static, ADC1>,
-    vin: Peri<'static, PA0>,
-    iin: Peri<'static, PA1>,
-    vout: Peri<'static, PA2>,
+    /// VIN_SENSE, IIN_SENSE, VOUT_SENSE.
+    analog: AnalogInputs<3>,
     bus_fault: Input<'static>,
     bus_en: Output<'static>,
     leds: Leds,
@@ -48,10 +45,11 @@ struct Io {
 async fn run(mut app: App<'static>, mut io: Io, flash: Flash<'static, Blocking>) {
     let mut ms = EveryMs::new(&PARAMS, flash);
     loop {
+        let [vin, iin, vout] = io.analog.read().await;
         let sample = Sample {
-            vin: io.adc.read(&mut io.vin, SAMPLE_TIME).await,
-            iin: io.adc.read(&mut io.iin, SAMPLE_TIME).await,
-            vout: io.adc.read(&mut io.vout, SAMPLE_TIME).await,
+            vin,
+            iin,
+            vout,
             bus_fault: asserted(&io.bus_fault, board::BUS_FAULT_ACTIVE_LOW),
             status: module_core::led_status(),
         };
@@ -65,19 +63,21 @@ async fn run(mut app: App<'static>, mut io: Io, flash: Flash<'static, Blocking>)
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
     let p = module_core::init::<{ board::HSE_HZ }, { board::SYSCLK_HZ }>();
-    let mut pins = board::take_pins!(p);
+    let pins = board::take_pins!(p);
 
     // Outputs first: the bus switch and the LEDs take their boot levels at once.
     let bus_en = board::bus_en(pins.bus_en);
     let leds = module_core::leds!(board, pins);
-    module_core::analog(&mut pins.vin_sense);
-    module_core::analog(&mut pins.iin_sense);
-    module_core::analog(&mut pins.vout_sense);
     let io = Io {
-        adc: Adc::new(p.ADC1),
-        vin: pins.vin_sense,
-        iin: pins.iin_sense,
-        vout: pins.vout_sense,
+        analog: AnalogInputs::new(
+            p.ADC1,
+            [
+                analog_input(pins.vin_sense),
+                analog_input(pins.iin_sense),
+                analog_input(pins.vout_sense),
+            ],
+            SAMPLE_TIME,
+        ),
         bus_fault: board::bus_fault(pins.bus_fault),
         bus_en,
         leds,
