@@ -3,6 +3,7 @@ socketcand on 127.0.0.1), against traces (candump logs and pcap files), and its 
 conversion (checked by tshark when installed) and replay into a bus."""
 from __future__ import annotations
 
+import hashlib
 import json
 import re
 import shutil
@@ -86,6 +87,46 @@ def test_flash_builds_the_probe_rs_commands_and_says_what_is_missing(built, tmp_
         f"{fake} download --chip STM32F407VG --verify {ROOT}/firmware/images/gateway.elf", p.stdout
     p = run([str(R2P), "flash"], timeout=30)
     assert p.returncode == 2 and "<MODULE>" in p.stdout
+
+
+def test_keygen_and_sign_make_images_only_their_key_verifies(built, tmp_path):
+    # A key of one's own, outside the repository; the signed image is the image then its trailer,
+    # whose ed25519 signature checks with that key (Python's independent `hashlib` for SHA-512;
+    # the signature itself is checked by r2p-boot's tests against ed25519-dalek).
+    key = tmp_path / "keys" / "lab.key"
+    p = run([str(R2P), "keygen", str(key)], timeout=30)
+    assert p.returncode == 0, p.stdout
+    assert (key.stat().st_mode & 0o777) == 0o600, "the secret key is readable by its owner only"
+    public = (tmp_path / "keys" / "lab.key.pub").read_text().splitlines()[-1]
+    assert re.fullmatch(r"[0-9a-f]{64}", public)
+    p = run([str(R2P), "keygen", str(key)], timeout=30)
+    assert p.returncode == 1 and "not overwritten" in p.stdout, p.stdout
+    p = run([str(R2P), "keygen", str(ROOT / "firmware" / "keys" / "mine.key")], timeout=30)
+    assert p.returncode == 1 and "inside the R2P repository" in p.stdout, p.stdout
+    assert not (ROOT / "firmware" / "keys" / "mine.key").exists()
+
+    out = tmp_path / "motor.signed.bin"
+    p = run([str(R2P), "sign", "motor", "--version", "1.2.3", "--key", str(key), "-o", str(out)], timeout=30)
+    assert p.returncode == 0, p.stdout
+    image = (ROOT / "firmware" / "images" / "motor.bin").read_bytes()
+    signed = out.read_bytes()
+    assert signed[:len(image)] == image and len(signed) == len(image) + 128
+    trailer = signed[len(image):]
+    assert trailer[:5] == b"R2PI\x01" and int.from_bytes(trailer[8:12], "little") == len(image)
+    assert trailer[12:16] == bytes([3, 0, 2, 1]) and trailer[16:21] == b"motor"
+    assert trailer[32:43] == b"STM32F103CB"
+    assert trailer[48:56] == hashlib.sha512(bytes.fromhex(public)).digest()[:8], "the key id names lab.key"
+    assert f"key {trailer[48:56].hex()}" in p.stdout
+
+    # Without --key: the public development key, said loudly.
+    p = run([str(R2P), "sign", "motor", "--version", "1.2.3", "-o", str(tmp_path / "dev.bin")], timeout=30)
+    assert p.returncode == 0 and p.stdout.startswith("warning: signed with the public development key"), p.stdout
+    for args, msg in [(["sign", "motor", "--version", "1.2"], "expected MAJOR.MINOR.PATCH"),
+                      (["sign", str(out), "--version", "1.0.0", "--key", str(key)], "a file needs --kind"),
+                      (["sign", str(out), "--kind", "motor", "--version", "1.0.0", "--key", str(key), "-o", str(tmp_path / "x")], "already signed"),
+                      (["sign", "servo", "--version", "1.0.0"], "no module named \"servo\"")]:
+        p = run([str(R2P), *args], timeout=30)
+        assert p.returncode == 1 and msg in p.stdout, (args, p.stdout)
 
 
 def test_nodes_lists_the_demo_boards(demo):

@@ -68,7 +68,9 @@ def reproducible_env(root: Path) -> dict[str, str]:
     env["RUSTC_WRAPPER"] = str(ROOT / "scripts" / "rustc-reproducible")
     env["R2P_ROOT"] = str(root.resolve())
     env["R2P_CARGO_HOME"] = str(cargo_home())
-    for var in ("RUSTFLAGS", "CARGO_ENCODED_RUSTFLAGS", "CARGO_BUILD_RUSTFLAGS"):
+    # R2P_BOOT_PUBLIC_KEY builds a bootloader for a user's key; the committed one trusts the
+    # development key whatever the environment says.
+    for var in ("RUSTFLAGS", "CARGO_ENCODED_RUSTFLAGS", "CARGO_BUILD_RUSTFLAGS", "R2P_BOOT_PUBLIC_KEY"):
         env.pop(var, None)
     # defmt's compile-time log filter: the committed images log at info and above (module-core's
     # boot, reboot and storage messages); a DEFMT_LOG in the caller's environment must not change them.

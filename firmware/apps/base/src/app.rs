@@ -1,8 +1,9 @@
 //! The base controller's step: IK, obstacle avoidance, odometry.
 
 use libm::{cosf, sinf};
+use r2p_module::TopicNode;
 use r2p_msgs::{Odometry, Twist2D, WheelSetpoint};
-use r2p_node::{Export, Import, Node, NodeError, ParamStore, Typed};
+use r2p_node::{Export, Import, NodeError, ParamStore, Typed};
 
 use crate::kinematics::Omni3;
 use crate::params as p;
@@ -77,16 +78,7 @@ impl<'a> App<'a> {
     }
 
     /// Exports the setpoints and odometry, imports the command, obstacles and wheel states.
-    pub fn register<
-        const E: usize,
-        const I: usize,
-        const T: usize,
-        const R: usize,
-        const B: usize,
-    >(
-        &self,
-        node: &mut Node<'a, E, I, T, R, B>,
-    ) -> Result<(), NodeError> {
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
         for e in self.ends.exports {
             node.export(e)?;
         }

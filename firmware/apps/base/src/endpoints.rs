@@ -3,9 +3,10 @@
 
 use std::boxed::Box;
 
-use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
+use r2p_middleware::{pool_size, Class, Publisher, Subscriber};
+use r2p_module::{Inbound, InboundCell, Outbound, OutboundCell};
 use r2p_msgs::{Obstacle, Odometry, Proximity, Twist2D, WheelSetpoint, WheelState};
-use r2p_node::{Export, Import, RemotePublisher, RemoteSubscriber};
+use r2p_node::{Export, Import};
 
 /// Topic names the base controller uses (the motors' and the proximity module's names depend
 /// on their `instance` parameters).
@@ -61,36 +62,33 @@ pub struct Endpoints<'a> {
     pub imports: [&'a dyn Import; 6],
 }
 
-fn leak<T>(x: T) -> &'static T {
-    Box::leak(Box::new(x))
+/// Pool of a topic whose one subscriber queues `q` messages, with one publisher.
+const fn pool(q: usize) -> usize {
+    pool_size(&[q], 1)
 }
 
-/// A topic received from the bus: (local subscriber, the node's import, the local publisher).
-macro_rules! incoming {
-    ($ty:ty, $name:expr, $q:literal) => {{
-        let topic: &'static Topic<'static, $ty, { pool_size(&[$q], 1) }, 1> =
-            leak(Topic::new($name, <$ty>::default()));
-        let publisher: &'static Publisher<'static, $ty> =
-            leak(Publisher::new(topic, Class::NonRealTime));
-        let sub: &'static Subscriber<'static, $ty, $q> = leak(Subscriber::new());
-        topic.subscribe(sub).expect("a new topic has room for a subscriber");
-        let import: &'static dyn Import = leak(RemotePublisher::new(publisher, topic));
-        (sub, import, publisher)
-    }};
+/// A topic received from the bus, on the heap: the local subscriber, the node's import, the
+/// local publisher.
+fn inbound<T, const SLOTS: usize, const Q: usize>(
+    name: &'static str,
+) -> Inbound<'static, T, SLOTS, 1, Q>
+where
+    T: Copy + Default + Send + Sync + 'static,
+{
+    let cell: &'static InboundCell<T, SLOTS, 1, Q> = Box::leak(Box::new(InboundCell::new()));
+    cell.build(name, T::default()).expect("a new topic has room for its endpoints")
 }
 
-/// A topic sent on the bus: (local publisher, the node's export).
-macro_rules! outgoing {
-    ($ty:ty, $name:expr, $class:expr, $q:literal) => {{
-        let topic: &'static Topic<'static, $ty, { pool_size(&[$q], 1) }, 1> =
-            leak(Topic::new($name, <$ty>::default()));
-        let publisher: &'static Publisher<'static, $ty> = leak(Publisher::new(topic, $class));
-        let out: &'static RemoteSubscriber<'static, $ty, $q> =
-            leak(RemoteSubscriber::new(publisher));
-        topic.subscribe(out).expect("a new topic has room for a subscriber");
-        let export: &'static dyn Export = out;
-        (publisher, export)
-    }};
+/// A topic sent on the bus, on the heap: the local publisher and the node's export.
+fn outbound<T, const SLOTS: usize, const Q: usize>(
+    name: &'static str,
+    class: Class,
+) -> Outbound<'static, T, SLOTS, 1, Q>
+where
+    T: Copy + Default + Send + Sync + 'static,
+{
+    let cell: &'static OutboundCell<T, SLOTS, 1, Q> = Box::leak(Box::new(OutboundCell::new()));
+    cell.build(name, T::default(), class).expect("a new topic has room for its endpoints")
 }
 
 impl Endpoints<'static> {
@@ -98,26 +96,29 @@ impl Endpoints<'static> {
     /// `ik_period_us`.
     pub fn leak(names: Names, ik_period_us: u32) -> Self {
         let hrt = Class::SyncRealTime { period_us: ik_period_us };
-        let (cmd, cmd_in, cmd_local) = incoming!(Twist2D, names.cmd_vel, 2);
-        let (obstacle, obstacle_in, _) = incoming!(Obstacle, names.obstacle, 4);
-        let (ranges, ranges_in, _) = incoming!(Proximity, names.ranges, 2);
-        let s0 = incoming!(WheelState, names.states[0], 2);
-        let s1 = incoming!(WheelState, names.states[1], 2);
-        let s2 = incoming!(WheelState, names.states[2], 2);
-        let p0 = outgoing!(WheelSetpoint, names.setpoints[0], hrt, 2);
-        let p1 = outgoing!(WheelSetpoint, names.setpoints[1], hrt, 2);
-        let p2 = outgoing!(WheelSetpoint, names.setpoints[2], hrt, 2);
-        let odom = outgoing!(Odometry, names.odom, Class::NonRealTime, 2);
+        let cmd = inbound::<Twist2D, { pool(2) }, 2>(names.cmd_vel);
+        let obstacle = inbound::<Obstacle, { pool(4) }, 4>(names.obstacle);
+        let ranges = inbound::<Proximity, { pool(2) }, 2>(names.ranges);
+        let s = names.states.map(inbound::<WheelState, { pool(2) }, 2>);
+        let p = names.setpoints.map(|n| outbound::<WheelSetpoint, { pool(2) }, 2>(n, hrt));
+        let odom = outbound::<Odometry, { pool(2) }, 2>(names.odom, Class::NonRealTime);
         Endpoints {
-            cmd,
-            cmd_local,
-            obstacle,
-            ranges,
-            states: [s0.0, s1.0, s2.0],
-            setpoints: [p0.0, p1.0, p2.0],
-            odom: odom.0,
-            exports: [p0.1, p1.1, p2.1, odom.1],
-            imports: [cmd_in, obstacle_in, ranges_in, s0.1, s1.1, s2.1],
+            cmd: cmd.subscriber,
+            cmd_local: cmd.publisher,
+            obstacle: obstacle.subscriber,
+            ranges: ranges.subscriber,
+            states: s.map(|s| s.subscriber),
+            setpoints: p.map(|p| p.publisher),
+            odom: odom.publisher,
+            exports: [p[0].remote, p[1].remote, p[2].remote, odom.remote],
+            imports: [
+                cmd.remote,
+                obstacle.remote,
+                ranges.remote,
+                s[0].remote,
+                s[1].remote,
+                s[2].remote,
+            ],
         }
     }
 }

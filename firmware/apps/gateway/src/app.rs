@@ -2,7 +2,8 @@
 
 use r2p_module::leds::{self, Pattern};
 use r2p_msgs::GatewayStatus;
-use r2p_node::{Node, NodeError};
+use r2p_module::TopicNode;
+use r2p_node::NodeError;
 
 use crate::endpoints::Endpoints;
 use crate::link::BusLink;
@@ -60,17 +61,8 @@ impl<'a> App<'a> {
     }
 
     /// Exports `gateway/status` on the gateway's node.
-    pub fn register<
-        const E: usize,
-        const I: usize,
-        const T: usize,
-        const R: usize,
-        const B: usize,
-    >(
-        &self,
-        node: &mut Node<'a, E, I, T, R, B>,
-    ) -> Result<(), NodeError> {
-        node.export(self.ep.status_out).map(drop)
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
+        node.export(self.ep.status_out)
     }
 
     /// The endpoints.

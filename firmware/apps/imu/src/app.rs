@@ -2,8 +2,9 @@
 
 use r2p_drivers::lsm6dso::RawSample;
 use r2p_module::leds;
+use r2p_module::TopicNode;
 use r2p_msgs::Imu;
-use r2p_node::{Node, NodeError, ParamStore};
+use r2p_node::{NodeError, ParamStore};
 
 use crate::attitude::Attitude;
 use crate::bias::BiasEstimator;
@@ -81,17 +82,8 @@ impl<'a> App<'a> {
     }
 
     /// Exports `imu` on the module's node.
-    pub fn register<
-        const E: usize,
-        const I: usize,
-        const T: usize,
-        const R: usize,
-        const B: usize,
-    >(
-        &self,
-        node: &mut Node<'a, E, I, T, R, B>,
-    ) -> Result<(), NodeError> {
-        node.export(self.ep.imu_out)?;
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
+        node.export(self.ep.imu.remote)?;
         Ok(())
     }
 
@@ -126,7 +118,7 @@ impl<'a> App<'a> {
         if now_us >= self.next_publish_us {
             self.next_publish_us = next_due(self.next_publish_us, now_us, cfg.period_us);
             let m = self.state;
-            self.ep.imu_pub.publish_with(|x| *x = m);
+            self.ep.imu.publisher.publish_with(|x| *x = m);
         }
         let mut status = sample.status;
         status.fault |= lost;

@@ -5,13 +5,14 @@
 //! | `imu` | `Imu` | NRT, at `rate_hz` |
 //!
 //! The topic's name depends on the `instance` parameter, so the objects are made at boot from
-//! the parameters, in a [`Storage`] of `StaticCell`s: a `static` one on the MCU, a leaked one
-//! per emulated board on the host ([`Endpoints::leak`]).
+//! the parameters, in a [`Storage`] of cells (`r2p_module`'s [`Outbound`], each topic written
+//! once): a `static` one on the MCU, a leaked one per emulated board on the host
+//! ([`Endpoints::leak`]).
 
-use r2p_middleware::{pool_size, Class, Publisher, Topic};
+use r2p_middleware::{pool_size, Class};
+use r2p_module::{Outbound, OutboundCell};
 use r2p_msgs::Imu;
-use r2p_node::{ParamStore, RemoteSubscriber};
-use static_cell::StaticCell;
+use r2p_node::ParamStore;
 
 use crate::params::INSTANCE;
 
@@ -46,55 +47,37 @@ pub const SPARE_QUEUE: usize = 4;
 
 const POOL: usize = pool_size(&[REMOTE_QUEUE, SPARE_QUEUE], 1);
 
-/// The `imu` topic.
-pub type ImuTopic<'a> = Topic<'a, Imu, POOL, 2>;
-
-/// Everything the application and the node use, by reference.
+/// Everything the application and the node use, by reference: one field a topic.
 #[derive(Clone, Copy)]
 pub struct Endpoints<'a> {
     /// The names in use.
     pub names: &'static Names,
-    /// The topic (subscribe here to read it on the module).
-    pub imu: &'a ImuTopic<'a>,
-    /// Its publisher (NRT).
-    pub imu_pub: &'a Publisher<'a, Imu>,
-    /// Its remote subscriber (exported).
-    pub imu_out: &'a RemoteSubscriber<'a, Imu, REMOTE_QUEUE>,
+    /// The readings: published (NRT) and exported.
+    pub imu: Outbound<'a, Imu, POOL, 2, REMOTE_QUEUE>,
 }
 
 /// Room for one set of endpoints: declare it `static` on the MCU, then [`Storage::build`] once.
+#[derive(Default)]
 pub struct Storage {
-    imu: StaticCell<ImuTopic<'static>>,
-    imu_pub: StaticCell<Publisher<'static, Imu>>,
-    imu_out: StaticCell<RemoteSubscriber<'static, Imu, REMOTE_QUEUE>>,
-}
-
-impl Default for Storage {
-    fn default() -> Self {
-        Self::new()
-    }
+    imu: OutboundCell<Imu, POOL, 2, REMOTE_QUEUE>,
 }
 
 impl Storage {
     /// Empty storage.
     pub const fn new() -> Self {
-        Self { imu: StaticCell::new(), imu_pub: StaticCell::new(), imu_out: StaticCell::new() }
+        Self { imu: OutboundCell::new() }
     }
 
     /// Makes and wires the endpoints with the names `params` give.
     ///
     /// # Panics
-    /// If called twice on one storage (each `StaticCell` is initialised once).
+    /// If called twice on one storage (each cell is initialised once).
     pub fn build(&'static self, params: &dyn ParamStore) -> Endpoints<'static> {
         let names = names(params);
         let empty = Imu { status: crate::app::STATUS_NO_DATA, ..Imu::default() };
-        let imu = &*self.imu.init(Topic::new(names.imu, empty));
-        let imu_pub = &*self.imu_pub.init(Publisher::new(imu, Class::NonRealTime));
-        let imu_out = &*self.imu_out.init(RemoteSubscriber::new(imu_pub));
         // Sized by `pool_size` for exactly these: cannot fail.
-        let wired = imu.advertise(imu_pub).and_then(|()| imu.subscribe(imu_out));
-        wired.expect("the imu topic is sized for its endpoints");
-        Endpoints { names, imu, imu_pub, imu_out }
+        let imu = self.imu.build(names.imu, empty, Class::NonRealTime);
+        Endpoints { names, imu: imu.expect("the imu topic is sized for its endpoints") }
     }
 }
 

@@ -3,6 +3,7 @@
 //! the sensor set-up ([`SensorConfig`]) fixed at boot.
 
 use r2p_drivers::lsm6dso::{self, AccelScale, GyroScale, Odr};
+use r2p_module::param_doc::{boot, doc, ParamDoc};
 use r2p_node::{NoParams, Param, ParamStore, Typed};
 
 /// Module instance: selects the node name and topic from [`crate::NAMES`] (at boot).
@@ -54,25 +55,6 @@ pub const DEFAULTS: [Param; COUNT] = [
     Param::u32("tilt_tau_ms", 2000, 10, 60_000),
     Param::f32("accel_gate", 0.1, 0.0, 1.0),
 ];
-
-/// What a parameter means, for the README (same order as [`DEFAULTS`]).
-#[derive(Clone, Copy, Debug)]
-pub struct ParamDoc {
-    /// Unit, or "" for a plain number.
-    pub unit: &'static str,
-    /// Whether a change takes effect only at the next boot.
-    pub at_boot: bool,
-    /// One sentence.
-    pub doc: &'static str,
-}
-
-const fn doc(unit: &'static str, doc: &'static str) -> ParamDoc {
-    ParamDoc { unit, at_boot: false, doc }
-}
-
-const fn boot(unit: &'static str, doc: &'static str) -> ParamDoc {
-    ParamDoc { unit, at_boot: true, doc }
-}
 
 /// Documentation of each parameter (index = position).
 pub const DOCS: [ParamDoc; COUNT] = [

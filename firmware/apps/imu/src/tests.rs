@@ -42,7 +42,7 @@ impl Rig {
         }
         let ep = Endpoints::leak(params);
         let sub = leak(Subscriber::new());
-        ep.imu.subscribe(sub).unwrap();
+        ep.imu.topic.subscribe(sub).unwrap();
         Self {
             app: App::new(ep, params),
             params,

@@ -2,8 +2,9 @@
 
 use r2p_module::filters::LowPass;
 use r2p_module::leds::{self, Status};
+use r2p_module::TopicNode;
 use r2p_msgs::{MotorFault, WheelState};
-use r2p_node::{Node, NodeError, ParamStore};
+use r2p_node::{NodeError, ParamStore};
 
 use crate::control::{Cascade, Measured, Setpoint, INNER_DT_S, OUTER_DIVIDER, OUTER_DT_S};
 use crate::encoder::{Encoder, Scale};
@@ -155,16 +156,7 @@ impl<'a> App<'a> {
     }
 
     /// Exports `state` and `fault` and imports `setpoint` and `clear_faults` on `node`.
-    pub fn register<
-        const E: usize,
-        const I: usize,
-        const T: usize,
-        const R: usize,
-        const B: usize,
-    >(
-        &self,
-        node: &mut Node<'a, E, I, T, R, B>,
-    ) -> Result<(), NodeError> {
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
         self.ep.register(node)
     }
 
@@ -301,7 +293,7 @@ impl<'a> App<'a> {
     }
 
     fn take_clear_commands(&mut self) {
-        while let Some(c) = self.ep.clear_sub.try_recv() {
+        while let Some(c) = self.ep.clear_faults.subscriber.try_recv() {
             let cleared = Faults(self.faults.0 & c.mask);
             if cleared.is_empty() {
                 continue;
@@ -325,7 +317,7 @@ impl<'a> App<'a> {
     }
 
     fn take_setpoints(&mut self, now_us: u64) {
-        while let Some(msg) = self.ep.setpoint_sub.try_recv() {
+        while let Some(msg) = self.ep.setpoint.subscriber.try_recv() {
             let Some(sp) = Setpoint::from_msg(&msg) else {
                 self.stats.bad_setpoints += 1;
                 continue;
@@ -390,7 +382,7 @@ impl<'a> App<'a> {
 
     fn event(&mut self, raised: Faults) {
         let (faults, current) = (self.faults.0, self.m.current);
-        let sent = self.ep.fault_pub.publish_with(|m| {
+        let sent = self.ep.fault.publisher.publish_with(|m| {
             *m = MotorFault { faults, raised: raised.0, current };
         });
         match sent {
@@ -446,7 +438,7 @@ impl<'a> App<'a> {
             current: self.current_filter.value().unwrap_or(0.0),
             faults: self.faults.0,
         };
-        match self.ep.state_pub.publish_with(|m| *m = state) {
+        match self.ep.state.publisher.publish_with(|m| *m = state) {
             Some(_) => self.stats.states += 1,
             None => self.stats.pool_empty += 1,
         }

@@ -55,17 +55,6 @@ pub mod readme;
 
 pub use app::{App, Command, Sample, Stats};
 pub use control::Setpoint;
-pub use endpoints::Endpoints;
+pub use endpoints::{Endpoints, Storage};
 pub use faults::Faults;
 pub use names::Names;
-
-/// What the endpoint macros expand to (not part of the API).
-#[doc(hidden)]
-pub mod __private {
-    pub use r2p_middleware::{Class, Publisher, Subscriber, Topic};
-    pub use r2p_msgs::{FaultClear, MotorFault, WheelSetpoint, WheelState};
-    pub use r2p_node::{RemotePublisher, RemoteSubscriber};
-    pub use static_cell::StaticCell;
-    #[cfg(feature = "std")]
-    pub use std::boxed::Box;
-}

@@ -1,8 +1,9 @@
 //! The proximity application: one step per millisecond, sans-IO.
 
 use r2p_module::leds;
+use r2p_module::TopicNode;
 use r2p_msgs::{Obstacle, Proximity};
-use r2p_node::{Node, NodeError, ParamStore};
+use r2p_node::{NodeError, ParamStore};
 
 use crate::channel::{Channel, Status};
 use crate::curves::curve;
@@ -61,18 +62,9 @@ impl<'a> App<'a> {
     }
 
     /// Exports `ranges` and `obstacle` on the module's node.
-    pub fn register<
-        const E: usize,
-        const I: usize,
-        const T: usize,
-        const R: usize,
-        const B: usize,
-    >(
-        &self,
-        node: &mut Node<'a, E, I, T, R, B>,
-    ) -> Result<(), NodeError> {
-        node.export(self.ep.ranges_out)?;
-        node.export(self.ep.obstacle_out)?;
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
+        node.export(self.ep.ranges.remote)?;
+        node.export(self.ep.obstacle.remote)?;
         Ok(())
     }
 
@@ -111,7 +103,7 @@ impl<'a> App<'a> {
         if now_us >= self.next_publish_us {
             self.next_publish_us = next_due(self.next_publish_us, now_us, cfg.period_us);
             let ranges = self.ranges();
-            self.ep.ranges_pub.publish_with(|m| *m = ranges);
+            self.ep.ranges.publisher.publish_with(|m| *m = ranges);
         }
         let [led_status, led_bus, led_fault] = leds::levels(sample.status, now_us / 1000);
         Command { sensor_power: cfg.sensor_power, led_status, led_bus, led_fault }
@@ -140,7 +132,7 @@ impl<'a> App<'a> {
             };
             let m = Obstacle { channel: channel as u8, distance };
             // SRT: never waits; an empty pool is counted by the publisher and retried next step.
-            if self.ep.obstacle_pub.publish_with(|o| *o = m).is_some() {
+            if self.ep.obstacle.publisher.publish_with(|o| *o = m).is_some() {
                 self.armed[channel] = false;
             }
         } else if !self.armed[channel] && clear {

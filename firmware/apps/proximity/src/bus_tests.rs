@@ -108,7 +108,7 @@ fn the_obstacle_reaches_the_other_module_within_its_deadline() {
 
     // Channel 2 closes to 0.15 m: the app publishes within a few ms; the other module has it
     // within the 10 ms deadline of that.
-    let published_before = r.app.endpoints().obstacle_pub.stats().published;
+    let published_before = r.app.endpoints().obstacle.publisher.stats().published;
     let t0 = r.now_us;
     let mut adc = [far; 4];
     adc[2] = counts(GP2Y0A21YK.volts_at(0.15));
@@ -116,7 +116,7 @@ fn the_obstacle_reaches_the_other_module_within_its_deadline() {
     for _ in 0..100 {
         r.run(1, adc);
         if published_at.is_none()
-            && r.app.endpoints().obstacle_pub.stats().published > published_before
+            && r.app.endpoints().obstacle.publisher.stats().published > published_before
         {
             published_at = Some(r.now_us - 1000);
         }
@@ -127,7 +127,7 @@ fn the_obstacle_reaches_the_other_module_within_its_deadline() {
     assert_eq!(o.channel, 2);
     assert!(received_at - published_at <= 10_000, "{} µs", received_at - published_at);
     assert!(published_at - t0 <= 15_000);
-    assert_eq!(r.app.endpoints().obstacle_pub.stats().deadline_misses, 0);
+    assert_eq!(r.app.endpoints().obstacle.publisher.stats().deadline_misses, 0);
 }
 
 #[test]

@@ -6,13 +6,14 @@
 //! | `proximity/obstacle` | `Obstacle` | SRT, deadline `obstacle_deadline_ms` (Listing 1) |
 //!
 //! Topic names depend on the `instance` parameter and a publisher's class on a parameter, so the
-//! objects are made at boot from the parameters, in a [`Storage`] of `StaticCell`s: a `static`
-//! one on the MCU, a leaked one per emulated board on the host ([`Endpoints::leak`]).
+//! objects are made at boot from the parameters, in a [`Storage`] of cells (`r2p_module`'s
+//! [`Outbound`], each topic written once): a `static` one on the MCU, a leaked one per emulated
+//! board on the host ([`Endpoints::leak`]).
 
-use r2p_middleware::{pool_size, Class, Publisher, Topic};
+use r2p_middleware::{pool_size, Class, Error};
+use r2p_module::{Outbound, OutboundCell};
 use r2p_msgs::{Obstacle, Proximity};
-use r2p_node::{ParamStore, RemoteSubscriber};
-use static_cell::StaticCell;
+use r2p_node::ParamStore;
 
 use crate::params::{INSTANCE, OBSTACLE_DEADLINE_MS};
 
@@ -49,86 +50,48 @@ pub const SPARE_QUEUE: usize = 4;
 
 const POOL: usize = pool_size(&[REMOTE_QUEUE, SPARE_QUEUE], 1);
 
-/// `ranges` topic.
-pub type RangesTopic<'a> = Topic<'a, Proximity, POOL, 2>;
-/// `obstacle` topic.
-pub type ObstacleTopic<'a> = Topic<'a, Obstacle, POOL, 2>;
-
-/// Everything the application and the node use, by reference.
+/// Everything the application and the node use, by reference: one field a topic.
 #[derive(Clone, Copy)]
 pub struct Endpoints<'a> {
     /// The names in use.
     pub names: &'static Names,
-    /// `ranges` topic (subscribe here to read it on the module).
-    pub ranges: &'a RangesTopic<'a>,
-    /// Its publisher (NRT).
-    pub ranges_pub: &'a Publisher<'a, Proximity>,
-    /// Its remote subscriber (exported).
-    pub ranges_out: &'a RemoteSubscriber<'a, Proximity, REMOTE_QUEUE>,
-    /// `obstacle` topic.
-    pub obstacle: &'a ObstacleTopic<'a>,
-    /// Its publisher (SRT).
-    pub obstacle_pub: &'a Publisher<'a, Obstacle>,
-    /// Its remote subscriber (exported).
-    pub obstacle_out: &'a RemoteSubscriber<'a, Obstacle, REMOTE_QUEUE>,
+    /// The four distances: published (NRT) and exported.
+    pub ranges: Outbound<'a, Proximity, POOL, 2, REMOTE_QUEUE>,
+    /// Obstacle events: published (SRT) and exported.
+    pub obstacle: Outbound<'a, Obstacle, POOL, 2, REMOTE_QUEUE>,
 }
 
 /// Room for one set of endpoints: declare it `static` on the MCU, then [`Storage::build`] once.
+#[derive(Default)]
 pub struct Storage {
-    ranges: StaticCell<RangesTopic<'static>>,
-    ranges_pub: StaticCell<Publisher<'static, Proximity>>,
-    ranges_out: StaticCell<RemoteSubscriber<'static, Proximity, REMOTE_QUEUE>>,
-    obstacle: StaticCell<ObstacleTopic<'static>>,
-    obstacle_pub: StaticCell<Publisher<'static, Obstacle>>,
-    obstacle_out: StaticCell<RemoteSubscriber<'static, Obstacle, REMOTE_QUEUE>>,
-}
-
-impl Default for Storage {
-    fn default() -> Self {
-        Self::new()
-    }
+    ranges: OutboundCell<Proximity, POOL, 2, REMOTE_QUEUE>,
+    obstacle: OutboundCell<Obstacle, POOL, 2, REMOTE_QUEUE>,
 }
 
 impl Storage {
     /// Empty storage.
     pub const fn new() -> Self {
-        Self {
-            ranges: StaticCell::new(),
-            ranges_pub: StaticCell::new(),
-            ranges_out: StaticCell::new(),
-            obstacle: StaticCell::new(),
-            obstacle_pub: StaticCell::new(),
-            obstacle_out: StaticCell::new(),
-        }
+        Self { ranges: OutboundCell::new(), obstacle: OutboundCell::new() }
     }
 
     /// Makes and wires the endpoints with the names and obstacle deadline `params` give.
     ///
     /// # Panics
-    /// If called twice on one storage (each `StaticCell` is initialised once).
+    /// If called twice on one storage (each cell is initialised once).
     pub fn build(&'static self, params: &dyn ParamStore) -> Endpoints<'static> {
         let names = names(params);
         let deadline_us = crate::params::typed(params).u32(OBSTACLE_DEADLINE_MS) * 1000;
+        let (nrt, srt) = (Class::NonRealTime, Class::AsyncRealTime { deadline_us });
         let empty = Proximity { distance: [f32::NAN; 4], status: [3; 4], supply_fault: false };
-
-        let ranges = &*self.ranges.init(Topic::new(names.ranges, empty));
-        let ranges_pub = &*self.ranges_pub.init(Publisher::new(ranges, Class::NonRealTime));
-        let ranges_out = &*self.ranges_out.init(RemoteSubscriber::new(ranges_pub));
-        let obstacle = &*self.obstacle.init(Topic::new(names.obstacle, Obstacle::default()));
-        let class = Class::AsyncRealTime { deadline_us };
-        let obstacle_pub = &*self.obstacle_pub.init(Publisher::new(obstacle, class));
-        let obstacle_out = &*self.obstacle_out.init(RemoteSubscriber::new(obstacle_pub));
-
         // Sized by `pool_size` for exactly these: cannot fail.
-        let wired = (|| {
-            ranges.advertise(ranges_pub)?;
-            ranges.subscribe(ranges_out)?;
-            obstacle.advertise(obstacle_pub)?;
-            obstacle.subscribe(obstacle_out)
+        let built = (|| -> Result<_, Error> {
+            Ok(Endpoints {
+                names,
+                ranges: self.ranges.build(names.ranges, empty, nrt)?,
+                obstacle: self.obstacle.build(names.obstacle, Obstacle::default(), srt)?,
+            })
         })();
-        wired.expect("proximity topics are sized for their endpoints");
-
-        Endpoints { names, ranges, ranges_pub, ranges_out, obstacle, obstacle_pub, obstacle_out }
+        built.expect("proximity topics are sized for their endpoints")
     }
 }
 

@@ -2,6 +2,7 @@
 //! PARAM_SET, ranges checked by the store) and the [`Config`] the application reads from it
 //! every step.
 
+use r2p_module::param_doc::{doc, ParamDoc};
 use r2p_node::{Param, ParamStore, Typed};
 
 /// Module instance: selects the node name and topic prefix from [`crate::NAMES`] (at boot).
@@ -41,21 +42,6 @@ pub const DEFAULTS: [Param; COUNT] = [
     Param::u32("obstacle_deadline_ms", 10, 1, 1000),
     Param::bool("sensor_power", true),
 ];
-
-/// What a parameter means, for the README (same order as [`DEFAULTS`]).
-#[derive(Clone, Copy, Debug)]
-pub struct ParamDoc {
-    /// Unit, or "" for a plain number.
-    pub unit: &'static str,
-    /// Whether a change takes effect only at the next boot.
-    pub at_boot: bool,
-    /// One sentence.
-    pub doc: &'static str,
-}
-
-const fn doc(unit: &'static str, doc: &'static str) -> ParamDoc {
-    ParamDoc { unit, at_boot: false, doc }
-}
 
 const SENSOR_DOC: ParamDoc = doc(
     "",

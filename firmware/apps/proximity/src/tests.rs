@@ -42,8 +42,8 @@ impl Rig {
         let ep = Endpoints::leak(params);
         let ranges = leak(Subscriber::new());
         let obstacle = leak(Subscriber::new());
-        ep.ranges.subscribe(ranges).unwrap();
-        ep.obstacle.subscribe(obstacle).unwrap();
+        ep.ranges.topic.subscribe(ranges).unwrap();
+        ep.obstacle.topic.subscribe(obstacle).unwrap();
         Self {
             app: App::new(ep, params),
             params,
@@ -201,7 +201,7 @@ fn the_low_pass_smooths_noise() {
 fn obstacle_event_is_srt_with_the_deadline_once_per_approach() {
     let mut r = Rig::new([1, 1, 0, 0]);
     assert_eq!(
-        r.app.endpoints().obstacle_pub.class(),
+        r.app.endpoints().obstacle.publisher.class(),
         Class::AsyncRealTime { deadline_us: 10_000 }
     );
     let far = code(&GP2Y0A21YK, 0.50);
@@ -240,7 +240,7 @@ fn the_obstacle_threshold_and_deadline_are_parameters() {
     let params = leak(RamParams::new(DEFAULTS));
     params.set(params::OBSTACLE_DEADLINE_MS, Value::U32(3)).unwrap();
     let ep = Endpoints::leak(params);
-    assert_eq!(ep.obstacle_pub.class(), Class::AsyncRealTime { deadline_us: 3_000 });
+    assert_eq!(ep.obstacle.publisher.class(), Class::AsyncRealTime { deadline_us: 3_000 });
 
     let mut r = Rig::new([2, 0, 0, 0]);
     r.params.set(params::OBSTACLE_M, Value::F32(1.0)).unwrap();
@@ -261,7 +261,7 @@ fn ranges_are_published_at_the_rate_parameter() {
     r.published.clear();
     r.run(1000, [code(&GP2Y0A21YK, 0.3), 0, 0, 0]);
     assert_eq!(r.published.len(), 100);
-    assert_eq!(r.app.endpoints().ranges_pub.class(), Class::NonRealTime);
+    assert_eq!(r.app.endpoints().ranges.publisher.class(), Class::NonRealTime);
 }
 
 #[test]
@@ -312,8 +312,8 @@ fn instance_names_the_node_and_topics() {
     let params = leak(RamParams::new(DEFAULTS));
     params.set(params::INSTANCE, Value::U32(1)).unwrap();
     let ep = Endpoints::leak(params);
-    assert_eq!(ep.ranges.name(), "proximity1/ranges");
-    assert_eq!(ep.obstacle.name(), "proximity1/obstacle");
+    assert_eq!(ep.ranges.topic.name(), "proximity1/ranges");
+    assert_eq!(ep.obstacle.topic.name(), "proximity1/obstacle");
     assert_eq!(node_config([1; 12], params).name, "proximity1");
     assert_eq!(node_config([1; 12], params).rank, None);
 }

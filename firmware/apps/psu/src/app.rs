@@ -3,8 +3,9 @@
 use r2p_middleware::Publisher;
 use r2p_module::filters::LowPass;
 use r2p_module::leds;
+use r2p_module::TopicNode;
 use r2p_msgs::{Battery, PsuEvent, PsuState};
-use r2p_node::{Node, NodeError, ParamStore};
+use r2p_node::{NodeError, ParamStore};
 
 use crate::charge::{remaining_s, ChargeCounter};
 use crate::endpoints::Endpoints;
@@ -83,20 +84,11 @@ impl<'a> App<'a> {
     }
 
     /// Exports `battery`, `state` and `event` and imports `power` on the module's node.
-    pub fn register<
-        const E: usize,
-        const I: usize,
-        const T: usize,
-        const R: usize,
-        const B: usize,
-    >(
-        &self,
-        node: &mut Node<'a, E, I, T, R, B>,
-    ) -> Result<(), NodeError> {
-        node.export(self.ep.battery_out)?;
-        node.export(self.ep.state_out)?;
-        node.export(self.ep.event_out)?;
-        node.import(self.ep.power_in)?;
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
+        node.export(self.ep.battery.remote)?;
+        node.export(self.ep.state.remote)?;
+        node.export(self.ep.event.remote)?;
+        node.import(self.ep.power.remote)?;
         Ok(())
     }
 
@@ -130,30 +122,30 @@ impl<'a> App<'a> {
         self.charge.add(amps, dt_us);
         let event = |kind, cause| Event { kind, cause, voltage: volts, current: amps };
 
-        while let Some(cmd) = self.ep.power_sub.try_recv() {
+        while let Some(cmd) = self.ep.power.subscriber.try_recv() {
             if let Some(on) = self.output.command(cmd.on) {
                 if on {
                     self.over_current = OverCurrent::default();
                     self.efuse = EfuseFault::default();
                 }
                 event(if on { OUTPUT_ON } else { OUTPUT_OFF }, CAUSE_COMMAND)
-                    .send(self.ep.event_pub);
+                    .send(self.ep.event.publisher);
             }
         }
         if self.over_current.update(now_us, amps, cfg.oc_threshold_a, cfg.oc_time_us) {
-            event(OVER_CURRENT, 0).send(self.ep.event_pub);
+            event(OVER_CURRENT, 0).send(self.ep.event.publisher);
             if self.output.trip(CAUSE_OVER_CURRENT) {
-                event(OUTPUT_OFF, CAUSE_OVER_CURRENT).send(self.ep.event_pub);
+                event(OUTPUT_OFF, CAUSE_OVER_CURRENT).send(self.ep.event.publisher);
             }
         }
         if self.efuse.update(now_us, sample.bus_fault, self.output.is_on())
             && self.output.trip(CAUSE_EFUSE)
         {
-            event(OUTPUT_OFF, CAUSE_EFUSE).send(self.ep.event_pub);
+            event(OUTPUT_OFF, CAUSE_EFUSE).send(self.ep.event.publisher);
         }
         match self.under_voltage.update(volts, cfg.uv_threshold_v, cfg.uv_hysteresis_v) {
-            Some(true) => event(UNDER_VOLTAGE, 0).send(self.ep.event_pub),
-            Some(false) => event(VOLTAGE_RECOVERED, 0).send(self.ep.event_pub),
+            Some(true) => event(UNDER_VOLTAGE, 0).send(self.ep.event.publisher),
+            Some(false) => event(VOLTAGE_RECOVERED, 0).send(self.ep.event.publisher),
             None => {}
         }
 
@@ -167,14 +159,14 @@ impl<'a> App<'a> {
         if now_us >= self.next_publish_us {
             self.next_publish_us = next_due(self.next_publish_us, now_us, cfg.battery_period_us);
             let battery = self.battery;
-            self.ep.battery_pub.publish_with(|m| *m = battery);
+            self.ep.battery.publisher.publish_with(|m| *m = battery);
             let state = PsuState {
                 output_on: self.output.is_on(),
                 latched: self.output.latched(),
                 under_voltage: self.under_voltage.is_low(),
                 bus_voltage: bus_volts,
             };
-            self.ep.state_pub.publish_with(|m| *m = state);
+            self.ep.state.publisher.publish_with(|m| *m = state);
         }
 
         let fault = self.output.latched() != 0 || self.under_voltage.is_low();

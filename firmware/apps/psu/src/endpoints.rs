@@ -8,14 +8,15 @@
 //! | `psu/power` | `BusPower` | subscribed | (the sender's) |
 //!
 //! Topic names depend on the `instance` parameter and a publisher's class on a parameter, so the
-//! objects are made at boot from the parameters, in a [`Storage`] of `StaticCell`s: a `static`
-//! one on the MCU, a leaked one per emulated board on the host ([`Endpoints::leak`]), so two
-//! boards in one process never share a topic.
+//! objects are made at boot from the parameters, in a [`Storage`] of cells (`r2p_module`'s
+//! [`Outbound`] and [`Inbound`], each topic written once): a `static` one on the MCU, a leaked
+//! one per emulated board on the host ([`Endpoints::leak`]), so two boards in one process never
+//! share a topic.
 
-use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
+use r2p_middleware::{pool_size, Class, Error};
+use r2p_module::{Inbound, InboundCell, Outbound, OutboundCell};
 use r2p_msgs::{Battery, BusPower, PsuEvent, PsuState};
-use r2p_node::{ParamStore, RemotePublisher, RemoteSubscriber};
-use static_cell::StaticCell;
+use r2p_node::ParamStore;
 
 use crate::params::{EVENT_DEADLINE_MS, INSTANCE};
 
@@ -24,13 +25,13 @@ use crate::params::{EVENT_DEADLINE_MS, INSTANCE};
 pub struct Names {
     /// Node name (heartbeats).
     pub node: &'static str,
-    /// Battery readings.
+    /// Battery readings: published (NRT) and exported.
     pub battery: &'static str,
-    /// Output state.
+    /// Output state: published (NRT) and exported.
     pub state: &'static str,
-    /// Protection and output events.
+    /// Protection and output events: published (SRT) and exported.
     pub event: &'static str,
-    /// Output on/off commands.
+    /// Output on/off commands: imported, read by the application.
     pub power: &'static str,
 }
 
@@ -83,143 +84,60 @@ pub const SPARE_QUEUE: usize = 2;
 const OUT_POOL: usize = pool_size(&[REMOTE_QUEUE, SPARE_QUEUE], 1);
 const POWER_POOL: usize = pool_size(&[POWER_QUEUE, SPARE_QUEUE], 2);
 
-/// `battery` topic.
-pub type BatteryTopic<'a> = Topic<'a, Battery, OUT_POOL, 2>;
-/// `state` topic.
-pub type StateTopic<'a> = Topic<'a, PsuState, OUT_POOL, 2>;
-/// `event` topic.
-pub type EventTopic<'a> = Topic<'a, PsuEvent, OUT_POOL, 2>;
-/// `power` topic.
-pub type PowerTopic<'a> = Topic<'a, BusPower, POWER_POOL, 2>;
-
-/// Everything the application and the node use, by reference.
+/// Everything the application and the node use, by reference: one field a topic.
 #[derive(Clone, Copy)]
 pub struct Endpoints<'a> {
     /// The names in use.
     pub names: &'static Names,
-    /// `battery` topic (subscribe here to read it on the module).
-    pub battery: &'a BatteryTopic<'a>,
-    /// Its publisher (NRT).
-    pub battery_pub: &'a Publisher<'a, Battery>,
-    /// Its remote subscriber (exported).
-    pub battery_out: &'a RemoteSubscriber<'a, Battery, REMOTE_QUEUE>,
-    /// `state` topic.
-    pub state: &'a StateTopic<'a>,
-    /// Its publisher (NRT).
-    pub state_pub: &'a Publisher<'a, PsuState>,
-    /// Its remote subscriber (exported).
-    pub state_out: &'a RemoteSubscriber<'a, PsuState, REMOTE_QUEUE>,
-    /// `event` topic.
-    pub event: &'a EventTopic<'a>,
-    /// Its publisher (SRT).
-    pub event_pub: &'a Publisher<'a, PsuEvent>,
-    /// Its remote subscriber (exported).
-    pub event_out: &'a RemoteSubscriber<'a, PsuEvent, REMOTE_QUEUE>,
-    /// `power` topic.
-    pub power: &'a PowerTopic<'a>,
-    /// The publisher the node publishes received commands with (NRT; local code may use it).
-    pub power_in_pub: &'a Publisher<'a, BusPower>,
-    /// The remote publisher (imported).
-    pub power_in: &'a RemotePublisher<'a, BusPower>,
-    /// The application's subscriber.
-    pub power_sub: &'a Subscriber<'a, BusPower, POWER_QUEUE>,
+    /// Battery readings: published (NRT) and exported.
+    pub battery: Outbound<'a, Battery, OUT_POOL, 2, REMOTE_QUEUE>,
+    /// Output state: published (NRT) and exported.
+    pub state: Outbound<'a, PsuState, OUT_POOL, 2, REMOTE_QUEUE>,
+    /// Protection and output events: published (SRT) and exported.
+    pub event: Outbound<'a, PsuEvent, OUT_POOL, 2, REMOTE_QUEUE>,
+    /// Output on/off commands: imported, read by the application.
+    pub power: Inbound<'a, BusPower, POWER_POOL, 2, POWER_QUEUE>,
 }
 
 /// Room for one set of endpoints: declare it `static` on the MCU, then [`Storage::build`] once.
+#[derive(Default)]
 pub struct Storage {
-    battery: StaticCell<BatteryTopic<'static>>,
-    battery_pub: StaticCell<Publisher<'static, Battery>>,
-    battery_out: StaticCell<RemoteSubscriber<'static, Battery, REMOTE_QUEUE>>,
-    state: StaticCell<StateTopic<'static>>,
-    state_pub: StaticCell<Publisher<'static, PsuState>>,
-    state_out: StaticCell<RemoteSubscriber<'static, PsuState, REMOTE_QUEUE>>,
-    event: StaticCell<EventTopic<'static>>,
-    event_pub: StaticCell<Publisher<'static, PsuEvent>>,
-    event_out: StaticCell<RemoteSubscriber<'static, PsuEvent, REMOTE_QUEUE>>,
-    power: StaticCell<PowerTopic<'static>>,
-    power_in_pub: StaticCell<Publisher<'static, BusPower>>,
-    power_in: StaticCell<RemotePublisher<'static, BusPower>>,
-    power_sub: StaticCell<Subscriber<'static, BusPower, POWER_QUEUE>>,
-}
-
-impl Default for Storage {
-    fn default() -> Self {
-        Self::new()
-    }
+    battery: OutboundCell<Battery, OUT_POOL, 2, REMOTE_QUEUE>,
+    state: OutboundCell<PsuState, OUT_POOL, 2, REMOTE_QUEUE>,
+    event: OutboundCell<PsuEvent, OUT_POOL, 2, REMOTE_QUEUE>,
+    power: InboundCell<BusPower, POWER_POOL, 2, POWER_QUEUE>,
 }
 
 impl Storage {
     /// Empty storage.
     pub const fn new() -> Self {
         Self {
-            battery: StaticCell::new(),
-            battery_pub: StaticCell::new(),
-            battery_out: StaticCell::new(),
-            state: StaticCell::new(),
-            state_pub: StaticCell::new(),
-            state_out: StaticCell::new(),
-            event: StaticCell::new(),
-            event_pub: StaticCell::new(),
-            event_out: StaticCell::new(),
-            power: StaticCell::new(),
-            power_in_pub: StaticCell::new(),
-            power_in: StaticCell::new(),
-            power_sub: StaticCell::new(),
+            battery: OutboundCell::new(),
+            state: OutboundCell::new(),
+            event: OutboundCell::new(),
+            power: InboundCell::new(),
         }
     }
 
     /// Makes and wires the endpoints with the names and event deadline `params` give.
     ///
     /// # Panics
-    /// If called twice on one storage (each `StaticCell` is initialised once).
+    /// If called twice on one storage (each cell is initialised once).
     pub fn build(&'static self, params: &dyn ParamStore) -> Endpoints<'static> {
         let names = names(params);
         let deadline_us = crate::params::typed(params).u32(EVENT_DEADLINE_MS) * 1000;
-
-        let battery = &*self.battery.init(Topic::new(names.battery, Battery::default()));
-        let battery_pub = &*self.battery_pub.init(Publisher::new(battery, Class::NonRealTime));
-        let battery_out = &*self.battery_out.init(RemoteSubscriber::new(battery_pub));
-        let state = &*self.state.init(Topic::new(names.state, PsuState::default()));
-        let state_pub = &*self.state_pub.init(Publisher::new(state, Class::NonRealTime));
-        let state_out = &*self.state_out.init(RemoteSubscriber::new(state_pub));
-        let event = &*self.event.init(Topic::new(names.event, PsuEvent::default()));
-        let class = Class::AsyncRealTime { deadline_us };
-        let event_pub = &*self.event_pub.init(Publisher::new(event, class));
-        let event_out = &*self.event_out.init(RemoteSubscriber::new(event_pub));
-        let power = &*self.power.init(Topic::new(names.power, BusPower::default()));
-        let power_in_pub = &*self.power_in_pub.init(Publisher::new(power, Class::NonRealTime));
-        let power_in = &*self.power_in.init(RemotePublisher::new(power_in_pub, power));
-        let power_sub = &*self.power_sub.init(Subscriber::new());
-
+        let (nrt, srt) = (Class::NonRealTime, Class::AsyncRealTime { deadline_us });
         // Sized by `pool_size` for exactly these: cannot fail.
-        let wired = (|| {
-            battery.advertise(battery_pub)?;
-            battery.subscribe(battery_out)?;
-            state.advertise(state_pub)?;
-            state.subscribe(state_out)?;
-            event.advertise(event_pub)?;
-            event.subscribe(event_out)?;
-            power.advertise(power_in_pub)?;
-            power.subscribe(power_sub)
+        let built = (|| -> Result<_, Error> {
+            Ok(Endpoints {
+                names,
+                battery: self.battery.build(names.battery, Battery::default(), nrt)?,
+                state: self.state.build(names.state, PsuState::default(), nrt)?,
+                event: self.event.build(names.event, PsuEvent::default(), srt)?,
+                power: self.power.build(names.power, BusPower::default())?,
+            })
         })();
-        wired.expect("PSU topics are sized for their endpoints");
-
-        Endpoints {
-            names,
-            battery,
-            battery_pub,
-            battery_out,
-            state,
-            state_pub,
-            state_out,
-            event,
-            event_pub,
-            event_out,
-            power,
-            power_in_pub,
-            power_in,
-            power_sub,
-        }
+        built.expect("PSU topics are sized for their endpoints")
     }
 }
 

@@ -1,6 +1,7 @@
 //! The PSU's parameters: the table the node serves over the bus (PARAM_GET / PARAM_SET, ranges
 //! checked by the store) and the [`Config`] the application reads from it every step.
 
+use r2p_module::param_doc::{boot, doc, ParamDoc};
 use r2p_node::{Param, ParamStore, Typed};
 
 /// Module instance: selects the node name and topic prefix from [`crate::NAMES`] (at boot).
@@ -55,25 +56,6 @@ pub const DEFAULTS: [Param; COUNT] = [
     Param::f32("vout_gain", 1.0, 0.8, 1.2),
     Param::f32("vout_offset_v", 0.0, -0.5, 0.5),
 ];
-
-/// What a parameter means, for the README (same order as [`DEFAULTS`]).
-#[derive(Clone, Copy, Debug)]
-pub struct ParamDoc {
-    /// Unit, or "" for a plain number.
-    pub unit: &'static str,
-    /// Whether a change takes effect only at the next boot.
-    pub at_boot: bool,
-    /// One sentence.
-    pub doc: &'static str,
-}
-
-const fn doc(unit: &'static str, doc: &'static str) -> ParamDoc {
-    ParamDoc { unit, at_boot: false, doc }
-}
-
-const fn boot(unit: &'static str, doc: &'static str) -> ParamDoc {
-    ParamDoc { unit, at_boot: true, doc }
-}
 
 /// Documentation of each parameter (index = position).
 pub const DOCS: [ParamDoc; COUNT] = [

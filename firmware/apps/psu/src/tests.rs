@@ -45,9 +45,9 @@ impl Rig {
         let battery = leak(Subscriber::new());
         let state = leak(Subscriber::new());
         let event = leak(Subscriber::new());
-        ep.battery.subscribe(battery).unwrap();
-        ep.state.subscribe(state).unwrap();
-        ep.event.subscribe(event).unwrap();
+        ep.battery.topic.subscribe(battery).unwrap();
+        ep.state.topic.subscribe(state).unwrap();
+        ep.event.topic.subscribe(event).unwrap();
         Self {
             app: App::new(ep, params),
             params,
@@ -82,7 +82,7 @@ impl Rig {
 
     fn command(&self, on: bool) {
         let ep = self.app.endpoints();
-        ep.power_in_pub.publish_with(|m| *m = BusPower { on }).unwrap();
+        ep.power.publisher.publish_with(|m| *m = BusPower { on }).unwrap();
     }
 
     fn kinds(&self) -> Vec<(u8, u8)> {
@@ -179,7 +179,7 @@ fn battery_and_state_are_published_at_the_rate_parameter() {
     r.run(1000, sample(12.0, 1.0));
     assert_eq!(r.batteries.len(), 50);
     let ep = r.app.endpoints();
-    assert_eq!(ep.battery_pub.class(), Class::NonRealTime);
+    assert_eq!(ep.battery.publisher.class(), Class::NonRealTime);
 }
 
 #[test]
@@ -198,7 +198,10 @@ fn over_current_fires_after_its_time_and_switches_the_output_off_latched() {
     assert_eq!(r.kinds(), [(OVER_CURRENT, 0), (OUTPUT_OFF, CAUSE_OVER_CURRENT)]);
     assert_eq!(r.events[0].0, 1_050_000);
     assert!((r.events[0].1.current - 6.0).abs() < 0.002, "the tripping current");
-    assert_eq!(r.app.endpoints().event_pub.class(), Class::AsyncRealTime { deadline_us: 10_000 });
+    assert_eq!(
+        r.app.endpoints().event.publisher.class(),
+        Class::AsyncRealTime { deadline_us: 10_000 }
+    );
 
     // Latched: stays off when the current is gone.
     r.events.clear();
@@ -286,8 +289,8 @@ fn instance_names_the_node_and_topics_and_the_psu_is_rank_0() {
     let ep = *r.app.endpoints();
     assert_eq!(ep.names.battery, "psu2/battery");
     use r2p_middleware::TopicInfo;
-    assert_eq!(ep.event.name(), "psu2/event");
-    assert_eq!(ep.power.name(), "psu2/power");
+    assert_eq!(ep.event.topic.name(), "psu2/event");
+    assert_eq!(ep.power.topic.name(), "psu2/power");
     let cfg = node_config([7; 12], r.params);
     assert_eq!((cfg.name, cfg.rank), ("psu2", Some(0)));
     r.run(1, sample(12.0, 0.0));

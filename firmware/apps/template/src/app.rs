@@ -1,7 +1,8 @@
 //! The template application: one step per millisecond, sans-IO.
 
 use r2p_module::leds;
-use r2p_node::{Node, NodeError, ParamStore};
+use r2p_module::TopicNode;
+use r2p_node::{NodeError, ParamStore};
 
 use crate::endpoints::Endpoints;
 use crate::params;
@@ -39,17 +40,8 @@ impl<'a> App<'a> {
     }
 
     /// Exports `count` on the module's node.
-    pub fn register<
-        const E: usize,
-        const I: usize,
-        const T: usize,
-        const R: usize,
-        const B: usize,
-    >(
-        &self,
-        node: &mut Node<'a, E, I, T, R, B>,
-    ) -> Result<(), NodeError> {
-        node.export(self.ep.count_out).map(drop)
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
+        node.export(self.ep.count.remote)
     }
 
     /// The endpoints (the topic to subscribe to on the module, the publisher's statistics).
@@ -66,7 +58,7 @@ impl<'a> App<'a> {
             let next = self.next_publish_us + period;
             self.next_publish_us = if next <= now_us { now_us + period } else { next };
             let steps = self.steps;
-            self.ep.count_pub.publish_with(|m| *m = steps);
+            self.ep.count.publisher.publish_with(|m| *m = steps);
         }
         let [led_status, led_bus, led_fault] = leds::levels(sample.status, now_us / 1000);
         Command { led_status, led_bus, led_fault }

@@ -39,7 +39,7 @@ fn rig() -> (App<'static>, &'static RamParams<COUNT>, &'static Subscriber<'stati
     let params = leak(RamParams::new(DEFAULTS));
     let ep = Endpoints::leak();
     let sub = leak(Subscriber::new());
-    ep.count.subscribe(sub).unwrap();
+    ep.count.topic.subscribe(sub).unwrap();
     (App::new(ep, params), params, sub)
 }
 
@@ -81,7 +81,7 @@ fn the_node_exports_the_topic_under_the_module_name() {
     app.register(&mut node).unwrap();
     assert!(app.register(&mut node).is_err(), "exported once; a second export of it is refused");
     assert_eq!(node_config([1; 12]).name, crate::NAME);
-    assert_eq!(app.endpoints().count.name(), COUNT_TOPIC);
+    assert_eq!(app.endpoints().count.topic.name(), COUNT_TOPIC);
     assert!(COUNT_TOPIC.starts_with(crate::NAME));
     assert_eq!(params.get(RATE_HZ), Ok(Value::U32(10)));
 }

@@ -5,8 +5,11 @@
 //!   reboots (an append-only log in two erase pages, power-loss safe);
 //! - [`RamFlash`]: a NOR flash in RAM with the real part's rules (erase to `0xFF`, program only
 //!   erased bytes), for emulated boards and tests, with a power cut at a chosen byte;
+//! - [`endpoints`]: a topic on the bus, written once: [`Outbound`] (published and exported),
+//!   [`Inbound`] (imported and subscribed), built at boot in a `StaticCell`;
 //! - [`filters`]: median and first-order low-pass filters for sensor channels;
 //! - [`leds`]: the status LED patterns every module shows the same way;
+//! - [`param_doc`]: what each parameter means, for the README;
 //! - `readme` (feature `std`): what the READMEs' generated sections share.
 //!
 //! Not `module-core` (firmware/targets/f103/module-core: what every F103 module *image* adds
@@ -18,12 +21,16 @@
 #[cfg(any(test, feature = "std"))]
 extern crate std;
 
+pub mod endpoints;
 pub mod filters;
 pub mod flash_params;
 pub mod leds;
+pub mod param_doc;
 pub mod ram_flash;
 #[cfg(any(test, feature = "std"))]
 pub mod readme;
 
+pub use endpoints::{Inbound, InboundCell, Outbound, OutboundCell, TopicNode};
 pub use flash_params::{CommitReport, FlashParams, LoadReport};
+pub use param_doc::ParamDoc;
 pub use ram_flash::RamFlash;

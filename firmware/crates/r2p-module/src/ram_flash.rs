@@ -21,7 +21,8 @@ pub enum RamFlashError {
     NotAligned,
     /// Beyond the end.
     OutOfBounds,
-    /// Programming a byte that is not erased (the F1 reports PGERR and writes nothing).
+    /// Programming a half-word that is not erased with anything but 0x0000 (the F1 reports PGERR
+    /// and writes nothing).
     NotErased,
     /// The simulated power cut happened during this operation.
     PowerCut,
@@ -44,7 +45,8 @@ impl<const SIZE: usize, const PAGE: usize> RamFlash<SIZE, PAGE> {
     }
 
     /// Cuts the power after `bytes` more bytes have been programmed: the write in progress is
-    /// torn there and fails, as is every later write or erase until [`Self::power_on`].
+    /// torn there and fails, and so does every later write until [`Self::power_on`]; an erase
+    /// started with no bytes left is torn (half its first page erased) and fails.
     pub fn cut_power_after(&mut self, bytes: usize) {
         self.budget = Some(bytes);
     }
@@ -113,7 +115,12 @@ impl<const SIZE: usize, const PAGE: usize> NorFlash for RamFlash<SIZE, PAGE> {
             return Err(RamFlashError::NotAligned);
         }
         let r = self.range(from, (to - from) as usize)?;
-        if self.budget.is_some() {
+        if self.budget == Some(0) {
+            // Power lost during the erase: the page is left neither old nor erased (modelled as
+            // its first half erased, the rest as it was).
+            if !r.is_empty() {
+                self.bytes[r.start..r.start + PAGE / 2].fill(0xFF);
+            }
             return Err(RamFlashError::PowerCut);
         }
         self.bytes[r].fill(0xFF);
@@ -128,19 +135,27 @@ impl<const SIZE: usize, const PAGE: usize> NorFlash for RamFlash<SIZE, PAGE> {
             return Err(RamFlashError::NotAligned);
         }
         let r = self.range(offset, bytes.len())?;
-        if self.bytes[r.clone()].iter().any(|&b| b != 0xFF) {
+        // The F1 programs a half-word only where it reads 0xFFFF, except 0x0000, which it
+        // programs over anything (PM0075 §2.3.3): how a flag is cleared without an erase.
+        let refused = self.bytes[r.clone()]
+            .chunks(2)
+            .zip(bytes.chunks(2))
+            .any(|(old, new)| old != [0xFF, 0xFF] && new != [0, 0]);
+        if refused {
             return Err(RamFlashError::NotErased);
         }
+        // A cut tears the write between half-words: each is programmed whole or not at all.
         let n = match self.budget {
-            Some(b) => b.min(bytes.len()),
+            Some(b) => b.min(bytes.len()) & !1,
             None => bytes.len(),
         };
         self.bytes[r.start..r.start + n].copy_from_slice(&bytes[..n]);
         if let Some(b) = &mut self.budget {
-            *b -= n;
             if n < bytes.len() {
+                *b = 0; // the power is off now, whatever was left of a half-word
                 return Err(RamFlashError::PowerCut);
             }
+            *b -= n;
         }
         Ok(())
     }
@@ -155,6 +170,9 @@ mod tests {
         let mut f: RamFlash<2048, 1024> = RamFlash::new();
         f.write(0, &[1, 2, 3, 4]).unwrap();
         assert_eq!(f.write(0, &[1, 2, 3, 4]), Err(RamFlashError::NotErased));
+        assert_eq!(f.write(0, &[0, 0, 3, 4]), Err(RamFlashError::NotErased));
+        f.write(0, &[0; 4]).unwrap(); // zeros go over anything
+        assert_eq!(&f.bytes()[..4], &[0; 4]);
         assert_eq!(f.write(2, &[1, 2, 3, 4]), Err(RamFlashError::NotAligned));
         assert_eq!(f.write(2048, &[1, 2, 3, 4]), Err(RamFlashError::OutOfBounds));
         assert_eq!(f.erase(0, 512), Err(RamFlashError::NotAligned));
@@ -164,13 +182,29 @@ mod tests {
     }
 
     #[test]
+    fn erases_work_until_the_power_is_cut() {
+        let mut f: RamFlash<2048, 1024> = RamFlash::new();
+        f.write(0, &[0; 4]).unwrap();
+        f.cut_power_after(4);
+        f.erase(0, 1024).unwrap();
+        assert_eq!(&f.bytes()[..4], &[0xFF; 4]);
+    }
+
+    #[test]
     fn a_power_cut_tears_the_write_in_progress() {
         let mut f: RamFlash<1024, 1024> = RamFlash::new();
-        f.cut_power_after(6);
+        f.cut_power_after(7);
         f.write(0, &[0; 4]).unwrap();
         assert_eq!(f.write(4, &[0; 4]), Err(RamFlashError::PowerCut));
-        assert_eq!(&f.bytes()[..8], &[0, 0, 0, 0, 0, 0, 0xFF, 0xFF]);
+        assert_eq!(
+            &f.bytes()[..8],
+            &[0, 0, 0, 0, 0, 0, 0xFF, 0xFF],
+            "torn after a whole half-word"
+        );
+        f.bytes_mut()[512..516].copy_from_slice(&[1, 2, 3, 4]);
         assert_eq!(f.erase(0, 1024), Err(RamFlashError::PowerCut));
+        assert_eq!(&f.bytes()[..8], &[0xFF; 8], "the torn erase cleared the page's start");
+        assert_eq!(&f.bytes()[512..516], &[1, 2, 3, 4], "and left its end as it was");
         f.power_on();
         f.erase(0, 1024).unwrap();
     }

@@ -1,7 +1,6 @@
 //! `r2p-canlink`: runs an in-memory CAN hub with a socketcand server so that CAN tools
 //! (python-can's `socketcand` interface, socketcand clients) can join it. See `--help`.
 
-use std::net::SocketAddr;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -9,8 +8,9 @@ use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
 
 use r2p_canlink::hub::DEFAULT_QUEUE;
-use r2p_canlink::server::DEFAULT_ADDR;
-use r2p_canlink::service::{parse_channel, parse_listen_addr, HubService, StopConditions};
+use r2p_canlink::service::{
+    parse_command_line, run_main, unknown_option, HubService, ServiceOptions, StopConditions,
+};
 use r2p_canlink::{BroadcastHub, CanFrame, Config, Hub};
 
 const HELP: &str = "\
@@ -48,12 +48,9 @@ struct Heartbeat {
 }
 
 struct Options {
-    addr: SocketAddr,
-    channel: String,
-    log: Option<String>,
+    service: ServiceOptions,
     heartbeats: Vec<Heartbeat>,
     queue: usize,
-    watch_stdin: bool,
 }
 
 fn parse_heartbeat(s: &str) -> Result<Heartbeat, String> {
@@ -71,40 +68,24 @@ fn parse_heartbeat(s: &str) -> Result<Heartbeat, String> {
 }
 
 fn parse_args(args: &[String]) -> Result<Options, String> {
-    let mut opts = Options {
-        addr: DEFAULT_ADDR.parse().expect("default address"),
-        channel: "vcan0".into(),
-        log: None,
-        heartbeats: Vec::new(),
-        queue: DEFAULT_QUEUE,
-        watch_stdin: true,
-    };
-    let mut it = args.iter();
-    match it.next().map(String::as_str) {
-        Some("serve") => {}
-        Some(other) => return Err(format!("unknown command {other} (try --help)")),
-        None => return Err("missing command (try --help)".into()),
-    }
-    while let Some(arg) = it.next() {
-        let mut value = || it.next().cloned().ok_or_else(|| format!("{arg} needs a value"));
-        match arg.as_str() {
-            "--socketcand" => opts.addr = parse_listen_addr(&value()?)?,
-            "--channel" => opts.channel = parse_channel(&value()?)?,
-            "--log" => opts.log = Some(value()?),
-            "--heartbeat" => opts.heartbeats.push(parse_heartbeat(&value()?)?),
+    let (mut service, mut heartbeats, mut queue) =
+        (ServiceOptions::default(), Vec::new(), DEFAULT_QUEUE);
+    parse_command_line(args, "serve", &mut service, |arg, value| {
+        match arg {
+            "--heartbeat" => heartbeats.push(parse_heartbeat(&value()?)?),
             "--queue" => {
                 let v = value()?;
-                opts.queue = v
+                queue = v
                     .parse()
                     .ok()
                     .filter(|&n| n > 0)
                     .ok_or(format!("--queue {v}: expected a positive number"))?;
             }
-            "--no-stdin" => opts.watch_stdin = false,
-            other => return Err(format!("unknown option {other} (try --help)")),
+            other => return Err(unknown_option(other)),
         }
-    }
-    Ok(opts)
+        Ok(())
+    })?;
+    Ok(Options { service, heartbeats, queue })
 }
 
 fn spawn_heartbeat(hub: Arc<BroadcastHub>, hb: Heartbeat, stop: Arc<AtomicBool>) -> JoinHandle<()> {
@@ -131,12 +112,23 @@ fn spawn_heartbeat(hub: Arc<BroadcastHub>, hb: Heartbeat, stop: Arc<AtomicBool>)
 }
 
 fn serve(opts: Options) -> Result<(), String> {
-    let stop_when = StopConditions::install(opts.watch_stdin);
-    let mut service =
-        HubService::new(opts.log.as_deref(), &opts.channel, opts.queue.max(DEFAULT_QUEUE))?;
-    let config = Config { addr: opts.addr, channel: opts.channel.clone(), queue: opts.queue };
+    let stop_when = StopConditions::install(opts.service.watch_stdin);
+    let mut service = HubService::new(
+        opts.service.log.as_deref(),
+        &opts.service.channel,
+        opts.queue.max(DEFAULT_QUEUE),
+    )?;
+    let config = Config {
+        addr: opts.service.addr,
+        channel: opts.service.channel.clone(),
+        queue: opts.queue,
+    };
     let server = service.listen(config, "another r2p-canlink or socketcand")?;
-    eprintln!("r2p-canlink: socketcand on {} channel {}", server.local_addr(), opts.channel);
+    eprintln!(
+        "r2p-canlink: socketcand on {} channel {}",
+        server.local_addr(),
+        opts.service.channel
+    );
 
     let heartbeats: Vec<_> = opts
         .heartbeats
@@ -178,17 +170,5 @@ fn serve(opts: Options) -> Result<(), String> {
 }
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    if args.is_empty() || args.iter().any(|a| a == "--help" || a == "-h") {
-        print!("{HELP}");
-        return if args.is_empty() { ExitCode::from(2) } else { ExitCode::SUCCESS };
-    }
-    let result = parse_args(&args).and_then(serve);
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("r2p-canlink: error: {e}");
-            ExitCode::from(2)
-        }
-    }
+    run_main("r2p-canlink", HELP, |args| parse_args(args).and_then(serve))
 }

@@ -6,6 +6,7 @@
 use std::fs::File;
 use std::io::{self, BufWriter, Read};
 use std::net::SocketAddr;
+use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::{self, JoinHandle};
@@ -13,7 +14,7 @@ use std::time::Duration;
 
 use crate::candump::LogWriter;
 use crate::hub::{BroadcastHub, Hub};
-use crate::server::{Config, Server};
+use crate::server::{Config, Server, DEFAULT_ADDR};
 
 #[cfg(unix)]
 mod signals {
@@ -134,6 +135,102 @@ pub fn spawn_logger(
     })
 }
 
+/// The options `r2p-canlink serve` and `r2p-emu demo --realtime` share: where the socketcand
+/// server listens, the bus name, the candump log and whether standard input closing stops it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ServiceOptions {
+    /// `--socketcand ADDR` ([`DEFAULT_ADDR`] by default).
+    pub addr: SocketAddr,
+    /// `--channel NAME` (`vcan0` by default).
+    pub channel: String,
+    /// `--log FILE`.
+    pub log: Option<String>,
+    /// Cleared by `--no-stdin`.
+    pub watch_stdin: bool,
+}
+
+impl Default for ServiceOptions {
+    fn default() -> Self {
+        Self {
+            addr: DEFAULT_ADDR.parse().expect("default address"),
+            channel: "vcan0".into(),
+            log: None,
+            watch_stdin: true,
+        }
+    }
+}
+
+impl ServiceOptions {
+    /// Takes `arg` if it is one of these options, asking `value` for its value: `Ok(false)` if
+    /// it is not one of them (the program's own, or unknown), an error if its value is bad.
+    pub fn take(
+        &mut self,
+        arg: &str,
+        value: impl FnOnce() -> Result<String, String>,
+    ) -> Result<bool, String> {
+        match arg {
+            "--socketcand" => self.addr = parse_listen_addr(&value()?)?,
+            "--channel" => self.channel = parse_channel(&value()?)?,
+            "--log" => self.log = Some(value()?),
+            "--no-stdin" => self.watch_stdin = false,
+            _ => return Ok(false),
+        }
+        Ok(true)
+    }
+}
+
+/// Reads a program's command line: its one `command`, then options, the shared ones into
+/// `service` and every other through `own(option, value)`, where `value()` takes the option's
+/// value (or fails naming the option). `own` returns [`unknown_option`] for one it does not
+/// know.
+pub fn parse_command_line(
+    args: &[String],
+    command: &str,
+    service: &mut ServiceOptions,
+    mut own: impl FnMut(&str, &mut dyn FnMut() -> Result<String, String>) -> Result<(), String>,
+) -> Result<(), String> {
+    let mut it = args.iter();
+    match it.next().map(String::as_str) {
+        Some(c) if c == command => {}
+        Some(other) => return Err(format!("unknown command {other} (try --help)")),
+        None => return Err("missing command (try --help)".into()),
+    }
+    while let Some(arg) = it.next() {
+        let mut value = || it.next().cloned().ok_or_else(|| format!("{arg} needs a value"));
+        if !service.take(arg, &mut value)? {
+            own(arg, &mut value)?;
+        }
+    }
+    Ok(())
+}
+
+/// A serving program's `main` around `run`, which gets the arguments: no argument prints
+/// `help` (exit status 2), `--help` or `-h` prints it (0); an error is printed as
+/// "`name`: error: …" (2).
+pub fn run_main(
+    name: &str,
+    help: &str,
+    run: impl FnOnce(&[String]) -> Result<(), String>,
+) -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.is_empty() || args.iter().any(|a| a == "--help" || a == "-h") {
+        print!("{help}");
+        return if args.is_empty() { ExitCode::from(2) } else { ExitCode::SUCCESS };
+    }
+    match run(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("{name}: error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// The error for an option a program does not know.
+pub fn unknown_option(option: &str) -> String {
+    format!("unknown option {option} (try --help)")
+}
+
 /// The value of `--socketcand`: the address to listen on.
 pub fn parse_listen_addr(v: &str) -> Result<SocketAddr, String> {
     v.parse().map_err(|_| format!("--socketcand {v}: expected IP:PORT, e.g. 127.0.0.1:29536"))
@@ -218,5 +315,67 @@ impl HubService {
             Some(Ok(Err(e))) => Err(format!("writing the log: {e}")),
             Some(Err(_)) => Err("the log writer panicked".into()),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[&str]) -> Result<(ServiceOptions, Vec<String>), String> {
+        let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+        let (mut opts, mut rest) = (ServiceOptions::default(), Vec::new());
+        parse_command_line(&args, "serve", &mut opts, |arg, value| {
+            match arg {
+                "--own" => rest.push(value()?),
+                "--flag" => rest.push(arg.into()),
+                other => return Err(unknown_option(other)),
+            }
+            Ok(())
+        })?;
+        Ok((opts, rest))
+    }
+
+    #[test]
+    fn the_shared_options_are_taken_and_the_others_left() {
+        let (o, rest) = parse(&[
+            "serve",
+            "--socketcand",
+            "0.0.0.0:1234",
+            "--flag",
+            "--channel",
+            "can1",
+            "--log",
+            "x.log",
+            "--no-stdin",
+            "--own",
+            "--log",
+        ])
+        .unwrap();
+        assert_eq!(o.addr, "0.0.0.0:1234".parse().unwrap());
+        assert_eq!(
+            (o.channel.as_str(), o.log.as_deref(), o.watch_stdin),
+            ("can1", Some("x.log"), false)
+        );
+        assert_eq!(rest, ["--flag", "--log"], "the program's own options, their values included");
+        let d = parse(&["serve"]).unwrap().0;
+        assert_eq!(d, ServiceOptions::default());
+        assert_eq!(
+            (d.addr.to_string().as_str(), d.channel.as_str(), d.watch_stdin),
+            (DEFAULT_ADDR, "vcan0", true)
+        );
+    }
+
+    #[test]
+    fn bad_values_and_commands_are_clear_errors() {
+        assert_eq!(parse(&["serve", "--log"]).unwrap_err(), "--log needs a value");
+        assert!(parse(&["serve", "--socketcand", "here"])
+            .unwrap_err()
+            .contains("expected IP:PORT"));
+        assert!(parse(&["serve", "--channel", "a b"]).unwrap_err().contains("not a bus name"));
+        assert_eq!(parse(&["serve", "--own"]).unwrap_err(), "--own needs a value");
+        assert_eq!(parse(&["serve", "--x"]).unwrap_err(), "unknown option --x (try --help)");
+        assert_eq!(parse(&["demo"]).unwrap_err(), "unknown command demo (try --help)");
+        assert_eq!(parse(&[]).unwrap_err(), "missing command (try --help)");
     }
 }

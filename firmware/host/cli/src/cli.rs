@@ -7,7 +7,7 @@ use clap::{Parser, Subcommand};
 use crate::args::{open_link, BusArgs};
 use crate::error::CliError;
 use crate::session::Session;
-use crate::{echo, flash, listing, monitor, param, publish, sim, traces};
+use crate::{echo, flash, keys, listing, monitor, param, publish, sim, traces};
 
 const ABOUT: &str = "R2P host tool: watch and talk to an R2P robot's CAN bus";
 
@@ -75,6 +75,12 @@ pub enum Command {
     /// Write a module's committed image (firmware/images/MODULE.elf) through an SWD probe with
     /// probe-rs, then reset the module (docs/flashing.md)
     Flash(flash::FlashArgs),
+    /// Make a key pair for signing images (the secret seed in FILE, its public half in
+    /// FILE.pub), outside the repository
+    Keygen(keys::KeygenArgs),
+    /// Sign a module's image for the bootloader (image, then a 128-byte trailer with its kind,
+    /// MCU, version and ed25519 signature)
+    Sign(keys::SignArgs),
 }
 
 /// Runs a parsed command line, printing results to `out`.
@@ -91,6 +97,8 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Param(cmd) => param::run(&cmd, bus, Session::new(open_link(bus)?), out),
         Command::Sim(args) => sim::run(&args, bus, out),
         Command::Flash(args) => flash::run(&args, out),
+        Command::Keygen(args) => keys::keygen(&args, out),
+        Command::Sign(args) => keys::sign_image(&args, out),
     }
 }
 

@@ -19,6 +19,7 @@ pub mod echo;
 pub mod error;
 pub mod flash;
 pub mod host;
+pub mod keys;
 pub mod link;
 pub mod listing;
 pub mod monitor;

@@ -1,11 +1,9 @@
 //! `r2p-emu`: runs the built-in demo robot on the emulated bus, in virtual time (a deterministic
 //! candump log) or in real time with a socketcand server so that CAN tools join it. See `--help`.
 
-use std::net::SocketAddr;
 use std::process::ExitCode;
 
-use r2p_canlink::server::DEFAULT_ADDR;
-use r2p_canlink::service::{parse_channel, parse_listen_addr};
+use r2p_canlink::service::{parse_command_line, run_main, unknown_option, ServiceOptions};
 use r2p_emu::{demo, serve};
 
 const HELP: &str = "\
@@ -48,40 +46,21 @@ EXAMPLE (python-can):
 /// Start of the virtual-time log's timestamps.
 struct Options {
     realtime: bool,
-    addr: SocketAddr,
-    channel: String,
-    log: Option<String>,
+    service: ServiceOptions,
     seconds: Option<f64>,
     seed: u64,
-    watch_stdin: bool,
 }
 
 fn parse_args(args: &[String]) -> Result<Options, String> {
-    let mut opts = Options {
-        realtime: false,
-        addr: DEFAULT_ADDR.parse().expect("default address"),
-        channel: "vcan0".into(),
-        log: None,
-        seconds: None,
-        seed: 0,
-        watch_stdin: true,
-    };
-    let mut it = args.iter();
-    match it.next().map(String::as_str) {
-        Some("demo") => {}
-        Some(other) => return Err(format!("unknown command {other} (try --help)")),
-        None => return Err("missing command (try --help)".into()),
-    }
-    while let Some(arg) = it.next() {
-        let mut value = || it.next().cloned().ok_or_else(|| format!("{arg} needs a value"));
-        match arg.as_str() {
-            "--realtime" => opts.realtime = true,
-            "--socketcand" => opts.addr = parse_listen_addr(&value()?)?,
-            "--channel" => opts.channel = parse_channel(&value()?)?,
-            "--log" => opts.log = Some(value()?),
+    let mut opts =
+        Options { realtime: false, service: ServiceOptions::default(), seconds: None, seed: 0 };
+    let Options { realtime, service, seconds, seed } = &mut opts;
+    parse_command_line(args, "demo", service, |arg, value| {
+        match arg {
+            "--realtime" => *realtime = true,
             "--seconds" => {
                 let v = value()?;
-                opts.seconds = Some(
+                *seconds = Some(
                     v.parse()
                         .ok()
                         .filter(|&s: &f64| s > 0.0 && s < 1e6)
@@ -90,13 +69,13 @@ fn parse_args(args: &[String]) -> Result<Options, String> {
             }
             "--seed" => {
                 let v = value()?;
-                opts.seed = v.parse().map_err(|_| format!("--seed {v}: expected a number"))?;
+                *seed = v.parse().map_err(|_| format!("--seed {v}: expected a number"))?;
             }
-            "--no-stdin" => opts.watch_stdin = false,
-            other => return Err(format!("unknown option {other} (try --help)")),
+            other => return Err(unknown_option(other)),
         }
-    }
-    if !opts.realtime && (opts.seconds.is_none() || opts.log.is_none()) {
+        Ok(())
+    })?;
+    if !opts.realtime && (opts.seconds.is_none() || opts.service.log.is_none()) {
         return Err("without --realtime, --seconds N and --log FILE are needed (try --help)".into());
     }
     Ok(opts)
@@ -105,8 +84,8 @@ fn parse_args(args: &[String]) -> Result<Options, String> {
 fn virtual_time(opts: &Options) -> Result<(), String> {
     let (mut sim, received) = demo::build(opts.seed).ok_or("the demo robot was built already")?;
     let seconds = opts.seconds.expect("checked");
-    let path = opts.log.as_deref().expect("checked");
-    let took = serve::run_virtual(&mut sim, seconds, path, &opts.channel)?;
+    let path = opts.service.log.as_deref().expect("checked");
+    let took = serve::run_virtual(&mut sim, seconds, path, &opts.service.channel)?;
     eprintln!(
         "r2p-emu: {seconds} s of virtual time in {:.3} s: {} frames on the bus, {} setpoints and {} scans received by control, log written to {path}",
         took.as_secs_f64(),
@@ -120,11 +99,11 @@ fn virtual_time(opts: &Options) -> Result<(), String> {
 fn realtime(opts: &Options) -> Result<(), String> {
     let (mut sim, received) = demo::build(opts.seed).ok_or("the demo robot was built already")?;
     let serve = serve::Serve {
-        addr: opts.addr,
-        channel: opts.channel.clone(),
-        log: opts.log.clone(),
+        addr: opts.service.addr,
+        channel: opts.service.channel.clone(),
+        log: opts.service.log.clone(),
         seconds: opts.seconds,
-        watch_stdin: opts.watch_stdin,
+        watch_stdin: opts.service.watch_stdin,
         socketcan: None,
     };
     let summary = serve::run_realtime(&mut sim, demo::SPARE_PORT, "demo robot", &serve)?;
@@ -137,18 +116,7 @@ fn realtime(opts: &Options) -> Result<(), String> {
 }
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    if args.is_empty() || args.iter().any(|a| a == "--help" || a == "-h") {
-        print!("{HELP}");
-        return if args.is_empty() { ExitCode::from(2) } else { ExitCode::SUCCESS };
-    }
-    let result =
-        parse_args(&args).and_then(|o| if o.realtime { realtime(&o) } else { virtual_time(&o) });
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("r2p-emu: error: {e}");
-            ExitCode::from(2)
-        }
-    }
+    run_main("r2p-emu", HELP, |args| {
+        parse_args(args).and_then(|o| if o.realtime { realtime(&o) } else { virtual_time(&o) })
+    })
 }

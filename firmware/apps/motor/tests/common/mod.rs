@@ -46,8 +46,8 @@ impl Rig {
         let ep = Endpoints::leak(Names::from_params(params));
         let states = leak(Subscriber::new());
         let events = leak(Subscriber::new());
-        ep.state.subscribe(states).unwrap();
-        ep.fault.subscribe(events).unwrap();
+        ep.state.topic.subscribe(states).unwrap();
+        ep.fault.topic.subscribe(events).unwrap();
         Self {
             app: App::new(ep, params),
             ep,
@@ -100,14 +100,14 @@ impl Rig {
     pub fn send(&self, mode: u8, value: f32) {
         let mut buf = [0u8; WheelSetpoint::SIZE];
         WheelSetpoint { mode, value }.encode(&mut buf).unwrap();
-        self.ep.setpoint_in.publish_bytes(&buf).unwrap();
+        self.ep.setpoint.remote.publish_bytes(&buf).unwrap();
     }
 
     /// A clear command as the bus delivers it.
     pub fn clear(&self, mask: u8) {
         let mut buf = [0u8; FaultClear::SIZE];
         FaultClear { mask }.encode(&mut buf).unwrap();
-        self.ep.clear_in.publish_bytes(&buf).unwrap();
+        self.ep.clear_faults.remote.publish_bytes(&buf).unwrap();
     }
 
     /// Runs `ms` steps sending the setpoint every 10 ms (as a gateway at 100 Hz), calling

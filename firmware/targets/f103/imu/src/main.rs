@@ -11,21 +11,18 @@ use embassy_stm32::can::Can;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::Output;
 use embassy_stm32::mode::Blocking as BlockingMode;
-use embassy_stm32::pac;
 use embassy_stm32::spi::{self, Spi, MODE_3};
 use embassy_stm32::time::Hertz;
-use embassy_time::{Duration, Instant, Ticker, Timer};
+use embassy_time::Timer;
 use embedded_hal_bus::spi::{ExclusiveDevice, NoDelay};
+use module_core::{EveryMs, Leds};
 use r2p_app_imu::{params, sensor, App, Storage};
 use r2p_drivers::lsm6dso::{Lsm6dso, SpiBus};
 use r2p_module::FlashParams;
-use rtcan_bxcan::BxCan;
 
 mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
 }
-
-use module_core::{drive, ModuleNode};
 
 module_core::bind_can_interrupts!(
     struct Irqs {}
@@ -53,45 +50,30 @@ struct Io {
     imu: Imu,
     /// [`Lsm6dso::init`] succeeded at boot.
     initialised: bool,
-    leds: [Output<'static>; 3],
+    leds: Leds,
 }
 
 /// The application: one step per millisecond in thread mode (a 2-byte status read, and a
-/// 15-byte burst when the gyro has a new sample); parameters persisted every 100 ms when
-/// changed.
+/// 15-byte burst when the gyro has a new sample).
 #[embassy_executor::task]
-async fn run(mut app: App<'static>, mut io: Io, mut flash: Flash<'static, Blocking>) {
-    let mut ticker = Ticker::every(Duration::from_millis(1));
-    let mut step = 0u32;
+async fn run(mut app: App<'static>, mut io: Io, flash: Flash<'static, Blocking>) {
+    let mut ms = EveryMs::new(&PARAMS, flash);
     loop {
-        let now = Instant::now().as_micros();
         let sample = sensor::poll(&mut io.imu, io.initialised, module_core::led_status());
-        let c = app.step(now, &sample);
-        let [status, bus, fault] = &mut io.leds;
-        drive(status, c.led_status, board::LED_STATUS_ACTIVE_LOW);
-        drive(bus, c.led_bus, board::LED_BUS_ACTIVE_LOW);
-        drive(fault, c.led_fault, board::LED_FAULT_ACTIVE_LOW);
-        step = step.wrapping_add(1);
-        if step.is_multiple_of(100) {
-            module_core::persist(&PARAMS, &mut flash);
-        }
-        ticker.next().await;
+        let c = app.step(ms.now(), &sample);
+        io.leds.show([c.led_status, c.led_bus, c.led_fault]);
+        ms.next().await;
     }
 }
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
-    let pll_mul = const { module_core::pll_mul(board::HSE_HZ, board::SYSCLK_HZ) };
-    let p = embassy_stm32::init(module_core::clocks(board::HSE_HZ, pll_mul));
+    let p = module_core::init::<{ board::HSE_HZ }, { board::SYSCLK_HZ }>();
     let pins = board::take_pins!(p);
 
     // Outputs first: the chip select deselects the sensor and the LEDs take their boot levels.
     let cs = board::imu_cs(pins.imu_cs);
-    let leds = [
-        board::led_status(pins.led_status),
-        board::led_bus(pins.led_bus),
-        board::led_fault(pins.led_fault),
-    ];
+    let leds = module_core::leds!(board, pins);
     // INT1 is wired for users' firmware (wake-up, FIFO thresholds); the default firmware polls
     // the data-ready flag over SPI, as the emulated board does. Held as an input with its pull.
     let _int1 = board::imu_int1(pins.imu_int1);
@@ -106,22 +88,15 @@ async fn main(spawner: Spawner) {
     };
     let mut imu = Lsm6dso::new_spi(device);
 
-    // The bus controller before the application and its node, so that neither lives across
-    // this await (and in `main`'s future).
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
-    can.modify_config().set_bitrate(1_000_000);
-    can.enable().await;
-
-    let mut flash = Flash::new_blocking(p.FLASH);
-    module_core::load_params(&PARAMS, &mut flash);
+    module_core::enable_can(&mut can).await;
+    let flash = module_core::load_params(&PARAMS, p.FLASH);
     let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
     Timer::after_millis(SENSOR_BOOT_MS).await;
     // A sensor that does not answer leaves the module on the bus, reporting "no data".
     let initialised = imu.init(app.sensor_config()).is_ok();
     let config = r2p_app_imu::node_config(embassy_stm32::uid::uid(), &PARAMS);
-    let mut node = ModuleNode::new(config, &PARAMS).unwrap();
-    app.register(&mut node).unwrap();
-    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN, 1_000_000), p.TIM2);
+    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
 
     spawner.spawn(run(app, Io { imu, initialised, leds }, flash)).unwrap();
 }

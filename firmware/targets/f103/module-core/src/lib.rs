@@ -1,7 +1,27 @@
 //! `module_core`: what every R2P module image on the STM32F103 shares (used by the psu,
-//! proximity, motor and imu images): clocks from the board file, the node on an interrupt
-//! executor driven by the TDMA slot timer (TIM2's compare, [`slot_timer`]), parameters in the
-//! last two flash pages, the node's state for the status LEDs, reboot on request.
+//! proximity, motor, imu and template images): clocks from the board file, the bus controller,
+//! the node on an interrupt executor driven by the TDMA slot timer (TIM2's compare,
+//! [`slot_timer`]), parameters in the last two flash pages, the status LEDs, the application's
+//! 1 kHz step, reboot on request. An image's `main` keeps only what is its module's own (its
+//! I/O, its application, its node configuration):
+//!
+//! ```ignore
+//! let p = module_core::init::<{ board::HSE_HZ }, { board::SYSCLK_HZ }>();
+//! let pins = board::take_pins!(p);
+//! let leds = module_core::leds!(board, pins); // outputs first
+//! let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
+//! module_core::enable_can(&mut can).await;
+//! let flash = module_core::load_params(&PARAMS, p.FLASH);
+//! let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
+//! let config = node_config(uid(), &PARAMS);
+//! module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
+//! // and in the application's task, every millisecond:
+//! let mut ms = module_core::EveryMs::new(&PARAMS, flash);
+//! loop {
+//!     let command = app.step(ms.now(), &sample);
+//!     ms.next().await;
+//! }
+//! ```
 //!
 //! Nodes are tasks with priorities, as in the footprint image (targets/shared/footprint_core.rs):
 //! the bus runs on an interrupt executor that preempts the application's 1 kHz step in thread
@@ -17,19 +37,21 @@
 //! slot boundary back except for their short critical sections.
 #![no_std]
 
+use core::future::Future;
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
 use embassy_executor::InterruptExecutor;
+use embassy_stm32::can::Can;
 use embassy_stm32::flash::{Blocking, Flash};
-use embassy_stm32::gpio::{Flex, Input, Level, Output, Pin};
+use embassy_stm32::gpio::{Input, Level, Output};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
-use embassy_stm32::peripherals::TIM2;
-use embassy_stm32::{rcc, time::Hertz, Config, Peri};
-use embassy_time::Instant;
+use embassy_stm32::peripherals::{FLASH, TIM2};
+use embassy_stm32::{pac, rcc, time::Hertz, Config, Peri, Peripherals};
+use embassy_time::{Duration, Instant, Ticker};
 use r2p_module::{leds, FlashParams};
 use r2p_node::node::STARTING_HEARTBEATS;
-use r2p_node::{Node, NodeConfig};
+use r2p_node::{Node, NodeConfig, NodeError, ParamStore};
 use rtcan::cycle::ClockState;
 use rtcan::failover::Role;
 use rtcan_bxcan::BxCan;
@@ -39,9 +61,11 @@ use defmt_rtt as _;
 
 defmt::timestamp!("{=u64:us}", Instant::now().as_micros());
 
+mod analog;
 mod flash_layout;
 mod panic;
 pub mod slot_timer;
+pub use analog::{analog_input, AnalogInputs};
 pub use flash_layout::PARAMS_BASE;
 use slot_timer::SlotTimer;
 
@@ -110,6 +134,25 @@ pub fn clocks(hse_hz: u32, pll_mul: u32) -> Config {
     config.rcc.apb2_pre = rcc::APBPrescaler::DIV1;
     config.rcc.adc_pre = rcc::ADCPrescaler::DIV6;
     config
+}
+
+/// Starts the chip with the clocks of a board file's `HSE_HZ` and `SYSCLK_HZ` (checked at
+/// compile time: [`pll_mul`]) and hands out its peripherals.
+pub fn init<const HSE_HZ: u32, const SYSCLK_HZ: u32>() -> Peripherals {
+    let pll_mul = const { pll_mul(HSE_HZ, SYSCLK_HZ) };
+    embassy_stm32::init(clocks(HSE_HZ, pll_mul))
+}
+
+/// The bus's bit rate (docs/bus.md).
+pub const BIT_RATE: u32 = 1_000_000;
+
+/// Sets the bus controller to [`BIT_RATE`]; the future completes when it has joined the bus.
+/// Await it before building the application and its node, so that neither lives across this
+/// await (and in `main`'s future). Not an `async fn`: `main`'s future holds the controller
+/// once, not a second time in this function's.
+pub fn enable_can<'a>(can: &'a mut Can<'static>) -> impl Future<Output = ()> + 'a {
+    can.modify_config().set_bitrate(BIT_RATE);
+    can.enable()
 }
 
 /// The high-priority executor the bus runs on: in the slot timer's interrupt (TIM2), which
@@ -181,14 +224,24 @@ async fn bus(node: BusNode, mut can: BxCan<'static>, mut timer: SlotTimer, runni
     }
 }
 
-/// Starts the node on the bus executor, its slot boundaries from TIM2's compare; if this boot
-/// followed a panic, the node reports it (panic.rs).
+/// Makes the module's node from `config` and `params`, lets `register` export and import the
+/// application's topics on it, and starts it on the bus executor with the RTCAN driver on
+/// `can`, its slot boundaries from TIM2's compare; if this boot followed a panic, the node
+/// reports it (panic.rs).
+///
+/// # Panics
+/// If `config` is not a valid node configuration or the node has no room for the topics
+/// `register` gives it (bugs of the image, found at boot).
 pub fn start_bus(
-    mut node: ModuleNode,
-    config: &NodeConfig,
-    can: BxCan<'static>,
+    config: NodeConfig,
+    params: &'static dyn ParamStore,
+    register: impl FnOnce(&mut ModuleNode) -> Result<(), NodeError>,
+    can: Can<'static>,
     tim2: Peri<'static, TIM2>,
 ) {
+    let mut node = ModuleNode::new(config, params).expect("valid node configuration");
+    register(&mut node).expect("room for the module's topics on its node");
+    let can = BxCan::new(can, pac::CAN, BIT_RATE);
     if let Some(text) = r2p_panic::take_last() {
         defmt::warn!("the last reset followed a panic: {=[u8]:a}", text);
         node.set_panic_report(text);
@@ -204,12 +257,18 @@ pub fn start_bus(
     BUS_EXECUTOR.start(interrupt::TIM2).spawn(bus(node, can, timer, running_after_us)).unwrap();
 }
 
-/// Loads the parameters from flash (defaults where nothing valid is stored).
-pub fn load_params<const N: usize>(params: &FlashParams<N>, flash: &mut Flash<'static, Blocking>) {
-    if params.load(flash).is_err() {
+/// Loads the parameters from flash (defaults where nothing valid is stored); the flash, for
+/// [`persist`].
+pub fn load_params<const N: usize>(
+    params: &FlashParams<N>,
+    flash: Peri<'static, FLASH>,
+) -> Flash<'static, Blocking> {
+    let mut flash = Flash::new_blocking(flash);
+    if params.load(&mut flash).is_err() {
         defmt::warn!("parameters: reading them from flash failed, defaults used");
         LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
     }
+    flash
 }
 
 /// From the application's task: stores changed parameters (a page erase, when the log is
@@ -225,10 +284,83 @@ pub fn persist<const N: usize>(params: &FlashParams<N>, flash: &mut Flash<'stati
     }
 }
 
-/// Puts a pin in analog mode (the board file's `analog`; embassy's F1 ADC leaves pins as
-/// floating inputs): dropping a `Flex` leaves its pin disconnected, which is analog on the F1.
-pub fn analog(pin: &mut Peri<'static, impl Pin>) {
-    drop(Flex::new(pin.reborrow()));
+/// The application's 1 kHz step in thread mode: [`next`](Self::next) waits for the next
+/// millisecond and persists the parameters every 100 ms when changed (and reboots if asked to).
+///
+/// ```ignore
+/// let mut ms = module_core::EveryMs::new(&PARAMS, flash);
+/// loop {
+///     let command = app.step(ms.now(), &sample);
+///     ms.next().await;
+/// }
+/// ```
+pub struct EveryMs<'a, const N: usize> {
+    params: &'a FlashParams<N>,
+    flash: Flash<'static, Blocking>,
+    ticker: Ticker,
+    steps: u32,
+}
+
+impl<'a, const N: usize> EveryMs<'a, N> {
+    /// Starts the period now; `flash` is [`load_params`]'s.
+    pub fn new(params: &'a FlashParams<N>, flash: Flash<'static, Blocking>) -> Self {
+        Self { params, flash, ticker: Ticker::every(Duration::from_millis(1)), steps: 0 }
+    }
+
+    /// The time for this step, µs since boot.
+    pub fn now(&self) -> u64 {
+        Instant::now().as_micros()
+    }
+
+    /// Ends the step: every 100th persists the parameters; then waits for the next period.
+    pub async fn next(&mut self) {
+        self.steps = self.steps.wrapping_add(1);
+        if self.steps.is_multiple_of(100) {
+            persist(self.params, &mut self.flash);
+        }
+        self.ticker.next().await;
+    }
+}
+
+/// The status, bus and fault LEDs, each driven at its board file's `active` level.
+pub struct Leds {
+    outputs: [Output<'static>; 3],
+    active_low: [bool; 3],
+}
+
+impl Leds {
+    /// The status, bus and fault LEDs and whether each is active low (see [`leds!`]).
+    pub fn new(outputs: [Output<'static>; 3], active_low: [bool; 3]) -> Self {
+        Self { outputs, active_low }
+    }
+
+    /// Lights the status, bus and fault LEDs as `on` says (the application's pattern).
+    pub fn show(&mut self, on: [bool; 3]) {
+        for ((out, on), active_low) in self.outputs.iter_mut().zip(on).zip(self.active_low) {
+            drive(out, on, active_low);
+        }
+    }
+}
+
+/// The image's [`Leds`] from its generated `board` module and the pins it took
+/// (`board::take_pins!`): every module board has `LED_STATUS`, `LED_BUS` and `LED_FAULT`.
+/// Configures the three outputs, which take their boot levels at once.
+#[macro_export]
+macro_rules! leds {
+    ($board:ident, $pins:ident) => {
+        $crate::Leds::new(
+            [
+                $board::led_status($pins.led_status),
+                $board::led_bus($pins.led_bus),
+                $board::led_fault($pins.led_fault),
+            ],
+            [
+                $board::LED_STATUS_ACTIVE_LOW,
+                $board::LED_BUS_ACTIVE_LOW,
+                $board::LED_FAULT_ACTIVE_LOW,
+            ],
+        )
+    };
 }
 
 /// Drives an output to its logical level (`on`), given the board file's `active`.

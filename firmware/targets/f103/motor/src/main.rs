@@ -24,18 +24,14 @@ use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
 use embassy_executor::{InterruptExecutor, Spawner};
 use embassy_stm32::adc;
 use embassy_stm32::can::Can;
-use embassy_stm32::flash::Flash;
-use embassy_stm32::gpio::Output;
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
-use embassy_stm32::pac;
 use embassy_stm32::peripherals::ADC1;
 use embassy_time::{Duration, Instant, Ticker, Timer};
-use module_core::{drive, ModuleNode};
-use r2p_app_motor::{params, App, Endpoints, Names, Sample};
+use module_core::Leds;
+use r2p_app_motor::{params, App, Endpoints, Names, Sample, Storage};
 use r2p_module::FlashParams;
 use r2p_node::NodeConfig;
-use rtcan_bxcan::BxCan;
 
 use bridge::Bridge;
 use sensors::Sensors;
@@ -46,6 +42,7 @@ module_core::bind_can_interrupts!(struct Irqs {
 
 static PARAMS: FlashParams<{ params::COUNT }> =
     FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
+static ENDPOINTS: Storage = Storage::new();
 
 /// The control loop's executor: above the bus's (P6), below the hardware's interrupts.
 static CONTROL_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
@@ -63,12 +60,7 @@ static BRIDGE_ON: AtomicBool = AtomicBool::new(false);
 /// The 1 kHz control step. The application is built here, from its endpoints, so that what
 /// crosses to this executor is `Send`.
 #[embassy_executor::task]
-async fn control(
-    ep: Endpoints<'static>,
-    mut sensors: Sensors,
-    mut bridge: Bridge,
-    mut leds: [Output<'static>; 3],
-) {
+async fn control(ep: Endpoints<'static>, mut sensors: Sensors, mut bridge: Bridge, mut leds: Leds) {
     let mut app = App::new(ep, &PARAMS);
     let mut ticker = Ticker::every(Duration::from_millis(1));
     loop {
@@ -85,26 +77,18 @@ async fn control(
         let cmd = app.step(now, &sample);
         bridge.apply(&cmd);
         BRIDGE_ON.store(cmd.bridge_enable, Relaxed);
-        let [status, bus, fault] = &mut leds;
-        drive(status, cmd.leds[0], board::LED_STATUS_ACTIVE_LOW);
-        drive(bus, cmd.leds[1], board::LED_BUS_ACTIVE_LOW);
-        drive(fault, cmd.leds[2], board::LED_FAULT_ACTIVE_LOW);
+        leds.show(cmd.leds);
     }
 }
 
 #[embassy_executor::main]
 async fn main(_spawner: Spawner) {
-    let pll_mul = const { module_core::pll_mul(board::HSE_HZ, board::SYSCLK_HZ) };
-    let p = embassy_stm32::init(module_core::clocks(board::HSE_HZ, pll_mul));
-    let mut pins = board::take_pins!(p);
+    let p = module_core::init::<{ board::HSE_HZ }, { board::SYSCLK_HZ }>();
+    let pins = board::take_pins!(p);
 
     // Outputs first: the driver stays disabled and the LEDs take their boot levels at once.
     let drv_en = board::drv_en(pins.drv_en);
-    let leds = [
-        board::led_status(pins.led_status),
-        board::led_bus(pins.led_bus),
-        board::led_fault(pins.led_fault),
-    ];
+    let leds = module_core::leds!(board, pins);
     let bridge = Bridge::new(
         p.TIM1,
         bridge::Pins {
@@ -116,26 +100,19 @@ async fn main(_spawner: Spawner) {
             enable: drv_en,
         },
     );
-    module_core::analog(&mut pins.motor_current);
-    module_core::analog(&mut pins.vmot_sense);
     let sensors =
         Sensors::new(p.ADC1, pins.motor_current, pins.vmot_sense, p.TIM3, pins.enc_a, pins.enc_b);
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
-    can.modify_config().set_bitrate(1_000_000);
-    can.enable().await;
-
-    let mut flash = Flash::new_blocking(p.FLASH);
-    module_core::load_params(&PARAMS, &mut flash);
+    module_core::enable_can(&mut can).await;
+    let mut flash = module_core::load_params(&PARAMS, p.FLASH);
     let names = Names::from_params(&PARAMS);
-    let ep = r2p_app_motor::endpoints!(names);
+    let ep = ENDPOINTS.build(names);
     let config = NodeConfig {
         slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
         ..NodeConfig::new(embassy_stm32::uid::uid(), names.node)
     };
-    let mut node = ModuleNode::new(config, &PARAMS).expect("valid node configuration");
-    ep.register(&mut node).expect("room for the motor's topics on its node");
-    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN, 1_000_000), p.TIM2);
+    module_core::start_bus(config, &PARAMS, |node| ep.register(node), can, p.TIM2);
 
     interrupt::USART2.set_priority(CONTROL_PRIORITY);
     CONTROL_EXECUTOR.start(interrupt::USART2).spawn(control(ep, sensors, bridge, leds)).unwrap();

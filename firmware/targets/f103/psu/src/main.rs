@@ -6,22 +6,18 @@
 #![no_main]
 
 use embassy_executor::Spawner;
-use embassy_stm32::adc::{self, Adc, SampleTime};
+use embassy_stm32::adc::{self, SampleTime};
 use embassy_stm32::can::Can;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::{Input, Output};
-use embassy_stm32::peripherals::{ADC1, PA0, PA1, PA2};
-use embassy_stm32::{pac, Peri};
-use embassy_time::{Duration, Instant, Ticker};
+use embassy_stm32::peripherals::ADC1;
+use module_core::{analog_input, asserted, drive, AnalogInputs, EveryMs, Leds};
 use r2p_app_psu::{params, App, Sample, Storage};
 use r2p_module::FlashParams;
-use rtcan_bxcan::BxCan;
 
 mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
 }
-
-use module_core::{asserted, drive, ModuleNode};
 
 module_core::bind_can_interrupts!(struct Irqs {
     ADC1_2 => adc::InterruptHandler<ADC1>;
@@ -37,83 +33,62 @@ const SAMPLE_TIME: SampleTime = SampleTime::CYCLES239_5;
 
 /// The board's I/O the application step reads and drives.
 struct Io {
-    adc: Adc<'static, ADC1>,
-    vin: Peri<'static, PA0>,
-    iin: Peri<'static, PA1>,
-    vout: Peri<'static, PA2>,
+    /// VIN_SENSE, IIN_SENSE, VOUT_SENSE.
+    analog: AnalogInputs<3>,
     bus_fault: Input<'static>,
     bus_en: Output<'static>,
-    leds: [Output<'static>; 3],
+    leds: Leds,
 }
 
-/// The application: one step per millisecond in thread mode; parameters persisted every
-/// 100 ms when changed.
+/// The application: one step per millisecond in thread mode.
 #[embassy_executor::task]
-async fn run(mut app: App<'static>, mut io: Io, mut flash: Flash<'static, Blocking>) {
-    let mut ticker = Ticker::every(Duration::from_millis(1));
-    let mut step = 0u32;
+async fn run(mut app: App<'static>, mut io: Io, flash: Flash<'static, Blocking>) {
+    let mut ms = EveryMs::new(&PARAMS, flash);
     loop {
-        let now = Instant::now().as_micros();
+        let [vin, iin, vout] = io.analog.read().await;
         let sample = Sample {
-            vin: io.adc.read(&mut io.vin, SAMPLE_TIME).await,
-            iin: io.adc.read(&mut io.iin, SAMPLE_TIME).await,
-            vout: io.adc.read(&mut io.vout, SAMPLE_TIME).await,
+            vin,
+            iin,
+            vout,
             bus_fault: asserted(&io.bus_fault, board::BUS_FAULT_ACTIVE_LOW),
             status: module_core::led_status(),
         };
-        let c = app.step(now, &sample);
+        let c = app.step(ms.now(), &sample);
         drive(&mut io.bus_en, c.bus_en, board::BUS_EN_ACTIVE_LOW);
-        let [status, bus, fault] = &mut io.leds;
-        drive(status, c.led_status, board::LED_STATUS_ACTIVE_LOW);
-        drive(bus, c.led_bus, board::LED_BUS_ACTIVE_LOW);
-        drive(fault, c.led_fault, board::LED_FAULT_ACTIVE_LOW);
-        step = step.wrapping_add(1);
-        if step.is_multiple_of(100) {
-            module_core::persist(&PARAMS, &mut flash);
-        }
-        ticker.next().await;
+        io.leds.show([c.led_status, c.led_bus, c.led_fault]);
+        ms.next().await;
     }
 }
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
-    let pll_mul = const { module_core::pll_mul(board::HSE_HZ, board::SYSCLK_HZ) };
-    let p = embassy_stm32::init(module_core::clocks(board::HSE_HZ, pll_mul));
-    let mut pins = board::take_pins!(p);
+    let p = module_core::init::<{ board::HSE_HZ }, { board::SYSCLK_HZ }>();
+    let pins = board::take_pins!(p);
 
     // Outputs first: the bus switch and the LEDs take their boot levels at once.
     let bus_en = board::bus_en(pins.bus_en);
-    let leds = [
-        board::led_status(pins.led_status),
-        board::led_bus(pins.led_bus),
-        board::led_fault(pins.led_fault),
-    ];
-    module_core::analog(&mut pins.vin_sense);
-    module_core::analog(&mut pins.iin_sense);
-    module_core::analog(&mut pins.vout_sense);
+    let leds = module_core::leds!(board, pins);
     let io = Io {
-        adc: Adc::new(p.ADC1),
-        vin: pins.vin_sense,
-        iin: pins.iin_sense,
-        vout: pins.vout_sense,
+        analog: AnalogInputs::new(
+            p.ADC1,
+            [
+                analog_input(pins.vin_sense),
+                analog_input(pins.iin_sense),
+                analog_input(pins.vout_sense),
+            ],
+            SAMPLE_TIME,
+        ),
         bus_fault: board::bus_fault(pins.bus_fault),
         bus_en,
         leds,
     };
 
-    // The bus controller before the application and its node, so that neither lives across
-    // this await (and in `main`'s future).
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
-    can.modify_config().set_bitrate(1_000_000);
-    can.enable().await;
-
-    let mut flash = Flash::new_blocking(p.FLASH);
-    module_core::load_params(&PARAMS, &mut flash);
+    module_core::enable_can(&mut can).await;
+    let flash = module_core::load_params(&PARAMS, p.FLASH);
     let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
     let config = r2p_app_psu::node_config(embassy_stm32::uid::uid(), &PARAMS);
-    let mut node = ModuleNode::new(config, &PARAMS).unwrap();
-    app.register(&mut node).unwrap();
-    module_core::start_bus(node, &config, BxCan::new(can, pac::CAN, 1_000_000), p.TIM2);
+    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
 
     spawner.spawn(run(app, io, flash)).unwrap();
 }

@@ -1,0 +1,195 @@
+//! A signed image moved into a DFU slot over a simulated link that loses, duplicates and delays
+//! messages, is cut off for a while (a bus partition), and whose receiver reboots mid-transfer:
+//! the slot ends with the image, verified, every time.
+
+use r2p_boot::layout::STM32F103CB as MAP;
+use r2p_boot::sender::{Phase, Sender};
+use r2p_boot::sign::{public_key, sign, Meta};
+use r2p_boot::transfer::{Msg, Receiver, State, Status, BLOCK_MAX};
+use r2p_boot::{verify_slot, Expect, Refusal, Version, TRAILER_LEN};
+use r2p_module::RamFlash;
+
+const SEED: [u8; 32] = [0x33; 32];
+type Dfu = RamFlash<{ 55 * 1024 }, 1024>;
+
+fn signed(len: usize) -> Vec<u8> {
+    let image: Vec<u8> =
+        (0..len).map(|i| (i as u32).wrapping_mul(2_654_435_761).to_le_bytes()[3]).collect();
+    let meta =
+        Meta { version: Version { major: 2, minor: 0, patch: 0 }, kind: "psu", mcu: "STM32F103CB" };
+    sign(&image, &meta, &SEED).unwrap()
+}
+
+fn verify(dfu: &mut Dfu) -> Result<(), Refusal> {
+    let key = public_key(&SEED);
+    let expect = Expect { mcu: "STM32F103CB", kind: Some("psu"), public_key: &key };
+    verify_slot(dfu, 0, MAP.active.size, &expect).map(|_| ())
+}
+
+/// A small deterministic generator (xorshift) for the link's faults.
+struct Rng(u64);
+impl Rng {
+    fn chance(&mut self, percent: u64) -> bool {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0 % 100 < percent
+    }
+}
+
+struct Faults {
+    loss: u64,
+    duplicate: u64,
+    /// Milliseconds during which nothing passes.
+    partition: std::ops::Range<u64>,
+    /// When the receiver reboots (forgets its transfer).
+    reboot_at: Option<u64>,
+}
+
+/// Runs a transfer at 1 ms steps (each message takes 1–3 ms each way); returns the sender's
+/// outcome, the steps taken and the messages sent.
+fn run(image: &[u8], faults: Faults, seed: u64) -> (Phase, Sender<'_>, u64, u32, Dfu) {
+    let mut dfu = Dfu::new();
+    let mut rx = Receiver::new(MAP.active.size);
+    let mut tx = Sender::new(image, 7, 16, 50);
+    let mut rng = Rng(seed);
+    let mut to_rx: Vec<(u64, Vec<u8>)> = Vec::new();
+    let mut to_tx: Vec<(u64, Status)> = Vec::new();
+    let mut sent = 0;
+    let mut now = 0;
+    while now < 600_000 && !matches!(tx.phase(), Phase::Done | Phase::Refused(_)) {
+        let cut = faults.partition.contains(&now);
+        if faults.reboot_at == Some(now) {
+            rx = Receiver::new(MAP.active.size);
+        }
+        while let Some(m) = tx.poll(now) {
+            let mut buf = [0; 64];
+            let n = m.encode(&mut buf);
+            sent += 1;
+            if cut || rng.chance(faults.loss) {
+                continue;
+            }
+            // CAN delivers one sender's frames in order: a message arrives 1–3 ms after it is
+            // sent, never before the one sent before it.
+            let copies = if rng.chance(faults.duplicate) { 2 } else { 1 };
+            for _ in 0..copies {
+                let at = (now + 1 + rng.0 % 3).max(to_rx.last().map_or(0, |(t, _)| *t));
+                to_rx.push((at, buf[..n].to_vec()));
+            }
+        }
+        let (due, later): (Vec<_>, Vec<_>) = to_rx.drain(..).partition(|(t, _)| *t <= now);
+        to_rx = later;
+        for (_, bytes) in due {
+            let msg = Msg::decode(&bytes)
+                .expect("the link does not corrupt (CAN's CRC drops corrupt frames)");
+            let s = rx.handle(&msg, &mut dfu, verify);
+            if !cut && !rng.chance(faults.loss) {
+                let at = (now + 1 + rng.0 % 3).max(to_tx.last().map_or(0, |(t, _)| *t));
+                to_tx.push((at, s));
+            }
+        }
+        let (due, later): (Vec<_>, Vec<_>) = to_tx.drain(..).partition(|(t, _)| *t <= now);
+        to_tx = later;
+        for (_, s) in due {
+            tx.on_status(&s, now);
+        }
+        now += 1;
+    }
+    (tx.phase(), tx, now, sent, dfu)
+}
+
+#[test]
+fn a_clean_link_moves_the_image_in_one_pass() {
+    let image = signed(20_000);
+    let (phase, tx, ms, sent, mut dfu) =
+        run(&image, Faults { loss: 0, duplicate: 0, partition: 0..0, reboot_at: None }, 1);
+    assert_eq!(phase, Phase::Done);
+    assert_eq!(verify(&mut dfu), Ok(()));
+    let blocks = image.len().div_ceil(BLOCK_MAX) as u32;
+    assert_eq!(sent, blocks + 2, "begin, each block once, end");
+    assert_eq!((tx.timeouts, tx.restarts), (0, 0));
+    println!("clean: {} B in {sent} messages, {ms} ms of simulated link", image.len());
+}
+
+#[test]
+fn loss_duplicates_a_partition_and_a_reboot_cost_time_not_bytes() {
+    let image = signed(52_000);
+    for seed in 1..=8 {
+        let faults = Faults {
+            loss: 10,
+            duplicate: 5,
+            partition: 700..2_200,
+            reboot_at: Some(200 + seed * 50),
+        };
+        let (phase, tx, ms, sent, mut dfu) = run(&image, faults, seed);
+        assert_eq!(phase, Phase::Done, "seed {seed}");
+        assert_eq!(verify(&mut dfu), Ok(()), "seed {seed}");
+        assert_eq!(&dfu.bytes()[..image.len() - TRAILER_LEN], &image[..image.len() - TRAILER_LEN]);
+        assert!(tx.restarts >= 1, "seed {seed}: the reboot made the sender begin again");
+        println!(
+            "seed {seed}: {ms} ms, {sent} messages ({:.2}× the minimum), {} timeouts, {} fast go-backs, {} restarts",
+            sent as f64 / (image.len().div_ceil(BLOCK_MAX) + 2) as f64,
+            tx.timeouts,
+            tx.fast_goes_back,
+            tx.restarts
+        );
+    }
+}
+
+#[test]
+fn a_partition_pauses_and_the_transfer_resumes_where_it_was() {
+    let image = signed(30_000);
+    let faults = Faults { loss: 0, duplicate: 0, partition: 500..3_000, reboot_at: None };
+    let (phase, tx, _, sent, mut dfu) = run(&image, faults, 3);
+    assert_eq!((phase, tx.restarts), (Phase::Done, 0), "resumed, not begun again");
+    assert_eq!(verify(&mut dfu), Ok(()));
+    let blocks = image.len().div_ceil(BLOCK_MAX) as u32;
+    assert!(
+        sent < blocks + blocks / 4,
+        "only what was in flight is sent again: {sent} for {blocks} blocks"
+    );
+}
+
+#[test]
+fn a_bad_image_is_refused_with_its_reason_at_the_end() {
+    let mut image = signed(10_000);
+    image[4321] ^= 0x80;
+    let (phase, ..) =
+        run(&image, Faults { loss: 0, duplicate: 0, partition: 0..0, reboot_at: None }, 1);
+    assert_eq!(phase, Phase::Refused(Refusal::BadSignature));
+    let too_big = vec![0u8; MAP.active.size as usize + 4];
+    let (phase, ..) =
+        run(&too_big, Faults { loss: 0, duplicate: 0, partition: 0..0, reboot_at: None }, 1);
+    assert_eq!(
+        phase,
+        Phase::Refused(Refusal::TooLarge),
+        "refused at the begin, before a byte is written"
+    );
+}
+
+#[test]
+fn messages_round_trip_and_malformed_ones_are_refused() {
+    let data = [9u8; BLOCK_MAX];
+    let msgs = [
+        Msg::Begin { id: 3, len: 56_000 },
+        Msg::Block { id: 3, offset: 480, data: &data },
+        Msg::End { id: 3 },
+        Msg::Status(Status { id: 3, state: State::Refused(Refusal::WrongKind), received: 12 }),
+        Msg::Status(Status { id: 3, state: State::Verified, received: 56_000 }),
+    ];
+    for m in msgs {
+        let mut buf = [0; 64];
+        let n = m.encode(&mut buf);
+        assert!(n <= 64);
+        assert_eq!(Msg::decode(&buf[..n]), Ok(m));
+        // Cut short, every message is refused, except a block cut after its first data byte:
+        // a shorter block (the transfer CRC of RTCAN's multi-frame messages guards its length).
+        let whole = if matches!(m, Msg::Block { .. }) { 8 } else { n };
+        for cut in 0..whole {
+            assert!(Msg::decode(&buf[..cut]).is_err(), "{m:?} cut to {cut} bytes");
+        }
+    }
+    assert!(Msg::decode(&[0x54, 3, 0, 3, 99, 0, 0, 0, 0]).is_err(), "no refusal has code 99");
+    assert!(Msg::decode(&[0x52, 3, 0, 0, 0, 0, 0]).is_err(), "a block without data");
+    assert!(Msg::decode(&[0x99]).is_err());
+}
