@@ -1,8 +1,8 @@
 //! The gateway's 1 kHz step, sans-IO: the LEDs and `gateway/status`.
 
 use r2p_module::leds::{self, Pattern};
-use r2p_msgs::GatewayStatus;
 use r2p_module::TopicNode;
+use r2p_msgs::GatewayStatus;
 use r2p_node::NodeError;
 
 use crate::endpoints::Endpoints;
