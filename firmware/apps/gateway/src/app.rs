@@ -62,7 +62,7 @@ impl<'a> App<'a> {
 
     /// Exports `gateway/status` on the gateway's node.
     pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
-        node.export(self.ep.status_out)
+        node.export(self.ep.status.remote)
     }
 
     /// The endpoints.
@@ -93,7 +93,7 @@ impl<'a> App<'a> {
             let next = self.next_status_us + STATUS_PERIOD_US;
             self.next_status_us = if next <= now_us { now_us + STATUS_PERIOD_US } else { next };
             let status = self.status(&sample.net);
-            self.ep.status_pub.publish_with(|m| *m = status);
+            self.ep.status.publisher.publish_with(|m| *m = status);
         }
         let now_ms = now_us / 1000;
         let [led_status, led_bus, led_fault] = leds::levels(sample.status, now_ms);

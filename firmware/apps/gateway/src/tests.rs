@@ -430,7 +430,7 @@ fn rig() -> (
     let link = leak(BusLink::new());
     let ep = Endpoints::leak();
     let sub = leak(Subscriber::new());
-    ep.status.subscribe(sub).unwrap();
+    ep.status.topic.subscribe(sub).unwrap();
     (App::new(ep, link), link, sub)
 }
 
@@ -481,7 +481,7 @@ fn the_node_exports_status_under_the_module_name() {
     let params = leak(RamParams::new(params::DEFAULTS));
     let mut node: Node<'static, 4, 4, 8, 4, 64> = Node::new(node_config([1; 12]), params).unwrap();
     app.register(&mut node).unwrap();
-    assert_eq!(app.endpoints().status.name(), STATUS_TOPIC);
+    assert_eq!(app.endpoints().status.topic.name(), STATUS_TOPIC);
     assert!(STATUS_TOPIC.starts_with(crate::NAME));
     assert_eq!(node_config([1; 12]).rank, Some(1), "the standby sync master");
 }
