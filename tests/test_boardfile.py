@@ -157,7 +157,9 @@ def test_board_key_types(tmp_path):
                          ids=lambda p: p.name)
 def test_the_repositorys_board_files_load(path):
     board = load_board(path)
-    assert board.mcu == "STM32F103CBT6"
-    assert "PA11" in board.pins
+    # The modules' F103 (the core's CAN on PA11/PA12), or the gateway's F407 (CAN1 on PB8/PB9).
+    assert board.mcu in ("STM32F103CBT6", "STM32F407VGT6")
+    assert "PA11" in board.pins or board.module == "gateway"
+    assert {"CAN_RX", "CAN_TX"} <= {p.signal for p in board.pins.values()}
     if board.module:
         assert board.schematic == f"hardware/{board.module}/{board.module}.kicad_sch"

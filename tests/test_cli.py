@@ -81,8 +81,10 @@ def test_flash_builds_the_probe_rs_commands_and_says_what_is_missing(built, tmp_
     p = run([str(R2P), "flash", "motor", "--probe-rs", str(fake)], timeout=30)
     assert p.returncode == 1 and p.stdout.startswith("r2p: error: no debug probe found"), p.stdout
     assert "docs/flashing.md" in p.stdout
-    p = run([str(R2P), "flash", "gateway"], timeout=30)
-    assert p.returncode == 1 and "module gateway has no firmware image yet" in p.stdout, p.stdout
+    # The gateway's image is for its F407.
+    p = run([str(R2P), "flash", "gateway", "--probe-rs", str(fake), "--dry-run"], timeout=30)
+    assert p.returncode == 0 and p.stdout.splitlines()[0] == \
+        f"{fake} download --chip STM32F407VG --verify {ROOT}/firmware/images/gateway.elf", p.stdout
     p = run([str(R2P), "flash"], timeout=30)
     assert p.returncode == 2 and "<MODULE>" in p.stdout
 

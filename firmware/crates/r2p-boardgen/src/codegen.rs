@@ -154,11 +154,14 @@ mod tests {
         for (module, file) in modules {
             let b = Board::load(&file).unwrap();
             assert_eq!(b.module, module);
-            assert_eq!(b.mcu, "STM32F103CBT6");
-            assert_eq!(b.pins["PA11"].signal, "CAN_RX", "{module} inherits the core's CAN pins");
+            // The modules' F103 core has the bus on PA11; the gateway's F407 on PB8.
+            let can_rx = if module == "gateway" { "PB8" } else { "PA11" };
+            let mcu = if module == "gateway" { "STM32F407VGT6" } else { "STM32F103CBT6" };
+            assert_eq!(b.mcu, mcu);
+            assert_eq!(b.pins[can_rx].signal, "CAN_RX", "{module}'s CAN pins");
             let src = generate(&b);
-            assert!(src.contains("pub can_rx: Peri<'static, peripherals::PA11>"));
-            assert!(src.contains("can_rx: $p.PA11,"));
+            assert!(src.contains(&format!("pub can_rx: Peri<'static, peripherals::{can_rx}>")));
+            assert!(src.contains(&format!("can_rx: $p.{can_rx},")));
             assert!(!src.contains("swdio"), "debug pins are not handed to the application");
         }
     }

@@ -106,6 +106,69 @@ impl crate::R2pMessage for FaultClear {
 
 crate::impl_wire!(FaultClear);
 
+/// The gateway's network link and its server of the bus on TCP, published by the gateway module once a second (the node's heartbeat carries the bus side: uptime, CAN error counters).
+///
+/// 24 bytes on the bus, type hash `0x4E80AA5A`; schema `firmware/msgs/GatewayStatus.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GatewayStatus {
+    /// Ethernet link up (the PHY reports a link) (`bool`, bytes 0..1)
+    pub link_up: bool,
+    /// an IPv4 address is in use (`bool`, bytes 1..2)
+    pub configured: bool,
+    /// that address came from DHCP (false: the static one) (`bool`, bytes 2..3)
+    pub dhcp: bool,
+    /// the address, a.b.c.d as (a << 24) | (b << 16) | (c << 8) | d; 0 = none (`uint32`, bytes 3..7)
+    pub ip: u32,
+    /// socketcand clients connected now (`uint8`, bytes 7..8)
+    pub clients: u8,
+    /// bus frames forwarded to clients (each client counted) (`uint32`, bytes 8..12)
+    pub frames_to_clients: u32,
+    /// client frames put on the bus (`uint32`, bytes 12..16)
+    pub frames_from_clients: u32,
+    /// client messages answered with < error > (`uint32`, bytes 16..20)
+    pub client_errors: u32,
+    /// frames lost: a client too slow, the queue to the bus full, or not sent (`uint32`, bytes 20..24)
+    pub lost: u32,
+}
+
+impl crate::R2pMessage for GatewayStatus {
+    const NAME: &'static str = "GatewayStatus";
+    const CANONICAL: &'static str = "GatewayStatus:bool link_up;bool configured;bool dhcp;uint32 ip;uint8 clients;uint32 frames_to_clients;uint32 frames_from_clients;uint32 client_errors;uint32 lost";
+    const SIZE: usize = 24;
+    const TYPE_HASH: u32 = 0x4E80_AA5A;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.link_up);
+        w.put(&self.configured);
+        w.put(&self.dhcp);
+        w.put(&self.ip);
+        w.put(&self.clients);
+        w.put(&self.frames_to_clients);
+        w.put(&self.frames_from_clients);
+        w.put(&self.client_errors);
+        w.put(&self.lost);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self {
+            link_up: r.get()?,
+            configured: r.get()?,
+            dhcp: r.get()?,
+            ip: r.get()?,
+            clients: r.get()?,
+            frames_to_clients: r.get()?,
+            frames_from_clients: r.get()?,
+            client_errors: r.get()?,
+            lost: r.get()?,
+        })
+    }
+}
+
+crate::impl_wire!(GatewayStatus);
+
 /// Motion and attitude from an IMU module (LSM6DSO), in the sensor's axes (x forward, y left, z up when mounted flat and aligned with the base). Published by the IMU module at its `rate_hz`.
 ///
 /// 41 bytes on the bus, type hash `0x0F532940`; schema `firmware/msgs/Imu.msg`.
@@ -510,6 +573,7 @@ pub const ALL: &[(&str, u32, usize)] = &[
     ("Battery", 0x471D_E2CA, 16),
     ("BusPower", 0xC2BD_8B69, 1),
     ("FaultClear", 0x9688_B902, 1),
+    ("GatewayStatus", 0x4E80_AA5A, 24),
     ("Imu", 0x0F53_2940, 41),
     ("MotorFault", 0x2D53_828B, 6),
     ("Obstacle", 0x24BE_C850, 5),
@@ -529,6 +593,7 @@ macro_rules! for_each_message {
         $f::<crate::Battery>($($arg),*);
         $f::<crate::BusPower>($($arg),*);
         $f::<crate::FaultClear>($($arg),*);
+        $f::<crate::GatewayStatus>($($arg),*);
         $f::<crate::Imu>($($arg),*);
         $f::<crate::MotorFault>($($arg),*);
         $f::<crate::Obstacle>($($arg),*);

@@ -13,7 +13,9 @@ use std::thread::{self, JoinHandle};
 use std::time::Duration;
 
 use crate::hub::{Hub, DEFAULT_QUEUE};
-use crate::socketcand::{format_frame, parse_command, Command, Splitter};
+use crate::socketcand::{format_error, format_frame, Splitter};
+use r2p_socketcand::format::{HI, OK};
+use r2p_socketcand::{Action, Session};
 
 /// socketcand's usual port.
 pub const DEFAULT_PORT: u16 = 29536;
@@ -150,13 +152,6 @@ fn accept_loop(listener: TcpListener, ctx: Ctx) {
     }
 }
 
-#[derive(PartialEq)]
-enum Mode {
-    Closed,
-    Bcm,
-    Raw,
-}
-
 fn write_all(out: &Mutex<TcpStream>, text: &str) -> io::Result<()> {
     out.lock().unwrap_or_else(|e| e.into_inner()).write_all(text.as_bytes())
 }
@@ -172,8 +167,8 @@ fn serve_client(stream: TcpStream, ctx: Ctx) -> io::Result<()> {
     let mut writer: Option<JoinHandle<()>> = None;
 
     let result = (|| {
-        write_all(&out, "< hi >")?;
-        let mut mode = Mode::Closed;
+        write_all(&out, HI)?;
+        let mut session = Session::new();
         let mut splitter = Splitter::new();
         let mut buf = [0u8; 1024];
         let mut reader = &stream;
@@ -194,25 +189,19 @@ fn serve_client(stream: TcpStream, ctx: Ctx) -> io::Result<()> {
                 Err(e) => return Err(e),
             };
             for msg in splitter.push(&buf[..n]) {
-                let reply = match msg.and_then(|m| parse_command(&m)) {
-                    Ok(Command::Open(ch)) if mode == Mode::Closed && ch == ctx.config.channel => {
-                        mode = Mode::Bcm;
-                        Ok("< ok >".to_string())
+                match session.on_message(
+                    msg.as_deref().map(str::as_bytes).map_err(|e| *e),
+                    &ctx.config.channel,
+                ) {
+                    Action::Reply(text) => write_all(&out, text)?,
+                    Action::Refuse(e) => {
+                        ctx.stats.errors.fetch_add(1, Ordering::Relaxed);
+                        write_all(&out, &format_error(&e))?;
                     }
-                    Ok(Command::Open(_)) if mode == Mode::Closed => {
-                        Err("could not open bus".to_string())
-                    }
-                    Ok(Command::Open(_)) => Err("bus already open".to_string()),
-                    Ok(_) if mode == Mode::Closed => Err("no bus open".to_string()),
-                    Ok(Command::Echo) => Ok("< echo >".to_string()),
-                    Ok(Command::BcmMode) if mode == Mode::Bcm => Ok("< ok >".to_string()),
-                    Ok(Command::BcmMode) => Err("cannot leave rawmode".to_string()),
-                    Ok(Command::RawMode) if mode == Mode::Raw => Ok("< ok >".to_string()),
-                    Ok(Command::RawMode) => {
-                        mode = Mode::Raw;
+                    Action::EnterRaw => {
                         // Subscribe before answering so that nothing sent after `ok` is missed.
                         let sub = ctx.hub.subscribe(me, ctx.config.queue);
-                        write_all(&out, "< ok >")?;
+                        write_all(&out, OK)?;
                         let (out, closed, ctx) = (out.clone(), closed.clone(), ctx.clone());
                         writer =
                             Some(thread::Builder::new().name("socketcand-writer".into()).spawn(
@@ -221,21 +210,11 @@ fn serve_client(stream: TcpStream, ctx: Ctx) -> io::Result<()> {
                                     ctx.stats.dropped.fetch_add(sub.dropped(), Ordering::Relaxed);
                                 },
                             )?);
-                        continue;
                     }
-                    Ok(Command::Send(frame)) => {
+                    Action::Send(frame) => {
                         // Count first, so that whoever receives the frame sees it counted.
                         ctx.stats.frames_in.fetch_add(1, Ordering::Relaxed);
                         ctx.hub.send(me, frame);
-                        continue;
-                    }
-                    Err(e) => Err(e.to_string()),
-                };
-                match reply {
-                    Ok(text) => write_all(&out, &text)?,
-                    Err(text) => {
-                        ctx.stats.errors.fetch_add(1, Ordering::Relaxed);
-                        write_all(&out, &format_error_text(&text))?;
                     }
                 }
             }
@@ -249,10 +228,6 @@ fn serve_client(stream: TcpStream, ctx: Ctx) -> io::Result<()> {
         let _ = w.join();
     }
     result
-}
-
-fn format_error_text(text: &str) -> String {
-    format!("< error {text} >")
 }
 
 fn forward(sub: &crate::hub::Subscription, out: &Mutex<TcpStream>, closed: &AtomicBool, ctx: &Ctx) {

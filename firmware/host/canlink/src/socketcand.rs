@@ -1,77 +1,17 @@
 //! The socketcand text protocol (<https://github.com/linux-can/socketcand>, `doc/protocol.md`)
-//! as far as raw-frame clients use it: python-can's `socketcand` interface, `cangw`-style
-//! bridges and `nc`.
-//!
-//! Messages are `< ... >` with no line separators required (python-can sends none):
-//!
-//! | direction | message | meaning |
-//! |---|---|---|
-//! | server → client | `< hi >` | greeting on connect |
-//! | client → server | `< open CHANNEL >` | select the bus; answered `< ok >` |
-//! | client → server | `< rawmode >` | receive every frame; answered `< ok >` |
-//! | client → server | `< send ID DLC B0 B1 … >` | send a frame (hex; 8-digit or > 7FF IDs are extended) |
-//! | client → server | `< echo >` | answered `< echo >` |
-//! | server → client | `< frame ID SECS.USECS DATA >` | a frame (ID 3 or 8 hex digits, DATA contiguous hex) |
-//! | server → client | `< error TEXT >` | a message was not understood |
+//! for this crate's server and the `r2p` tools: the protocol crate's (`r2p-socketcand`, no_std,
+//! shared with the gateway module's server) with `String`s and `Vec`s, as host code wants them.
+//! The messages are listed there.
 
-use std::fmt;
+pub use r2p_socketcand::command::Word;
+pub use r2p_socketcand::{Command, ParseError, MAX_MESSAGE};
 
-use crate::frame::{format_time, CanFrame, Stamped, MAX_DLC, MAX_EXTENDED_ID, MAX_STANDARD_ID};
-
-/// Longest message accepted (a full `< send >` is under 50 bytes).
-pub const MAX_MESSAGE: usize = 256;
-
-/// A message from a client.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Command {
-    /// `< open CHANNEL >`.
-    Open(String),
-    /// `< rawmode >`.
-    RawMode,
-    /// `< bcmmode >` (the mode after `open`; only `send` is supported in it).
-    BcmMode,
-    /// `< echo >`.
-    Echo,
-    /// `< send ID DLC DATA… >`.
-    Send(CanFrame),
-}
-
-/// Why a client message was not understood; sent back as `< error … >`.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum ParseError {
-    /// Bytes outside `< … >`.
-    Garbage,
-    /// A message longer than [`MAX_MESSAGE`] without a closing `>`.
-    TooLong,
-    /// A message that is not ASCII.
-    NotAscii,
-    /// `< >`.
-    Empty,
-    /// A command this server does not implement.
-    Unknown(String),
-    /// A command with the wrong arguments.
-    BadArguments(&'static str),
-}
-
-impl fmt::Display for ParseError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ParseError::Garbage => write!(f, "data outside a message"),
-            ParseError::TooLong => write!(f, "message too long"),
-            ParseError::NotAscii => write!(f, "message not ASCII"),
-            ParseError::Empty => write!(f, "empty message"),
-            ParseError::Unknown(c) => write!(f, "unknown command {c}"),
-            ParseError::BadArguments(usage) => write!(f, "usage {usage}"),
-        }
-    }
-}
-
-impl std::error::Error for ParseError {}
+use crate::frame::Stamped;
 
 /// Splits a byte stream into `< … >` messages; whatever is not a message is an error.
 #[derive(Debug, Default)]
 pub struct Splitter {
-    buf: Vec<u8>,
+    inner: r2p_socketcand::Splitter,
 }
 
 impl Splitter {
@@ -82,124 +22,39 @@ impl Splitter {
 
     /// Adds received bytes and returns every complete message (`< … >` inclusive) or error.
     pub fn push(&mut self, bytes: &[u8]) -> Vec<Result<String, ParseError>> {
-        self.buf.extend_from_slice(bytes);
         let mut out = Vec::new();
-        loop {
-            let start = self.buf.iter().position(|b| !b.is_ascii_whitespace());
-            let Some(start) = start else {
-                self.buf.clear();
-                break;
-            };
-            if self.buf[start] != b'<' {
-                // Garbage up to the next message (or all of it).
-                let next = self.buf[start..].iter().position(|&b| b == b'<');
-                self.buf.drain(..next.map_or(self.buf.len(), |n| start + n));
-                out.push(Err(ParseError::Garbage));
-                continue;
-            }
-            let body = &self.buf[start + 1..];
-            let close = body.iter().position(|&b| b == b'>');
-            let reopen = body.iter().position(|&b| b == b'<');
-            match (close, reopen) {
-                (Some(c), r) if r.is_none_or(|r| r > c) => {
-                    let msg = self.buf[start..start + c + 2].to_vec();
-                    self.buf.drain(..start + c + 2);
-                    out.push(
-                        String::from_utf8(msg)
-                            .ok()
-                            .filter(|m| m.is_ascii())
-                            .ok_or(ParseError::NotAscii),
-                    );
-                }
-                (_, Some(r)) => {
-                    // A second `<` before the `>`: drop the broken message, resync there.
-                    self.buf.drain(..start + 1 + r);
-                    out.push(Err(ParseError::Garbage));
-                }
-                (None, None) => {
-                    if self.buf.len() - start > MAX_MESSAGE {
-                        self.buf.clear();
-                        out.push(Err(ParseError::TooLong));
-                    } else {
-                        self.buf.drain(..start);
-                    }
-                    break;
-                }
-                (Some(_), None) => unreachable!("covered by the first arm"),
-            }
-        }
+        self.inner.feed(bytes, |m| {
+            // The splitter returns ASCII messages only.
+            out.push(m.map(|m| String::from_utf8_lossy(m).into_owned()));
+        });
         out
     }
 }
 
-fn hex_u32(s: &str) -> Option<u32> {
-    if s.is_empty() || s.len() > 8 || !s.bytes().all(|b| b.is_ascii_hexdigit()) {
-        return None;
-    }
-    u32::from_str_radix(s, 16).ok()
-}
-
-const SEND_USAGE: &str = "send ID DLC DATA";
-
 /// Parses one message (`< … >` inclusive, as [`Splitter`] returns it).
-pub fn parse_command(msg: &str) -> Result<Command, ParseError> {
-    let inner =
-        msg.strip_prefix('<').and_then(|m| m.strip_suffix('>')).ok_or(ParseError::Garbage)?;
-    let mut words = inner.split_ascii_whitespace();
-    let cmd = words.next().ok_or(ParseError::Empty)?;
-    let args: Vec<&str> = words.collect();
-    match (cmd, args.as_slice()) {
-        ("open", [channel]) => Ok(Command::Open((*channel).to_string())),
-        ("open", _) => Err(ParseError::BadArguments("open CHANNEL")),
-        ("rawmode", []) => Ok(Command::RawMode),
-        ("bcmmode", []) => Ok(Command::BcmMode),
-        ("echo", []) => Ok(Command::Echo),
-        ("rawmode" | "bcmmode" | "echo", _) => Err(ParseError::BadArguments("without arguments")),
-        ("send", [id, dlc, data @ ..]) => {
-            let raw = hex_u32(id).ok_or(ParseError::BadArguments(SEND_USAGE))?;
-            let extended = id.len() == 8 || raw > MAX_STANDARD_ID;
-            if raw > MAX_EXTENDED_ID {
-                return Err(ParseError::BadArguments("send ID below 20000000"));
-            }
-            let dlc = hex_u32(dlc).filter(|&d| d as usize <= MAX_DLC);
-            let dlc = dlc.ok_or(ParseError::BadArguments("send DLC of 0 to 8"))? as usize;
-            if data.len() != dlc {
-                return Err(ParseError::BadArguments("send with DLC data bytes"));
-            }
-            let mut bytes = [0u8; MAX_DLC];
-            for (b, s) in bytes.iter_mut().zip(data) {
-                *b = hex_u32(s)
-                    .filter(|&v| s.len() <= 2 && v <= 0xFF)
-                    .ok_or(ParseError::BadArguments("send data bytes in hex"))?
-                    as u8;
-            }
-            CanFrame::new(raw, extended, &bytes[..dlc])
-                .map(Command::Send)
-                .map_err(|_| ParseError::BadArguments(SEND_USAGE))
-        }
-        ("send", _) => Err(ParseError::BadArguments(SEND_USAGE)),
-        (other, _) => Err(ParseError::Unknown(other.chars().take(32).collect())),
-    }
+pub fn parse_command(msg: &str) -> Result<Command<'_>, ParseError> {
+    r2p_socketcand::parse_command(msg.as_bytes())
 }
 
 /// `< frame ID SECS.USECS DATA >` as socketcand sends it (empty data leaves two spaces).
 pub fn format_frame(s: &Stamped) -> String {
-    let mut out = format!("< frame {} {} ", s.frame.id_hex(), format_time(s.time));
-    for b in s.frame.data() {
-        out.push_str(&format!("{b:02X}"));
-    }
-    out.push_str(" >");
+    let mut out = String::new();
+    r2p_socketcand::format::write_frame(&mut out, &s.frame, s.time)
+        .expect("a String takes any text");
     out
 }
 
 /// `< error TEXT >`.
-pub fn format_error(e: &ParseError) -> String {
-    format!("< error {e} >")
+pub fn format_error(e: &impl std::fmt::Display) -> String {
+    let mut out = String::new();
+    r2p_socketcand::format::write_error(&mut out, e).expect("a String takes any text");
+    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frame::CanFrame;
     use std::time::Duration;
 
     fn send(msg: &str) -> CanFrame {
@@ -220,7 +75,7 @@ mod tests {
         assert_eq!(send("< send 12345678 8 0 1 2 3 4 5 6 7 >").len(), 8);
         assert!(send("< send 800 0 >").is_extended(), "above 7FF is extended");
         assert!(!send("< send 7FF 0 >").is_extended());
-        assert_eq!(parse_command("< open vcan0 >"), Ok(Command::Open("vcan0".into())));
+        assert_eq!(parse_command("< open vcan0 >"), Ok(Command::Open("vcan0")));
         assert_eq!(parse_command("< rawmode >"), Ok(Command::RawMode));
         assert_eq!(parse_command("<echo>"), Ok(Command::Echo));
         assert_eq!(parse_command("< bcmmode >"), Ok(Command::BcmMode));

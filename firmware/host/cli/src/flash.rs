@@ -381,9 +381,9 @@ mod tests {
         let t = flash_target(&root, "motor").unwrap();
         assert_eq!(t.chip, "STM32F103CB");
         assert_eq!(t.image, Path::new("firmware/images/motor.elf"));
-        let err = flash_target(&root, "gateway").unwrap_err().to_string();
-        assert!(err.contains("gateway has no firmware image"), "{err}");
-        assert!(err.contains("psu, motor, imu, proximity, template"), "{err}");
+        let t = flash_target(&root, "gateway").unwrap();
+        assert_eq!(t.chip, "STM32F407VG");
+        assert_eq!(t.image, Path::new("firmware/images/gateway.elf"));
         let err = flash_target(&root, "servo").unwrap_err().to_string();
         assert!(err.contains("no module named \"servo\""), "{err}");
         // footprint images are not modules: flash names modules only.
@@ -403,6 +403,15 @@ mod tests {
         let err = flash_target(&d, "psu").unwrap_err().to_string();
         assert!(err.contains("firmware/images/psu.elf is missing"), "{err}");
         assert!(err.contains("make firmware"), "{err}");
+        // A module without an image yet.
+        std::fs::write(
+            d.join("modules.toml"),
+            "[[module]]\nname = \"psu\"\nimage = { mcu = \"STM32F103CB\" }\n\n[[module]]\nname = \"servo\"\n",
+        )
+        .unwrap();
+        let err = flash_target(&d, "servo").unwrap_err().to_string();
+        assert!(err.contains("servo has no firmware image"), "{err}");
+        assert!(err.contains("psu"), "{err}");
         assert_eq!(find_root(&d.join("firmware/images")), Some(d.clone()));
         std::fs::remove_dir_all(d).unwrap();
     }

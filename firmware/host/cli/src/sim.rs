@@ -35,6 +35,11 @@ pub struct SimArgs {
     /// With --realtime: keep running when standard input closes
     #[arg(long)]
     pub no_stdin: bool,
+    /// With --realtime: also serve the bus through the robot's gateway, on ADDR (IP:PORT): the
+    /// gateway application's own socketcand server (the code its STM32F407 image runs), over
+    /// host TCP — the endpoint a real robot's gateway serves on its Ethernet port
+    #[arg(long, value_name = "ADDR")]
+    pub gateway: Option<SocketAddr>,
     /// Without --realtime: also write the base's true pose, its odometry and the command every
     /// 50 ms to FILE (CSV), for plots
     #[arg(long, value_name = "FILE")]
@@ -52,6 +57,11 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
     let mut r = EmuRobot::build(robot).map_err(CliError::new)?;
     let log = args.log.as_ref().map(|p| p.display().to_string());
     if !args.realtime {
+        if let Some(a) = args.gateway {
+            return Err(CliError::new(format!(
+                "--gateway {a} serves the bus in real time: add --realtime"
+            )));
+        }
         let (Some(seconds), Some(path)) = (args.seconds, log.as_deref()) else {
             return Err(CliError::new(
                 "without --realtime, give --seconds N and --log FILE (the run goes as fast as it can into the trace)",
@@ -105,8 +115,21 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
         watch_stdin: !args.no_stdin,
         socketcan: bus.socketcan.clone(),
     };
+    let gateway = match args.gateway {
+        Some(a) => {
+            let g = r.serve_gateway(a).map_err(|e| {
+                CliError::new(format!("--gateway {a}: cannot serve the bus there: {e}"))
+            })?;
+            eprintln!("r2p sim: {name}'s gateway serves socketcand on {}", g.local_addr());
+            Some(g)
+        }
+        None => None,
+    };
     let spare = r.spare_port();
     let summary = serve::run_realtime(&mut r.sim, spare, &name, &opts).map_err(CliError::new)?;
+    if let Some(g) = gateway {
+        g.shutdown();
+    }
     emit(out, &summary.replacen("r2p-emu:", "r2p sim:", 1))
 }
 

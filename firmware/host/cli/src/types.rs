@@ -406,6 +406,7 @@ const GENERATED: &[Generated] = generated!(
     Battery,
     BusPower,
     FaultClear,
+    GatewayStatus,
     Imu,
     MotorFault,
     Obstacle,

@@ -21,6 +21,7 @@
 pub mod boards;
 pub mod bridge;
 pub mod demo;
+pub mod gateway_net;
 pub mod periph;
 pub mod robot;
 pub mod serve;
@@ -75,6 +76,18 @@ impl<R: Runtime + ?Sized> Runtime for Box<R> {
     }
 }
 
+/// Something between a board's node and its port, as the gateway's bus tap is on the MCU
+/// (`r2p_app_gateway::BusTap`): each call of the node runtime goes through it.
+pub trait PortTap {
+    /// Calls `node` (one `slot_tick` or `poll`) at `now` on `port` as the tap presents it.
+    fn run(
+        &mut self,
+        now: Micros,
+        port: &mut dyn CanController,
+        node: &mut dyn FnMut(&mut dyn CanController),
+    );
+}
+
 /// How boards drive their nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
@@ -108,6 +121,8 @@ struct Board<'a, N> {
     node: N,
     port: SimPort,
     app: Option<App<'a, N>>,
+    /// Between the node and its port, if the board has one.
+    tap: Option<Box<dyn PortTap + 'a>>,
     /// Next slot tick / poll, ns.
     wake_ns: u64,
     /// Next application step, ns.
@@ -166,6 +181,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
             node,
             port: SimPort::new(self.bus.port(port), bit_rate).with_load_latency(SLOT_PATH_US),
             app,
+            tap: None,
             wake_ns: self.now_ns,
             app_ns: self.now_ns,
             powered: true,
@@ -192,6 +208,12 @@ impl<'a, N: Runtime> Sim<'a, N> {
         b.powered = true;
         b.wake_ns = self.now_ns;
         b.app_ns = self.now_ns;
+    }
+
+    /// Puts `tap` between board `i`'s node and its port (replacing any; `None` removes it).
+    /// A reboot keeps it: set the new firmware's after [`Sim::reboot`].
+    pub fn set_tap(&mut self, i: usize, tap: Option<Box<dyn PortTap + 'a>>) {
+        self.boards[i].tap = tap;
     }
 
     /// Whether board `i` is powered.
@@ -291,15 +313,18 @@ impl<'a, N: Runtime> Sim<'a, N> {
                     continue;
                 }
                 self.stats.ticks += 1;
+                let (node, port) = (&mut b.node, &mut b.port);
+                let mut call = |c: &mut dyn CanController| match mode {
+                    Mode::Tdma => node.slot_tick(now_us, c),
+                    Mode::Poll { .. } => node.poll(now_us, c),
+                };
+                match &mut b.tap {
+                    Some(tap) => tap.run(now_us, port, &mut call),
+                    None => call(port),
+                }
                 b.wake_ns = match mode {
-                    Mode::Tdma => {
-                        b.node.slot_tick(now_us, &mut b.port);
-                        (b.node.next_slot_at(now_us) * NS_PER_US).max(t + 1)
-                    }
-                    Mode::Poll { period_us } => {
-                        b.node.poll(now_us, &mut b.port);
-                        t + period_us.max(1) * NS_PER_US
-                    }
+                    Mode::Tdma => (b.node.next_slot_at(now_us) * NS_PER_US).max(t + 1),
+                    Mode::Poll { period_us } => t + period_us.max(1) * NS_PER_US,
                 };
             }
             if t >= t_ns {

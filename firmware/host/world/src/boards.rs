@@ -193,7 +193,7 @@ impl BoardKind {
         self.signals().iter().filter(|s| s.kind == kind).map(|s| s.name).collect()
     }
 
-    /// Its HAL board file under `firmware/boards/` (the gateway's comes with its own issue).
+    /// Its HAL board file under `firmware/boards/`.
     pub fn board_file(self) -> Option<&'static str> {
         match self {
             BoardKind::Psu => Some("psu.toml"),
@@ -201,7 +201,7 @@ impl BoardKind {
             BoardKind::Proximity => Some("proximity.toml"),
             BoardKind::Imu => Some("imu.toml"),
             BoardKind::Template => Some("template.toml"),
-            BoardKind::Gateway => None,
+            BoardKind::Gateway => Some("gateway.toml"),
         }
     }
 }

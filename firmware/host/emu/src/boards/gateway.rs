@@ -1,22 +1,63 @@
-//! The gateway board. Its firmware (Ethernet, ROS bridge) is a later issue; in the emulator it
-//! runs the robot-level nodes of the paper's Triskar2 (`r2p-app-base`: inverse kinematics,
-//! obstacle avoidance, odometry) and plays the robot file's `[[teleop]]` script on `cmd_vel`,
-//! as a teleoperator behind the gateway would.
+//! The gateway board: the gateway's application (`r2p-app-gateway`: its node's status, the bus
+//! on TCP through its bus tap, network parameters) as the STM32F407 image runs it, its server
+//! over host TCP ([`crate::gateway_net`]); and the robot-level nodes of the paper's Triskar2
+//! (`r2p-app-base`: inverse kinematics, obstacle avoidance, odometry), which the gateway runs
+//! for the robot (issue 20 item 5; not in the F407 image yet), playing the robot file's
+//! `[[teleop]]` script on `cmd_vel` as a teleoperator behind the gateway would.
+//!
+//! One node serves both applications' parameters: the base controller's first (their indices
+//! are unchanged), the network's after them ([`PARAMS`]).
 
 use r2p_app_base::endpoints::Names;
 use r2p_app_base::{params, App, Endpoints};
+use r2p_app_gateway::params::{after, COUNT as NET_COUNT};
+use r2p_app_gateway::{BusLink, BusTap};
 use r2p_msgs::Twist2D;
-use r2p_node::{NodeConfig, ParamStore};
+use r2p_node::{Param, ParamStore};
 use r2p_world::robot_file::Wiring;
+use rtcan::{CanController, Micros};
 
-use super::{load_params, node, persist, Booted, Ctx};
+use super::{leak, load_params, node, persist, Booted, Ctx, Leds};
+use crate::PortTap;
+
+/// Number of the gateway node's parameters.
+pub const PARAM_COUNT: usize = params::DEFAULTS.len() + NET_COUNT;
+
+/// The gateway node's parameters: the base controller's, then the network's.
+pub const PARAMS: [Param; PARAM_COUNT] = after(params::DEFAULTS);
+
+/// Index of the first network parameter.
+pub const NET_FIRST: u16 = params::DEFAULTS.len() as u16;
+
+/// The gateway's bus tap between its node and its port, as on the MCU.
+pub struct GatewayTap(pub BusTap<'static>);
+
+impl PortTap for GatewayTap {
+    fn run(
+        &mut self,
+        now: Micros,
+        port: &mut dyn CanController,
+        node: &mut dyn FnMut(&mut dyn CanController),
+    ) {
+        self.0.run(now, port, |c| node(c));
+    }
+}
+
+/// What a gateway's boot leaves for the robot: the tap to put on its port and the link its
+/// network server serves.
+pub struct GatewayBoot {
+    /// Goes between the node and the board's port ([`crate::Sim::set_tap`]).
+    pub tap: GatewayTap,
+    /// The queues between the tap and the network clients.
+    pub link: &'static BusLink,
+}
 
 /// Period of the teleop script's `cmd_vel` (a joystick's rate).
 const TELEOP_PERIOD_US: u64 = 50_000;
 
-/// Boots the gateway's base controller.
+/// Boots the gateway: its application and the base controller on one node.
 pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
-    let p = load_params(params::DEFAULTS, &ctx.flash)?;
+    let p = load_params(PARAMS, &ctx.flash)?;
     let names = names(&ctx)?;
     let ik_hz = match p.get(params::IK_RATE_HZ) {
         Ok(r2p_management::message::Value::U32(v)) => v.max(1),
@@ -25,15 +66,24 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
     let ep = Endpoints::leak(names, 1_000_000 / ik_hz);
     let cmd_local = ep.cmd_local;
     let mut a = App::new(ep, p);
+    let link = leak(BusLink::new());
+    let mut gw = r2p_app_gateway::App::new(r2p_app_gateway::Endpoints::leak(), link);
     // The standby master: rank 1 after the PSU.
-    let config = NodeConfig { rank: Some(1), ..NodeConfig::new(ctx.module.uid.0, "gateway") };
+    let config = r2p_app_gateway::node_config(ctx.module.uid.0);
     let mut n = node(config, &ctx, p)?;
     a.register(&mut n).map_err(|e| format!("registering topics: {e:?}"))?;
+    gw.register(&mut n).map_err(|e| format!("registering gateway/status: {e:?}"))?;
+    *ctx.gateway.borrow_mut() = Some(GatewayBoot { tap: GatewayTap(BusTap::new(link)), link });
+    let mut leds = Leds::new(&ctx, config.heartbeat_period_us);
+    let net = ctx.net.clone();
     let script: Vec<_> = ctx.robot.teleop.clone();
     let (flash, probe) = (ctx.flash, ctx.probe);
     Ok((
         n,
-        Box::new(move |now, _node| {
+        Box::new(move |now, node| {
+            let status = leds.status(now, node, false);
+            let net = *net.lock().unwrap_or_else(|e| e.into_inner());
+            gw.step(now, &r2p_app_gateway::Sample { status, net });
             if now % TELEOP_PERIOD_US == 0 {
                 if let Some(t) = script.iter().rev().find(|t| (t.at_s * 1e6) as u64 <= now) {
                     let (vx, vy, wz) = (t.vx as f32, t.vy as f32, t.wz as f32);

@@ -28,7 +28,7 @@ use rtcan::cycle::ClockState;
 use rtcan::failover::Role;
 use rtcan::{CycleConfig, Micros};
 
-pub use gateway::gateway;
+pub use gateway::{gateway, GatewayBoot, GatewayTap, NET_FIRST};
 pub use imu::imu;
 pub use motor::motor;
 pub use params::store_params;
@@ -71,6 +71,10 @@ pub struct Ctx<'r> {
     pub boot_us: Micros,
     /// Where the gateway reports what it computes.
     pub probe: Rc<RefCell<Probe>>,
+    /// Where the gateway's boot leaves its bus tap and link ([`GatewayBoot`]).
+    pub gateway: Rc<RefCell<Option<GatewayBoot>>>,
+    /// The network as the gateway sees it (its server's listening address).
+    pub net: crate::gateway_net::NetSlot,
 }
 
 /// A booted board: its node and its 1 kHz application step.

@@ -25,7 +25,7 @@ pub fn store_params(module: &Module, robot: &Robot, flash: &mut BoardFlash) -> R
         BoardKind::Psu => store(r2p_app_psu::params::DEFAULTS, &values, flash),
         BoardKind::Proximity => store(r2p_app_proximity::params::DEFAULTS, &values, flash),
         BoardKind::Motor => store(r2p_app_motor::params::DEFAULTS, &values, flash),
-        BoardKind::Gateway => store(r2p_app_base::params::DEFAULTS, &values, flash),
+        BoardKind::Gateway => store(super::gateway::PARAMS, &values, flash),
         BoardKind::Imu => store(r2p_app_imu::params::DEFAULTS, &values, flash),
         BoardKind::Template => store(r2p_app_template::params::DEFAULTS, &values, flash),
     };

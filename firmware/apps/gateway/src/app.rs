@@ -1,0 +1,126 @@
+//! The gateway's 1 kHz step, sans-IO: the LEDs and `gateway/status`.
+
+use r2p_module::leds::{self, Pattern};
+use r2p_module::TopicNode;
+use r2p_msgs::GatewayStatus;
+use r2p_node::NodeError;
+
+use crate::endpoints::Endpoints;
+use crate::link::BusLink;
+
+/// Period of `gateway/status`, µs.
+pub const STATUS_PERIOD_US: u64 = 1_000_000;
+
+/// The network as the board-support layer sees it (the MCU: embassy-net's stack; the emulator:
+/// its host listener).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NetState {
+    /// The Ethernet link is up.
+    pub link_up: bool,
+    /// The IPv4 address in use, if any.
+    pub ip: Option<[u8; 4]>,
+    /// It came from DHCP.
+    pub dhcp: bool,
+}
+
+/// What the board-support layer reads before each step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Sample {
+    /// The node's state for the status LEDs (running, synced, traffic, storage fault).
+    pub status: leds::Status,
+    /// The network.
+    pub net: NetState,
+}
+
+/// What the board-support layer applies after each step (logical levels: `true` = on).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Command {
+    /// `LED_STATUS`.
+    pub led_status: bool,
+    /// `LED_BUS`.
+    pub led_bus: bool,
+    /// `LED_FAULT`.
+    pub led_fault: bool,
+    /// `LED_LINK`: off without a link, fast blink with a link but no address yet, on with an
+    /// address, a short blink off while a client is connected.
+    pub led_link: bool,
+}
+
+/// The gateway's application.
+pub struct App<'a> {
+    ep: Endpoints<'a>,
+    link: &'a BusLink,
+    next_status_us: u64,
+}
+
+impl<'a> App<'a> {
+    /// The application on its endpoints ([`crate::Storage::build`]) and the link its server
+    /// and bus tap share.
+    pub fn new(endpoints: Endpoints<'a>, link: &'a BusLink) -> Self {
+        Self { ep: endpoints, link, next_status_us: 0 }
+    }
+
+    /// Exports `gateway/status` on the gateway's node.
+    pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
+        node.export(self.ep.status.remote)
+    }
+
+    /// The endpoints.
+    pub fn endpoints(&self) -> &Endpoints<'a> {
+        &self.ep
+    }
+
+    /// The status as published now.
+    pub fn status(&self, net: &NetState) -> GatewayStatus {
+        use core::sync::atomic::Ordering::Relaxed;
+        let s = &self.link.stats;
+        GatewayStatus {
+            link_up: net.link_up,
+            configured: net.ip.is_some(),
+            dhcp: net.ip.is_some() && net.dhcp,
+            ip: net.ip.map_or(0, u32::from_be_bytes),
+            clients: self.link.clients(),
+            frames_to_clients: s.frames_to_clients.load(Relaxed),
+            frames_from_clients: s.frames_from_clients.load(Relaxed),
+            client_errors: s.client_errors.load(Relaxed),
+            lost: s.lost.load(Relaxed),
+        }
+    }
+
+    /// One step at `now_us`: `gateway/status` when due; returns the LEDs.
+    pub fn step(&mut self, now_us: u64, sample: &Sample) -> Command {
+        if now_us >= self.next_status_us {
+            let next = self.next_status_us + STATUS_PERIOD_US;
+            self.next_status_us = if next <= now_us { now_us + STATUS_PERIOD_US } else { next };
+            let status = self.status(&sample.net);
+            self.ep.status.publisher.publish_with(|m| *m = status);
+        }
+        let now_ms = now_us / 1000;
+        let [led_status, led_bus, led_fault] = leds::levels(sample.status, now_ms);
+        let link = match (sample.net.link_up, sample.net.ip.is_some(), self.link.clients() > 0) {
+            (false, _, _) => Pattern::Off,
+            (true, false, _) => leds::FAST,
+            (true, true, false) => Pattern::On,
+            // Lit 90 % of each second: "someone is connected", still reads as "on".
+            (true, true, true) => Pattern::Blink { period_ms: 1000 }.with_duty(now_ms, 900),
+        };
+        Command { led_status, led_bus, led_fault, led_link: link.is_lit(now_ms) }
+    }
+}
+
+/// A pattern evaluated with its own duty cycle.
+trait Duty {
+    fn with_duty(self, now_ms: u64, lit_ms: u64) -> Pattern;
+}
+
+impl Duty for Pattern {
+    fn with_duty(self, now_ms: u64, lit_ms: u64) -> Pattern {
+        match self {
+            Pattern::Blink { period_ms } if now_ms % u64::from(period_ms.max(1)) < lit_ms => {
+                Pattern::On
+            }
+            Pattern::Blink { .. } => Pattern::Off,
+            other => other,
+        }
+    }
+}

@@ -1,0 +1,62 @@
+//! The gateway's topic, its publisher, and the proxy that puts it on the bus.
+//!
+//! | topic | type | class |
+//! |---|---|---|
+//! | `gateway/status` | `GatewayStatus` | NRT, 1 Hz |
+//!
+//! The objects are made at boot in a [`Storage`] of cells (`r2p_module`'s [`Outbound`], each
+//! topic written once): a `static` one on the MCU, a leaked one per emulated board on the host
+//! ([`Endpoints::leak`]).
+
+use r2p_middleware::{pool_size, Class};
+use r2p_module::{Outbound, OutboundCell};
+use r2p_msgs::GatewayStatus;
+
+/// The topic's name.
+pub const STATUS_TOPIC: &str = "gateway/status";
+
+/// Queue each remote subscriber may ask for.
+pub const REMOTE_QUEUE: usize = 2;
+/// Room left on the topic for one more local subscriber with this queue (a user's node, a
+/// test).
+pub const SPARE_QUEUE: usize = 2;
+
+const POOL: usize = pool_size(&[REMOTE_QUEUE, SPARE_QUEUE], 1);
+
+/// Everything the application and the node use, by reference: one field a topic.
+#[derive(Clone, Copy)]
+pub struct Endpoints<'a> {
+    /// The status: published (NRT) and exported.
+    pub status: Outbound<'a, GatewayStatus, POOL, 2, REMOTE_QUEUE>,
+}
+
+/// Room for one set of endpoints: declare it `static` on the MCU, then [`Storage::build`] once.
+#[derive(Default)]
+pub struct Storage {
+    status: OutboundCell<GatewayStatus, POOL, 2, REMOTE_QUEUE>,
+}
+
+impl Storage {
+    /// Empty storage.
+    pub const fn new() -> Self {
+        Self { status: OutboundCell::new() }
+    }
+
+    /// Makes and wires the endpoints.
+    ///
+    /// # Panics
+    /// If called twice on one storage (each cell is initialised once).
+    pub fn build(&'static self) -> Endpoints<'static> {
+        // Sized by `pool_size` for exactly these: cannot fail.
+        let status = self.status.build(STATUS_TOPIC, GatewayStatus::default(), Class::NonRealTime);
+        Endpoints { status: status.expect("the status topic is sized for its endpoints") }
+    }
+}
+
+#[cfg(any(test, feature = "std"))]
+impl Endpoints<'static> {
+    /// A fresh set of endpoints on the host (its storage is leaked: one per emulated board).
+    pub fn leak() -> Self {
+        std::boxed::Box::leak(std::boxed::Box::new(Storage::new())).build()
+    }
+}

@@ -1,0 +1,532 @@
+//! The gateway's application on the host: the server over an in-memory stream, the bus tap on
+//! a scripted controller, the status and the LEDs, the parameters.
+
+use std::boxed::Box;
+use std::cell::RefCell;
+use std::collections::VecDeque;
+use std::rc::Rc;
+use std::string::String;
+use std::vec::Vec;
+
+use core::convert::Infallible;
+use core::future::{poll_fn, Future};
+use core::sync::atomic::Ordering::Relaxed;
+use core::task::Poll;
+
+use embassy_futures::block_on;
+use embassy_futures::join::join;
+use embassy_futures::yield_now;
+use r2p_management::message::Value;
+use r2p_middleware::{Subscriber, TopicInfo};
+use r2p_module::leds::Status;
+use r2p_node::{Node, ParamStore, RamParams};
+use r2p_socketcand::CanFrame;
+use rtcan::controller::{
+    BusState, CanController, ErrorCounters, Filter, Received, TxError, TxMode, TxOutcome, TxResult,
+};
+use rtcan::Frame;
+
+use crate::endpoints::{SPARE_QUEUE, STATUS_TOPIC};
+use crate::link::{LinkFrame, BUS, MAX_CLIENTS};
+use crate::params::{self, Net};
+use crate::server::{serve, Config, Ended};
+use crate::{node_config, App, BusLink, BusTap, Endpoints, NetState, Sample};
+
+fn leak<T>(x: T) -> &'static T {
+    Box::leak(Box::new(x))
+}
+
+// ---- an in-memory TCP connection ----
+
+#[derive(Default)]
+struct Wire {
+    to_server: VecDeque<u8>,
+    from_server: Vec<u8>,
+    closed: bool,
+}
+
+/// The server's end of a connection; the test holds the other through the `Rc`.
+struct Pipe(Rc<RefCell<Wire>>);
+
+impl embedded_io_async::ErrorType for Pipe {
+    type Error = Infallible;
+}
+
+impl embedded_io_async::Read for Pipe {
+    async fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
+        poll_fn(|_| {
+            let mut w = self.0.borrow_mut();
+            if w.to_server.is_empty() {
+                return if w.closed { Poll::Ready(Ok(0)) } else { Poll::Pending };
+            }
+            let n = buf.len().min(w.to_server.len());
+            for b in buf.iter_mut().take(n) {
+                *b = w.to_server.pop_front().unwrap();
+            }
+            Poll::Ready(Ok(n))
+        })
+        .await
+    }
+}
+
+impl embedded_io_async::Write for Pipe {
+    async fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
+        self.0.borrow_mut().from_server.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+
+    async fn flush(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+}
+
+/// A timer that returns at once (the settle pause is not what these tests look at).
+struct NoDelay;
+
+impl embedded_hal_async::delay::DelayNs for NoDelay {
+    async fn delay_ns(&mut self, _ns: u32) {}
+}
+
+/// The test's end of a connection.
+#[derive(Clone)]
+struct Client(Rc<RefCell<Wire>>);
+
+impl Client {
+    fn say(&self, text: &str) {
+        self.0.borrow_mut().to_server.extend(text.bytes());
+    }
+
+    fn close(&self) {
+        self.0.borrow_mut().closed = true;
+    }
+
+    /// The next message from the server, waiting (yielding to the server) for it.
+    async fn next(&self) -> String {
+        for _ in 0..10_000 {
+            {
+                let mut w = self.0.borrow_mut();
+                if let Some(end) = w.from_server.iter().position(|&b| b == b'>') {
+                    let msg: Vec<u8> = w.from_server.drain(..=end).collect();
+                    return String::from_utf8(msg).unwrap().trim().into();
+                }
+            }
+            yield_now().await;
+        }
+        panic!("no message from the server")
+    }
+
+    /// Nothing more from the server after letting it run a while.
+    async fn nothing_more(&self) {
+        for _ in 0..200 {
+            yield_now().await;
+        }
+        let w = self.0.borrow();
+        assert!(w.from_server.is_empty(), "{:?}", String::from_utf8_lossy(&w.from_server));
+    }
+}
+
+const CONFIG: Config<'static> = Config { channel: "vcan0" };
+
+/// Runs a server session on `link` against `script`, which drives the client's end.
+fn session<F: Future<Output = ()>>(link: &BusLink, script: impl FnOnce(Client) -> F) -> Ended {
+    let wire = Rc::new(RefCell::new(Wire::default()));
+    let client = Client(wire.clone());
+    let mut pipe = Pipe(wire);
+    let done = client.clone();
+    let (ended, ()) = block_on(join(serve(&mut pipe, link, &CONFIG, &mut NoDelay), async move {
+        script(done.clone()).await;
+        done.close();
+    }));
+    ended.unwrap()
+}
+
+fn ext(id: u32, data: &[u8]) -> CanFrame {
+    CanFrame::extended(id, data).unwrap()
+}
+
+#[test]
+fn a_raw_client_gets_the_bus_frames_as_socketcand_writes_them() {
+    let link: &'static BusLink = leak(BusLink::new());
+    let ended = session(link, |c| async move {
+        assert_eq!(c.next().await, "< hi >");
+        c.say("< open vcan0 >");
+        assert_eq!(c.next().await, "< ok >");
+        c.say("< rawmode >");
+        assert_eq!(c.next().await, "< ok >");
+        link.publish(LinkFrame {
+            frame: ext(0x1234_5678, &[0xDE, 0xAD]),
+            at_us: 1_500_002,
+            from: BUS,
+        });
+        assert_eq!(c.next().await, "< frame 12345678 1.500002 DEAD >");
+        link.publish(LinkFrame { frame: ext(0x1F, &[]), at_us: 3, from: BUS });
+        assert_eq!(c.next().await, "< frame 0000001F 0.000003  >");
+    });
+    assert_eq!(ended, Ended::Closed);
+    assert_eq!(link.stats.frames_to_clients.load(Relaxed), 2);
+    assert_eq!(link.clients(), 0, "the client's number is free again");
+}
+
+#[test]
+fn a_clients_frames_go_to_the_bus_and_not_back_to_it() {
+    let link: &'static BusLink = leak(BusLink::new());
+    session(link, |c| async move {
+        c.next().await;
+        c.say("< open vcan0 >< rawmode >< send 1FA80003 2 11 0 >");
+        assert_eq!(c.next().await, "< ok >");
+        assert_eq!(c.next().await, "< ok >");
+        c.nothing_more().await;
+        let queued = link.next_for_bus().expect("queued for the bus");
+        assert_eq!(queued.frame, ext(0x1FA8_0003, &[0x11, 0]));
+        // Once sent, the tap publishes it as this client's: not written back to it.
+        link.publish(LinkFrame { from: queued.from, ..queued });
+        c.nothing_more().await;
+    });
+}
+
+#[test]
+fn bad_input_is_answered_counted_and_the_session_goes_on() {
+    let link: &'static BusLink = leak(BusLink::new());
+    session(link, |c| async move {
+        c.next().await;
+        c.say("< send 1 0 >");
+        assert_eq!(c.next().await, "< error no bus open >");
+        c.say("< open can9 >");
+        assert_eq!(c.next().await, "< error could not open bus >");
+        c.say("< open vcan0 >");
+        assert_eq!(c.next().await, "< ok >");
+        c.say("garbage< echo >< send 1 2 3 >< nope >\u{ff}");
+        assert_eq!(c.next().await, "< error data outside a message >");
+        assert_eq!(c.next().await, "< echo >");
+        assert_eq!(c.next().await, "< error usage send with DLC data bytes >");
+        assert_eq!(c.next().await, "< error unknown command nope >");
+        assert_eq!(c.next().await, "< error data outside a message >");
+        c.say("< send 123 1 7 >");
+        assert_eq!(
+            c.next().await,
+            "< error the R2P bus carries 29-bit identifiers only, frame dropped >"
+        );
+        c.say(&std::format!("<{}", "x".repeat(300)));
+        assert_eq!(c.next().await, "< error message too long >");
+        c.say("< echo >");
+        assert_eq!(c.next().await, "< echo >");
+    });
+    assert_eq!(link.stats.client_errors.load(Relaxed), 8);
+    assert!(link.next_for_bus().is_none(), "nothing reached the bus");
+}
+
+#[test]
+fn a_full_queue_to_the_bus_refuses_and_says_so() {
+    let link: &'static BusLink = leak(BusLink::new());
+    session(link, |c| async move {
+        c.next().await;
+        c.say("< open vcan0 >");
+        c.next().await;
+        for i in 0..crate::link::FROM_CLIENTS + 1 {
+            c.say(&std::format!("< send {:08X} 0 >", 0x1000 + i));
+        }
+        assert_eq!(c.next().await, "< error queue to the bus full, frame dropped >");
+    });
+    assert_eq!(link.stats.lost.load(Relaxed), 1);
+}
+
+#[test]
+fn a_client_that_does_not_read_loses_the_oldest_frames_counted() {
+    let link: &'static BusLink = leak(BusLink::new());
+    session(link, |c| async move {
+        c.next().await;
+        c.say("< open vcan0 >< rawmode >");
+        c.next().await;
+        c.next().await;
+        // The bus outpaces the client: more frames than the queue holds before it runs.
+        for i in 0..crate::link::TO_CLIENTS as u32 + 10 {
+            link.publish(LinkFrame { frame: ext(i, &[]), at_us: 0, from: BUS });
+        }
+        assert_eq!(c.next().await, "< frame 0000000A 0.000000  >", "the 10 oldest were lost");
+    });
+    assert_eq!(link.stats.lost.load(Relaxed), 10);
+}
+
+#[test]
+fn clients_beyond_the_limit_are_told_and_closed() {
+    let link: &'static BusLink = leak(BusLink::new());
+    let taken: Vec<_> = (0..MAX_CLIENTS).map(|_| link.join().unwrap()).collect();
+    assert_eq!(taken, [1, 2, 3, 4]);
+    let ended = session(link, |c| async move {
+        assert_eq!(c.next().await, "< error too many clients >");
+    });
+    assert_eq!(ended, Ended::Full);
+    link.leave(2);
+    assert_eq!(link.join(), Some(2));
+}
+
+#[test]
+fn the_server_never_panics_on_arbitrary_input() {
+    // A cheap deterministic fuzz: byte strings from a small alphabet, in a raw session.
+    let alphabet = b"< >sendopraw0F9\xff\n";
+    let mut seed = 0x2545_F491_4F6C_DD1Du64;
+    for _ in 0..300 {
+        let link: &'static BusLink = leak(BusLink::new());
+        let mut input = String::from("< open vcan0 >");
+        for _ in 0..(seed % 200) {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            input.push(alphabet[(seed % alphabet.len() as u64) as usize] as char);
+        }
+        session(link, |c| async move {
+            c.next().await;
+            c.say(&input);
+            for _ in 0..100 {
+                yield_now().await;
+            }
+        });
+    }
+}
+
+// ---- the bus tap ----
+
+/// A bxCAN as the tap sees it: three mailboxes whose frames finish when the test says.
+#[derive(Default)]
+struct Scripted {
+    loaded: Vec<Frame>,
+    results: VecDeque<TxResult>,
+    received: VecDeque<Received>,
+    filters: Vec<Filter>,
+}
+
+impl Scripted {
+    fn finish(&mut self, outcome: TxOutcome) {
+        let f = self.loaded.remove(0);
+        self.results
+            .push_back(TxResult { start_of_frame: Some(900), ..TxResult::new(f.id(), outcome) });
+    }
+}
+
+impl CanController for Scripted {
+    fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
+        if self.loaded.len() == 3 {
+            return Err(TxError::MailboxesFull);
+        }
+        self.loaded.push(*frame);
+        Ok(())
+    }
+    fn set_tx_mode(&mut self, _: TxMode) {}
+    fn take_tx_result(&mut self) -> Option<TxResult> {
+        self.results.pop_front()
+    }
+    fn try_receive(&mut self) -> Option<Received> {
+        self.received.pop_front()
+    }
+    fn set_filters(&mut self, filters: &[Filter]) {
+        self.filters = filters.to_vec();
+    }
+    fn abort_pending(&mut self) -> usize {
+        0
+    }
+    fn bus_state(&self) -> BusState {
+        BusState::ErrorActive
+    }
+    fn error_counters(&self) -> ErrorCounters {
+        ErrorCounters::default()
+    }
+}
+
+fn rt(id: u32, data: &[u8]) -> Frame {
+    Frame::from_raw(id, data).unwrap()
+}
+
+#[test]
+fn the_clients_see_what_the_node_receives_and_sends() {
+    let link: &'static BusLink = leak(BusLink::new());
+    let mut sub = link.subscribe().unwrap();
+    let mut tap = BusTap::new(link);
+    let mut can = Scripted::default();
+    can.received.push_back(Received { frame: rt(0x0123_4567, &[1]), at: 500 });
+    let got = tap.run(1000, &mut can, |c| {
+        c.set_filters(&[Filter { value: 0x100, mask: 0x1FF }]);
+        let r = c.try_receive();
+        c.try_transmit(&rt(0x0AAA_0001, &[2])).unwrap();
+        r
+    });
+    assert_eq!(got.map(|r| r.frame), Some(rt(0x0123_4567, &[1])), "the node receives as before");
+    assert_eq!(can.filters, [Filter::ACCEPT_ALL], "the clients see every frame");
+    let f = sub.try_next_message_pure().unwrap();
+    assert_eq!((f.frame, f.at_us, f.from), (ext(0x0123_4567, &[1]), 500, BUS));
+    assert!(sub.try_next_message_pure().is_none(), "the node's frame is not sent yet");
+    can.finish(TxOutcome::Sent);
+    let result = tap.run(1100, &mut can, |c| c.take_tx_result());
+    assert_eq!(result.map(|r| (r.id, r.sent())), Some((rt(0x0AAA_0001, &[]).id(), true)));
+    let f = sub.try_next_message_pure().unwrap();
+    assert_eq!(
+        (f.frame, f.at_us, f.from),
+        (ext(0x0AAA_0001, &[2]), 900, BUS),
+        "stamped at its start of frame"
+    );
+}
+
+#[test]
+fn a_client_frame_waits_for_idle_mailboxes_is_sent_looped_back_and_kept_from_the_node() {
+    let link: &'static BusLink = leak(BusLink::new());
+    let mut sub = link.subscribe().unwrap();
+    let mut tap = BusTap::new(link);
+    let mut can = Scripted::default();
+    link.send(2, ext(0x1FA8_0003, &[9])).unwrap();
+    // The node has a frame in a mailbox: the client's waits.
+    tap.run(0, &mut can, |c| c.try_transmit(&rt(0x0AAA_0001, &[])).unwrap());
+    assert_eq!(can.loaded, [rt(0x0AAA_0001, &[])]);
+    can.finish(TxOutcome::Sent);
+    tap.run(100, &mut can, |c| assert!(c.take_tx_result().is_some()));
+    assert_eq!(can.loaded, [rt(0x1FA8_0003, &[9])], "loaded once the node's went out");
+    can.finish(TxOutcome::Sent);
+    let (result, looped) = tap.run(200, &mut can, |c| (c.take_tx_result(), c.try_receive()));
+    assert_eq!(result, None, "the client frame's result is not the node's");
+    assert_eq!(looped.map(|r| r.frame), Some(rt(0x1FA8_0003, &[9])), "looped back to the node");
+    let from: Vec<_> =
+        core::iter::from_fn(|| sub.try_next_message_pure()).map(|f| f.from).collect();
+    assert_eq!(from, [BUS, 2], "the node's frame, then the client's as the client's");
+    assert_eq!(link.stats.frames_from_clients.load(Relaxed), 1);
+}
+
+#[test]
+fn a_client_frame_that_loses_arbitration_is_tried_again_then_counted_lost() {
+    let link: &'static BusLink = leak(BusLink::new());
+    let mut tap = BusTap::new(link);
+    let mut can = Scripted::default();
+    link.send(1, ext(0x1FA8_0003, &[])).unwrap();
+    tap.run(0, &mut can, |_| {});
+    for t in 1..=crate::tap::CLIENT_TRIES as u64 {
+        assert_eq!(can.loaded.len(), 1, "try {t}");
+        can.finish(TxOutcome::LostArbitration);
+        tap.run(t * 100, &mut can, |c| assert_eq!(c.take_tx_result(), None));
+    }
+    assert!(can.loaded.is_empty(), "given up");
+    assert_eq!(link.stats.lost.load(Relaxed), 1);
+    assert_eq!(link.stats.frames_from_clients.load(Relaxed), 0);
+}
+
+#[test]
+fn a_frame_whose_result_never_comes_does_not_stop_the_clients_frames() {
+    let link: &'static BusLink = leak(BusLink::new());
+    let mut tap = BusTap::new(link);
+    let mut can = Scripted::default();
+    link.send(1, ext(0x1FA8_0003, &[1])).unwrap();
+    tap.run(0, &mut can, |c| c.try_transmit(&rt(0x0AAA_0001, &[])).unwrap());
+    // The controller is reset: the node's frame and its result are gone.
+    can.loaded.clear();
+    tap.run(50_000, &mut can, |_| {});
+    assert!(can.loaded.is_empty(), "still waiting for the node's result");
+    tap.run(50_000 + crate::tap::STALE_US + 1, &mut can, |_| {});
+    assert_eq!(can.loaded, [rt(0x1FA8_0003, &[1])], "the client's frame goes out after all");
+}
+
+// ---- the application ----
+
+fn rig() -> (
+    App<'static>,
+    &'static BusLink,
+    &'static Subscriber<'static, r2p_msgs::GatewayStatus, SPARE_QUEUE>,
+) {
+    let link = leak(BusLink::new());
+    let ep = Endpoints::leak();
+    let sub = leak(Subscriber::new());
+    ep.status.topic.subscribe(sub).unwrap();
+    (App::new(ep, link), link, sub)
+}
+
+const UP: NetState = NetState { link_up: true, ip: Some([10, 0, 0, 7]), dhcp: true };
+
+#[test]
+fn status_is_published_once_a_second_with_the_link_and_counters() {
+    let (mut app, link, sub) = rig();
+    link.stats.client_errors.store(3, Relaxed);
+    let client = link.join().unwrap();
+    let mut got = Vec::new();
+    for ms in 0..2500u64 {
+        app.step(ms * 1000, &Sample { net: UP, ..Sample::default() });
+        while let Some(m) = sub.try_recv() {
+            got.push((ms, *m));
+        }
+    }
+    assert_eq!(got.iter().map(|g| g.0).collect::<Vec<_>>(), [0, 1000, 2000]);
+    let s = got[0].1;
+    assert!(s.link_up && s.configured && s.dhcp);
+    assert_eq!((s.ip, s.clients, s.client_errors), (0x0A00_0007, 1, 3));
+    link.leave(client);
+    app.step(3_000_000, &Sample::default());
+    let s = *sub.try_recv().unwrap();
+    assert!(!s.link_up && !s.configured && s.ip == 0 && s.clients == 0);
+}
+
+#[test]
+fn the_link_led_shows_link_address_and_clients() {
+    let (mut app, link, _) = rig();
+    let lit = |app: &mut App<'static>, net: NetState| {
+        (0..1000u64)
+            .filter(|ms| app.step(ms * 1000, &Sample { net, ..Sample::default() }).led_link)
+            .count()
+    };
+    assert_eq!(lit(&mut app, NetState::default()), 0, "no link: off");
+    assert_eq!(lit(&mut app, NetState { ip: None, ..UP }), 500, "no address yet: blinking");
+    assert_eq!(lit(&mut app, UP), 1000, "addressed: on");
+    link.join().unwrap();
+    assert_eq!(lit(&mut app, UP), 900, "a client: a short blink off each second");
+    let s = app.step(0, &Sample { status: Status { fault: true, ..Status::default() }, net: UP });
+    assert!(s.led_fault);
+}
+
+#[test]
+fn the_node_exports_status_under_the_module_name() {
+    let (app, _, _) = rig();
+    let params = leak(RamParams::new(params::DEFAULTS));
+    let mut node: Node<'static, 4, 4, 8, 4, 64> = Node::new(node_config([1; 12]), params).unwrap();
+    app.register(&mut node).unwrap();
+    assert_eq!(app.endpoints().status.topic.name(), STATUS_TOPIC);
+    assert!(STATUS_TOPIC.starts_with(crate::NAME));
+    assert_eq!(node_config([1; 12]).rank, Some(1), "the standby sync master");
+}
+
+// ---- parameters ----
+
+#[test]
+fn network_parameters_read_from_their_place_in_the_table() {
+    let alone = RamParams::new(params::DEFAULTS);
+    let net = Net::read(&alone, 0);
+    assert_eq!(
+        net,
+        Net {
+            dhcp: true,
+            dhcp_wait_ms: 10_000,
+            ip: [192, 168, 1, 50],
+            prefix_len: 24,
+            router: None,
+            tcp_port: 29536,
+        }
+    );
+    // After another application's two parameters.
+    const JOINED: [r2p_node::Param; 2 + params::COUNT] =
+        params::after([r2p_node::Param::u32("a", 1, 0, 9), r2p_node::Param::bool("b", false)]);
+    let joined = RamParams::new(JOINED);
+    assert_eq!(joined.get(0), Ok(Value::U32(1)));
+    joined.set(2 + params::DHCP, Value::Bool(false)).unwrap();
+    joined.set(2 + params::IP, Value::U32(0x0A00_0002)).unwrap();
+    joined.set(2 + params::ROUTER, Value::U32(0x0A00_0001)).unwrap();
+    joined.set(2 + params::TCP_PORT, Value::U32(5000)).unwrap();
+    let net = Net::read(&joined, 2);
+    assert_eq!(
+        (net.dhcp, net.ip, net.router, net.tcp_port),
+        (false, [10, 0, 0, 2], Some([10, 0, 0, 1]), 5000)
+    );
+    assert!(joined.set(2 + params::TCP_PORT, Value::U32(70_000)).is_err(), "ports end at 65535");
+    assert!(joined.set(2 + params::PREFIX_LEN, Value::U32(0)).is_err());
+}
+
+#[test]
+fn the_servers_own_refusals_fit_an_error_message() {
+    use crate::link::Refused;
+    use r2p_socketcand::format::{write_error, TextBuf, MAX_ERROR_TEXT};
+    for why in [Refused::QueueFull, Refused::StandardId] {
+        write_error(&mut TextBuf::<MAX_ERROR_TEXT>::new(), &why).expect("fits");
+    }
+    write_error(&mut TextBuf::<MAX_ERROR_TEXT>::new(), &"too many clients").expect("fits");
+}

@@ -1,0 +1,324 @@
+//! Firmware of the R2P gateway (STM32F407VG): `r2p-app-gateway` on the shared core — bxCAN
+//! and the node runtime on an interrupt executor, through the gateway's bus tap — and the
+//! network: embassy-stm32's RMII Ethernet driver (LAN8742A) and embassy-net, DHCP with a
+//! static fallback, the socketcand server for up to four clients. Pins come only from the
+//! board file (firmware/boards/gateway.toml) through the generated `board` module; network
+//! settings are parameters kept in flash (r2p-module's `FlashParams`), applied at boot.
+#![no_std]
+#![no_main]
+
+use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+
+use embassy_executor::{InterruptExecutor, Spawner};
+use embassy_futures::select::{select, Either};
+use embassy_net::tcp::TcpSocket;
+use embassy_net::{Ipv4Address, Ipv4Cidr, Stack, StackResources, StaticConfigV4};
+use embassy_stm32::can::{
+    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
+};
+use embassy_stm32::eth::{self, Ethernet, GenericPhy, PacketQueue, Sma};
+use embassy_stm32::flash::{Blocking, Flash};
+use embassy_stm32::gpio::{Level, Output};
+use embassy_stm32::interrupt;
+use embassy_stm32::interrupt::{InterruptExt, Priority};
+use embassy_stm32::peripherals::{CAN1, ETH, ETH_SMA};
+use embassy_stm32::rng::{self, Rng};
+use embassy_stm32::{bind_interrupts, pac, rcc, time::Hertz, Config};
+use embassy_time::{Delay, Duration, Instant, Ticker, Timer};
+use r2p_app_gateway::link::MAX_CLIENTS;
+use r2p_app_gateway::params::{self, Net};
+use r2p_app_gateway::server::{self, serve};
+use r2p_app_gateway::{App, BusLink, BusTap, NetState, Sample, Storage};
+use r2p_module::{leds, FlashParams};
+use r2p_node::node::STARTING_HEARTBEATS;
+use r2p_node::Node;
+use rtcan::cycle::ClockState;
+use rtcan::failover::Role;
+use rtcan_bxcan::BxCan;
+use static_cell::StaticCell;
+
+mod board {
+    include!(concat!(env!("OUT_DIR"), "/board.rs"));
+}
+mod flash_layout;
+
+bind_interrupts!(struct Irqs {
+    CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN1>;
+    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN1>;
+    CAN1_SCE => SceInterruptHandler<CAN1>;
+    CAN1_TX => TxInterruptHandler<CAN1>;
+    ETH => eth::InterruptHandler;
+    RNG => rng::InterruptHandler<embassy_stm32::peripherals::RNG>;
+});
+
+/// The gateway's node: up to 4 exports and 2 imports, 32 queued frames, 4 streams in
+/// reassembly, messages up to 64 bytes (as a module's).
+type GatewayNode = Node<'static, 4, 2, 32, 4, 64>;
+type Device = Ethernet<'static, ETH, GenericPhy<Sma<'static, ETH_SMA>>>;
+
+static PARAMS: FlashParams<{ params::COUNT }> =
+    FlashParams::new(params::DEFAULTS, flash_layout::PARAMS_BASE);
+static ENDPOINTS: Storage = Storage::new();
+static LINK: BusLink = BusLink::new();
+static NODE: StaticCell<GatewayNode> = StaticCell::new();
+
+/// The bus runs here, woken through an interrupt no peripheral of the gateway uses.
+static BUS_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
+
+#[interrupt]
+unsafe fn USART3() {
+    // SAFETY: the interrupt is reserved for this executor (started in `main`).
+    unsafe { BUS_EXECUTOR.on_interrupt() }
+}
+
+const RUNNING: u8 = 1;
+const SYNCED: u8 = 2;
+const TRAFFIC: u8 = 4;
+const STORAGE_FAULT: u8 = 8;
+/// The node's state for the LEDs, written by the bus task, read by the application's step.
+static LED_INPUTS: AtomicU8 = AtomicU8::new(0);
+/// A REBOOT request arrived: the application's task persists parameters, then resets.
+static REBOOT: AtomicBool = AtomicBool::new(false);
+/// The address in use came from DHCP.
+static FROM_DHCP: AtomicBool = AtomicBool::new(false);
+
+/// The node on the bus, through the tap that copies the bus to the network clients. It wakes
+/// at each slot boundary from embassy-time's queue (the F103 modules' dedicated slot timer is
+/// not ported to the F407 yet: the gateway holds no HRT slot).
+#[embassy_executor::task]
+async fn bus(node: &'static mut GatewayNode, mut can: BxCan<'static>, running_after_us: u64) {
+    let mut tap = BusTap::new(&LINK);
+    let (mut frames, mut last_frame_at) = (0u32, None::<u64>);
+    loop {
+        let now = Instant::now().as_micros();
+        tap.run(now, &mut can, |c| node.slot_tick(now, c));
+        while node.next_event().is_some() {}
+        if node.take_reboot_request() {
+            REBOOT.store(true, Ordering::Relaxed);
+        }
+        let received = node.stats().frames_received;
+        if received != frames {
+            (frames, last_frame_at) = (received, Some(now));
+        }
+        let synced = node.role() == Role::Master
+            || matches!(node.clock().state(now), ClockState::Running(_));
+        let traffic = last_frame_at.is_some_and(|t| now - t < 1_000_000);
+        let mut bits = 0;
+        for (on, bit) in [(now >= running_after_us, RUNNING), (synced, SYNCED), (traffic, TRAFFIC)]
+        {
+            if on {
+                bits |= bit;
+            }
+        }
+        LED_INPUTS.fetch_and(STORAGE_FAULT, Ordering::Relaxed);
+        LED_INPUTS.fetch_or(bits, Ordering::Relaxed);
+        Timer::at(embassy_time::Instant::from_micros(node.next_slot_at(now))).await;
+    }
+}
+
+#[embassy_executor::task]
+async fn ethernet(mut runner: embassy_net::Runner<'static, Device>) -> ! {
+    runner.run().await
+}
+
+/// DHCP first if asked; the static address if no lease comes in time (or DHCP is off).
+#[embassy_executor::task]
+async fn addressing(stack: Stack<'static>, net: Net) {
+    if net.dhcp {
+        let wait = Duration::from_millis(u64::from(net.dhcp_wait_ms));
+        match select(stack.wait_config_up(), Timer::after(wait)).await {
+            Either::First(()) => {
+                FROM_DHCP.store(true, Ordering::Relaxed);
+                return;
+            }
+            Either::Second(()) => {}
+        }
+    }
+    let [a, b, c, d] = net.ip;
+    let config = StaticConfigV4 {
+        address: Ipv4Cidr::new(Ipv4Address::new(a, b, c, d), net.prefix_len),
+        gateway: net.router.map(|[a, b, c, d]| Ipv4Address::new(a, b, c, d)),
+        dns_servers: Default::default(),
+    };
+    stack.set_config_v4(embassy_net::ConfigV4::Static(config));
+}
+
+/// One client at a time per task, [`MAX_CLIENTS`] tasks.
+#[embassy_executor::task(pool_size = MAX_CLIENTS)]
+async fn client(stack: Stack<'static>, port: u16) -> ! {
+    let mut rx = [0u8; 512];
+    let mut tx = [0u8; 2048];
+    let config = server::Config { channel: server::CHANNEL };
+    loop {
+        let mut socket = TcpSocket::new(stack, &mut rx, &mut tx);
+        if socket.accept(port).await.is_err() {
+            continue;
+        }
+        let _ = serve(&mut socket, &LINK, &config, &mut Delay).await;
+        socket.close();
+        let _ = socket.flush().await;
+        socket.abort();
+    }
+}
+
+/// The application: one step per millisecond; parameters persisted every 100 ms when changed.
+#[embassy_executor::task]
+async fn run(
+    mut app: App<'static>,
+    mut leds: [Output<'static>; 4],
+    mut flash: Flash<'static, Blocking>,
+    stack: Stack<'static>,
+) {
+    let mut ticker = Ticker::every(Duration::from_millis(1));
+    let mut step = 0u32;
+    loop {
+        let now = Instant::now().as_micros();
+        let ip = stack.config_v4().map(|c| c.address.address().octets());
+        let net =
+            NetState { link_up: stack.is_link_up(), ip, dhcp: FROM_DHCP.load(Ordering::Relaxed) };
+        let c = app.step(now, &Sample { status: led_status(), net });
+        let [status, bus, fault, link] = &mut leds;
+        for (out, on, active_low) in [
+            (status, c.led_status, board::LED_STATUS_ACTIVE_LOW),
+            (bus, c.led_bus, board::LED_BUS_ACTIVE_LOW),
+            (fault, c.led_fault, board::LED_FAULT_ACTIVE_LOW),
+            (link, c.led_link, board::LED_LINK_ACTIVE_LOW),
+        ] {
+            out.set_level(Level::from(on != active_low));
+        }
+        step = step.wrapping_add(1);
+        if step.is_multiple_of(100) {
+            if PARAMS.is_dirty() && PARAMS.commit(&mut flash).is_err() {
+                LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
+            }
+            if REBOOT.load(Ordering::Relaxed) {
+                cortex_m::peripheral::SCB::sys_reset();
+            }
+        }
+        ticker.next().await;
+    }
+}
+
+fn led_status() -> leds::Status {
+    let b = LED_INPUTS.load(Ordering::Relaxed);
+    leds::Status {
+        running: b & RUNNING != 0,
+        synced: b & SYNCED != 0,
+        traffic: b & TRAFFIC != 0,
+        fault: false,
+        storage_fault: b & STORAGE_FAULT != 0,
+    }
+}
+
+/// 168 MHz SYSCLK from the board's crystal; APB1 at 42 MHz clocks bxCAN, 48 MHz for the RNG.
+fn clocks() -> Config {
+    const { assert!(board::HSE_HZ == 8_000_000 && board::SYSCLK_HZ == 168_000_000) };
+    let mut config = Config::default();
+    config.rcc.hse = Some(rcc::Hse { freq: Hertz(board::HSE_HZ), mode: rcc::HseMode::Oscillator });
+    config.rcc.pll_src = rcc::PllSource::HSE;
+    config.rcc.pll = Some(rcc::Pll {
+        prediv: rcc::PllPreDiv::DIV4,
+        mul: rcc::PllMul::MUL168,
+        divp: Some(rcc::PllPDiv::DIV2),
+        divq: Some(rcc::PllQDiv::DIV7),
+        divr: None,
+    });
+    config.rcc.sys = rcc::Sysclk::PLL1_P;
+    config.rcc.ahb_pre = rcc::AHBPrescaler::DIV1;
+    config.rcc.apb1_pre = rcc::APBPrescaler::DIV4;
+    config.rcc.apb2_pre = rcc::APBPrescaler::DIV2;
+    config
+}
+
+/// A locally administered MAC address from the MCU's unique ID.
+fn mac_address(uid: &[u8; 12]) -> [u8; 6] {
+    let mut h = 0x811C_9DC5u32;
+    for &b in uid {
+        h = (h ^ u32::from(b)).wrapping_mul(0x0100_0193);
+    }
+    let [a, b, c, d] = h.to_be_bytes();
+    [0x02, 0x52, a, b, c, d]
+}
+
+#[embassy_executor::main]
+async fn main(spawner: Spawner) {
+    let p = embassy_stm32::init(clocks());
+    let pins = board::take_pins!(p);
+    let leds = [
+        board::led_status(pins.led_status),
+        board::led_bus(pins.led_bus),
+        board::led_fault(pins.led_fault),
+        board::led_link(pins.led_link),
+    ];
+    // Releases the PHY from reset (its boot level).
+    let phy_reset = board::phy_nrst(pins.phy_nrst);
+    core::mem::forget(phy_reset);
+
+    let mut can = Can::new(p.CAN1, pins.can_rx, pins.can_tx, Irqs);
+    can.modify_config().set_bitrate(1_000_000);
+    can.enable().await;
+
+    let mut flash = Flash::new_blocking(p.FLASH);
+    if PARAMS.load(&mut flash).is_err() {
+        LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
+    }
+    let net = Net::read(&PARAMS, 0);
+    let uid = embassy_stm32::uid::uid();
+
+    // The bus.
+    let app = App::new(ENDPOINTS.build(), &LINK);
+    let config = r2p_app_gateway::node_config(uid);
+    let mut node = GatewayNode::new(config, &PARAMS).unwrap();
+    app.register(&mut node).unwrap();
+    let running_after_us = u64::from(STARTING_HEARTBEATS) * u64::from(config.heartbeat_period_us);
+    for irq in [interrupt::CAN1_RX0, interrupt::CAN1_RX1, interrupt::TIM2] {
+        irq.set_priority(Priority::P1);
+    }
+    interrupt::USART3.set_priority(Priority::P0);
+    let can = BxCan::new(can, pac::CAN1, 1_000_000);
+    BUS_EXECUTOR
+        .start(interrupt::USART3)
+        .spawn(bus(NODE.init(node), can, running_after_us))
+        .unwrap();
+
+    // The network.
+    static PACKETS: StaticCell<PacketQueue<4, 4>> = StaticCell::new();
+    let device = Ethernet::new(
+        PACKETS.init(PacketQueue::new()),
+        p.ETH,
+        Irqs,
+        pins.eth_ref_clk,
+        pins.eth_crs_dv,
+        pins.eth_rxd0,
+        pins.eth_rxd1,
+        pins.eth_txd0,
+        pins.eth_txd1,
+        pins.eth_tx_en,
+        mac_address(&uid),
+        p.ETH_SMA,
+        pins.eth_mdio,
+        pins.eth_mdc,
+    );
+    let mut rng = Rng::new(p.RNG, Irqs);
+    let seed = rng.next_u64();
+    let stack_config = if net.dhcp {
+        embassy_net::Config::dhcpv4(Default::default())
+    } else {
+        embassy_net::Config::default()
+    };
+    static RESOURCES: StaticCell<StackResources<{ MAX_CLIENTS + 2 }>> = StaticCell::new();
+    let (stack, runner) =
+        embassy_net::new(device, stack_config, RESOURCES.init(StackResources::new()), seed);
+    spawner.spawn(ethernet(runner)).unwrap();
+    spawner.spawn(addressing(stack, net)).unwrap();
+    for _ in 0..MAX_CLIENTS {
+        spawner.spawn(client(stack, net.tcp_port)).unwrap();
+    }
+    spawner.spawn(run(app, leds, flash, stack)).unwrap();
+}
+
+#[panic_handler]
+fn panic(_info: &core::panic::PanicInfo) -> ! {
+    // Reset: a gateway that stops would cut the robot off the network until power-cycled.
+    cortex_m::peripheral::SCB::sys_reset()
+}
