@@ -81,10 +81,12 @@ def test_flash_builds_the_probe_rs_commands_and_says_what_is_missing(built, tmp_
     p = run([str(R2P), "flash", "motor", "--probe-rs", str(fake)], timeout=30)
     assert p.returncode == 1 and p.stdout.startswith("r2p: error: no debug probe found"), p.stdout
     assert "docs/flashing.md" in p.stdout
-    # The gateway's image is for its F407.
+    # The gateway's image is for its F407, behind the F407's bootloader: the bootloader first.
     p = run([str(R2P), "flash", "gateway", "--probe-rs", str(fake), "--dry-run"], timeout=30)
-    assert p.returncode == 0 and p.stdout.splitlines()[0] == \
-        f"{fake} download --chip STM32F407VG --verify {ROOT}/firmware/images/gateway.elf", p.stdout
+    assert p.returncode == 0 and p.stdout.splitlines() == [
+        f"{fake} download --chip STM32F407VG --verify {ROOT}/firmware/images/bootloader-f407.elf",
+        f"{fake} download --chip STM32F407VG --verify {ROOT}/firmware/images/gateway.elf",
+        f"{fake} reset --chip STM32F407VG"], p.stdout
     p = run([str(R2P), "flash"], timeout=30)
     assert p.returncode == 2 and "<MODULE>" in p.stdout
 

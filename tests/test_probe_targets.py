@@ -47,7 +47,21 @@ def test_a_vector_table_elsewhere_than_image_origin_is_refused(crate):
     regions = probe_targets.chip_regions(crate, "STM32F103CB")
     assert probe_targets.check("psu", elf, regions, probe_targets.image_origin("STM32F103CB")) == []
     errs = probe_targets.check("psu", elf, regions, 0x0800_8000)
-    assert errs == ["psu: the vector table is at 0x08000000, expected at 0x08008000 (image_origin in firmware/images.toml)"]
+    assert errs == ["psu: the vector table is at 0x08000000, expected at 0x08008000 (image_origin in "
+                    "firmware/images.toml, or the active slot of its flash map for an image behind the bootloader)"]
+
+
+def test_an_image_behind_the_bootloader_starts_at_the_active_slot():
+    # The gateway's image is linked at the F407 map's active slot, where its bootloader jumps.
+    gateway = next(i for i in firmware.manifest() if i.name == "gateway")
+    assert gateway.origin == 0x0800_0000 + firmware_map("STM32F407VG")["active"]["offset"] == 0x0802_0000
+    psu = next(i for i in firmware.manifest() if i.name == "psu")
+    assert psu.origin == 0x0800_0000, "F103 module images are still alone in flash (too large for a slot)"
+
+
+def firmware_map(mcu):
+    import tomllib
+    return tomllib.loads((ROOT / "firmware" / "images.toml").read_text())["mcu"][mcu]["partitions"]
 
 
 def test_a_reset_vector_outside_flash_is_refused(crate):

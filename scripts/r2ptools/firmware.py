@@ -39,6 +39,12 @@ class Image:
     mcu_ram: int
     budget_flash: int
     budget_ram: int
+    origin: int
+    """Where the image is linked to start (its vector table): its MCU's `image_origin`, or the
+    flash map's active slot for an image behind the bootloader (`slot = "active"`)."""
+
+
+FLASH_BASE = 0x0800_0000
 
 
 def manifest(root: Path = ROOT) -> list[Image]:
@@ -49,12 +55,14 @@ def manifest(root: Path = ROOT) -> list[Image]:
     for i in data.get("image", []):
         mcu = data["mcu"][i["mcu"]]
         out.append(Image(i["name"], i["workspace"], i["package"], i["mcu"], mcu["target"],
-                         mcu["flash"], mcu["ram"], i["budget_flash"], i["budget_ram"]))
+                         mcu["flash"], mcu["ram"], i["budget_flash"], i["budget_ram"], mcu["image_origin"]))
     for m in modules.load(root, check_tree=False):
         if m.image:
             i, mcu = m.image, data["mcu"][m.image.mcu]
+            origin = (FLASH_BASE + mcu["partitions"]["active"]["offset"] if i.slot == "active"
+                      else mcu["image_origin"])
             out.append(Image(m.name, i.workspace, i.package, i.mcu, mcu["target"], mcu["flash"],
-                             mcu["ram"], i.budget_flash, i.budget_ram))
+                             mcu["ram"], i.budget_flash, i.budget_ram, origin))
     return out
 
 

@@ -29,6 +29,10 @@ NAME = re.compile(r"^[a-z][a-z0-9-]*$")
 REQUIRED = {"name": str, "kind": str, "hardware": str, "fab": bool, "case": bool}
 OPTIONAL = {"board_file": str, "app": str, "emulator": str, "image": dict}
 IMAGE_KEYS = {"workspace": str, "package": str, "mcu": str, "budget_flash": int, "budget_ram": int}
+IMAGE_OPTIONAL = {"slot": str}
+"""`slot = "active"`: the image runs behind its MCU's bootloader, linked in the flash map's active
+slot (firmware/images.toml); without it, alone from the flash base."""
+SLOTS = ("active",)
 
 
 class ManifestError(ValueError):
@@ -42,6 +46,7 @@ class ModuleImage:
     mcu: str
     budget_flash: int
     budget_ram: int
+    slot: str | None = None
 
 
 @dataclass(frozen=True)
@@ -141,10 +146,13 @@ def load(root: Path = ROOT, check_tree: bool = True) -> list[Module]:
                     raise fail(f"image: `{key}` is missing; add it ({_type_name(t)})", "image")
                 if type(img[key]) is not t:
                     raise fail(f"image: `{key}` must be {_type_name(t)}, not {img[key]!r}", "image")
-            unknown = sorted(set(img) - set(IMAGE_KEYS))
+            unknown = sorted(set(img) - set(IMAGE_KEYS) - set(IMAGE_OPTIONAL))
             if unknown:
-                raise fail(f"image: unknown key `{unknown[0]}`; the keys are {', '.join(IMAGE_KEYS)}",
-                           "image")
+                raise fail(f"image: unknown key `{unknown[0]}`; the keys are "
+                           f"{', '.join([*IMAGE_KEYS, *IMAGE_OPTIONAL])}", "image")
+            if "slot" in img and img["slot"] not in SLOTS:
+                raise fail(f"image: slot {img['slot']!r} is not one of {', '.join(SLOTS)} (or leave "
+                           "it out for an image alone in flash)", "image")
             if "app" not in e or "board_file" not in e:
                 raise fail("an image needs the module's `app` and `board_file`; add them or "
                            "remove the image", "image")

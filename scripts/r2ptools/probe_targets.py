@@ -176,7 +176,8 @@ def check(name: str, elf: Elf, regions: list[Region], origin: int) -> list[str]:
     vt = next((s for s in elf.sections if s.name == ".vector_table"), None)
     if vt is None or vt.addr != origin:
         errs.append(f"{name}: the vector table is at {vt.addr:#010x}, " if vt else f"{name}: no .vector_table section, ")
-        errs[-1] += f"expected at {origin:#010x} (image_origin in firmware/images.toml)"
+        errs[-1] += (f"expected at {origin:#010x} (image_origin in firmware/images.toml, or the active "
+                     "slot of its flash map for an image behind the bootloader)")
     else:
         sp, reset = elf.word_at(origin), elf.word_at(origin + 4)
         if sp is None or not any(r.start < sp <= r.end for r in ram):
@@ -192,7 +193,7 @@ def check_all(root: Path = ROOT) -> list[str]:
     errs = []
     for img in firmware.manifest(root):
         elf = read_elf(root / firmware.IMAGES_DIR / f"{img.name}.elf")
-        errs += check(img.name, elf, chip_regions(crate, img.mcu), image_origin(img.mcu, root))
+        errs += check(img.name, elf, chip_regions(crate, img.mcu), img.origin)
     return errs
 
 

@@ -61,6 +61,9 @@ pub struct FlashTarget {
     pub chip: String,
     /// Its image, relative to the repository (`firmware/images/<module>.elf`).
     pub image: PathBuf,
+    /// The bootloader written first, for an image behind one (modules.toml's `slot = "active"`):
+    /// its MCU's bootloader image from firmware/images.toml.
+    pub bootloader: Option<PathBuf>,
 }
 
 /// The repository around `start`: the nearest folder holding `modules.toml` and
@@ -107,7 +110,44 @@ pub fn flash_target(root: &Path, module: &str) -> Result<FlashTarget, CliError> 
             image.display()
         )));
     }
-    Ok(FlashTarget { module: module.to_string(), chip: chip.to_string(), image })
+    let behind_bootloader =
+        entry.get("image").and_then(|i| i.get("slot")).and_then(|s| s.as_str()) == Some("active");
+    let bootloader = if behind_bootloader { Some(bootloader_image(root, chip)?) } else { None };
+    Ok(FlashTarget { module: module.to_string(), chip: chip.to_string(), image, bootloader })
+}
+
+/// The committed bootloader image for `chip` (firmware/images.toml's image of package
+/// `bootloader` on that MCU).
+fn bootloader_image(root: &Path, chip: &str) -> Result<PathBuf, CliError> {
+    let path = root.join("firmware/images.toml");
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| CliError::new(format!("{}: {e}", path.display())))?;
+    let images: toml::Table =
+        toml::from_str(&text).map_err(|e| CliError::new(format!("{}: {e}", path.display())))?;
+    let name = images
+        .get("image")
+        .and_then(|i| i.as_array())
+        .into_iter()
+        .flatten()
+        .find(|i| {
+            i.get("package").and_then(|p| p.as_str()) == Some("bootloader")
+                && i.get("mcu").and_then(|m| m.as_str()) == Some(chip)
+        })
+        .and_then(|i| i.get("name").and_then(|n| n.as_str()))
+        .ok_or_else(|| {
+            CliError::new(format!(
+                "the image runs behind a bootloader, but firmware/images.toml has no bootloader \
+                 image for {chip}"
+            ))
+        })?;
+    let elf = PathBuf::from(format!("firmware/images/{name}.elf"));
+    if !root.join(&elf).is_file() {
+        return Err(CliError::new(format!(
+            "{} is missing: build the images with `make firmware`",
+            elf.display()
+        )));
+    }
+    Ok(elf)
 }
 
 /// The command that installs the pinned probe-rs where `r2p flash` looks first (`make probe-rs`
@@ -180,11 +220,17 @@ fn probe_options(t: &FlashTarget, args: &FlashArgs) -> Vec<OsString> {
     v
 }
 
-/// `probe-rs download …`: writes the image and reads it back (`--verify`).
-pub fn download_args(t: &FlashTarget, args: &FlashArgs, root: &Path) -> Vec<OsString> {
+/// `probe-rs download …`: writes an image (the module's, or its bootloader) and reads it back
+/// (`--verify`).
+pub fn download_args(
+    t: &FlashTarget,
+    args: &FlashArgs,
+    root: &Path,
+    image: &Path,
+) -> Vec<OsString> {
     let mut v: Vec<OsString> = vec!["download".into()];
     v.extend(probe_options(t, args));
-    v.extend(["--verify".into(), root.join(&t.image).into()]);
+    v.extend(["--verify".into(), root.join(image).into()]);
     v
 }
 
@@ -238,11 +284,18 @@ pub fn flash(
         Err(_) if args.dry_run && args.probe_rs.is_none() => PathBuf::from("probe-rs"),
         Err(e) => return Err(e),
     };
-    let download = download_args(&target, args, root);
-    let reset = reset_args(&target, args);
+    // The bootloader first (an image behind one), then the image, then a reset.
+    let mut steps: Vec<(&str, Vec<OsString>)> = Vec::new();
+    if let Some(b) = &target.bootloader {
+        steps.push(("writing the bootloader", download_args(&target, args, root, b)));
+    }
+    steps.push(("writing the image", download_args(&target, args, root, &target.image)));
+    steps.push(("resetting the module", reset_args(&target, args)));
     if args.dry_run {
-        emit(out, &shell_line(&exe, &download))?;
-        return emit(out, &shell_line(&exe, &reset));
+        for (_, cmd) in &steps {
+            emit(out, &shell_line(&exe, cmd))?;
+        }
+        return Ok(());
     }
     let capture = |what: &[&str]| {
         Command::new(&exe).args(what).output().map_err(|e| {
@@ -290,7 +343,7 @@ pub fn flash(
             target.chip
         ),
     )?;
-    for (what, cmd) in [("writing the image", &download), ("resetting the module", &reset)] {
+    for (what, cmd) in &steps {
         let status = Command::new(&exe)
             .args(cmd)
             .status()
@@ -381,9 +434,12 @@ mod tests {
         let t = flash_target(&root, "motor").unwrap();
         assert_eq!(t.chip, "STM32F103CB");
         assert_eq!(t.image, Path::new("firmware/images/motor.elf"));
+        assert_eq!(t.bootloader, None, "the F103 images are still alone in flash");
         let t = flash_target(&root, "gateway").unwrap();
         assert_eq!(t.chip, "STM32F407VG");
         assert_eq!(t.image, Path::new("firmware/images/gateway.elf"));
+        // Behind its MCU's bootloader: written first.
+        assert_eq!(t.bootloader.as_deref(), Some(Path::new("firmware/images/bootloader-f407.elf")));
         let err = flash_target(&root, "servo").unwrap_err().to_string();
         assert!(err.contains("no module named \"servo\""), "{err}");
         // footprint images are not modules: flash names modules only.
@@ -423,7 +479,7 @@ mod tests {
         let mut a = args("psu");
         let image = root.join("firmware/images/psu.elf");
         assert_eq!(
-            download_args(&t, &a, &root),
+            download_args(&t, &a, &root, &t.image),
             ["download", "--chip", "STM32F103CB", "--verify"]
                 .map(OsString::from)
                 .into_iter()

@@ -1,20 +1,23 @@
-//! Generates `board.rs` from the gateway's board file (the single source of its pins), links
-//! with cortex-m-rt's script (embassy-stm32's `memory-x` provides memory.x) and adds a linker
-//! check that the image ends below the parameter sectors.
+//! Generates `board.rs` from the gateway's board file (the single source of its pins) and links
+//! the image into the active slot of the F407's flash map (firmware/images.toml, through
+//! r2p-boot's layout), behind the bootloader: its last 128 bytes left for the signed image's
+//! trailer; its RAM below the bootloader's top 16 KiB of SRAM.
 
-include!("src/flash_layout.rs");
+use r2p_boot::layout::STM32F407VG as MAP;
+use r2p_boot::TRAILER_LEN;
+
+const FLASH_BASE: u32 = 0x0800_0000;
 
 fn main() {
     r2p_boardgen::build("../../../boards/gateway.toml");
-    println!("cargo:rerun-if-changed=src/flash_layout.rs");
     let out = std::env::var("OUT_DIR").expect("OUT_DIR");
-    let check = format!(
-        "ASSERT(__sidata + (__edata - __sdata) <= ORIGIN(FLASH) + {PARAMS_BASE:#x}, \
-         \"the image reaches the parameter sectors at flash offset {PARAMS_BASE:#x} (flash_layout.rs)\");\n"
+    let memory = format!(
+        "MEMORY\n{{\n  FLASH : ORIGIN = {:#010x}, LENGTH = {}\n  RAM : ORIGIN = 0x20000000, LENGTH = 112K\n}}\n",
+        FLASH_BASE + MAP.active.offset,
+        MAP.active.size - TRAILER_LEN as u32
     );
-    std::fs::write(format!("{out}/params.x"), check).expect("writing params.x");
+    std::fs::write(format!("{out}/memory.x"), memory).expect("writing memory.x");
     println!("cargo:rustc-link-search={out}");
     println!("cargo:rustc-link-arg-bins=--nmagic");
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
-    println!("cargo:rustc-link-arg-bins=-Tparams.x");
 }

@@ -4,11 +4,18 @@
 //! static fallback, the socketcand server for up to four clients. Pins come only from the
 //! board file (firmware/boards/gateway.toml) through the generated `board` module; network
 //! settings are parameters kept in flash (r2p-module's `FlashParams`), applied at boot.
+//!
+//! The image runs behind the F407 bootloader, in the active slot of the flash map
+//! (firmware/images.toml; build.rs links it there); its parameters sit in the map's two 16 KiB
+//! sectors. After an update it is on trial (r2p-boot's `trial`): it confirms itself once its
+//! node is running and hears the master's sync, within 15 s, under an independent watchdog of
+//! 20 s; otherwise it resets unconfirmed and the bootloader swaps the previous image back.
 #![no_std]
 #![no_main]
 
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
+use embassy_boot::{AlignedBuffer, BlockingFirmwareState, State};
 use embassy_executor::{InterruptExecutor, Spawner};
 use embassy_futures::select::{select, Either};
 use embassy_net::tcp::TcpSocket;
@@ -17,18 +24,21 @@ use embassy_stm32::can::{
     Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
 };
 use embassy_stm32::eth::{self, Ethernet, GenericPhy, PacketQueue, Sma};
-use embassy_stm32::flash::{Blocking, Flash};
+use embassy_stm32::flash::{Bank1Region1, Bank1Region2, Blocking, Flash};
 use embassy_stm32::gpio::{Level, Output};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
 use embassy_stm32::peripherals::{CAN1, ETH, ETH_SMA};
 use embassy_stm32::rng::{self, Rng};
+use embassy_stm32::wdg::IndependentWatchdog;
 use embassy_stm32::{bind_interrupts, pac, rcc, time::Hertz, Config};
 use embassy_time::{Delay, Duration, Instant, Ticker, Timer};
 use r2p_app_gateway::link::MAX_CLIENTS;
 use r2p_app_gateway::params::{self, Net};
 use r2p_app_gateway::server::{self, serve};
 use r2p_app_gateway::{App, BusLink, BusTap, NetState, Sample, Storage};
+use r2p_boot::layout::STM32F407VG as MAP;
+use r2p_boot::trial::{Trial, Verdict, WATCHDOG_MS};
 use r2p_module::{leds, FlashParams};
 use r2p_node::node::STARTING_HEARTBEATS;
 use r2p_node::Node;
@@ -40,7 +50,6 @@ use static_cell::StaticCell;
 mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
 }
-mod flash_layout;
 
 bind_interrupts!(struct Irqs {
     CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN1>;
@@ -56,8 +65,43 @@ bind_interrupts!(struct Irqs {
 type GatewayNode = Node<'static, 4, 2, 32, 4, 64>;
 type Device = Ethernet<'static, ETH, GenericPhy<Sma<'static, ETH_SMA>>>;
 
+/// In the flash map's parameter sectors (2 and 3, 16 KiB each: embassy-stm32's bank 1 region 1
+/// starts at the flash base, so the map's offset is the region's).
 static PARAMS: FlashParams<{ params::COUNT }> =
-    FlashParams::new(params::DEFAULTS, flash_layout::PARAMS_BASE);
+    FlashParams::new(params::DEFAULTS, MAP.params.offset);
+
+/// The parameters' flash: the 16 KiB sectors, so a page of FlashParams is one sector.
+type ParamFlash = Bank1Region1<'static, Blocking>;
+/// embassy-boot's state partition: the 64 KiB sector 4, bank 1 region 2, whole.
+type StateFlash = Bank1Region2<'static, Blocking>;
+
+/// The image's trial after an update, and the bootloader state it confirms in.
+struct Confirmation {
+    trial: Trial,
+    state: StateFlash,
+    watchdog: Option<IndependentWatchdog<'static, embassy_stm32::peripherals::IWDG>>,
+}
+
+impl Confirmation {
+    /// Polled every 100 ms: confirms a healthy image on trial, resets one out of time, and
+    /// keeps the watchdog fed while the image runs.
+    fn poll(&mut self, now_ms: u64, healthy: bool) {
+        match self.trial.poll(now_ms, healthy) {
+            Verdict::Confirm => {
+                let mut aligned = AlignedBuffer([0; 4]);
+                let mut state = BlockingFirmwareState::new(&mut self.state, &mut aligned.0);
+                if state.mark_booted().is_err() {
+                    LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
+                }
+            }
+            Verdict::GiveUp => cortex_m::peripheral::SCB::sys_reset(),
+            Verdict::Wait | Verdict::Kept => {}
+        }
+        if let Some(w) = &mut self.watchdog {
+            w.pet();
+        }
+    }
+}
 static ENDPOINTS: Storage = Storage::new();
 static LINK: BusLink = BusLink::new();
 static NODE: StaticCell<GatewayNode> = StaticCell::new();
@@ -166,7 +210,8 @@ async fn client(stack: Stack<'static>, port: u16) -> ! {
 async fn run(
     mut app: App<'static>,
     mut leds: [Output<'static>; 4],
-    mut flash: Flash<'static, Blocking>,
+    mut flash: ParamFlash,
+    mut confirmation: Confirmation,
     stack: Stack<'static>,
 ) {
     let mut ticker = Ticker::every(Duration::from_millis(1));
@@ -188,6 +233,9 @@ async fn run(
         }
         step = step.wrapping_add(1);
         if step.is_multiple_of(100) {
+            let b = LED_INPUTS.load(Ordering::Relaxed);
+            let healthy = b & RUNNING != 0 && b & SYNCED != 0 && b & STORAGE_FAULT == 0;
+            confirmation.poll(Instant::now().as_millis(), healthy);
             if PARAMS.is_dirty() && PARAMS.commit(&mut flash).is_err() {
                 LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
             }
@@ -258,10 +306,30 @@ async fn main(spawner: Spawner) {
     can.modify_config().set_bitrate(1_000_000);
     can.enable().await;
 
-    let mut flash = Flash::new_blocking(p.FLASH);
+    let regions = Flash::new_blocking(p.FLASH).into_blocking_regions();
+    let mut flash = regions.bank1_region1;
     if PARAMS.load(&mut flash).is_err() {
         LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
     }
+    // Just swapped in by the bootloader (its state says Swap): on trial, under the watchdog.
+    // Just rolled back (Revert): say so to the bootloader, so the next update may begin.
+    let mut state_flash = regions.bank1_region2;
+    let mut aligned = AlignedBuffer([0; 4]);
+    let mut boot_state = BlockingFirmwareState::new(&mut state_flash, &mut aligned.0);
+    let on_trial = boot_state.get_state().is_ok_and(|s| s == State::Swap);
+    if boot_state.get_state().is_ok_and(|s| s == State::Revert) {
+        let _ = boot_state.mark_booted();
+    }
+    let watchdog = on_trial.then(|| {
+        let mut w = IndependentWatchdog::new(p.IWDG, (WATCHDOG_MS * 1000) as u32);
+        w.unleash();
+        w
+    });
+    let confirmation = Confirmation {
+        trial: Trial::new(Instant::now().as_millis(), on_trial),
+        state: state_flash,
+        watchdog,
+    };
     let net = Net::read(&PARAMS, 0);
     let uid = embassy_stm32::uid::uid();
 
@@ -314,7 +382,7 @@ async fn main(spawner: Spawner) {
     for _ in 0..MAX_CLIENTS {
         spawner.spawn(client(stack, net.tcp_port)).unwrap();
     }
-    spawner.spawn(run(app, leds, flash, stack)).unwrap();
+    spawner.spawn(run(app, leds, flash, confirmation, stack)).unwrap();
 }
 
 #[panic_handler]
