@@ -75,6 +75,9 @@ type ParamFlash = Bank1Region1<'static, Blocking>;
 /// embassy-boot's state partition: the 64 KiB sector 4, bank 1 region 2, whole.
 type StateFlash = Bank1Region2<'static, Blocking>;
 
+/// embassy-boot writes its state in the flash's write units (a word on the F4).
+const STATE_WRITE: usize = <StateFlash as embedded_storage::nor_flash::NorFlash>::WRITE_SIZE;
+
 /// The image's trial after an update, and the bootloader state it confirms in.
 struct Confirmation {
     trial: Trial,
@@ -88,7 +91,7 @@ impl Confirmation {
     fn poll(&mut self, now_ms: u64, healthy: bool) {
         match self.trial.poll(now_ms, healthy) {
             Verdict::Confirm => {
-                let mut aligned = AlignedBuffer([0; 4]);
+                let mut aligned = AlignedBuffer([0; STATE_WRITE]);
                 let mut state = BlockingFirmwareState::new(&mut self.state, &mut aligned.0);
                 if state.mark_booted().is_err() {
                     LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
@@ -314,7 +317,7 @@ async fn main(spawner: Spawner) {
     // Just swapped in by the bootloader (its state says Swap): on trial, under the watchdog.
     // Just rolled back (Revert): say so to the bootloader, so the next update may begin.
     let mut state_flash = regions.bank1_region2;
-    let mut aligned = AlignedBuffer([0; 4]);
+    let mut aligned = AlignedBuffer([0; STATE_WRITE]);
     let mut boot_state = BlockingFirmwareState::new(&mut state_flash, &mut aligned.0);
     let on_trial = boot_state.get_state().is_ok_and(|s| s == State::Swap);
     if boot_state.get_state().is_ok_and(|s| s == State::Revert) {
