@@ -104,7 +104,7 @@ def _lines(fp: pcbnew.FOOTPRINT) -> list[pcbnew.PCB_SHAPE]:
 def _module_board(m) -> pcbnew.BOARD:
     """Every part of a module at its place, source footprints, no nets: the obstacles."""
     b = pcbnew.BOARD()
-    board_mod._outline(b)
+    board_mod._outline(b, m.size)
     places = {p.ref: (p, p.place) for _, p in m.all_parts()}
     for ref, (p, _) in list(places.items()):
         if ref in m.places:
@@ -118,7 +118,7 @@ def _module_board(m) -> pcbnew.BOARD:
         b.Add(fp)
         if place.back:
             fp.Flip(fp.GetPosition(), pcbnew.FLIP_DIRECTION_LEFT_RIGHT)
-    for i, (x, y) in enumerate(board_mod.HOLES, start=1):
+    for i, (x, y) in enumerate(board_mod.HOLES if m.holes is None else m.holes, start=1):
         fp = board_mod.load_footprint(":".join(board_mod.HOLE_FP))
         fp.SetReference(f"H{i}")
         fp.SetPosition(board_mod.pt(x, y))
@@ -167,7 +167,7 @@ def _free(fp: pcbnew.FOOTPRINT, b: pcbnew.BOARD, g: pcbnew.PCB_SHAPE) -> list[bo
     for k in range(n):
         seg = pcbnew.SHAPE_SEGMENT(_at(a, e, k, n), _at(a, e, k + 1, n), g.GetWidth())
         box = silk._box(seg.BBox())
-        out.append(silk._inside(box, mm(silk.GAP_EDGE))
+        out.append(silk._inside(box, mm(silk.GAP_EDGE), board_mod.outline_size(b))
                    and not any(silk._near(box, o.box, gap) and seg.Collide(o.shape, gap)
                                for o, gap in obstacles))
     return out
