@@ -23,12 +23,14 @@ table could not be read here), the IDRIVE and VDS resistor levels, F102's land p
 no NANO2 456 footprint: the 462's is used), and LCSC numbers for U101, U102, D101, F102 and the
 electrolytics (parts.csv `-`).
 
-Board: 112 × 50 mm (docs/bus.md's 60 × 50 mm bus end plus one 52 mm hole pitch, calc/motor.py
-BOARD_MM), 4 layers, 2 oz outer. The core keeps its default placement on the left 60 mm.
+Board: 164 × 50 mm (docs/bus.md's 60 × 50 mm bus end plus two 52 mm hole pitches: the power
+stage's parts need 2880 mm² of courtyard, more than one pitch's 2525 mm²), 4 layers, 2 oz outer.
+The core keeps its default placement on the left 60 mm.
 """
 from __future__ import annotations
 
-from r2ptools.kicad.design import Module, Place, Sheet, Text, Zone
+from r2ptools.kicad.design import Module, Place, Sheet, Text, Track, Via, Zone
+from r2ptools.kicad.calc import motor as calc
 from r2ptools.kicad.modules import core as core_mod
 from r2ptools.kicad.modules import drawing_of
 from r2ptools.kicad.modules.common import (BUS_TAP_PLACE, bus_tap, bus_tap_track, core_tracks,
@@ -37,10 +39,11 @@ from r2ptools.kicad.modules.common import (BUS_TAP_PLACE, bus_tap, bus_tap_track
 NAME = "motor"
 TITLE = "R2P DC motor module"
 REVISION = "A"
-SIZE = (112.0, 50.0)
-HOLES = [(4.0, 4.0), (56.0, 4.0), (108.0, 4.0), (4.0, 46.0), (56.0, 46.0), (108.0, 46.0)]
-"""The bus grid's four holes and two more one 52 mm pitch to the right (calc/motor.py BOARD_MM)."""
-FIDUCIALS = [(2.6, 20.2), (57.4, 14.5), (110.0, 25.0)]
+SIZE = calc.BOARD_MM
+HOLES = [(x, y) for y in (4.0, 46.0) for x in (4.0, 56.0, 108.0, 160.0)]
+"""The bus grid's holes continued at the same 52 mm pitch: the 60 × 50 mm bus end plus two
+pitches for the power stage (README: the parts do not fit in one)."""
+FIDUCIALS = [(2.6, 20.2), (57.4, 14.5), (109.0, 30.0)]
 
 PINS = {"PA8": "PWM_AH", "PB13": "PWM_AL", "PA9": "PWM_BH", "PB14": "PWM_BL",
         "PB12": "DRV_FAULT", "PA6": "ENC_A", "PA7": "ENC_B", "PA0": "MOTOR_CURRENT",
@@ -49,39 +52,125 @@ PINS = {"PA8": "PWM_AH", "PB13": "PWM_AL", "PA9": "PWM_BH", "PB14": "PWM_BL",
 
 P = Place
 PLACES = {
-    # --- power input, protection, bulk (right section, x 60-112)
-    "J101": P(96.0, 3.8, 270), "F102": P(84.0, 7.4, 0), "D101": P(72.0, 7.4, 180),
-    "C101": P(64.5, 21.0, 0), "C102": P(64.5, 38.0, 0), "C103": P(82.5, 21.0, 0),
-    "C104": P(82.5, 38.0, 0),
-    # --- bridge: leg A top, leg B bottom, tabs (drains / phase nodes) facing the caps
-    "Q101": P(104.0, 16.0, 180), "Q102": P(104.0, 27.0, 180),
-    "Q103": P(104.0, 38.0, 180), "Q104": P(96.5, 48.0, 90),
-    # ceramics along the legs (the commutation loop)
-    "C105": P(96.0, 14.0, 90), "C106": P(96.0, 18.0, 90), "C107": P(96.0, 22.0, 90),
-    "C108": P(96.0, 26.0, 90), "C109": P(96.0, 30.0, 90), "C110": P(96.0, 34.0, 90),
-    "C111": P(93.0, 14.0, 90), "C112": P(93.0, 18.0, 90),
-    # --- gate driver and its parts
-    "U101": P(74.0, 30.0, 0), "R101": P(80.0, 26.0, 0), "R102": P(80.0, 28.0, 0),
-    "R103": P(80.0, 32.0, 0), "R104": P(80.0, 34.0, 0),
-    "C113": P(70.0, 25.0, 0), "C114": P(72.0, 25.0, 90), "C115": P(74.0, 25.0, 90),
-    "C116": P(76.0, 25.0, 90), "C117": P(70.0, 35.0, 90), "C118": P(72.0, 35.0, 90),
-    "R105": P(74.0, 35.0, 90), "R106": P(76.0, 35.0, 90),
-    # --- current sensor between leg A and the motor connector
-    "U102": P(88.0, 46.0, 0), "C119": P(84.0, 44.0, 90), "R107": P(80.0, 44.0, 0),
-    "C120": P(80.0, 46.0, 0),
-    "J102": P(108.0, 44.0, 270),
-    # --- supervision (bottom band of the core area)
-    "R108": P(62.0, 46.0, 90), "R109": P(63.8, 46.0, 90), "C121": P(65.6, 46.0, 90),
-    "R110": P(52.0, 40.0, 90), "R111": P(53.8, 40.0, 90), "R112": P(55.6, 40.0, 90),
-    "R113": P(57.4, 40.0, 90), "C122": P(59.2, 40.0, 90),
-    "U103": P(47.0, 40.0, 0), "C123": P(44.0, 40.0, 90), "R114": P(41.0, 40.0, 90),
-    "R115": P(39.0, 40.0, 90),
-    # --- encoder input (bottom edge, left)
-    "J103": P(12.0, 47.0, 90), "D102": P(19.0, 45.0, 0),
-    "R116": P(23.0, 43.0, 0), "R117": P(23.0, 45.0, 0), "R118": P(26.5, 43.0, 0),
-    "R119": P(26.5, 45.0, 0), "C124": P(30.0, 43.0, 0), "C125": P(30.0, 45.0, 0),
-    "U104": P(34.5, 44.0, 0), "C126": P(34.5, 47.5, 0),
+    # --- bridge: two legs as columns, high side above (tab = VMOT up, pins down onto the low
+    # side's tab = the phase node), the motor connector between the legs at the bottom edge
+    "Q101": P(66.0, 13.0, 90), "Q102": P(66.0, 31.0, 90),
+    "Q103": P(95.0, 13.0, 90), "Q104": P(95.0, 31.0, 90),
+    "J102": P(76.8, 34.6, 180), "U102": P(80.5, 26.0, 0), "C119": P(80.5, 21.5, 0),
+    "R107": P(86.5, 23.6, 0), "C120": P(86.5, 26.0, 0),
+    # commutation-loop ceramics beside each leg
+    "C105": P(74.5, 15.5, 0), "C106": P(74.5, 19.5, 0), "C107": P(86.5, 15.5, 180),
+    "C108": P(86.5, 19.5, 180), "C109": P(104.0, 10.0, 0), "C110": P(104.0, 14.0, 0),
+    "C111": P(104.0, 18.0, 0), "C112": P(104.0, 22.0, 0),
+    # gate driver between the legs' high sides, its capacitors in a row above it
+    "U101": P(80.5, 8.5, 0),
+    "C113": P(76.0, 3.2, 90), "C116": P(78.0, 3.2, 90), "C114": P(80.0, 3.2, 90),
+    "C115": P(82.0, 3.2, 90), "C117": P(84.0, 3.2, 90), "C118": P(86.0, 3.2, 90),
+    "R101": P(74.5, 6.0, 0), "R102": P(74.5, 8.0, 0), "R103": P(74.5, 10.0, 0),
+    "R104": P(74.5, 12.0, 0), "R105": P(86.5, 6.0, 0), "R106": P(86.5, 8.0, 0),
+    "R115": P(86.5, 10.0, 0),
+    # supply sense and over-voltage dividers beside leg B
+    "R108": P(104.0, 26.0, 0), "R109": P(104.0, 28.0, 0), "C121": P(104.0, 30.0, 0),
+    "R110": P(104.0, 32.0, 0), "R111": P(104.0, 34.0, 0), "R112": P(104.0, 36.0, 0),
+    "R113": P(104.0, 38.0, 0), "C122": P(104.0, 40.0, 0),
+    # input: bulk 2 × 2, battery XT60 on the right edge, fuse and TVS below the bulk
+    "C101": P(116.0, 10.5, 0), "C102": P(116.0, 28.0, 0), "C103": P(132.6, 10.5, 0),
+    "C104": P(132.6, 28.0, 0), "J101": P(147.5, 13.0, 270), "F102": P(140.0, 45.0, 180),
+    "D101": P(122.0, 45.0, 180),
+    # over-voltage comparator and DRV_FAULT pull-up, encoder input: the core's bottom band
+    "U103": P(44.0, 41.0, 0), "C123": P(44.0, 37.8, 0), "R114": P(48.5, 41.0, 90),
+    "J103": P(12.0, 47.2, 90), "D102": P(24.5, 46.5, 0),
+    "R116": P(29.0, 44.0, 0), "R117": P(29.0, 46.0, 0), "R118": P(29.0, 48.0, 0),
+    "R119": P(33.0, 44.0, 0), "C124": P(33.0, 46.0, 0), "C125": P(33.0, 48.0, 0),
+    "U104": P(38.0, 46.0, 0), "C126": P(38.0, 42.5, 0),
 }
+
+
+def _grid(net: str, x0: float, y0: float, nx: int, ny: int, pitch: float = 1.2) -> list[Via]:
+    """A field of 0.6/0.3 mm vias (thermal under a tab, or a plane connection)."""
+    return [Via(net, round(x0 + i * pitch, 3), round(y0 + j * pitch, 3), 0.6, 0.3)
+            for i in range(nx) for j in range(ny)]
+
+
+LEGS = {  # column x, high-side net at the tab, phase node, low-side tab = phase node
+    "A": (66.0, "SW_A"), "B": (95.0, "MOT_B")}
+
+
+def planes() -> list[Zone]:
+    """In1.Cu: GND under the whole board (the star: every return reaches it by vias). In2.Cu:
+    VMOT under the power stage, GND under the core. B.Cu islands under the four tabs, each on
+    its tab's net: the thermal vias' landing, pressed onto the heatsink's gap pad."""
+    w, h = SIZE
+    e = 0.3
+    zs = [Zone("GND", "In1.Cu", [(e, e), (w - e, e), (w - e, h - e), (e, h - e)], solid=True),
+          Zone("GND", "In2.Cu", [(e, e), (59.6, e), (59.6, h - e), (e, h - e)], solid=True),
+          Zone("VMOT", "In2.Cu", [(60.4, e), (w - e, e), (w - e, h - e), (60.4, h - e)], solid=True)]
+    for x, phase in LEGS.values():
+        for y, net in ((13.0, "VMOT"), (31.0, phase)):
+            zs.append(Zone(net, "B.Cu", [(x - 5.4, y - 6.2), (x + 5.4, y - 6.2), (x + 5.4, y + 3.2),
+                                         (x - 5.4, y + 3.2)], priority=2, solid=True))
+    return zs
+
+
+def power_tracks() -> list[Track]:
+    """The motor current's copper on F.Cu (calc/motor.py PATHS; README, "Copper")."""
+    T = Track
+    out = []
+    for x, phase in LEGS.values():
+        # high side's source lead down onto the low side's tab: the phase node
+        out.append(T(phase, [(x + 2.54, 20.65), (x + 2.54, 26.0)], 2.0))
+        # low side's source lead onto its GND via field
+        out.append(T("GND", [(x + 2.54, 38.65), (x + 2.54, 44.0)], 1.8))
+    out += [
+        # leg A's phase node into the Hall sensor's IP+ leads (pins 1, 2)
+        T("SW_A", [(70.0, 24.7), (78.0, 24.7)], 2.0),
+        # IP− leads (3, 4) down to the motor connector's pin 1
+        T("MOT_A", [(78.0, 27.3), (77.4, 29.5), (77.0, 32.5), (76.8, 34.6)], 2.0),
+        T("MOT_A", [(76.8, 31.5), (76.8, 36.0)], 4.0),
+        # leg B's phase node (Q104's tab) across to the connector's pin 2
+        T("MOT_B", [(90.5, 33.5), (84.0, 34.6)], 4.0),
+        # SW_A and MOT_A also on B.Cu: from Q102's tab island to vias beside the sensor's
+        # leads, and from vias under the IP− track to the connector's pin
+        T("SW_A", [(69.0, 27.0), (75.4, 24.7)], 2.0, "B.Cu"),
+        T("MOT_A", [(77.2, 29.6), (76.8, 34.6)], 3.0, "B.Cu"),
+        T("MOT_B", [(90.5, 33.5), (84.0, 34.6)], 4.0, "B.Cu"),
+        # battery: XT60 + down the right edge into the fuse; fuse out to the TVS and the bulk;
+        # both outer layers (the fuse's pads reach B.Cu through via fields)
+        T("VBAT", [(147.5, 20.2), (147.5, 38.0), (145.05, 41.0), (145.05, 45.0)], 6.0),
+        T("VBAT", [(147.5, 20.2), (147.5, 38.0), (145.6, 39.3)], 6.0, "B.Cu"),
+        T("VMOT", [(134.95, 45.0), (134.95, 40.0), (132.6, 35.0), (132.6, 28.0)], 6.0),
+        T("VMOT", [(132.2, 38.6), (132.6, 35.0), (132.6, 28.0)], 6.0, "B.Cu"),
+        T("VMOT", [(125.4, 45.0), (134.95, 45.0)], 2.5),
+        T("VMOT", [(116.0, 28.0), (116.0, 36.0), (125.4, 42.0), (125.4, 45.0)], 4.0),
+        T("VMOT", [(116.0, 28.0), (116.0, 36.0), (125.4, 42.0)], 4.0, "B.Cu"),
+        # commutation ceramics' VMOT pads onto the high sides' tabs
+        *[T("VMOT", [(73.02, y), (71.0, y)], 1.6) for y in (15.5,)],
+        *[T("VMOT", [(87.98, y), (90.0, y)], 1.6) for y in (15.5,)],
+        *[T("VMOT", [(102.52, y), (100.0, y)], 1.6) for y in (10.0, 14.0)],
+    ]
+    return out
+
+
+def power_vias() -> list[Via]:
+    out = []
+    for x, phase in LEGS.values():
+        out += _grid("VMOT", x - 4.2, 7.6, 8, 6)          # high-side tab: 48 thermal vias
+        out += _grid(phase, x - 4.2, 25.6, 8, 6)         # low-side tab
+        out += _grid("GND", x + 1.94, 42.0, 2, 2)        # low-side source to the GND plane
+    # ceramics' GND pads to In1, and the two lower ones' VMOT pads to In2
+    out += [Via("GND", 77.4, y, 0.6, 0.3) for y in (15.5, 19.5)]
+    out += [Via("GND", 83.6, y, 0.6, 0.3) for y in (15.5, 19.5)]
+    out += [Via("GND", 107.0, y, 0.6, 0.3) for y in (10.0, 14.0, 18.0, 22.0)]
+    out += [Via("VMOT", 72.0, 19.5, 0.6, 0.3), Via("VMOT", 89.0, 19.5, 0.6, 0.3),
+            Via("VMOT", 101.3, 18.0, 0.6, 0.3), Via("VMOT", 101.3, 22.0, 0.6, 0.3)]
+    # fuse output and TVS into the planes, the fuse's input onto B.Cu
+    out += _grid("VMOT", 131.0, 38.0, 3, 2)
+    out += _grid("GND", 114.0, 43.4, 2, 3)
+    out += _grid("VBAT", 144.2, 38.6, 3, 2, pitch=1.4)
+    out += [Via("VMOT", 125.4, 42.0, 0.6, 0.3), Via("VMOT", 124.2, 41.3, 0.6, 0.3)]
+    out += [Via("SW_A", x, 24.7, 0.6, 0.3) for x in (72.6, 74.0, 75.4)]
+    out += [Via("MOT_A", x, y, 0.6, 0.3) for x in (76.2, 77.6) for y in (29.6, 30.9)]
+    return out
 
 
 def build(core: Sheet) -> Module:
@@ -136,7 +225,7 @@ def build(core: Sheet) -> Module:
     s.part("C119", "C_100n", {"1": "+3V3", "2": "GND"})
     s.part("R107", "R_1k", {"1": "HALL_OUT", "2": "MOTOR_CURRENT"})
     s.part("C120", "C_4n7", {"1": "MOTOR_CURRENT", "2": "GND"})
-    s.part("J102", "XT60_F", {"1": "MOT_B", "2": "MOT_A"}, value="MOTOR")
+    s.part("J102", "XT60_F", {"1": "MOT_A", "2": "MOT_B"}, value="MOTOR")
 
     # motor supply sense (÷16) and the over-voltage trip (375 k / 10 k into the 1.242 V reference)
     s.part("R108", "R_150k", {"1": "VMOT", "2": "VMOT_SENSE"})
@@ -177,7 +266,9 @@ def build(core: Sheet) -> Module:
 
     power = ["VBAT", "VMOT", "SW_A", "MOT_A", "MOT_B"]
     m = Module(NAME, TITLE, REVISION, s,
-               tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks()],
+               tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks(),
+                       *power_tracks()],
+               vias=power_vias(), zones=planes(),
                seed=19, size=SIZE, holes=HOLES, copper_layers=4,
                netclasses={"HV": power + ["GATE_AH", "GATE_BH", "GHA", "GHB", "DRV_VCP", "DRV_CPH",
                                           "DRV_CPL", "OV_A", "OV_B"]},
@@ -186,5 +277,7 @@ def build(core: Sheet) -> Module:
                            "Q101", "Q102", "Q103", "Q104", "U102"))
     m.fiducials = list(FIDUCIALS)
     m.texts = frame_texts(NAME, REVISION) + [
-        Text("MOTOR SUPPLY 10-44V", 86.0, 24.0, 1.2, "B.SilkS")]
+        Text("MOTOR SUPPLY 10-44V", 130.0, 19.3, 1.2, "B.SilkS"),
+        Text("+", 152.0, 20.2, 1.5, "B.SilkS"), Text("-", 152.0, 13.0, 1.5, "B.SilkS"),
+        Text("BATTERY", 152.5, 30.0, 1.0, "B.SilkS"), Text("MOTOR", 80.5, 44.0, 1.0, "B.SilkS")]
     return m

@@ -130,6 +130,9 @@ def build(m: Module, net: Netlist) -> pcbnew.BOARD:
     pcbnew.KIID.SeedGenerator(m.seed)
     board = pcbnew.BOARD()
     board.SetCopperLayerCount(m.copper_layers)
+    for layer in (pcbnew.In1_Cu, pcbnew.In2_Cu)[:m.copper_layers - 2]:
+        # inner layers are planes (Module.zones): the router keeps signals off them
+        board.SetLayerType(layer, pcbnew.LT_POWER)
     fabcap.apply(board, m.netclass_defs)
     ds = board.GetDesignSettings()
     ds.SetAuxOrigin(pt(0, 0))

@@ -161,9 +161,9 @@ _ITEMS = [
     ("SMCJ45A", "Device:D_TVS", "Diode_SMD:D_SMC", "SMCJ45A", "SMCJ45A"),
     # 30 A NANO2 456: KiCad has no 456 land pattern; the 462's is used until one is drawn (errata)
     ("FUSE_30A", "Device:Fuse", "Fuse:Fuse_Littelfuse-NANO2-462", "30A", "0456030.ER"),
-    ("XT60_M", "Connector_Generic:Conn_01x02", "Connector_AMASS:AMASS_XT60PW-M_1x02_P7.20mm_Horizontal",
+    ("XT60_M", "Connector_Generic:Conn_01x02", "R2P:AMASS_XT60PW-M_1x02_P7.20mm_Horizontal",
      "XT60 IN", "XT60PW-M"),
-    ("XT60_F", "Connector_Generic:Conn_01x02", "Connector_AMASS:AMASS_XT60PW-F_1x02_P7.20mm_Horizontal",
+    ("XT60_F", "Connector_Generic:Conn_01x02", "R2P:AMASS_XT60PW-F_1x02_P7.20mm_Horizontal",
      "XT60 MOTOR", "XT60PW-F"),
 ]
 

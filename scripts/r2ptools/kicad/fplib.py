@@ -38,6 +38,8 @@ VARIANTS = {
     # variant name (= the KiCad footprint it is cut from) -> KiCad library
     "RJ45_Amphenol_54602-x08_Horizontal": "Connector_RJ",
     "AMASS_XT30PW-M_1x02_P2.50mm_Horizontal": "Connector_AMASS",
+    "AMASS_XT60PW-M_1x02_P7.20mm_Horizontal": "Connector_AMASS",
+    "AMASS_XT60PW-F_1x02_P7.20mm_Horizontal": "Connector_AMASS",
     "JST_PH_S3B-PH-K_1x03_P2.00mm_Horizontal": "Connector_JST",
     "HTSSOP-20-1EP_4.4x6.5mm_P0.65mm_EP3.4x6.5mm": "Package_SO",
 }
