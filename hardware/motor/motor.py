@@ -173,6 +173,28 @@ def power_vias() -> list[Via]:
     return out
 
 
+HV_NETS = ("VBAT", "VMOT", "SW_A", "MOT_A", "MOT_B", "GATE_AH", "GATE_BH", "GHA", "GHB",
+           "DRV_VCP", "DRV_CPH", "DRV_CPL", "OV_A", "OV_B")
+"""Nets at the motor supply (up to 49.2 V at the trip, 72.7 V at the TVS clamp) or riding on it
+(the high-side gates and the charge pump, ≤ 12 V above it); among themselves they differ by less
+than 15 V, from every other net by up to the clamp."""
+FINE_PITCH = ("U101", "U102")
+"""The driver (0.5 mm pitch) and the sensor: inside their courtyards the maker's pin spacing rules."""
+
+
+def ipc2221b_rules() -> str:
+    """IPC-2221B table 6-1, B2 (external, uncoated): 0.6 mm for 31-100 V, as on the PSU."""
+    def anyof(side: str) -> str:
+        return "(" + " || ".join(f"{side}.NetName == '/{n}'" for n in HV_NETS) + ")"
+    exempt = " && ".join(f"!(A.intersectsCourtyard('{r}') && B.intersectsCourtyard('{r}'))"
+                         for r in FINE_PITCH)
+    return ("# IPC-2221B table 6-1, B2 (external, uncoated): 0.6 mm for 31-100 V between conductors.\n"
+            "# Motor supply: 44.1 V steady, 49.2 V at the trip, 72.7 V at the TVS clamp (calc/motor.py).\n"
+            '(rule "ipc2221b: motor supply nets 0.6 mm from other potentials"\n'
+            f'    (condition "{anyof("A")} && !{anyof("B")} && {exempt}")\n'
+            "    (constraint clearance (min 0.6mm)))\n")
+
+
 def build(core: Sheet) -> Module:
     s = Sheet(NAME, f"{TITLE}: 10-44 V, 20 A continuous H-bridge, encoder, Hall current sense")
     bus_tap(s, "+5V_MOD", at=BUS_TAP_PLACE)
@@ -264,14 +286,12 @@ def build(core: Sheet) -> Module:
     sheet = drawing_of(__file__)
     s.drawing, s.blocks = sheet.DRAWING, sheet.BLOCKS
 
-    power = ["VBAT", "VMOT", "SW_A", "MOT_A", "MOT_B"]
     m = Module(NAME, TITLE, REVISION, s,
                tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks(),
                        *power_tracks()],
                vias=power_vias(), zones=planes(),
                seed=19, size=SIZE, holes=HOLES, copper_layers=4,
-               netclasses={"HV": power + ["GATE_AH", "GATE_BH", "GHA", "GHB", "DRV_VCP", "DRV_CPH",
-                                          "DRV_CPL", "OV_A", "OV_B"]},
+               netclasses={"HV": list(HV_NETS)}, dru_rules=ipc2221b_rules(),
                netclass_defs={"HV": (0.6, 0.3, 0.8, 0.4)},
                solid_pads=("J101", "J102", "F102", "D101", "C101", "C102", "C103", "C104",
                            "Q101", "Q102", "Q103", "Q104", "U102"))
