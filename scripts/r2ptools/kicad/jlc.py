@@ -56,9 +56,6 @@ OVERRIDES = [
              "top of the left side, JLC's at the left end of the bottom side); the table's QFN "
              "patterns are anchored at the start of the name and miss TI's 'Texas_…_WQFN-30' "
              "name, so without this row the LM76005 would be placed 90° off"),
-    Override(r"WQFN-32-1EP_5x5mm_P0\.5mm_EP3\.1x3\.1mm", 270,
-             "the motor's DRV8350H (RTV, WQFN-32): a quad no-lead package like the table's QFN "
-             "rows, whose patterns list 16-40 pins but not 32 and miss the 'WQFN' prefix"),
 ]
 
 
