@@ -76,6 +76,12 @@ JLC_ZERO = [
          "THT RJ45, cable opening down: pin 1 upper left (KiCad's orientation; fitted by hand)"),
     Zero(r"AMASS_XT30PW-M_1x02_P2\.50mm_Horizontal", 315,
          "THT XT30, cable entry down: pin 1 lower right of the pads' centre (KiCad's orientation)"),
+    Zero(r"TO-263-2$", 160, "D2PAK: leads to the left, pin 1 the upper lead (IPC-7351, no correction)"),
+    Zero(r"CP_Radial_D\d", 180, "THT radial electrolytic: + (pin 1) left (KiCad's orientation; fitted by hand)"),
+    Zero(r"AMASS_XT60PW-M_1x02_P7\.20mm_Horizontal", 200,
+         "THT XT60 male, cable entry up: pin 1 left of the pads' centre (KiCad's orientation)"),
+    Zero(r"AMASS_XT60PW-F_1x02_P7\.20mm_Horizontal", 340,
+         "THT XT60 female, cable entry up: pin 1 right of the pads' centre (KiCad's orientation)"),
     Zero(r"JST_PH_S\dB-PH-K_1x\d+_P2\.00mm_Horizontal", 0,
          "THT JST PH side entry: pin 1 at the right end (JLC's part is KiCad's turned 180°)"),
 ]

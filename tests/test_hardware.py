@@ -535,3 +535,47 @@ def test_design_numbers_hold():
     limit_a = float(re.search(r"SENSOR_SWITCH_LIMIT_A: f64 = ([0-9.]+);", model).group(1))
     assert abs(limit_a * 1000 - nom) < 1.0, (limit_a, nom)
 
+
+
+MOTOR_ROLES = {
+    # calc/motor.py DESIGN_VALUES role -> the references on hardware/motor that realise it
+    # (sums for a string of resistors, every listed part for a repeated one)
+    "R_VMOT_TOP": ("R108",), "R_VMOT_BOT": ("R109",),
+    "R_OV_TOP": ("R110", "R111", "R112"), "R_OV_BOT": ("R113",),
+    "C_BULK_EACH": ("C101", "C102", "C103", "C104"),
+    "C_CER_EACH": ("C105", "C106", "C107", "C108", "C109", "C110", "C111", "C112"),
+    "C_VCP": ("C114",), "R_ENC_SERIES": ("R118", "R119"), "C_ENC": ("C124", "C125"),
+    "R_ENC_PULLUP": ("R116", "R117"), "R_FAULT_PULLUP": ("R114",),
+    # C_CP_FLY (47 nF in SLVSDY6) is C115 = 100 nF 100 V on the board: README errata
+}
+MOTOR_SERIES = {"R_OV_TOP"}
+
+
+def _motor_wrong(values: dict[str, float]) -> list[str]:
+    parts = netlist.export(HARDWARE / "motor" / "motor.kicad_sch").components
+    wrong = []
+    for role, refs in MOTOR_ROLES.items():
+        missing = [r for r in refs if r not in parts]
+        if missing:
+            wrong.append(f"{role}: {', '.join(missing)} not on the board")
+            continue
+        have = [_si(parts[r].value) for r in refs]
+        got = sum(have) if role in MOTOR_SERIES else have
+        want = values[role]
+        ok = abs(got - want) <= 1e-9 * want if role in MOTOR_SERIES else \
+            all(abs(h - want) <= 1e-9 * want for h in have)
+        if not ok:
+            wrong.append(f"{role} ({', '.join(refs)}): calc assumes {want:g}, board has {got}")
+    for role, count in (("N_BULK", 4), ("N_CER", 8)):
+        if values[role] != count:
+            wrong.append(f"{role}: calc assumes {values[role]}, board has {count}")
+    return wrong
+
+
+@pytest.mark.skipif(not (HARDWARE / "motor" / "motor.kicad_sch").exists(), reason="no motor board")
+def test_motor_design_calculation_uses_the_boards_values(monkeypatch):
+    """calc/motor.py's DESIGN_VALUES are the motor board's parts; a drifted value is reported."""
+    from r2ptools.kicad.calc import motor as calc
+    assert _motor_wrong(calc.DESIGN_VALUES) == []
+    drifted = dict(calc.DESIGN_VALUES, R_VMOT_TOP=100e3)       # the firmware's old divider
+    assert any("R_VMOT_TOP" in w for w in _motor_wrong(drifted))

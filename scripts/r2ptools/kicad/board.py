@@ -32,7 +32,7 @@ per board (`Module.fiducials`), board-only (no symbol), on no BOM and in no plac
 NOT_ASSEMBLED = pcbnew.FP_EXCLUDE_FROM_BOM | pcbnew.FP_EXCLUDE_FROM_POS_FILES
 
 
-LAYERS = {"F.Cu": pcbnew.F_Cu, "B.Cu": pcbnew.B_Cu, "F.SilkS": pcbnew.F_SilkS,
+LAYERS = {"F.Cu": pcbnew.F_Cu, "In1.Cu": pcbnew.In1_Cu, "In2.Cu": pcbnew.In2_Cu, "B.Cu": pcbnew.B_Cu, "F.SilkS": pcbnew.F_SilkS,
           "B.SilkS": pcbnew.B_SilkS, "F.Fab": pcbnew.F_Fab, "B.Fab": pcbnew.B_Fab}
 
 
@@ -54,9 +54,9 @@ def load_footprint(lib_id: str) -> pcbnew.FOOTPRINT:
     return fp
 
 
-def _outline(board: pcbnew.BOARD) -> None:
+def _outline(board: pcbnew.BOARD, size: tuple[float, float] = (BOARD_W, BOARD_H)) -> None:
     r = CORNER_R
-    w, h = BOARD_W, BOARD_H
+    w, h = size
     segs = [((r, 0), (w - r, 0)), ((w, r), (w, h - r)), ((w - r, h), (r, h)), ((0, h - r), (0, r))]
     for a, b in segs:
         s = pcbnew.PCB_SHAPE(board)
@@ -77,6 +77,17 @@ def _outline(board: pcbnew.BOARD) -> None:
         s.SetStart(pt(*start))
         s.SetArcAngleAndEnd(pcbnew.EDA_ANGLE(90, pcbnew.DEGREES_T), True)
         board.Add(s)
+
+
+def outline_size(board: pcbnew.BOARD) -> tuple[float, float]:
+    """Width and height of the board outline in mm, from its Edge.Cuts segments' end points."""
+    xs, ys = [], []
+    for d in board.GetDrawings():
+        if d.GetLayer() == pcbnew.Edge_Cuts and d.GetShape() == pcbnew.SHAPE_T_SEGMENT:
+            for p in (d.GetStart(), d.GetEnd()):
+                xs.append(pcbnew.ToMM(p.x) - ORIGIN[0])
+                ys.append(pcbnew.ToMM(p.y) - ORIGIN[1])
+    return (round(max(xs), 4), round(max(ys), 4)) if xs else (BOARD_W, BOARD_H)
 
 
 def _text(board: pcbnew.BOARD, t: Text) -> None:
@@ -118,6 +129,10 @@ def build(m: Module, net: Netlist) -> pcbnew.BOARD:
     from .fplib import source as fplib_source      # fplib builds on this module
     pcbnew.KIID.SeedGenerator(m.seed)
     board = pcbnew.BOARD()
+    board.SetCopperLayerCount(m.copper_layers)
+    for layer in (pcbnew.In1_Cu, pcbnew.In2_Cu)[:m.copper_layers - 2]:
+        # inner layers are planes (Module.zones): the router keeps signals off them
+        board.SetLayerType(layer, pcbnew.LT_POWER)
     fabcap.apply(board, m.netclass_defs)
     ds = board.GetDesignSettings()
     ds.SetAuxOrigin(pt(0, 0))
@@ -127,7 +142,7 @@ def build(m: Module, net: Netlist) -> pcbnew.BOARD:
     tb.SetRevision(m.revision)
     tb.SetCompany("R2P - Rapid Robot Prototyping")
     tb.SetComment(0, "Scaffolded by scripts/hwgen; these KiCad files are the source: edit them in KiCad 9")
-    _outline(board)
+    _outline(board, m.size)
 
     nets: dict[str, pcbnew.NETINFO_ITEM] = {}
     for name in sorted(net.nets):
@@ -179,7 +194,7 @@ def build(m: Module, net: Netlist) -> pcbnew.BOARD:
         if place.back:                  # flipping needs the footprint on a board
             fp.Flip(fp.GetPosition(), pcbnew.FLIP_DIRECTION_LEFT_RIGHT)
 
-    for i, (x, y) in enumerate(HOLES, start=1):
+    for i, (x, y) in enumerate(HOLES if m.holes is None else m.holes, start=1):
         fp = load_footprint(":".join(HOLE_FP))
         fp.SetReference(f"H{i}")
         fp.SetValue("M3")
@@ -253,8 +268,8 @@ def ground_pours(board: pcbnew.BOARD) -> None:
     from .design import Zone
     nets = {board.FindNet("GND").GetNetname(): board.FindNet("GND")}
     inset = 0.3
-    poly = [(inset, inset), (BOARD_W - inset, inset), (BOARD_W - inset, BOARD_H - inset),
-            (inset, BOARD_H - inset)]
+    w, h = outline_size(board)
+    poly = [(inset, inset), (w - inset, inset), (w - inset, h - inset), (inset, h - inset)]
     for layer in ("F.Cu", "B.Cu"):
         _zone(board, nets, Zone("GND", layer, poly, priority=0, min_width=0.25, thermal_gap=0.3,
                                 spoke=0.4))

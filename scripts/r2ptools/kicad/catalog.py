@@ -142,6 +142,29 @@ _ITEMS = [
     # (1 IN, 2 GND, 3 EN active high, 4 open-drain fault, 5 ILIM, 6 OUT)
     ("TPS2553", "Power_Management:BD2222G", "Package_TO_SOT_SMD:SOT-23-6", "TPS2553",
      "TPS2553DBVR"),
+    # --- motor (hardware/motor/motor.py; design numbers in calc/motor.py)
+    ("R_2k2", R, R0603, "2.2k", "0603WAF2201T5E"),
+    ("R_10R", R, R0603, "10", "0603WAF100JT5E"),
+    ("C_100p", C, C0603, "100pF C0G", "0603CG101J500NT"),
+    ("C_1000u_63V", "Device:C_Polarized", "Capacitor_THT:CP_Radial_D16.0mm_P7.50mm", "1000uF 63V",
+     "63ZLH1000MEFC16X25"),
+    ("CSD19536KTT", "Transistor_FET:Q_NMOS_GDS", "Package_TO_SOT_SMD:TO-263-2", "CSD19536KTT",
+     "CSD19536KTT"),
+    # KiCad has no DRV835x symbol: R2P:DRV8350H (hardware/core/R2P.kicad_sym) carries the
+    # datasheet's pin names; its pin NUMBERS are NOT VERIFIED against SLVSDY6 (README errata)
+    ("DRV8350H", "R2P:DRV8350H", "Package_DFN_QFN:WQFN-32-1EP_5x5mm_P0.5mm_EP3.1x3.1mm", "DRV8350H",
+     "DRV8350HRTVR"),
+    ("ACS725-30AB", "Sensor_Current:ACS725xLCTR-30AB", "Package_SO:SOIC-8_3.9x4.9mm_P1.27mm",
+     "ACS725 30AB", "ACS725LLCTR-30AB-T"),
+    ("TLV3011", "R2P:TLV3011", "Package_TO_SOT_SMD:SOT-23-6", "TLV3011", "TLV3011AIDBVR"),
+    ("74LVC2G17", "R2P:74LVC2G17", "Package_TO_SOT_SMD:SOT-23-6", "74LVC2G17", "SN74LVC2G17DBVR"),
+    ("SMCJ45A", "Device:D_TVS", "Diode_SMD:D_SMC", "SMCJ45A", "SMCJ45A"),
+    # 30 A NANO2 456: KiCad has no 456 land pattern; the 462's is used until one is drawn (errata)
+    ("FUSE_30A", "Device:Fuse", "Fuse:Fuse_Littelfuse-NANO2-462", "30A", "0456030.ER"),
+    ("XT60_M", "Connector_Generic:Conn_01x02", "R2P:AMASS_XT60PW-M_1x02_P7.20mm_Horizontal",
+     "XT60 IN", "XT60PW-M"),
+    ("XT60_F", "Connector_Generic:Conn_01x02", "R2P:AMASS_XT60PW-F_1x02_P7.20mm_Horizontal",
+     "XT60 MOTOR", "XT60PW-F"),
 ]
 
 _BY_KEY = {k: Item(k, s, f, v, m) for k, s, f, v, m in _ITEMS}

@@ -217,6 +217,11 @@ class Module:
     netclass_defs: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
     # extra net classes (clearance, track, via, drill in mm) for `netclasses` beyond Power
     dru_rules: str = ""                 # board-specific KiCad custom rules, after the fab's
+    # the outline and stack-up: the bus form factor unless a module states its reason to differ
+    # (docs/bus.md); holes in mm from the top-left corner, None = the four of the 60 x 50 mm grid
+    size: tuple[float, float] = (60.0, 50.0)
+    holes: list[tuple[float, float]] | None = None
+    copper_layers: int = 2
 
     def sheets(self) -> list[Sheet]:
         out, todo = [], [self.root]

@@ -71,7 +71,10 @@ def pin_pdf_dates(data: bytes) -> bytes:
 
 def gerbers(pcb: Path, out: Path) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
-    _kicad("pcb", "export", "gerbers", "--layers", ",".join(GERBER_LAYERS), "--subtract-soldermask",
+    layers = list(GERBER_LAYERS)
+    if "(layers" in (text := pcb.read_text()) and '"In1.Cu"' in text.split("(setup", 1)[0]:
+        layers[1:1] = ["In1.Cu", "In2.Cu"]          # a 4-layer board's planes
+    _kicad("pcb", "export", "gerbers", "--layers", ",".join(layers), "--subtract-soldermask",
            "--use-drill-file-origin", "-o", str(out) + "/", str(pcb))
     _kicad("pcb", "export", "drill", "--format", "excellon", "--excellon-units", "mm",
            "--excellon-separate-th", "--drill-origin", "plot", "-o", str(out) + "/", str(pcb))

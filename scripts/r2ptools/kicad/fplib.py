@@ -38,6 +38,8 @@ VARIANTS = {
     # variant name (= the KiCad footprint it is cut from) -> KiCad library
     "RJ45_Amphenol_54602-x08_Horizontal": "Connector_RJ",
     "AMASS_XT30PW-M_1x02_P2.50mm_Horizontal": "Connector_AMASS",
+    "AMASS_XT60PW-M_1x02_P7.20mm_Horizontal": "Connector_AMASS",
+    "AMASS_XT60PW-F_1x02_P7.20mm_Horizontal": "Connector_AMASS",
     "JST_PH_S3B-PH-K_1x03_P2.00mm_Horizontal": "Connector_JST",
     "HTSSOP-20-1EP_4.4x6.5mm_P0.65mm_EP3.4x6.5mm": "Package_SO",
 }
@@ -104,7 +106,7 @@ def _lines(fp: pcbnew.FOOTPRINT) -> list[pcbnew.PCB_SHAPE]:
 def _module_board(m) -> pcbnew.BOARD:
     """Every part of a module at its place, source footprints, no nets: the obstacles."""
     b = pcbnew.BOARD()
-    board_mod._outline(b)
+    board_mod._outline(b, m.size)
     places = {p.ref: (p, p.place) for _, p in m.all_parts()}
     for ref, (p, _) in list(places.items()):
         if ref in m.places:
@@ -118,7 +120,7 @@ def _module_board(m) -> pcbnew.BOARD:
         b.Add(fp)
         if place.back:
             fp.Flip(fp.GetPosition(), pcbnew.FLIP_DIRECTION_LEFT_RIGHT)
-    for i, (x, y) in enumerate(board_mod.HOLES, start=1):
+    for i, (x, y) in enumerate(board_mod.HOLES if m.holes is None else m.holes, start=1):
         fp = board_mod.load_footprint(":".join(board_mod.HOLE_FP))
         fp.SetReference(f"H{i}")
         fp.SetPosition(board_mod.pt(x, y))
@@ -167,7 +169,7 @@ def _free(fp: pcbnew.FOOTPRINT, b: pcbnew.BOARD, g: pcbnew.PCB_SHAPE) -> list[bo
     for k in range(n):
         seg = pcbnew.SHAPE_SEGMENT(_at(a, e, k, n), _at(a, e, k + 1, n), g.GetWidth())
         box = silk._box(seg.BBox())
-        out.append(silk._inside(box, mm(silk.GAP_EDGE))
+        out.append(silk._inside(box, mm(silk.GAP_EDGE), board_mod.outline_size(b))
                    and not any(silk._near(box, o.box, gap) and seg.Collide(o.shape, gap)
                                for o, gap in obstacles))
     return out

@@ -16,6 +16,15 @@ from . import sexpr
 from .sexpr import Q
 
 SYMBOL_DIR = Path("/usr/share/kicad/symbols")
+PROJECT_LIB = "R2P"
+"""The project's own symbols (hardware/core/R2P.kicad_sym) for parts KiCad's libraries lack."""
+
+
+def library_path(lib: str) -> Path:
+    if lib == PROJECT_LIB:
+        from .. import ROOT
+        return ROOT / "hardware" / "core" / f"{PROJECT_LIB}.kicad_sym"
+    return SYMBOL_DIR / f"{lib}.kicad_sym"
 
 
 @dataclass(frozen=True)
@@ -31,7 +40,7 @@ class Pin:
 
 @functools.cache
 def _library(lib: str) -> dict[str, list]:
-    path = SYMBOL_DIR / f"{lib}.kicad_sym"
+    path = library_path(lib)
     if not path.exists():
         raise FileNotFoundError(f"symbol library {lib!r}: no {path} (is kicad-symbols installed?)")
     tree = sexpr.parse(path.read_text())
@@ -41,7 +50,7 @@ def _library(lib: str) -> dict[str, list]:
 def _flat(lib: str, name: str) -> list:
     symbols = _library(lib)
     if name not in symbols:
-        raise KeyError(f"symbol {lib}:{name} not found in {SYMBOL_DIR / (lib + '.kicad_sym')}")
+        raise KeyError(f"symbol {lib}:{name} not found in {library_path(lib)}")
     sym = copy.deepcopy(symbols[name])
     ext = sexpr.find(sym, "extends")
     if ext is None:

@@ -8,14 +8,16 @@ from __future__ import annotations
 from pathlib import Path
 
 PROJECT_FP_LIB = "R2P"
-"""The project's own footprints (hardware/core/R2P.pretty, fplib.py), shared like the core sheet."""
+"""The project's own footprints (hardware/core/R2P.pretty, fplib.py) and symbols
+(hardware/core/R2P.kicad_sym, parts KiCad has no symbol for), shared like the core sheet."""
 
 
 def write(folder: Path, symbol_libs: list[str], footprint_libs: list[str]) -> None:
     sym = ["(sym_lib_table", "\t(version 7)"]
     for lib in sorted(set(symbol_libs)):
-        sym.append(f'\t(lib (name "{lib}")(type "KiCad")(uri "${{KICAD9_SYMBOL_DIR}}/{lib}.kicad_sym")'
-                   '(options "")(descr ""))')
+        uri = (f"${{KIPRJMOD}}/../core/{lib}.kicad_sym" if lib == PROJECT_FP_LIB
+               else f"${{KICAD9_SYMBOL_DIR}}/{lib}.kicad_sym")
+        sym.append(f'\t(lib (name "{lib}")(type "KiCad")(uri "{uri}")(options "")(descr ""))')
     sym.append(")")
     (folder / "sym-lib-table").write_text("\n".join(sym) + "\n")
     fp = ["(fp_lib_table", "\t(version 7)"]

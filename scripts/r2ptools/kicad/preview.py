@@ -21,7 +21,8 @@ def _mm(v) -> float:
 
 def plot(pcb: str, png: str) -> None:
     b = pcbnew.LoadBoard(pcb)
-    fig, ax = plt.subplots(figsize=(12, 10), dpi=110)
+    from .board import outline_size as _size
+    fig, ax = plt.subplots(figsize=(12 * max(1.0, _size(b)[0] / 60 * 0.6), 10), dpi=110)
     ox, oy = ORIGIN
     for t in b.GetTracks():
         col = "#c33" if t.GetLayer() == pcbnew.F_Cu else "#36c"
@@ -59,13 +60,15 @@ def plot(pcb: str, png: str) -> None:
         p = fp.GetPosition()
         ax.text(_mm(p.x) - ox, _mm(p.y) - oy, fp.GetReference(), fontsize=6, ha="center",
                 va="center", color="k")
-    ax.plot([0, 60, 60, 0, 0], [0, 0, 50, 50, 0], color="k", lw=1)
-    ax.set_xlim(-3, 63)
-    ax.set_ylim(53, -3)
+    from .board import outline_size
+    w, h = outline_size(b)
+    ax.plot([0, w, w, 0, 0], [0, 0, h, h, 0], color="k", lw=1)
+    ax.set_xlim(-3, w + 3)
+    ax.set_ylim(h + 3, -3)
     ax.set_aspect("equal")
     ax.grid(True, lw=0.3)
-    ax.set_xticks(range(0, 61, 5))
-    ax.set_yticks(range(0, 51, 5))
+    ax.set_xticks(range(0, int(w) + 1, 5))
+    ax.set_yticks(range(0, int(h) + 1, 5))
     fig.savefig(png, bbox_inches="tight")
 
 

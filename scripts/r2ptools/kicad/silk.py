@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import pcbnew
 
-from .board import BOARD_H, BOARD_W, ORIGIN, mm
+from .board import BOARD_H, BOARD_W, ORIGIN, mm, outline_size
 
 REF_SIZES = (1.0, 0.8)
 """Reference text heights tried, mm; 0.8 mm is JLCPCB's minimum (fabcap.MIN_TEXT_HEIGHT)."""
@@ -83,16 +83,17 @@ def _hits(shape, box, obstacles: list[Obstacle], gap: int) -> Obstacle | None:
     return None
 
 
-def _inside(box, gap: int) -> bool:
-    """Within the board outline less `gap` (the 2 mm corner arcs are edge obstacles too)."""
+def _inside(box, gap: int, size: tuple[float, float] = (BOARD_W, BOARD_H)) -> bool:
+    """Within the board outline (`size`, mm) less `gap` (the 2 mm corner arcs are edge obstacles too)."""
     x0, y0 = mm(ORIGIN[0]) + gap, mm(ORIGIN[1]) + gap
-    x1, y1 = mm(ORIGIN[0] + BOARD_W) - gap, mm(ORIGIN[1] + BOARD_H) - gap
+    x1, y1 = mm(ORIGIN[0] + size[0]) - gap, mm(ORIGIN[1] + size[1]) - gap
     return box[0] >= x0 and box[1] >= y0 and box[2] <= x1 and box[3] <= y1
 
 
 class Layout:
     def __init__(self, board: pcbnew.BOARD):
         self.board = board
+        self.size = outline_size(board)
         self.fps = sorted(board.GetFootprints(), key=lambda f: f.GetReference())
         self.edge = [Obstacle(_box(d.GetBoundingBox()), d.GetEffectiveShape(pcbnew.Edge_Cuts), "edge")
                      for d in board.GetDrawings() if d.GetLayer() == pcbnew.Edge_Cuts]
@@ -127,7 +128,7 @@ class Layout:
                     f"{pcbnew.ToMM(t.GetPosition().y) - ORIGIN[1]:.2f}) mm on {t.GetLayerName()}"
             o = _hits(shape, box, self.mask[layer] + self.edge, mm(GAP_MASK)) or \
                 _hits(shape, box, self.silk[layer], mm(GAP_SILK))
-            if o is not None or not _inside(box, mm(GAP_EDGE)):
+            if o is not None or not _inside(box, mm(GAP_EDGE), self.size):
                 errors.append(f"{where} overlaps {o.what if o else 'the board edge'}")
             self.silk[layer].append(Obstacle(box, shape, f"label {t.GetText()!r}"))
         if errors:
@@ -195,7 +196,7 @@ class Layout:
 
     def _clear(self, f, box, shape, placed: bool) -> bool:
         layer = pcbnew.B_SilkS if f.IsFlipped() else pcbnew.F_SilkS
-        if not _inside(box, mm(GAP_EDGE)):
+        if not _inside(box, mm(GAP_EDGE), self.size):
             return False
         own = f"pad {f.GetReference()}."
         for o in self.mask[layer]:

@@ -128,7 +128,7 @@ FUSE_PULSE_FRACTION = 0.22
 R_HOTPLUG = 0.05              # Ω: cable, connector, ESR: a low bound (as calc/psu.py)
 
 # --- copper, thermal ---------------------------------------------------------------------------
-BOARD_MM = (112.0, 50.0)      # the 60 × 50 mm outline extended by one 52 mm hole pitch (README)
+BOARD_MM = (164.0, 50.0)      # the 60 × 50 mm outline extended by two 52 mm hole pitches (hardware/motor/motor.py SIZE)
 CU_OUTER_UM, CU_INNER_UM = 70.0, 35.0   # 4-layer, 2 oz outer, 1 oz inner (JLC stack-up)
 CU_K = 390.0                  # W/(m·K)
 H_CONV = 12.0                 # W/(m²·K): natural convection + radiation, horizontal board: estimate

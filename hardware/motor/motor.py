@@ -1,0 +1,303 @@
+"""hardware/motor revision A: the DC motor module, 36 V / 20 A H-bridge on the common core.
+
+    XT60 in ─► F102 30 A ─► VMOT ─┬─ D101 SMCJ45A, C101-C104 4 × 1000 µF 63 V, C105-C112 8 × 2.2 µF 100 V
+                                  ├─ leg A: Q101 (high) / Q102 (low) ─► SW_A ─► U102 ACS725 ─► MOT_A ─┐
+                                  └─ leg B: Q103 (high) / Q104 (low) ─► MOT_B ─────────────────────────┴► XT60 motor
+    U101 DRV8350H (6x PWM, hardware interface, charge pump) drives the four gates through 10 Ω;
+    VM and VDRAIN from VMOT (the driver takes nothing from the bus); nFAULT and U103 (TLV3011,
+    VMOT > 46.4-49.2 V) pull DRV_FAULT low: TIM1's break input stops the PWM in hardware.
+    U102 ±30 A Hall sensor (3.3 V, ratiometric) → 1 k / 4.7 nF → MOTOR_CURRENT (PA0);
+    VMOT → 150 k / 10 k → VMOT_SENSE (PA1); encoder A/B (5 V or 3.3 V) → SRV05-4, 2.2 k pull-ups,
+    1 k / 100 pF, U104 74LVC2G17 at 3.3 V → ENC_A/ENC_B (PA6/PA7, not 5 V tolerant).
+
+Every value is calc/motor.py's (`DESIGN_VALUES`; `scripts/py -m r2ptools.kicad.calc.motor`).
+Grounding (issue 19 item 5): the logic side (core, Hall sensor's supply, encoder) runs from the
+bus through the fused bus tap; the power stage from VMOT. One ground: the bus GND and the power
+GND are the same net, joined at the bulk capacitors' negative (star point) by the inner GND
+plane; the motor current's loop (XT60 − → capacitors → low-side sources) stays in the right-hand
+power section and never crosses the core. Isolated CAN is the revision B alternative (README).
+
+NOT VERIFIED, and why this board must not be ordered as is (README, errata): U101's pin NUMBERS
+(R2P:DRV8350H carries the datasheet's pin names; KiCad has no DRV835x symbol and SLVSDY6's pin
+table could not be read here), the IDRIVE and VDS resistor levels, F102's land pattern (KiCad has
+no NANO2 456 footprint: the 462's is used), and LCSC numbers for U101, U102, D101, F102 and the
+electrolytics (parts.csv `-`).
+
+Board: 164 × 50 mm (docs/bus.md's 60 × 50 mm bus end plus two 52 mm hole pitches: the power
+stage's parts need 2880 mm² of courtyard, more than one pitch's 2525 mm²), 4 layers, 2 oz outer.
+The core keeps its default placement on the left 60 mm.
+"""
+from __future__ import annotations
+
+from r2ptools.kicad.design import Module, Place, Sheet, Text, Track, Via, Zone
+from r2ptools.kicad.calc import motor as calc
+from r2ptools.kicad.modules import core as core_mod
+from r2ptools.kicad.modules import drawing_of
+from r2ptools.kicad.modules.common import (BUS_TAP_PLACE, bus_tap, bus_tap_track, core_tracks,
+                                           frame_texts, tvs_track)
+
+NAME = "motor"
+TITLE = "R2P DC motor module"
+REVISION = "A"
+SIZE = calc.BOARD_MM
+HOLES = [(x, y) for y in (4.0, 46.0) for x in (4.0, 56.0, 108.0, 160.0)]
+"""The bus grid's holes continued at the same 52 mm pitch: the 60 × 50 mm bus end plus two
+pitches for the power stage (README: the parts do not fit in one)."""
+FIDUCIALS = [(2.6, 20.2), (57.4, 14.5), (109.0, 30.0)]
+
+PINS = {"PA8": "PWM_AH", "PB13": "PWM_AL", "PA9": "PWM_BH", "PB14": "PWM_BL",
+        "PB12": "DRV_FAULT", "PA6": "ENC_A", "PA7": "ENC_B", "PA0": "MOTOR_CURRENT",
+        "PA1": "VMOT_SENSE", "PB0": "DRV_EN"}
+"""MCU pins → firmware/boards/motor.toml's signals (scripts/check-pins)."""
+
+P = Place
+PLACES = {
+    # --- bridge: two legs as columns, high side above (tab = VMOT up, pins down onto the low
+    # side's tab = the phase node), the motor connector between the legs at the bottom edge
+    "Q101": P(66.0, 13.0, 90), "Q102": P(66.0, 31.0, 90),
+    "Q103": P(95.0, 13.0, 90), "Q104": P(95.0, 31.0, 90),
+    "J102": P(76.8, 34.6, 180), "U102": P(80.5, 26.0, 0), "C119": P(80.5, 21.5, 0),
+    "R107": P(86.5, 23.6, 0), "C120": P(86.5, 26.0, 0),
+    # commutation-loop ceramics beside each leg
+    "C105": P(74.5, 15.5, 0), "C106": P(74.5, 19.5, 0), "C107": P(86.5, 15.5, 180),
+    "C108": P(86.5, 19.5, 180), "C109": P(104.0, 10.0, 0), "C110": P(104.0, 14.0, 0),
+    "C111": P(104.0, 18.0, 0), "C112": P(104.0, 22.0, 0),
+    # gate driver between the legs' high sides, its capacitors in a row above it
+    "U101": P(80.5, 8.5, 0),
+    "C113": P(76.0, 3.2, 90), "C116": P(78.0, 3.2, 90), "C114": P(80.0, 3.2, 90),
+    "C115": P(82.0, 3.2, 90), "C117": P(84.0, 3.2, 90), "C118": P(86.0, 3.2, 90),
+    "R101": P(74.5, 6.0, 0), "R102": P(74.5, 8.0, 0), "R103": P(74.5, 10.0, 0),
+    "R104": P(74.5, 12.0, 0), "R105": P(86.5, 6.0, 0), "R106": P(86.5, 8.0, 0),
+    "R115": P(86.5, 10.0, 0),
+    # supply sense and over-voltage dividers beside leg B
+    "R108": P(104.0, 26.0, 0), "R109": P(104.0, 28.0, 0), "C121": P(104.0, 30.0, 0),
+    "R110": P(104.0, 32.0, 0), "R111": P(104.0, 34.0, 0), "R112": P(104.0, 36.0, 0),
+    "R113": P(104.0, 38.0, 0), "C122": P(104.0, 40.0, 0),
+    # input: bulk 2 × 2, battery XT60 on the right edge, fuse and TVS below the bulk
+    "C101": P(116.0, 10.5, 0), "C102": P(116.0, 28.0, 0), "C103": P(132.6, 10.5, 0),
+    "C104": P(132.6, 28.0, 0), "J101": P(147.5, 13.0, 270), "F102": P(140.0, 45.0, 180),
+    "D101": P(122.0, 45.0, 180),
+    # over-voltage comparator and DRV_FAULT pull-up, encoder input: the core's bottom band
+    "U103": P(44.0, 41.0, 0), "C123": P(44.0, 37.8, 0), "R114": P(48.5, 41.0, 90),
+    "J103": P(12.0, 47.2, 90), "D102": P(24.5, 46.5, 0),
+    "R116": P(29.0, 44.0, 0), "R117": P(29.0, 46.0, 0), "R118": P(29.0, 48.0, 0),
+    "R119": P(33.0, 44.0, 0), "C124": P(33.0, 46.0, 0), "C125": P(33.0, 48.0, 0),
+    "U104": P(38.0, 46.0, 0), "C126": P(38.0, 42.5, 0),
+}
+
+
+def _grid(net: str, x0: float, y0: float, nx: int, ny: int, pitch: float = 1.2) -> list[Via]:
+    """A field of 0.6/0.3 mm vias (thermal under a tab, or a plane connection)."""
+    return [Via(net, round(x0 + i * pitch, 3), round(y0 + j * pitch, 3), 0.6, 0.3)
+            for i in range(nx) for j in range(ny)]
+
+
+LEGS = {  # column x, high-side net at the tab, phase node, low-side tab = phase node
+    "A": (66.0, "SW_A"), "B": (95.0, "MOT_B")}
+
+
+def planes() -> list[Zone]:
+    """In1.Cu: GND under the whole board (the star: every return reaches it by vias). In2.Cu:
+    VMOT under the power stage, GND under the core. B.Cu islands under the four tabs, each on
+    its tab's net: the thermal vias' landing, pressed onto the heatsink's gap pad."""
+    w, h = SIZE
+    e = 0.3
+    zs = [Zone("GND", "In1.Cu", [(e, e), (w - e, e), (w - e, h - e), (e, h - e)], solid=True),
+          Zone("GND", "In2.Cu", [(e, e), (59.6, e), (59.6, h - e), (e, h - e)], solid=True),
+          Zone("VMOT", "In2.Cu", [(60.4, e), (w - e, e), (w - e, h - e), (60.4, h - e)], solid=True)]
+    for x, phase in LEGS.values():
+        for y, net in ((13.0, "VMOT"), (31.0, phase)):
+            zs.append(Zone(net, "B.Cu", [(x - 5.4, y - 6.2), (x + 5.4, y - 6.2), (x + 5.4, y + 3.2),
+                                         (x - 5.4, y + 3.2)], priority=2, solid=True))
+    return zs
+
+
+def power_tracks() -> list[Track]:
+    """The motor current's copper on F.Cu (calc/motor.py PATHS; README, "Copper")."""
+    T = Track
+    out = []
+    for x, phase in LEGS.values():
+        # high side's source lead down onto the low side's tab: the phase node
+        out.append(T(phase, [(x + 2.54, 20.65), (x + 2.54, 26.0)], 2.0))
+        # low side's source lead onto its GND via field
+        out.append(T("GND", [(x + 2.54, 38.65), (x + 2.54, 44.0)], 1.8))
+    out += [
+        # leg A's phase node into the Hall sensor's IP+ leads (pins 1, 2)
+        T("SW_A", [(70.0, 24.7), (78.0, 24.7)], 2.0),
+        # IP− leads (3, 4) down to the motor connector's pin 1
+        T("MOT_A", [(78.0, 27.3), (77.4, 29.5), (77.0, 32.5), (76.8, 34.6)], 2.0),
+        T("MOT_A", [(76.8, 31.5), (76.8, 36.0)], 4.0),
+        # leg B's phase node (Q104's tab) across to the connector's pin 2
+        T("MOT_B", [(90.5, 33.5), (84.0, 34.6)], 4.0),
+        # SW_A and MOT_A also on B.Cu: from Q102's tab island to vias beside the sensor's
+        # leads, and from vias under the IP− track to the connector's pin
+        T("SW_A", [(69.0, 27.0), (75.4, 24.7)], 2.0, "B.Cu"),
+        T("MOT_A", [(77.2, 29.6), (76.8, 34.6)], 3.0, "B.Cu"),
+        T("MOT_B", [(90.5, 33.5), (84.0, 34.6)], 4.0, "B.Cu"),
+        # battery: XT60 + down the right edge into the fuse; fuse out to the TVS and the bulk;
+        # both outer layers (the fuse's pads reach B.Cu through via fields)
+        T("VBAT", [(147.5, 20.2), (147.5, 38.0), (145.05, 41.0), (145.05, 45.0)], 6.0),
+        T("VBAT", [(147.5, 20.2), (147.5, 38.0), (145.6, 39.3)], 6.0, "B.Cu"),
+        T("VMOT", [(134.95, 45.0), (134.95, 40.0), (132.6, 35.0), (132.6, 28.0)], 6.0),
+        T("VMOT", [(132.2, 38.6), (132.6, 35.0), (132.6, 28.0)], 6.0, "B.Cu"),
+        T("VMOT", [(125.4, 45.0), (134.95, 45.0)], 2.5),
+        T("VMOT", [(116.0, 28.0), (116.0, 36.0), (125.4, 42.0), (125.4, 45.0)], 4.0),
+        T("VMOT", [(116.0, 28.0), (116.0, 36.0), (125.4, 42.0)], 4.0, "B.Cu"),
+        # commutation ceramics' VMOT pads onto the high sides' tabs
+        *[T("VMOT", [(73.02, y), (71.0, y)], 1.6) for y in (15.5,)],
+        *[T("VMOT", [(87.98, y), (90.0, y)], 1.6) for y in (15.5,)],
+        *[T("VMOT", [(102.52, y), (100.0, y)], 1.6) for y in (10.0, 14.0)],
+    ]
+    return out
+
+
+def power_vias() -> list[Via]:
+    out = []
+    for x, phase in LEGS.values():
+        out += _grid("VMOT", x - 4.2, 7.6, 8, 6)          # high-side tab: 48 thermal vias
+        out += _grid(phase, x - 4.2, 25.6, 8, 6)         # low-side tab
+        out += _grid("GND", x + 1.94, 42.0, 2, 2)        # low-side source to the GND plane
+    # ceramics' GND pads to In1, and the two lower ones' VMOT pads to In2
+    out += [Via("GND", 77.4, y, 0.6, 0.3) for y in (15.5, 19.5)]
+    out += [Via("GND", 83.6, y, 0.6, 0.3) for y in (15.5, 19.5)]
+    out += [Via("GND", 107.0, y, 0.6, 0.3) for y in (10.0, 14.0, 18.0, 22.0)]
+    out += [Via("VMOT", 72.0, 19.5, 0.6, 0.3), Via("VMOT", 89.0, 19.5, 0.6, 0.3),
+            Via("VMOT", 101.3, 18.0, 0.6, 0.3), Via("VMOT", 101.3, 22.0, 0.6, 0.3)]
+    # fuse output and TVS into the planes, the fuse's input onto B.Cu
+    out += _grid("VMOT", 131.0, 38.0, 3, 2)
+    out += _grid("GND", 114.0, 43.4, 2, 3)
+    out += _grid("VBAT", 144.2, 38.6, 3, 2, pitch=1.4)
+    out += [Via("VMOT", 125.4, 42.0, 0.6, 0.3), Via("VMOT", 124.2, 41.3, 0.6, 0.3)]
+    out += [Via("SW_A", x, 24.7, 0.6, 0.3) for x in (72.6, 74.0, 75.4)]
+    out += [Via("MOT_A", x, y, 0.6, 0.3) for x in (76.2, 77.6) for y in (29.6, 30.9)]
+    return out
+
+
+HV_NETS = ("VBAT", "VMOT", "SW_A", "MOT_A", "MOT_B", "GATE_AH", "GATE_BH", "GHA", "GHB",
+           "DRV_VCP", "DRV_CPH", "DRV_CPL", "OV_A", "OV_B")
+"""Nets at the motor supply (up to 49.2 V at the trip, 72.7 V at the TVS clamp) or riding on it
+(the high-side gates and the charge pump, ≤ 12 V above it); among themselves they differ by less
+than 15 V, from every other net by up to the clamp."""
+FINE_PITCH = ("U101", "U102")
+"""The driver (0.5 mm pitch) and the sensor: inside their courtyards the maker's pin spacing rules."""
+
+
+def ipc2221b_rules() -> str:
+    """IPC-2221B table 6-1, B2 (external, uncoated): 0.6 mm for 31-100 V, as on the PSU."""
+    def anyof(side: str) -> str:
+        return "(" + " || ".join(f"{side}.NetName == '/{n}'" for n in HV_NETS) + ")"
+    exempt = " && ".join(f"!(A.intersectsCourtyard('{r}') && B.intersectsCourtyard('{r}'))"
+                         for r in FINE_PITCH)
+    return ("# IPC-2221B table 6-1, B2 (external, uncoated): 0.6 mm for 31-100 V between conductors.\n"
+            "# Motor supply: 44.1 V steady, 49.2 V at the trip, 72.7 V at the TVS clamp (calc/motor.py).\n"
+            '(rule "ipc2221b: motor supply nets 0.6 mm from other potentials"\n'
+            f'    (condition "{anyof("A")} && !{anyof("B")} && {exempt}")\n'
+            "    (constraint clearance (min 0.6mm)))\n")
+
+
+def build(core: Sheet) -> Module:
+    s = Sheet(NAME, f"{TITLE}: 10-44 V, 20 A continuous H-bridge, encoder, Hall current sense")
+    bus_tap(s, "+5V_MOD", at=BUS_TAP_PLACE)
+    pins = {p: "" for p in core_mod.FREE_GPIO}
+    pins.update(PINS)
+    pins["V5_IN"] = "+5V_MOD"
+    s.use(core, pins)
+    s.flags += ["VMOT"]
+
+    # input: XT60 male (pin 1 −, pin 2 +), fuse, TVS, bulk and the commutation-loop ceramics
+    s.part("J101", "XT60_M", {"1": "GND", "2": "VBAT"}, value="BATTERY 10-44V")
+    s.part("F102", "FUSE_30A", {"1": "VBAT", "2": "VMOT"})
+    s.part("D101", "SMCJ45A", {"1": "VMOT", "2": "GND"})          # D_SMC pad 1 = cathode
+    for i in range(4):
+        s.part(f"C{101 + i}", "C_1000u_63V", {"1": "VMOT", "2": "GND"})
+    for i in range(8):
+        s.part(f"C{105 + i}", "C_2u2_100V", {"1": "VMOT", "2": "GND"})
+
+    # the bridge: high sides' drains on VMOT, low sides' sources on GND (SLA/SLB sense them)
+    s.part("Q101", "CSD19536KTT", {"G": "GATE_AH", "D": "VMOT", "S": "SW_A"})
+    s.part("Q102", "CSD19536KTT", {"G": "GATE_AL", "D": "SW_A", "S": "GND"})
+    s.part("Q103", "CSD19536KTT", {"G": "GATE_BH", "D": "VMOT", "S": "MOT_B"})
+    s.part("Q104", "CSD19536KTT", {"G": "GATE_BL", "D": "MOT_B", "S": "GND"})
+    for ref, drv, gate in (("R101", "GHA", "GATE_AH"), ("R102", "GLA", "GATE_AL"),
+                           ("R103", "GHB", "GATE_BH"), ("R104", "GLB", "GATE_BL")):
+        s.part(ref, "R_10R", {"1": drv, "2": gate})
+
+    # gate driver: 6x PWM (MODE to AGND), phase C unused (inputs low, outputs open)
+    s.part("U101", "DRV8350H", {
+        "VM": "VMOT", "VDRAIN": "VMOT", "VCP": "DRV_VCP", "CPH": "DRV_CPH", "CPL": "DRV_CPL",
+        "VGLS": "DRV_VGLS", "DVDD": "DRV_DVDD", "AGND": "GND", "GND": "GND", "PAD": "GND",
+        "GHA": "GHA", "SHA": "SW_A", "GLA": "GLA", "SLA": "GND",
+        "GHB": "GHB", "SHB": "MOT_B", "GLB": "GLB", "SLB": "GND", "SHC": "GND", "SLC": "GND",
+        "INHA": "PWM_AH", "INLA": "PWM_AL", "INHB": "PWM_BH", "INLB": "PWM_BL",
+        "INHC": "GND", "INLC": "GND", "ENABLE": "DRV_EN", "nFAULT": "DRV_FAULT",
+        "MODE": "GND", "IDRIVE": "DRV_IDRIVE", "VDS": "DRV_VDS"}, nc=("GHC", "GLC"))
+    s.part("C113", "C_100n_100V", {"1": "VMOT", "2": "GND"})        # VM
+    s.part("C114", "C_1u", {"1": "DRV_VCP", "2": "VMOT"})            # VCP to VDRAIN
+    s.part("C115", "C_100n_100V", {"1": "DRV_CPH", "2": "DRV_CPL"})  # flying cap (47 nF in SLVSDY6)
+    s.part("C116", "C_100n_100V", {"1": "VMOT", "2": "GND"})        # VDRAIN
+    s.part("C117", "C_1u", {"1": "DRV_VGLS", "2": "GND"})
+    s.part("C118", "C_1u", {"1": "DRV_DVDD", "2": "GND"})
+    # hardware-interface levels: one resistor each to AGND (level NOT VERIFIED, README errata)
+    s.part("R105", "R_100k", {"1": "DRV_IDRIVE", "2": "GND"})
+    s.part("R106", "R_100k", {"1": "DRV_VDS", "2": "GND"})
+
+    # Hall sensor in leg A's output, ratiometric to the ADC's 3.3 V
+    s.part("U102", "ACS725-30AB", {"IP+": "SW_A", "IP-": "MOT_A", "VCC": "+3V3", "GND": "GND",
+                                   "VIOUT": "HALL_OUT"}, nc=("FILTER",))
+    s.part("C119", "C_100n", {"1": "+3V3", "2": "GND"})
+    s.part("R107", "R_1k", {"1": "HALL_OUT", "2": "MOTOR_CURRENT"})
+    s.part("C120", "C_4n7", {"1": "MOTOR_CURRENT", "2": "GND"})
+    s.part("J102", "XT60_F", {"1": "MOT_A", "2": "MOT_B"}, value="MOTOR")
+
+    # motor supply sense (÷16) and the over-voltage trip (375 k / 10 k into the 1.242 V reference)
+    s.part("R108", "R_150k", {"1": "VMOT", "2": "VMOT_SENSE"})
+    s.part("R109", "R_10k", {"1": "VMOT_SENSE", "2": "GND"})
+    s.part("C121", "C_100n", {"1": "VMOT_SENSE", "2": "GND"})
+    s.part("R110", "R_174k", {"1": "VMOT", "2": "OV_A"})
+    s.part("R111", "R_174k", {"1": "OV_A", "2": "OV_B"})
+    s.part("R112", "R_27k", {"1": "OV_B", "2": "OV_SENSE"})
+    s.part("R113", "R_10k", {"1": "OV_SENSE", "2": "GND"})
+    s.part("C122", "C_10n", {"1": "OV_SENSE", "2": "GND"})
+    # output low (open drain) when OV_SENSE (IN−) rises above the reference (IN+)
+    s.part("U103", "TLV3011", {"IN+": "OV_REF", "REF": "OV_REF", "IN-": "OV_SENSE",
+                               "OUT": "DRV_FAULT", "V+": "+3V3", "V-": "GND"})
+    s.part("C123", "C_100n", {"1": "+3V3", "2": "GND"})
+    s.part("R114", "R_10k", {"1": "+3V3", "2": "DRV_FAULT"})
+    s.part("R115", "R_100k", {"1": "DRV_EN", "2": "GND"})       # driver off while the MCU resets
+
+    # encoder: 1 +5V_MOD, 2 A, 3 B, 4 GND; open-collector pull-ups to the encoder's 5 V
+    s.part("J103", "HDR_1x4", {"1": "+5V_MOD", "2": "ENC_A_IN", "3": "ENC_B_IN", "4": "GND"},
+           value="ENCODER")
+    s.part("D102", "SRV05-4", {"IO1": "ENC_A_IN", "IO2": "ENC_B_IN", "VP": "+5V_MOD", "VN": "GND"},
+           nc=("IO3", "IO4"))
+    s.part("R116", "R_2k2", {"1": "+5V_MOD", "2": "ENC_A_IN"})
+    s.part("R117", "R_2k2", {"1": "+5V_MOD", "2": "ENC_B_IN"})
+    s.part("R118", "R_1k", {"1": "ENC_A_IN", "2": "ENC_A_F"})
+    s.part("R119", "R_1k", {"1": "ENC_B_IN", "2": "ENC_B_F"})
+    s.part("C124", "C_100p", {"1": "ENC_A_F", "2": "GND"})
+    s.part("C125", "C_100p", {"1": "ENC_B_F", "2": "GND"})
+    s.part("U104", "74LVC2G17", {"1A": "ENC_A_F", "2A": "ENC_B_F", "1Y": "ENC_A", "2Y": "ENC_B",
+                                 "VCC": "+3V3", "GND": "GND"})
+    s.part("C126", "C_100n", {"1": "+3V3", "2": "GND"})
+
+    for p in s.parts:
+        if p.ref in PLACES:
+            p.place = PLACES[p.ref]
+    sheet = drawing_of(__file__)
+    s.drawing, s.blocks = sheet.DRAWING, sheet.BLOCKS
+
+    m = Module(NAME, TITLE, REVISION, s,
+               tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks(),
+                       *power_tracks()],
+               vias=power_vias(), zones=planes(),
+               seed=19, size=SIZE, holes=HOLES, copper_layers=4,
+               netclasses={"HV": list(HV_NETS)}, dru_rules=ipc2221b_rules(),
+               netclass_defs={"HV": (0.6, 0.3, 0.8, 0.4)},
+               solid_pads=("J101", "J102", "F102", "D101", "C101", "C102", "C103", "C104",
+                           "Q101", "Q102", "Q103", "Q104", "U102"))
+    m.fiducials = list(FIDUCIALS)
+    m.texts = frame_texts(NAME, REVISION) + [
+        Text("MOTOR SUPPLY 10-44V", 130.0, 19.3, 1.2, "B.SilkS"),
+        Text("+", 152.0, 20.2, 1.5, "B.SilkS"), Text("-", 152.0, 13.0, 1.5, "B.SilkS"),
+        Text("BATTERY", 152.5, 30.0, 1.0, "B.SilkS"), Text("MOTOR", 80.5, 44.0, 1.0, "B.SilkS")]
+    return m
