@@ -9,7 +9,7 @@
 //!   [`Inbound`] (imported and subscribed), built at boot in a `StaticCell`;
 //! - [`filters`]: median and first-order low-pass filters for sensor channels;
 //! - [`leds`]: the status LED patterns every module shows the same way;
-//! - [`memmove`]: a small `memmove` replacing compiler-builtins' 1.6 KB one in the images;
+//! - [`mem_routines`]: smaller `memmove` and 8-byte aligned copy/clear than compiler-builtins';
 //! - [`param_doc`]: what each parameter means, for the README;
 //! - `readme` (feature `std`): what the READMEs' generated sections share.
 //!
@@ -26,7 +26,7 @@ pub mod endpoints;
 pub mod filters;
 pub mod flash_params;
 pub mod leds;
-pub mod memmove;
+pub mod mem_routines;
 pub mod param_doc;
 pub mod ram_flash;
 #[cfg(any(test, feature = "std"))]
