@@ -11,6 +11,7 @@
 //! - [`leds`]: the status LED patterns every module shows the same way;
 //! - [`mem_routines`]: smaller `memmove` and 8-byte aligned copy/clear than compiler-builtins';
 //! - [`param_doc`]: what each parameter means, for the README;
+//! - [`trig`]: sine, cosine and tangent in `f32` only (libm's pull in `f64` soft float);
 //! - `readme` (feature `std`): what the READMEs' generated sections share.
 //!
 //! Not `module-core` (firmware/targets/f103/module-core: what every F103 module *image* adds
@@ -31,6 +32,7 @@ pub mod param_doc;
 pub mod ram_flash;
 #[cfg(any(test, feature = "std"))]
 pub mod readme;
+pub mod trig;
 
 pub use endpoints::{Inbound, InboundCell, Outbound, OutboundCell, TopicNode};
 pub use flash_params::{CommitReport, FlashParams, LoadReport};
