@@ -9,7 +9,9 @@
 //!   [`Inbound`] (imported and subscribed), built at boot in a `StaticCell`;
 //! - [`filters`]: median and first-order low-pass filters for sensor channels;
 //! - [`leds`]: the status LED patterns every module shows the same way;
+//! - [`mem_routines`]: smaller `memmove` and 8-byte aligned copy/clear than compiler-builtins';
 //! - [`param_doc`]: what each parameter means, for the README;
+//! - [`trig`]: sine, cosine and tangent in `f32` only (libm's pull in `f64` soft float);
 //! - `readme` (feature `std`): what the READMEs' generated sections share.
 //!
 //! Not `module-core` (firmware/targets/f103/module-core: what every F103 module *image* adds
@@ -25,10 +27,12 @@ pub mod endpoints;
 pub mod filters;
 pub mod flash_params;
 pub mod leds;
+pub mod mem_routines;
 pub mod param_doc;
 pub mod ram_flash;
 #[cfg(any(test, feature = "std"))]
 pub mod readme;
+pub mod trig;
 
 pub use endpoints::{Inbound, InboundCell, Outbound, OutboundCell, TopicNode};
 pub use flash_params::{CommitReport, FlashParams, LoadReport};
