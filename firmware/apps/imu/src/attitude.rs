@@ -22,7 +22,10 @@
 
 use core::f32::consts::PI;
 
-use libm::{atan2f, cosf, sinf, sqrtf, tanf};
+use libm::{atan2f, sqrtf};
+// r2p-module's f32-only sine, cosine and tangent: libm's compute in f64, which brings 2.3 KB of
+// range reduction and 2.5 KB of double soft float into the image (7.6 KB in all, measured).
+use r2p_module::trig::{cosf, sinf, tanf};
 
 /// Standard gravity, m/s² (as the driver's).
 pub const G: f32 = r2p_drivers::lsm6dso::G;
