@@ -9,7 +9,7 @@
 //!   [`Inbound`] (imported and subscribed), built at boot in a `StaticCell`;
 //! - [`filters`]: median and first-order low-pass filters for sensor channels;
 //! - [`leds`]: the status LED patterns every module shows the same way;
-//! - [`mem_routines`]: smaller `memmove` and 8-byte aligned copy/clear than compiler-builtins';
+//! - [`mem_routines`]: smaller 8-byte aligned copy/clear than compiler-builtins';
 //! - [`param_doc`]: what each parameter means, for the README;
 //! - [`trig`]: sine, cosine and tangent in `f32` only (libm's pull in `f64` soft float);
 //! - `readme` (feature `std`): what the READMEs' generated sections share.
