@@ -1,10 +1,11 @@
 """The committed bootloader image (issue 18 item 2): its API table where images look for it, with
 the development key; its code inside its partition of the flash map; its RAM above the images'."""
 import struct
-import subprocess
 import tomllib
 
 import pytest
+
+from r2ptools import probe_targets
 
 from conftest import ROOT
 
@@ -28,13 +29,8 @@ def development_key() -> bytes:
 
 
 def load_segments(elf):
-    out = subprocess.run(["arm-none-eabi-readelf", "-lW", str(elf)], capture_output=True, text=True, check=True).stdout
-    segs = []
-    for line in out.splitlines():
-        p = line.split()
-        if p and p[0] == "LOAD":
-            segs.append(tuple(int(x, 16) for x in p[2:6]))  # vaddr, paddr, filesz, memsz
-    return segs
+    """(vaddr, paddr, filesz, memsz) of each loaded segment (probe_targets' ELF reader)."""
+    return [(g.vaddr, g.paddr, g.filesz, g.memsz) for g in probe_targets.read_elf(elf).segments]
 
 
 @pytest.mark.parametrize("name,mcu,ram", BOOTLOADERS)

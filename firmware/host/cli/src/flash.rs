@@ -252,22 +252,28 @@ fn shell_line(exe: &Path, args: &[OsString]) -> String {
 
 /// Runs `r2p flash`.
 pub fn run(args: &FlashArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    let root = match &args.root {
+    let root = repository(args.root.as_deref(), "flash")?;
+    flash(args, &root, std::env::var_os("PATH").as_deref(), out)
+}
+
+/// The R2P repository a command works in: `--root`'s, else the one around the current folder,
+/// else the one around `r2p` itself; `command` names the command in the error.
+pub fn repository(root: Option<&Path>, command: &str) -> Result<PathBuf, CliError> {
+    match root {
         Some(r) => find_root(r).ok_or_else(|| {
             CliError::new(format!("--root {}: no modules.toml there or above", r.display()))
-        })?,
+        }),
         None => std::env::current_dir()
             .ok()
             .and_then(|d| find_root(&d))
             .or_else(|| std::env::current_exe().ok().and_then(|e| find_root(&e)))
             .ok_or_else(|| {
-                CliError::new(
-                    "not inside an R2P repository (no modules.toml here or above): run r2p flash \
-                     from the repository, or give --root DIR",
-                )
-            })?,
-    };
-    flash(args, &root, std::env::var_os("PATH").as_deref(), out)
+                CliError::new(format!(
+                    "not inside an R2P repository (no modules.toml here or above): run r2p \
+                     {command} from the repository, or give --root DIR"
+                ))
+            }),
+    }
 }
 
 /// `r2p flash` in the repository `root`, looking for probe-rs on `path`.

@@ -10,7 +10,7 @@ use r2p_boot::sign::{parse_key_file, public_key, sign, Meta, SignError};
 use r2p_boot::Version;
 
 use crate::error::CliError;
-use crate::flash::{find_root, flash_target};
+use crate::flash::{find_root, flash_target, repository};
 
 /// The public development key pair, relative to the repository: anyone can sign with it.
 pub const DEVELOPMENT_KEY: &str = "firmware/keys/development.key";
@@ -44,13 +44,6 @@ pub struct SignArgs {
     /// The R2P repository (default: the one around the current folder)
     #[arg(long, value_name = "DIR")]
     pub root: Option<PathBuf>,
-}
-
-fn repository(root: &Option<PathBuf>) -> Option<PathBuf> {
-    match root {
-        Some(r) => find_root(r),
-        None => std::env::current_dir().ok().and_then(|d| find_root(&d)),
-    }
 }
 
 /// Writes a new key pair: 32 random bytes from the OS as the secret seed (mode 0600), its
@@ -135,7 +128,8 @@ pub fn parse_version(s: &str) -> Result<Version, CliError> {
 /// Signs an image: a module's committed image, or a file.
 pub fn sign_image(args: &SignArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let version = parse_version(&args.version)?;
-    let root = repository(&args.root);
+    // The module's MCU (and the development key) come from the repository, whatever is signed.
+    let root = repository(args.root.as_deref(), "sign")?;
     let as_file = Path::new(&args.image);
     let (bin, kind, mcu) = if as_file.is_file() {
         let kind = args.kind.clone().ok_or_else(|| {
@@ -144,25 +138,26 @@ pub fn sign_image(args: &SignArgs, out: &mut dyn Write) -> Result<(), CliError> 
                 as_file.display()
             ))
         })?;
-        let root = root.as_ref().ok_or_else(|| CliError::new("the module's MCU comes from modules.toml: run inside the repository or give --root"))?;
-        let mcu = flash_target(root, &kind)?.chip;
+        let mcu = flash_target(&root, &kind)?.chip;
         (as_file.to_path_buf(), kind, mcu)
+    } else if args.image.contains(std::path::MAIN_SEPARATOR) || args.image.ends_with(".bin") {
+        return Err(CliError::new(format!(
+            "{}: no such file (give a module's name, e.g. motor, or an image file)",
+            as_file.display()
+        )));
     } else {
-        let root = root.as_ref().ok_or_else(|| {
-            CliError::new(format!("{:?} is not a file, and there is no R2P repository here to find a module of that name in (give --root)", args.image))
-        })?;
-        let t = flash_target(root, &args.image)?;
+        let t = flash_target(&root, &args.image)?;
         (root.join(t.image.with_extension("bin")), t.module, t.chip)
     };
     let image =
         std::fs::read(&bin).map_err(|e| CliError::new(format!("{}: {e}", bin.display())))?;
-    let (key_file, development) = match (&args.key, &root) {
-        (Some(k), _) => (k.clone(), false),
-        (None, Some(r)) => (r.join(DEVELOPMENT_KEY), true),
-        (None, None) => return Err(CliError::new("give --key FILE (`r2p keygen` makes one)")),
+    let (key_file, development) = match &args.key {
+        Some(k) => (k.clone(), false),
+        None => (root.join(DEVELOPMENT_KEY), true),
     };
-    let text = std::fs::read_to_string(&key_file)
-        .map_err(|e| CliError::new(format!("{}: {e}", key_file.display())))?;
+    let text = std::fs::read_to_string(&key_file).map_err(|e| {
+        CliError::new(format!("{}: {e} (`r2p keygen FILE` makes a key)", key_file.display()))
+    })?;
     let seed =
         parse_key_file(&text).map_err(|e| CliError::new(format!("{}: {e}", key_file.display())))?;
     let meta = Meta { version, kind: &kind, mcu: &mcu };

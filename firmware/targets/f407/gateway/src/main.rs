@@ -319,8 +319,9 @@ async fn main(spawner: Spawner) {
     let mut state_flash = regions.bank1_region2;
     let mut aligned = AlignedBuffer([0; STATE_WRITE]);
     let mut boot_state = BlockingFirmwareState::new(&mut state_flash, &mut aligned.0);
-    let on_trial = boot_state.get_state().is_ok_and(|s| s == State::Swap);
-    if boot_state.get_state().is_ok_and(|s| s == State::Revert) {
+    let state = boot_state.get_state().ok();
+    let on_trial = state == Some(State::Swap);
+    if state == Some(State::Revert) {
         let _ = boot_state.mark_booted();
     }
     let watchdog = on_trial.then(|| {
