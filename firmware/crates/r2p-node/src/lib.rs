@@ -32,6 +32,7 @@ mod node_send;
 pub mod params;
 pub mod remote;
 pub mod slot_tx;
+pub mod update;
 pub mod wire;
 
 #[cfg(test)]
@@ -55,6 +56,8 @@ mod master_timing_tests;
 #[cfg(test)]
 mod panic_report_tests;
 #[cfg(test)]
+mod update_tests;
+#[cfg(test)]
 mod registration_bounds_tests;
 #[cfg(any(test, feature = "selftest"))]
 mod tdma_tests;
@@ -73,6 +76,7 @@ pub use node::{
 pub use params::{NoParams, Param, ParamStore, RamParams, Typed};
 pub use remote::{Export, Import, ImportError, RemotePublisher, RemoteSubscriber};
 pub use slot_tx::{FreeSlots, SlotTx};
+pub use update::{FirmwareId, UpdateSink};
 pub use wire::{Wire, WireError};
 
 /// The crate's test suite, compiled in for bare-metal runners (feature `selftest`).
