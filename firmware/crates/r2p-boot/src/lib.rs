@@ -29,6 +29,6 @@ mod verify;
 
 pub use refusal::Refusal;
 pub use trailer::{
-    key_id, Name, Trailer, Version, FORMAT, MAGIC, NAME_LEN, SIGNED_LEN, TRAILER_LEN,
+    image_digest, key_id, Name, Trailer, Version, FORMAT, MAGIC, NAME_LEN, SIGNED_LEN, TRAILER_LEN,
 };
 pub use verify::{verify_file, verify_slot, Expect};

@@ -192,6 +192,9 @@ pub enum Message {
         version: u32,
         /// The first [`DIGEST_LEN`] bytes of SHA-512 of the image (what `r2p sign` prints).
         digest: [u8; DIGEST_LEN],
+        /// The module kind the image is for (modules.toml's name): what `r2p update --all`
+        /// matches images against.
+        kind: String<NAME_MAX>,
     },
     /// One message of a firmware-update transfer (r2p-boot's `transfer`: begin, block, end from
     /// the sender; status from the module) for node `target`. The management layer only
@@ -446,9 +449,10 @@ impl Message {
             }
             Message::Reboot { target } => w.u8(*target)?,
             Message::PanicReport { text } => w.str(text)?,
-            Message::Firmware { version, digest } => {
+            Message::Firmware { version, digest, kind } => {
                 w.u32(*version)?;
                 w.bytes(digest)?;
+                w.str(kind)?;
             }
             Message::Update { target, data } => {
                 w.u8(*target)?;
@@ -554,13 +558,14 @@ impl Message {
                 let version = r.u32()?;
                 let mut digest = [0; DIGEST_LEN];
                 digest.copy_from_slice(r.take(DIGEST_LEN)?);
-                Message::Firmware { version, digest }
+                Message::Firmware { version, digest, kind: r.string(is_name_char)? }
             }
             ty::UPDATE => {
                 let target = r.u8()?;
                 let len = r.u8()?;
                 let data = r.take(usize::from(len))?;
-                let data = heapless::Vec::from_slice(data).map_err(|_| DecodeError::BadValue(len))?;
+                let data =
+                    heapless::Vec::from_slice(data).map_err(|_| DecodeError::BadValue(len))?;
                 Message::Update { target, data }
             }
             ty::ADVERTISE => {
@@ -662,7 +667,11 @@ pub(crate) mod tests {
             Message::PanicReport {
                 text: String::try_from("panic, calls: 08002a1e 0800b3c2 08004f16").unwrap(),
             },
-            Message::Firmware { version: 0x0104_0002, digest: [0xA1, 2, 3, 4, 5, 6, 7, 0xF8] },
+            Message::Firmware {
+                version: 0x0104_0002,
+                digest: [0xA1, 2, 3, 4, 5, 6, 7, 0xF8],
+                kind: String::try_from("motor").unwrap(),
+            },
             Message::Update { target: 0x12, data: heapless::Vec::from_slice(&[0x52; 55]).unwrap() },
             Message::Advertise {
                 topic: String::try_from("motor1/speed").unwrap(),
@@ -762,9 +771,13 @@ pub(crate) mod tests {
             let mut long = [0u8; 3 + UPDATE_MAX + 1];
             long[..3].copy_from_slice(&[ty::UPDATE, 1, UPDATE_MAX as u8 + 1]);
             assert_eq!(Message::decode(&long), Err(DecodeError::BadValue(UPDATE_MAX as u8 + 1)));
-            let f = Message::Firmware { version: 0x0104_0002, digest: [1, 2, 3, 4, 5, 6, 7, 8] };
+            let f = Message::Firmware {
+                version: 0x0104_0002,
+                digest: [1, 2, 3, 4, 5, 6, 7, 8],
+                kind: String::try_from("psu").unwrap(),
+            };
             let n = f.encode(&mut buf).unwrap();
-            assert_eq!(&buf[..n], &[0x15, 2, 0, 4, 1, 1, 2, 3, 4, 5, 6, 7, 8]);
+            assert_eq!(&buf[..n], &[0x15, 2, 0, 4, 1, 1, 2, 3, 4, 5, 6, 7, 8, 3, b'p', b's', b'u']);
         }
 
         fn hrt_layout_matches_spec() {

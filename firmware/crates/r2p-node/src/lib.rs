@@ -56,8 +56,6 @@ mod master_timing_tests;
 #[cfg(test)]
 mod panic_report_tests;
 #[cfg(test)]
-mod update_tests;
-#[cfg(test)]
 mod registration_bounds_tests;
 #[cfg(any(test, feature = "selftest"))]
 mod tdma_tests;
@@ -69,6 +67,8 @@ pub mod testbus;
 mod tests;
 #[cfg(test)]
 mod unslotted_tests;
+#[cfg(test)]
+mod update_tests;
 
 pub use node::{
     Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats, MODULE_SLOT_LEAD_US,

@@ -183,6 +183,11 @@ impl<
         })
     }
 
+    /// What the module said about itself when it built the node.
+    pub fn config(&self) -> &NodeConfig {
+        &self.config
+    }
+
     /// This module's node ID (it may change when a conflict is settled: [`Event::NodeIdChanged`]).
     pub fn node_id(&self) -> NodeId {
         self.ids.node_id()

@@ -17,11 +17,13 @@ pub trait UpdateSink: Sync {
 }
 
 /// What the running image is, as its signed trailer says (r2p-boot): sent in FIRMWARE
-/// messages. The default (version 0, zero digest) is an image flashed without a trailer.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// messages. Version 0 and a zero digest: an image flashed without a trailer.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct FirmwareId {
     /// major << 24 | minor << 16 | patch.
     pub version: u32,
     /// The first 8 bytes of SHA-512 of the image.
     pub digest: [u8; 8],
+    /// The module kind it is for (modules.toml's name).
+    pub kind: heapless::String<{ r2p_management::message::NAME_MAX }>,
 }

@@ -67,7 +67,10 @@ fn updates_reach_the_addressed_sink_and_its_answer_the_sender() {
     assert_eq!(module_sink.seen(), [(t, block.clone())], "the whole message, with its sender");
     assert!(other_sink.seen().is_empty(), "addressed to another node");
     assert_eq!(tool_sink.seen(), [(module.node_id().get(), b"ok\x00".to_vec())]);
-    assert!(module_sink.seen().iter().all(|(from, _)| *from == t), "its own answer never comes back");
+    assert!(
+        module_sink.seen().iter().all(|(from, _)| *from == t),
+        "its own answer never comes back"
+    );
 }
 
 #[test]
@@ -94,8 +97,8 @@ fn heard(firmware: Option<FirmwareId>, heartbeats: u64) -> Vec<std::string::Stri
             if let Some(m) = r.accept(&rx.frame, rx.at, Expect::Any) {
                 match Message::decode(m.data) {
                     Ok(Message::Heartbeat { .. }) => seen.push("H".into()),
-                    Ok(Message::Firmware { version, digest }) => {
-                        assert_eq!(digest, [9, 8, 7, 6, 5, 4, 3, 2]);
+                    Ok(Message::Firmware { version, digest, kind }) => {
+                        assert_eq!((digest, kind.as_str()), ([9, 8, 7, 6, 5, 4, 3, 2], "motor"));
                         seen.push(std::format!("F{version:x}"));
                     }
                     _ => {}
@@ -108,7 +111,8 @@ fn heard(firmware: Option<FirmwareId>, heartbeats: u64) -> Vec<std::string::Stri
 
 #[test]
 fn the_firmware_is_said_after_the_first_heartbeat_and_every_few_after() {
-    let f = FirmwareId { version: 0x0104_0002, digest: [9, 8, 7, 6, 5, 4, 3, 2] };
+    let kind = "motor".try_into().unwrap();
+    let f = FirmwareId { version: 0x0104_0002, digest: [9, 8, 7, 6, 5, 4, 3, 2], kind };
     let seen = heard(Some(f), u64::from(PANIC_REPORT_EVERY) + 1);
     let mut expected: Vec<std::string::String> = Vec::new();
     for i in 0..=PANIC_REPORT_EVERY {

@@ -134,8 +134,9 @@ impl<
             if let Some(text) = self.panic_report.clone() {
                 let _ = self.send(&Message::PanicReport { text }); // again at the next one due
             }
-            if let Some(f) = self.firmware {
-                let _ = self.send(&Message::Firmware { version: f.version, digest: f.digest });
+            if let Some(f) = self.firmware.clone() {
+                let (version, digest, kind) = (f.version, f.digest, f.kind);
+                let _ = self.send(&Message::Firmware { version, digest, kind });
             }
         }
     }
