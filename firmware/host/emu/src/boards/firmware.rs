@@ -95,7 +95,9 @@ pub fn bootloader(chip: &'static BoardChip) -> Result<Booted, Refusal> {
         | u32::from(t.version.minor) << 16
         | u32::from(t.version.patch);
     let kind = t.kind.as_str().try_into().unwrap_or_default();
-    Ok(Booted { state, firmware: FirmwareId { version, digest: t.digest, kind }, stall_ns })
+    let on_trial = state == State::Swap;
+    let firmware = FirmwareId { version, digest: t.digest, kind, on_trial };
+    Ok(Booted { state, firmware, stall_ns })
 }
 
 /// The bootloader's check a module asks for through its API table, here over the DFU slot.
@@ -129,7 +131,8 @@ pub fn around_app(
     heartbeat_us: Micros,
     reset: Rc<Cell<bool>>,
 ) -> App<'static, BoardNode> {
-    let mut trial = Trial::new(boot_us / 1_000, booted.state == State::Swap);
+    let mut trial = Trial::new(boot_us / 1_000, booted.firmware.on_trial);
+    let confirmed = FirmwareId { on_trial: false, ..booted.firmware.clone() };
     let running_after = boot_us + 2 * heartbeat_us;
     Box::new(move |now, node: &mut BoardNode| {
         app(now, node);
@@ -143,10 +146,31 @@ pub fn around_app(
             Verdict::Confirm => {
                 let mut aligned = [0u8; 4];
                 let state = part(chip, map().state);
-                let _ = BlockingFirmwareState::new(state, &mut aligned).mark_booted();
+                if BlockingFirmwareState::new(state, &mut aligned).mark_booted().is_ok() {
+                    node.set_firmware(confirmed.clone());
+                }
             }
             Verdict::GiveUp => reset.set(true),
             Verdict::Wait | Verdict::Kept => {}
         }
     })
+}
+
+/// The trailer of the image in the active slot (what the board runs), read without side
+/// effects; `None` if there is no valid one.
+pub fn active_trailer(chip: &BoardChip) -> Option<r2p_boot::Trailer> {
+    let active = map().active;
+    chip.lock(|c| {
+        let at = (active.offset + active.size) as usize - TRAILER_LEN;
+        let flash = c.borrow();
+        let raw: &[u8; TRAILER_LEN] = flash.chip.bytes()[at..at + TRAILER_LEN].try_into().ok()?;
+        r2p_boot::Trailer::parse(raw).ok()
+    })
+}
+
+/// embassy-boot's state as the flash holds it now (`Swap`: an update is marked, or the running
+/// image is on trial; `Boot`: confirmed, nothing pending).
+pub fn boot_state(chip: &'static BoardChip) -> Option<State> {
+    let mut aligned = [0u8; 4];
+    BlockingFirmwareState::new(part(chip, map().state), &mut aligned).get_state().ok()
 }
