@@ -8,7 +8,8 @@
 //! the bus's (module_core, USART3), so bus traffic never delays the current loop; thread mode
 //! stores parameters, only while the bridge is off (a page erase stalls the CPU for ~20 ms,
 //! control loop included), and reboots on request (likewise deferred until the bridge is off:
-//! the module never resets with the motor driven).
+//! the module never resets with the motor driven); so is its confirmation after an update (a
+//! page erase) or its rollback when out of time.
 #![no_std]
 #![no_main]
 
@@ -105,7 +106,7 @@ async fn main(_spawner: Spawner) {
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can(&mut can).await;
-    let mut flash = module_core::load_params(&PARAMS, p.FLASH);
+    let mut flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
     let names = Names::from_params(&PARAMS);
     let ep = ENDPOINTS.build(names);
     let config = NodeConfig {
@@ -121,6 +122,9 @@ async fn main(_spawner: Spawner) {
         Timer::after_millis(100).await;
         if !BRIDGE_ON.load(Relaxed) {
             module_core::persist(&PARAMS, &mut flash);
+        } else {
+            // After an update, the trial confirms (or gives up) once the bridge is off.
+            flash.feed_watchdog();
         }
     }
 }
