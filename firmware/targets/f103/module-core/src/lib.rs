@@ -46,11 +46,9 @@
 //! slot boundary back except for their short critical sections.
 #![no_std]
 
-use core::cell::RefCell;
 use core::future::Future;
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
-use embassy_embedded_hal::flash::partition::BlockingPartition;
 use embassy_executor::InterruptExecutor;
 use embassy_stm32::can::Can;
 use embassy_stm32::flash::{Blocking, Flash};
@@ -59,8 +57,6 @@ use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
 use embassy_stm32::peripherals::{FLASH, IWDG, TIM2};
 use embassy_stm32::{pac, rcc, time::Hertz, Config, Peri, Peripherals};
-use embassy_sync::blocking_mutex::raw::NoopRawMutex;
-use embassy_sync::blocking_mutex::Mutex;
 use embassy_time::{Duration, Instant, Ticker};
 use r2p_boot::layout::STM32F103CB as MAP;
 use r2p_module::{leds, FlashParams};
@@ -296,10 +292,8 @@ impl ModuleFlash {
     fn poll_trial(&mut self) {
         let b = LED_INPUTS.load(Ordering::Relaxed);
         let healthy = b & RUNNING != 0 && b & SYNCED != 0 && b & STORAGE_FAULT == 0;
-        let flash = Mutex::<NoopRawMutex, _>::new(RefCell::new(&mut self.flash));
-        let mut state = BlockingPartition::new(&flash, MAP.state.offset, MAP.state.size);
         let now_ms = Instant::now().as_millis();
-        if !self.confirmation.poll(&mut state, now_ms, healthy) {
+        if !self.confirmation.poll(&mut self.flash, now_ms, healthy) {
             defmt::warn!("trial: confirming this image failed");
             LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
         }
@@ -320,9 +314,7 @@ pub fn load_params<const N: usize>(
         LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
     }
     let confirmation = if behind_bootloader() {
-        let lock = Mutex::<NoopRawMutex, _>::new(RefCell::new(&mut flash));
-        let mut state = BlockingPartition::new(&lock, MAP.state.offset, MAP.state.size);
-        Confirmation::at_boot(&mut state, iwdg, Instant::now().as_millis())
+        Confirmation::at_boot(&mut flash, MAP.state, iwdg, Instant::now().as_millis())
     } else {
         Confirmation::not_on_trial()
     };

@@ -296,7 +296,8 @@ async fn main(spawner: Spawner) {
     // Just swapped in by the bootloader (its state says Swap): on trial, under the watchdog.
     // Just rolled back (Revert): say so to the bootloader, so the next update may begin.
     let mut state = regions.bank1_region2;
-    let confirmation = Confirmation::at_boot(&mut state, p.IWDG, Instant::now().as_millis());
+    let whole = r2p_boot::layout::Partition { offset: 0, size: MAP.state.size };
+    let confirmation = Confirmation::at_boot(&mut state, whole, p.IWDG, Instant::now().as_millis());
     let trial = Trial { confirmation, state };
     let net = Net::read(&PARAMS, 0);
     let uid = embassy_stm32::uid::uid();
