@@ -276,6 +276,12 @@ pub fn start_bus(
 
 /// The module's flash as the application's task keeps it: the parameter pages and the
 /// bootloader's state, in which the image confirms itself after an update.
+///
+/// SEAM (issue 18 item 3, the update over the bus): the DFU writer (r2p-module's `DfuSink`
+/// behind r2p-node's `UpdateSink`) needs the DFU slot and the state partition of this same
+/// flash, which this task owns; the node hands it UPDATE messages in the bus task, at interrupt
+/// priority, where a page erase (20–40 ms) would stall every slot. Where it runs and how it
+/// shares the flash with the parameters is the update's design, not settled here.
 pub struct ModuleFlash {
     flash: Flash<'static, Blocking>,
     confirmation: Confirmation,
