@@ -1,6 +1,7 @@
 //! The running image's side of embassy-boot's state partition: whether the bootloader has just
-//! swapped this image in (it is on trial) or rolled it back, and confirming it
-//! (`mark_booted`).
+//! swapped this image in (it is on trial) or rolled it back, confirming it (`mark_booted`), and
+//! asking for the swap of a verified update (`mark_updated`, for the DFU writer of issue 18
+//! item 3).
 //!
 //! embassy-boot's `BlockingFirmwareState` does the same in ~1.2 KiB more of Cortex-M3 code
 //! (measured on the F103 module images): it keeps its state word in a slice, which it fills
@@ -60,14 +61,31 @@ pub fn read<F: NorFlash>(flash: &mut F, offset: u32) -> Result<BootState, F::Err
 }
 
 /// Confirms the running image in the state partition at `offset` (`size` bytes) of `flash`, as
-/// embassy-boot's `mark_booted`: nothing if already confirmed; otherwise invalidates the swap's
-/// progress (so a torn erase cannot leave progress that looks valid), erases the partition and
-/// writes the confirmed magic. The erase stalls an STM32's CPU for a page erase's time.
+/// embassy-boot's `mark_booted`. The erase stalls an STM32's CPU for a page erase's time.
 pub fn mark_booted<F: NorFlash>(flash: &mut F, offset: u32, size: u32) -> Result<(), F::Error> {
+    set_magic(flash, offset, size, BOOT_MAGIC)
+}
+
+/// Asks the bootloader to swap in the update in the DFU slot at the next reset, as
+/// embassy-boot's `mark_updated` (only once the update has been verified: the bootloader
+/// swaps without checking).
+pub fn mark_updated<F: NorFlash>(flash: &mut F, offset: u32, size: u32) -> Result<(), F::Error> {
+    set_magic(flash, offset, size, SWAP_MAGIC)
+}
+
+/// embassy-boot's `set_magic`: nothing if the state already says `magic`; otherwise invalidates
+/// the swap's progress (so a torn erase cannot leave progress that looks valid), erases the
+/// partition and writes `magic`.
+fn set_magic<F: NorFlash>(
+    flash: &mut F,
+    offset: u32,
+    size: u32,
+    magic: u8,
+) -> Result<(), F::Error> {
     let mut w = Word([0; MAX_WRITE]);
     let word = &mut w.0[..F::WRITE_SIZE];
     flash.read(offset, word)?;
-    if all(word, BOOT_MAGIC) {
+    if all(word, magic) {
         return Ok(());
     }
     let progress = offset + F::WRITE_SIZE as u32;
@@ -77,7 +95,7 @@ pub fn mark_booted<F: NorFlash>(flash: &mut F, offset: u32, size: u32) -> Result
         flash.write(progress, word)?;
     }
     flash.erase(offset, offset + size)?;
-    word.fill(BOOT_MAGIC);
+    word.fill(magic);
     flash.write(offset, word)
 }
 
@@ -141,6 +159,52 @@ mod tests {
         );
     }
 
+    /// The chip, logging each erase and write.
+    struct Logged<'a>(&'a mut Chip, std::vec::Vec<(char, u32, u8)>);
+    impl embedded_storage::nor_flash::ErrorType for Logged<'_> {
+        type Error = <Chip as embedded_storage::nor_flash::ErrorType>::Error;
+    }
+    impl embedded_storage::nor_flash::ReadNorFlash for Logged<'_> {
+        const READ_SIZE: usize = 1;
+        fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+            self.0.read(offset, bytes)
+        }
+        fn capacity(&self) -> usize {
+            self.0.capacity()
+        }
+    }
+    impl NorFlash for Logged<'_> {
+        const WRITE_SIZE: usize = Chip::WRITE_SIZE;
+        const ERASE_SIZE: usize = 1024;
+        fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+            self.1.push(('e', from, 0));
+            self.0.erase(from, to)
+        }
+        fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+            self.1.push(('w', offset, bytes[0]));
+            self.0.write(offset, bytes)
+        }
+    }
+
+    #[test]
+    fn the_swap_progress_is_invalidated_before_the_erase_as_embassy_boot_does() {
+        let mut chip = Chip::new();
+        chip.write(AT, &[SWAP_MAGIC; Chip::WRITE_SIZE]).unwrap();
+        let mut f = Logged(&mut chip, std::vec::Vec::new());
+        mark_booted(&mut f, AT, 2048).unwrap();
+        let w = Chip::WRITE_SIZE as u32;
+        assert_eq!(f.1, [('w', AT + w, !ERASED), ('e', AT, 0), ('w', AT, BOOT_MAGIC)]);
+        // A marker already written is left as it is.
+        let mut chip = Chip::new();
+        chip.write(AT, &[SWAP_MAGIC; Chip::WRITE_SIZE]).unwrap();
+        chip.write(AT + w, &[0; Chip::WRITE_SIZE]).unwrap();
+        let mut f = Logged(&mut chip, std::vec::Vec::new());
+        mark_updated(&mut f, AT, 2048).unwrap();
+        assert_eq!(f.1, [], "already marked for the swap: nothing written");
+        mark_booted(&mut f, AT, 2048).unwrap();
+        assert_eq!(f.1, [('e', AT, 0), ('w', AT, BOOT_MAGIC)]);
+    }
+
     #[test]
     fn a_confirmed_image_is_not_written_again() {
         let mut chip = Chip::new();
@@ -148,6 +212,15 @@ mod tests {
         chip.bytes_mut()[AT as usize + 100] = 0x5A; // anything after the magic stays
         mark_booted(&mut chip, AT, 2048).unwrap();
         assert_eq!(chip.bytes_mut()[AT as usize + 100], 0x5A);
+    }
+
+    #[test]
+    fn an_update_marked_here_is_one_embassy_boot_swaps() {
+        let mut chip = Chip::new();
+        mark_booted(&mut chip, AT, 2048).unwrap();
+        mark_updated(&mut chip, AT, 2048).unwrap();
+        assert_eq!(embassy(&mut chip), State::Swap, "what the bootloader's read_state reads too");
+        assert_eq!(read(&mut chip, AT), Ok(BootState::Swapped));
     }
 
     #[test]
