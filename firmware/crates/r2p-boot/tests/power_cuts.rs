@@ -169,12 +169,17 @@ fn boot(flash: &Flash) -> Result<(State, Trailer), String> {
     Ok((state, t))
 }
 
-/// The new image, once it has joined the bus and passed its self-checks.
+/// The new image, once it has joined the bus and passed its self-checks: as the images do it
+/// (r2p-boot's `boot_state`, not embassy-boot's updater).
 fn confirm(flash: &Flash) -> Result<(), String> {
-    let mut aligned = [0u8; Chip::WRITE_SIZE];
-    let config = FirmwareUpdaterConfig { dfu: part(flash, MAP.dfu), state: part(flash, MAP.state) };
-    BlockingFirmwareUpdater::new(config, &mut aligned)
-        .mark_booted()
+    flash
+        .lock(|f| {
+            r2p_boot::boot_state::mark_booted(
+                &mut *f.borrow_mut(),
+                MAP.state.offset,
+                MAP.state.size,
+            )
+        })
         .map_err(|e| format!("confirm: {e:?}"))
 }
 
