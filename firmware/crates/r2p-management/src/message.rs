@@ -195,6 +195,9 @@ pub enum Message {
         /// The module kind the image is for (modules.toml's name): what `r2p update --all`
         /// matches images against.
         kind: String<NAME_MAX>,
+        /// Just swapped in and not yet confirmed healthy: the bootloader rolls it back if it
+        /// resets before it confirms (r2p-boot's `trial`).
+        on_trial: bool,
     },
     /// One message of a firmware-update transfer (r2p-boot's `transfer`: begin, block, end from
     /// the sender; status from the module) for node `target`. The management layer only
@@ -449,10 +452,11 @@ impl Message {
             }
             Message::Reboot { target } => w.u8(*target)?,
             Message::PanicReport { text } => w.str(text)?,
-            Message::Firmware { version, digest, kind } => {
+            Message::Firmware { version, digest, kind, on_trial } => {
                 w.u32(*version)?;
                 w.bytes(digest)?;
                 w.str(kind)?;
+                w.u8(u8::from(*on_trial))?;
             }
             Message::Update { target, data } => {
                 w.u8(*target)?;
@@ -558,7 +562,12 @@ impl Message {
                 let version = r.u32()?;
                 let mut digest = [0; DIGEST_LEN];
                 digest.copy_from_slice(r.take(DIGEST_LEN)?);
-                Message::Firmware { version, digest, kind: r.string(is_name_char)? }
+                let kind = r.string(is_name_char)?;
+                let on_trial = match r.u8()? {
+                    b @ 0..=1 => b == 1,
+                    other => return Err(DecodeError::BadValue(other)),
+                };
+                Message::Firmware { version, digest, kind, on_trial }
             }
             ty::UPDATE => {
                 let target = r.u8()?;
@@ -671,6 +680,7 @@ pub(crate) mod tests {
                 version: 0x0104_0002,
                 digest: [0xA1, 2, 3, 4, 5, 6, 7, 0xF8],
                 kind: String::try_from("motor").unwrap(),
+                on_trial: true,
             },
             Message::Update { target: 0x12, data: heapless::Vec::from_slice(&[0x52; 55]).unwrap() },
             Message::Advertise {
@@ -775,9 +785,11 @@ pub(crate) mod tests {
                 version: 0x0104_0002,
                 digest: [1, 2, 3, 4, 5, 6, 7, 8],
                 kind: String::try_from("psu").unwrap(),
+                on_trial: false,
             };
             let n = f.encode(&mut buf).unwrap();
-            assert_eq!(&buf[..n], &[0x15, 2, 0, 4, 1, 1, 2, 3, 4, 5, 6, 7, 8, 3, b'p', b's', b'u']);
+            assert_eq!(&buf[..n], &[0x15, 2, 0, 4, 1, 1, 2, 3, 4, 5, 6, 7, 8, 3, b'p', b's', b'u', 0]);
+            assert_eq!(Message::decode(&[&buf[..n - 1], &[2]].concat()), Err(DecodeError::BadValue(2)));
         }
 
         fn hrt_layout_matches_spec() {

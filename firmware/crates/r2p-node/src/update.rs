@@ -26,4 +26,6 @@ pub struct FirmwareId {
     pub digest: [u8; 8],
     /// The module kind it is for (modules.toml's name).
     pub kind: heapless::String<{ r2p_management::message::NAME_MAX }>,
+    /// Just swapped in, not yet confirmed (set it again once confirmed).
+    pub on_trial: bool,
 }

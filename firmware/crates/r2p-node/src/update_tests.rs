@@ -97,7 +97,7 @@ fn heard(firmware: Option<FirmwareId>, heartbeats: u64) -> Vec<std::string::Stri
             if let Some(m) = r.accept(&rx.frame, rx.at, Expect::Any) {
                 match Message::decode(m.data) {
                     Ok(Message::Heartbeat { .. }) => seen.push("H".into()),
-                    Ok(Message::Firmware { version, digest, kind }) => {
+                    Ok(Message::Firmware { version, digest, kind, .. }) => {
                         assert_eq!((digest, kind.as_str()), ([9, 8, 7, 6, 5, 4, 3, 2], "motor"));
                         seen.push(std::format!("F{version:x}"));
                     }
@@ -112,7 +112,12 @@ fn heard(firmware: Option<FirmwareId>, heartbeats: u64) -> Vec<std::string::Stri
 #[test]
 fn the_firmware_is_said_after_the_first_heartbeat_and_every_few_after() {
     let kind = "motor".try_into().unwrap();
-    let f = FirmwareId { version: 0x0104_0002, digest: [9, 8, 7, 6, 5, 4, 3, 2], kind };
+    let f = FirmwareId {
+        version: 0x0104_0002,
+        digest: [9, 8, 7, 6, 5, 4, 3, 2],
+        kind,
+        on_trial: false,
+    };
     let seen = heard(Some(f), u64::from(PANIC_REPORT_EVERY) + 1);
     let mut expected: Vec<std::string::String> = Vec::new();
     for i in 0..=PANIC_REPORT_EVERY {

@@ -135,8 +135,8 @@ impl<
                 let _ = self.send(&Message::PanicReport { text }); // again at the next one due
             }
             if let Some(f) = self.firmware.clone() {
-                let (version, digest, kind) = (f.version, f.digest, f.kind);
-                let _ = self.send(&Message::Firmware { version, digest, kind });
+                let (version, digest, kind, on_trial) = (f.version, f.digest, f.kind, f.on_trial);
+                let _ = self.send(&Message::Firmware { version, digest, kind, on_trial });
             }
         }
     }
