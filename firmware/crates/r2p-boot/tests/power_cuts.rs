@@ -5,9 +5,7 @@
 
 use core::cell::RefCell;
 
-use embassy_boot::{
-    BlockingFirmwareUpdater, BootLoader, BootLoaderConfig, FirmwareUpdaterConfig, State,
-};
+use embassy_boot::{BootLoader, BootLoaderConfig, State};
 use embassy_embedded_hal::flash::partition::BlockingPartition;
 use embassy_sync::blocking_mutex::{raw::CriticalSectionRawMutex, Mutex};
 use embedded_storage::nor_flash::{ErrorType, NorFlash, ReadNorFlash};

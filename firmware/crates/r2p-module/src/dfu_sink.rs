@@ -7,10 +7,10 @@
 
 use core::cell::RefCell;
 
-use embassy_boot::{BlockingFirmwareState, State as BootState};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embedded_storage::nor_flash::NorFlash;
+use r2p_boot::boot_state::{self, BootState};
 use r2p_boot::transfer::{Msg, Receiver, State};
 use r2p_boot::{Refusal, Trailer, TRAILER_LEN};
 use r2p_node::UpdateSink;
@@ -75,18 +75,19 @@ impl<F: NorFlash, S: NorFlash> DfuSink<F, S> {
 
 impl<F: NorFlash, S: NorFlash> Inner<F, S> {
     fn boot_state(&mut self) -> Option<BootState> {
-        let mut aligned = [0u8; 8];
-        let aligned = &mut aligned[..S::WRITE_SIZE.min(8)];
-        BlockingFirmwareState::new(&mut self.state, aligned).get_state().ok()
+        boot_state::read(&mut self.state, 0).ok()
     }
 
-    /// Writes embassy-boot's magic: `swap` marks the DFU slot for the next reset, otherwise the
-    /// mark is taken back (a new transfer is about to overwrite the slot).
+    /// Writes embassy-boot's magic (r2p-boot's `boot_state`, without embassy-boot's code in
+    /// the image): `swap` marks the DFU slot for the next reset, otherwise the mark is taken
+    /// back (a new transfer is about to overwrite the slot).
     fn mark(&mut self, swap: bool) -> bool {
-        let mut aligned = [0u8; 8];
-        let aligned = &mut aligned[..S::WRITE_SIZE.min(8)];
-        let mut state = BlockingFirmwareState::new(&mut self.state, aligned);
-        let done = if swap { state.mark_updated() } else { state.mark_booted() };
+        let size = self.state.capacity() as u32;
+        let done = if swap {
+            boot_state::mark_updated(&mut self.state, 0, size)
+        } else {
+            boot_state::mark_booted(&mut self.state, 0, size)
+        };
         done.is_ok()
     }
 
@@ -98,7 +99,7 @@ impl<F: NorFlash, S: NorFlash> Inner<F, S> {
                     return self.receiver.refuse(id, Refusal::FlashWrite);
                 }
                 self.marked = false;
-            } else if self.boot_state() == Some(BootState::Swap) {
+            } else if self.boot_state() == Some(BootState::Swapped) {
                 // Just swapped in and not yet confirmed: embassy-boot would take a new mark
                 // for this image's rollback.
                 return self.receiver.refuse(id, Refusal::OnTrial);
