@@ -115,7 +115,7 @@ fn a_motor_module_takes_an_image_while_the_robot_drives_swaps_it_in_and_confirms
     let mut r = robot();
     r.sim.run_until(2 * S); // booted, driving (the teleop script starts at 1 s)
     let m = r.board("motor1").unwrap();
-    let new = image(40_000, "motor", 4);
+    let new = image(24_000, "motor", 4);
     let target = node_id(&r, "motor1");
     let t = tool(&mut r, new, target);
     let start = r.sim.now_ns();
@@ -165,9 +165,9 @@ fn a_motor_module_takes_an_image_while_the_robot_drives_swaps_it_in_and_confirms
 #[test]
 fn refused_images_change_nothing_and_say_why() {
     for (what, img, why) in [
-        ("another kind", image(20_000, "psu", 4), Refusal::WrongKind),
+        ("another kind", image(6_000, "psu", 4), Refusal::WrongKind),
         ("too large", image(60_000, "motor", 4), Refusal::TooLarge),
-        ("a flipped byte", flipped(image(20_000, "motor", 4), 12_345), Refusal::BadSignature),
+        ("a flipped byte", flipped(image(6_000, "motor", 4), 4_321), Refusal::BadSignature),
     ] {
         let mut r = robot();
         r.sim.run_until(2 * S);
@@ -200,7 +200,7 @@ fn a_new_image_that_never_confirms_is_rolled_back() {
     r.sim.run_until(2 * S);
     let m = r.board("motor1").unwrap();
     let target = node_id(&r, "motor1");
-    let t = tool(&mut r, image(30_000, "motor", 4), target);
+    let t = tool(&mut r, image(12_000, "motor", 4), target);
     run_transfer(&mut r, &t, 120 * S);
     assert_eq!(phase(&t), Phase::Done);
     let target = node_id(&r, "motor1").get();
@@ -223,7 +223,7 @@ fn a_transfer_cut_by_a_bus_partition_resumes_where_it_stood() {
     r.sim.run_until(2 * S);
     let m = r.board("motor1").unwrap();
     let target = node_id(&r, "motor1");
-    let t = tool(&mut r, image(30_000, "motor", 4), target);
+    let t = tool(&mut r, image(12_000, "motor", 4), target);
     r.sim.run_for(3 * S);
     let before = t.sender.lock().unwrap().progress().0;
     assert!(before > 0 && phase(&t) == Phase::Sending, "under way: {before} B");

@@ -1,0 +1,76 @@
+"""`r2p update` on the emulated Triskar2 in real time, over socketcand as on a real robot's bus
+(issue 18 item 3): a signed image reaches a motor module with a progress bar, the module swaps it
+in and confirms it, and `r2p nodes` shows the new version; images the module or the CLI refuse
+say why and leave the module on its image."""
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from conftest import ROOT, SocketcandProcess, run
+
+FIRMWARE = ROOT / "firmware"
+R2P = FIRMWARE / "target" / "debug" / "r2p"
+TRISKAR2 = ROOT / "robots" / "triskar2.toml"
+
+
+@pytest.fixture(scope="module")
+def robot():
+    p = run(["cargo", "build", "-q", "-p", "r2p-cli"], cwd=FIRMWARE, timeout=900)
+    assert p.returncode == 0, p.stdout
+    sim = SocketcandProcess([str(R2P), "sim", str(TRISKAR2), "--realtime"], "r2p sim")
+    try:
+        yield sim
+    finally:
+        sim.kill()
+
+
+def r2p(sim, *args: str, timeout: float = 120):
+    return run([str(R2P), "--socketcand", f"127.0.0.1:{sim.port}", "--timeout", "2", *args], timeout=timeout)
+
+
+def signed(tmp_path, module_image: str, kind: str, version: str):
+    """The committed image `module_image` signed (development key) as `kind` `version`."""
+    out = tmp_path / f"{kind}-{version}.bin"
+    p = run([str(R2P), "sign", str(FIRMWARE / "images" / f"{module_image}.bin"), "--kind", kind,
+             "--version", version, "-o", str(out)])
+    assert p.returncode == 0, p.stdout
+    digest = re.search(r"digest ([0-9a-f]{16})", p.stdout).group(1)
+    return out, digest
+
+
+def firmware_of(sim, name: str) -> str:
+    p = r2p(sim, "nodes")
+    assert p.returncode == 0, p.stdout
+    row = next(line for line in p.stdout.splitlines() if f" {name} " in line)
+    return row
+
+
+def test_a_motor_module_is_updated_over_the_bus_and_runs_the_new_image(robot, tmp_path):
+    assert "0.1.0" in firmware_of(robot, "motor2"), "flashed with the factory image"
+    # The template's image fits a slot; signed for a motor module it stands for a motor update.
+    image, digest = signed(tmp_path, "template", "motor", "1.4.0")
+    p = r2p(robot, "update", "motor2", str(image), timeout=180)
+    assert p.returncode == 0, p.stdout
+    assert re.search(r"\[#+\.*\] +\d+ % .* KiB/s, .* left", p.stdout), "a progress bar: " + p.stdout
+    assert "verified and marked" in p.stdout, p.stdout
+    assert f"-> 1.4.0 {digest}: running, confirmed" in p.stdout, p.stdout
+    row = firmware_of(robot, "motor2")
+    assert f"1.4.0 {digest}" in row and "on trial" not in row, row
+    assert "0.1.0" in firmware_of(robot, "motor3"), "only the module named was updated"
+
+
+def test_refused_images_say_why_and_the_module_keeps_its_image(robot, tmp_path):
+    before = firmware_of(robot, "motor1")
+    big, _ = signed(tmp_path, "motor", "motor", "2.0.0")  # 57 KB: more than a 55 168 B slot
+    p = r2p(robot, "update", "motor1", str(big))
+    assert p.returncode != 0
+    assert "refused" in p.stdout and "larger than the module's image slot" in p.stdout, p.stdout
+    assert "it keeps running its image" in p.stdout, p.stdout
+    unsigned = FIRMWARE / "images" / "template.bin"
+    p = r2p(robot, "update", "motor1", str(unsigned))
+    assert p.returncode != 0 and "not a signed R2P image" in p.stdout, p.stdout
+    p = r2p(robot, "update", "--all", str(unsigned), "motor1")
+    assert p.returncode != 0 and "with --all give only IMAGE" in p.stdout, p.stdout
+    assert firmware_of(robot, "motor1").split()[8:10] == before.split()[8:10], "unchanged"
