@@ -54,6 +54,12 @@ impl Confirmation {
         }
     }
 
+    /// Whether the image must still confirm itself.
+    #[allow(dead_code)]
+    pub const fn on_trial(&self) -> bool {
+        self.trial.on_trial()
+    }
+
     /// Feeds the watchdog (started on a trial boot only, and fed from then on).
     pub fn feed(&mut self) {
         if let Some(w) = &mut self.watchdog {

@@ -47,7 +47,8 @@ pub struct Version {
 }
 
 impl Version {
-    const fn to_bits(self) -> u32 {
+    /// The version as the trailer and FIRMWARE carry it: major << 24 | minor << 16 | patch.
+    pub const fn to_bits(self) -> u32 {
         (self.major as u32) << 24 | (self.minor as u32) << 16 | self.patch as u32
     }
 

@@ -91,9 +91,7 @@ pub fn bootloader(chip: &'static BoardChip) -> Result<Booted, Refusal> {
     let key = public_key(&development_seed());
     let expect = Expect { mcu: MCU, kind: None, public_key: &key };
     let t = verify_slot(&mut part(chip, m.active), 0, m.active.size, &expect)?;
-    let version = u32::from(t.version.major) << 24
-        | u32::from(t.version.minor) << 16
-        | u32::from(t.version.patch);
+    let version = t.version.to_bits();
     let kind = t.kind.as_str().try_into().unwrap_or_default();
     let on_trial = state == State::Swap;
     let firmware = FirmwareId { version, digest: t.digest, kind, on_trial };

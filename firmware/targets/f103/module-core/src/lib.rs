@@ -46,19 +46,22 @@
 //! slot boundary back except for their short critical sections.
 #![no_std]
 
+use core::cell::RefCell;
 use core::future::Future;
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
 use embassy_executor::InterruptExecutor;
 use embassy_stm32::can::Can;
-use embassy_stm32::flash::{Blocking, Flash};
+use embassy_stm32::flash::Flash;
 use embassy_stm32::gpio::{Input, Level, Output};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
 use embassy_stm32::peripherals::{FLASH, IWDG, TIM2};
 use embassy_stm32::{pac, rcc, time::Hertz, Config, Peri, Peripherals};
+use embassy_sync::blocking_mutex::Mutex;
+use embassy_sync::once_lock::OnceLock;
 use embassy_time::{Duration, Instant, Ticker};
-use r2p_boot::layout::STM32F103CB as MAP;
+use r2p_boot::layout::{Partition, STM32F103CB as MAP};
 use r2p_module::{leds, FlashParams};
 use r2p_node::node::STARTING_HEARTBEATS;
 use r2p_node::{Node, NodeConfig, NodeError, ParamStore};
@@ -76,9 +79,11 @@ mod panic;
 pub mod slot_timer;
 #[path = "../../../shared/trial.rs"]
 mod trial;
+pub mod update;
 pub use analog::{analog_input, AnalogInputs};
 use slot_timer::SlotTimer;
 use trial::Confirmation;
+use update::SharedFlash;
 
 /// Offset from the flash base of the parameter pages (the flash map's `params` partition,
 /// firmware/images.toml), where an image's `FlashParams` live: an update never touches them.
@@ -183,6 +188,14 @@ const STORAGE_FAULT: u8 = 8;
 static LED_INPUTS: AtomicU8 = AtomicU8::new(0);
 /// A REBOOT request arrived: the application's task persists parameters, then resets.
 static REBOOT: AtomicBool = AtomicBool::new(false);
+/// This boot is a new image's trial (read at boot from the bootloader's state).
+static ON_TRIAL: AtomicBool = AtomicBool::new(false);
+/// The image has just confirmed itself: the bus task says so in FIRMWARE.
+static TRIAL_OVER: AtomicBool = AtomicBool::new(false);
+/// The chip's flash, made at boot ([`load_params`]), shared with the bus task.
+static SHARED_FLASH: StaticCell<SharedFlash> = StaticCell::new();
+/// The shared flash, for [`start_bus`]'s update sink.
+static FLASH_FOR_BUS: OnceLock<&'static SharedFlash> = OnceLock::new();
 
 /// The node's state as the status LEDs show it (the application adds its faults).
 pub fn led_status() -> leds::Status {
@@ -218,6 +231,9 @@ async fn bus(node: BusNode, mut can: BxCan<'static>, mut timer: SlotTimer, runni
         while node.next_event().is_some() {}
         if node.take_reboot_request() {
             REBOOT.store(true, Ordering::Relaxed);
+        }
+        if TRIAL_OVER.swap(false, Ordering::Relaxed) {
+            node.set_firmware(update::running_image("", false)); // confirmed
         }
         let received = node.stats().frames_received;
         if received != frames {
@@ -258,6 +274,18 @@ pub fn start_bus(
     let node =
         NODE.init_with(|| ModuleNode::new(config, params).expect("valid node configuration"));
     register(node).expect("room for the module's topics on its node");
+    if behind_bootloader() {
+        if let Some(flash) = FLASH_FOR_BUS.try_get() {
+            node.set_update_sink(update::sink(flash, config.name));
+        }
+        node.set_firmware(update::running_image(config.name, ON_TRIAL.load(Ordering::Relaxed)));
+    } else {
+        // Flashed alone at the flash base: no trailer, no slot to update.
+        node.set_firmware(r2p_node::FirmwareId {
+            kind: config.name.try_into().unwrap_or_default(),
+            ..r2p_node::FirmwareId::default()
+        });
+    }
     let can = BxCan::new(can, pac::CAN, BIT_RATE);
     if let Some(text) = r2p_panic::take_last() {
         defmt::warn!("the last reset followed a panic: {=[u8]:a}", text);
@@ -277,13 +305,13 @@ pub fn start_bus(
 /// The module's flash as the application's task keeps it: the parameter pages and the
 /// bootloader's state, in which the image confirms itself after an update.
 ///
-/// SEAM (issue 18 item 3, the update over the bus): the DFU writer (r2p-module's `DfuSink`
-/// behind r2p-node's `UpdateSink`) needs the DFU slot and the state partition of this same
-/// flash, which this task owns; the node hands it UPDATE messages in the bus task, at interrupt
-/// priority, where a page erase (20–40 ms) would stall every slot. Where it runs and how it
-/// shares the flash with the parameters is the update's design, not settled here.
+/// The flash is shared with the bus task, which writes updates into the DFU slot
+/// ([`update`]); each use holds a critical section.
 pub struct ModuleFlash {
-    flash: Flash<'static, Blocking>,
+    flash: &'static SharedFlash,
+    /// The bootloader's state partition, as the update sink reaches it too (one copy of the
+    /// state's code in the image).
+    state: update::Part,
     confirmation: Confirmation,
 }
 
@@ -299,9 +327,12 @@ impl ModuleFlash {
         let b = LED_INPUTS.load(Ordering::Relaxed);
         let healthy = b & RUNNING != 0 && b & SYNCED != 0 && b & STORAGE_FAULT == 0;
         let now_ms = Instant::now().as_millis();
-        if !self.confirmation.poll(&mut self.flash, now_ms, healthy) {
+        let was_on_trial = self.confirmation.on_trial();
+        if !self.confirmation.poll(&mut self.state, now_ms, healthy) {
             defmt::warn!("trial: confirming this image failed");
             LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
+        } else if was_on_trial && !self.confirmation.on_trial() {
+            TRIAL_OVER.store(true, Ordering::Relaxed);
         }
     }
 }
@@ -314,17 +345,22 @@ pub fn load_params<const N: usize>(
     flash: Peri<'static, FLASH>,
     iwdg: Peri<'static, IWDG>,
 ) -> ModuleFlash {
-    let mut flash = Flash::new_blocking(flash);
-    if params.load(&mut flash).is_err() {
+    let flash: &'static SharedFlash =
+        SHARED_FLASH.init(Mutex::new(RefCell::new(Flash::new_blocking(flash))));
+    if flash.lock(|f| params.load(&mut *f.borrow_mut())).is_err() {
         defmt::warn!("parameters: reading them from flash failed, defaults used");
         LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
     }
+    let mut state = update::state_partition(flash);
     let confirmation = if behind_bootloader() {
-        Confirmation::at_boot(&mut flash, MAP.state, iwdg, Instant::now().as_millis())
+        let whole = Partition { offset: 0, size: MAP.state.size };
+        Confirmation::at_boot(&mut state, whole, iwdg, Instant::now().as_millis())
     } else {
         Confirmation::not_on_trial()
     };
-    ModuleFlash { flash, confirmation }
+    ON_TRIAL.store(confirmation.on_trial(), Ordering::Relaxed);
+    let _ = FLASH_FOR_BUS.init(flash);
+    ModuleFlash { flash, state, confirmation }
 }
 
 /// Whether this image is linked at the active slot (build_image.rs), so runs behind the
@@ -344,7 +380,7 @@ fn behind_bootloader() -> bool {
 /// full or on the confirmation, stalls the CPU ~20–40 ms) and resets if a reboot was requested.
 pub fn persist<const N: usize>(params: &FlashParams<N>, flash: &mut ModuleFlash) {
     flash.poll_trial();
-    if params.is_dirty() && params.commit(&mut flash.flash).is_err() {
+    if params.is_dirty() && flash.flash.lock(|f| params.commit(&mut *f.borrow_mut())).is_err() {
         defmt::warn!("parameters: storing in flash failed");
         LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
     }
