@@ -57,6 +57,10 @@ def test_a_changed_board_value_fails_its_row(monkeypatch, name, value, guarded):
     ("ENCODER_MA", 85.0, "from the bus"),                               # HEDS-5540 at its max
     ("ELCAP_T_LOCAL", 85.0, "electrolytic life"),                       # capacitors by the FETs
     ("HALL_RANGE", 15.5, "current resolution"),                         # below ±30 A (issue 19)
+    ("DRV_VCP_BY_VM", {15.0: (9.0, 25e-3), 10.0: (6.0, 8e-3)},
+     "charge pump load"),                                               # a weaker charge pump at 10 V
+    ("DRV_VGLS_MIN_BY_VM", {15.0: 13.0, 12.0: 10.0, 10.0: 5.0, 9.0: 5.0},
+     "gate drive at the 10 V minimum input"),                           # a weaker low-side supply
 ])
 def test_a_changed_part_or_assumption_fails_its_row(monkeypatch, name, value, guarded):
     assert row(guarded).ok

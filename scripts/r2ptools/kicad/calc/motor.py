@@ -70,15 +70,28 @@ FET_ID_PULSE = 400.0          # I_DM, abs max (the KTT family's, read for CSD195
 # --- gate driver: TI DRV8350H (hardware interface, 6x PWM mode), SLVSDY6 -------------------------
 DRV = "DRV8350HRTVR"
 DRV_VM_RANGE = (9.0, 75.0)    # VM recommended (third-party summary of SLVSDY6: NOT VERIFIED on ti.com)
-DRV_VM_ABS = 80.0             # VM abs max (same source: NOT VERIFIED)
-DRV_VDRAIN_ABS = 102.0        # VDRAIN abs max (same source)
-DRV_IDRIVE_SRC, DRV_IDRIVE_SNK = 0.55, 1.1   # A: register levels 1000b (SLVSDY6 Table 16, read);
-                              # the H variant's IDRIVE pin offers 7 of them: which, NOT VERIFIED
+DRV_VM_ABS = 80.0             # VM abs max (same summary, sheetsdata.com; TI's table NOT read)
+DRV_VDRAIN_ABS = 102.0        # VDRAIN abs max (same summary)
+DRV_IDRIVE_SRC, DRV_IDRIVE_SNK = 0.55, 1.1   # A: the register level 1000b (SLVSDY6A gate drive LS
+                              # register, read on ti.com's DRV8353R document viewer); the H variant's
+                              # IDRIVE pin offers 7 fixed levels: which ones, NOT VERIFIED
 DRV_DEAD_MIN = 100e-9         # H variant's inserted dead time (the SPI default, read): TIM1 adds its own
 DRV_VDS_LVL = 0.2             # V: VDS_OCP level (SLVSDY6 Table 17 lists 0.06–2 V; pin level NOT VERIFIED)
 DRV_VDS_TOL = 0.2             # ±20 % on the VDS comparator (estimate)
-DRV_VCP_MAX_A = 25e-3         # charge-pump (VCP) load capability (third-party summary: NOT VERIFIED)
-DRV_IQ = 8.5e-3               # VM operating current at 48 V (third-party summary)
+# Read in ZHCSIN3A (TI's Chinese edition of SLVSDY6A), electrical characteristics, "power supplies":
+# VCP (with respect to VDRAIN) and its load capability, and VGLS, fall with VM; the VM current.
+DRV_VCP_BY_VM = {             # VM: (VCP − VDRAIN min, max load A)
+    15.0: (9.0, 25e-3), 12.0: (7.5, 20e-3), 10.0: (6.0, 15e-3), 9.0: (5.5, 10e-3)}
+DRV_VGLS_MIN_BY_VM = {15.0: 13.0, 12.0: 10.0, 10.0: 8.0, 9.0: 7.0}   # V, low-side gate supply min
+DRV_IQ = 13e-3                # VM operating current at 48 V, max (8.5 mA typ), ENABLE high, no switching
+
+
+def drv_at(vm: float) -> tuple[float, float, float]:
+    """(VCP − VDRAIN min, VCP load capability, VGLS min) at supply `vm`: the datasheet's row at or
+    below it (a supply between two rows gets the lower row's figures)."""
+    row = max(k for k in DRV_VCP_BY_VM if k <= vm)
+    return (*DRV_VCP_BY_VM[row], DRV_VGLS_MIN_BY_VM[row])
+
 
 # --- current sensor: Allegro ACS725LLCTR-30AB-T, 3.3 V, ratiometric ------------------------------
 HALL = "ACS725LLCTR-30AB-T"
@@ -410,8 +423,15 @@ def rows() -> list[Row]:
 
     # --- gate drive supply (charge pump: no bootstrap, 100 % duty allowed)
     i_vcp = 2 * FET_QG * PWM_HZ
-    add(Row("charge pump load: 2 high sides Q_g f", f"{i_vcp * 1e3:.1f} mA", f"≤ {DRV_VCP_MAX_A * 1e3:.0f} mA (NOT VERIFIED)",
-            i_vcp <= 0.5 * DRV_VCP_MAX_A, f"{i_vcp / DRV_VCP_MAX_A:.0%}; no bootstrap refresh limit on duty"))
+    vcp_min, vcp_max_a, vgls_min = drv_at(VIN_MIN)
+    add(Row("charge pump load: 2 high sides Q_g f", f"{i_vcp * 1e3:.1f} mA",
+            f"≤ half of {vcp_max_a * 1e3:.0f} mA (VM {VIN_MIN:.0f} V; ZHCSIN3A)",
+            i_vcp <= 0.5 * vcp_max_a, f"{i_vcp / vcp_max_a:.0%} at the minimum input "
+            f"({drv_at(15.0)[1] * 1e3:.0f} mA from VM 15 V); no bootstrap refresh limit on duty"))
+    add(Row(f"gate drive at the {VIN_MIN:.0f} V minimum input", f"high side ≥ {vcp_min:.1f} V, low side ≥ {vgls_min:.1f} V",
+            "≥ 6 V (design floor)", min(vcp_min, vgls_min) >= 6.0,
+            f"ZHCSIN3A at VM {VIN_MIN:.0f} V; from VM 15 V: ≥ {drv_at(15.0)[0]:.0f} V / {drv_at(15.0)[2]:.0f} V. "
+            "CSD19536KTT R_DS(on) at V_GS 6 V NOT VERIFIED: below 12 V input the losses above are optimistic"))
     droop = FET_QG / (v["C_VCP"] * 0.5)
     add(Row("VCP droop per high-side turn-on", f"{droop * 1e3:.0f} mV", "≤ 0.5 V (gate stays ≥ 10 V)",
             droop <= 0.5, "1 µF 16 V 0603 X7R at ~11 V keeps ~50 %"))
