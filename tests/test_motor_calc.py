@@ -69,9 +69,31 @@ def test_a_changed_part_or_assumption_fails_its_row(monkeypatch, name, value, gu
 
 
 def test_narrow_copper_fails_its_ipc_row(monkeypatch):
-    narrow = tuple((n, 2.0, l, a) for n, _, l, a in calc.PATHS)
+    narrow = tuple((n, a, tuple((seg, length, tuple(tuple((k, 2.0 if k != "vias" else 2) for k, v in c)
+                                                    for c in conductors))
+                                for seg, length, conductors in segs))
+                   for n, a, segs in calc.PATHS)
     monkeypatch.setattr(calc, "PATHS", narrow)
     assert not any(r.ok for r in calc.rows() if r.what.startswith("copper "))
+
+
+def test_one_oz_inner_layers_fail_the_planes(monkeypatch):
+    """JLC's default 1 oz inner copper: the VMOT and GND planes no longer carry 20 A at +10 °C."""
+    assert row("copper VMOT: bulk → legs").ok and row("copper GND: legs → bulk").ok
+    monkeypatch.setattr(calc, "CU_INNER_UM", 35.0)
+    assert not row("copper VMOT: bulk → legs").ok
+    assert not row("copper GND: legs → bulk").ok
+
+
+def test_too_few_vias_limit_the_layer_they_feed(monkeypatch):
+    """A B.Cu pour reached through 3 vias (the previous drawing) carries what the vias carry."""
+    name, amps, segs = next(p for p in calc.PATHS if p[0] == "motor A")
+    assert row("copper motor A: phase node").ok
+    few = ((seg, length, tuple(tuple((k, 3 if k == "vias" else v) for k, v in c) for c in conductors))
+           for seg, length, conductors in segs)
+    monkeypatch.setattr(calc, "PATHS", tuple(p if p[0] != "motor A" else (name, amps, tuple(few))
+                                             for p in calc.PATHS))
+    assert not row("copper motor A: phase node").ok
 
 
 def test_the_peak_is_bounded_by_heat_and_by_the_sensor(monkeypatch):

@@ -142,7 +142,8 @@ R_HOTPLUG = 0.05              # Ω: cable, connector, ESR: a low bound (as calc/
 
 # --- copper, thermal ---------------------------------------------------------------------------
 BOARD_MM = (164.0, 50.0)      # the 60 × 50 mm outline extended by two 52 mm hole pitches (hardware/motor/motor.py SIZE)
-CU_OUTER_UM, CU_INNER_UM = 70.0, 35.0   # 4-layer, 2 oz outer, 1 oz inner (JLC stack-up)
+CU_OUTER_UM, CU_INNER_UM = 70.0, 70.0   # 4-layer, 2 oz outer AND 2 oz inner: the In1/In2 planes
+                              # carry the motor current (below); JLC's 1 oz inner would leave them short
 CU_K = 390.0                  # W/(m·K)
 H_CONV = 12.0                 # W/(m²·K): natural convection + radiation, horizontal board: estimate
 VIA_DRILL, VIA_PLATING, BOARD_T = 0.3e-3, 25e-6, 1.6e-3
@@ -153,13 +154,35 @@ HEATSINK_RTH = 2.0            # °C/W, sink to air: the heatsink MUST meet it (e
 HEATSINK_J_PER_K = 90.0       # ~100 g of aluminium (0.9 J/(g·K))
 XT60_R = 0.5e-3               # Ω per contact pair: NOT VERIFIED (Amass lists ≤ 0.5 mΩ)
 XT60_RATED = 30.0             # A continuous (Amass)
-# high-current paths: (name, width mm on each outer layer, length mm, current A)
-PATHS = (
-    ("VMOT: XT60 → fuse → capacitors → legs", 8.0, 45.0, I_CONT),
-    ("GND: legs → capacitors → XT60", 8.0, 45.0, I_CONT),
-    ("motor A: leg → ACS725 → XT60", 6.0, 30.0, I_CONT),
-    ("motor B: leg → XT60", 6.0, 30.0, I_CONT),
+# High-current copper AS DRAWN in hardware/motor/motor.py (power_tracks, power_zones, power_vias,
+# planes): each path is a chain of segments, each segment a set of conductors in parallel, each
+# conductor a series of pieces (a layer reached through vias is limited by the vias). A piece is
+# ("F.Cu"/"B.Cu", width mm) on an outer layer, ("In1.Cu"/"In2.Cu", width mm) on an inner one,
+# or ("vias", count) of the board's 0.3 mm vias. Widths are the narrowest cross-section.
+Piece = tuple[str, float]
+PATHS: tuple[tuple[str, float, tuple[tuple[str, float, tuple[tuple[Piece, ...], ...]], ...]], ...] = (
+    ("VMOT", I_CONT, (
+        ("XT60 + → fuse", 25.0, ((("F.Cu", 6.0),), (("B.Cu", 6.0), ("vias", 6)))),
+        ("fuse → bulk", 15.0, ((("F.Cu", 6.0),), (("B.Cu", 6.0), ("vias", 6)))),
+        # In2.Cu VMOT plane, narrowest between the x = 108 mm holes and the GND via antipads
+        ("bulk → legs: In2.Cu plane", 45.0, ((("In2.Cu", 33.0),),)),
+    )),
+    ("GND", I_CONT, (
+        # each low side's source lead onto the In1 plane through a 4 × 4 via field (and F.Cu pour)
+        ("low-side source → In1.Cu", 4.0, ((("vias", 16),),)),
+        ("legs → bulk → XT60 −: In1.Cu plane", 90.0, ((("In1.Cu", 33.0),),)),
+    )),
+    ("motor A", I_CONT, (
+        # SW_A pours on F.Cu and B.Cu from Q102's tab to U102's IP+ leads, 15 vias between them
+        ("phase node → ACS725 IP+", 7.0, ((("F.Cu", 4.2),), (("B.Cu", 4.2), ("vias", 15)))),
+        # MOT_A pours on both layers from the IP− leads into the XT60's pin, 12 vias
+        ("ACS725 IP− → XT60", 7.0, ((("F.Cu", 4.8),), (("B.Cu", 4.8), ("vias", 12)))),
+    )),
+    ("motor B", I_CONT, (
+        ("leg B → XT60", 8.0, ((("F.Cu", 5.0),), (("B.Cu", 5.0),))),
+    )),
 )
+ACS725_NECK_MM = (2.3, 1.2)   # the sensor's IP+/IP− lead rows: 2.3 mm of F.Cu for ~1.2 mm, no room for more
 PATH_RISE = 10.0              # °C allowed per path above the board (it is already warm)
 
 # --- sensing and logic -------------------------------------------------------------------------
@@ -230,7 +253,7 @@ def losses(i: float, v: float, tj: float) -> dict[str, float]:
         "ACS725": i * i * HALL_R,
         "fuse": (i ** 2) * FUSE_R,   # input current ≤ motor current (its rms, pessimistic)
         "connectors (2 × XT60)": 2 * i * i * XT60_R,
-        "copper": sum(path_loss(w, l, a) for _, w, l, a in PATHS) * (i / I_CONT) ** 2,
+        "copper": sum(path_loss(segs, a) for _, a, segs in PATHS) * (i / I_CONT) ** 2,
         "capacitor ESR": electrolytic_share(i_cap) ** 2 * ELCAP_ESR / DESIGN_VALUES["N_BULK"],
     }
 
@@ -257,17 +280,48 @@ def electrolytic_share(i_rms: float) -> float:
     return i_rms * abs(z_cer / (z_el + z_cer))
 
 
+def ipc2221_amps(area_mil2: float, rise: float, internal: bool = False) -> float:
+    """IPC-2221B: I = k ΔT^0.44 A^0.725 (A in mil²), k 0.048 external, 0.024 internal."""
+    return (0.024 if internal else 0.048) * rise ** 0.44 * area_mil2 ** 0.725
+
+
 def ipc2221_external_amps(width_mm: float, thick_um: float, rise: float) -> float:
-    """IPC-2221B external conductor: I = 0.048 ΔT^0.44 A^0.725 (A in mil²)."""
-    area_mil2 = (width_mm / 0.0254) * (thick_um / 25.4)
-    return 0.048 * rise ** 0.44 * area_mil2 ** 0.725
+    """IPC-2221B external conductor of `width_mm` × `thick_um`."""
+    return ipc2221_amps((width_mm / 0.0254) * (thick_um / 25.4), rise)
 
 
-def path_loss(width_mm: float, length_mm: float, amps: float, t: float = 70.0) -> float:
-    """I²R of a path on both outer layers in parallel (copper at `t` °C)."""
+def piece_amps(piece: Piece, rise: float) -> float:
+    """What one piece of a conductor carries at `rise`: a trace or plane by IPC-2221B (inner layers
+    by its internal curve), a via field by its barrels' cross-section (π d t each) taken as an
+    external conductor (IPC-2221B has no via equation; the usual reading)."""
+    kind, size = piece
+    if kind == "vias":
+        barrel_mil2 = math.pi * (VIA_DRILL / 25.4e-6) * (VIA_PLATING / 25.4e-6)
+        return size * ipc2221_amps(barrel_mil2, rise)
+    inner = kind.startswith("In")
+    thick = CU_INNER_UM if inner else CU_OUTER_UM
+    return ipc2221_amps((size / 0.0254) * (thick / 25.4), rise, internal=inner)
+
+
+def segment_amps(conductors, rise: float) -> float:
+    """Conductors in parallel, each limited by its weakest piece."""
+    return sum(min(piece_amps(p, rise) for p in pieces) for pieces in conductors)
+
+
+def segment_loss(conductors, length_mm: float, amps: float, t: float = 70.0) -> float:
+    """I²R of a segment at `t` °C: its traces and planes, or, for a segment of vias only, the
+    barrels through the board (vias beside copper are left out: a few mm of barrel)."""
     rho = 1.72e-8 * (1 + 0.00393 * (t - 20))
-    area = 2 * width_mm * 1e-3 * CU_OUTER_UM * 1e-6
-    return amps ** 2 * rho * length_mm * 1e-3 / area
+    area = sum(size * 1e-3 * (CU_INNER_UM if kind.startswith("In") else CU_OUTER_UM) * 1e-6
+               for pieces in conductors for kind, size in pieces if kind != "vias")
+    if area:
+        return amps ** 2 * rho * length_mm * 1e-3 / area
+    n = sum(size for pieces in conductors for kind, size in pieces)
+    return amps ** 2 * rho * BOARD_T / (n * math.pi * VIA_DRILL * VIA_PLATING)
+
+
+def path_loss(segments, amps: float) -> float:
+    return sum(segment_loss(c, length, amps) for _, length, c in segments)
 
 
 def rth_vias() -> float:
@@ -472,14 +526,24 @@ def rows() -> list[Row]:
     add(Row("ACS725 primary at 20 A", f"{I_CONT ** 2 * HALL_R:.2f} W", "≤ 0.5 W in SOIC-8 on 2 oz pours",
             I_CONT ** 2 * HALL_R <= 0.5, "continuous 20 A through the leads: NOT VERIFIED (Allegro thermal curves)"))
 
-    # --- copper (IPC-2221B external, both outer layers)
-    for name, w, length, amps in PATHS:
-        cap = 2 * ipc2221_external_amps(w, CU_OUTER_UM, PATH_RISE)
-        cap_pk = 2 * ipc2221_external_amps(w, CU_OUTER_UM, 2 * PATH_RISE)
-        add(Row(f"copper {name}", f"{w:.0f} mm × 2 layers 2 oz: {cap:.0f} A", f"≥ {amps:.0f} A at +{PATH_RISE:.0f} °C",
-                cap >= amps and cap_pk >= I_PEAK,
-                f"{cap_pk:.0f} A at +{2 * PATH_RISE:.0f} °C (peak {I_PEAK:.0f} A); {path_loss(w, length, amps) * 1e3:.0f} mW "
-                f"over {length:.0f} mm (IPC-2221B; IPC-2152 chart check open)"))
+    # --- copper as drawn (IPC-2221B; planes on the 2 oz inner layers, via fields by their barrels)
+    for name, amps, segs in PATHS:
+        for seg, length, conductors in segs:
+            cap = segment_amps(conductors, PATH_RISE)
+            cap_pk = segment_amps(conductors, 2 * PATH_RISE)
+            drawn = " + ".join(" via ".join(f"{k} {v:g} mm" if k != "vias" else f"{v:g} vias"
+                                            for k, v in pieces) for pieces in conductors)
+            add(Row(f"copper {name}: {seg}", f"{cap:.0f} A", f"≥ {amps:.0f} A at +{PATH_RISE:.0f} °C",
+                    cap >= amps and cap_pk >= I_PEAK,
+                    f"{drawn}; {cap_pk:.0f} A at +{2 * PATH_RISE:.0f} °C (peak {I_PEAK:.0f} A); "
+                    f"{segment_loss(conductors, length, amps) * 1e3:.0f} mW over {length:.0f} mm"))
+    neck = ipc2221_external_amps(ACS725_NECK_MM[0], CU_OUTER_UM, PATH_RISE)
+    add(Row("copper motor A: ACS725 lead rows (F.Cu only)", f"{neck:.0f} A by IPC-2221B",
+            f"≥ {I_CONT:.0f} A at +{PATH_RISE:.0f} °C", neck >= I_CONT,
+            f"traded: {ACS725_NECK_MM[0]} mm for {ACS725_NECK_MM[1]} mm at the SOIC-8's two-lead rows, "
+            "pours on both sides; IPC-2221B's long-conductor curve does not describe a 1 mm neck, and "
+            "Allegro's continuous-current rating of the package on a 2 oz board was NOT read: measure "
+            "the lead temperature on the first board (revision B: a sensor with a larger primary)"))
 
     # --- current sense
     span = HALL_RANGE * HALL_MV_PER_A / 1e3
