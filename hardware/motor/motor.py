@@ -119,11 +119,23 @@ MOT_A_POUR = [(74.6, 26.3), (79.4, 26.3), (79.4, 34.6), (74.6, 34.6)]
 """From U102's IP− leads into the motor XT60's pin 1, on F.Cu and B.Cu (4.8 mm)."""
 
 
+def bridge_pour(x: float, layer: str) -> list[tuple[float, float]]:
+    """Under leg `x`'s high-side source lead, down onto the low side's tab (the phase node): 4.4 mm
+    wide (calc/motor.py PATHS "high side's source → phase node"), 3 mm clear of the high-side gate
+    lead on its left for the gate's track; on B.Cu it starts 0.8 mm below the VMOT tab island."""
+    return [(x + 1.0, 18.35 if layer == "F.Cu" else 17.0), (x + 5.4, 18.35 if layer == "F.Cu" else 17.0),
+            (x + 5.4, 25.0), (x + 1.0, 25.0)]
+
+
 def power_zones() -> list[Zone]:
-    """The Hall sensor's primary copper as pours on both outer layers (a SOIC-8's lead rows leave
-    no room for wide tracks), stitched by the via fields in power_vias()."""
-    return [Zone(net, layer, pts, priority=2, solid=True)
-            for net, pts in (("SW_A", SW_A_POUR), ("MOT_A", MOT_A_POUR)) for layer in ("F.Cu", "B.Cu")]
+    """The copper the motor current needs where tracks cannot be wide enough, as pours on both
+    outer layers stitched by power_vias(): the Hall sensor's primary (a SOIC-8's lead rows leave
+    no room for wide tracks) and each high side's source lead onto its phase node."""
+    zs = [Zone(net, layer, pts, priority=2, solid=True)
+          for net, pts in (("SW_A", SW_A_POUR), ("MOT_A", MOT_A_POUR)) for layer in ("F.Cu", "B.Cu")]
+    zs += [Zone(phase, layer, bridge_pour(x, layer), priority=2, solid=True)
+           for x, phase in LEGS.values() for layer in ("F.Cu", "B.Cu")]
+    return zs
 
 
 def power_tracks() -> list[Track]:
@@ -163,6 +175,8 @@ def power_vias() -> list[Via]:
         out += _grid("VMOT", x - 4.2, 7.6, 8, 6)          # high-side tab: 48 thermal vias
         out += _grid(phase, x - 4.2, 25.6, 8, 6)         # low-side tab
         out += _grid("GND", x + 0.74, 42.0, 4, 4)        # low-side source to the In1 GND plane
+        # high-side source lead: both sides of its pad, onto the B.Cu bridge pour (15)
+        out += _grid(phase, x + 1.5, 18.9, 1, 5) + _grid(phase, x + 3.8, 18.9, 2, 5, pitch=1.1)
     # ceramics' GND pads to In1, and the two lower ones' VMOT pads to In2
     out += [Via("GND", 77.4, y, 0.6, 0.3) for y in (15.5, 19.5)]
     out += [Via("GND", 83.6, y, 0.6, 0.3) for y in (15.5, 19.5)]

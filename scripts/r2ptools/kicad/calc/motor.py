@@ -166,6 +166,7 @@ PATHS: tuple[tuple[str, float, tuple[tuple[str, float, tuple[tuple[Piece, ...], 
         ("fuse → bulk", 15.0, ((("F.Cu", 6.0),), (("B.Cu", 6.0), ("vias", 6)))),
         # In2.Cu VMOT plane, narrowest between the x = 108 mm holes and the GND via antipads
         ("bulk → legs: In2.Cu plane", 45.0, ((("In2.Cu", 33.0),),)),
+        ("In2.Cu → high-side tab", 1.6, ((("vias", 48),),)),
     )),
     ("GND", I_CONT, (
         # each low side's source lead onto the In1 plane through a 4 × 4 via field (and F.Cu pour)
@@ -173,12 +174,15 @@ PATHS: tuple[tuple[str, float, tuple[tuple[str, float, tuple[tuple[Piece, ...], 
         ("legs → bulk → XT60 −: In1.Cu plane", 90.0, ((("In1.Cu", 33.0),),)),
     )),
     ("motor A", I_CONT, (
+        # high side's source lead onto the low side's tab: pours on F.Cu and B.Cu, 15 vias
+        ("high side's source → phase node", 6.0, ((("F.Cu", 4.4),), (("B.Cu", 4.4), ("vias", 15)))),
         # SW_A pours on F.Cu and B.Cu from Q102's tab to U102's IP+ leads, 15 vias between them
         ("phase node → ACS725 IP+", 7.0, ((("F.Cu", 4.2),), (("B.Cu", 4.2), ("vias", 15)))),
         # MOT_A pours on both layers from the IP− leads into the XT60's pin, 12 vias
         ("ACS725 IP− → XT60", 7.0, ((("F.Cu", 4.8),), (("B.Cu", 4.8), ("vias", 12)))),
     )),
     ("motor B", I_CONT, (
+        ("high side's source → phase node", 6.0, ((("F.Cu", 4.4),), (("B.Cu", 4.4), ("vias", 15)))),
         ("leg B → XT60", 8.0, ((("F.Cu", 5.0),), (("B.Cu", 5.0),))),
     )),
 )
