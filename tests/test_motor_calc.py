@@ -158,7 +158,7 @@ def test_the_paths_are_the_boards_copper():
                    and (end is None or end in t.points))
 
     def pour(net, layer, axis, x0=0.0, x1=1e3):   # a pour's extent across the current
-        (z,) = [z for z in m.zones if z.net == net and z.layer == layer and z.priority == 2
+        (z,) = [z for z in m.zones if z.net == net and z.layer == layer and z.priority > 2
                 and x0 <= min(p[0] for p in z.polygon) <= x1]
         return round(max(p[axis] for p in z.polygon) - min(p[axis] for p in z.polygon), 3)
 

@@ -131,9 +131,10 @@ def power_zones() -> list[Zone]:
     """The copper the motor current needs where tracks cannot be wide enough, as pours on both
     outer layers stitched by power_vias(): the Hall sensor's primary (a SOIC-8's lead rows leave
     no room for wide tracks) and each high side's source lead onto its phase node."""
-    zs = [Zone(net, layer, pts, priority=2, solid=True)
+    # priorities distinct from the tab islands' (2) and from each other where same-net pours overlap
+    zs = [Zone(net, layer, pts, priority=4, solid=True)
           for net, pts in (("SW_A", SW_A_POUR), ("MOT_A", MOT_A_POUR)) for layer in ("F.Cu", "B.Cu")]
-    zs += [Zone(phase, layer, bridge_pour(x, layer), priority=2, solid=True)
+    zs += [Zone(phase, layer, bridge_pour(x, layer), priority=3, solid=True)
            for x, phase in LEGS.values() for layer in ("F.Cu", "B.Cu")]
     return zs
 
