@@ -57,6 +57,10 @@ def test_a_changed_board_value_fails_its_row(monkeypatch, name, value, guarded):
     ("ENCODER_MA", 85.0, "from the bus"),                               # HEDS-5540 at its max
     ("ELCAP_T_LOCAL", 85.0, "electrolytic life"),                       # capacitors by the FETs
     ("HALL_RANGE", 15.5, "current resolution"),                         # below ±30 A (issue 19)
+    ("DRV_VCP_BY_VM", {15.0: (9.0, 25e-3), 10.0: (6.0, 8e-3)},
+     "charge pump load"),                                               # a weaker charge pump at 10 V
+    ("DRV_VGLS_MIN_BY_VM", {15.0: 13.0, 12.0: 10.0, 10.0: 5.0, 9.0: 5.0},
+     "gate drive at the 10 V minimum input"),                           # a weaker low-side supply
 ])
 def test_a_changed_part_or_assumption_fails_its_row(monkeypatch, name, value, guarded):
     assert row(guarded).ok
@@ -65,9 +69,31 @@ def test_a_changed_part_or_assumption_fails_its_row(monkeypatch, name, value, gu
 
 
 def test_narrow_copper_fails_its_ipc_row(monkeypatch):
-    narrow = tuple((n, 2.0, l, a) for n, _, l, a in calc.PATHS)
+    narrow = tuple((n, a, tuple((seg, length, tuple(tuple((k, 2.0 if k != "vias" else 2) for k, v in c)
+                                                    for c in conductors))
+                                for seg, length, conductors in segs))
+                   for n, a, segs in calc.PATHS)
     monkeypatch.setattr(calc, "PATHS", narrow)
     assert not any(r.ok for r in calc.rows() if r.what.startswith("copper "))
+
+
+def test_one_oz_inner_layers_fail_the_planes(monkeypatch):
+    """JLC's default 1 oz inner copper: the VMOT and GND planes no longer carry 20 A at +10 °C."""
+    assert row("copper VMOT: bulk → legs").ok and row("copper GND: legs → bulk").ok
+    monkeypatch.setattr(calc, "CU_INNER_UM", 35.0)
+    assert not row("copper VMOT: bulk → legs").ok
+    assert not row("copper GND: legs → bulk").ok
+
+
+def test_too_few_vias_limit_the_layer_they_feed(monkeypatch):
+    """A B.Cu pour reached through 3 vias (the previous drawing) carries what the vias carry."""
+    name, amps, segs = next(p for p in calc.PATHS if p[0] == "motor A")
+    assert row("copper motor A: phase node").ok
+    few = ((seg, length, tuple(tuple((k, 3 if k == "vias" else v) for k, v in c) for c in conductors))
+           for seg, length, conductors in segs)
+    monkeypatch.setattr(calc, "PATHS", tuple(p if p[0] != "motor A" else (name, amps, tuple(few))
+                                             for p in calc.PATHS))
+    assert not row("copper motor A: phase node").ok
 
 
 def test_the_peak_is_bounded_by_heat_and_by_the_sensor(monkeypatch):
@@ -106,3 +132,67 @@ def test_a_stale_readme_table_is_caught(monkeypatch):
     text = calc.README.read_text()
     monkeypatch.setitem(calc.DESIGN_VALUES, "N_BULK", 5)
     assert calc.readme_with_table(text) != text
+
+
+def _segment(name: str):
+    """calc/motor.py's conductors for segment `name`, as {layer or "vias": [sizes]}."""
+    for _, _, segs in calc.PATHS:
+        for seg, _, conductors in segs:
+            if seg == name:
+                found: dict[str, list[float]] = {}
+                for pieces in conductors:
+                    for kind, size in pieces:
+                        found.setdefault(kind, []).append(size)
+                return found
+    raise KeyError(name)
+
+
+def test_the_paths_are_the_boards_copper():
+    """Each outer-layer width and via count calc/motor.py credits is what hardware/motor/motor.py
+    draws: a narrowed track, a smaller pour or a missing via there fails here."""
+    from r2ptools.kicad import modules
+    m = modules.build("motor")
+
+    def width(net, layer, end=None):   # the narrowest track of `net` on `layer` (ending at `end`)
+        return min(t.width for t in m.tracks if t.net == net and t.layer == layer
+                   and (end is None or end in t.points))
+
+    def pour(net, layer, axis, x0=0.0, x1=1e3):   # a pour's extent across the current
+        (z,) = [z for z in m.zones if z.net == net and z.layer == layer and z.priority > 2
+                and x0 <= min(p[0] for p in z.polygon) <= x1]
+        return round(max(p[axis] for p in z.polygon) - min(p[axis] for p in z.polygon), 3)
+
+    def vias(net, x0, x1, y0, y1):
+        return sum(1 for v in m.vias if v.net == net and x0 <= v.x <= x1 and y0 <= v.y <= y1)
+
+    seg = _segment("leg B → XT60")
+    xt60_pin2 = (84.0, 34.6)
+    assert [width("MOT_B", "F.Cu", xt60_pin2), width("MOT_B", "B.Cu", xt60_pin2)] == \
+        seg["F.Cu"] + seg["B.Cu"]
+    seg = _segment("XT60 + → fuse")
+    assert width("VBAT", "F.Cu") >= seg["F.Cu"][0] and width("VBAT", "B.Cu") >= seg["B.Cu"][0]
+    assert vias("VBAT", 140, 150, 36, 42) == seg["vias"][0]
+    seg = _segment("fuse → bulk")
+    assert vias("VMOT", 129, 135, 36, 41) == seg["vias"][0]
+    seg = _segment("phase node → ACS725 IP+")
+    assert [pour("SW_A", layer, 1, 68.5, 70) for layer in ("F.Cu", "B.Cu")] == seg["F.Cu"] + seg["B.Cu"]
+    assert vias("SW_A", 71.3, 79, 21, 26) == seg["vias"][0]
+    seg = _segment("ACS725 IP− → XT60")
+    assert [pour("MOT_A", "F.Cu", 0), pour("MOT_A", "B.Cu", 0)] == seg["F.Cu"] + seg["B.Cu"]
+    assert vias("MOT_A", 74, 80, 26, 35) == seg["vias"][0]
+    seg = _segment("low-side source → In1.Cu")
+    for leg_x, _ in m_legs():
+        assert vias("GND", leg_x + 0.5, leg_x + 4.6, 41.5, 46) == seg["vias"][0]
+    seg = _segment("high side's source → phase node")
+    for leg_x, phase in m_legs():
+        assert [pour(phase, layer, 0, leg_x + 0.5, leg_x + 2) for layer in ("F.Cu", "B.Cu")] == \
+            seg["F.Cu"] + seg["B.Cu"]
+        assert vias(phase, leg_x, leg_x + 5.2, 17, 24) == seg["vias"][0]
+    seg = _segment("In2.Cu → high-side tab")
+    for leg_x, _ in m_legs():
+        assert vias("VMOT", leg_x - 5, leg_x + 5, 7, 15) == seg["vias"][0]
+
+
+def m_legs():
+    from r2ptools.kicad.modules import description_file, _load
+    return _load(description_file("motor")).LEGS.values()

@@ -24,7 +24,7 @@ no NANO2 456 footprint: the 462's is used), and LCSC numbers for U101, U102, D10
 electrolytics (parts.csv `-`).
 
 Board: 164 × 50 mm (docs/bus.md's 60 × 50 mm bus end plus two 52 mm hole pitches: the power
-stage's parts need 2880 mm² of courtyard, more than one pitch's 2525 mm²), 4 layers, 2 oz outer.
+stage's parts need 2880 mm² of courtyard, more than one pitch's 2525 mm²), 4 layers, 2 oz on every layer (the In1/In2 planes carry the motor current: calc/motor.py PATHS).
 The core keeps its default placement on the left 60 mm.
 """
 from __future__ import annotations
@@ -112,6 +112,33 @@ def planes() -> list[Zone]:
     return zs
 
 
+SW_A_POUR = [(69.0, 21.5), (78.2, 21.5), (78.2, 25.7), (69.0, 25.7)]
+"""Leg A's phase node from Q102's tab to U102's IP+ leads, on F.Cu and B.Cu (4.2 mm: calc/motor.py
+PATHS "phase node → ACS725 IP+"); 0.6 mm (the HV class) from the IP− leads below it."""
+MOT_A_POUR = [(74.6, 26.3), (79.4, 26.3), (79.4, 34.6), (74.6, 34.6)]
+"""From U102's IP− leads into the motor XT60's pin 1, on F.Cu and B.Cu (4.8 mm)."""
+
+
+def bridge_pour(x: float, layer: str) -> list[tuple[float, float]]:
+    """Under leg `x`'s high-side source lead, down onto the low side's tab (the phase node): 4.4 mm
+    wide (calc/motor.py PATHS "high side's source → phase node"), 3 mm clear of the high-side gate
+    lead on its left for the gate's track; on B.Cu it starts 0.8 mm below the VMOT tab island."""
+    return [(x + 1.0, 18.35 if layer == "F.Cu" else 17.0), (x + 5.4, 18.35 if layer == "F.Cu" else 17.0),
+            (x + 5.4, 25.0), (x + 1.0, 25.0)]
+
+
+def power_zones() -> list[Zone]:
+    """The copper the motor current needs where tracks cannot be wide enough, as pours on both
+    outer layers stitched by power_vias(): the Hall sensor's primary (a SOIC-8's lead rows leave
+    no room for wide tracks) and each high side's source lead onto its phase node."""
+    # priorities distinct from the tab islands' (2) and from each other where same-net pours overlap
+    zs = [Zone(net, layer, pts, priority=4, solid=True)
+          for net, pts in (("SW_A", SW_A_POUR), ("MOT_A", MOT_A_POUR)) for layer in ("F.Cu", "B.Cu")]
+    zs += [Zone(phase, layer, bridge_pour(x, layer), priority=3, solid=True)
+           for x, phase in LEGS.values() for layer in ("F.Cu", "B.Cu")]
+    return zs
+
+
 def power_tracks() -> list[Track]:
     """The motor current's copper on F.Cu (calc/motor.py PATHS; README, "Copper")."""
     T = Track
@@ -122,18 +149,10 @@ def power_tracks() -> list[Track]:
         # low side's source lead onto its GND via field
         out.append(T("GND", [(x + 2.54, 38.65), (x + 2.54, 44.0)], 1.8))
     out += [
-        # leg A's phase node into the Hall sensor's IP+ leads (pins 1, 2)
-        T("SW_A", [(70.0, 24.7), (78.0, 24.7)], 2.0),
-        # IP− leads (3, 4) down to the motor connector's pin 1
-        T("MOT_A", [(78.0, 27.3), (77.4, 29.5), (77.0, 32.5), (76.8, 34.6)], 2.0),
-        T("MOT_A", [(76.8, 31.5), (76.8, 36.0)], 4.0),
-        # leg B's phase node (Q104's tab) across to the connector's pin 2
-        T("MOT_B", [(90.5, 33.5), (84.0, 34.6)], 4.0),
-        # SW_A and MOT_A also on B.Cu: from Q102's tab island to vias beside the sensor's
-        # leads, and from vias under the IP− track to the connector's pin
-        T("SW_A", [(69.0, 27.0), (75.4, 24.7)], 2.0, "B.Cu"),
-        T("MOT_A", [(77.2, 29.6), (76.8, 34.6)], 3.0, "B.Cu"),
-        T("MOT_B", [(90.5, 33.5), (84.0, 34.6)], 4.0, "B.Cu"),
+        # leg A's phase node → U102 → the connector's pin 1: the pours of power_zones()
+        # leg B's phase node (Q104's tab) across to the connector's pin 2, both outer layers
+        T("MOT_B", [(90.5, 33.5), (84.0, 34.6)], 5.0),
+        T("MOT_B", [(90.5, 33.5), (84.0, 34.6)], 5.0, "B.Cu"),
         # battery: XT60 + down the right edge into the fuse; fuse out to the TVS and the bulk;
         # both outer layers (the fuse's pads reach B.Cu through via fields)
         T("VBAT", [(147.5, 20.2), (147.5, 38.0), (145.05, 41.0), (145.05, 45.0)], 6.0),
@@ -156,7 +175,9 @@ def power_vias() -> list[Via]:
     for x, phase in LEGS.values():
         out += _grid("VMOT", x - 4.2, 7.6, 8, 6)          # high-side tab: 48 thermal vias
         out += _grid(phase, x - 4.2, 25.6, 8, 6)         # low-side tab
-        out += _grid("GND", x + 1.94, 42.0, 2, 2)        # low-side source to the GND plane
+        out += _grid("GND", x + 0.74, 42.0, 4, 4)        # low-side source to the In1 GND plane
+        # high-side source lead: both sides of its pad, onto the B.Cu bridge pour (15)
+        out += _grid(phase, x + 1.5, 18.9, 1, 5) + _grid(phase, x + 3.8, 18.9, 2, 5, pitch=1.1)
     # ceramics' GND pads to In1, and the two lower ones' VMOT pads to In2
     out += [Via("GND", 77.4, y, 0.6, 0.3) for y in (15.5, 19.5)]
     out += [Via("GND", 83.6, y, 0.6, 0.3) for y in (15.5, 19.5)]
@@ -168,8 +189,8 @@ def power_vias() -> list[Via]:
     out += _grid("GND", 114.0, 43.4, 2, 3)
     out += _grid("VBAT", 144.2, 38.6, 3, 2, pitch=1.4)
     out += [Via("VMOT", 125.4, 42.0, 0.6, 0.3), Via("VMOT", 124.2, 41.3, 0.6, 0.3)]
-    out += [Via("SW_A", x, 24.7, 0.6, 0.3) for x in (72.6, 74.0, 75.4)]
-    out += [Via("MOT_A", x, y, 0.6, 0.3) for x in (76.2, 77.6) for y in (29.6, 30.9)]
+    out += _grid("SW_A", 71.6, 22.3, 5, 3)             # the IP+ pours' stitching (15)
+    out += _grid("MOT_A", 75.2, 29.2, 4, 3)            # the IP− pours' stitching (12)
     return out
 
 
@@ -289,7 +310,7 @@ def build(core: Sheet) -> Module:
     m = Module(NAME, TITLE, REVISION, s,
                tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks(),
                        *power_tracks()],
-               vias=power_vias(), zones=planes(),
+               vias=power_vias(), zones=planes() + power_zones(),
                seed=19, size=SIZE, holes=HOLES, copper_layers=4,
                netclasses={"HV": list(HV_NETS)}, dru_rules=ipc2221b_rules(),
                netclass_defs={"HV": (0.6, 0.3, 0.8, 0.4)},

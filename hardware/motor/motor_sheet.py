@@ -38,7 +38,7 @@ DRAWING = {
     "U101": A(34, 76),
     "R115": A(20, 76.5), "R105": A(22, 82.5), "R106": A(18, 82.5),
     "C118": A(12, 86.5), "C117": A(16, 86.5),
-    "C113": A(46, 64.5), "C116": A(52, 64.5), "C115": A(46, 73.5), "C114": A(52, 70.5),
+    "C113": A(44, 62.5), "C116": A(52, 62.5), "C115": A(46, 73.5), "C114": A(60, 70.5),
     # supply sense and over-voltage trip
     "R108": A(72, 56), "R109": A(72, 61), "C121": A(76, 61),
     "R110": A(86, 54), "R111": A(86, 58), "R112": A(86, 62), "R113": A(86, 67), "C122": A(90, 67),
@@ -75,7 +75,7 @@ BLOCKS = [
                  f"R107/C120 1 k / 4.7 nF = 34 kHz into PA0, sampled at the PWM centre."),
     ]),
     Block("Gate driver DRV8350H: 6x PWM, charge pump, VDS over-current", 4, 46, 64, 98, notes=[
-        (5, 92.5, f"MODE to AGND: 6x PWM; TIM1 sets the {_v('dead time vs turn-off + driver skew (50 ns)')} dead time.\n"
+        (5, 94, f"MODE to AGND: 6x PWM; TIM1 sets the {_v('dead time vs turn-off + driver skew (50 ns)')} dead time.\n"
                 f"VDS trip {_v('VDS over-current trip (hot R max … cold R typ)')} (a short: overloads "
                 f"are the firmware's).\n"
                 f"Charge pump: {_v('charge pump load: 2 high sides Q_g f')} load, "
@@ -83,7 +83,7 @@ BLOCKS = [
                 "R105 IDRIVE, R106 VDS: levels NOT VERIFIED (README errata)."),
     ]),
     Block("Supply sense and over-voltage trip", 66, 48, 118, 78, notes=[
-        (67, 72, f"VMOT_SENSE = VMOT × 10 k / 160 k: full scale {_v('VMOT_SENSE full scale')}.\n"
+        (67, 73.5, f"VMOT_SENSE = VMOT × 10 k / 160 k: full scale {_v('VMOT_SENSE full scale')}.\n"
                  f"Trip: 1.242 V × (174 k + 174 k + 27 k + 10 k) / 10 k, "
                  f"{_v('over-voltage trip (TLV3011 → DRV_FAULT: coast)')}:\n"
                  "U103 pulls DRV_FAULT low with the driver's nFAULT (TIM1_BKIN)."),

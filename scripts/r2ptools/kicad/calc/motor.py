@@ -70,15 +70,28 @@ FET_ID_PULSE = 400.0          # I_DM, abs max (the KTT family's, read for CSD195
 # --- gate driver: TI DRV8350H (hardware interface, 6x PWM mode), SLVSDY6 -------------------------
 DRV = "DRV8350HRTVR"
 DRV_VM_RANGE = (9.0, 75.0)    # VM recommended (third-party summary of SLVSDY6: NOT VERIFIED on ti.com)
-DRV_VM_ABS = 80.0             # VM abs max (same source: NOT VERIFIED)
-DRV_VDRAIN_ABS = 102.0        # VDRAIN abs max (same source)
-DRV_IDRIVE_SRC, DRV_IDRIVE_SNK = 0.55, 1.1   # A: register levels 1000b (SLVSDY6 Table 16, read);
-                              # the H variant's IDRIVE pin offers 7 of them: which, NOT VERIFIED
+DRV_VM_ABS = 80.0             # VM abs max (same summary, sheetsdata.com; TI's table NOT read)
+DRV_VDRAIN_ABS = 102.0        # VDRAIN abs max (same summary)
+DRV_IDRIVE_SRC, DRV_IDRIVE_SNK = 0.55, 1.1   # A: the register level 1000b (SLVSDY6A gate drive LS
+                              # register, read on ti.com's DRV8353R document viewer); the H variant's
+                              # IDRIVE pin offers 7 fixed levels: which ones, NOT VERIFIED
 DRV_DEAD_MIN = 100e-9         # H variant's inserted dead time (the SPI default, read): TIM1 adds its own
 DRV_VDS_LVL = 0.2             # V: VDS_OCP level (SLVSDY6 Table 17 lists 0.06–2 V; pin level NOT VERIFIED)
 DRV_VDS_TOL = 0.2             # ±20 % on the VDS comparator (estimate)
-DRV_VCP_MAX_A = 25e-3         # charge-pump (VCP) load capability (third-party summary: NOT VERIFIED)
-DRV_IQ = 8.5e-3               # VM operating current at 48 V (third-party summary)
+# Read in ZHCSIN3A (TI's Chinese edition of SLVSDY6A), electrical characteristics, "power supplies":
+# VCP (with respect to VDRAIN) and its load capability, and VGLS, fall with VM; the VM current.
+DRV_VCP_BY_VM = {             # VM: (VCP − VDRAIN min, max load A)
+    15.0: (9.0, 25e-3), 12.0: (7.5, 20e-3), 10.0: (6.0, 15e-3), 9.0: (5.5, 10e-3)}
+DRV_VGLS_MIN_BY_VM = {15.0: 13.0, 12.0: 10.0, 10.0: 8.0, 9.0: 7.0}   # V, low-side gate supply min
+DRV_IQ = 13e-3                # VM operating current at 48 V, max (8.5 mA typ), ENABLE high, no switching
+
+
+def drv_at(vm: float) -> tuple[float, float, float]:
+    """(VCP − VDRAIN min, VCP load capability, VGLS min) at supply `vm`: the datasheet's row at or
+    below it (a supply between two rows gets the lower row's figures)."""
+    row = max(k for k in DRV_VCP_BY_VM if k <= vm)
+    return (*DRV_VCP_BY_VM[row], DRV_VGLS_MIN_BY_VM[row])
+
 
 # --- current sensor: Allegro ACS725LLCTR-30AB-T, 3.3 V, ratiometric ------------------------------
 HALL = "ACS725LLCTR-30AB-T"
@@ -129,7 +142,8 @@ R_HOTPLUG = 0.05              # Ω: cable, connector, ESR: a low bound (as calc/
 
 # --- copper, thermal ---------------------------------------------------------------------------
 BOARD_MM = (164.0, 50.0)      # the 60 × 50 mm outline extended by two 52 mm hole pitches (hardware/motor/motor.py SIZE)
-CU_OUTER_UM, CU_INNER_UM = 70.0, 35.0   # 4-layer, 2 oz outer, 1 oz inner (JLC stack-up)
+CU_OUTER_UM, CU_INNER_UM = 70.0, 70.0   # 4-layer, 2 oz outer AND 2 oz inner: the In1/In2 planes
+                              # carry the motor current (below); JLC's 1 oz inner would leave them short
 CU_K = 390.0                  # W/(m·K)
 H_CONV = 12.0                 # W/(m²·K): natural convection + radiation, horizontal board: estimate
 VIA_DRILL, VIA_PLATING, BOARD_T = 0.3e-3, 25e-6, 1.6e-3
@@ -140,13 +154,39 @@ HEATSINK_RTH = 2.0            # °C/W, sink to air: the heatsink MUST meet it (e
 HEATSINK_J_PER_K = 90.0       # ~100 g of aluminium (0.9 J/(g·K))
 XT60_R = 0.5e-3               # Ω per contact pair: NOT VERIFIED (Amass lists ≤ 0.5 mΩ)
 XT60_RATED = 30.0             # A continuous (Amass)
-# high-current paths: (name, width mm on each outer layer, length mm, current A)
-PATHS = (
-    ("VMOT: XT60 → fuse → capacitors → legs", 8.0, 45.0, I_CONT),
-    ("GND: legs → capacitors → XT60", 8.0, 45.0, I_CONT),
-    ("motor A: leg → ACS725 → XT60", 6.0, 30.0, I_CONT),
-    ("motor B: leg → XT60", 6.0, 30.0, I_CONT),
+# High-current copper AS DRAWN in hardware/motor/motor.py (power_tracks, power_zones, power_vias,
+# planes): each path is a chain of segments, each segment a set of conductors in parallel, each
+# conductor a series of pieces (a layer reached through vias is limited by the vias). A piece is
+# ("F.Cu"/"B.Cu", width mm) on an outer layer, ("In1.Cu"/"In2.Cu", width mm) on an inner one,
+# or ("vias", count) of the board's 0.3 mm vias. Widths are the narrowest cross-section.
+Piece = tuple[str, float]
+PATHS: tuple[tuple[str, float, tuple[tuple[str, float, tuple[tuple[Piece, ...], ...]], ...]], ...] = (
+    ("VMOT", I_CONT, (
+        ("XT60 + → fuse", 25.0, ((("F.Cu", 6.0),), (("B.Cu", 6.0), ("vias", 6)))),
+        ("fuse → bulk", 15.0, ((("F.Cu", 6.0),), (("B.Cu", 6.0), ("vias", 6)))),
+        # In2.Cu VMOT plane, narrowest between the x = 108 mm holes and the GND via antipads
+        ("bulk → legs: In2.Cu plane", 45.0, ((("In2.Cu", 33.0),),)),
+        ("In2.Cu → high-side tab", 1.6, ((("vias", 48),),)),
+    )),
+    ("GND", I_CONT, (
+        # each low side's source lead onto the In1 plane through a 4 × 4 via field (and F.Cu pour)
+        ("low-side source → In1.Cu", 4.0, ((("vias", 16),),)),
+        ("legs → bulk → XT60 −: In1.Cu plane", 90.0, ((("In1.Cu", 33.0),),)),
+    )),
+    ("motor A", I_CONT, (
+        # high side's source lead onto the low side's tab: pours on F.Cu and B.Cu, 15 vias
+        ("high side's source → phase node", 6.0, ((("F.Cu", 4.4),), (("B.Cu", 4.4), ("vias", 15)))),
+        # SW_A pours on F.Cu and B.Cu from Q102's tab to U102's IP+ leads, 15 vias between them
+        ("phase node → ACS725 IP+", 7.0, ((("F.Cu", 4.2),), (("B.Cu", 4.2), ("vias", 15)))),
+        # MOT_A pours on both layers from the IP− leads into the XT60's pin, 12 vias
+        ("ACS725 IP− → XT60", 7.0, ((("F.Cu", 4.8),), (("B.Cu", 4.8), ("vias", 12)))),
+    )),
+    ("motor B", I_CONT, (
+        ("high side's source → phase node", 6.0, ((("F.Cu", 4.4),), (("B.Cu", 4.4), ("vias", 15)))),
+        ("leg B → XT60", 8.0, ((("F.Cu", 5.0),), (("B.Cu", 5.0),))),
+    )),
 )
+ACS725_NECK_MM = (2.3, 1.2)   # the sensor's IP+/IP− lead rows: 2.3 mm of F.Cu for ~1.2 mm, no room for more
 PATH_RISE = 10.0              # °C allowed per path above the board (it is already warm)
 
 # --- sensing and logic -------------------------------------------------------------------------
@@ -217,7 +257,7 @@ def losses(i: float, v: float, tj: float) -> dict[str, float]:
         "ACS725": i * i * HALL_R,
         "fuse": (i ** 2) * FUSE_R,   # input current ≤ motor current (its rms, pessimistic)
         "connectors (2 × XT60)": 2 * i * i * XT60_R,
-        "copper": sum(path_loss(w, l, a) for _, w, l, a in PATHS) * (i / I_CONT) ** 2,
+        "copper": sum(path_loss(segs, a) for _, a, segs in PATHS) * (i / I_CONT) ** 2,
         "capacitor ESR": electrolytic_share(i_cap) ** 2 * ELCAP_ESR / DESIGN_VALUES["N_BULK"],
     }
 
@@ -244,17 +284,48 @@ def electrolytic_share(i_rms: float) -> float:
     return i_rms * abs(z_cer / (z_el + z_cer))
 
 
+def ipc2221_amps(area_mil2: float, rise: float, internal: bool = False) -> float:
+    """IPC-2221B: I = k ΔT^0.44 A^0.725 (A in mil²), k 0.048 external, 0.024 internal."""
+    return (0.024 if internal else 0.048) * rise ** 0.44 * area_mil2 ** 0.725
+
+
 def ipc2221_external_amps(width_mm: float, thick_um: float, rise: float) -> float:
-    """IPC-2221B external conductor: I = 0.048 ΔT^0.44 A^0.725 (A in mil²)."""
-    area_mil2 = (width_mm / 0.0254) * (thick_um / 25.4)
-    return 0.048 * rise ** 0.44 * area_mil2 ** 0.725
+    """IPC-2221B external conductor of `width_mm` × `thick_um`."""
+    return ipc2221_amps((width_mm / 0.0254) * (thick_um / 25.4), rise)
 
 
-def path_loss(width_mm: float, length_mm: float, amps: float, t: float = 70.0) -> float:
-    """I²R of a path on both outer layers in parallel (copper at `t` °C)."""
+def piece_amps(piece: Piece, rise: float) -> float:
+    """What one piece of a conductor carries at `rise`: a trace or plane by IPC-2221B (inner layers
+    by its internal curve), a via field by its barrels' cross-section (π d t each) taken as an
+    external conductor (IPC-2221B has no via equation; the usual reading)."""
+    kind, size = piece
+    if kind == "vias":
+        barrel_mil2 = math.pi * (VIA_DRILL / 25.4e-6) * (VIA_PLATING / 25.4e-6)
+        return size * ipc2221_amps(barrel_mil2, rise)
+    inner = kind.startswith("In")
+    thick = CU_INNER_UM if inner else CU_OUTER_UM
+    return ipc2221_amps((size / 0.0254) * (thick / 25.4), rise, internal=inner)
+
+
+def segment_amps(conductors, rise: float) -> float:
+    """Conductors in parallel, each limited by its weakest piece."""
+    return sum(min(piece_amps(p, rise) for p in pieces) for pieces in conductors)
+
+
+def segment_loss(conductors, length_mm: float, amps: float, t: float = 70.0) -> float:
+    """I²R of a segment at `t` °C: its traces and planes, or, for a segment of vias only, the
+    barrels through the board (vias beside copper are left out: a few mm of barrel)."""
     rho = 1.72e-8 * (1 + 0.00393 * (t - 20))
-    area = 2 * width_mm * 1e-3 * CU_OUTER_UM * 1e-6
-    return amps ** 2 * rho * length_mm * 1e-3 / area
+    area = sum(size * 1e-3 * (CU_INNER_UM if kind.startswith("In") else CU_OUTER_UM) * 1e-6
+               for pieces in conductors for kind, size in pieces if kind != "vias")
+    if area:
+        return amps ** 2 * rho * length_mm * 1e-3 / area
+    n = sum(size for pieces in conductors for kind, size in pieces)
+    return amps ** 2 * rho * BOARD_T / (n * math.pi * VIA_DRILL * VIA_PLATING)
+
+
+def path_loss(segments, amps: float) -> float:
+    return sum(segment_loss(c, length, amps) for _, length, c in segments)
 
 
 def rth_vias() -> float:
@@ -410,8 +481,15 @@ def rows() -> list[Row]:
 
     # --- gate drive supply (charge pump: no bootstrap, 100 % duty allowed)
     i_vcp = 2 * FET_QG * PWM_HZ
-    add(Row("charge pump load: 2 high sides Q_g f", f"{i_vcp * 1e3:.1f} mA", f"≤ {DRV_VCP_MAX_A * 1e3:.0f} mA (NOT VERIFIED)",
-            i_vcp <= 0.5 * DRV_VCP_MAX_A, f"{i_vcp / DRV_VCP_MAX_A:.0%}; no bootstrap refresh limit on duty"))
+    vcp_min, vcp_max_a, vgls_min = drv_at(VIN_MIN)
+    add(Row("charge pump load: 2 high sides Q_g f", f"{i_vcp * 1e3:.1f} mA",
+            f"≤ half of {vcp_max_a * 1e3:.0f} mA (VM {VIN_MIN:.0f} V; ZHCSIN3A)",
+            i_vcp <= 0.5 * vcp_max_a, f"{i_vcp / vcp_max_a:.0%} at the minimum input "
+            f"({drv_at(15.0)[1] * 1e3:.0f} mA from VM 15 V); no bootstrap refresh limit on duty"))
+    add(Row(f"gate drive at the {VIN_MIN:.0f} V minimum input", f"high side ≥ {vcp_min:.1f} V, low side ≥ {vgls_min:.1f} V",
+            "≥ 6 V (design floor)", min(vcp_min, vgls_min) >= 6.0,
+            f"ZHCSIN3A at VM {VIN_MIN:.0f} V; from VM 15 V: ≥ {drv_at(15.0)[0]:.0f} V / {drv_at(15.0)[2]:.0f} V. "
+            "CSD19536KTT R_DS(on) at V_GS 6 V NOT VERIFIED: below 12 V input the losses above are optimistic"))
     droop = FET_QG / (v["C_VCP"] * 0.5)
     add(Row("VCP droop per high-side turn-on", f"{droop * 1e3:.0f} mV", "≤ 0.5 V (gate stays ≥ 10 V)",
             droop <= 0.5, "1 µF 16 V 0603 X7R at ~11 V keeps ~50 %"))
@@ -452,14 +530,24 @@ def rows() -> list[Row]:
     add(Row("ACS725 primary at 20 A", f"{I_CONT ** 2 * HALL_R:.2f} W", "≤ 0.5 W in SOIC-8 on 2 oz pours",
             I_CONT ** 2 * HALL_R <= 0.5, "continuous 20 A through the leads: NOT VERIFIED (Allegro thermal curves)"))
 
-    # --- copper (IPC-2221B external, both outer layers)
-    for name, w, length, amps in PATHS:
-        cap = 2 * ipc2221_external_amps(w, CU_OUTER_UM, PATH_RISE)
-        cap_pk = 2 * ipc2221_external_amps(w, CU_OUTER_UM, 2 * PATH_RISE)
-        add(Row(f"copper {name}", f"{w:.0f} mm × 2 layers 2 oz: {cap:.0f} A", f"≥ {amps:.0f} A at +{PATH_RISE:.0f} °C",
-                cap >= amps and cap_pk >= I_PEAK,
-                f"{cap_pk:.0f} A at +{2 * PATH_RISE:.0f} °C (peak {I_PEAK:.0f} A); {path_loss(w, length, amps) * 1e3:.0f} mW "
-                f"over {length:.0f} mm (IPC-2221B; IPC-2152 chart check open)"))
+    # --- copper as drawn (IPC-2221B; planes on the 2 oz inner layers, via fields by their barrels)
+    for name, amps, segs in PATHS:
+        for seg, length, conductors in segs:
+            cap = segment_amps(conductors, PATH_RISE)
+            cap_pk = segment_amps(conductors, 2 * PATH_RISE)
+            drawn = " + ".join(" via ".join(f"{k} {v:g} mm" if k != "vias" else f"{v:g} vias"
+                                            for k, v in pieces) for pieces in conductors)
+            add(Row(f"copper {name}: {seg}", f"{cap:.0f} A", f"≥ {amps:.0f} A at +{PATH_RISE:.0f} °C",
+                    cap >= amps and cap_pk >= I_PEAK,
+                    f"{drawn}; {cap_pk:.0f} A at +{2 * PATH_RISE:.0f} °C (peak {I_PEAK:.0f} A); "
+                    f"{segment_loss(conductors, length, amps) * 1e3:.0f} mW over {length:.0f} mm"))
+    neck = ipc2221_external_amps(ACS725_NECK_MM[0], CU_OUTER_UM, PATH_RISE)
+    add(Row("copper motor A: ACS725 lead rows (F.Cu only)", f"{neck:.0f} A by IPC-2221B",
+            f"≥ {I_CONT:.0f} A at +{PATH_RISE:.0f} °C", neck >= I_CONT,
+            f"traded: {ACS725_NECK_MM[0]} mm for {ACS725_NECK_MM[1]} mm at the SOIC-8's two-lead rows, "
+            "pours on both sides; IPC-2221B's long-conductor curve does not describe a 1 mm neck, and "
+            "Allegro's continuous-current rating of the package on a 2 oz board was NOT read: measure "
+            "the lead temperature on the first board (revision B: a sensor with a larger primary)"))
 
     # --- current sense
     span = HALL_RANGE * HALL_MV_PER_A / 1e3
