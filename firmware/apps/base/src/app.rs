@@ -125,6 +125,11 @@ impl<'a> App<'a> {
         self.pose
     }
 
+    /// Velocity (vx, vy, ωz) in the base frame by forward kinematics of the wheels' speeds.
+    pub fn velocity(&self) -> (f32, f32, f32) {
+        self.velocity
+    }
+
     /// One step at `now_us` (every millisecond).
     pub fn step(&mut self, now_us: u64) {
         while let Some(c) = self.ends.cmd.try_recv() {

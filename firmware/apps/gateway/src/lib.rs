@@ -24,6 +24,7 @@ mod app;
 pub mod endpoints;
 pub mod link;
 pub mod params;
+pub mod ros;
 pub mod server;
 pub mod tap;
 

@@ -24,7 +24,10 @@ pub struct Stamp {
 impl Stamp {
     /// From nanoseconds since the epoch of the clock the gateway stamps with.
     pub fn from_ns(ns: i64) -> Self {
-        Self { sec: ns.div_euclid(1_000_000_000) as i32, nanosec: ns.rem_euclid(1_000_000_000) as u32 }
+        Self {
+            sec: ns.div_euclid(1_000_000_000) as i32,
+            nanosec: ns.rem_euclid(1_000_000_000) as u32,
+        }
     }
 }
 
@@ -182,7 +185,14 @@ mod tests {
 
     #[test]
     fn odometry_is_724_bytes_with_the_pose_where_ros_reads_it() {
-        let o = Odometry { x: 1.5, y: -2.0, theta: core::f32::consts::FRAC_PI_2, vx: 0.3, vy: 0.0, wz: 0.1 };
+        let o = Odometry {
+            x: 1.5,
+            y: -2.0,
+            theta: core::f32::consts::FRAC_PI_2,
+            vx: 0.3,
+            vy: 0.0,
+            wz: 0.1,
+        };
         let mut buf = [0u8; size::MAX];
         let n = odometry(&o, Stamp { sec: 3, nanosec: 5 }, &mut buf).unwrap();
         assert_eq!(n, size::ODOMETRY);
@@ -211,8 +221,13 @@ mod tests {
 
     #[test]
     fn ranges_out_of_reach_are_infinities() {
-        let p = Proximity { distance: [0.5, f32::NAN, f32::NAN, 0.2], status: [0, 1, 2, 3], supply_fault: false };
-        let spec = RangerSpec { radiation_type: 1, field_of_view: 0.1, min_range: 0.04, max_range: 3.0 };
+        let p = Proximity {
+            distance: [0.5, f32::NAN, f32::NAN, 0.2],
+            status: [0, 1, 2, 3],
+            supply_fault: false,
+        };
+        let spec =
+            RangerSpec { radiation_type: 1, field_of_view: 0.1, min_range: 0.04, max_range: 3.0 };
         let mut buf = [0u8; 64];
         let mut value = |ch| {
             let n = range(&p, ch, &spec, "range_0", Stamp::default(), &mut buf).unwrap();

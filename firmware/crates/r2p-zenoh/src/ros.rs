@@ -98,8 +98,15 @@ pub fn token_key(
         Entity::Publisher => "MP",
         Entity::Subscription => "MS",
     };
-    write!(k, "@ros2_lv/{}/{:x}/0/{}/{}/%/", node.domain, u128::from_le_bytes(node.zid), entity_id, kind)
-        .ok()?;
+    write!(
+        k,
+        "@ros2_lv/{}/{:x}/0/{}/{}/%/",
+        node.domain,
+        u128::from_le_bytes(node.zid),
+        entity_id,
+        kind
+    )
+    .ok()?;
     k.push('%').ok()?;
     if !trim(node.namespace).is_empty() {
         mangled(&mut k, trim(node.namespace))?;
@@ -184,8 +191,9 @@ mod tests {
                 "/::,:,:,:,,"
             ])
         );
-        let t = token_key(&node("a/b"), 1, Entity::Subscription, Some(("cmd_vel", &ODOM, DEFAULT_QOS)))
-            .unwrap();
+        let t =
+            token_key(&node("a/b"), 1, Entity::Subscription, Some(("cmd_vel", &ODOM, DEFAULT_QOS)))
+                .unwrap();
         assert!(t.contains("/MS/%/%a%b/r2p_gateway/%a%b%cmd_vel/"), "{t}");
     }
 

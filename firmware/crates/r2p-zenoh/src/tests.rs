@@ -96,7 +96,10 @@ fn frames_carry_declarations_and_puts_with_consecutive_sequence_numbers() {
     assert_eq!(&out[..n], &framed(&expect)[..]);
     let n = s.send(4, &mut out, |net| net.put(1, &[9, 8], Some(&[7]))).unwrap();
     // sn + 1; PUSH with the sender's mapping, id 1; PUT with an attachment extension.
-    assert_eq!(&out[..n], &framed(&[0x25, 0x82, 0x84, 0x0C, 0x5D, 1, 0x81, 0x43, 1, 7, 2, 9, 8])[..]);
+    assert_eq!(
+        &out[..n],
+        &framed(&[0x25, 0x82, 0x84, 0x0C, 0x5D, 1, 0x81, 0x43, 1, 7, 2, 9, 8])[..]
+    );
     assert_eq!(s.stats().frames_sent, 2);
     // A frame over the router's batch size (1024) is refused, and its sequence number not used.
     let big = [0u8; 1100];
@@ -159,8 +162,8 @@ fn malformed_batches_are_counted_and_dropped_and_the_session_goes_on() {
     let mut s = opened();
     let mut out = [0u8; 64];
     for bad in [
-        &[0x25][..],                       // frame without its sequence number
-        &[0x25, 0x07, 0x1D, 0x00, 0x01],   // push without its payload
+        &[0x25][..],                           // frame without its sequence number
+        &[0x25, 0x07, 0x1D, 0x00, 0x01],       // push without its payload
         &[0x25, 0x07, 0x3D, 0x00, 0x09, b'a'], // suffix longer than the batch
         &[0x25, 0x07, 0x1D, 0x00, 0x81, 0x63], // a reserved extension encoding
         &[0x25, 0x07, 0x3D, 0x00, 0x02, 0xFF, 0xFE, 0x01, 0x00], // key not UTF-8

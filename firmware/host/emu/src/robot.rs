@@ -27,6 +27,7 @@ use rtcan::CycleConfig;
 use crate::boards::{self, GatewayBoot, Probe};
 pub use crate::boards::{BoardFlash, BoardNode};
 use crate::gateway_net::{GatewayServer, LinkSlot, NetSlot};
+use crate::gateway_zenoh::{RosSlot, ZenohClient};
 use crate::{App, Mode, Sim};
 
 /// One board of the robot.
@@ -57,6 +58,8 @@ pub struct EmuRobot {
     gateway_link: LinkSlot,
     /// The network as the gateway sees it.
     gateway_net: NetSlot,
+    /// What the gateway's step and its Zenoh client share, while connected.
+    gateway_ros: RosSlot,
 }
 
 impl EmuRobot {
@@ -83,6 +86,7 @@ impl EmuRobot {
             probe,
             gateway_link: Arc::new(Mutex::new(None)),
             gateway_net: Arc::new(Mutex::new(Default::default())),
+            gateway_ros: Arc::new(Mutex::new(None)),
         };
         for (i, m) in r.robot.modules.clone().iter().enumerate() {
             let flash = Rc::new(RefCell::new(BoardFlash::new()));
@@ -114,6 +118,31 @@ impl EmuRobot {
             ));
         }
         GatewayServer::start(addr, self.gateway_link.clone(), self.gateway_net.clone())
+    }
+
+    /// Connects the gateway to the Zenoh router at `router` (its application's Zenoh client
+    /// over host TCP): the robot's topics become ROS 2 topics (rmw_zenoh's conventions) in
+    /// `domain` and `namespace`, and `/cmd_vel` drives the base. Runs until the returned handle
+    /// is shut down or dropped; reconnects when the router goes away.
+    pub fn connect_zenoh(
+        &self,
+        router: SocketAddr,
+        domain: u32,
+        namespace: &str,
+    ) -> io::Result<ZenohClient> {
+        let Some(m) = self.robot.modules.iter().find(|m| m.kind() == BoardKind::Gateway) else {
+            return Err(io::Error::new(
+                io::ErrorKind::NotFound,
+                format!("{} has no gateway module to connect to a Zenoh router", self.robot.name),
+            ));
+        };
+        ZenohClient::start(
+            router,
+            m.uid.0,
+            domain,
+            namespace.trim_matches('/').to_string(),
+            self.gateway_ros.clone(),
+        )
     }
 
     /// The spare port tools and bridges use.
@@ -155,6 +184,7 @@ impl EmuRobot {
             probe: self.probe.clone(),
             gateway: gateway.clone(),
             net: self.gateway_net.clone(),
+            ros: self.gateway_ros.clone(),
         };
         let (node, app) =
             boards::boot(module.kind(), ctx).map_err(|e| format!("{}: {e}", module.name))?;

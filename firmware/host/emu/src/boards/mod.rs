@@ -75,6 +75,8 @@ pub struct Ctx<'r> {
     pub gateway: Rc<RefCell<Option<GatewayBoot>>>,
     /// The network as the gateway sees it (its server's listening address).
     pub net: crate::gateway_net::NetSlot,
+    /// What the gateway shares with its Zenoh client, while connected.
+    pub ros: crate::gateway_zenoh::RosSlot,
 }
 
 /// A booted board: its node and its 1 kHz application step.
