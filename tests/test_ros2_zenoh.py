@@ -8,6 +8,8 @@ driving the base, the watchdog stopping it, and the gateway reconnecting after a
 Loopback only, multicast scouting off."""
 from __future__ import annotations
 
+import json
+import math
 import struct
 import threading
 import time
@@ -247,3 +249,42 @@ def test_after_a_router_restart_the_gateway_reconnects(ros):
     peer.drive(1.5, vx=-0.3)  # backwards, away from the box
     p1 = peer.samples_since(time.monotonic() - 0.3)[-1][0].pose.pose.position
     assert ((p1.x - p0.x) ** 2 + (p1.y - p0.y) ** 2) ** 0.5 > 0.15, (p0, p1)
+
+
+def collect(peer: Peer, key: str, typename: str, n: int, timeout: float = 10.0) -> list:
+    got = []
+    sub = peer.session.declare_subscriber(key, lambda s: got.append(bytes(s.payload.to_bytes())))
+    try:
+        wait_for(key, lambda: len(got) >= n, timeout)
+    finally:
+        sub.undeclare()
+    return [TS.deserialize_cdr(b, typename) for b in got]
+
+
+def echo(ros, topic: str) -> dict:
+    p = run([str(R2P), "--socketcand", f"127.0.0.1:{ros['sim'].port}", "--timeout", "5", "echo", topic,
+             "--count", "1", "--json"], timeout=60)
+    assert p.returncode == 0, p.stdout
+    return json.loads(p.stdout.splitlines()[-1])["value"]
+
+
+def test_battery_state_and_ranges_carry_what_the_modules_publish_on_the_bus(ros):
+    peer = ros["peer"]
+    battery_key = f"0/battery_state/sensor_msgs::msg::dds_::BatteryState_/{TS.hash_rihs01('sensor_msgs/msg/BatteryState')}"
+    b = collect(peer, battery_key, "sensor_msgs/msg/BatteryState", 2, timeout=5)[-1]
+    bus = echo(ros, "psu/battery")
+    assert b.voltage == pytest.approx(bus["voltage"], abs=0.05) and 20 < b.voltage < 30, (b, bus)
+    assert b.current == pytest.approx(-bus["current"], abs=0.3)   # ROS: negative while discharging
+    assert b.present and b.power_supply_status == 2 and b.header.frame_id == "battery"
+    bus = echo(ros, "proximity/ranges")
+    range_type = f"sensor_msgs::msg::dds_::Range_/{TS.hash_rihs01('sensor_msgs/msg/Range')}"
+    for ch in range(4):
+        r = collect(peer, f"0/range_{ch}/{range_type}", "sensor_msgs/msg/Range", 2)[-1]
+        assert r.header.frame_id == f"range_{ch}" and r.radiation_type == 1
+        want = {0: bus["distance"][ch], 1: float("-inf"), 2: float("inf")}.get(bus["status"][ch])
+        if want is None:
+            assert r.range != r.range  # NaN: no sensor
+        elif math.isinf(want):
+            assert r.range == want
+        else:
+            assert r.range == pytest.approx(want, abs=0.03), (ch, r.range, bus)

@@ -2,7 +2,7 @@
 
 use r2p_module::leds::{self, Pattern};
 use r2p_module::TopicNode;
-use r2p_msgs::GatewayStatus;
+use r2p_msgs::{Battery, GatewayStatus, Imu};
 use r2p_node::NodeError;
 
 use crate::endpoints::Endpoints;
@@ -51,18 +51,33 @@ pub struct App<'a> {
     ep: Endpoints<'a>,
     link: &'a BusLink,
     next_status_us: u64,
+    battery: Option<Battery>,
+    imu: Option<Imu>,
 }
 
 impl<'a> App<'a> {
     /// The application on its endpoints ([`crate::Storage::build`]) and the link its server
     /// and bus tap share.
     pub fn new(endpoints: Endpoints<'a>, link: &'a BusLink) -> Self {
-        Self { ep: endpoints, link, next_status_us: 0 }
+        Self { ep: endpoints, link, next_status_us: 0, battery: None, imu: None }
     }
 
-    /// Exports `gateway/status` on the gateway's node.
+    /// Exports `gateway/status` on the gateway's node and imports what ROS 2 gets besides the
+    /// base's topics (the battery, the IMU; waiting harmlessly on a robot without them).
     pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
-        node.export(self.ep.status.remote)
+        node.export(self.ep.status.remote)?;
+        node.import(self.ep.battery.remote)?;
+        node.import(self.ep.imu.remote)
+    }
+
+    /// The latest battery reading received, if any.
+    pub fn battery(&self) -> Option<Battery> {
+        self.battery
+    }
+
+    /// The latest IMU reading received, if any.
+    pub fn imu(&self) -> Option<Imu> {
+        self.imu
     }
 
     /// The endpoints.
@@ -89,6 +104,12 @@ impl<'a> App<'a> {
 
     /// One step at `now_us`: `gateway/status` when due; returns the LEDs.
     pub fn step(&mut self, now_us: u64, sample: &Sample) -> Command {
+        while let Some(b) = self.ep.battery.subscriber.try_recv() {
+            self.battery = Some(*b);
+        }
+        while let Some(m) = self.ep.imu.subscriber.try_recv() {
+            self.imu = Some(*m);
+        }
         if now_us >= self.next_status_us {
             let next = self.next_status_us + STATUS_PERIOD_US;
             self.next_status_us = if next <= now_us { now_us + STATUS_PERIOD_US } else { next };

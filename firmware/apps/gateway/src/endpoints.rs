@@ -3,17 +3,23 @@
 //! | topic | type | class |
 //! |---|---|---|
 //! | `gateway/status` | `GatewayStatus` | NRT, 1 Hz |
+//! | `psu/battery` | `Battery` | imported: for ROS 2's `/battery_state` |
+//! | `imu` | `Imu` | imported: for ROS 2's `/imu/data` |
 //!
 //! The objects are made at boot in a [`Storage`] of cells (`r2p_module`'s [`Outbound`], each
 //! topic written once): a `static` one on the MCU, a leaked one per emulated board on the host
 //! ([`Endpoints::leak`]).
 
 use r2p_middleware::{pool_size, Class};
-use r2p_module::{Outbound, OutboundCell};
-use r2p_msgs::GatewayStatus;
+use r2p_module::{Inbound, InboundCell, Outbound, OutboundCell};
+use r2p_msgs::{Battery, GatewayStatus, Imu};
 
 /// The topic's name.
 pub const STATUS_TOPIC: &str = "gateway/status";
+/// The PSU's battery (what `/battery_state` carries).
+pub const BATTERY_TOPIC: &str = "psu/battery";
+/// The IMU module's reading (what `/imu/data` carries).
+pub const IMU_TOPIC: &str = "imu";
 
 /// Queue each remote subscriber may ask for.
 pub const REMOTE_QUEUE: usize = 2;
@@ -22,24 +28,32 @@ pub const REMOTE_QUEUE: usize = 2;
 pub const SPARE_QUEUE: usize = 2;
 
 const POOL: usize = pool_size(&[REMOTE_QUEUE, SPARE_QUEUE], 1);
+/// An imported topic: the gateway's one subscriber keeps the latest two.
+const IN_POOL: usize = pool_size(&[2], 1);
 
 /// Everything the application and the node use, by reference: one field a topic.
 #[derive(Clone, Copy)]
 pub struct Endpoints<'a> {
     /// The status: published (NRT) and exported.
     pub status: Outbound<'a, GatewayStatus, POOL, 2, REMOTE_QUEUE>,
+    /// The battery, imported.
+    pub battery: Inbound<'a, Battery, IN_POOL, 1, 2>,
+    /// The IMU's reading, imported.
+    pub imu: Inbound<'a, Imu, IN_POOL, 1, 2>,
 }
 
 /// Room for one set of endpoints: declare it `static` on the MCU, then [`Storage::build`] once.
 #[derive(Default)]
 pub struct Storage {
     status: OutboundCell<GatewayStatus, POOL, 2, REMOTE_QUEUE>,
+    battery: InboundCell<Battery, IN_POOL, 1, 2>,
+    imu: InboundCell<Imu, IN_POOL, 1, 2>,
 }
 
 impl Storage {
     /// Empty storage.
     pub const fn new() -> Self {
-        Self { status: OutboundCell::new() }
+        Self { status: OutboundCell::new(), battery: InboundCell::new(), imu: InboundCell::new() }
     }
 
     /// Makes and wires the endpoints.
@@ -49,7 +63,13 @@ impl Storage {
     pub fn build(&'static self) -> Endpoints<'static> {
         // Sized by `pool_size` for exactly these: cannot fail.
         let status = self.status.build(STATUS_TOPIC, GatewayStatus::default(), Class::NonRealTime);
-        Endpoints { status: status.expect("the status topic is sized for its endpoints") }
+        let battery = self.battery.build(BATTERY_TOPIC, Battery::default());
+        let imu = self.imu.build(IMU_TOPIC, Imu::default());
+        Endpoints {
+            status: status.expect("the status topic is sized for its endpoints"),
+            battery: battery.expect("the battery topic is sized for its endpoints"),
+            imu: imu.expect("the imu topic is sized for its endpoints"),
+        }
     }
 }
 

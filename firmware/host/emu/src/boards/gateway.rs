@@ -93,6 +93,9 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
                 let (vx, vy, wz) = a.velocity();
                 sh.latest.odom = Some(r2p_msgs::Odometry { x, y, theta, vx, vy, wz });
                 sh.latest.status = Some(gw.status(&net));
+                sh.latest.battery = gw.battery();
+                sh.latest.imu = gw.imu();
+                sh.latest.proximity = a.ranges();
                 if let Some(c) = sh.cmd.take() {
                     let _ = cmd_local.publish_with(|m| *m = c);
                 }
