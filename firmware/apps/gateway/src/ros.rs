@@ -52,7 +52,6 @@ pub fn zid_of(uid: [u8; 12]) -> [u8; 16] {
 /// One published topic: its key id (declared once per session), GID, sequence number.
 struct Pub {
     key: KeyString,
-    token: KeyString,
     gid: [u8; 16],
     seq: i64,
     period_us: u64,
@@ -136,14 +135,18 @@ pub struct Latest {
 /// The gateway's ROS 2 node on a Zenoh session.
 pub struct RosBridge {
     session: Session,
-    node_token: KeyString,
+    domain: u32,
+    namespace: heapless::String<MAX_NAMESPACE>,
+    zid: [u8; 16],
     pubs: [Pub; topic::COUNT],
     cmd_key: KeyString,
-    cmd_token: KeyString,
     cmd: Option<(Twist2D, u64)>,
     cmd_pending: Option<Twist2D>,
     stats: RosStats,
 }
+
+/// Longest namespace.
+pub const MAX_NAMESPACE: usize = 48;
 
 /// Zenoh lease the gateway announces (keep-alives every 2.5 s).
 pub const LEASE_MS: u32 = 10_000;
@@ -152,46 +155,33 @@ pub const RX_BATCH: u16 = 2048;
 
 impl RosBridge {
     /// A bridge for the gateway's node in `cfg`'s domain and namespace. `None` if a key does
-    /// not fit (a namespace longer than ~60 characters).
+    /// not fit (a namespace longer than [`MAX_NAMESPACE`]).
     pub fn new(cfg: &RosConfig<'_>) -> Option<Self> {
-        let node = NodeInfo {
-            domain: cfg.domain,
-            namespace: cfg.namespace,
-            name: NODE_NAME,
-            zid: cfg.zid,
-        };
-        let node_token = ros::token_key(&node, 0, Entity::Node, None)?;
+        let namespace = heapless::String::try_from(cfg.namespace.trim_matches('/')).ok()?;
+        let node =
+            NodeInfo { domain: cfg.domain, namespace: &namespace, name: NODE_NAME, zid: cfg.zid };
+        ros::token_key(&node, 0, Entity::Node, None)?;
+        cmd_token(&node)?;
         let mut pubs: heapless::Vec<Pub, { topic::COUNT }> = heapless::Vec::new();
         for (i, (name, hz)) in TOPICS.iter().enumerate() {
-            let ty = ros_type(i);
-            let qos = if i == topic::STATUS { DEFAULT_QOS } else { SENSOR_QOS };
-            let token =
-                ros::token_key(&node, 1 + i as u32, Entity::Publisher, Some((name, &ty, qos)))?;
             let _ = pubs.push(Pub {
-                key: ros::topic_key(&node, name, &ty)?,
-                gid: ros::gid(&token),
-                token,
+                key: ros::topic_key(&node, name, &ros_type(i))?,
+                gid: ros::gid(&pub_token(&node, i)?),
                 seq: 0,
                 period_us: 1_000_000 / u64::from(*hz),
                 next_us: 0,
             });
         }
         let pubs = pubs.into_array().ok()?;
-        let twist = types::TWIST;
-        let cmd_key = ros::topic_key(&node, "/cmd_vel", &twist)?;
-        let cmd_token = ros::token_key(
-            &node,
-            1 + topic::COUNT as u32,
-            Entity::Subscription,
-            Some(("/cmd_vel", &twist, DEFAULT_QOS)),
-        )?;
+        let cmd_key = ros::topic_key(&node, "/cmd_vel", &types::TWIST)?;
         let session = Session::new(Config { zid: cfg.zid, lease_ms: LEASE_MS, rx_batch: RX_BATCH });
         Some(Self {
             session,
-            node_token,
+            domain: cfg.domain,
+            namespace,
+            zid: cfg.zid,
             pubs,
             cmd_key,
-            cmd_token,
             cmd: None,
             cmd_pending: None,
             stats: RosStats::default(),
@@ -252,21 +242,34 @@ impl RosBridge {
         Ok(n)
     }
 
+    /// The declarations, one frame each (the node and `/cmd_vel` first, then each publisher's
+    /// key expression and token: ~500 bytes a frame, ~4.3 KB in all). Tokens are rebuilt
+    /// here, not kept: they go out once a session.
     fn declare(&mut self, now_us: u64, out: &mut [u8]) -> Result<usize, SessionError> {
-        let (node_token, pubs, cmd_key, cmd_token) =
-            (&self.node_token, &mut self.pubs, &self.cmd_key, &self.cmd_token);
+        let node = NodeInfo {
+            domain: self.domain,
+            namespace: &self.namespace,
+            name: NODE_NAME,
+            zid: self.zid,
+        };
+        let (Some(node_token), Some(cmd_tok)) =
+            (ros::token_key(&node, 0, Entity::Node, None), cmd_token(&node))
+        else {
+            return Err(SessionError::Overflow);
+        };
+        let cmd_key = &self.cmd_key;
         let mut n = self.session.send(now_us, out, |net| {
-            net.declare_token(0, node_token);
+            net.declare_token(0, &node_token);
             net.declare_subscriber(1, cmd_key);
-            net.declare_token(1 + topic::COUNT as u32, cmd_token);
+            net.declare_token(1 + topic::COUNT as u32, &cmd_tok);
         })?;
-        // One frame per publisher: its key expression and its token (~500 bytes each).
-        for (i, p) in pubs.iter_mut().enumerate() {
+        for (i, p) in self.pubs.iter_mut().enumerate() {
             p.seq = 0;
             p.next_us = now_us;
+            let token = pub_token(&node, i).ok_or(SessionError::Overflow)?;
             n += self.session.send(now_us, &mut out[n..], |net| {
                 net.declare_keyexpr(1 + i as u16, &p.key);
-                net.declare_token(1 + i as u32, &p.token);
+                net.declare_token(1 + i as u32, &token);
             })?;
         }
         Ok(n)
@@ -343,4 +346,20 @@ impl RosBridge {
     pub fn driving(&self) -> bool {
         self.cmd.is_some()
     }
+}
+
+/// Publisher `i`'s liveliness token.
+fn pub_token(node: &NodeInfo<'_>, i: usize) -> Option<KeyString> {
+    let qos = if i == topic::STATUS { DEFAULT_QOS } else { SENSOR_QOS };
+    ros::token_key(node, 1 + i as u32, Entity::Publisher, Some((TOPICS[i].0, &ros_type(i), qos)))
+}
+
+/// The `/cmd_vel` subscription's liveliness token.
+fn cmd_token(node: &NodeInfo<'_>) -> Option<KeyString> {
+    ros::token_key(
+        node,
+        1 + topic::COUNT as u32,
+        Entity::Subscription,
+        Some(("/cmd_vel", &types::TWIST, DEFAULT_QOS)),
+    )
 }

@@ -87,7 +87,7 @@ impl<'a> CdrWriter<'a> {
 
     /// Pads with zeros to a multiple of `n` after the header.
     pub fn align(&mut self, n: usize) {
-        while (self.pos - 4) % n != 0 && !self.overflow {
+        while !(self.pos - 4).is_multiple_of(n) && !self.overflow {
             self.raw(&[0]);
         }
     }

@@ -21,7 +21,7 @@ pub const VERSION: u8 = 0x09;
 /// Longest key expression the session keeps (router mappings, its own declarations).
 pub const MAX_KEY: usize = 256;
 /// Key expressions the router may declare to this client and be remembered.
-pub const MAX_REMOTE_KEYS: usize = 8;
+pub const MAX_REMOTE_KEYS: usize = 4;
 /// Longest cookie from the router's INIT ack.
 pub const MAX_COOKIE: usize = 256;
 
@@ -218,10 +218,10 @@ impl Session {
     /// send back in `out` (the OPEN after the INIT ack; else 0) and hands events to `on`.
     /// A malformed batch is counted and dropped; only a broken handshake, a CLOSE or an
     /// output overflow end the session.
-    pub fn receive<'b>(
+    pub fn receive(
         &mut self,
         now_us: u64,
-        input: &'b [u8],
+        input: &[u8],
         out: &mut [u8],
         mut on: impl FnMut(Event<'_>),
     ) -> Result<usize, SessionError> {
@@ -349,7 +349,7 @@ impl Session {
         // The initial sequence number: any is valid; derive one from the ZID.
         self.tx_sn = u32::from_le_bytes([self.cfg.zid[0], self.cfg.zid[1], self.cfg.zid[2], 0]);
         let lease_s = self.cfg.lease_ms / 1000;
-        let whole_seconds = self.cfg.lease_ms % 1000 == 0;
+        let whole_seconds = self.cfg.lease_ms.is_multiple_of(1000);
         let (sn, cookie) = (self.tx_sn, &self.cookie);
         batch(out, |w| {
             w.u8(id::OPEN | if whole_seconds { FLAG_T } else { 0 });

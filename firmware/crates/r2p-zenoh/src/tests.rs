@@ -20,7 +20,15 @@ fn framed(body: &[u8]) -> Vec<u8> {
 
 /// An INIT ack from a router with a 4-byte ZID, size parameters (batch 1024) and an extension.
 fn init_ack() -> Vec<u8> {
-    let mut v = vec![0x01 | 0x20 | 0x40 | 0x80, 0x09, (3 << 4) | 0b00, 0xAA, 0xBB, 0xCC, 0xDD];
+    let mut v = vec![
+        0x01 | 0x20 | 0x40 | 0x80,
+        0x09,
+        3 << 4, /* ZID of 4 bytes, a router */
+        0xAA,
+        0xBB,
+        0xCC,
+        0xDD,
+    ];
     v.extend_from_slice(&[0b1010, 0x00, 0x04]); // resolution, batch 1024
     v.extend_from_slice(&[3, b'c', b'k', b'y']); // cookie
     v.extend_from_slice(&[0x21, 0x05]); // a z64 extension (QoS), last
