@@ -292,3 +292,11 @@ def test_battery_state_and_ranges_carry_what_the_modules_publish_on_the_bus(ros)
             assert r.range == want
         else:
             assert r.range == pytest.approx(want, abs=0.03), (ch, r.range, bus)
+
+
+def test_the_gateways_tokens_go_when_it_goes(ros):
+    """Last (it stops the robot): `ros2 node list` forgets a gateway that is switched off."""
+    peer = ros["peer"]
+    assert any("r2p_gateway" in t for t in peer.tokens())
+    ros["sim"].kill()
+    wait_for("the tokens to go", lambda: not any("r2p_gateway" in t for t in peer.tokens()), timeout=12)
