@@ -294,6 +294,32 @@ def test_battery_state_and_ranges_carry_what_the_modules_publish_on_the_bus(ros)
             assert r.range == pytest.approx(want, abs=0.03), (ch, r.range, bus)
 
 
+def test_other_r2p_topics_are_ros_topics_of_their_r2p_msgs_type(ros):
+    """psu/state has no standard ROS 2 type: it is /psu/state, r2p_msgs/msg/PsuState, with the
+    values on the bus (the CDR from the packed bus payload and the generated layout)."""
+    from rosbags.typesys import get_types_from_msg
+    store = get_typestore(Stores.ROS2_JAZZY)
+    for name in ("PsuState", "MotorFault", "PsuEvent"):
+        text = (ROOT / "firmware" / "msgs" / "r2p_msgs" / "msg" / f"{name}.msg").read_text()
+        store.register(get_types_from_msg(text, f"r2p_msgs/msg/{name}"))
+    tokens = [parse_token(t) for t in ros["peer"].tokens() if "r2p_gateway" in t]
+    pubs = {e["topic"]: e for e in tokens if e["kind"] == "MP"}
+    for topic, ty in (("/psu/state", "PsuState"), ("/psu/event", "PsuEvent"), ("/motor2/fault", "MotorFault")):
+        assert pubs[topic]["type"] == f"r2p_msgs::msg::dds_::{ty}_"
+        assert pubs[topic]["hash"] == store.hash_rihs01(f"r2p_msgs/msg/{ty}")
+    key = f"0/psu/state/r2p_msgs::msg::dds_::PsuState_/{store.hash_rihs01('r2p_msgs/msg/PsuState')}"
+    got = []
+    sub = ros["peer"].session.declare_subscriber(key, lambda s: got.append(bytes(s.payload.to_bytes())))
+    try:
+        wait_for("/psu/state", lambda: got, timeout=10)
+    finally:
+        sub.undeclare()
+    state = store.deserialize_cdr(got[-1], "r2p_msgs/msg/PsuState")
+    bus = echo(ros, "psu/state")
+    assert (state.output_on, state.latched, state.under_voltage) == (bus["output_on"], bus["latched"], bus["under_voltage"])
+    assert state.output_on and state.bus_voltage == pytest.approx(bus["bus_voltage"], abs=0.05)
+
+
 def test_the_gateways_tokens_go_when_it_goes(ros):
     """Last (it stops the robot): `ros2 node list` forgets a gateway that is switched off."""
     peer = ros["peer"]

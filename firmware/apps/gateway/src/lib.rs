@@ -31,7 +31,7 @@ pub mod tap;
 #[cfg(test)]
 mod tests;
 
-pub use app::{App, Command, NetState, Sample};
+pub use app::{App, Command, Mirrored, NetState, Sample};
 pub use endpoints::{Endpoints, Storage};
 pub use link::{BusLink, LinkFrame, LinkStats};
 pub use tap::BusTap;

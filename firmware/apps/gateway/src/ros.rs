@@ -9,6 +9,7 @@
 //! | `/range_0` … `/range_3` | sensor_msgs/msg/Range | proximity → ROS | 10 Hz | best effort |
 //! | `/imu/data` | sensor_msgs/msg/Imu | IMU → ROS | 50 Hz | best effort |
 //! | `/gateway/status` | r2p_msgs/msg/GatewayStatus | gateway → ROS | 1 Hz | reliable |
+//! | `/psu/state`, `/psu/event`, `/motor1/fault` … `/motor3/fault` | r2p_msgs/msg/PsuState, PsuEvent, MotorFault | modules → ROS | each message once, as it comes | reliable |
 //!
 //! The board-support layer owns the link (a TCP connection to the router) and the clock; it
 //! hands this bridge each batch it reads and the latest value of each R2P topic, and sends what
@@ -19,6 +20,8 @@ use r2p_zenoh::mapping::{self, RangerSpec, Stamp};
 use r2p_zenoh::ros::{self, Entity, KeyString, NodeInfo, RosType, DEFAULT_QOS, SENSOR_QOS};
 use r2p_zenoh::session::{Config, Event, Session, SessionError, State, Stats};
 use r2p_zenoh::types::{self, R2pRosType};
+
+use crate::endpoints::MIRRORED;
 
 /// The ROS node's name.
 pub const NODE_NAME: &str = "r2p_gateway";
@@ -54,7 +57,9 @@ struct Pub {
     key: KeyString,
     gid: [u8; 16],
     seq: i64,
+    /// 0: each new message once (`count` tells them apart).
     period_us: u64,
+    count: u32,
     next_us: u64,
 }
 
@@ -70,8 +75,10 @@ pub mod topic {
     pub const IMU: usize = 6;
     /// `/gateway/status`.
     pub const STATUS: usize = 7;
+    /// The first of the mirrored R2P topics (`crate::endpoints::MIRRORED`, in its order).
+    pub const MIRRORED0: usize = 8;
     /// How many.
-    pub const COUNT: usize = 8;
+    pub const COUNT: usize = 13;
 }
 
 const TOPICS: [(&str, u32); topic::COUNT] = [
@@ -83,6 +90,12 @@ const TOPICS: [(&str, u32); topic::COUNT] = [
     ("/range_3", 10),
     ("/imu/data", 50),
     ("/gateway/status", 1),
+    // The mirrored topics: each message once, as it arrives (rate 0).
+    ("/psu/state", 0),
+    ("/psu/event", 0),
+    ("/motor1/fault", 0),
+    ("/motor2/fault", 0),
+    ("/motor3/fault", 0),
 ];
 
 fn ros_type(i: usize) -> RosType {
@@ -91,6 +104,9 @@ fn ros_type(i: usize) -> RosType {
         topic::BATTERY => types::BATTERY_STATE,
         topic::IMU => types::IMU,
         topic::STATUS => r2p_type("GatewayStatus").map_or(types::ODOMETRY, |t| t.ros),
+        i if i >= topic::MIRRORED0 => {
+            r2p_type(MIRRORED[i - topic::MIRRORED0].1).map_or(types::ODOMETRY, |t| t.ros)
+        }
         _ => types::RANGE,
     }
 }
@@ -130,6 +146,8 @@ pub struct Latest {
     pub imu: Option<Imu>,
     /// The gateway's status.
     pub status: Option<r2p_msgs::GatewayStatus>,
+    /// The mirrored R2P topics' latest messages (`crate::endpoints::MIRRORED`).
+    pub mirrored: [crate::Mirrored; MIRRORED.len()],
 }
 
 /// The gateway's ROS 2 node on a Zenoh session.
@@ -168,7 +186,8 @@ impl RosBridge {
                 key: ros::topic_key(&node, name, &ros_type(i))?,
                 gid: ros::gid(&pub_token(&node, i)?),
                 seq: 0,
-                period_us: 1_000_000 / u64::from(*hz),
+                period_us: if *hz == 0 { 0 } else { 1_000_000 / u64::from(*hz) },
+                count: 0,
                 next_us: 0,
             });
         }
@@ -306,6 +325,15 @@ impl RosBridge {
                     s.encode(&mut packed).ok()?;
                     Some(r2p_zenoh::cdr::packed_to_cdr(t.fields, &packed, &mut cdr))
                 }),
+                i if i >= topic::MIRRORED0 => {
+                    let m = &latest.mirrored[i - topic::MIRRORED0];
+                    if m.count == self.pubs[i].count {
+                        continue; // nothing new
+                    }
+                    self.pubs[i].count = m.count;
+                    r2p_type(MIRRORED[i - topic::MIRRORED0].1)
+                        .map(|t| r2p_zenoh::cdr::packed_to_cdr(t.fields, m.packed(), &mut cdr))
+                }
                 _ => latest.proximity.map(|p| {
                     let ch = i - topic::RANGE0;
                     let frame: &str = ["range_0", "range_1", "range_2", "range_3"][ch];
@@ -350,7 +378,7 @@ impl RosBridge {
 
 /// Publisher `i`'s liveliness token.
 fn pub_token(node: &NodeInfo<'_>, i: usize) -> Option<KeyString> {
-    let qos = if i == topic::STATUS { DEFAULT_QOS } else { SENSOR_QOS };
+    let qos = if i == topic::STATUS || i >= topic::MIRRORED0 { DEFAULT_QOS } else { SENSOR_QOS };
     ros::token_key(node, 1 + i as u32, Entity::Publisher, Some((TOPICS[i].0, &ros_type(i), qos)))
 }
 

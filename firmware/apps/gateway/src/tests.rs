@@ -479,8 +479,11 @@ fn the_link_led_shows_link_address_and_clients() {
 fn the_node_exports_status_under_the_module_name() {
     let (app, _, _) = rig();
     let params = leak(RamParams::new(params::DEFAULTS));
-    let mut node: Node<'static, 4, 4, 8, 4, 64> = Node::new(node_config([1; 12]), params).unwrap();
+    // The image's node: 7 imports (battery, imu and the mirrored topics).
+    let mut node: Node<'static, 4, 7, 8, 4, 64> = Node::new(node_config([1; 12]), params).unwrap();
     app.register(&mut node).unwrap();
+    let mut small: Node<'static, 4, 6, 8, 4, 64> = Node::new(node_config([1; 12]), params).unwrap();
+    assert!(app.register(&mut small).is_err(), "one import more than 6");
     assert_eq!(app.endpoints().status.topic.name(), STATUS_TOPIC);
     assert!(STATUS_TOPIC.starts_with(crate::NAME));
     assert_eq!(node_config([1; 12]).rank, Some(1), "the standby sync master");

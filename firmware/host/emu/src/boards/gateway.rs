@@ -95,6 +95,7 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
                 sh.latest.status = Some(gw.status(&net));
                 sh.latest.battery = gw.battery();
                 sh.latest.imu = gw.imu();
+                sh.latest.mirrored = gw.mirrored();
                 sh.latest.proximity = a.ranges();
                 if let Some(c) = sh.cmd.take() {
                     let _ = cmd_local.publish_with(|m| *m = c);

@@ -39,7 +39,7 @@ pub use template::template;
 use crate::App;
 
 /// Every emulated board's node runtime: room for each module's topics.
-pub type BoardNode = Node<'static, 8, 8, 64, 16, 64>;
+pub type BoardNode = Node<'static, 8, 16, 64, 16, 64>;
 
 /// A board's parameter flash: two 1 KiB pages, as the F103's last two.
 pub type BoardFlash = RamFlash<2048, 1024>;

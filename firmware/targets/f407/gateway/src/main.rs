@@ -67,9 +67,9 @@ bind_interrupts!(struct Irqs {
     RNG => rng::InterruptHandler<embassy_stm32::peripherals::RNG>;
 });
 
-/// The gateway's node: up to 4 exports and 2 imports, 32 queued frames, 4 streams in
+/// The gateway's node: up to 4 exports and 7 imports, 32 queued frames, 4 streams in
 /// reassembly, messages up to 64 bytes (as a module's).
-type GatewayNode = Node<'static, 4, 2, 32, 4, 64>;
+type GatewayNode = Node<'static, 4, 7, 32, 4, 64>;
 type Device = Ethernet<'static, ETH, GenericPhy<Sma<'static, ETH_SMA>>>;
 
 /// In the flash map's parameter sectors (2 and 3, 16 KiB each: embassy-stm32's bank 1 region 1
@@ -123,6 +123,7 @@ static LATEST: cortex_m::interrupt::Mutex<Cell<Latest>> =
         proximity: None,
         imu: None,
         status: None,
+        mirrored: [r2p_app_gateway::Mirrored { bytes: [0; 16], len: 0, count: 0 }; 5],
     }));
 static LINK: BusLink = BusLink::new();
 static NODE: StaticCell<GatewayNode> = StaticCell::new();
@@ -323,9 +324,10 @@ async fn run(
             NetState { link_up: stack.is_link_up(), ip, dhcp: FROM_DHCP.load(Ordering::Relaxed) };
         let c = app.step(now, &Sample { status: led_status(), net });
         let (status, battery, imu) = (app.status(&net), app.battery(), app.imu());
+        let mirrored = app.mirrored();
         cortex_m::interrupt::free(|cs| {
             let l = LATEST.borrow(cs);
-            l.set(Latest { status: Some(status), battery, imu, ..l.get() });
+            l.set(Latest { status: Some(status), battery, imu, mirrored, ..l.get() });
         });
         let [status, bus, fault, link] = &mut leds;
         for (out, on, active_low) in [
