@@ -43,11 +43,11 @@ def test_an_image_too_large_for_the_chip_is_refused(crate):
 
 
 def test_a_vector_table_elsewhere_than_image_origin_is_refused(crate):
-    elf = probe_targets.read_elf(ROOT / firmware.IMAGES_DIR / "psu.elf")
+    elf = probe_targets.read_elf(ROOT / firmware.IMAGES_DIR / "motor.elf")
     regions = probe_targets.chip_regions(crate, "STM32F103CB")
-    assert probe_targets.check("psu", elf, regions, probe_targets.image_origin("STM32F103CB")) == []
-    errs = probe_targets.check("psu", elf, regions, 0x0800_8000)
-    assert errs == ["psu: the vector table is at 0x08000000, expected at 0x08008000 (image_origin in "
+    assert probe_targets.check("motor", elf, regions, probe_targets.image_origin("STM32F103CB")) == []
+    errs = probe_targets.check("motor", elf, regions, 0x0800_8000)
+    assert errs == ["motor: the vector table is at 0x08000000, expected at 0x08008000 (image_origin in "
                     "firmware/images.toml, or the active slot of its flash map for an image behind the bootloader)"]
 
 
@@ -55,8 +55,11 @@ def test_an_image_behind_the_bootloader_starts_at_the_active_slot():
     # The gateway's image is linked at the F407 map's active slot, where its bootloader jumps.
     gateway = next(i for i in firmware.manifest() if i.name == "gateway")
     assert gateway.origin == 0x0800_0000 + firmware_map("STM32F407VG")["active"]["offset"] == 0x0802_0000
-    psu = next(i for i in firmware.manifest() if i.name == "psu")
-    assert psu.origin == 0x0800_0000, "F103 module images are still alone in flash (too large for a slot)"
+    images = {i.name: i for i in firmware.manifest()}
+    slot = 0x0800_0000 + firmware_map("STM32F103CB")["active"]["offset"]
+    for name in ("template", "imu", "proximity", "psu"):
+        assert images[name].origin == slot == 0x0800_4400, name
+    assert images["motor"].origin == 0x0800_0000, "motor is still alone in flash (too large for a slot)"
 
 
 def firmware_map(mcu):
@@ -71,7 +74,8 @@ def test_a_reset_vector_outside_flash_is_refused(crate):
     data = bytearray(elf.data)
     data[vt + 4:vt + 8] = (0x2000_0101).to_bytes(4, "little")  # a "reset handler" in RAM
     bad = dataclasses.replace(elf, data=bytes(data))
-    assert probe_targets.check("template", bad, regions, 0x0800_0000) == [
+    origin = next(i for i in firmware.manifest() if i.name == "template").origin
+    assert probe_targets.check("template", bad, regions, origin) == [
         "template: the reset vector 0x20000101 is not Thumb code in the chip's flash"]
 
 

@@ -196,6 +196,8 @@ path is docs/adding-a-module.md.
 def manifest_entry(root: Path, name: str, kind: str) -> None:
     t = next(m for m in manifest.load(root, check_tree=False) if m.name == TEMPLATE)
     i = t.image
+    # Linked where the template's build.rs links it (behind the bootloader): the manifest says so.
+    slot = f', slot = "{i.slot}"' if i.slot else ""
     with (root / manifest.FILE).open("a") as f:
         f.write(f"""
 # Made by scripts/new-module from the template; its budget is the template's until it needs more.
@@ -208,7 +210,7 @@ app = "firmware/apps/{name}"
 fab = false
 case = true
 emulator = "{TEMPLATE}"
-image = {{ workspace = "{i.workspace}", package = "{name}", mcu = "{i.mcu}", budget_flash = {i.budget_flash}, budget_ram = {i.budget_ram} }}
+image = {{ workspace = "{i.workspace}", package = "{name}", mcu = "{i.mcu}", budget_flash = {i.budget_flash}, budget_ram = {i.budget_ram}{slot} }}
 """)
 
 

@@ -10,6 +10,7 @@
 //! - [`transfer`] and [`sender`]: moving a signed image into a module's DFU slot over a lossy
 //!   link (go-back-N, resumable);
 //! - [`trial`]: when a new image confirms itself, or gives up and is rolled back;
+//! - [`boot_state`]: the image's side of embassy-boot's state (on trial? confirm);
 //! - `sign` (feature `std`): signing and key derivation on the host.
 //!
 //! The swap itself, power-cut safe with rollback, is embassy-boot's; tests/power_cuts.rs drives
@@ -17,6 +18,7 @@
 #![no_std]
 
 pub mod api;
+pub mod boot_state;
 pub mod layout;
 mod refusal;
 pub mod sender;
@@ -29,6 +31,6 @@ mod verify;
 
 pub use refusal::Refusal;
 pub use trailer::{
-    key_id, Name, Trailer, Version, FORMAT, MAGIC, NAME_LEN, SIGNED_LEN, TRAILER_LEN,
+    image_digest, key_id, Name, Trailer, Version, FORMAT, MAGIC, NAME_LEN, SIGNED_LEN, TRAILER_LEN,
 };
 pub use verify::{verify_file, verify_slot, Expect};

@@ -21,6 +21,11 @@ pub enum Refusal {
     BadSignature,
     /// The flash could not be read.
     FlashRead,
+    /// The module runs an image on trial (just swapped in, not yet confirmed): marking another
+    /// update now would be taken for its rollback.
+    OnTrial,
+    /// An erase or write of the DFU slot failed.
+    FlashWrite,
 }
 
 impl Refusal {
@@ -36,6 +41,8 @@ impl Refusal {
             Self::UnknownKey => "the image is signed with a key the module's bootloader does not trust: sign it with the module's key",
             Self::BadSignature => "the image's signature does not match its contents: it was altered or damaged after signing",
             Self::FlashRead => "the module could not read the received image back from its flash",
+            Self::OnTrial => "the module runs a new image that has not confirmed itself yet: try again once it has (within 15 s of its boot)",
+            Self::FlashWrite => "the module could not erase or write its update slot: try again; if it persists, its flash is worn out",
         }
     }
 
@@ -46,7 +53,7 @@ impl Refusal {
 
     /// The refusal a wire code names.
     pub const fn from_code(code: u8) -> Option<Self> {
-        const ALL: [Refusal; 9] = [
+        const ALL: [Refusal; 11] = [
             Refusal::NoTrailer,
             Refusal::UnknownFormat,
             Refusal::TooLarge,
@@ -56,9 +63,11 @@ impl Refusal {
             Refusal::UnknownKey,
             Refusal::BadSignature,
             Refusal::FlashRead,
+            Refusal::OnTrial,
+            Refusal::FlashWrite,
         ];
         match code {
-            1..=9 => Some(ALL[code as usize - 1]),
+            1..=11 => Some(ALL[code as usize - 1]),
             _ => None,
         }
     }
@@ -79,7 +88,7 @@ mod tests {
         for code in 0..=255u8 {
             match Refusal::from_code(code) {
                 Some(r) => assert_eq!(r.code(), code),
-                None => assert!(code == 0 || code > 9, "code {code} names nothing"),
+                None => assert!(code == 0 || code > 11, "code {code} names nothing"),
             }
         }
         assert_eq!(Refusal::from_code(8), Some(Refusal::BadSignature));

@@ -4,7 +4,7 @@
 extern crate std;
 use std::vec::Vec;
 
-use crate::{key_id, Name, Trailer, Version, SIGNED_LEN};
+use crate::{image_digest, key_id, Name, Trailer, Version, SIGNED_LEN};
 
 /// What the signer states about an image.
 #[derive(Clone, Copy, Debug)]
@@ -47,6 +47,7 @@ pub fn sign(image: &[u8], meta: &Meta<'_>, seed: &[u8; 32]) -> Result<Vec<u8>, S
         kind: Name::new(meta.kind).ok_or(SignError::BadKind)?,
         mcu: Name::new(meta.mcu).ok_or(SignError::BadMcu)?,
         key_id: key_id(&keypair.public.to_bytes()),
+        digest: image_digest(image),
         signature: [0; 64],
     };
     let unsigned = trailer.to_bytes();

@@ -15,7 +15,7 @@
 //! | 16..32  | module kind (the manifest's name), zero-padded ASCII          |
 //! | 32..48  | MCU (probe-rs's chip name), zero-padded ASCII                 |
 //! | 48..56  | key id: the first 8 bytes of SHA-512(public key)              |
-//! | 56..64  | zero                                                          |
+//! | 56..64  | digest: the first 8 bytes of SHA-512(image)                   |
 //! | 64..128 | ed25519 signature of SHA-512(image ‖ bytes 0..64)             |
 //!
 //! The signature covers the digest rather than the image itself, as embassy-boot's own
@@ -110,6 +110,9 @@ pub struct Trailer {
     pub mcu: Name,
     /// Which key signed it: the first bytes of SHA-512 of its public key.
     pub key_id: [u8; 8],
+    /// The first bytes of SHA-512 of the image: what `r2p sign` prints and `r2p nodes` shows
+    /// (signed with the rest, so a module reports it without hashing its flash).
+    pub digest: [u8; 8],
     /// ed25519 signature of SHA-512(image ‖ the trailer's first [`SIGNED_LEN`] bytes).
     pub signature: [u8; 64],
 }
@@ -125,6 +128,7 @@ impl Trailer {
         b[16..32].copy_from_slice(&self.kind.0);
         b[32..48].copy_from_slice(&self.mcu.0);
         b[48..56].copy_from_slice(&self.key_id);
+        b[56..64].copy_from_slice(&self.digest);
         b[64..128].copy_from_slice(&self.signature);
         b
     }
@@ -134,12 +138,14 @@ impl Trailer {
         if b[0..4] != MAGIC {
             return Err(Refusal::NoTrailer);
         }
-        if b[4] != FORMAT || b[5..8] != [0; 3] || b[56..64] != [0; 8] {
+        if b[4] != FORMAT || b[5..8] != [0; 3] {
             return Err(Refusal::UnknownFormat);
         }
         let word = |i: usize| u32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]]);
         let mut key_id = [0; 8];
         key_id.copy_from_slice(&b[48..56]);
+        let mut digest = [0; 8];
+        digest.copy_from_slice(&b[56..64]);
         let mut signature = [0; 64];
         signature.copy_from_slice(&b[64..128]);
         Ok(Self {
@@ -148,9 +154,18 @@ impl Trailer {
             kind: Name::from_bytes(&b[16..32]).ok_or(Refusal::UnknownFormat)?,
             mcu: Name::from_bytes(&b[32..48]).ok_or(Refusal::UnknownFormat)?,
             key_id,
+            digest,
             signature,
         })
     }
+}
+
+/// The digest a trailer carries for `image`: the first 8 bytes of its SHA-512.
+pub fn image_digest(image: &[u8]) -> [u8; 8] {
+    let digest = salty::Sha512::new().updated(image).finalize();
+    let mut d = [0; 8];
+    d.copy_from_slice(&digest[..8]);
+    d
 }
 
 /// The key id of a public key: the first 8 bytes of its SHA-512, so a refusal can say "signed by
@@ -173,6 +188,7 @@ mod tests {
             kind: Name::new("motor").unwrap(),
             mcu: Name::new("STM32F103CB").unwrap(),
             key_id: [1, 2, 3, 4, 5, 6, 7, 8],
+            digest: [0xD1, 2, 3, 4, 5, 6, 7, 0xD8],
             signature: [9; 64],
         }
     }
@@ -185,6 +201,7 @@ mod tests {
         assert_eq!(&b[8..12], &56_008u32.to_le_bytes());
         assert_eq!(&b[12..16], &[44, 1, 2, 1], "version 1.2.300");
         assert_eq!(&b[16..21], b"motor");
+        assert_eq!(&b[56..64], &[0xD1, 2, 3, 4, 5, 6, 7, 0xD8]);
         assert_eq!(Trailer::parse(&b), Ok(t));
     }
 
@@ -194,7 +211,7 @@ mod tests {
         let mut b = good;
         b[0] = b'X';
         assert_eq!(Trailer::parse(&b), Err(Refusal::NoTrailer));
-        for i in [4, 5, 7, 56, 63] {
+        for i in [4, 5, 7] {
             let mut b = good;
             b[i] ^= 0x40;
             assert_eq!(Trailer::parse(&b), Err(Refusal::UnknownFormat), "byte {i}");

@@ -20,6 +20,9 @@ use crate::{Refusal, TRAILER_LEN};
 /// message.
 pub const BLOCK_MAX: usize = 48;
 
+/// Bytes the receiver holds before programming them: a block and a write unit's misalignment.
+const PENDING: usize = BLOCK_MAX + 8;
+
 /// A transfer's messages.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Msg<'a> {
@@ -164,10 +167,10 @@ pub struct Receiver {
     state: State,
     /// The last page erased (an index), so each page is erased once, before its first write.
     erased: Option<u32>,
-    /// The write unit being filled (the F1 programs half-words, the F4 words): its slot offset,
-    /// its bytes, how many are set.
+    /// Bytes not yet programmed, from a write unit's start (the F1 programs half-words, the F4
+    /// words): their slot offset, the bytes, how many.
     pending_at: u32,
-    pending: [u8; 8],
+    pending: [u8; PENDING],
     pending_len: usize,
 }
 
@@ -182,7 +185,7 @@ impl Receiver {
             state: State::Idle,
             erased: None,
             pending_at: 0,
-            pending: [0xFF; 8],
+            pending: [0xFF; PENDING],
             pending_len: 0,
         }
     }
@@ -190,6 +193,15 @@ impl Receiver {
     /// The status to send now.
     pub fn status(&self) -> Status {
         Status { id: self.id, state: self.state, received: self.received }
+    }
+
+    /// Refuses transfer `id` for a reason of the module's own (it cannot take an update now):
+    /// the status to answer its `Begin` with. Nothing is written.
+    pub fn refuse(&mut self, id: u16, why: Refusal) -> Status {
+        *self = Self::new(self.slot_size);
+        self.id = id;
+        self.state = State::Refused(why);
+        self.status()
     }
 
     /// Handles a sender's message, writing to `dfu` (the DFU partition); `verify` checks the
@@ -217,7 +229,7 @@ impl Receiver {
                 let fits = offset.checked_add(data.len() as u32).is_some_and(|end| end <= self.len);
                 if offset == self.received && fits && !data.is_empty() {
                     if self.write(dfu, data).is_err() {
-                        self.state = State::Refused(Refusal::FlashRead);
+                        self.state = State::Refused(Refusal::FlashWrite);
                     } else {
                         self.received += data.len() as u32;
                     }
@@ -251,39 +263,59 @@ impl Receiver {
         }
     }
 
+    /// Takes a block's bytes into the pending buffer and programs the whole write units it
+    /// holds: one flash write per block (the F1 programs it a half-word at a time either way),
+    /// the unaligned rest kept for the next block.
     fn write<F: NorFlash>(&mut self, dfu: &mut F, data: &[u8]) -> Result<(), F::Error> {
         const { assert!(F::WRITE_SIZE <= 8, "write units up to 8 bytes (the STM32s': 2 and 4)") };
         for (i, &b) in data.iter().enumerate() {
             let at = self.slot_offset(self.received + i as u32);
-            let unit = at - at % F::WRITE_SIZE as u32;
-            if self.pending_len > 0 && unit != self.pending_at {
-                self.flush(dfu)?; // the image's last unit, before the trailer's first
+            if self.pending_len > 0 && at != self.pending_at + self.pending_len as u32 {
+                self.flush(dfu)?; // the image's last bytes, before the trailer's first
             }
-            self.pending_at = unit;
-            self.pending[(at - unit) as usize] = b;
-            self.pending_len = (at - unit) as usize + 1;
-            if self.pending_len == F::WRITE_SIZE {
-                self.flush(dfu)?;
+            if self.pending_len == 0 {
+                // Start at a write unit: the bytes before `at` in it stay erased.
+                let lead = at % F::WRITE_SIZE as u32;
+                self.pending_at = at - lead;
+                self.pending[..lead as usize].fill(0xFF);
+                self.pending_len = lead as usize;
+            }
+            self.pending[self.pending_len] = b;
+            self.pending_len += 1;
+            if self.pending_len == PENDING {
+                self.program(dfu, PENDING)?;
             }
         }
-        Ok(())
+        let whole = self.pending_len - self.pending_len % F::WRITE_SIZE;
+        self.program(dfu, whole)
     }
 
-    /// Programs the pending write unit (a partial one padded with erased bytes), erasing its
-    /// page first if it is the first unit written there.
+    /// Programs everything pending, a partial last unit padded with erased bytes.
     fn flush<F: NorFlash>(&mut self, dfu: &mut F) -> Result<(), F::Error> {
-        if self.pending_len == 0 {
+        let padded = self.pending_len.next_multiple_of(F::WRITE_SIZE);
+        self.pending[self.pending_len..padded].fill(0xFF);
+        self.pending_len = padded;
+        self.program(dfu, padded)
+    }
+
+    /// Programs the first `n` pending bytes (whole write units), erasing each page they reach
+    /// before its first write, and keeps the rest pending.
+    fn program<F: NorFlash>(&mut self, dfu: &mut F, n: usize) -> Result<(), F::Error> {
+        if n == 0 {
             return Ok(());
         }
-        let page = self.pending_at / F::ERASE_SIZE as u32;
-        if self.erased != Some(page) {
-            let from = page * F::ERASE_SIZE as u32;
-            dfu.erase(from, from + F::ERASE_SIZE as u32)?;
-            self.erased = Some(page);
+        let (first, last) = (self.pending_at, self.pending_at + n as u32 - 1);
+        for page in first / F::ERASE_SIZE as u32..=last / F::ERASE_SIZE as u32 {
+            if self.erased.is_none_or(|e| e < page) {
+                let from = page * F::ERASE_SIZE as u32;
+                dfu.erase(from, from + F::ERASE_SIZE as u32)?;
+                self.erased = Some(page);
+            }
         }
-        let r = dfu.write(self.pending_at, &self.pending[..F::WRITE_SIZE]);
-        self.pending = [0xFF; 8];
-        self.pending_len = 0;
-        r
+        dfu.write(self.pending_at, &self.pending[..n])?;
+        self.pending.copy_within(n..self.pending_len, 0);
+        self.pending_len -= n;
+        self.pending_at += n as u32;
+        Ok(())
     }
 }

@@ -43,6 +43,8 @@ fn the_signature_is_standard_ed25519_of_the_digest() {
     let key = VerifyingKey::from_bytes(&public_key(&SEED)).unwrap();
     key.verify(&digest, &Signature::from_bytes(&t.signature))
         .expect("dalek accepts salty's signature");
+    // The digest it carries (what `r2p nodes` shows) is the image's SHA-512, cut to 8 bytes.
+    assert_eq!(t.digest[..], Sha512::digest(img)[..8]);
     // and the public key is the one RFC 8032 derives from the seed
     let dalek_key = ed25519_dalek::SigningKey::from_bytes(&SEED).verifying_key();
     assert_eq!(dalek_key.to_bytes(), public_key(&SEED));

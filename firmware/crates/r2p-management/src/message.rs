@@ -18,6 +18,10 @@ pub const ENCODED_MAX: usize = 64;
 pub const UID_LEN: usize = 12;
 /// Longest panic report text: what is left of [`ENCODED_MAX`] after the type and length bytes.
 pub const PANIC_TEXT_MAX: usize = ENCODED_MAX - 2;
+/// Longest firmware-update payload: what is left after the type, target and length bytes.
+pub const UPDATE_MAX: usize = ENCODED_MAX - 3;
+/// Bytes of an image digest in [`Message::Firmware`].
+pub const DIGEST_LEN: usize = 8;
 
 /// Type bytes (docs/middleware.md, "Management protocol").
 pub mod ty {
@@ -27,6 +31,8 @@ pub mod ty {
     pub const REBOOT: u8 = 0x13;
     /// [`super::Message::PanicReport`]
     pub const PANIC_REPORT: u8 = 0x14;
+    /// [`super::Message::Firmware`]
+    pub const FIRMWARE: u8 = 0x15;
     /// [`super::Message::Advertise`]
     pub const ADVERTISE: u8 = 0x21;
     /// [`super::Message::SubscribeRequest`]
@@ -45,6 +51,8 @@ pub mod ty {
     pub const PARAM_VALUE: u8 = 0x43;
     /// [`super::Message::ParamError`]
     pub const PARAM_ERROR: u8 = 0x44;
+    /// [`super::Message::Update`]
+    pub const UPDATE: u8 = 0x51;
 }
 
 /// What a module is doing, as its heartbeat says.
@@ -174,6 +182,31 @@ pub enum Message {
         /// Printable ASCII; from the modules' images, the calls found on the stack
         /// (r2p-panic: `panic, calls: 08002a1e 0800b3c2 …`, innermost first).
         text: String<PANIC_TEXT_MAX>,
+    },
+    /// "I run this image": the version and digest from its signed trailer (r2p-boot), sent
+    /// after the first heartbeat and with every panic report's turn after it, so a tool that
+    /// listens for a second (`r2p nodes`) hears it. Version 0 and a zero digest: an image
+    /// flashed without a trailer (a development build).
+    Firmware {
+        /// major << 24 | minor << 16 | patch, as in the trailer.
+        version: u32,
+        /// The first [`DIGEST_LEN`] bytes of SHA-512 of the image (what `r2p sign` prints).
+        digest: [u8; DIGEST_LEN],
+        /// The module kind the image is for (modules.toml's name): what `r2p update --all`
+        /// matches images against.
+        kind: String<NAME_MAX>,
+        /// Just swapped in and not yet confirmed healthy: the bootloader rolls it back if it
+        /// resets before it confirms (r2p-boot's `trial`).
+        on_trial: bool,
+    },
+    /// One message of a firmware-update transfer (r2p-boot's `transfer`: begin, block, end from
+    /// the sender; status from the module) for node `target`. The management layer only
+    /// carries it: the module's update sink reads it, and the sender the answers.
+    Update {
+        /// The module updated (a request) or the sender answered (a status).
+        target: u8,
+        /// The transfer message, at most [`UPDATE_MAX`] bytes.
+        data: heapless::Vec<u8, UPDATE_MAX>,
     },
     /// "I publish `topic` on my stream `index`."
     Advertise {
@@ -389,6 +422,8 @@ impl Message {
             Message::Heartbeat { .. } => ty::HEARTBEAT,
             Message::Reboot { .. } => ty::REBOOT,
             Message::PanicReport { .. } => ty::PANIC_REPORT,
+            Message::Firmware { .. } => ty::FIRMWARE,
+            Message::Update { .. } => ty::UPDATE,
             Message::Advertise { .. } => ty::ADVERTISE,
             Message::SubscribeRequest { .. } => ty::SUBSCRIBE_REQUEST,
             Message::SubscribeResponse { .. } => ty::SUBSCRIBE_RESPONSE,
@@ -417,6 +452,17 @@ impl Message {
             }
             Message::Reboot { target } => w.u8(*target)?,
             Message::PanicReport { text } => w.str(text)?,
+            Message::Firmware { version, digest, kind, on_trial } => {
+                w.u32(*version)?;
+                w.bytes(digest)?;
+                w.str(kind)?;
+                w.u8(u8::from(*on_trial))?;
+            }
+            Message::Update { target, data } => {
+                w.u8(*target)?;
+                w.u8(data.len() as u8)?;
+                w.bytes(data)?;
+            }
             Message::Advertise { topic, type_hash, size, index, class } => {
                 w.str(topic)?;
                 w.u32(*type_hash)?;
@@ -512,6 +558,25 @@ impl Message {
             }
             ty::REBOOT => Message::Reboot { target: r.u8()? },
             ty::PANIC_REPORT => Message::PanicReport { text: r.string(is_name_char)? },
+            ty::FIRMWARE => {
+                let version = r.u32()?;
+                let mut digest = [0; DIGEST_LEN];
+                digest.copy_from_slice(r.take(DIGEST_LEN)?);
+                let kind = r.string(is_name_char)?;
+                let on_trial = match r.u8()? {
+                    b @ 0..=1 => b == 1,
+                    other => return Err(DecodeError::BadValue(other)),
+                };
+                Message::Firmware { version, digest, kind, on_trial }
+            }
+            ty::UPDATE => {
+                let target = r.u8()?;
+                let len = r.u8()?;
+                let data = r.take(usize::from(len))?;
+                let data =
+                    heapless::Vec::from_slice(data).map_err(|_| DecodeError::BadValue(len))?;
+                Message::Update { target, data }
+            }
             ty::ADVERTISE => {
                 let topic = r.string(is_topic_char)?;
                 let type_hash = r.u32()?;
@@ -596,7 +661,7 @@ impl Message {
 pub(crate) mod tests {
     use super::*;
 
-    pub(crate) fn samples() -> [Message; 12] {
+    pub(crate) fn samples() -> [Message; 14] {
         [
             Message::Heartbeat {
                 uid: [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12],
@@ -611,6 +676,13 @@ pub(crate) mod tests {
             Message::PanicReport {
                 text: String::try_from("panic, calls: 08002a1e 0800b3c2 08004f16").unwrap(),
             },
+            Message::Firmware {
+                version: 0x0104_0002,
+                digest: [0xA1, 2, 3, 4, 5, 6, 7, 0xF8],
+                kind: String::try_from("motor").unwrap(),
+                on_trial: true,
+            },
+            Message::Update { target: 0x12, data: heapless::Vec::from_slice(&[0x52; 55]).unwrap() },
             Message::Advertise {
                 topic: String::try_from("motor1/speed").unwrap(),
                 type_hash: 0xDEAD_BEEF,
@@ -694,6 +766,32 @@ pub(crate) mod tests {
                 Message::decode(&[ty::PARAM_VALUE, 0, 0, 7, 0, 0, 0, 0]),
                 Err(DecodeError::BadValue(7))
             );
+        }
+
+        fn update_and_firmware_layouts_match_spec() {
+            let mut buf = [0u8; ENCODED_MAX];
+            let block = [0x52, 7, 0, 0x30, 0, 0, 0, 0xAA];
+            let m = Message::Update { target: 0x12, data: heapless::Vec::from_slice(&block).unwrap() };
+            let n = m.encode(&mut buf).unwrap();
+            assert_eq!(&buf[..n], &[0x51, 0x12, 8, 0x52, 7, 0, 0x30, 0, 0, 0, 0xAA]);
+            // A block of 48 bytes with its 7-byte header fills the message to 58 of 64 bytes.
+            let full = Message::Update { target: 1, data: heapless::Vec::from_slice(&[0; 55]).unwrap() };
+            assert_eq!(full.encode(&mut buf), Ok(58));
+            // A length past what a message holds is refused, not cut.
+            let mut long = [0u8; 3 + UPDATE_MAX + 1];
+            long[..3].copy_from_slice(&[ty::UPDATE, 1, UPDATE_MAX as u8 + 1]);
+            assert_eq!(Message::decode(&long), Err(DecodeError::BadValue(UPDATE_MAX as u8 + 1)));
+            let f = Message::Firmware {
+                version: 0x0104_0002,
+                digest: [1, 2, 3, 4, 5, 6, 7, 8],
+                kind: String::try_from("psu").unwrap(),
+                on_trial: false,
+            };
+            let n = f.encode(&mut buf).unwrap();
+            assert_eq!(&buf[..n], &[0x15, 2, 0, 4, 1, 1, 2, 3, 4, 5, 6, 7, 8, 3, b'p', b's', b'u', 0]);
+            let mut bad = buf;
+            bad[n - 1] = 2;
+            assert_eq!(Message::decode(&bad[..n]), Err(DecodeError::BadValue(2)));
         }
 
         fn hrt_layout_matches_spec() {

@@ -102,20 +102,13 @@ impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a,
     /// Fails, changing nothing, if the sink is already subscribed, the topic has `SUBS`
     /// subscribers, or the pool could not keep the promise of the sizing rule with it.
     pub fn subscribe(&self, sink: &'a dyn Sink<'a, T>) -> Result<(), Error> {
+        let slots = sink.reserved_slots();
         self.links.lock(|l| {
-            let (mut sinks, count) = (l.sinks.get(), l.count.get());
-            if sinks[..count].iter().flatten().any(|s| core::ptr::addr_eq(*s, sink)) {
-                return Err(Error::AlreadySubscribed);
-            }
-            if count == SUBS {
-                return Err(Error::TooManySubscribers);
-            }
-            let needed = l.reserved.get() + sink.reserved_slots();
-            if needed > SLOTS {
-                return Err(Error::PoolTooSmall { needed, capacity: SLOTS });
-            }
-            sinks[count] = Some(sink);
-            l.sinks.set(sinks);
+            let (sinks, count) = (l.sinks.as_array_of_cells(), l.count.get());
+            let subscribed =
+                sinks[..count].iter().any(|s| s.get().is_some_and(|s| core::ptr::addr_eq(s, sink)));
+            let needed = admit(subscribed, count, SUBS, l.reserved.get() + slots, SLOTS)?;
+            sinks[count].set(Some(sink));
             l.count.set(count + 1);
             l.reserved.set(needed);
             Ok(())
@@ -125,6 +118,27 @@ impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a,
     /// The pool, without its size, for the topic's publishers.
     pub(crate) const fn pool(&self) -> &Pool<[Slot<T>]> {
         &self.pool
+    }
+}
+
+/// Whether a topic with `count` of its `subs` subscribers, and `needed` of its `capacity` pool
+/// slots promised with the new one, takes a new subscriber (not `subscribed` already): the
+/// slots then promised. Not generic, so each message type's [`Topic::subscribe`] shares it.
+fn admit(
+    subscribed: bool,
+    count: usize,
+    subs: usize,
+    needed: usize,
+    capacity: usize,
+) -> Result<usize, Error> {
+    if subscribed {
+        Err(Error::AlreadySubscribed)
+    } else if count == subs {
+        Err(Error::TooManySubscribers)
+    } else if needed > capacity {
+        Err(Error::PoolTooSmall { needed, capacity })
+    } else {
+        Ok(needed)
     }
 }
 

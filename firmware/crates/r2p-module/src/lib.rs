@@ -5,6 +5,8 @@
 //!   reboots (an append-only log in two erase pages, power-loss safe);
 //! - [`RamFlash`]: a NOR flash in RAM with the real part's rules (erase to `0xFF`, program only
 //!   erased bytes), for emulated boards and tests, with a power cut at a chosen byte;
+//! - [`dfu_sink`]: the module's side of a firmware update over the bus (into the DFU slot,
+//!   checked, marked for the bootloader's swap);
 //! - [`endpoints`]: a topic on the bus, written once: [`Outbound`] (published and exported),
 //!   [`Inbound`] (imported and subscribed), built at boot in a `StaticCell`;
 //! - [`filters`]: median and first-order low-pass filters for sensor channels;
@@ -23,6 +25,7 @@
 #[cfg(any(test, feature = "std"))]
 extern crate std;
 
+pub mod dfu_sink;
 pub mod endpoints;
 pub mod filters;
 pub mod flash_params;
@@ -34,6 +37,7 @@ pub mod ram_flash;
 pub mod readme;
 pub mod trig;
 
+pub use dfu_sink::DfuSink;
 pub use endpoints::{Inbound, InboundCell, Outbound, OutboundCell, TopicNode};
 pub use flash_params::{CommitReport, FlashParams, LoadReport};
 pub use param_doc::ParamDoc;

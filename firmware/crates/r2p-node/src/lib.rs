@@ -32,6 +32,7 @@ mod node_send;
 pub mod params;
 pub mod remote;
 pub mod slot_tx;
+pub mod update;
 pub mod wire;
 
 #[cfg(test)]
@@ -66,6 +67,8 @@ pub mod testbus;
 mod tests;
 #[cfg(test)]
 mod unslotted_tests;
+#[cfg(test)]
+mod update_tests;
 
 pub use node::{
     Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats, MODULE_SLOT_LEAD_US,
@@ -73,6 +76,7 @@ pub use node::{
 pub use params::{NoParams, Param, ParamStore, RamParams, Typed};
 pub use remote::{Export, Import, ImportError, RemotePublisher, RemoteSubscriber};
 pub use slot_tx::{FreeSlots, SlotTx};
+pub use update::{FirmwareId, UpdateSink};
 pub use wire::{Wire, WireError};
 
 /// The crate's test suite, compiled in for bare-metal runners (feature `selftest`).

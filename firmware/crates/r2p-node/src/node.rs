@@ -103,6 +103,10 @@ pub struct Node<
     reboot: bool,
     /// The panic that preceded this boot, repeated after heartbeats ([`Node::set_panic_report`]).
     panic_report: Option<String<PANIC_TEXT_MAX>>,
+    /// The running image, repeated with the panic report ([`Node::set_firmware`]).
+    firmware: Option<crate::FirmwareId>,
+    /// Where UPDATE messages for this module go ([`Node::set_update_sink`]); none: ignored.
+    update: Option<&'a dyn crate::UpdateSink>,
     events: Deque<Event, EVENT_QUEUE>,
     stats: NodeStats,
     clock: SlotClock,
@@ -164,6 +168,8 @@ impl<
             asked: NodeSet::default(),
             reboot: false,
             panic_report: None,
+            firmware: None,
+            update: None,
             events: Deque::new(),
             stats: NodeStats::default(),
             clock: SlotClock::new(config.cycle),
@@ -175,6 +181,11 @@ impl<
             last_sync: 0,
             sync_loaded: None,
         })
+    }
+
+    /// What the module said about itself when it built the node.
+    pub fn config(&self) -> &NodeConfig {
+        &self.config
     }
 
     /// This module's node ID (it may change when a conflict is settled: [`Event::NodeIdChanged`]).
@@ -302,7 +313,7 @@ impl<
                 dropped: self.dropped().min(u16::MAX as u32) as u16,
             };
             if self.send(&hb).is_ok() {
-                self.repeat_panic_report();
+                self.repeat_reports();
                 self.heartbeats = self.heartbeats.saturating_add(1);
                 self.next_heartbeat =
                     now.saturating_add(Micros::from(self.config.heartbeat_period_us));

@@ -7,7 +7,7 @@ use clap::{Parser, Subcommand};
 use crate::args::{open_link, BusArgs};
 use crate::error::CliError;
 use crate::session::Session;
-use crate::{echo, flash, keys, listing, monitor, param, publish, sim, traces};
+use crate::{echo, flash, keys, listing, monitor, param, publish, sim, traces, update};
 
 const ABOUT: &str = "R2P host tool: watch and talk to an R2P robot's CAN bus";
 
@@ -81,6 +81,9 @@ pub enum Command {
     /// Sign a module's image for the bootloader (image, then a 128-byte trailer with its kind,
     /// MCU, version and ed25519 signature)
     Sign(keys::SignArgs),
+    /// Send a signed image to a module (or --all of its kind) over the bus, reboot it into the
+    /// image and wait until it has confirmed itself (docs/flashing.md)
+    Update(update::UpdateArgs),
 }
 
 /// Runs a parsed command line, printing results to `out`.
@@ -99,6 +102,7 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Flash(args) => flash::run(&args, out),
         Command::Keygen(args) => keys::keygen(&args, out),
         Command::Sign(args) => keys::sign_image(&args, out),
+        Command::Update(args) => update::run(&args, bus, Session::new(open_link(bus)?), out),
     }
 }
 

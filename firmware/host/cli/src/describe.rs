@@ -96,6 +96,33 @@ fn target_text(t: u8) -> String {
     }
 }
 
+/// A trailer's version word as `major.minor.patch`.
+pub fn version_text(v: u32) -> String {
+    format!("{}.{}.{}", v >> 24, (v >> 16) & 0xFF, v & 0xFFFF)
+}
+
+/// A firmware-update transfer message (r2p-boot's `transfer`) in a few words.
+fn transfer_text(data: &[u8]) -> String {
+    use r2p_boot::transfer::{Msg, State};
+    match Msg::decode(data) {
+        Ok(Msg::Begin { id, len }) => format!("BEGIN id={id} len={len}"),
+        Ok(Msg::Block { id, offset, data }) => {
+            format!("BLOCK id={id} offset={offset} len={}", data.len())
+        }
+        Ok(Msg::End { id }) => format!("END id={id}"),
+        Ok(Msg::Status(s)) => {
+            let state = match s.state {
+                State::Idle => "idle".to_string(),
+                State::Receiving => "receiving".to_string(),
+                State::Verified => "verified".to_string(),
+                State::Refused(r) => format!("refused ({})", r.message()),
+            };
+            format!("STATUS id={} state={state} received={}", s.id, s.received)
+        }
+        Err(e) => format!("malformed ({e:?}, {} bytes)", data.len()),
+    }
+}
+
 /// A management message in one line: `HEARTBEAT name=psu state=running …`.
 pub fn message_text(m: &Message) -> String {
     match m {
@@ -107,6 +134,14 @@ pub fn message_text(m: &Message) -> String {
         ),
         Message::Reboot { target } => format!("REBOOT target={}", target_text(*target)),
         Message::PanicReport { text } => format!("PANIC_REPORT text={text:?}"),
+        Message::Firmware { version, digest, kind, on_trial } => format!(
+            "FIRMWARE kind={kind} version={} digest={} on_trial={on_trial}",
+            version_text(*version),
+            hex(digest)
+        ),
+        Message::Update { target, data } => {
+            format!("UPDATE target={} {}", target_text(*target), transfer_text(data))
+        }
         Message::Advertise { topic, type_hash, size, index, class } => format!(
             "ADVERTISE topic={topic} type={} size={size} stream={index} class={}",
             type_text(*type_hash, *size),
@@ -148,6 +183,13 @@ pub fn message_json(m: &Message) -> Json {
         }),
         Message::Reboot { target } => json!({"type": "REBOOT", "target": target}),
         Message::PanicReport { text } => json!({"type": "PANIC_REPORT", "text": text.as_str()}),
+        Message::Firmware { version, digest, kind, on_trial } => json!({
+            "type": "FIRMWARE", "kind": kind.as_str(), "version": version_text(*version),
+            "digest": hex(digest), "on_trial": on_trial,
+        }),
+        Message::Update { target, data } => json!({
+            "type": "UPDATE", "target": target, "transfer": transfer_text(data),
+        }),
         Message::Advertise { topic, type_hash, size, index, class } => {
             let name = MsgType::by_hash(*type_hash, usize::from(*size)).map(|t| t.name);
             json!({

@@ -322,6 +322,16 @@ impl HostNode {
         self.node.set_param(target, index, value).map_err(|e| CliError::new(format!("{e:?}")))
     }
 
+    /// Sends firmware-update transfer message `data` to `target` (UPDATE).
+    pub fn send_update(&mut self, target: NodeId, data: &[u8]) -> Result<(), CliError> {
+        self.node.send_update(target, data).map_err(|e| CliError::new(format!("{e:?}")))
+    }
+
+    /// Asks `target` to reboot (REBOOT).
+    pub fn request_reboot(&mut self, target: NodeId) -> Result<(), CliError> {
+        self.node.request_reboot(target.get()).map_err(|e| CliError::new(format!("{e:?}")))
+    }
+
     /// The next event of the node (subscriptions, parameter answers), oldest first.
     pub fn next_event(&mut self) -> Option<Event> {
         self.events.pop_front()

@@ -184,12 +184,13 @@ pub fn sign_image(args: &SignArgs, out: &mut dyn Write) -> Result<(), CliError> 
     }
     writeln!(
         out,
-        "{}: {kind} {}.{}.{} for {mcu}, {} B + 128 B trailer, key {}",
+        "{}: {kind} {}.{}.{} for {mcu}, {} B + 128 B trailer, digest {}, key {}",
         dest.display(),
         version.major,
         version.minor,
         version.patch,
         image.len(),
+        hex(&r2p_boot::image_digest(&image)),
         hex(&r2p_boot::key_id(&public_key(&seed)))
     )
     .map_err(w)

@@ -30,6 +30,7 @@ pub mod sim;
 pub mod socketcand_client;
 pub mod traces;
 pub mod types;
+pub mod update;
 pub mod watch;
 
 pub use error::CliError;

@@ -40,6 +40,17 @@ fn table(rows: &[Vec<String>]) -> Vec<String> {
         .collect()
 }
 
+/// `1.4.2 3f0a9c1e5b7d2468`, `(on trial)` while it has not confirmed itself, `-` if unheard.
+fn firmware_text(n: &NodeInfo) -> String {
+    n.firmware.as_ref().map_or_else(
+        || "-".into(),
+        |f| {
+            let trial = if f.on_trial { " (on trial)" } else { "" };
+            format!("{} {}{trial}", f.version_text(), f.digest_hex())
+        },
+    )
+}
+
 fn node_row(n: &NodeInfo) -> Vec<String> {
     vec![
         n.id.to_string(),
@@ -50,6 +61,7 @@ fn node_row(n: &NodeInfo) -> Vec<String> {
         n.tx_errors.to_string(),
         n.rx_errors.to_string(),
         n.dropped.to_string(),
+        firmware_text(n),
         n.panic.clone().unwrap_or_else(|| "-".into()),
     ]
 }
@@ -65,6 +77,7 @@ pub fn nodes_table(w: &Watcher) -> Vec<String> {
         "TX_ERR",
         "RX_ERR",
         "DROPPED",
+        "FIRMWARE",
         "LAST PANIC",
     ]
     .map(String::from)
@@ -96,6 +109,10 @@ pub fn nodes(bus: &BusArgs, mut s: Session, out: &mut dyn Write) -> Result<(), C
                 "node": n.id, "name": n.name, "uid": hex(&n.uid), "state": state_name(n.state),
                 "uptime_s": n.uptime_s, "tx_errors": n.tx_errors, "rx_errors": n.rx_errors,
                 "dropped": n.dropped, "panic": n.panic,
+                "firmware": n.firmware.as_ref().map(|f| json!({
+                    "version": f.version_text(), "digest": f.digest_hex(), "kind": f.kind,
+                    "on_trial": f.on_trial,
+                })),
             });
             emit(out, &j.to_string())?;
         }

@@ -74,7 +74,7 @@ fn to_value(s: Scalar) -> Value {
 }
 
 /// Waits for a heartbeat of `node` (an ID or a name) and returns its node ID.
-fn resolve(node: &str, bus: &BusArgs, s: &mut Session) -> Result<NodeId, CliError> {
+pub(crate) fn resolve(node: &str, bus: &BusArgs, s: &mut Session) -> Result<NodeId, CliError> {
     let by_id = node
         .strip_prefix("0x")
         .map_or_else(|| node.parse::<u8>().ok(), |h| u8::from_str_radix(h, 16).ok());

@@ -46,6 +46,37 @@ pub struct NodeInfo {
     /// The panic its last reset followed, as its PANIC_REPORT says (none heard since it booted:
     /// `None`).
     pub panic: Option<String>,
+    /// The image it runs, as its FIRMWARE message says (none heard since it booted: `None`).
+    pub firmware: Option<Firmware>,
+}
+
+/// What a node's FIRMWARE message says about the image it runs.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Firmware {
+    /// major << 24 | minor << 16 | patch (0: an image flashed without a trailer).
+    pub version: u32,
+    /// The first 8 bytes of SHA-512 of the image.
+    pub digest: [u8; 8],
+    /// The module kind the image is for.
+    pub kind: String,
+    /// Not yet confirmed after its swap.
+    pub on_trial: bool,
+}
+
+impl Firmware {
+    /// `1.4.2`, or `unsigned` for an image without a trailer.
+    pub fn version_text(&self) -> String {
+        if self.version == 0 && self.digest == [0; 8] {
+            return "unsigned".into();
+        }
+        let v = self.version;
+        format!("{}.{}.{}", v >> 24, (v >> 16) & 0xFF, v & 0xFFFF)
+    }
+
+    /// The digest in hex, as `r2p sign` prints it.
+    pub fn digest_hex(&self) -> String {
+        self.digest.iter().map(|b| format!("{b:02x}")).collect()
+    }
 }
 
 /// A topic some node advertised.
@@ -235,7 +266,9 @@ impl Watcher {
                 let heartbeats = old.map_or(0, |n| n.heartbeats) + 1;
                 // A report stands until the node boots again (its uptime goes back); the
                 // reports that follow a new panic's first heartbeat set it again.
-                let panic = old.filter(|n| n.uptime_s <= *uptime_s).and_then(|n| n.panic.clone());
+                let same_boot = old.filter(|n| n.uptime_s <= *uptime_s);
+                let panic = same_boot.and_then(|n| n.panic.clone());
+                let firmware = same_boot.and_then(|n| n.firmware.clone());
                 self.nodes.insert(
                     node,
                     NodeInfo {
@@ -250,12 +283,23 @@ impl Watcher {
                         last_seen: time,
                         heartbeats,
                         panic,
+                        firmware,
                     },
                 );
             }
             Message::PanicReport { text } => {
                 if let Some(n) = self.nodes.get_mut(&node) {
                     n.panic = Some(text.to_string());
+                }
+            }
+            Message::Firmware { version, digest, kind, on_trial } => {
+                if let Some(n) = self.nodes.get_mut(&node) {
+                    n.firmware = Some(Firmware {
+                        version: *version,
+                        digest: *digest,
+                        kind: kind.to_string(),
+                        on_trial: *on_trial,
+                    });
                 }
             }
             Message::Advertise { topic, type_hash, size, index, class } if *index != 0 => {

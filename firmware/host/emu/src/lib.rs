@@ -117,6 +117,26 @@ pub type SimPort = r2p_vbus::BxCanPort;
 /// ticks [`r2p_node::MODULE_SLOT_LEAD_US`] (the shortest path) before each boundary.
 pub const SLOT_PATH_US: u64 = 29;
 
+/// CPU time a board's firmware lost since the last call, ns: what its flash took (on the
+/// F103 the CPU stalls while a page is erased or a half-word programmed).
+pub type StallSource<'a> = Box<dyn FnMut() -> u64 + 'a>;
+
+/// A board's next boot after a reset its firmware asked for (a REBOOT request, a watchdog).
+pub struct Reset<'a, N> {
+    /// The new firmware's node.
+    pub node: N,
+    /// Its application step.
+    pub app: Option<App<'a, N>>,
+    /// Its port tap, if the board has one.
+    pub tap: Option<Box<dyn PortTap + 'a>>,
+    /// How long the board is off the bus first (the bootloader's work, e.g. a swap), ns.
+    pub down_ns: u64,
+}
+
+/// Called after every step for each board: `Some` when the board reset (its firmware asked),
+/// with its next boot.
+pub type Resetter<'a, N> = Box<dyn FnMut(usize, Micros) -> Option<Reset<'a, N>> + 'a>;
+
 /// One emulated board.
 struct Board<'a, N> {
     node: N,
@@ -124,11 +144,28 @@ struct Board<'a, N> {
     app: Option<App<'a, N>>,
     /// Between the node and its port, if the board has one.
     tap: Option<Box<dyn PortTap + 'a>>,
+    /// Where its flash's CPU time comes from.
+    stall: Option<StallSource<'a>>,
+    /// In its bootloader until then (port off), after a reset.
+    down_until_ns: Option<u64>,
     /// Next slot tick / poll, ns.
     wake_ns: u64,
     /// Next application step, ns.
     app_ns: u64,
     powered: bool,
+}
+
+impl<N> Board<'_, N> {
+    /// Holds the firmware for the CPU time its flash just took.
+    fn hold(&mut self, t: u64) {
+        if let Some(stall) = &mut self.stall {
+            let ns = stall();
+            if ns > 0 {
+                self.wake_ns = self.wake_ns.max(t + ns);
+                self.app_ns = self.app_ns.max(t + ns);
+            }
+        }
+    }
 }
 
 /// Counters of a run.
@@ -156,6 +193,7 @@ pub struct Sim<'a, N: Runtime> {
     world_ns: u64,
     now_ns: u64,
     stats: SimStats,
+    resetter: Option<Resetter<'a, N>>,
 }
 
 impl<'a, N: Runtime> Sim<'a, N> {
@@ -170,7 +208,18 @@ impl<'a, N: Runtime> Sim<'a, N> {
             world_ns: 0,
             now_ns: 0,
             stats: SimStats::default(),
+            resetter: None,
         }
+    }
+
+    /// Holds board `i`'s firmware for the CPU time `stall` reports after each of its steps.
+    pub fn set_stall(&mut self, i: usize, stall: StallSource<'a>) {
+        self.boards[i].stall = Some(stall);
+    }
+
+    /// Lets boards reset themselves: `resetter` is asked after each step (see [`Resetter`]).
+    pub fn set_resetter(&mut self, resetter: Resetter<'a, N>) {
+        self.resetter = Some(resetter);
     }
 
     /// Adds a board: `node` on port `port`, with application step `app` (if any). Returns the
@@ -183,6 +232,8 @@ impl<'a, N: Runtime> Sim<'a, N> {
             port: SimPort::new(self.bus.port(port), bit_rate).with_load_latency(SLOT_PATH_US),
             app,
             tap: None,
+            stall: None,
+            down_until_ns: None,
             wake_ns: self.now_ns,
             app_ns: self.now_ns,
             powered: true,
@@ -301,15 +352,24 @@ impl<'a, N: Runtime> Sim<'a, N> {
                 }
             }
             for b in self.boards.iter_mut().filter(|b| b.powered) {
+                match b.down_until_ns {
+                    Some(d) if d > t => continue,
+                    Some(_) => {
+                        self.bus.power(b.port.port().index(), true);
+                        b.down_until_ns = None;
+                    }
+                    None => {}
+                }
                 if let Some(app) = &mut b.app {
                     if b.app_ns <= t {
                         app(now_us, &mut b.node);
                         b.app_ns += NS_PER_MS;
                         self.stats.app_steps += 1;
+                        b.hold(t);
                     }
                 }
             }
-            for b in self.boards.iter_mut().filter(|b| b.powered) {
+            for b in self.boards.iter_mut().filter(|b| b.powered && b.down_until_ns.is_none()) {
                 if b.wake_ns > t {
                     continue;
                 }
@@ -327,6 +387,20 @@ impl<'a, N: Runtime> Sim<'a, N> {
                     Mode::Tdma => (b.node.next_slot_at(now_us) * NS_PER_US).max(t + 1),
                     Mode::Poll { period_us } => t + period_us.max(1) * NS_PER_US,
                 };
+                b.hold(t);
+            }
+            if let Some(resetter) = &mut self.resetter {
+                for (i, b) in self.boards.iter_mut().enumerate() {
+                    if let Some(r) = resetter(i, now_us) {
+                        let port = b.port.port().index();
+                        self.bus.power(port, false);
+                        b.node = r.node;
+                        b.app = r.app;
+                        b.tap = r.tap;
+                        let up = t + r.down_ns.max(1);
+                        (b.down_until_ns, b.wake_ns, b.app_ns) = (Some(up), up, up);
+                    }
+                }
             }
             if t >= t_ns {
                 // Let frames loaded at the limit start, so a later run continues identically.

@@ -8,27 +8,36 @@
 //! application's server when asked ([`EmuRobot::serve_gateway`]). Only the board-support layer
 //! differs: [`boards`] reads the world where the MCU reads its ADC, timers and pins, and
 //! applies the application's command to the world where the MCU drives its outputs.
-//! Parameters live in an emulated flash per board ([`BoardFlash`], a `RamFlash`) that survives
-//! reboots; the robot file's `[modules.params]` are stored there before the first boot.
+//!
+//! Each board has the F103's flash with the bootloader's map ([`boards::chip`]): its parameters
+//! (the robot file's `[modules.params]` stored there before the first boot), a signed image in
+//! its active slot, and the slot an update over the bus is written to. At every reset the
+//! emulated bootloader runs first ([`boards::firmware`]): after an update it swaps the images
+//! (the board is off the bus for as long as the F103 takes), and a new image that does not
+//! confirm itself is rolled back. A board resets when a REBOOT request reaches it or its trial
+//! runs out.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::io;
 use std::net::SocketAddr;
 use std::path::Path;
 use std::rc::Rc;
 use std::sync::{Arc, Mutex};
 
+use embassy_boot::{BlockingFirmwareState, State};
 use r2p_vbus::Config;
 use r2p_world::robot_file::{Module, Robot};
 use r2p_world::BoardKind;
 use r2p_world::World;
-use rtcan::CycleConfig;
+use rtcan::{CycleConfig, Micros};
 
+use crate::boards::chip::{map, new_chip, part};
+use crate::boards::firmware::{self, around_app, factory_image, flash_active};
 use crate::boards::{self, GatewayBoot, Probe};
-pub use crate::boards::{BoardFlash, BoardNode};
+pub use crate::boards::{BoardChip, BoardFlash, BoardNode};
 use crate::gateway_net::{GatewayServer, LinkSlot, NetSlot};
 use crate::gateway_zenoh::{RosSlot, ZenohClient};
-use crate::{App, Mode, Sim};
+use crate::{App, Mode, PortTap, Reset, Sim};
 
 /// One board of the robot.
 pub struct BoardInfo {
@@ -36,10 +45,27 @@ pub struct BoardInfo {
     pub name: String,
     /// What it is.
     pub kind: BoardKind,
-    /// Its parameter flash (kept across reboots).
-    pub flash: Rc<RefCell<BoardFlash>>,
+    /// Its flash: parameters and image slots, kept across reboots.
+    pub flash: &'static BoardChip,
     /// Times it booted.
-    pub boots: u32,
+    pub boots: Rc<Cell<u32>>,
+}
+
+/// What booting a board needs, shared by the robot and the sim's resets.
+struct Booter {
+    robot: Robot,
+    world: Rc<RefCell<World>>,
+    probe: Rc<RefCell<Probe>>,
+    /// The gateway's link of its current boot, for its network server.
+    gateway_link: LinkSlot,
+    /// The network as the gateway sees it.
+    gateway_net: NetSlot,
+    /// What the gateway's step and its Zenoh client share, while connected.
+    gateway_ros: RosSlot,
+    flash: Vec<&'static BoardChip>,
+    boots: Vec<Rc<Cell<u32>>>,
+    /// Set by a board's firmware when it resets itself.
+    resets: Vec<Rc<Cell<bool>>>,
 }
 
 /// A robot file running on emulated boards. See the module documentation.
@@ -54,12 +80,61 @@ pub struct EmuRobot {
     pub boards: Vec<BoardInfo>,
     /// What the robot-level application (on the gateway) computes: odometry and commands.
     pub probe: Rc<RefCell<Probe>>,
-    /// The gateway's link of its current boot, for its network server.
-    gateway_link: LinkSlot,
-    /// The network as the gateway sees it.
-    gateway_net: NetSlot,
-    /// What the gateway's step and its Zenoh client share, while connected.
-    gateway_ros: RosSlot,
+    booter: Rc<RefCell<Booter>>,
+}
+
+/// A board's firmware after its bootloader: node, application, port tap, time off the bus.
+type Boot = (BoardNode, App<'static, BoardNode>, Option<Box<dyn PortTap>>, u64);
+
+impl Booter {
+    fn cycle(&self) -> CycleConfig {
+        CycleConfig {
+            bit_rate: self.robot.bus.bit_rate,
+            cycle_us: self.robot.bus.cycle_us,
+            ..CycleConfig::DEFAULT
+        }
+    }
+
+    /// Resets board `i` at `now_us`: its bootloader, then its firmware over its flash.
+    fn boot(&mut self, i: usize, now_us: Micros) -> Result<Boot, String> {
+        let module: Module = self.robot.modules[i].clone();
+        let chip = self.flash[i];
+        let booted = firmware::bootloader(chip).map_err(|r| {
+            format!("{}: the bootloader finds no image it can run: {}", module.name, r.message())
+        })?;
+        if booted.state == State::Revert {
+            // The old image, back after a rollback, tells the bootloader it knows.
+            let mut aligned = [0u8; 4];
+            let _ = BlockingFirmwareState::new(part(chip, map().state), &mut aligned).mark_booted();
+        }
+        let boot_us = now_us + booted.stall_ns.div_ceil(1_000);
+        let gateway = Rc::new(RefCell::new(None));
+        self.boots[i].set(self.boots[i].get() + 1);
+        let ctx = boards::Ctx {
+            module: &module,
+            robot: &self.robot,
+            cycle: self.cycle(),
+            world: self.world.clone(),
+            flash: chip,
+            boot_us,
+            probe: self.probe.clone(),
+            gateway: gateway.clone(),
+            net: self.gateway_net.clone(),
+            ros: self.gateway_ros.clone(),
+        };
+        let kind = module.kind();
+        let (mut node, app) =
+            boards::boot(kind, ctx).map_err(|e| format!("{}: {e}", module.name))?;
+        node.set_firmware(booted.firmware.clone());
+        node.set_update_sink(firmware::update_sink(chip, kind.name()));
+        let heartbeat_us = Micros::from(node.config().heartbeat_period_us);
+        let app = around_app(app, chip, &booted, boot_us, heartbeat_us, self.resets[i].clone());
+        let tap = gateway.borrow_mut().take().map(|g: GatewayBoot| {
+            *self.gateway_link.lock().unwrap_or_else(|e| e.into_inner()) = Some(g.link);
+            Box::new(g.tap) as Box<dyn PortTap>
+        });
+        Ok((node, app, tap, booted.stall_ns))
+    }
 }
 
 impl EmuRobot {
@@ -70,7 +145,7 @@ impl EmuRobot {
     }
 
     /// Builds `robot`: a bus with one port per module plus a spare (for tools), the world,
-    /// and every board booted at time 0.
+    /// and every board flashed (its image, its parameters) and booted at time 0.
     pub fn build(robot: Robot) -> Result<Self, String> {
         let config = Config { seed: robot.seed, bit_rate: robot.bus.bit_rate, ..Config::default() };
         let mut sim = Sim::new(robot.modules.len() + 1, config, Mode::Tdma);
@@ -78,33 +153,48 @@ impl EmuRobot {
         let w = world.clone();
         sim.set_world(Box::new(move |now_us| w.borrow_mut().advance_to_ns(now_us * 1_000)));
         let probe = Rc::new(RefCell::new(Probe::default()));
-        let mut r = EmuRobot {
-            sim,
-            world,
-            robot,
-            boards: Vec::new(),
-            probe,
+        let mut boards = Vec::new();
+        for (i, m) in robot.modules.iter().enumerate() {
+            let chip = new_chip(robot.seed ^ (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+            flash_active(chip, &factory_image(m.kind().name()));
+            chip.lock(|c| boards::store_params(m, &robot, &mut c.borrow_mut()))?;
+            chip.lock(|c| c.borrow_mut().take_stall_ns()); // the factory's, not the robot's
+            boards.push(BoardInfo {
+                name: m.name.clone(),
+                kind: m.kind(),
+                flash: chip,
+                boots: Rc::new(Cell::new(0)),
+            });
+        }
+        let booter = Rc::new(RefCell::new(Booter {
+            robot: robot.clone(),
+            world: world.clone(),
+            probe: probe.clone(),
             gateway_link: Arc::new(Mutex::new(None)),
             gateway_net: Arc::new(Mutex::new(Default::default())),
             gateway_ros: Arc::new(Mutex::new(None)),
-        };
-        for (i, m) in r.robot.modules.clone().iter().enumerate() {
-            let flash = Rc::new(RefCell::new(BoardFlash::new()));
-            boards::store_params(m, &r.robot, &mut flash.borrow_mut())?;
-            r.boards.push(BoardInfo { name: m.name.clone(), kind: m.kind(), flash, boots: 0 });
-            let (node, app, gateway) = r.boot(i)?;
-            r.sim.add_board(node, i, Some(app));
-            r.install(i, gateway);
+            flash: boards.iter().map(|b| b.flash).collect(),
+            boots: boards.iter().map(|b| b.boots.clone()).collect(),
+            resets: boards.iter().map(|_| Rc::new(Cell::new(false))).collect(),
+        }));
+        for (i, b) in boards.iter().enumerate() {
+            let (node, app, tap, _) = booter.borrow_mut().boot(i, 0)?;
+            sim.add_board(node, i, Some(app));
+            sim.set_tap(i, tap);
+            let chip = b.flash;
+            sim.set_stall(i, Box::new(move || chip.lock(|c| c.borrow_mut().take_stall_ns())));
         }
-        Ok(r)
-    }
-
-    /// Puts a gateway's bus tap on its port and its link behind the network server.
-    fn install(&mut self, i: usize, gateway: Option<GatewayBoot>) {
-        if let Some(g) = gateway {
-            self.sim.set_tap(i, Some(Box::new(g.tap)));
-            *self.gateway_link.lock().unwrap_or_else(|e| e.into_inner()) = Some(g.link);
-        }
+        let b = booter.clone();
+        sim.set_resetter(Box::new(move |i, now_us| {
+            // Boards a test added beyond the robot's have no reset line.
+            if !b.borrow().resets.get(i).is_some_and(|r| r.replace(false)) {
+                return None;
+            }
+            let (node, app, tap, down_ns) =
+                b.borrow_mut().boot(i, now_us).unwrap_or_else(|e| panic!("{e}"));
+            Some(Reset { node, app: Some(app), tap, down_ns })
+        }));
+        Ok(EmuRobot { sim, world, robot, boards, probe, booter })
     }
 
     /// Serves the bus on TCP at `addr` through the gateway's own socketcand server (its
@@ -117,7 +207,8 @@ impl EmuRobot {
                 format!("{} has no gateway module to serve the bus", self.robot.name),
             ));
         }
-        GatewayServer::start(addr, self.gateway_link.clone(), self.gateway_net.clone())
+        let b = self.booter.borrow();
+        GatewayServer::start(addr, b.gateway_link.clone(), b.gateway_net.clone())
     }
 
     /// Connects the gateway to the Zenoh router at `router` (its application's Zenoh client
@@ -136,13 +227,8 @@ impl EmuRobot {
                 format!("{} has no gateway module to connect to a Zenoh router", self.robot.name),
             ));
         };
-        ZenohClient::start(
-            router,
-            m.uid.0,
-            domain,
-            namespace.trim_matches('/').to_string(),
-            self.gateway_ros.clone(),
-        )
+        let slot = self.booter.borrow().gateway_ros.clone();
+        ZenohClient::start(router, m.uid.0, domain, namespace.trim_matches('/').to_string(), slot)
     }
 
     /// The spare port tools and bridges use.
@@ -155,49 +241,13 @@ impl EmuRobot {
         self.boards.iter().position(|b| b.name == name)
     }
 
-    fn cycle(&self) -> CycleConfig {
-        CycleConfig {
-            bit_rate: self.robot.bus.bit_rate,
-            cycle_us: self.robot.bus.cycle_us,
-            ..CycleConfig::DEFAULT
-        }
-    }
-
-    /// Boots board `i`'s firmware: a new node and application over its flash.
-    #[allow(clippy::type_complexity)]
-    fn boot(
-        &mut self,
-        i: usize,
-    ) -> Result<(BoardNode, App<'static, BoardNode>, Option<GatewayBoot>), String> {
-        let module: Module = self.robot.modules[i].clone();
-        let cycle = self.cycle();
-        let gateway = Rc::new(RefCell::new(None));
-        let board = &mut self.boards[i];
-        board.boots += 1;
-        let ctx = boards::Ctx {
-            module: &module,
-            robot: &self.robot,
-            cycle,
-            world: self.world.clone(),
-            flash: board.flash.clone(),
-            boot_us: self.sim.now_us(),
-            probe: self.probe.clone(),
-            gateway: gateway.clone(),
-            net: self.gateway_net.clone(),
-            ros: self.gateway_ros.clone(),
-        };
-        let (node, app) =
-            boards::boot(module.kind(), ctx).map_err(|e| format!("{}: {e}", module.name))?;
-        let booted = gateway.borrow_mut().take();
-        Ok((node, app, booted))
-    }
-
-    /// Reboots the board called `name` (a reset: RAM state gone, parameters kept in flash).
+    /// Reboots the board called `name` now (a reset: RAM state gone, its flash kept; its
+    /// bootloader runs first, and a swap it does keeps the board off the bus meanwhile).
     pub fn reboot(&mut self, name: &str) -> Result<(), String> {
         let i = self.board(name).ok_or_else(|| format!("no board called {name}"))?;
-        let (node, app, gateway) = self.boot(i)?;
+        let (node, app, tap, _) = self.booter.borrow_mut().boot(i, self.sim.now_us())?;
         self.sim.reboot(i, node, Some(app));
-        self.install(i, gateway);
+        self.sim.set_tap(i, tap);
         Ok(())
     }
 }

@@ -304,7 +304,7 @@ fn a_rebooted_motor_board_rejoins_and_the_robot_drives_on() {
             && s.node(m).stats().published > 0
     });
     assert!(back, "motor2 rejoined and the gateway receives its state again");
-    assert_eq!(r.boards[m].boots, 2);
+    assert_eq!(r.boards[m].boots.get(), 2);
     // Its parameters came back from flash: its topics are motor2's.
     r.sim.run_for(500 * MS);
     assert!(r.world.borrow().twist().vx.abs() > 0.0 || r.world.borrow().pose().x > 0.1);

@@ -3,5 +3,5 @@
 include!("../module-core/build_image.rs");
 
 fn main() {
-    build_image("../../../boards/proximity.toml");
+    build_image("../../../boards/proximity.toml", Link::ActiveSlot);
 }

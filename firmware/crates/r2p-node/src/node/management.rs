@@ -5,7 +5,7 @@
 
 use heapless::String;
 use r2p_management::message::{
-    is_name_char, BusClass, Message, ModuleState, SubscribeResult, Value, ENCODED_MAX,
+    is_name_char, BusClass, Message, ModuleState, SubscribeResult, Value, ENCODED_MAX, UPDATE_MAX,
 };
 use r2p_management::{NodeId, MANAGEMENT_INDEX};
 use r2p_middleware::Class;
@@ -105,11 +105,38 @@ impl<
         self.panic_report = Some(s);
     }
 
-    /// After heartbeat number `self.heartbeats` was queued: the panic report, when it is due.
-    pub(super) fn repeat_panic_report(&mut self) {
+    /// Says which image runs (its signed trailer's version and digest): sent as FIRMWARE after
+    /// the first heartbeat and every [`PANIC_REPORT_EVERY`] heartbeats after, so `r2p nodes`
+    /// shows it.
+    pub fn set_firmware(&mut self, firmware: crate::FirmwareId) {
+        self.firmware = Some(firmware);
+    }
+
+    /// Sends transfer message `data` (r2p-boot's `transfer`, at most [`UPDATE_MAX`] bytes) to
+    /// `target` as an UPDATE message: what a tool updating a module sends.
+    pub fn send_update(&mut self, target: NodeId, data: &[u8]) -> Result<(), NodeError> {
+        let data = heapless::Vec::from_slice(data)
+            .map_err(|_| NodeError::TooLarge { size: data.len(), max: UPDATE_MAX })?;
+        self.send(&Message::Update { target: target.get(), data })
+    }
+
+    /// Receives firmware updates through `sink`: UPDATE messages addressed to this module go to
+    /// it and its answers go back to their sender. Without a sink they are ignored (the sender
+    /// times out: the image cannot be updated over the bus).
+    pub fn set_update_sink(&mut self, sink: &'a dyn crate::UpdateSink) {
+        self.update = Some(sink);
+    }
+
+    /// After heartbeat number `self.heartbeats` was queued: the panic report and the firmware
+    /// message, when they are due.
+    pub(super) fn repeat_reports(&mut self) {
         if self.heartbeats.is_multiple_of(PANIC_REPORT_EVERY) {
             if let Some(text) = self.panic_report.clone() {
                 let _ = self.send(&Message::PanicReport { text }); // again at the next one due
+            }
+            if let Some(f) = self.firmware.clone() {
+                let (version, digest, kind, on_trial) = (f.version, f.digest, f.kind, f.on_trial);
+                let _ = self.send(&Message::Firmware { version, digest, kind, on_trial });
             }
         }
     }
@@ -303,6 +330,17 @@ impl<
                     Err(fault) => Message::ParamError { index, fault },
                 };
                 let _ = self.send(&reply);
+            }
+            Message::Update { target, data } if for_me(target) && from != me => {
+                let Some(sink) = self.update else {
+                    return; // no bootloader behind this image: the sender times out
+                };
+                let mut answer = [0u8; ENCODED_MAX];
+                let n = sink.handle(from.get(), &data, &mut answer).min(UPDATE_MAX);
+                if n > 0 {
+                    let data = heapless::Vec::from_slice(&answer[..n]).unwrap_or_default();
+                    let _ = self.send(&Message::Update { target: from.get(), data });
+                }
             }
             Message::ParamValue { index, value } if self.asked.contains(from) => {
                 self.event(Event::ParamValue { from, index, value });

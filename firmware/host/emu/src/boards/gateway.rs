@@ -57,7 +57,7 @@ const TELEOP_PERIOD_US: u64 = 50_000;
 
 /// Boots the gateway: its application and the base controller on one node.
 pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
-    let p = load_params(PARAMS, &ctx.flash)?;
+    let p = load_params(PARAMS, ctx.flash)?;
     let names = names(&ctx)?;
     let ik_hz = match p.get(params::IK_RATE_HZ) {
         Ok(r2p_management::message::Value::U32(v)) => v.max(1),
@@ -114,7 +114,7 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
             let c = a.command(now);
             pr.command = (c.vx, c.vy, c.wz);
             pr.setpoints_dropped = a.dropped;
-            persist(p, &flash);
+            persist(p, flash);
         }),
     ))
 }

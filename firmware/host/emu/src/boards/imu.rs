@@ -18,7 +18,7 @@ use crate::periph::spi::SimSpi;
 
 /// Boots the IMU firmware.
 pub fn imu(ctx: Ctx<'_>) -> Result<Booted, String> {
-    let params = load_params(app::params::DEFAULTS, &ctx.flash)?;
+    let params = load_params(app::params::DEFAULTS, ctx.flash)?;
     let mut a = app::App::new(app::Endpoints::leak(params), params);
     let config = app::node_config(ctx.module.uid.0, params);
     let mut n = node(config, &ctx, params)?;
@@ -44,7 +44,7 @@ pub fn imu(ctx: Ctx<'_>) -> Result<Booted, String> {
             }
             let sample = app::sensor::poll(&mut sensor, initialised, leds.status(now, node, false));
             a.step(now, &sample);
-            persist(params, &flash);
+            persist(params, flash);
         }),
     ))
 }

@@ -7,6 +7,8 @@
 //! and give the world a model of what the board is wired to (firmware/host/world). A module
 //! without a model of its own runs the template's (`emulator = "template"` in modules.toml).
 
+pub mod chip;
+pub mod firmware;
 mod gateway;
 mod imu;
 mod motor;
@@ -19,7 +21,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use r2p_module::leds::Status;
-use r2p_module::{FlashParams, RamFlash};
+use r2p_module::FlashParams;
 use r2p_node::node::STARTING_HEARTBEATS;
 use r2p_node::{Node, NodeConfig, ParamStore};
 use r2p_world::robot_file::{Module, Robot};
@@ -41,8 +43,10 @@ use crate::App;
 /// Every emulated board's node runtime: room for each module's topics.
 pub type BoardNode = Node<'static, 8, 16, 64, 16, 64>;
 
-/// A board's parameter flash: two 1 KiB pages, as the F103's last two.
-pub type BoardFlash = RamFlash<2048, 1024>;
+pub use chip::{BoardChip, TimedFlash as BoardFlash};
+
+/// Where the parameter pages start in a board's flash (the map's `params` partition).
+pub const PARAMS_AT: u32 = chip::map().params.offset;
 
 /// What the robot-level application computed, for tests, plots and tools.
 #[derive(Clone, Debug, Default)]
@@ -65,8 +69,8 @@ pub struct Ctx<'r> {
     pub cycle: CycleConfig,
     /// The world.
     pub world: Rc<RefCell<World>>,
-    /// The board's parameter flash.
-    pub flash: Rc<RefCell<BoardFlash>>,
+    /// The board's flash (parameters, image slots).
+    pub flash: &'static BoardChip,
     /// Virtual time of this boot, µs.
     pub boot_us: Micros,
     /// Where the gateway reports what it computes.
@@ -102,19 +106,21 @@ fn leak<T>(x: T) -> &'static T {
 /// Parameters from the board's flash, as the MCU's boot loads them.
 fn load_params<const N: usize>(
     defaults: [r2p_node::Param; N],
-    flash: &Rc<RefCell<BoardFlash>>,
+    flash: &BoardChip,
 ) -> Result<&'static FlashParams<N>, String> {
-    let params = leak(FlashParams::new(defaults, 0));
-    params.load(&mut *flash.borrow_mut()).map_err(|e| format!("reading parameters: {e:?}"))?;
+    let params = leak(FlashParams::new(defaults, PARAMS_AT));
+    flash
+        .lock(|f| params.load(&mut *f.borrow_mut()))
+        .map_err(|e| format!("reading parameters: {e:?}"))?;
     Ok(params)
 }
 
 /// Writes parameters set over the bus to the board's flash (the MCU does it from its
 /// application task, as here).
-fn persist<const N: usize>(params: &FlashParams<N>, flash: &RefCell<BoardFlash>) {
+fn persist<const N: usize>(params: &FlashParams<N>, flash: &BoardChip) {
     if params.is_dirty() {
         // A failed write stays dirty and is retried next step, as on the MCU.
-        let _ = params.commit(&mut *flash.borrow_mut());
+        let _ = flash.lock(|f| params.commit(&mut *f.borrow_mut()));
     }
 }
 

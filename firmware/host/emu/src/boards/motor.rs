@@ -8,7 +8,7 @@ use super::{adc, leak, load_params, node, persist, Booted, Ctx, Leds};
 
 /// Boots the motor controller firmware.
 pub fn motor(ctx: Ctx<'_>) -> Result<Booted, String> {
-    let params = load_params(app::params::DEFAULTS, &ctx.flash)?;
+    let params = load_params(app::params::DEFAULTS, ctx.flash)?;
     let names = app::Names::from_params(params);
     let mut a = app::App::new(app::Endpoints::leak(names), params);
     let config = r2p_node::NodeConfig::new(ctx.module.uid.0, names.node);
@@ -38,7 +38,7 @@ pub fn motor(ctx: Ctx<'_>) -> Result<Booted, String> {
             set(&mut w, "PWM_AH", da);
             set(&mut w, "PWM_BH", db);
             w.set_output(name, "DRV_EN", c.bridge_enable).unwrap_or_else(|e| panic!("{e}"));
-            persist(params, &flash);
+            persist(params, flash);
         }),
     ))
 }

@@ -8,7 +8,7 @@ use r2p_world::ranger::RangerKind;
 use r2p_world::robot_file::{Module, ParamValue, RangerMount, Robot, Wiring};
 use r2p_world::BoardKind;
 
-use super::BoardFlash;
+use super::{BoardFlash, PARAMS_AT};
 
 /// Stores `module`'s parameters from the robot file (and, for the gateway's base controller,
 /// the base geometry of the robot) in `flash`. Errors name the parameter and what is valid.
@@ -98,7 +98,7 @@ fn store<const N: usize>(
     values: &[(String, ParamValue)],
     flash: &mut BoardFlash,
 ) -> Result<(), String> {
-    let params = FlashParams::new(defaults, 0);
+    let params = FlashParams::new(defaults, PARAMS_AT);
     params.load(flash).map_err(|e| format!("reading parameters: {e:?}"))?;
     for (name, v) in values {
         let Some(i) = defaults.iter().position(|p| p.name == name) else {

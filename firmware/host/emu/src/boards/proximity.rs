@@ -7,7 +7,7 @@ use super::{adc, leak, load_params, node, persist, Booted, Ctx, Leds};
 
 /// Boots the proximity firmware.
 pub fn proximity(ctx: Ctx<'_>) -> Result<Booted, String> {
-    let params = load_params(app::params::DEFAULTS, &ctx.flash)?;
+    let params = load_params(app::params::DEFAULTS, ctx.flash)?;
     let mut a = app::App::new(app::Endpoints::leak(params), params);
     let config = app::node_config(ctx.module.uid.0, params);
     let mut n = node(config, &ctx, params)?;
@@ -27,7 +27,7 @@ pub fn proximity(ctx: Ctx<'_>) -> Result<Booted, String> {
             };
             let c = a.step(now, &sample);
             w.set_output(name, "SENSOR_PWR_EN", c.sensor_power).unwrap_or_else(|e| panic!("{e}"));
-            persist(params, &flash);
+            persist(params, flash);
         }),
     ))
 }

@@ -7,7 +7,7 @@ use super::{load_params, node, persist, Booted, Ctx, Leds};
 
 /// Boots the template firmware.
 pub fn template(ctx: Ctx<'_>) -> Result<Booted, String> {
-    let params = load_params(app::params::DEFAULTS, &ctx.flash)?;
+    let params = load_params(app::params::DEFAULTS, ctx.flash)?;
     let mut a = app::App::new(app::Endpoints::leak(), params);
     let config = app::node_config(ctx.module.uid.0);
     let mut n = node(config, &ctx, params)?;
@@ -18,7 +18,7 @@ pub fn template(ctx: Ctx<'_>) -> Result<Booted, String> {
         n,
         Box::new(move |now, node| {
             a.step(now, &app::Sample { status: leds.status(now, node, false) });
-            persist(params, &flash);
+            persist(params, flash);
         }),
     ))
 }

@@ -8,14 +8,13 @@
 
 use embassy_executor::Spawner;
 use embassy_stm32::can::Can;
-use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::Output;
 use embassy_stm32::mode::Blocking as BlockingMode;
 use embassy_stm32::spi::{self, Spi, MODE_3};
 use embassy_stm32::time::Hertz;
 use embassy_time::Timer;
 use embedded_hal_bus::spi::{ExclusiveDevice, NoDelay};
-use module_core::{EveryMs, Leds};
+use module_core::{EveryMs, Leds, ModuleFlash};
 use r2p_app_imu::{params, sensor, App, Storage};
 use r2p_drivers::lsm6dso::{Lsm6dso, SpiBus};
 use r2p_module::FlashParams;
@@ -56,7 +55,7 @@ struct Io {
 /// The application: one step per millisecond in thread mode (a 2-byte status read, and a
 /// 15-byte burst when the gyro has a new sample).
 #[embassy_executor::task]
-async fn run(mut app: App<'static>, mut io: Io, flash: Flash<'static, Blocking>) {
+async fn run(mut app: App<'static>, mut io: Io, flash: ModuleFlash) {
     let mut ms = EveryMs::new(&PARAMS, flash);
     loop {
         let sample = sensor::poll(&mut io.imu, io.initialised, module_core::led_status());
@@ -90,7 +89,7 @@ async fn main(spawner: Spawner) {
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can(&mut can).await;
-    let flash = module_core::load_params(&PARAMS, p.FLASH);
+    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
     let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
     Timer::after_millis(SENSOR_BOOT_MS).await;
     // A sensor that does not answer leaves the module on the bus, reporting "no data".

@@ -1,9 +1,10 @@
 //! `module_core`: what every R2P module image on the STM32F103 shares (used by the psu,
 //! proximity, motor, imu and template images): clocks from the board file, the bus controller,
 //! the node on an interrupt executor driven by the TDMA slot timer (TIM2's compare,
-//! [`slot_timer`]), parameters in the last two flash pages, the status LEDs, the application's
-//! 1 kHz step, reboot on request. An image's `main` keeps only what is its module's own (its
-//! I/O, its application, its node configuration):
+//! [`slot_timer`]), parameters in the flash map's parameter pages, the status LEDs, the
+//! application's 1 kHz step, reboot on request, and the image's trial after an update. An
+//! image's `main` keeps only what is its module's own (its I/O, its application, its node
+//! configuration):
 //!
 //! ```ignore
 //! let p = module_core::init::<{ board::HSE_HZ }, { board::SYSCLK_HZ }>();
@@ -11,7 +12,7 @@
 //! let leds = module_core::leds!(board, pins); // outputs first
 //! let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
 //! module_core::enable_can(&mut can).await;
-//! let flash = module_core::load_params(&PARAMS, p.FLASH);
+//! let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
 //! let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
 //! let config = node_config(uid(), &PARAMS);
 //! module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
@@ -32,6 +33,14 @@
 //! parts every module *application* shares, on the MCU and in the emulator), nor
 //! `hardware/core` (the KiCad sheet every module *board* shares: MCU, CAN, bus jacks).
 //!
+//! Behind the bootloader: each image is linked at the active slot of the F103's flash map
+//! (firmware/images.toml; build_image.rs writes memory.x from it). After an update it is on
+//! trial (`../../shared/trial.rs`, r2p-boot's `trial`): it confirms itself once its node is
+//! running, hears the sync and its parameters loaded, within 15 s, under a 20 s independent
+//! watchdog started only on a trial boot; otherwise it resets unconfirmed and the bootloader
+//! swaps the previous image back. A sync master (the PSU) "hears the sync" by holding the
+//! master role: it sends the syncs itself.
+//!
 //! Interrupt priorities: the slot timer (and with it the bus executor) alone at the highest;
 //! the CAN receive interrupts and the time driver (TIM4) one below, so that neither holds a
 //! slot boundary back except for their short critical sections.
@@ -46,9 +55,10 @@ use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::{Input, Level, Output};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
-use embassy_stm32::peripherals::{FLASH, TIM2};
+use embassy_stm32::peripherals::{FLASH, IWDG, TIM2};
 use embassy_stm32::{pac, rcc, time::Hertz, Config, Peri, Peripherals};
 use embassy_time::{Duration, Instant, Ticker};
+use r2p_boot::layout::STM32F103CB as MAP;
 use r2p_module::{leds, FlashParams};
 use r2p_node::node::STARTING_HEARTBEATS;
 use r2p_node::{Node, NodeConfig, NodeError, ParamStore};
@@ -62,12 +72,17 @@ use defmt_rtt as _;
 defmt::timestamp!("{=u64:us}", Instant::now().as_micros());
 
 mod analog;
-mod flash_layout;
 mod panic;
 pub mod slot_timer;
+#[path = "../../../shared/trial.rs"]
+mod trial;
 pub use analog::{analog_input, AnalogInputs};
-pub use flash_layout::PARAMS_BASE;
 use slot_timer::SlotTimer;
+use trial::Confirmation;
+
+/// Offset from the flash base of the parameter pages (the flash map's `params` partition,
+/// firmware/images.toml), where an image's `FlashParams` live: an update never touches them.
+pub const PARAMS_BASE: u32 = MAP.params.offset;
 
 /// Binds a module image's interrupts, as `embassy_stm32::bind_interrupts!` does, with the
 /// bxCAN's four that every image needs written once: the receive FIFOs through
@@ -239,8 +254,10 @@ pub fn start_bus(
     can: Can<'static>,
     tim2: Peri<'static, TIM2>,
 ) {
-    let mut node = ModuleNode::new(config, params).expect("valid node configuration");
-    register(&mut node).expect("room for the module's topics on its node");
+    // Made in its static: moving the ~3 KB node out of `Result::expect` cost 248 B of code.
+    let node =
+        NODE.init_with(|| ModuleNode::new(config, params).expect("valid node configuration"));
+    register(node).expect("room for the module's topics on its node");
     let can = BxCan::new(can, pac::CAN, BIT_RATE);
     if let Some(text) = r2p_panic::take_last() {
         defmt::warn!("the last reset followed a panic: {=[u8]:a}", text);
@@ -252,29 +269,82 @@ pub fn start_bus(
         irq.set_priority(Priority::P1);
     }
     interrupt::TIM2.set_priority(Priority::P0);
-    let node = BusNode(NODE.init(node));
+    let node = BusNode(node);
     let timer = SlotTimer::new(tim2);
     BUS_EXECUTOR.start(interrupt::TIM2).spawn(bus(node, can, timer, running_after_us)).unwrap();
 }
 
-/// Loads the parameters from flash (defaults where nothing valid is stored); the flash, for
-/// [`persist`].
+/// The module's flash as the application's task keeps it: the parameter pages and the
+/// bootloader's state, in which the image confirms itself after an update.
+///
+/// SEAM (issue 18 item 3, the update over the bus): the DFU writer (r2p-module's `DfuSink`
+/// behind r2p-node's `UpdateSink`) needs the DFU slot and the state partition of this same
+/// flash, which this task owns; the node hands it UPDATE messages in the bus task, at interrupt
+/// priority, where a page erase (20–40 ms) would stall every slot. Where it runs and how it
+/// shares the flash with the parameters is the update's design, not settled here.
+pub struct ModuleFlash {
+    flash: Flash<'static, Blocking>,
+    confirmation: Confirmation,
+}
+
+impl ModuleFlash {
+    /// Feeds the trial's watchdog, for a task that cannot [`persist`] now (the motor's, while
+    /// its bridge is driven).
+    pub fn feed_watchdog(&mut self) {
+        self.confirmation.feed();
+    }
+
+    /// Polls the trial with the node's health (running, synced, parameters working).
+    fn poll_trial(&mut self) {
+        let b = LED_INPUTS.load(Ordering::Relaxed);
+        let healthy = b & RUNNING != 0 && b & SYNCED != 0 && b & STORAGE_FAULT == 0;
+        let now_ms = Instant::now().as_millis();
+        if !self.confirmation.poll(&mut self.flash, now_ms, healthy) {
+            defmt::warn!("trial: confirming this image failed");
+            LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
+        }
+    }
+}
+
+/// Loads the parameters from flash (defaults where nothing valid is stored) and reads the
+/// bootloader's state: on a trial boot the independent watchdog (`iwdg`) starts. The flash,
+/// for [`persist`].
 pub fn load_params<const N: usize>(
     params: &FlashParams<N>,
     flash: Peri<'static, FLASH>,
-) -> Flash<'static, Blocking> {
+    iwdg: Peri<'static, IWDG>,
+) -> ModuleFlash {
     let mut flash = Flash::new_blocking(flash);
     if params.load(&mut flash).is_err() {
         defmt::warn!("parameters: reading them from flash failed, defaults used");
         LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
     }
-    flash
+    let confirmation = if behind_bootloader() {
+        Confirmation::at_boot(&mut flash, MAP.state, iwdg, Instant::now().as_millis())
+    } else {
+        Confirmation::not_on_trial()
+    };
+    ModuleFlash { flash, confirmation }
 }
 
-/// From the application's task: stores changed parameters (a page erase, when the log is
-/// full, stalls the CPU ~20 ms) and resets if a reboot was requested.
-pub fn persist<const N: usize>(params: &FlashParams<N>, flash: &mut Flash<'static, Blocking>) {
-    if params.is_dirty() && params.commit(flash).is_err() {
+/// Whether this image is linked at the active slot (build_image.rs), so runs behind the
+/// bootloader and has its state partition to read; an image flashed alone at the flash base
+/// must never take its own code there for the bootloader's state.
+fn behind_bootloader() -> bool {
+    extern "C" {
+        // cortex-m-rt's link.x: the image's vector table, at the start of its FLASH region.
+        static __vector_table: u32;
+    }
+    let start = core::ptr::addr_of!(__vector_table) as u32;
+    start == 0x0800_0000 + MAP.active.offset
+}
+
+/// From the application's task, every 100 ms: confirms the image on trial once it is healthy
+/// (or resets it when out of time), stores changed parameters (a page erase, when the log is
+/// full or on the confirmation, stalls the CPU ~20–40 ms) and resets if a reboot was requested.
+pub fn persist<const N: usize>(params: &FlashParams<N>, flash: &mut ModuleFlash) {
+    flash.poll_trial();
+    if params.is_dirty() && params.commit(&mut flash.flash).is_err() {
         defmt::warn!("parameters: storing in flash failed");
         LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
     }
@@ -296,14 +366,14 @@ pub fn persist<const N: usize>(params: &FlashParams<N>, flash: &mut Flash<'stati
 /// ```
 pub struct EveryMs<'a, const N: usize> {
     params: &'a FlashParams<N>,
-    flash: Flash<'static, Blocking>,
+    flash: ModuleFlash,
     ticker: Ticker,
     steps: u32,
 }
 
 impl<'a, const N: usize> EveryMs<'a, N> {
     /// Starts the period now; `flash` is [`load_params`]'s.
-    pub fn new(params: &'a FlashParams<N>, flash: Flash<'static, Blocking>) -> Self {
+    pub fn new(params: &'a FlashParams<N>, flash: ModuleFlash) -> Self {
         Self { params, flash, ticker: Ticker::every(Duration::from_millis(1)), steps: 0 }
     }
 
@@ -312,7 +382,8 @@ impl<'a, const N: usize> EveryMs<'a, N> {
         Instant::now().as_micros()
     }
 
-    /// Ends the step: every 100th persists the parameters; then waits for the next period.
+    /// Ends the step: every 100th polls the trial and persists the parameters ([`persist`]);
+    /// then waits for the next period.
     pub async fn next(&mut self) {
         self.steps = self.steps.wrapping_add(1);
         if self.steps.is_multiple_of(100) {

@@ -8,10 +8,9 @@
 use embassy_executor::Spawner;
 use embassy_stm32::adc::{self, SampleTime};
 use embassy_stm32::can::Can;
-use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::gpio::{Input, Output};
 use embassy_stm32::peripherals::ADC1;
-use module_core::{analog_input, asserted, drive, AnalogInputs, EveryMs, Leds};
+use module_core::{analog_input, asserted, drive, AnalogInputs, EveryMs, Leds, ModuleFlash};
 use r2p_app_psu::{params, App, Sample, Storage};
 use r2p_module::FlashParams;
 
@@ -42,7 +41,7 @@ struct Io {
 
 /// The application: one step per millisecond in thread mode.
 #[embassy_executor::task]
-async fn run(mut app: App<'static>, mut io: Io, flash: Flash<'static, Blocking>) {
+async fn run(mut app: App<'static>, mut io: Io, flash: ModuleFlash) {
     let mut ms = EveryMs::new(&PARAMS, flash);
     loop {
         let [vin, iin, vout] = io.analog.read().await;
@@ -85,7 +84,7 @@ async fn main(spawner: Spawner) {
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can(&mut can).await;
-    let flash = module_core::load_params(&PARAMS, p.FLASH);
+    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
     let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
     let config = r2p_app_psu::node_config(embassy_stm32::uid::uid(), &PARAMS);
     module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);

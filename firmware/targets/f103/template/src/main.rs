@@ -8,8 +8,7 @@
 
 use embassy_executor::Spawner;
 use embassy_stm32::can::Can;
-use embassy_stm32::flash::{Blocking, Flash};
-use module_core::{EveryMs, Leds};
+use module_core::{EveryMs, Leds, ModuleFlash};
 use r2p_app_template::{params, App, Sample, Storage};
 use r2p_module::FlashParams;
 
@@ -27,7 +26,7 @@ static ENDPOINTS: Storage = Storage::new();
 
 /// The application: one step per millisecond in thread mode.
 #[embassy_executor::task]
-async fn run(mut app: App<'static>, mut leds: Leds, flash: Flash<'static, Blocking>) {
+async fn run(mut app: App<'static>, mut leds: Leds, flash: ModuleFlash) {
     let mut ms = EveryMs::new(&PARAMS, flash);
     loop {
         let c = app.step(ms.now(), &Sample { status: module_core::led_status() });
@@ -45,7 +44,7 @@ async fn main(spawner: Spawner) {
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can(&mut can).await;
-    let flash = module_core::load_params(&PARAMS, p.FLASH);
+    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
     let app = App::new(ENDPOINTS.build(), &PARAMS);
     let config = r2p_app_template::node_config(embassy_stm32::uid::uid());
     module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);

@@ -19,7 +19,6 @@
 use core::cell::Cell;
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
-use embassy_boot::{AlignedBuffer, BlockingFirmwareState, State};
 use embassy_executor::{InterruptExecutor, Spawner};
 use embassy_futures::select::{select, Either};
 use embassy_net::tcp::TcpSocket;
@@ -34,7 +33,6 @@ use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
 use embassy_stm32::peripherals::{CAN1, ETH, ETH_SMA};
 use embassy_stm32::rng::{self, Rng};
-use embassy_stm32::wdg::IndependentWatchdog;
 use embassy_stm32::{bind_interrupts, pac, rcc, time::Hertz, Config};
 use embassy_time::{Delay, Duration, Instant, Ticker, Timer};
 use r2p_app_gateway::link::MAX_CLIENTS;
@@ -43,7 +41,6 @@ use r2p_app_gateway::ros::{zid_of, Latest, RosBridge, RosConfig};
 use r2p_app_gateway::server::{self, serve};
 use r2p_app_gateway::{App, BusLink, BusTap, NetState, Sample, Storage};
 use r2p_boot::layout::STM32F407VG as MAP;
-use r2p_boot::trial::{Trial, Verdict, WATCHDOG_MS};
 use r2p_middleware::{pool_size, Class};
 use r2p_module::{leds, FlashParams, Outbound, OutboundCell};
 use r2p_msgs::Twist2D;
@@ -57,6 +54,9 @@ use static_cell::StaticCell;
 mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
 }
+#[path = "../../../shared/trial.rs"]
+mod trial;
+use trial::Confirmation;
 
 bind_interrupts!(struct Irqs {
     CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN1>;
@@ -82,35 +82,11 @@ type ParamFlash = Bank1Region1<'static, Blocking>;
 /// embassy-boot's state partition: the 64 KiB sector 4, bank 1 region 2, whole.
 type StateFlash = Bank1Region2<'static, Blocking>;
 
-/// embassy-boot writes its state in the flash's write units (a word on the F4).
-const STATE_WRITE: usize = <StateFlash as embedded_storage::nor_flash::NorFlash>::WRITE_SIZE;
-
-/// The image's trial after an update, and the bootloader state it confirms in.
-struct Confirmation {
-    trial: Trial,
+/// The image's trial after an update (../../shared/trial.rs) and the bootloader state it
+/// confirms in.
+struct Trial {
+    confirmation: Confirmation,
     state: StateFlash,
-    watchdog: Option<IndependentWatchdog<'static, embassy_stm32::peripherals::IWDG>>,
-}
-
-impl Confirmation {
-    /// Polled every 100 ms: confirms a healthy image on trial, resets one out of time, and
-    /// keeps the watchdog fed while the image runs.
-    fn poll(&mut self, now_ms: u64, healthy: bool) {
-        match self.trial.poll(now_ms, healthy) {
-            Verdict::Confirm => {
-                let mut aligned = AlignedBuffer([0; STATE_WRITE]);
-                let mut state = BlockingFirmwareState::new(&mut self.state, &mut aligned.0);
-                if state.mark_booted().is_err() {
-                    LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
-                }
-            }
-            Verdict::GiveUp => cortex_m::peripheral::SCB::sys_reset(),
-            Verdict::Wait | Verdict::Kept => {}
-        }
-        if let Some(w) = &mut self.watchdog {
-            w.pet();
-        }
-    }
 }
 static ENDPOINTS: Storage = Storage::new();
 /// `/cmd_vel` from ROS 2, on the bus for whichever module runs the base controller.
@@ -312,7 +288,7 @@ async fn run(
     mut app: App<'static>,
     mut leds: [Output<'static>; 4],
     mut flash: ParamFlash,
-    mut confirmation: Confirmation,
+    mut trial: Trial,
     stack: Stack<'static>,
 ) {
     let mut ticker = Ticker::every(Duration::from_millis(1));
@@ -342,7 +318,10 @@ async fn run(
         if step.is_multiple_of(100) {
             let b = LED_INPUTS.load(Ordering::Relaxed);
             let healthy = b & RUNNING != 0 && b & SYNCED != 0 && b & STORAGE_FAULT == 0;
-            confirmation.poll(Instant::now().as_millis(), healthy);
+            let now_ms = Instant::now().as_millis();
+            if !trial.confirmation.poll(&mut trial.state, now_ms, healthy) {
+                LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
+            }
             if PARAMS.is_dirty() && PARAMS.commit(&mut flash).is_err() {
                 LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
             }
@@ -420,24 +399,10 @@ async fn main(spawner: Spawner) {
     }
     // Just swapped in by the bootloader (its state says Swap): on trial, under the watchdog.
     // Just rolled back (Revert): say so to the bootloader, so the next update may begin.
-    let mut state_flash = regions.bank1_region2;
-    let mut aligned = AlignedBuffer([0; STATE_WRITE]);
-    let mut boot_state = BlockingFirmwareState::new(&mut state_flash, &mut aligned.0);
-    let state = boot_state.get_state().ok();
-    let on_trial = state == Some(State::Swap);
-    if state == Some(State::Revert) {
-        let _ = boot_state.mark_booted();
-    }
-    let watchdog = on_trial.then(|| {
-        let mut w = IndependentWatchdog::new(p.IWDG, (WATCHDOG_MS * 1000) as u32);
-        w.unleash();
-        w
-    });
-    let confirmation = Confirmation {
-        trial: Trial::new(Instant::now().as_millis(), on_trial),
-        state: state_flash,
-        watchdog,
-    };
+    let mut state = regions.bank1_region2;
+    let whole = r2p_boot::layout::Partition { offset: 0, size: MAP.state.size };
+    let confirmation = Confirmation::at_boot(&mut state, whole, p.IWDG, Instant::now().as_millis());
+    let trial = Trial { confirmation, state };
     let net = Net::read(&PARAMS, 0);
     let uid = embassy_stm32::uid::uid();
 
@@ -496,7 +461,7 @@ async fn main(spawner: Spawner) {
     if let Some(router) = net.zenoh {
         spawner.spawn(zenoh(stack, router, net.ros_domain, zid_of(uid), cmd_vel)).unwrap();
     }
-    spawner.spawn(run(app, leds, flash, confirmation, stack)).unwrap();
+    spawner.spawn(run(app, leds, flash, trial, stack)).unwrap();
 }
 
 #[panic_handler]

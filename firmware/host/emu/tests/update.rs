@@ -1,0 +1,238 @@
+//! Firmware updates over the bus on the emulated Triskar2 (issue 18, items 3–4): a tool on the
+//! spare port sends a signed image to a motor module with `r2p update`'s sender while the robot
+//! drives; the module writes it through its update sink (its flash stalling its CPU as the F103's
+//! does), checks it, and after a REBOOT its bootloader swaps it in and it confirms itself. The
+//! other modules' HRT traffic keeps its slots; refused images change nothing; an image that
+//! never confirms is rolled back; a bus partition pauses the transfer, which then resumes.
+
+use std::sync::Mutex;
+
+use embassy_boot::State;
+use r2p_boot::sender::{Phase, Sender};
+use r2p_boot::sign::{sign, Meta};
+use r2p_boot::transfer::{Msg, Status};
+use r2p_boot::{image_digest, Refusal, Version};
+use r2p_emu::boards::firmware::{active_trailer, boot_state, development_seed, MCU};
+use r2p_emu::robot::{BoardNode, EmuRobot};
+use r2p_management::NodeId;
+use r2p_node::{NoParams, NodeConfig, UpdateSink};
+use r2p_world::robot_file::Robot;
+use rtcan::CycleConfig;
+
+const MS: u64 = 1_000_000;
+const S: u64 = 1_000 * MS;
+
+fn robot() -> EmuRobot {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../robots/triskar2.toml");
+    EmuRobot::build(Robot::load(path).unwrap()).unwrap()
+}
+
+/// A signed image of `len` bytes for `kind`, version 1.`minor`.0.
+fn image(len: usize, kind: &str, minor: u8) -> &'static [u8] {
+    let bytes: Vec<u8> = (0..len as u32)
+        .map(|i| (i ^ 0x5A5A).wrapping_mul(2_654_435_761).to_le_bytes()[2])
+        .collect();
+    let meta = Meta { version: Version { major: 1, minor, patch: 0 }, kind, mcu: MCU };
+    Box::leak(sign(&bytes, &meta, &development_seed()).unwrap().into_boxed_slice())
+}
+
+/// The statuses the tool hears (its update sink only records).
+struct Heard(Mutex<Vec<Status>>);
+
+impl UpdateSink for Heard {
+    fn handle(&self, _from: u8, msg: &[u8], _answer: &mut [u8; 64]) -> usize {
+        if let Ok(Msg::Status(s)) = Msg::decode(msg) {
+            self.0.lock().unwrap().push(s);
+        }
+        0
+    }
+}
+
+/// The tool: a node on the spare port with the sender in its application step.
+struct Tool {
+    board: usize,
+    sender: &'static Mutex<Sender<'static>>,
+}
+
+fn tool(r: &mut EmuRobot, image: &'static [u8], target: NodeId) -> Tool {
+    let heard: &'static Heard = Box::leak(Box::new(Heard(Mutex::new(Vec::new()))));
+    let sender: &'static Mutex<Sender<'static>> =
+        Box::leak(Box::new(Mutex::new(Sender::new(image, 7, 8, 400))));
+    let mut uid = [0xFFu8; 12];
+    uid[11] = 0x51;
+    let cycle = CycleConfig { cycle_us: r.robot.bus.cycle_us, ..CycleConfig::DEFAULT };
+    let mut node =
+        BoardNode::new(NodeConfig { cycle, ..NodeConfig::new(uid, "r2p-cli") }, &NoParams).unwrap();
+    node.set_update_sink(heard);
+    let app = Box::new(move |now: u64, node: &mut BoardNode| {
+        let now_ms = now / 1_000;
+        let mut s = sender.lock().unwrap();
+        for st in heard.0.lock().unwrap().drain(..) {
+            s.on_status(&st, now_ms);
+        }
+        let mut buf = [0u8; 64];
+        while node.tx_pending() < 16 {
+            let Some(m) = s.poll(now_ms) else { break };
+            let n = m.encode(&mut buf);
+            let _ = node.send_update(target, &buf[..n]);
+        }
+    });
+    let port = r.spare_port();
+    let board = r.sim.add_board(node, port, Some(app));
+    Tool { board, sender }
+}
+
+fn phase(t: &Tool) -> Phase {
+    t.sender.lock().unwrap().phase()
+}
+
+/// Runs until the transfer ends (or `limit_ns`); returns when it ended.
+fn run_transfer(r: &mut EmuRobot, t: &Tool, limit_ns: u64) -> u64 {
+    let done = |_: &_| matches!(phase(t), Phase::Done | Phase::Refused(_));
+    assert!(r.sim.run_while(10 * MS, limit_ns, done), "transfer unfinished: {:?}", phase(t));
+    r.sim.now_ns()
+}
+
+fn node_id(r: &EmuRobot, name: &str) -> NodeId {
+    r.sim.node(r.board(name).unwrap()).node_id()
+}
+
+fn hrt_missed(r: &EmuRobot, except: usize) -> (u32, u32) {
+    let (mut others, mut own) = (0, 0);
+    for i in 0..r.boards.len() {
+        let m = r.sim.node(i).stats().hrt_missed;
+        if i == except {
+            own += m;
+        } else {
+            others += m;
+        }
+    }
+    (others, own)
+}
+
+#[test]
+fn a_motor_module_takes_an_image_while_the_robot_drives_swaps_it_in_and_confirms_it() {
+    let mut r = robot();
+    r.sim.run_until(2 * S); // booted, driving (the teleop script starts at 1 s)
+    let m = r.board("motor1").unwrap();
+    let new = image(40_000, "motor", 4);
+    let target = node_id(&r, "motor1");
+    let t = tool(&mut r, new, target);
+    let start = r.sim.now_ns();
+    let frames_before = r.sim.bus().frames().count();
+    let end = run_transfer(&mut r, &t, start + 120 * S);
+    assert_eq!(phase(&t), Phase::Done);
+    let (others, own) = hrt_missed(&r, m);
+    assert_eq!(others, 0, "every other module's HRT traffic kept its slots during the transfer");
+    let secs = (end - start) as f64 / S as f64;
+    let frames = r.sim.bus().frames().count() - frames_before;
+    let update_frames = r
+        .sim
+        .bus()
+        .frames()
+        .skip(frames_before)
+        .filter(|(_, p, f)| {
+            // The tool's management stream and motor1's answers to it.
+            let id = f.id().message.0;
+            *p == t.board || (*p == m && id & 0xFF == 0)
+        })
+        .count();
+    let s = t.sender.lock().unwrap();
+    println!(
+        "update of {} B to motor1 while driving: {secs:.1} s virtual ({:.1} KiB/s), {} timeouts, \
+         {} goes back; {update_frames} of {frames} frames on the bus were the update's; \
+         motor1's own HRT slots missed while its flash stalled it: {own}",
+        new.len(),
+        new.len() as f64 / 1024.0 / secs,
+        s.timeouts,
+        s.fast_goes_back
+    );
+    drop(s);
+    assert_eq!(boot_state(r.boards[m].flash), Some(State::Swap), "marked for the swap");
+    assert_eq!(active_trailer(r.boards[m].flash).unwrap().version.minor, 1, "still the old image");
+    // REBOOT: the bootloader swaps (the board is off the bus meanwhile), the image confirms.
+    let boots = r.boards[m].boots.get();
+    let target = node_id(&r, "motor1").get();
+    r.sim.node_mut(t.board).request_reboot(target).unwrap();
+    r.sim.run_for(25 * S);
+    assert_eq!(r.boards[m].boots.get(), boots + 1, "rebooted once");
+    let now = active_trailer(r.boards[m].flash).unwrap();
+    assert_eq!((now.version.minor, now.digest), (4, image_digest(&new[..new.len() - 128])));
+    assert_eq!(boot_state(r.boards[m].flash), Some(State::Boot), "confirmed: no rollback");
+    assert_eq!(r.sim.node(m).peer_count(), r.sim.boards() - 1, "back on the bus");
+}
+
+#[test]
+fn refused_images_change_nothing_and_say_why() {
+    for (what, img, why) in [
+        ("another kind", image(20_000, "psu", 4), Refusal::WrongKind),
+        ("too large", image(60_000, "motor", 4), Refusal::TooLarge),
+        ("a flipped byte", flipped(image(20_000, "motor", 4), 12_345), Refusal::BadSignature),
+    ] {
+        let mut r = robot();
+        r.sim.run_until(2 * S);
+        let m = r.board("motor1").unwrap();
+        let target = node_id(&r, "motor1");
+        let t = tool(&mut r, img, target);
+        run_transfer(&mut r, &t, 120 * S);
+        assert_eq!(phase(&t), Phase::Refused(why), "{what}");
+        assert_eq!(boot_state(r.boards[m].flash), Some(State::Boot), "{what}: nothing marked");
+        let target = node_id(&r, "motor1").get();
+        r.sim.node_mut(t.board).request_reboot(target).unwrap();
+        r.sim.run_for(3 * S);
+        assert_eq!(
+            active_trailer(r.boards[m].flash).unwrap().version.minor,
+            1,
+            "{what}: old image"
+        );
+    }
+}
+
+fn flipped(img: &'static [u8], at: usize) -> &'static [u8] {
+    let mut v = img.to_vec();
+    v[at] ^= 0x10;
+    Box::leak(v.into_boxed_slice())
+}
+
+#[test]
+fn a_new_image_that_never_confirms_is_rolled_back() {
+    let mut r = robot();
+    r.sim.run_until(2 * S);
+    let m = r.board("motor1").unwrap();
+    let target = node_id(&r, "motor1");
+    let t = tool(&mut r, image(30_000, "motor", 4), target);
+    run_transfer(&mut r, &t, 120 * S);
+    assert_eq!(phase(&t), Phase::Done);
+    let target = node_id(&r, "motor1").get();
+    r.sim.node_mut(t.board).request_reboot(target).unwrap();
+    // The new image boots cut off from the bus: it never hears the master's sync.
+    r.sim.run_for(200 * MS);
+    r.sim.bus().partition(&[m]);
+    r.sim.run_for(10 * S);
+    assert_eq!(active_trailer(r.boards[m].flash).unwrap().version.minor, 4, "swapped in, on trial");
+    r.sim.run_for(20 * S); // past the trial's 15 s: it resets, the bootloader swaps back
+    r.sim.bus().heal();
+    r.sim.run_for(15 * S);
+    assert_eq!(active_trailer(r.boards[m].flash).unwrap().version.minor, 1, "rolled back");
+    assert_eq!(boot_state(r.boards[m].flash), Some(State::Boot), "and the old image kept");
+}
+
+#[test]
+fn a_transfer_cut_by_a_bus_partition_resumes_where_it_stood() {
+    let mut r = robot();
+    r.sim.run_until(2 * S);
+    let m = r.board("motor1").unwrap();
+    let target = node_id(&r, "motor1");
+    let t = tool(&mut r, image(30_000, "motor", 4), target);
+    r.sim.run_for(3 * S);
+    let before = t.sender.lock().unwrap().progress().0;
+    assert!(before > 0 && phase(&t) == Phase::Sending, "under way: {before} B");
+    r.sim.bus().partition(&[m]);
+    r.sim.run_for(2 * S);
+    r.sim.bus().heal();
+    let limit = r.sim.now_ns() + 120 * S;
+    run_transfer(&mut r, &t, limit);
+    let s = t.sender.lock().unwrap();
+    assert_eq!((s.phase(), s.restarts), (Phase::Done, 0), "resumed, not begun again");
+    assert!(s.timeouts > 0, "the partition was felt");
+}
