@@ -11,6 +11,8 @@ measured in the same run (never pass/fail on timing: that is what tests are not 
    CAN on the virtual bus, in virtual time (deterministic). Tabulated with the issue's goals and
    plotted to docs/img/rtcan-load-*.png (docs/rtcan.md, "Under load"); the loads from 60 %
    again for traffic seeds 1–16, misses summed, to show whether seed 1's result is typical.
+5. ROS 2 over Zenoh: /cmd_vel → wheel setpoints on the emulated Triskar2's bus, p50/p99, against
+   a Zenoh put's own round trip through the same router (bench_ros2.py, docs/ros2.md).
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ import sys
 
 from pathlib import Path
 
-from . import ROOT, firmware, qemu
+from . import ROOT, bench_ros2, firmware, qemu
 
 PLOT = ROOT / "docs" / "img" / "bench-pubsub-cortex-m3.png"
 # The paper's figure for the original middleware on a 72 MHz Cortex-M3, one subscriber:
@@ -437,6 +439,11 @@ def main() -> int:
         print(f"plot: {path.relative_to(ROOT)}")
     report_triskar2(sim_rows)
     print(f"plot: {plot_trajectory().relative_to(ROOT)}")
+    try:
+        bench_ros2.report(bench_ros2.run())
+    except (RuntimeError, subprocess.CalledProcessError, ImportError) as e:
+        print(f"bench: ROS 2 over Zenoh: {e}", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -37,6 +37,7 @@ pub struct App<'a> {
     next_ik_us: u64,
     next_odom_us: u64,
     last_odom_us: Option<u64>,
+    last_ranges: Option<r2p_msgs::Proximity>,
     /// Setpoints the pool had no room for (the bus is behind).
     pub dropped: u32,
 }
@@ -73,6 +74,7 @@ impl<'a> App<'a> {
             next_ik_us: 0,
             next_odom_us: 0,
             last_odom_us: None,
+            last_ranges: None,
             dropped: 0,
         }
     }
@@ -125,6 +127,16 @@ impl<'a> App<'a> {
         self.pose
     }
 
+    /// The latest ranges received from the proximity module, if any.
+    pub fn ranges(&self) -> Option<r2p_msgs::Proximity> {
+        self.last_ranges
+    }
+
+    /// Velocity (vx, vy, ωz) in the base frame by forward kinematics of the wheels' speeds.
+    pub fn velocity(&self) -> (f32, f32, f32) {
+        self.velocity
+    }
+
     /// One step at `now_us` (every millisecond).
     pub fn step(&mut self, now_us: u64) {
         while let Some(c) = self.ends.cmd.try_recv() {
@@ -141,6 +153,7 @@ impl<'a> App<'a> {
             }
         }
         while let Some(r) = self.ends.ranges.try_recv() {
+            self.last_ranges = Some(*r);
             for ch in 0..4 {
                 if r.status[ch] == 0 && r.distance[ch].is_finite() && r.distance[ch] < stop {
                     self.blocked[ch] = until;

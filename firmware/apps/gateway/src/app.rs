@@ -2,7 +2,38 @@
 
 use r2p_module::leds::{self, Pattern};
 use r2p_module::TopicNode;
-use r2p_msgs::GatewayStatus;
+use r2p_msgs::{Battery, GatewayStatus, Imu, R2pMessage};
+
+use crate::endpoints::MIRRORED;
+
+/// The latest message of a mirrored topic, packed as on the bus, and how many came so far
+/// (the ROS side publishes each new one once: most are events).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Mirrored {
+    /// The packed bytes (`len` of them).
+    pub bytes: [u8; MIRROR_MAX],
+    /// Bytes used.
+    pub len: u8,
+    /// Messages received so far.
+    pub count: u32,
+}
+
+/// Largest mirrored message.
+pub const MIRROR_MAX: usize = 16;
+
+impl Mirrored {
+    fn update<T: R2pMessage>(&mut self, m: &T) {
+        if let Ok(n) = m.encode(&mut self.bytes) {
+            self.len = n as u8;
+            self.count = self.count.wrapping_add(1);
+        }
+    }
+
+    /// The packed message.
+    pub fn packed(&self) -> &[u8] {
+        &self.bytes[..usize::from(self.len)]
+    }
+}
 use r2p_node::NodeError;
 
 use crate::endpoints::Endpoints;
@@ -51,18 +82,52 @@ pub struct App<'a> {
     ep: Endpoints<'a>,
     link: &'a BusLink,
     next_status_us: u64,
+    battery: Option<Battery>,
+    imu: Option<Imu>,
+    mirrored: [Mirrored; MIRRORED.len()],
 }
 
 impl<'a> App<'a> {
     /// The application on its endpoints ([`crate::Storage::build`]) and the link its server
     /// and bus tap share.
     pub fn new(endpoints: Endpoints<'a>, link: &'a BusLink) -> Self {
-        Self { ep: endpoints, link, next_status_us: 0 }
+        Self {
+            ep: endpoints,
+            link,
+            next_status_us: 0,
+            battery: None,
+            imu: None,
+            mirrored: [Mirrored::default(); MIRRORED.len()],
+        }
     }
 
-    /// Exports `gateway/status` on the gateway's node.
+    /// Exports `gateway/status` on the gateway's node and imports what ROS 2 gets besides the
+    /// base's topics (the battery, the IMU; waiting harmlessly on a robot without them).
     pub fn register(&self, node: &mut impl TopicNode<'a>) -> Result<(), NodeError> {
-        node.export(self.ep.status.remote)
+        node.export(self.ep.status.remote)?;
+        node.import(self.ep.battery.remote)?;
+        node.import(self.ep.imu.remote)?;
+        node.import(self.ep.psu_state.remote)?;
+        node.import(self.ep.psu_event.remote)?;
+        for f in &self.ep.motor_faults {
+            node.import(f.remote)?;
+        }
+        Ok(())
+    }
+
+    /// The latest message of each [`MIRRORED`] topic, in its order.
+    pub fn mirrored(&self) -> [Mirrored; MIRRORED.len()] {
+        self.mirrored
+    }
+
+    /// The latest battery reading received, if any.
+    pub fn battery(&self) -> Option<Battery> {
+        self.battery
+    }
+
+    /// The latest IMU reading received, if any.
+    pub fn imu(&self) -> Option<Imu> {
+        self.imu
     }
 
     /// The endpoints.
@@ -89,6 +154,23 @@ impl<'a> App<'a> {
 
     /// One step at `now_us`: `gateway/status` when due; returns the LEDs.
     pub fn step(&mut self, now_us: u64, sample: &Sample) -> Command {
+        while let Some(b) = self.ep.battery.subscriber.try_recv() {
+            self.battery = Some(*b);
+        }
+        while let Some(m) = self.ep.imu.subscriber.try_recv() {
+            self.imu = Some(*m);
+        }
+        while let Some(m) = self.ep.psu_state.subscriber.try_recv() {
+            self.mirrored[0].update(&*m);
+        }
+        while let Some(m) = self.ep.psu_event.subscriber.try_recv() {
+            self.mirrored[1].update(&*m);
+        }
+        for (i, f) in self.ep.motor_faults.iter().enumerate() {
+            while let Some(m) = f.subscriber.try_recv() {
+                self.mirrored[2 + i].update(&*m);
+            }
+        }
         if now_us >= self.next_status_us {
             let next = self.next_status_us + STATUS_PERIOD_US;
             self.next_status_us = if next <= now_us { now_us + STATUS_PERIOD_US } else { next };

@@ -24,13 +24,14 @@ mod app;
 pub mod endpoints;
 pub mod link;
 pub mod params;
+pub mod ros;
 pub mod server;
 pub mod tap;
 
 #[cfg(test)]
 mod tests;
 
-pub use app::{App, Command, NetState, Sample};
+pub use app::{App, Command, Mirrored, NetState, Sample};
 pub use endpoints::{Endpoints, Storage};
 pub use link::{BusLink, LinkFrame, LinkStats};
 pub use tap::BusTap;

@@ -25,9 +25,15 @@ pub const PREFIX_LEN: u16 = 3;
 pub const ROUTER: u16 = 4;
 /// TCP port of the socketcand server.
 pub const TCP_PORT: u16 = 5;
+/// The Zenoh router's IPv4 address (0: no ROS 2 over Zenoh), docs/ros2.md.
+pub const ZENOH_ROUTER: u16 = 6;
+/// The Zenoh router's TCP port (7447: rmw_zenoh's router).
+pub const ZENOH_PORT: u16 = 7;
+/// ROS domain ID of the gateway's ROS 2 node and topics (as `ROS_DOMAIN_ID`).
+pub const ROS_DOMAIN: u16 = 8;
 
 /// Number of network parameters.
-pub const COUNT: usize = 6;
+pub const COUNT: usize = 9;
 
 /// 192.168.1.50: a static address in the most common home/lab subnet.
 pub const DEFAULT_IP: u32 = u32::from_be_bytes([192, 168, 1, 50]);
@@ -41,6 +47,9 @@ pub const DEFAULTS: [Param; COUNT] = [
     Param::u32("prefix_len", 24, 1, 31),
     Param::u32("router", 0, 0, u32::MAX),
     Param::u32("tcp_port", r2p_socketcand::DEFAULT_PORT as u32, 1, 65_535),
+    Param::u32("zenoh_router", 0, 0, u32::MAX),
+    Param::u32("zenoh_port", 7447, 1, 65_535),
+    Param::u32("ros_domain", 0, 0, 232),
 ];
 
 /// `base` followed by [`DEFAULTS`] (`T` = `B` + [`COUNT`], checked when evaluated): the table
@@ -71,6 +80,10 @@ pub struct Net {
     pub router: Option<[u8; 4]>,
     /// The socketcand server's TCP port.
     pub tcp_port: u16,
+    /// The Zenoh router (address, port), if ROS 2 is on.
+    pub zenoh: Option<([u8; 4], u16)>,
+    /// ROS domain ID.
+    pub ros_domain: u32,
 }
 
 impl Net {
@@ -88,6 +101,11 @@ impl Net {
             prefix_len: t2.u32(PREFIX_LEN) as u8,
             router: (router != 0).then(|| router.to_be_bytes()),
             tcp_port: t2.u32(TCP_PORT) as u16,
+            zenoh: match t2.u32(ZENOH_ROUTER) {
+                0 => None,
+                ip => Some((ip.to_be_bytes(), t2.u32(ZENOH_PORT) as u16)),
+            },
+            ros_domain: t2.u32(ROS_DOMAIN),
         }
     }
 }

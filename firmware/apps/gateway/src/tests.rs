@@ -479,8 +479,11 @@ fn the_link_led_shows_link_address_and_clients() {
 fn the_node_exports_status_under_the_module_name() {
     let (app, _, _) = rig();
     let params = leak(RamParams::new(params::DEFAULTS));
-    let mut node: Node<'static, 4, 4, 8, 4, 64> = Node::new(node_config([1; 12]), params).unwrap();
+    // The image's node: 7 imports (battery, imu and the mirrored topics).
+    let mut node: Node<'static, 4, 7, 8, 4, 64> = Node::new(node_config([1; 12]), params).unwrap();
     app.register(&mut node).unwrap();
+    let mut small: Node<'static, 4, 6, 8, 4, 64> = Node::new(node_config([1; 12]), params).unwrap();
+    assert!(app.register(&mut small).is_err(), "one import more than 6");
     assert_eq!(app.endpoints().status.topic.name(), STATUS_TOPIC);
     assert!(STATUS_TOPIC.starts_with(crate::NAME));
     assert_eq!(node_config([1; 12]).rank, Some(1), "the standby sync master");
@@ -501,6 +504,8 @@ fn network_parameters_read_from_their_place_in_the_table() {
             prefix_len: 24,
             router: None,
             tcp_port: 29536,
+            zenoh: None,
+            ros_domain: 0,
         }
     );
     // After another application's two parameters.
@@ -518,6 +523,13 @@ fn network_parameters_read_from_their_place_in_the_table() {
         (false, [10, 0, 0, 2], Some([10, 0, 0, 1]), 5000)
     );
     assert!(joined.set(2 + params::TCP_PORT, Value::U32(70_000)).is_err(), "ports end at 65535");
+    // ROS 2 over Zenoh: off until a router is set; its port 7447 by default.
+    assert_eq!(net.zenoh, None);
+    joined.set(2 + params::ZENOH_ROUTER, Value::U32(0x0A00_0009)).unwrap();
+    joined.set(2 + params::ROS_DOMAIN, Value::U32(42)).unwrap();
+    let net = Net::read(&joined, 2);
+    assert_eq!((net.zenoh, net.ros_domain), (Some(([10, 0, 0, 9], 7447)), 42));
+    assert!(joined.set(2 + params::ROS_DOMAIN, Value::U32(233)).is_err(), "ROS domains end at 232");
     assert!(joined.set(2 + params::PREFIX_LEN, Value::U32(0)).is_err());
 }
 
@@ -529,4 +541,80 @@ fn the_servers_own_refusals_fit_an_error_message() {
         write_error(&mut TextBuf::<MAX_ERROR_TEXT>::new(), &why).expect("fits");
     }
     write_error(&mut TextBuf::<MAX_ERROR_TEXT>::new(), &"too many clients").expect("fits");
+}
+
+// ---- ROS 2 over Zenoh ----
+
+#[test]
+fn the_ros_bridge_declares_its_node_and_publishes_only_what_it_has() {
+    use crate::ros::{topic, zid_of, Latest, RosBridge, RosConfig};
+    use r2p_zenoh::session::State;
+    let mut b =
+        RosBridge::new(&RosConfig { domain: 3, namespace: "/robot1/", zid: zid_of([5; 12]) })
+            .expect("keys fit");
+    assert!(b.key(topic::ODOM).starts_with("3/robot1/odom/nav_msgs::msg::dds_::Odometry_/RIHS01_"));
+    let mut out = [0u8; 8192];
+    let n = b.connect(0, &mut out).unwrap();
+    assert_eq!(out[2], 0x41, "INIT");
+    assert!(n > 0);
+    // The router's INIT ack and OPEN ack (see r2p-zenoh's tests for their bytes).
+    let ack = [0x21, 0x09, 0x00, 0xAA, 0x01, 0xCC];
+    let n = b.receive(1, &ack, &mut out).unwrap();
+    assert_eq!(out[2] & 0x1F, 0x02, "OPEN");
+    assert!(n > 0);
+    let n = b.receive(2, &[0x62, 10, 0], &mut out).unwrap();
+    assert_eq!(b.state(), State::Open);
+    let text = std::string::String::from_utf8_lossy(&out[..n]).into_owned();
+    assert!(text.contains("/0/0/NN/%/%robot1/r2p_gateway"), "{text}");
+    assert!(text
+        .contains("/MS/%/%robot1/r2p_gateway/%robot1%cmd_vel/geometry_msgs::msg::dds_::Twist_/"));
+    assert!(text.contains("/MP/%/%robot1/r2p_gateway/%robot1%odom/nav_msgs::msg::dds_::Odometry_/"));
+    // Nothing to publish yet; then odometry only, at its rate.
+    assert_eq!(b.poll(3, 0, &Latest::default(), &mut out), Ok(0));
+    let latest = Latest { odom: Some(r2p_msgs::Odometry::default()), ..Latest::default() };
+    assert!(b.poll(4, 0, &latest, &mut out).unwrap() > 724);
+    assert_eq!(b.poll(5, 0, &latest, &mut out), Ok(0), "20 Hz: not again within 50 ms");
+    assert!(b.poll(50_004, 0, &latest, &mut out).unwrap() > 724);
+    assert_eq!(b.stats().published, 2);
+}
+
+#[test]
+fn cmd_vel_drives_until_its_watchdog_sends_one_stop() {
+    use crate::ros::{zid_of, RosBridge, RosConfig, CMD_WATCHDOG_US};
+    let mut b =
+        RosBridge::new(&RosConfig { domain: 0, namespace: "", zid: zid_of([5; 12]) }).unwrap();
+    let mut out = [0u8; 8192];
+    b.connect(0, &mut out).unwrap();
+    b.receive(1, &[0x21, 0x09, 0x00, 0xAA, 0x01, 0xCC], &mut out).unwrap();
+    b.receive(2, &[0x62, 10, 0], &mut out).unwrap();
+    // A PUT on /cmd_vel's key, in full: vx 0.5, wz -1.
+    let key =
+        std::format!("0/cmd_vel/geometry_msgs::msg::dds_::Twist_/{}", r2p_zenoh::types::TWIST.hash);
+    let mut cdr = std::vec![0, 1, 0, 0];
+    for v in [0.5f64, 0.0, 0.0, 0.0, 0.0, -1.0] {
+        cdr.extend_from_slice(&v.to_le_bytes());
+    }
+    assert!(key.len() < 128, "one-byte zint length");
+    // FRAME (reliable, sn 0), PUSH with a suffix, scope 0, the key, PUT, the payload.
+    let mut batch = std::vec![0x25, 0x00, 0x3D, 0x00, key.len() as u8];
+    batch.extend_from_slice(key.as_bytes());
+    batch.extend_from_slice(&[0x01, cdr.len() as u8]);
+    batch.extend_from_slice(&cdr);
+    b.receive(1_000, &batch, &mut out).unwrap();
+    assert_eq!(b.stats().cmd_vel, 1);
+    assert!(b.driving());
+    assert_eq!(b.take_cmd(1_000), Some(r2p_msgs::Twist2D { vx: 0.5, vy: 0.0, wz: -1.0 }));
+    assert_eq!(b.take_cmd(2_000), None);
+    assert_eq!(b.take_cmd(1_000 + CMD_WATCHDOG_US), None);
+    assert_eq!(b.take_cmd(1_001 + CMD_WATCHDOG_US), Some(r2p_msgs::Twist2D::default()));
+    assert_eq!(b.take_cmd(2_000_000), None, "one stop, not a stream of them");
+    assert!(!b.driving());
+    // Not a Twist: counted, dropped, no command.
+    let mut bad = batch.clone();
+    let len_at = bad.len() - cdr.len() - 1;
+    bad[len_at] = 5;
+    bad.truncate(len_at + 6);
+    b.receive(3_000_000, &bad, &mut out).unwrap();
+    assert_eq!((b.stats().cmd_vel, b.stats().bad_cmd_vel), (1, 1));
+    assert_eq!(b.take_cmd(3_000_000), None);
 }

@@ -40,6 +40,17 @@ pub struct SimArgs {
     /// host TCP — the endpoint a real robot's gateway serves on its Ethernet port
     #[arg(long, value_name = "ADDR")]
     pub gateway: Option<SocketAddr>,
+    /// With --realtime: connect the robot's gateway to the Zenoh router at ENDPOINT
+    /// (tcp/HOST:PORT, e.g. tcp/127.0.0.1:7447, rmw_zenoh's router): its topics become ROS 2
+    /// topics (/odom, /gateway/status, ...) and /cmd_vel drives the base (docs/ros2.md)
+    #[arg(long, value_name = "ENDPOINT")]
+    pub zenoh: Option<String>,
+    /// With --zenoh: the ROS domain ID
+    #[arg(long, value_name = "ID", default_value_t = 0)]
+    pub ros_domain: u32,
+    /// With --zenoh: the ROS namespace of the gateway's node and topics (none by default)
+    #[arg(long, value_name = "NS", default_value = "")]
+    pub ros_namespace: String,
     /// Without --realtime: also write the base's true pose, its odometry and the command every
     /// 50 ms to FILE (CSV), for plots
     #[arg(long, value_name = "FILE")]
@@ -60,6 +71,11 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
         if let Some(a) = args.gateway {
             return Err(CliError::new(format!(
                 "--gateway {a} serves the bus in real time: add --realtime"
+            )));
+        }
+        if let Some(z) = &args.zenoh {
+            return Err(CliError::new(format!(
+                "--zenoh {z} connects the gateway in real time: add --realtime"
             )));
         }
         let (Some(seconds), Some(path)) = (args.seconds, log.as_deref()) else {
@@ -125,12 +141,42 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
         }
         None => None,
     };
+    let zenoh = match &args.zenoh {
+        Some(e) => {
+            let router = parse_zenoh_endpoint(e)?;
+            let z =
+                r.connect_zenoh(router, args.ros_domain, &args.ros_namespace).map_err(|err| {
+                    CliError::new(format!("--zenoh {e}: cannot connect the gateway: {err}"))
+                })?;
+            eprintln!(
+                "r2p sim: {name}'s gateway is a Zenoh client of {router} (ROS domain {})",
+                args.ros_domain
+            );
+            Some(z)
+        }
+        None => None,
+    };
     let spare = r.spare_port();
     let summary = serve::run_realtime(&mut r.sim, spare, &name, &opts).map_err(CliError::new)?;
     if let Some(g) = gateway {
         g.shutdown();
     }
+    if let Some(z) = zenoh {
+        z.shutdown();
+    }
     emit(out, &summary.replacen("r2p-emu:", "r2p sim:", 1))
+}
+
+/// `tcp/HOST:PORT` (Zenoh's locator syntax; only TCP) as an address.
+fn parse_zenoh_endpoint(e: &str) -> Result<SocketAddr, CliError> {
+    let bad = || {
+        CliError::new(format!(
+            "--zenoh {e}: expected tcp/IP:PORT, e.g. tcp/127.0.0.1:7447 (the router's listening endpoint)"
+        ))
+    };
+    let addr = e.strip_prefix("tcp/").ok_or_else(bad)?;
+    use std::net::ToSocketAddrs;
+    addr.to_socket_addrs().map_err(|_| bad())?.next().ok_or_else(bad)
 }
 
 /// Runs `r` for `seconds` in 50 ms slices, writing the base's pose (world and odometry) and the

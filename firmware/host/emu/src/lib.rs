@@ -22,6 +22,7 @@ pub mod boards;
 pub mod bridge;
 pub mod demo;
 pub mod gateway_net;
+pub mod gateway_zenoh;
 pub mod periph;
 pub mod robot;
 pub mod serve;

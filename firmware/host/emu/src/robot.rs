@@ -36,6 +36,7 @@ use crate::boards::firmware::{self, around_app, factory_image, flash_active};
 use crate::boards::{self, GatewayBoot, Probe};
 pub use crate::boards::{BoardChip, BoardFlash, BoardNode};
 use crate::gateway_net::{GatewayServer, LinkSlot, NetSlot};
+use crate::gateway_zenoh::{RosSlot, ZenohClient};
 use crate::{App, Mode, PortTap, Reset, Sim};
 
 /// One board of the robot.
@@ -59,6 +60,8 @@ struct Booter {
     gateway_link: LinkSlot,
     /// The network as the gateway sees it.
     gateway_net: NetSlot,
+    /// What the gateway's step and its Zenoh client share, while connected.
+    gateway_ros: RosSlot,
     flash: Vec<&'static BoardChip>,
     boots: Vec<Rc<Cell<u32>>>,
     /// Set by a board's firmware when it resets itself.
@@ -117,6 +120,7 @@ impl Booter {
             probe: self.probe.clone(),
             gateway: gateway.clone(),
             net: self.gateway_net.clone(),
+            ros: self.gateway_ros.clone(),
         };
         let kind = module.kind();
         let (mut node, app) =
@@ -168,6 +172,7 @@ impl EmuRobot {
             probe: probe.clone(),
             gateway_link: Arc::new(Mutex::new(None)),
             gateway_net: Arc::new(Mutex::new(Default::default())),
+            gateway_ros: Arc::new(Mutex::new(None)),
             flash: boards.iter().map(|b| b.flash).collect(),
             boots: boards.iter().map(|b| b.boots.clone()).collect(),
             resets: boards.iter().map(|_| Rc::new(Cell::new(false))).collect(),
@@ -204,6 +209,26 @@ impl EmuRobot {
         }
         let b = self.booter.borrow();
         GatewayServer::start(addr, b.gateway_link.clone(), b.gateway_net.clone())
+    }
+
+    /// Connects the gateway to the Zenoh router at `router` (its application's Zenoh client
+    /// over host TCP): the robot's topics become ROS 2 topics (rmw_zenoh's conventions) in
+    /// `domain` and `namespace`, and `/cmd_vel` drives the base. Runs until the returned handle
+    /// is shut down or dropped; reconnects when the router goes away.
+    pub fn connect_zenoh(
+        &self,
+        router: SocketAddr,
+        domain: u32,
+        namespace: &str,
+    ) -> io::Result<ZenohClient> {
+        let Some(m) = self.robot.modules.iter().find(|m| m.kind() == BoardKind::Gateway) else {
+            return Err(io::Error::new(
+                io::ErrorKind::NotFound,
+                format!("{} has no gateway module to connect to a Zenoh router", self.robot.name),
+            ));
+        };
+        let slot = self.booter.borrow().gateway_ros.clone();
+        ZenohClient::start(router, m.uid.0, domain, namespace.trim_matches('/').to_string(), slot)
     }
 
     /// The spare port tools and bridges use.

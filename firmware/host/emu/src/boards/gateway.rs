@@ -76,6 +76,7 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
     *ctx.gateway.borrow_mut() = Some(GatewayBoot { tap: GatewayTap(BusTap::new(link)), link });
     let mut leds = Leds::new(&ctx, config.heartbeat_period_us);
     let net = ctx.net.clone();
+    let ros = ctx.ros.clone();
     let script: Vec<_> = ctx.robot.teleop.clone();
     let (flash, probe) = (ctx.flash, ctx.probe);
     Ok((
@@ -84,7 +85,24 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
             let status = leds.status(now, node, false);
             let net = *net.lock().unwrap_or_else(|e| e.into_inner());
             gw.step(now, &r2p_app_gateway::Sample { status, net });
-            if now % TELEOP_PERIOD_US == 0 {
+            // ROS 2 over Zenoh: the latest values out, /cmd_vel in (it takes over from the
+            // teleop script while it arrives; its watchdog's zero command stops the base).
+            let mut driving = false;
+            if let Some(sh) = ros.lock().unwrap_or_else(|e| e.into_inner()).as_mut() {
+                let (x, y, theta) = a.pose();
+                let (vx, vy, wz) = a.velocity();
+                sh.latest.odom = Some(r2p_msgs::Odometry { x, y, theta, vx, vy, wz });
+                sh.latest.status = Some(gw.status(&net));
+                sh.latest.battery = gw.battery();
+                sh.latest.imu = gw.imu();
+                sh.latest.mirrored = gw.mirrored();
+                sh.latest.proximity = a.ranges();
+                if let Some(c) = sh.cmd.take() {
+                    let _ = cmd_local.publish_with(|m| *m = c);
+                }
+                driving = sh.driving;
+            }
+            if now % TELEOP_PERIOD_US == 0 && !driving {
                 if let Some(t) = script.iter().rev().find(|t| (t.at_s * 1e6) as u64 <= now) {
                     let (vx, vy, wz) = (t.vx as f32, t.vy as f32, t.wz as f32);
                     let _ = cmd_local.publish_with(|m| *m = Twist2D { vx, vy, wz });

@@ -41,7 +41,7 @@ pub use template::template;
 use crate::App;
 
 /// Every emulated board's node runtime: room for each module's topics.
-pub type BoardNode = Node<'static, 8, 8, 64, 16, 64>;
+pub type BoardNode = Node<'static, 8, 16, 64, 16, 64>;
 
 pub use chip::{BoardChip, TimedFlash as BoardFlash};
 
@@ -79,6 +79,8 @@ pub struct Ctx<'r> {
     pub gateway: Rc<RefCell<Option<GatewayBoot>>>,
     /// The network as the gateway sees it (its server's listening address).
     pub net: crate::gateway_net::NetSlot,
+    /// What the gateway shares with its Zenoh client, while connected.
+    pub ros: crate::gateway_zenoh::RosSlot,
 }
 
 /// A booted board: its node and its 1 kHz application step.

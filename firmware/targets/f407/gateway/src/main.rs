@@ -4,6 +4,9 @@
 //! static fallback, the socketcand server for up to four clients. Pins come only from the
 //! board file (firmware/boards/gateway.toml) through the generated `board` module; network
 //! settings are parameters kept in flash (r2p-module's `FlashParams`), applied at boot.
+//! With a Zenoh router set (`zenoh_router`), the gateway is also a native ROS 2 node over
+//! Zenoh (r2p-app-gateway's `ros`, docs/ros2.md): `/gateway/status`, `/battery_state`,
+//! `/imu/data` out, `/cmd_vel` in (exported on the bus as `cmd_vel` for the base controller).
 //!
 //! The image runs behind the F407 bootloader, in the active slot of the flash map
 //! (firmware/images.toml; build.rs links it there); its parameters sit in the map's two 16 KiB
@@ -13,6 +16,7 @@
 #![no_std]
 #![no_main]
 
+use core::cell::Cell;
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
 use embassy_executor::{InterruptExecutor, Spawner};
@@ -33,10 +37,13 @@ use embassy_stm32::{bind_interrupts, pac, rcc, time::Hertz, Config};
 use embassy_time::{Delay, Duration, Instant, Ticker, Timer};
 use r2p_app_gateway::link::MAX_CLIENTS;
 use r2p_app_gateway::params::{self, Net};
+use r2p_app_gateway::ros::{zid_of, Latest, RosBridge, RosConfig};
 use r2p_app_gateway::server::{self, serve};
 use r2p_app_gateway::{App, BusLink, BusTap, NetState, Sample, Storage};
 use r2p_boot::layout::STM32F407VG as MAP;
-use r2p_module::{leds, FlashParams};
+use r2p_middleware::{pool_size, Class};
+use r2p_module::{leds, FlashParams, Outbound, OutboundCell};
+use r2p_msgs::Twist2D;
 use r2p_node::node::STARTING_HEARTBEATS;
 use r2p_node::Node;
 use rtcan::cycle::ClockState;
@@ -60,9 +67,9 @@ bind_interrupts!(struct Irqs {
     RNG => rng::InterruptHandler<embassy_stm32::peripherals::RNG>;
 });
 
-/// The gateway's node: up to 4 exports and 2 imports, 32 queued frames, 4 streams in
+/// The gateway's node: up to 4 exports and 7 imports, 32 queued frames, 4 streams in
 /// reassembly, messages up to 64 bytes (as a module's).
-type GatewayNode = Node<'static, 4, 2, 32, 4, 64>;
+type GatewayNode = Node<'static, 4, 7, 32, 4, 64>;
 type Device = Ethernet<'static, ETH, GenericPhy<Sma<'static, ETH_SMA>>>;
 
 /// In the flash map's parameter sectors (2 and 3, 16 KiB each: embassy-stm32's bank 1 region 1
@@ -82,6 +89,18 @@ struct Trial {
     state: StateFlash,
 }
 static ENDPOINTS: Storage = Storage::new();
+/// `/cmd_vel` from ROS 2, on the bus for whichever module runs the base controller.
+static CMD_VEL: OutboundCell<Twist2D, { pool_size(&[2], 1) }, 1, 2> = OutboundCell::new();
+/// The latest values the ROS 2 side publishes (the application's step writes them).
+static LATEST: cortex_m::interrupt::Mutex<Cell<Latest>> =
+    cortex_m::interrupt::Mutex::new(Cell::new(Latest {
+        odom: None,
+        battery: None,
+        proximity: None,
+        imu: None,
+        status: None,
+        mirrored: [r2p_app_gateway::Mirrored { bytes: [0; 16], len: 0, count: 0 }; 5],
+    }));
 static LINK: BusLink = BusLink::new();
 static NODE: StaticCell<GatewayNode> = StaticCell::new();
 
@@ -184,6 +203,85 @@ async fn client(stack: Stack<'static>, port: u16) -> ! {
     }
 }
 
+/// The gateway's ROS 2 node: a Zenoh client of the router at `router`, reconnecting every
+/// second while it is away. Samples are stamped with the time since boot (the gateway has no
+/// wall clock).
+#[embassy_executor::task]
+async fn zenoh(
+    stack: Stack<'static>,
+    router: ([u8; 4], u16),
+    domain: u32,
+    zid: [u8; 16],
+    cmd_vel: Outbound<'static, Twist2D, { pool_size(&[2], 1) }, 1, 2>,
+) -> ! {
+    let Some(mut bridge) = RosBridge::new(&RosConfig { domain, namespace: "", zid }) else {
+        loop {
+            Timer::after_secs(3600).await;
+        }
+    };
+    let mut rx = [0u8; 1024];
+    let mut tx = [0u8; 2048];
+    let mut out = [0u8; 6 * 1024];
+    let mut batch = [0u8; r2p_app_gateway::ros::RX_BATCH as usize];
+    let [a, b, c, d] = router.0;
+    let endpoint = (Ipv4Address::new(a, b, c, d), router.1);
+    loop {
+        stack.wait_config_up().await;
+        let mut socket = TcpSocket::new(stack, &mut rx, &mut tx);
+        socket.set_timeout(Some(Duration::from_secs(20)));
+        if socket.connect(endpoint).await.is_ok() {
+            let _ = ros_session(&mut bridge, &mut socket, &mut out, &mut batch, &cmd_vel).await;
+        }
+        socket.abort();
+        let _ = socket.flush().await;
+        Timer::after_secs(1).await;
+    }
+}
+
+/// One session on a connected socket, until the link or the session fails.
+async fn ros_session(
+    bridge: &mut RosBridge,
+    socket: &mut TcpSocket<'_>,
+    out: &mut [u8],
+    batch: &mut [u8],
+    cmd_vel: &Outbound<'static, Twist2D, { pool_size(&[2], 1) }, 1, 2>,
+) -> Result<(), ()> {
+    use embedded_io_async::Write;
+    let now = || Instant::now().as_micros();
+    let n = bridge.connect(now(), out).map_err(|_| ())?;
+    socket.write_all(&out[..n]).await.map_err(|_| ())?;
+    let (mut have, mut need) = (0usize, 2usize);
+    loop {
+        // Read what comes within 5 ms (a batch's 2-byte length, then the batch), then poll.
+        if let Either::First(r) =
+            select(socket.read(&mut batch[have..need]), Timer::after_millis(5)).await
+        {
+            match r {
+                Ok(0) | Err(_) => return Err(()),
+                Ok(k) => have += k,
+            }
+            if have == need && need == 2 {
+                need = 2 + usize::from(u16::from_le_bytes([batch[0], batch[1]]));
+                if need > batch.len() {
+                    return Err(()); // larger than the batch size agreed: not a router we know
+                }
+            }
+            if have == need && need > 2 {
+                let n = bridge.receive(now(), &batch[2..need], out).map_err(|_| ())?;
+                socket.write_all(&out[..n]).await.map_err(|_| ())?;
+                (have, need) = (0, 2);
+            }
+        }
+        let t = now();
+        if let Some(c) = bridge.take_cmd(t) {
+            let _ = cmd_vel.publisher.publish_with(|m| *m = c);
+        }
+        let latest = cortex_m::interrupt::free(|cs| LATEST.borrow(cs).get());
+        let n = bridge.poll(t, (t * 1000) as i64, &latest, out).map_err(|_| ())?;
+        socket.write_all(&out[..n]).await.map_err(|_| ())?;
+    }
+}
+
 /// The application: one step per millisecond; parameters persisted every 100 ms when changed.
 #[embassy_executor::task]
 async fn run(
@@ -201,6 +299,12 @@ async fn run(
         let net =
             NetState { link_up: stack.is_link_up(), ip, dhcp: FROM_DHCP.load(Ordering::Relaxed) };
         let c = app.step(now, &Sample { status: led_status(), net });
+        let (status, battery, imu) = (app.status(&net), app.battery(), app.imu());
+        let mirrored = app.mirrored();
+        cortex_m::interrupt::free(|cs| {
+            let l = LATEST.borrow(cs);
+            l.set(Latest { status: Some(status), battery, imu, mirrored, ..l.get() });
+        });
         let [status, bus, fault, link] = &mut leds;
         for (out, on, active_low) in [
             (status, c.led_status, board::LED_STATUS_ACTIVE_LOW),
@@ -307,6 +411,8 @@ async fn main(spawner: Spawner) {
     let config = r2p_app_gateway::node_config(uid);
     let mut node = GatewayNode::new(config, &PARAMS).unwrap();
     app.register(&mut node).unwrap();
+    let cmd_vel = CMD_VEL.build("cmd_vel", Twist2D::default(), Class::NonRealTime).unwrap();
+    node.export(cmd_vel.remote).unwrap();
     let running_after_us = u64::from(STARTING_HEARTBEATS) * u64::from(config.heartbeat_period_us);
     for irq in [interrupt::CAN1_RX0, interrupt::CAN1_RX1, interrupt::TIM2] {
         irq.set_priority(Priority::P1);
@@ -343,13 +449,17 @@ async fn main(spawner: Spawner) {
     } else {
         embassy_net::Config::default()
     };
-    static RESOURCES: StaticCell<StackResources<{ MAX_CLIENTS + 2 }>> = StaticCell::new();
+    // The socketcand clients, DHCP, and the Zenoh router.
+    static RESOURCES: StaticCell<StackResources<{ MAX_CLIENTS + 3 }>> = StaticCell::new();
     let (stack, runner) =
         embassy_net::new(device, stack_config, RESOURCES.init(StackResources::new()), seed);
     spawner.spawn(ethernet(runner)).unwrap();
     spawner.spawn(addressing(stack, net)).unwrap();
     for _ in 0..MAX_CLIENTS {
         spawner.spawn(client(stack, net.tcp_port)).unwrap();
+    }
+    if let Some(router) = net.zenoh {
+        spawner.spawn(zenoh(stack, router, net.ros_domain, zid_of(uid), cmd_vel)).unwrap();
     }
     spawner.spawn(run(app, leds, flash, trial, stack)).unwrap();
 }
