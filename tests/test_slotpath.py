@@ -16,7 +16,11 @@ def test_an_image_has_the_same_slot_path_as_itself_and_the_bus_task_is_in_it():
     assert changed == []
     bus = [b for b in slotpath.functions(str(MOTOR))["embassy_executor::raw::TaskStorage<F>::poll"]
            if slotpath.on_path("embassy_executor::raw::TaskStorage<F>::poll", [b])]
-    assert len(bus) == 1 and len(bus[0]) > 3000, "the bus task, slot_tick inlined"
+    assert len(bus) == 1, "the bus task"
+    # slot_tick inlined into the bus task (3 600 instructions) or on the path on its own
+    funcs = slotpath.functions(str(MOTOR))
+    tick = [k for k in funcs if k.endswith("::slot_tick")]
+    assert len(bus[0]) > 3000 or (tick and all(slotpath.on_path(k, funcs[k]) for k in tick)), tick
     assert same > 50 and insns > 3000 + 2000
 
 

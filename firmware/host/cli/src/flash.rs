@@ -605,12 +605,13 @@ mod tests {
         let d = scratch();
         let (exe, log) = fake_probe_rs(&d, ONE_PROBE, 0);
         let root = repo();
-        let mut a = args("proximity");
+        // The IMU's image is flashed alone (too large for a slot: no bootloader first).
+        let mut a = args("imu");
         a.probe_rs = Some(exe.clone());
         a.dry_run = true;
         let mut out = Vec::new();
         flash(&a, &root, None, &mut out).unwrap();
-        let image = root.join("firmware/images/proximity.elf");
+        let image = root.join("firmware/images/imu.elf");
         assert_eq!(
             String::from_utf8(out).unwrap(),
             format!(

@@ -226,9 +226,9 @@ mod tests {
         assert_eq!(
             nodes_table(&w),
             [
-                "NODE  NAME   UNIQUE ID                 STATE    UPTIME  TX_ERR  RX_ERR  DROPPED  LAST PANIC",
-                "1     psu    000000000000000000000001  running  7s      1       2       3        -",
-                "2     motor  000000000000000000000002  running  7s      1       2       3        -",
+                "NODE  NAME   UNIQUE ID                 STATE    UPTIME  TX_ERR  RX_ERR  DROPPED  FIRMWARE  LAST PANIC",
+                "1     psu    000000000000000000000001  running  7s      1       2       3        -         -",
+                "2     motor  000000000000000000000002  running  7s      1       2       3        -         -",
             ]
         );
         let topics = sorted_topics(&w, None);
@@ -241,6 +241,42 @@ mod tests {
             ]
         );
         assert!(sorted_topics(&w, Some(2)).is_empty(), "the CLI's own topics are left out");
+    }
+
+    #[test]
+    fn nodes_show_the_firmware_a_module_runs_and_forget_it_when_it_boots_again() {
+        let mut w = Watcher::new();
+        let firmware = |on_trial| Message::Firmware {
+            version: 0x0104_0002,
+            digest: [0x72, 0x92, 0x12, 0xe7, 0x69, 0xdf, 0x4a, 0xa1],
+            kind: "motor".try_into().unwrap(),
+            on_trial,
+        };
+        let mut rebooted = heartbeat("motor", 2);
+        if let Message::Heartbeat { uptime_s, .. } = &mut rebooted {
+            *uptime_s = 0;
+        }
+        let feed = |w: &mut Watcher, m: &Message, t: u64| {
+            for f in management(2, m, t) {
+                w.feed(&f);
+            }
+        };
+        feed(&mut w, &heartbeat("motor", 2), 1_000);
+        feed(&mut w, &firmware(true), 2_000);
+        assert!(nodes_table(&w)[1].contains("  1.4.2 729212e769df4aa1 (on trial)  "));
+        feed(&mut w, &firmware(false), 3_000);
+        feed(&mut w, &heartbeat("motor", 2), 4_000); // same boot: it stands
+        assert!(nodes_table(&w)[1].contains("  1.4.2 729212e769df4aa1  "), "{:?}", nodes_table(&w));
+        feed(&mut w, &rebooted, 5_000); // a new boot: not yet said
+        assert_eq!(w.node(2).unwrap().firmware, None);
+        let unsigned = Message::Firmware {
+            version: 0,
+            digest: [0; 8],
+            kind: "motor".try_into().unwrap(),
+            on_trial: false,
+        };
+        feed(&mut w, &unsigned, 6_000);
+        assert!(nodes_table(&w)[1].contains("  unsigned 0000000000000000  "));
     }
 
     #[test]
@@ -264,7 +300,7 @@ mod tests {
         feed(&mut w, &heartbeat("motor", 2), 3_000); // same boot: the report stands
         assert_eq!(
             nodes_table(&w)[1],
-            "2     motor  000000000000000000000002  running  7s      1       2       3        \
+            "2     motor  000000000000000000000002  running  7s      1       2       3        -         \
              panic, calls: 08002a1e 0800b3c2"
         );
         feed(&mut w, &rebooted, 4_000); // uptime back to 0: a new boot, no report yet
