@@ -48,6 +48,8 @@ const SILENT_FOR: Duration = Duration::from_secs(10);
 /// How long a module may take to come back running the new image and confirm it: the F103's
 /// slowest swap (8.2 s), its boot, and the trial's 15 s.
 const CONFIRM_WITHIN: Duration = Duration::from_secs(40);
+/// REBOOT again after this long while the module still runs its old boot.
+const REBOOT_AGAIN: Duration = Duration::from_millis(500);
 /// Listening for FIRMWARE messages (every 8 heartbeats, 0.8 s by default) before choosing.
 const HEAR_FIRMWARE: Duration = Duration::from_millis(1_800);
 
@@ -266,8 +268,7 @@ fn update_one(
             &format!("{label}: {new_version} swaps in at its next reset (--no-reboot)"),
         );
     }
-    s.host().expect("joined").request_reboot(target)?;
-    let running = wait_confirmed(s, uid, &t.digest, &label)?;
+    let running = wait_confirmed(s, target, uid, &t.digest, &label)?;
     emit(
         out,
         &format!(
@@ -281,8 +282,15 @@ fn update_one(
 
 /// Waits until the module with unique ID `uid` runs the image of `digest` and has confirmed it;
 /// an error if it comes back with another image (rolled back) or not at all.
+///
+/// It sends REBOOT first, and again every [`REBOOT_AGAIN`] while the module's old boot still
+/// heartbeats: a single frame is lost if it arrives while the module's flash stalls its CPU (its
+/// receive FIFOs overflow), and REBOOT is not answered. Once the module falls silent (its
+/// bootloader swapping) or boots again, no more are sent: one arriving during the new image's
+/// trial would reset it before it confirms, and roll it back.
 fn wait_confirmed(
     s: &mut Session,
+    target: NodeId,
     uid: Option<[u8; 12]>,
     digest: &[u8; 8],
     label: &str,
@@ -291,9 +299,19 @@ fn wait_confirmed(
     let mut seen_new = false;
     let mut rebooted = false;
     let mut last_uptime = u32::MAX;
+    let (mut heartbeats, mut heartbeat_at) = (0u64, Instant::now());
+    let mut asked_at: Option<Instant> = None;
     while start.elapsed() < CONFIRM_WITHIN {
+        let alive = heartbeat_at.elapsed() < Duration::from_millis(300);
+        if !rebooted && alive && asked_at.is_none_or(|t| t.elapsed() >= REBOOT_AGAIN) {
+            s.host().expect("joined").request_reboot(target)?;
+            asked_at = Some(Instant::now());
+        }
         s.step(Duration::from_millis(5))?;
         let Some(n) = s.watcher().nodes().find(|n| Some(n.uid) == uid) else { continue };
+        if n.heartbeats != heartbeats {
+            (heartbeats, heartbeat_at) = (n.heartbeats, Instant::now());
+        }
         // A new boot: its uptime went back (the watcher forgets the old boot's FIRMWARE then).
         if n.uptime_s < last_uptime && last_uptime != u32::MAX {
             rebooted = true;
