@@ -67,6 +67,11 @@ impl<F: NorFlash, S: NorFlash> DfuSink<F, S> {
         self.inner.lock(|i| i.borrow().marked)
     }
 
+    /// Runs `f` on the bootloader's state partition (tools and tests read it).
+    pub fn with_state<R>(&self, f: impl FnOnce(&mut S) -> R) -> R {
+        self.inner.lock(|i| f(&mut i.borrow_mut().state))
+    }
+
     /// Messages dropped because they were not a sender's transfer message.
     pub fn malformed(&self) -> u32 {
         self.inner.lock(|i| i.borrow().malformed)
