@@ -156,11 +156,12 @@ fn a_motor_module_takes_an_image_while_the_robot_drives_swaps_it_in_and_confirms
     println!(
         "update of {} B to motor1 while driving: {secs:.1} s virtual ({:.1} KiB/s), {} timeouts, \
          {} goes back; {update_frames} of {frames} frames on the bus were the update's; \
-         motor1's own HRT slots missed while its flash stalled it: {own}",
+         motor1's own HRT streams: {} frames sent, {own} slots missed",
         new.len(),
         new.len() as f64 / 1024.0 / secs,
         s.timeouts,
-        s.fast_goes_back
+        s.fast_goes_back,
+        r.sim.node(m).stats().hrt_sent
     );
     drop(s);
     assert_eq!(boot_state(r.boards[m].flash), Some(State::Swap), "marked for the swap");
