@@ -193,3 +193,80 @@ fn messages_round_trip_and_malformed_ones_are_refused() {
     assert!(Msg::decode(&[0x52, 3, 0, 0, 0, 0, 0]).is_err(), "a block without data");
     assert!(Msg::decode(&[0x99]).is_err());
 }
+
+/// Sends `image` to a fresh receiver in blocks of the sizes `sizes` cycles through (any sender
+/// may cut blocks as it likes, up to BLOCK_MAX), ending with `End`.
+fn receive_in_blocks(image: &[u8], sizes: &[usize]) -> (Status, Dfu, Status) {
+    let mut rx = Receiver::new(MAP.active.size);
+    let mut dfu = Dfu::new();
+    rx.handle(&Msg::Begin { id: 5, len: image.len() as u32 }, &mut dfu, verify);
+    let (mut at, mut i) = (0, 0);
+    let mut before_end = rx.status();
+    while at < image.len() {
+        let n = sizes[i % sizes.len()].min(image.len() - at);
+        let block = Msg::Block { id: 5, offset: at as u32, data: &image[at..at + n] };
+        before_end = rx.handle(&block, &mut dfu, verify);
+        at += n;
+        i += 1;
+    }
+    let end = rx.handle(&Msg::End { id: 5 }, &mut dfu, verify);
+    (before_end, dfu, end)
+}
+
+#[test]
+fn blocks_of_any_size_land_where_they_belong() {
+    // Odd sizes start blocks inside a write unit and leave a partial unit pending between them.
+    let image = signed(3_001);
+    let (_, dfu, end) = receive_in_blocks(&image, &[47, 13, 1, 48, 5]);
+    assert_eq!(end.state, State::Verified);
+    let (code, trailer) = image.split_at(image.len() - TRAILER_LEN);
+    assert_eq!(&dfu.bytes()[..code.len()], code, "the image from the slot's start");
+    let t = MAP.active.size as usize - TRAILER_LEN;
+    assert_eq!(&dfu.bytes()[t..t + TRAILER_LEN], trailer, "the trailer in the slot's last bytes");
+    assert!(dfu.bytes()[code.len()..t].iter().all(|&b| b == 0xFF), "nothing written between");
+    // Each page is erased once: the image's three pages and the trailer's.
+    assert_eq!(dfu.erases(), 4);
+}
+
+#[test]
+fn end_before_every_byte_arrived_changes_nothing() {
+    let image = signed(2_000);
+    let mut rx = Receiver::new(MAP.active.size);
+    let mut dfu = Dfu::new();
+    rx.handle(&Msg::Begin { id: 6, len: image.len() as u32 }, &mut dfu, verify);
+    let first = Msg::Block { id: 6, offset: 0, data: &image[..BLOCK_MAX] };
+    rx.handle(&first, &mut dfu, verify);
+    let s = rx.handle(&Msg::End { id: 6 }, &mut dfu, verify);
+    assert_eq!((s.state, s.received), (State::Receiving, BLOCK_MAX as u32), "still receiving");
+}
+
+#[test]
+fn begin_checks_the_length_at_its_bounds() {
+    let slot = MAP.active.size;
+    for (len, want) in [
+        (TRAILER_LEN as u32 - 1, State::Refused(Refusal::NoTrailer)),
+        (TRAILER_LEN as u32, State::Receiving),
+        (slot, State::Receiving),
+        (slot + 1, State::Refused(Refusal::TooLarge)),
+    ] {
+        let mut rx = Receiver::new(slot);
+        let s = rx.handle(&Msg::Begin { id: 1, len }, &mut Dfu::new(), verify);
+        assert_eq!(s.state, want, "len {len}");
+    }
+}
+
+#[test]
+fn blocks_of_another_transfer_or_after_a_refusal_are_not_taken() {
+    let image = signed(1_000);
+    let mut rx = Receiver::new(MAP.active.size);
+    let mut dfu = Dfu::new();
+    rx.handle(&Msg::Begin { id: 7, len: image.len() as u32 }, &mut dfu, verify);
+    let stale = Msg::Block { id: 6, offset: 0, data: &image[..BLOCK_MAX] };
+    assert_eq!(rx.handle(&stale, &mut dfu, verify).received, 0, "another transfer's block");
+    assert_eq!(dfu.erases(), 0, "and nothing written");
+    let mut rx = Receiver::new(MAP.active.size);
+    rx.handle(&Msg::Begin { id: 8, len: 10 }, &mut dfu, verify); // refused: no trailer
+    let block = Msg::Block { id: 8, offset: 0, data: &image[..10] };
+    let s = rx.handle(&block, &mut dfu, verify);
+    assert_eq!((s.state, s.received), (State::Refused(Refusal::NoTrailer), 0));
+}
