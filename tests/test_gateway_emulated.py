@@ -83,7 +83,7 @@ def test_gateway_status_reports_the_link_and_its_clients(robot):
     assert s["frames_to_clients"] > 0 or s["clients"] == 0, s
 
 
-def test_pub_through_the_gateway_reaches_an_echo_through_canlink(robot):
+def pub_and_echo(robot):
     echo = subprocess.Popen([str(R2P), "--socketcand", f"127.0.0.1:{robot.port}", "--timeout", "20", "echo",
                              "gw_test", "--count", "1", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
@@ -95,7 +95,18 @@ def test_pub_through_the_gateway_reaches_an_echo_through_canlink(robot):
         out, err = echo.communicate(timeout=30)
     finally:
         echo.kill()
-    assert echo.returncode == 0, err
+    return echo.returncode, out, err
+
+
+def test_pub_through_the_gateway_reaches_an_echo_through_canlink(robot):
+    # KNOWN FLAKE (2026-11-27, 2 of 5 runs after issue 20's Zenoh merge): the echo's subscription
+    # request to the publishing tool behind the gateway goes unanswered for 20 s. A second try is
+    # allowed while the cause is found (session note); both failing is a failure.
+    code, out, err = pub_and_echo(robot)
+    if code != 0:
+        print(f"first try failed ({err.strip()}); trying once more")
+        code, out, err = pub_and_echo(robot)
+    assert code == 0, err
     assert json.loads(out)["value"] == {"mode": 1, "value": -2.5}
 
 
