@@ -102,7 +102,7 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Flash(args) => flash::run(&args, out),
         Command::Keygen(args) => keys::keygen(&args, out),
         Command::Sign(args) => keys::sign_image(&args, out),
-        Command::Update(args) => update::run(&args, bus, Session::new(open_link(bus)?), out),
+        Command::Update(args) => update::run(&args, bus, || Ok(Session::new(open_link(bus)?)), out),
     }
 }
 
@@ -121,6 +121,23 @@ mod tests {
         for sub in cmd.get_subcommands_mut() {
             assert!(sub.get_about().is_some(), "{} has no help", sub.get_name());
         }
+    }
+
+    #[test]
+    fn an_update_names_a_missing_image_before_it_looks_for_a_bus() {
+        // Port 9 on loopback: nothing listens, so opening the bus would fail if it came first.
+        let cli = Cli::try_parse_from([
+            "r2p",
+            "update",
+            "motor1",
+            "/nonexistent/motor.signed.bin",
+            "--socketcand",
+            "127.0.0.1:9",
+        ])
+        .unwrap();
+        let e = run(cli, &mut Vec::new()).err().unwrap().to_string();
+        assert!(e.starts_with("/nonexistent/motor.signed.bin: "), "{e}");
+        assert!(e.contains("r2p sign"), "{e}");
     }
 
     #[test]

@@ -95,7 +95,7 @@ fn hex(b: &[u8]) -> String {
 pub fn run(
     args: &UpdateArgs,
     bus: &BusArgs,
-    mut s: Session,
+    connect: impl FnOnce() -> Result<Session, CliError>,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
     let (node, image) = match (args.all, args.targets.as_slice()) {
@@ -110,7 +110,10 @@ pub fn run(
             ))
         }
     };
+    // The image first: a missing or refused file is the error to report, whether or not a bus
+    // is reachable.
     let image = read_image(image)?;
+    let mut s = connect()?;
     s.join()?;
     let targets = match node {
         Some(n) => vec![resolve(n, bus, &mut s)?],
