@@ -54,8 +54,11 @@ struct Io {
 
 /// The application: one step per millisecond in thread mode (a 2-byte status read, and a
 /// 15-byte burst when the gyro has a new sample).
-#[embassy_executor::task]
-async fn run(mut app: App<'static>, mut io: Io, flash: ModuleFlash) {
+///
+/// Awaited by `main` rather than spawned as a task of its own: a spawn can fail, and the
+/// drop glue of the arguments it would then drop (the board's I/O, never dropped otherwise)
+/// cost flash; `main`'s task holds this future instead.
+async fn run(mut app: App<'static>, mut io: Io, flash: ModuleFlash) -> ! {
     let mut ms = EveryMs::new(&PARAMS, flash);
     loop {
         let sample = sensor::poll(&mut io.imu, io.initialised, module_core::led_status());
@@ -66,7 +69,7 @@ async fn run(mut app: App<'static>, mut io: Io, flash: ModuleFlash) {
 }
 
 #[embassy_executor::main]
-async fn main(spawner: Spawner) {
+async fn main(_spawner: Spawner) {
     let p = module_core::init::<{ board::HSE_HZ }, { board::SYSCLK_HZ }>();
     let pins = board::take_pins!(p);
 
@@ -97,5 +100,5 @@ async fn main(spawner: Spawner) {
     let config = r2p_app_imu::node_config(embassy_stm32::uid::uid(), &PARAMS);
     module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
 
-    spawner.spawn(run(app, Io { imu, initialised, leds }, flash)).unwrap();
+    run(app, Io { imu, initialised, leds }, flash).await
 }

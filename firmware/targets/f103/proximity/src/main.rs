@@ -14,6 +14,7 @@ use embassy_stm32::peripherals::ADC1;
 use module_core::{analog_input, asserted, drive, AnalogInputs, EveryMs, Leds, ModuleFlash};
 use r2p_app_proximity::{params, App, Sample, Storage};
 use r2p_module::FlashParams;
+use static_cell::StaticCell;
 
 mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
@@ -26,6 +27,10 @@ module_core::bind_can_interrupts!(struct Irqs {
 static PARAMS: FlashParams<{ params::COUNT }> =
     FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
 static ENDPOINTS: Storage = Storage::new();
+/// The board's I/O, in a static: the task takes a reference, because arguments it took by
+/// value would be dropped if its spawn failed, and that drop glue (never run) cost flash
+/// (as the motor's `CONTROL_IO`).
+static IO: StaticCell<Io> = StaticCell::new();
 
 /// ADC sample time: 239.5 cycles at 12 MHz (20 µs), for the inputs' 100 kΩ pull-down and
 /// whatever a sensor's output impedance adds.
@@ -42,7 +47,7 @@ struct Io {
 
 /// The application: one step per millisecond in thread mode (four conversions, ~90 µs).
 #[embassy_executor::task]
-async fn run(mut app: App<'static>, mut io: Io, flash: ModuleFlash) {
+async fn run(mut app: App<'static>, io: &'static mut Io, flash: ModuleFlash) {
     let mut ms = EveryMs::new(&PARAMS, flash);
     loop {
         let sample = Sample {
@@ -88,5 +93,5 @@ async fn main(spawner: Spawner) {
     let config = r2p_app_proximity::node_config(embassy_stm32::uid::uid(), &PARAMS);
     module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
 
-    spawner.spawn(run(app, io, flash)).unwrap();
+    spawner.spawn(run(app, IO.init(io), flash)).unwrap();
 }

@@ -25,8 +25,11 @@ static PARAMS: FlashParams<{ params::COUNT }> =
 static ENDPOINTS: Storage = Storage::new();
 
 /// The application: one step per millisecond in thread mode.
-#[embassy_executor::task]
-async fn run(mut app: App<'static>, mut leds: Leds, flash: ModuleFlash) {
+///
+/// Awaited by `main` rather than spawned as a task of its own: a spawn can fail, and the
+/// drop glue of the arguments it would then drop (the board's I/O, never dropped otherwise)
+/// cost flash; `main`'s task holds this future instead.
+async fn run(mut app: App<'static>, mut leds: Leds, flash: ModuleFlash) -> ! {
     let mut ms = EveryMs::new(&PARAMS, flash);
     loop {
         let c = app.step(ms.now(), &Sample { status: module_core::led_status() });
@@ -36,7 +39,7 @@ async fn run(mut app: App<'static>, mut leds: Leds, flash: ModuleFlash) {
 }
 
 #[embassy_executor::main]
-async fn main(spawner: Spawner) {
+async fn main(_spawner: Spawner) {
     let p = module_core::init::<{ board::HSE_HZ }, { board::SYSCLK_HZ }>();
     let pins = board::take_pins!(p);
     // Outputs first: the LEDs take their boot levels at once.
@@ -49,5 +52,5 @@ async fn main(spawner: Spawner) {
     let config = r2p_app_template::node_config(embassy_stm32::uid::uid());
     module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
 
-    spawner.spawn(run(app, leds, flash)).unwrap();
+    run(app, leds, flash).await
 }
