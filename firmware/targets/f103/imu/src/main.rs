@@ -91,7 +91,7 @@ async fn main(_spawner: Spawner) {
     let mut imu = Lsm6dso::new_spi(device);
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
-    module_core::enable_can(&mut can).await;
+    module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
     let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
     let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
     Timer::after_millis(SENSOR_BOOT_MS).await;

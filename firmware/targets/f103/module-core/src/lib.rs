@@ -11,7 +11,7 @@
 //! let pins = board::take_pins!(p);
 //! let leds = module_core::leds!(board, pins); // outputs first
 //! let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
-//! module_core::enable_can(&mut can).await;
+//! module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
 //! let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
 //! let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
 //! let config = node_config(uid(), &PARAMS);
@@ -75,6 +75,7 @@ use defmt_rtt as _;
 defmt::timestamp!("{=u64:us}", Instant::now().as_micros());
 
 mod analog;
+pub mod can_timing;
 mod panic;
 pub mod slot_timer;
 #[path = "../../../shared/trial.rs"]
@@ -166,12 +167,16 @@ pub fn init<const HSE_HZ: u32, const SYSCLK_HZ: u32>() -> Peripherals {
 /// The bus's bit rate (docs/bus.md).
 pub const BIT_RATE: u32 = 1_000_000;
 
-/// Sets the bus controller to [`BIT_RATE`]; the future completes when it has joined the bus.
-/// Await it before building the application and its node, so that neither lives across this
-/// await (and in `main`'s future). Not an `async fn`: `main`'s future holds the controller
-/// once, not a second time in this function's.
-pub fn enable_can<'a>(can: &'a mut Can<'static>) -> impl Future<Output = ()> + 'a {
-    can.modify_config().set_bitrate(BIT_RATE);
+/// Sets the bus controller to [`BIT_RATE`] from the board's `SYSCLK_HZ` (APB1, the bxCAN's
+/// clock, runs at half: [`clocks`]), its timing computed at compile time ([`can_timing`]); the
+/// future completes when it has joined the bus. Await it before building the application and
+/// its node, so that neither lives across this await (and in `main`'s future). Not an
+/// `async fn`: `main`'s future holds the controller once, not a second time in this function's.
+pub fn enable_can<'a, const SYSCLK_HZ: u32>(
+    can: &'a mut Can<'static>,
+) -> impl Future<Output = ()> + 'a {
+    let timing = const { can_timing::bit_timing(SYSCLK_HZ / 2, BIT_RATE) };
+    can.modify_config().set_bit_timing(timing);
     can.enable()
 }
 

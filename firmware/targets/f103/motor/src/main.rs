@@ -112,7 +112,7 @@ async fn main(_spawner: Spawner) {
         Sensors::new(p.ADC1, pins.motor_current, pins.vmot_sense, p.TIM3, pins.enc_a, pins.enc_b);
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
-    module_core::enable_can(&mut can).await;
+    module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
     let mut flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
     let names = Names::from_params(&PARAMS);
     let ep = ENDPOINTS.build(names);
