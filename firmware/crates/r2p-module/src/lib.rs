@@ -29,6 +29,7 @@ pub mod dfu_sink;
 pub mod endpoints;
 pub mod filters;
 pub mod flash_params;
+pub mod float_compare;
 pub mod leds;
 pub mod mem_routines;
 pub mod param_doc;
