@@ -72,11 +72,11 @@ impl Status {
 #[derive(Clone, Copy, Debug, Default)]
 struct Smoothed {
     filter: Option<LowPass>,
-    tau_us: u64,
+    tau_us: u32,
 }
 
 impl Smoothed {
-    fn push(&mut self, x: f32, tau_us: u64) -> f32 {
+    fn push(&mut self, x: f32, tau_us: u32) -> f32 {
         if tau_us == 0 {
             self.filter = None;
             return x;
@@ -137,7 +137,7 @@ impl Channel {
         code: u16,
         kind: u32,
         powered: bool,
-        tau_us: u64,
+        tau_us: u32,
     ) -> Status {
         let Some(curve) = curve(kind).filter(|_| powered) else {
             *self = Self { kind, ..Self::default() };

@@ -75,8 +75,9 @@ pub struct Config {
     pub period_us: u64,
     /// Sensor type per channel.
     pub sensors: [u32; CHANNELS],
-    /// Low-pass time constant, µs (0: off).
-    pub filter_tau_us: u64,
+    /// Low-pass time constant, µs (0: off). A `u32` (the parameter is at most 1 s): as an `f32`
+    /// it needs no 64-bit conversion helper (106 B of flash).
+    pub filter_tau_us: u32,
     /// Obstacle threshold, m.
     pub obstacle_m: f32,
     /// Obstacle hysteresis, m.
@@ -93,7 +94,7 @@ impl Config {
         Self {
             period_us: 1_000_000 / u64::from(u(RATE_HZ).max(1)),
             sensors: core::array::from_fn(|c| u(SENSOR0 + c as u16)),
-            filter_tau_us: u64::from(u(FILTER_TAU_MS)) * 1000,
+            filter_tau_us: u(FILTER_TAU_MS).saturating_mul(1000),
             obstacle_m: t.f32(OBSTACLE_M),
             obstacle_hysteresis_m: t.f32(OBSTACLE_HYSTERESIS_M),
             sensor_power: t.bool(SENSOR_POWER),

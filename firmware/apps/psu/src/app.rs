@@ -195,11 +195,11 @@ pub const STEP_S: f32 = 0.001;
 #[derive(Default)]
 struct Smoothed {
     filter: Option<LowPass>,
-    tau_us: u64,
+    tau_us: u32,
 }
 
 impl Smoothed {
-    fn push(&mut self, x: f32, tau_us: u64) -> f32 {
+    fn push(&mut self, x: f32, tau_us: u32) -> f32 {
         if self.filter.is_none() || self.tau_us != tau_us {
             let cutoff_hz = 1e6 / (2.0 * core::f32::consts::PI * tau_us.max(1) as f32);
             let mut f = LowPass::new(cutoff_hz, STEP_S);

@@ -99,8 +99,9 @@ pub struct Config {
     pub capacity_ah: f32,
     /// Time between two `battery` messages, µs.
     pub battery_period_us: u64,
-    /// Low-pass time constant, µs.
-    pub filter_tau_us: u64,
+    /// Low-pass time constant, µs. A `u32` (the parameter is at most 60 s): as an `f32` it needs
+    /// no 64-bit conversion helper (106 B of flash).
+    pub filter_tau_us: u32,
     /// Over-current level, A.
     pub oc_threshold_a: f32,
     /// Over-current time, µs.
@@ -126,7 +127,7 @@ impl Config {
         Self {
             capacity_ah: f(CAPACITY_AH),
             battery_period_us: 1_000_000 / u(BATTERY_RATE_HZ).max(1),
-            filter_tau_us: u(FILTER_TAU_MS) * 1000,
+            filter_tau_us: t.u32(FILTER_TAU_MS).saturating_mul(1000),
             oc_threshold_a: f(OC_THRESHOLD_A),
             oc_time_us: u(OC_TIME_MS) * 1000,
             uv_threshold_v: f(UV_THRESHOLD_V),
