@@ -13,6 +13,9 @@ measured in the same run (never pass/fail on timing: that is what tests are not 
    again for traffic seeds 1–16, misses summed, to show whether seed 1's result is typical.
 5. ROS 2 over Zenoh: /cmd_vel → wheel setpoints on the emulated Triskar2's bus, p50/p99, against
    a Zenoh put's own round trip through the same router (bench_ros2.py, docs/ros2.md).
+6. Updates over the bus: the motor image's transfer at 10 % and 60 % background load against
+   the robot's own traffic, its share of the bus, and the bootloaders' size (bench_update.py,
+   docs/flashing.md).
 """
 from __future__ import annotations
 
@@ -24,7 +27,7 @@ import sys
 
 from pathlib import Path
 
-from . import ROOT, bench_ros2, firmware, qemu
+from . import ROOT, bench_ros2, bench_update, firmware, qemu
 
 PLOT = ROOT / "docs" / "img" / "bench-pubsub-cortex-m3.png"
 # The paper's figure for the original middleware on a 72 MHz Cortex-M3, one subscriber:
@@ -443,6 +446,11 @@ def main() -> int:
         bench_ros2.report(bench_ros2.run())
     except (RuntimeError, subprocess.CalledProcessError, ImportError) as e:
         print(f"bench: ROS 2 over Zenoh: {e}", file=sys.stderr)
+        return 1
+    try:
+        bench_update.report(bench_update.run())
+    except (RuntimeError, subprocess.CalledProcessError) as e:
+        print(f"bench: updates over the bus: {e}", file=sys.stderr)
         return 1
     return 0
 

@@ -10,7 +10,11 @@
 //!   other clients and is looped back to the node (a bxCAN does not receive its own frames:
 //!   without this, `r2p param gateway …` through the gateway would never reach it). A client
 //!   frame that loses arbitration or is withdrawn (the node's slot windows are one-shot) is
-//!   tried again, [`CLIENT_TRIES`] times in all;
+//!   tried again until it goes out, for up to [`CLIENT_PATIENCE_US`]: a host's controller
+//!   would keep trying it, and the lowest-priority NRT frame of a tool loses to every frame of
+//!   a burst after the sync (a fixed count of tries lost fragments of the tools' messages, and
+//!   so whole advertisements and subscription answers). One that ends in an error frame is
+//!   tried [`CLIENT_TRIES`] times in all;
 //! - the acceptance filters stay open: the clients see every frame, the node filters again in
 //!   software as RTCAN always does.
 //!
@@ -18,15 +22,20 @@
 
 use heapless::Deque;
 use rtcan::controller::{
-    BusState, CanController, ErrorCounters, Filter, Received, TxError, TxMode, TxResult,
+    BusState, CanController, ErrorCounters, Filter, Received, TxError, TxMode, TxOutcome, TxResult,
 };
 use rtcan::{Frame, Micros};
 
 use crate::link::{BusLink, LinkFrame, LinkStats, Source, BUS};
 use r2p_socketcand::CanFrame;
 
-/// Attempts at sending one client frame before it is counted lost.
+/// Attempts at sending one client frame that end in an error frame before it is counted lost.
 pub const CLIENT_TRIES: u8 = 3;
+/// How long a client frame that keeps losing arbitration, or being withdrawn for the node's
+/// slots, is tried again (from its first try) before it is counted lost: a busy bus delays an
+/// NRT frame by milliseconds; a frame still waiting after this long waits for a bus that is
+/// full, and the tools re-send their requests (every 300 ms) rather than wait for it.
+pub const CLIENT_PATIENCE_US: Micros = 100_000;
 /// Frames loaded and not yet reported, at most (bxCAN has 3 mailboxes; results untaken for
 /// longer are dropped by the controller, and so here).
 const IN_FLIGHT: usize = 6;
@@ -39,8 +48,11 @@ pub const STALE_US: Micros = 100_000;
 struct Loaded {
     frame: Frame,
     owner: Option<Source>,
+    /// Tries that ended in an error frame.
     tries: u8,
+    /// When it was loaded last, and first (a client frame's patience runs from its first try).
     at: Micros,
+    first: Micros,
 }
 
 /// The state the tap keeps between the node's calls. See the module documentation.
@@ -107,17 +119,27 @@ impl<C: CanController + ?Sized> Tapped<'_, '_, C> {
             let found = tap.in_flight.iter().position(|l| l.frame.id() == r.id);
             let loaded = found.and_then(|i| remove(&mut tap.in_flight, i));
             match loaded {
-                Some(Loaded { frame, owner: Some(client), tries, .. }) => {
-                    if r.sent() {
-                        let at = r.start_of_frame.unwrap_or(self.now);
-                        tap.link.publish(to_link(&frame, at, client));
-                        if tap.loopback.is_full() {
-                            tap.loopback.pop_front();
-                        }
-                        let _ = tap.loopback.push_back(Received { frame, at });
-                        LinkStats::add(&tap.link.stats.frames_from_clients, 1);
-                    } else if tries < CLIENT_TRIES {
-                        tap.retry = Some(Loaded { frame, owner: Some(client), tries, at: 0 });
+                Some(Loaded { frame, owner: Some(client), .. }) if r.sent() => {
+                    let at = r.start_of_frame.unwrap_or(self.now);
+                    tap.link.publish(to_link(&frame, at, client));
+                    if tap.loopback.is_full() {
+                        tap.loopback.pop_front();
+                    }
+                    let _ = tap.loopback.push_back(Received { frame, at });
+                    LinkStats::add(&tap.link.stats.frames_from_clients, 1);
+                }
+                Some(Loaded { frame, owner: Some(client), tries, first, .. }) => {
+                    let withdrawn =
+                        matches!(r.outcome, TxOutcome::LostArbitration | TxOutcome::Aborted);
+                    let errors = tries + u8::from(!withdrawn);
+                    let again = if withdrawn {
+                        self.now.saturating_sub(first) < CLIENT_PATIENCE_US
+                    } else {
+                        errors < CLIENT_TRIES
+                    };
+                    if again {
+                        let owner = Some(client);
+                        tap.retry = Some(Loaded { frame, owner, tries: errors, at: 0, first });
                     } else {
                         LinkStats::add(&tap.link.stats.lost, 1);
                     }
@@ -150,7 +172,9 @@ impl<C: CanController + ?Sized> Tapped<'_, '_, C> {
         let next = self.tap.retry.take().or_else(|| {
             let f = self.tap.link.next_for_bus()?;
             match Frame::from_raw(f.frame.id(), f.frame.data()) {
-                Ok(frame) => Some(Loaded { frame, owner: Some(f.from), tries: 0, at: 0 }),
+                Ok(frame) => {
+                    Some(Loaded { frame, owner: Some(f.from), tries: 0, at: 0, first: self.now })
+                }
                 Err(_) => {
                     // `BusLink::send` lets extended frames only: cannot happen; count it.
                     LinkStats::add(&self.stats().lost, 1);
@@ -161,7 +185,6 @@ impl<C: CanController + ?Sized> Tapped<'_, '_, C> {
         let Some(mut l) = next else { return };
         match self.can.try_transmit(&l.frame) {
             Ok(()) => {
-                l.tries += 1;
                 l.at = self.now;
                 let _ = self.tap.in_flight.push_back(l);
             }
@@ -195,7 +218,8 @@ impl<C: CanController + ?Sized> CanController for Tapped<'_, '_, C> {
             tap.in_flight.pop_front();
         }
         let at = self.now;
-        let _ = tap.in_flight.push_back(Loaded { frame: *frame, owner: None, tries: 1, at });
+        let _ =
+            tap.in_flight.push_back(Loaded { frame: *frame, owner: None, tries: 0, at, first: at });
         Ok(())
     }
 

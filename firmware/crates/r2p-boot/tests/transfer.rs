@@ -270,3 +270,21 @@ fn blocks_of_another_transfer_or_after_a_refusal_are_not_taken() {
     let s = rx.handle(&block, &mut dfu, verify);
     assert_eq!((s.state, s.received), (State::Refused(Refusal::NoTrailer), 0));
 }
+
+#[test]
+fn progress_is_what_the_receiver_acknowledged_of_the_whole() {
+    // What `r2p update`'s progress bar and time estimate show.
+    let image = signed(500);
+    let len = image.len() as u32;
+    let mut tx = Sender::new(&image, 7, 1, 50);
+    assert_eq!(tx.progress(), (0, len));
+    assert!(matches!(tx.poll(0), Some(Msg::Begin { .. })));
+    tx.on_status(&Status { id: 7, state: State::Receiving, received: 0 }, 1);
+    assert!(matches!(tx.poll(1), Some(Msg::Block { offset: 0, .. })));
+    assert_eq!(tx.progress(), (0, len), "sent is not acknowledged");
+    assert!(tx.poll(1).is_none(), "one block in flight: the next waits for its answer");
+    let one = BLOCK_MAX as u32;
+    tx.on_status(&Status { id: 7, state: State::Receiving, received: one }, 2);
+    assert_eq!(tx.progress(), (one, len));
+    assert!(matches!(tx.poll(2), Some(Msg::Block { offset, .. }) if offset == one));
+}

@@ -33,8 +33,9 @@ pub struct UpdateArgs {
     /// Update every module whose kind (as its FIRMWARE message says) is the image's
     #[arg(long)]
     pub all: bool,
-    /// Blocks (48 bytes each) in flight at once
-    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=64))]
+    /// Blocks (48 bytes each) in flight at once: one suits modules that write each block as it
+    /// arrives (every F103 module: docs/flashing.md); more only for a receiver that buffers
+    #[arg(long, default_value_t = r2p_boot::sender::DEFAULT_WINDOW, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub window: u32,
     /// Leave the image marked in the module's update slot: it swaps in at the module's next reset
     #[arg(long)]

@@ -26,6 +26,7 @@ pub mod gateway_zenoh;
 pub mod periph;
 pub mod robot;
 pub mod serve;
+mod stalled;
 
 use std::io::{self, Write};
 use std::time::Duration;
@@ -35,6 +36,7 @@ use r2p_canlink::{CanFrame, Stamped};
 use r2p_node::Node;
 use r2p_vbus::{Bus, Config};
 use rtcan::{CanController, Micros};
+use stalled::StalledPort;
 
 /// Nanoseconds per microsecond.
 const NS_PER_US: u64 = 1_000;
@@ -158,12 +160,15 @@ struct Board<'a, N> {
 impl<N> Board<'_, N> {
     /// Holds the firmware for the CPU time its flash just took.
     fn hold(&mut self, t: u64) {
-        if let Some(stall) = &mut self.stall {
-            let ns = stall();
-            if ns > 0 {
-                self.wake_ns = self.wake_ns.max(t + ns);
-                self.app_ns = self.app_ns.max(t + ns);
-            }
+        let ns = self.stall.as_mut().map_or(0, |stall| stall());
+        self.hold_for(t, ns);
+    }
+
+    /// Holds the firmware for `ns` of stalls from `t` on.
+    fn hold_for(&mut self, t: u64, ns: u64) {
+        if ns > 0 {
+            self.wake_ns = self.wake_ns.max(t + ns);
+            self.app_ns = self.app_ns.max(t + ns);
         }
     }
 }
@@ -374,20 +379,22 @@ impl<'a, N: Runtime> Sim<'a, N> {
                     continue;
                 }
                 self.stats.ticks += 1;
-                let (node, port) = (&mut b.node, &mut b.port);
+                let node = &mut b.node;
+                let mut port = StalledPort::new(&mut b.port, b.stall.as_mut());
                 let mut call = |c: &mut dyn CanController| match mode {
                     Mode::Tdma => node.slot_tick(now_us, c),
                     Mode::Poll { .. } => node.poll(now_us, c),
                 };
                 match &mut b.tap {
-                    Some(tap) => tap.run(now_us, port, &mut call),
-                    None => call(port),
+                    Some(tap) => tap.run(now_us, &mut port, &mut call),
+                    None => call(&mut port),
                 }
+                let stalled_ns = port.stalled_ns();
                 b.wake_ns = match mode {
                     Mode::Tdma => (b.node.next_slot_at(now_us) * NS_PER_US).max(t + 1),
                     Mode::Poll { period_us } => t + period_us.max(1) * NS_PER_US,
                 };
-                b.hold(t);
+                b.hold_for(t, stalled_ns);
             }
             if let Some(resetter) = &mut self.resetter {
                 for (i, b) in self.boards.iter_mut().enumerate() {

@@ -147,8 +147,14 @@ impl EmuRobot {
     /// Builds `robot`: a bus with one port per module plus a spare (for tools), the world,
     /// and every board flashed (its image, its parameters) and booted at time 0.
     pub fn build(robot: Robot) -> Result<Self, String> {
+        Self::build_with_spares(robot, 1)
+    }
+
+    /// [`EmuRobot::build`] with `spares` spare ports (at least one), from
+    /// [`EmuRobot::spare_port`] on: for benches that add nodes of their own (a load, a tool).
+    pub fn build_with_spares(robot: Robot, spares: usize) -> Result<Self, String> {
         let config = Config { seed: robot.seed, bit_rate: robot.bus.bit_rate, ..Config::default() };
-        let mut sim = Sim::new(robot.modules.len() + 1, config, Mode::Tdma);
+        let mut sim = Sim::new(robot.modules.len() + spares.max(1), config, Mode::Tdma);
         let world = Rc::new(RefCell::new(World::from_robot(&robot)));
         let w = world.clone();
         sim.set_world(Box::new(move |now_us| w.borrow_mut().advance_to_ns(now_us * 1_000)));
@@ -231,7 +237,7 @@ impl EmuRobot {
         ZenohClient::start(router, m.uid.0, domain, namespace.trim_matches('/').to_string(), slot)
     }
 
-    /// The spare port tools and bridges use.
+    /// The spare port tools and bridges use (the first, with [`EmuRobot::build_with_spares`]).
     pub fn spare_port(&self) -> usize {
         self.robot.modules.len()
     }

@@ -8,7 +8,7 @@
 use std::sync::Mutex;
 
 use embassy_boot::State;
-use r2p_boot::sender::{Phase, Sender};
+use r2p_boot::sender::{Phase, Sender, DEFAULT_WINDOW};
 use r2p_boot::sign::{sign, Meta};
 use r2p_boot::transfer::{Msg, Status};
 use r2p_boot::{image_digest, Refusal, Version};
@@ -57,7 +57,7 @@ struct Tool {
 fn tool(r: &mut EmuRobot, image: &'static [u8], target: NodeId) -> Tool {
     let heard: &'static Heard = Box::leak(Box::new(Heard(Mutex::new(Vec::new()))));
     let sender: &'static Mutex<Sender<'static>> =
-        Box::leak(Box::new(Mutex::new(Sender::new(image, 7, 8, 400))));
+        Box::leak(Box::new(Mutex::new(Sender::new(image, 7, DEFAULT_WINDOW, 400))));
     let mut uid = [0xFFu8; 12];
     uid[11] = 0x51;
     let cycle = CycleConfig { cycle_us: r.robot.bus.cycle_us, ..CycleConfig::DEFAULT };
@@ -235,10 +235,10 @@ fn a_transfer_cut_by_a_bus_partition_resumes_where_it_stood() {
     r.sim.run_until(2 * S);
     let m = r.board("motor1").unwrap();
     let target = node_id(&r, "motor1");
-    let t = tool(&mut r, image(12_000, "motor", 4), target);
-    r.sim.run_for(3 * S);
+    let t = tool(&mut r, image(30_000, "motor", 4), target);
+    r.sim.run_for(2 * S);
     let before = t.sender.lock().unwrap().progress().0;
-    assert!(before > 0 && phase(&t) == Phase::Sending, "under way: {before} B");
+    assert!(before > 0 && phase(&t) == Phase::Sending, "under way: {before} B of 30 128");
     r.sim.bus().partition(&[m]);
     r.sim.run_for(2 * S);
     r.sim.bus().heal();

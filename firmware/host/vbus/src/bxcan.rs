@@ -59,6 +59,12 @@ impl BxCanPort {
         self
     }
 
+    /// [`CanController::try_transmit`] for firmware whose CPU stalled `stalled_ns` since its
+    /// clock read (its flash, on an F103): the request reaches the mailbox that much later.
+    pub fn transmit_after_stall(&mut self, frame: &Frame, stalled_ns: u64) -> Result<(), TxError> {
+        self.port.transmit_after(frame, self.load_latency_ns + stalled_ns)
+    }
+
     /// The counter's value at bus time `t_ns` (what bxCAN captures at a start of frame then).
     fn capture_at(&self, t_ns: u64) -> u16 {
         ((t_ns / self.bit_ns + self.phase) % TIME_COUNTER_MODULUS) as u16
