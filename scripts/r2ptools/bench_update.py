@@ -13,22 +13,48 @@ import json
 import subprocess
 import sys
 
+import tomllib
+
 from . import ROOT, firmware
 
 FIRMWARE = ROOT / "firmware"
+TRAILER_LEN = 128
+
+
+def slot_limit(mcu: str = "STM32F103CB") -> int:
+    """The largest image an F103 module's active slot takes (its trailer at the slot's end)."""
+    data = tomllib.loads((FIRMWARE / "images.toml").read_text())
+    return data["mcu"][mcu]["partitions"]["active"]["size"] - TRAILER_LEN
+
+
+def image() -> tuple[str, str]:
+    """The motor image, or while it does not fit a slot the largest module image that does (the
+    transfer's time depends on the size only; the emulated module runs its emulated firmware):
+    its path and what to call it."""
+    limit = slot_limit()
+    sizes = {m: (FIRMWARE / "images" / f"{m}.bin").stat().st_size
+             for m in ("motor", "psu", "imu", "proximity", "template")}
+    if sizes["motor"] <= limit:
+        return str(FIRMWARE / "images" / "motor.bin"), "the motor image"
+    name = max((m for m in sizes if sizes[m] <= limit), key=sizes.get)
+    return (str(FIRMWARE / "images" / f"{name}.bin"),
+            f"the {name} image in its place (the motor image, {sizes['motor']:,} B, is "
+            f"{sizes['motor'] - limit:,} B over a slot's {limit:,} B)")
 # The diffbot's own traffic is 4 % of the bus, so 10 % is reachable; the Triskar2's is 18 %.
 RUNS = [("diffbot", "left", "0,0.1,0.6"), ("triskar2", "motor1", "0,0.6")]
 
 
 def run() -> list[dict]:
     rows = []
+    path, what = image()
     for robot, module, loads in RUNS:
         p = subprocess.run(["cargo", "run", "-q", "--release", "--locked", "-p", "r2p-updatebench", "--",
-                            "--robot", robot, "--module", module, "--loads", loads],
+                            "--robot", robot, "--module", module, "--loads", loads, "--image", path],
                            cwd=FIRMWARE, capture_output=True, text=True)
         if p.returncode != 0:
             raise RuntimeError(f"r2p-updatebench {robot}: {p.stderr.strip()}")
-        rows += [json.loads(line) for line in p.stdout.splitlines() if line.startswith("{")]
+        rows += [dict(json.loads(line), image=what)
+                 for line in p.stdout.splitlines() if line.startswith("{")]
     return rows
 
 
@@ -48,19 +74,38 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def loaded(elf) -> tuple[int, int]:
+    """Bytes an image puts in flash (its loadable segments' file sizes, not the span: the
+    bootloader's API table sits at its partition's end) and in static RAM (its RAM segments)."""
+    out = subprocess.run(["arm-none-eabi-readelf", "-lW", str(elf)], capture_output=True, text=True,
+                         check=True).stdout
+    flash = ram = 0
+    for parts in (line.split() for line in out.splitlines()):
+        if parts and parts[0] == "LOAD":
+            vaddr, _, filesz, memsz = (int(x, 16) for x in parts[2:6])
+            if vaddr >= 0x2000_0000:
+                ram += memsz
+            else:
+                flash += filesz
+    return flash, ram
+
+
 def bootloaders() -> str:
-    rows = []
+    data = tomllib.loads((FIRMWARE / "images.toml").read_text())
+    lines = [f"{'image':<16} {'MCU':<12} {'flash':>9} {'partition':>10} {'spare':>8} {'static RAM':>11}"]
     for img in firmware.manifest():
         if img.name.startswith("bootloader"):
-            elf = ROOT / firmware.IMAGES_DIR / f"{img.name}.elf"
-            rows.append((img, firmware.size_of(elf) if elf.exists() else None))
-    return firmware.table(rows)
+            flash, ram = loaded(ROOT / firmware.IMAGES_DIR / f"{img.name}.elf")
+            part = data["mcu"][img.mcu]["partitions"]["bootloader"]["size"]
+            lines.append(f"{img.name:<16} {img.mcu:<12} {flash:>7,} B {part:>8,} B {part - flash:>6,} B "
+                         f"{ram:>9,} B")
+    return "\n".join(lines) + "\n(static RAM 0: the bootloader runs on its stack alone)"
 
 
 def report(rows: list[dict]) -> None:
     r = rows[0]
-    print(f"\n=== updates over the bus: a {r['image_bytes']:,} B signed motor image, "
-          f"{r['window']} block in flight (emulated, virtual time)")
+    print(f"\n=== updates over the bus: {r['image']}, {r['image_bytes']:,} B signed, sent to a motor "
+          f"module, {r['window']} block in flight (emulated, virtual time)")
     print("load: the bus before the update (the robot's own traffic, then plus the load node); "
           "during: the others' traffic while it ran; vs own: transfer time against the robot's "
           "own traffic alone; to confirmed: REBOOT to the new image confirmed (swap, boot, trial)")

@@ -63,7 +63,7 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    let base = match robot(&name, 0).map(|mut r| background(&mut r, None)) {
+    let base = match robot(&name, 0).map(|mut r| background(&mut r)) {
         Ok(b) => b,
         Err(e) => {
             eprintln!("{e}");
@@ -155,7 +155,7 @@ fn shares(
 }
 
 /// Runs the robot to [`SETTLE`] and measures its traffic over [`MEASURED`].
-fn background(r: &mut EmuRobot, _load: Option<&LoadPublisher>) -> f64 {
+fn background(r: &mut EmuRobot) -> f64 {
     r.sim.run_until(SETTLE + MEASURED);
     shares(r, SETTLE, SETTLE + MEASURED, None, |_, _| false).0
 }
@@ -203,7 +203,7 @@ fn point(
     s.import(subscriber).map_err(|e| format!("{e:?}"))?;
     r.sim.add_board(p, pub_port, Some(Box::new(move |now, _: &mut BoardNode| publisher.step(now))));
     r.sim.add_board(s, sub_port, None);
-    let measured = background(&mut r, Some(publisher));
+    let measured = background(&mut r);
 
     let m = r.board(module).ok_or(format!("{name} has no module {module}"))?;
     let target_id = r.sim.node(m).node_id();
@@ -294,4 +294,28 @@ fn point(
         "load_received": subscriber.received.load(Relaxed),
     })
     .to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_load_node_brings_the_bus_to_the_load_asked_for_and_the_update_still_lands() {
+        let image: Vec<u8> = (0..6_000u32).map(|i| i.wrapping_mul(2_654_435_761) as u8).collect();
+        let meta =
+            Meta { version: Version { major: 0, minor: 2, patch: 0 }, kind: "motor", mcu: MCU };
+        let signed = sign(&image, &meta, &development_seed()).unwrap().leak();
+        let base = background(&mut robot("diffbot", 0).unwrap());
+        assert!((0.02..0.08).contains(&base), "the diffbot's own traffic: {base}");
+        let line = point("diffbot", "left", 0.3, base, signed, DEFAULT_WINDOW).unwrap();
+        let p: serde_json::Value = serde_json::from_str(&line).unwrap();
+        let load = p["background_load"].as_f64().unwrap();
+        assert!((0.29..0.33).contains(&load), "30 % asked for, {load} measured");
+        assert!(p["background_during"].as_f64().unwrap() > 0.27, "{line}");
+        assert!(p["load_received"].as_u64().unwrap() > 1_000, "the load reached its subscriber");
+        assert_eq!(p["hrt_missed_others"], 0, "{line}");
+        assert_eq!(p["timeouts"], 0, "{line}");
+        assert!(p["update_share"].as_f64().unwrap() > 0.05, "{line}");
+    }
 }
