@@ -128,7 +128,9 @@ impl Booter {
         node.set_firmware(booted.firmware.clone());
         node.set_update_sink(firmware::update_sink(chip, kind.name()));
         let heartbeat_us = Micros::from(node.config().heartbeat_period_us);
-        let app = around_app(app, chip, &booted, boot_us, heartbeat_us, self.resets[i].clone());
+        let gateway_image = kind == BoardKind::Gateway;
+        let reset = self.resets[i].clone();
+        let app = around_app(app, chip, &booted, boot_us, heartbeat_us, gateway_image, reset);
         let tap = gateway.borrow_mut().take().map(|g: GatewayBoot| {
             *self.gateway_link.lock().unwrap_or_else(|e| e.into_inner()) = Some(g.link);
             Box::new(g.tap) as Box<dyn PortTap>

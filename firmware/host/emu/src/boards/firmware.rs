@@ -120,7 +120,10 @@ pub fn update_sink(chip: &'static BoardChip, kind: &'static str) -> &'static dyn
     on_layout!(chip, update_sink_on(chip, kind))
 }
 
-fn update_sink_on<L: ChipLayout>(chip: &'static BoardChip, kind: &'static str) -> &'static dyn UpdateSink {
+fn update_sink_on<L: ChipLayout>(
+    chip: &'static BoardChip,
+    kind: &'static str,
+) -> &'static dyn UpdateSink {
     let m = L::MCU.spec().map;
     let sink: DfuSink<L::Slot, L::State> =
         DfuSink::new(kind, m.active.size, L::slot(chip, m.dfu), L::state(chip), check_dfu::<L>);
@@ -140,14 +143,16 @@ fn mark_booted_on<L: ChipLayout>(chip: &'static BoardChip) -> bool {
 
 /// Wraps a board's application step with what the module core does around it on the MCU: a
 /// REBOOT request resets the board, and an image on trial confirms itself once its node runs
-/// and hears the master's sync (or it is the master), or resets unconfirmed when its time is up
-/// (the bootloader then rolls it back).
+/// and hears the master's sync (or it is the master; with `master_needs_peer`, as the gateway's
+/// image, and it has heard another node: a standby master alone on its side of the bus keeps
+/// its own syncs), or resets unconfirmed when its time is up (the bootloader then rolls it back).
 pub fn around_app(
     mut app: App<'static, BoardNode>,
     chip: &'static BoardChip,
     booted: &Booted,
     boot_us: Micros,
     heartbeat_us: Micros,
+    master_needs_peer: bool,
     reset: Rc<Cell<bool>>,
 ) -> App<'static, BoardNode> {
     let mut trial = Trial::new(boot_us / 1_000, booted.firmware.on_trial);
@@ -160,7 +165,8 @@ pub fn around_app(
         }
         let healthy = now >= running_after
             && (node.role() == Role::Master
-                || matches!(node.clock().state(now), ClockState::Running(_)));
+                || matches!(node.clock().state(now), ClockState::Running(_)))
+            && (!master_needs_peer || node.peer_count() > 0);
         match trial.poll(now / 1_000, healthy) {
             Verdict::Confirm => {
                 if mark_booted(chip) {

@@ -43,9 +43,9 @@ use crate::App;
 /// Every emulated board's node runtime: room for each module's topics.
 pub type BoardNode = Node<'static, 8, 16, 64, 16, 64>;
 
-pub use chip::{BoardChip, TimedFlash as BoardFlash};
-use chip::ChipLayout;
 use crate::on_layout;
+use chip::ChipLayout;
+pub use chip::{BoardChip, TimedFlash as BoardFlash};
 
 /// What the robot-level application computed, for tests, plots and tools.
 #[derive(Clone, Debug, Default)]
