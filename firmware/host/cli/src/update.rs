@@ -45,8 +45,8 @@ pub struct UpdateArgs {
 const RESEND_AFTER_MS: u64 = 400;
 /// With no answer at all for this long, the module is taken not to take updates.
 const SILENT_FOR: Duration = Duration::from_secs(10);
-/// How long a module may take to come back running the new image and confirm it: the F103's
-/// slowest swap (8.2 s), its boot, and the trial's 15 s.
+/// How long a module may take to come back running the new image and confirm it: the slowest
+/// swap (the F103's 8.2 s, the gateway's F407 16.2 s), its boot, and the trial's 15 s.
 const CONFIRM_WITHIN: Duration = Duration::from_secs(40);
 /// REBOOT again after this long while the module still runs its old boot.
 const REBOOT_AGAIN: Duration = Duration::from_millis(500);

@@ -6,8 +6,10 @@
 //! never confirms is rolled back; a bus partition pauses the transfer, which then resumes.
 //!
 //! The gateway (an STM32F407VG: its flash in 128 KiB sectors, each erase stalling its CPU for
-//! 1–2 s) takes its own image the same way while the robot drives; a motor's image is refused;
-//! an image that never confirms is rolled back.
+//! 1–2 s) takes its own image the same way while the robot drives (the other modules keep their
+//! HRT slots; the robot, whose base controller the gateway runs, stops at the first stall: its
+//! motors' setpoint watchdogs latch); a motor's image is refused; an image that never confirms is
+//! rolled back.
 
 use std::sync::Mutex;
 
@@ -271,6 +273,14 @@ fn erases_since(r: &EmuRobot, b: usize, from: usize) -> Vec<Erase> {
     r.boards[b].flash.lock(|c| c.borrow().erases[from..].to_vec())
 }
 
+/// The robot's pose at `t_ns` when nothing is updated.
+fn pose_without_update(t_ns: u64) -> r2p_world::Pose {
+    let mut r = robot();
+    r.sim.run_until(t_ns);
+    let pose = r.world.borrow().pose();
+    pose
+}
+
 fn erase_count(r: &EmuRobot, b: usize) -> usize {
     r.boards[b].flash.lock(|c| c.borrow().erases.len())
 }
@@ -295,8 +305,16 @@ fn the_gateway_takes_its_image_while_the_robot_drives_swaps_it_in_and_confirms_i
     // The gateway's longest silence on the bus meanwhile: its CPU stalled by an erase.
     let sent: Vec<u64> = r.sim.bus().frames().filter(|f| f.1 == g).map(|f| f.0).collect();
     let silence = sent.windows(2).filter(|w| w[0] >= start).map(|w| w[1] - w[0]).max().unwrap();
+    // Where the robot is (it turned and slid meanwhile), against the same robot not updated.
+    let (p, q) = (r.world.borrow().pose(), pose_without_update(end));
     let secs = (end - start) as f64 / S as f64;
     let s = t.sender.lock().unwrap();
+    println!(
+        "after the transfer the robot stood {:.3} m and {:.1}° from where it stands without the \
+         update (the gateway's base controller stalled with it)",
+        (p.x - q.x).hypot(p.y - q.y),
+        (p.theta - q.theta).to_degrees()
+    );
     println!(
         "update of {} B to the gateway while driving: {secs:.1} s virtual ({:.1} KiB/s), {} \
          timeouts, {} goes back; erase stalls {:?} ms; HRT slots missed: {others} by the \
