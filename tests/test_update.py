@@ -88,3 +88,14 @@ def test_a_motor_module_is_updated_through_the_gateway(robot, tmp_path):
     assert f"-> 1.5.0 {digest}: running, confirmed" in p.stdout, p.stdout
     row = firmware_of(robot, "motor1", port=robot.gateway)
     assert f"1.5.0 {digest}" in row and "on trial" not in row, row
+
+
+def test_the_gateway_is_updated_through_its_own_endpoint(robot, tmp_path):
+    # The template's image signed for the gateway (its F407) stands for a gateway update. Its reset
+    # closes the connection the CLI came through: the CLI connects again and sees it confirm.
+    image, digest = signed(tmp_path, "template", "gateway", "1.6.0")
+    p = r2p(robot, "update", "gateway", str(image), timeout=240, port=robot.gateway)
+    assert p.returncode == 0, p.stdout
+    assert "the link went down with it; connecting again" in p.stdout, p.stdout
+    assert f"-> 1.6.0 {digest}: running, confirmed" in p.stdout, p.stdout
+    assert f"1.6.0 {digest}" in firmware_of(robot, "gateway", port=robot.gateway)
