@@ -1,14 +1,15 @@
 """`r2p update` on the emulated Triskar2 in real time, over socketcand as on a real robot's bus
 (issue 18 item 3): a signed image reaches a motor module with a progress bar, the module swaps it
 in and confirms it, and `r2p nodes` shows the new version; images the module or the CLI refuse
-say why and leave the module on its image."""
+say why and leave the module on its image. The same through the gateway's own network endpoint
+(its application's socketcand server, `r2p sim --gateway`), as a robot is reached over Ethernet."""
 from __future__ import annotations
 
 import re
 
 import pytest
 
-from conftest import ROOT, SocketcandProcess, run
+from conftest import ROOT, SocketcandProcess, free_port, run
 
 FIRMWARE = ROOT / "firmware"
 R2P = FIRMWARE / "target" / "debug" / "r2p"
@@ -19,15 +20,19 @@ TRISKAR2 = ROOT / "robots" / "triskar2.toml"
 def robot():
     p = run(["cargo", "build", "-q", "-p", "r2p-cli"], cwd=FIRMWARE, timeout=900)
     assert p.returncode == 0, p.stdout
-    sim = SocketcandProcess([str(R2P), "sim", str(TRISKAR2), "--realtime"], "r2p sim")
+    gateway = free_port()
+    sim = SocketcandProcess([str(R2P), "sim", str(TRISKAR2), "--realtime", "--gateway", f"127.0.0.1:{gateway}"],
+                            "r2p sim")
+    sim.gateway = gateway
     try:
         yield sim
     finally:
         sim.kill()
 
 
-def r2p(sim, *args: str, timeout: float = 120):
-    return run([str(R2P), "--socketcand", f"127.0.0.1:{sim.port}", "--timeout", "2", *args], timeout=timeout)
+def r2p(sim, *args: str, timeout: float = 120, port: int | None = None):
+    port = port or sim.port
+    return run([str(R2P), "--socketcand", f"127.0.0.1:{port}", "--timeout", "2", *args], timeout=timeout)
 
 
 def signed(tmp_path, module_image: str, kind: str, version: str):
@@ -40,8 +45,8 @@ def signed(tmp_path, module_image: str, kind: str, version: str):
     return out, digest
 
 
-def firmware_of(sim, name: str) -> str:
-    p = r2p(sim, "nodes")
+def firmware_of(sim, name: str, port: int | None = None) -> str:
+    p = r2p(sim, "nodes", port=port)
     assert p.returncode == 0, p.stdout
     row = next(line for line in p.stdout.splitlines() if f" {name} " in line)
     return row
@@ -74,3 +79,23 @@ def test_refused_images_say_why_and_the_module_keeps_its_image(robot, tmp_path):
     p = r2p(robot, "update", "--all", str(unsigned), "motor1")
     assert p.returncode != 0 and "with --all give only IMAGE" in p.stdout, p.stdout
     assert firmware_of(robot, "motor1").split()[8:10] == before.split()[8:10], "unchanged"
+
+
+def test_a_motor_module_is_updated_through_the_gateway(robot, tmp_path):
+    image, digest = signed(tmp_path, "template", "motor", "1.5.0")
+    p = r2p(robot, "update", "motor1", str(image), timeout=180, port=robot.gateway)
+    assert p.returncode == 0, p.stdout
+    assert f"-> 1.5.0 {digest}: running, confirmed" in p.stdout, p.stdout
+    row = firmware_of(robot, "motor1", port=robot.gateway)
+    assert f"1.5.0 {digest}" in row and "on trial" not in row, row
+
+
+def test_the_gateway_is_updated_through_its_own_endpoint(robot, tmp_path):
+    # The template's image signed for the gateway (its F407) stands for a gateway update. Its reset
+    # closes the connection the CLI came through: the CLI connects again and sees it confirm.
+    image, digest = signed(tmp_path, "template", "gateway", "1.6.0")
+    p = r2p(robot, "update", "gateway", str(image), timeout=240, port=robot.gateway)
+    assert p.returncode == 0, p.stdout
+    assert "the link went down with it; connecting again" in p.stdout, p.stdout
+    assert f"-> 1.6.0 {digest}: running, confirmed" in p.stdout, p.stdout
+    assert f"1.6.0 {digest}" in firmware_of(robot, "gateway", port=robot.gateway)

@@ -3,7 +3,9 @@
 //! gateway), as NRT management traffic. r2p-boot's sender moves it (windowed, resumable: a
 //! module that reboots mid-way gets it again from the start), the module checks it where it
 //! landed and marks it; then a REBOOT swaps it in, and the command waits until the module runs
-//! it and has confirmed itself (or reports its rollback). docs/flashing.md, "Updates over the bus".
+//! it and has confirmed itself (or reports its rollback). Updating the gateway through its own
+//! endpoint, the link goes down with its reset: the command connects again and goes on waiting.
+//! docs/flashing.md, "Updates over the bus".
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -46,8 +48,8 @@ pub struct UpdateArgs {
 const RESEND_AFTER_MS: u64 = 400;
 /// With no answer at all for this long, the module is taken not to take updates.
 const SILENT_FOR: Duration = Duration::from_secs(10);
-/// How long a module may take to come back running the new image and confirm it: the F103's
-/// slowest swap (8.2 s), its boot, and the trial's 15 s.
+/// How long a module may take to come back running the new image and confirm it: the slowest
+/// swap (the F103's 8.2 s, the gateway's F407 16.2 s), its boot, and the trial's 15 s.
 const CONFIRM_WITHIN: Duration = Duration::from_secs(40);
 /// REBOOT again after this long while the module still runs its old boot.
 const REBOOT_AGAIN: Duration = Duration::from_millis(500);
@@ -96,7 +98,7 @@ fn hex(b: &[u8]) -> String {
 pub fn run(
     args: &UpdateArgs,
     bus: &BusArgs,
-    connect: impl FnOnce() -> Result<Session, CliError>,
+    connect: impl Fn() -> Result<Session, CliError>,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
     let (node, image) = match (args.all, args.targets.as_slice()) {
@@ -121,7 +123,7 @@ pub fn run(
         None => same_kind(&mut s, &image)?,
     };
     for target in targets {
-        update_one(args, &mut s, target, &image, out)?;
+        update_one(args, &mut s, &connect, target, &image, out)?;
     }
     Ok(())
 }
@@ -179,6 +181,7 @@ fn progress(label: &str, done: u32, total: u32, elapsed: Duration) -> String {
 fn update_one(
     args: &UpdateArgs,
     s: &mut Session,
+    connect: &dyn Fn() -> Result<Session, CliError>,
     target: NodeId,
     image: &Image,
     out: &mut dyn Write,
@@ -272,7 +275,7 @@ fn update_one(
             &format!("{label}: {new_version} swaps in at its next reset (--no-reboot)"),
         );
     }
-    let running = wait_confirmed(s, target, uid, &t.digest, &label)?;
+    let running = wait_confirmed(s, connect, target, uid, &t.digest, &label)?;
     emit(
         out,
         &format!(
@@ -292,8 +295,14 @@ fn update_one(
 /// receive FIFOs overflow), and REBOOT is not answered. Once the module falls silent (its
 /// bootloader swapping) or boots again, no more are sent: one arriving during the new image's
 /// trial would reset it before it confirms, and roll it back.
+///
+/// A link that closes once REBOOT was sent went down with the module: the gateway, updated
+/// through its own endpoint (its reset closes its connections). The command connects again
+/// (`connect`) until the gateway serves again, and takes the new connection's first view of it
+/// as its new boot.
 fn wait_confirmed(
     s: &mut Session,
+    connect: &dyn Fn() -> Result<Session, CliError>,
     target: NodeId,
     uid: Option<[u8; 12]>,
     digest: &[u8; 8],
@@ -311,7 +320,15 @@ fn wait_confirmed(
             s.host().expect("joined").request_reboot(target)?;
             asked_at = Some(Instant::now());
         }
-        s.step(Duration::from_millis(5))?;
+        if let Err(e) = s.step(Duration::from_millis(5)) {
+            if asked_at.is_none() {
+                return Err(e);
+            }
+            eprintln!("{label}: {e}: the link went down with it; connecting again");
+            *s = reconnect(connect, start)?;
+            (rebooted, last_uptime) = (true, u32::MAX);
+            continue;
+        }
         let Some(n) = s.watcher().nodes().find(|n| Some(n.uid) == uid) else { continue };
         if n.heartbeats != heartbeats {
             (heartbeats, heartbeat_at) = (n.heartbeats, Instant::now());
@@ -346,6 +363,26 @@ fn wait_confirmed(
         "{label}: not running the new image, confirmed, within {CONFIRM_WITHIN:?} of its reboot{}",
         if seen_new { " (it runs it, still on trial)" } else { "" }
     )))
+}
+
+/// Connects again, once a second, until [`CONFIRM_WITHIN`] of `start` is over (a gateway
+/// swapping its images serves nothing).
+fn reconnect(
+    connect: &dyn Fn() -> Result<Session, CliError>,
+    start: Instant,
+) -> Result<Session, CliError> {
+    loop {
+        std::thread::sleep(Duration::from_secs(1));
+        let joined = connect().and_then(|mut s| {
+            s.join()?;
+            Ok(s)
+        });
+        match joined {
+            Ok(s) => return Ok(s),
+            Err(e) if start.elapsed() >= CONFIRM_WITHIN => return Err(e),
+            Err(_) => {}
+        }
+    }
 }
 
 #[cfg(test)]

@@ -9,11 +9,12 @@
 //! differs: [`boards`] reads the world where the MCU reads its ADC, timers and pins, and
 //! applies the application's command to the world where the MCU drives its outputs.
 //!
-//! Each board has the F103's flash with the bootloader's map ([`boards::chip`]): its parameters
+//! Each board has its MCU's flash with the bootloader's map ([`boards::chip`]: the modules' F103,
+//! the gateway's F407): its parameters
 //! (the robot file's `[modules.params]` stored there before the first boot), a signed image in
 //! its active slot, and the slot an update over the bus is written to. At every reset the
 //! emulated bootloader runs first ([`boards::firmware`]): after an update it swaps the images
-//! (the board is off the bus for as long as the F103 takes), and a new image that does not
+//! (the board is off the bus for as long as its MCU takes), and a new image that does not
 //! confirm itself is rolled back. A board resets when a REBOOT request reaches it or its trial
 //! runs out.
 
@@ -24,14 +25,14 @@ use std::path::Path;
 use std::rc::Rc;
 use std::sync::{Arc, Mutex};
 
-use embassy_boot::{BlockingFirmwareState, State};
+use embassy_boot::State;
 use r2p_vbus::Config;
 use r2p_world::robot_file::{Module, Robot};
 use r2p_world::BoardKind;
 use r2p_world::World;
 use rtcan::{CycleConfig, Micros};
 
-use crate::boards::chip::{map, new_chip, part};
+use crate::boards::chip::{new_chip, Mcu};
 use crate::boards::firmware::{self, around_app, factory_image, flash_active};
 use crate::boards::{self, GatewayBoot, Probe};
 pub use crate::boards::{BoardChip, BoardFlash, BoardNode};
@@ -104,8 +105,7 @@ impl Booter {
         })?;
         if booted.state == State::Revert {
             // The old image, back after a rollback, tells the bootloader it knows.
-            let mut aligned = [0u8; 4];
-            let _ = BlockingFirmwareState::new(part(chip, map().state), &mut aligned).mark_booted();
+            firmware::mark_booted(chip);
         }
         let boot_us = now_us + booted.stall_ns.div_ceil(1_000);
         let gateway = Rc::new(RefCell::new(None));
@@ -128,7 +128,9 @@ impl Booter {
         node.set_firmware(booted.firmware.clone());
         node.set_update_sink(firmware::update_sink(chip, kind.name()));
         let heartbeat_us = Micros::from(node.config().heartbeat_period_us);
-        let app = around_app(app, chip, &booted, boot_us, heartbeat_us, self.resets[i].clone());
+        let gateway_image = kind == BoardKind::Gateway;
+        let reset = self.resets[i].clone();
+        let app = around_app(app, chip, &booted, boot_us, heartbeat_us, gateway_image, reset);
         let tap = gateway.borrow_mut().take().map(|g: GatewayBoot| {
             *self.gateway_link.lock().unwrap_or_else(|e| e.into_inner()) = Some(g.link);
             Box::new(g.tap) as Box<dyn PortTap>
@@ -161,9 +163,11 @@ impl EmuRobot {
         let probe = Rc::new(RefCell::new(Probe::default()));
         let mut boards = Vec::new();
         for (i, m) in robot.modules.iter().enumerate() {
-            let chip = new_chip(robot.seed ^ (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-            flash_active(chip, &factory_image(m.kind().name()));
-            chip.lock(|c| boards::store_params(m, &robot, &mut c.borrow_mut()))?;
+            let seed = robot.seed ^ (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            let mcu = Mcu::of(m.kind());
+            let chip = new_chip(mcu, seed);
+            flash_active(chip, &factory_image(m.kind().name(), mcu));
+            boards::store_params(m, &robot, chip)?;
             chip.lock(|c| c.borrow_mut().take_stall_ns()); // the factory's, not the robot's
             boards.push(BoardInfo {
                 name: m.name.clone(),

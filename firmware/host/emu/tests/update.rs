@@ -4,6 +4,12 @@
 //! does), checks it, and after a REBOOT its bootloader swaps it in and it confirms itself. The
 //! other modules' HRT traffic keeps its slots; refused images change nothing; an image that
 //! never confirms is rolled back; a bus partition pauses the transfer, which then resumes.
+//!
+//! The gateway (an STM32F407VG: its flash in 128 KiB sectors, each erase stalling its CPU for
+//! 1–2 s) takes its own image the same way while the robot drives (the other modules keep their
+//! HRT slots; the robot, whose base controller the gateway runs, stops at the first stall: its
+//! motors' setpoint watchdogs latch); a motor's image is refused; an image that never confirms is
+//! rolled back.
 
 use std::sync::Mutex;
 
@@ -12,6 +18,7 @@ use r2p_boot::sender::{Phase, Sender, DEFAULT_WINDOW};
 use r2p_boot::sign::{sign, Meta};
 use r2p_boot::transfer::{Msg, Status};
 use r2p_boot::{image_digest, Refusal, Version};
+use r2p_emu::boards::chip::{Erase, Mcu};
 use r2p_emu::boards::firmware::{active_trailer, boot_state, development_seed, MCU};
 use r2p_emu::robot::{BoardNode, EmuRobot};
 use r2p_management::NodeId;
@@ -27,12 +34,17 @@ fn robot() -> EmuRobot {
     EmuRobot::build(Robot::load(path).unwrap()).unwrap()
 }
 
-/// A signed image of `len` bytes for `kind`, version 1.`minor`.0.
+/// A signed image of `len` bytes for `kind` on the modules' MCU, version 1.`minor`.0.
 fn image(len: usize, kind: &str, minor: u8) -> &'static [u8] {
+    image_for(len, kind, minor, MCU)
+}
+
+/// A signed image of `len` bytes for `kind` on `mcu`, version 1.`minor`.0.
+fn image_for(len: usize, kind: &str, minor: u8, mcu: &str) -> &'static [u8] {
     let bytes: Vec<u8> = (0..len as u32)
         .map(|i| (i ^ 0x5A5A).wrapping_mul(2_654_435_761).to_le_bytes()[2])
         .collect();
-    let meta = Meta { version: Version { major: 1, minor, patch: 0 }, kind, mcu: MCU };
+    let meta = Meta { version: Version { major: 1, minor, patch: 0 }, kind, mcu };
     Box::leak(sign(&bytes, &meta, &development_seed()).unwrap().into_boxed_slice())
 }
 
@@ -247,4 +259,138 @@ fn a_transfer_cut_by_a_bus_partition_resumes_where_it_stood() {
     let s = t.sender.lock().unwrap();
     assert_eq!((s.phase(), s.restarts), (Phase::Done, 0), "resumed, not begun again");
     assert!(s.timeouts > 0, "the partition was felt");
+}
+
+/// The gateway's image: about the size of the committed one (firmware/images/gateway.bin).
+const GATEWAY_IMAGE_LEN: usize = 124_000;
+
+fn gateway_image(len: usize, kind: &str, minor: u8) -> &'static [u8] {
+    image_for(len, kind, minor, Mcu::F407.spec().name)
+}
+
+/// The erases board `b`'s flash did from the `from`th on.
+fn erases_since(r: &EmuRobot, b: usize, from: usize) -> Vec<Erase> {
+    r.boards[b].flash.lock(|c| c.borrow().erases[from..].to_vec())
+}
+
+/// The robot's pose at `t_ns` when nothing is updated.
+fn pose_without_update(t_ns: u64) -> r2p_world::Pose {
+    let mut r = robot();
+    r.sim.run_until(t_ns);
+    let pose = r.world.borrow().pose();
+    pose
+}
+
+fn erase_count(r: &EmuRobot, b: usize) -> usize {
+    r.boards[b].flash.lock(|c| c.borrow().erases.len())
+}
+
+#[test]
+fn the_gateway_takes_its_image_while_the_robot_drives_swaps_it_in_and_confirms_it() {
+    let mut r = robot();
+    r.sim.run_until(2 * S);
+    let g = r.board("gateway").unwrap();
+    let new = gateway_image(GATEWAY_IMAGE_LEN, "gateway", 4);
+    let target = node_id(&r, "gateway");
+    let t = tool(&mut r, new, target);
+    let (start, erases_before) = (r.sim.now_ns(), erase_count(&r, g));
+    let end = run_transfer(&mut r, &t, start + 300 * S);
+    assert_eq!(phase(&t), Phase::Done);
+    let (others, own) = hrt_missed(&r, g);
+    assert_eq!(others, 0, "every other module's HRT traffic kept its slots during the transfer");
+    let erases = erases_since(&r, g, erases_before);
+    // Its first slot sector, the trailer's, and the state sector for the mark.
+    let sizes: Vec<u32> = erases.iter().map(|e| e.size / 1024).collect();
+    assert_eq!(sizes, [128, 128, 64], "sectors erased by the transfer (KiB)");
+    // The gateway's longest silence on the bus meanwhile: its CPU stalled by an erase.
+    let sent: Vec<u64> = r.sim.bus().frames().filter(|f| f.1 == g).map(|f| f.0).collect();
+    let silence = sent.windows(2).filter(|w| w[0] >= start).map(|w| w[1] - w[0]).max().unwrap();
+    // Where the robot is (it turned and slid meanwhile), against the same robot not updated.
+    let (p, q) = (r.world.borrow().pose(), pose_without_update(end));
+    let secs = (end - start) as f64 / S as f64;
+    let s = t.sender.lock().unwrap();
+    println!(
+        "after the transfer the robot stood {:.3} m and {:.1}° from where it stands without the \
+         update (the gateway's base controller stalled with it)",
+        (p.x - q.x).hypot(p.y - q.y),
+        (p.theta - q.theta).to_degrees()
+    );
+    println!(
+        "update of {} B to the gateway while driving: {secs:.1} s virtual ({:.1} KiB/s), {} \
+         timeouts, {} goes back; erase stalls {:?} ms; HRT slots missed: {others} by the \
+         others, {own} by the gateway (its setpoints, {} sent); the gateway silent on the bus for \
+         up to {} ms",
+        new.len(),
+        new.len() as f64 / 1024.0 / secs,
+        s.timeouts,
+        s.fast_goes_back,
+        erases.iter().map(|e| e.ns / MS).collect::<Vec<_>>(),
+        r.sim.node(g).stats().hrt_sent,
+        silence / MS,
+    );
+    drop(s);
+    assert_eq!(boot_state(r.boards[g].flash), Some(State::Swap), "marked for the swap");
+    assert_eq!(active_trailer(r.boards[g].flash).unwrap().version.minor, 1, "still the old image");
+    // REBOOT: the bootloader swaps three 128 KiB sectors (the gateway is off the bus meanwhile),
+    // the image confirms itself.
+    let boots = r.boards[g].boots.get();
+    let before_swap = erase_count(&r, g);
+    reboot(&mut r, &t, g);
+    let swap_start = r.sim.now_ns();
+    r.sim.run_while(100 * MS, swap_start + 60 * S, |sim| sim.node(g).peer_count() > 0);
+    let swap_ms: u64 = erases_since(&r, g, before_swap).iter().map(|e| e.ns / MS).sum();
+    r.sim.run_for(20 * S);
+    println!("the swap erased for {swap_ms} ms; the gateway was back after {} ms", {
+        (r.sim.now_ns() - 20 * S - swap_start) / MS
+    });
+    assert_eq!(r.boards[g].boots.get(), boots + 1, "rebooted once");
+    let now = active_trailer(r.boards[g].flash).unwrap();
+    assert_eq!((now.version.minor, now.digest), (4, image_digest(&new[..new.len() - 128])));
+    assert_eq!(boot_state(r.boards[g].flash), Some(State::Boot), "confirmed: no rollback");
+    assert_eq!(r.sim.node(g).peer_count(), r.sim.boards() - 1, "back on the bus");
+}
+
+#[test]
+fn the_gateway_refuses_a_motor_image_and_keeps_its_own() {
+    let motor_on_f407 = gateway_image(6_000, "motor", 4);
+    for (what, img, why) in [
+        ("a motor's image", image(6_000, "motor", 4), Refusal::WrongMcu),
+        ("a motor image for its MCU", motor_on_f407, Refusal::WrongKind),
+        ("too large", gateway_image(400_000, "gateway", 4), Refusal::TooLarge),
+    ] {
+        let mut r = robot();
+        r.sim.run_until(2 * S);
+        let g = r.board("gateway").unwrap();
+        let target = node_id(&r, "gateway");
+        let t = tool(&mut r, img, target);
+        run_transfer(&mut r, &t, 120 * S);
+        assert_eq!(phase(&t), Phase::Refused(why), "{what}");
+        assert_eq!(boot_state(r.boards[g].flash), Some(State::Boot), "{what}: nothing marked");
+        reboot(&mut r, &t, g);
+        r.sim.run_for(3 * S);
+        let running = active_trailer(r.boards[g].flash).unwrap();
+        assert_eq!((running.version.minor, running.kind.as_str()), (1, "gateway"), "{what}");
+    }
+}
+
+#[test]
+fn a_gateway_image_that_never_confirms_is_rolled_back() {
+    let mut r = robot();
+    r.sim.run_until(2 * S);
+    let g = r.board("gateway").unwrap();
+    let target = node_id(&r, "gateway");
+    let t = tool(&mut r, gateway_image(12_000, "gateway", 4), target);
+    run_transfer(&mut r, &t, 120 * S);
+    assert_eq!(phase(&t), Phase::Done);
+    // The new image boots cut off from the bus: master of nobody, it never confirms.
+    reboot(&mut r, &t, g);
+    r.sim.bus().partition(&[g]);
+    r.sim.run_for(20 * S); // the swap: 9–15 s
+    assert_eq!(active_trailer(r.boards[g].flash).unwrap().version.minor, 4, "swapped in, on trial");
+    r.sim.run_for(35 * S); // past the trial's 15 s: it resets, the bootloader swaps back
+    r.sim.bus().heal();
+    r.sim.run_for(10 * S);
+    assert_eq!(active_trailer(r.boards[g].flash).unwrap().version.minor, 1, "rolled back");
+    assert_eq!(boot_state(r.boards[g].flash), Some(State::Boot), "and the old image kept");
+    assert_eq!(r.sim.node(g).peer_count(), r.sim.boards() - 1, "back on the bus");
 }

@@ -43,10 +43,9 @@ use crate::App;
 /// Every emulated board's node runtime: room for each module's topics.
 pub type BoardNode = Node<'static, 8, 16, 64, 16, 64>;
 
+use crate::on_layout;
+use chip::ChipLayout;
 pub use chip::{BoardChip, TimedFlash as BoardFlash};
-
-/// Where the parameter pages start in a board's flash (the map's `params` partition).
-pub const PARAMS_AT: u32 = chip::map().params.offset;
 
 /// What the robot-level application computed, for tests, plots and tools.
 #[derive(Clone, Debug, Default)]
@@ -106,22 +105,37 @@ fn leak<T>(x: T) -> &'static T {
 /// Parameters from the board's flash, as the MCU's boot loads them.
 fn load_params<const N: usize>(
     defaults: [r2p_node::Param; N],
-    flash: &BoardChip,
+    flash: &'static BoardChip,
 ) -> Result<&'static FlashParams<N>, String> {
-    let params = leak(FlashParams::new(defaults, PARAMS_AT));
-    flash
-        .lock(|f| params.load(&mut *f.borrow_mut()))
+    // The parameter pages are the map's `params` partition, from its start.
+    let params = leak(FlashParams::new(defaults, 0));
+    on_layout!(flash, load_on::<N>(params, flash))
         .map_err(|e| format!("reading parameters: {e:?}"))?;
     Ok(params)
 }
 
+fn load_on<L: ChipLayout, const N: usize>(
+    params: &FlashParams<N>,
+    flash: &'static BoardChip,
+) -> Result<(), chip::FlashError> {
+    params.load(&mut L::params(flash)).map(|_| ())
+}
+
 /// Writes parameters set over the bus to the board's flash (the MCU does it from its
 /// application task, as here).
-fn persist<const N: usize>(params: &FlashParams<N>, flash: &BoardChip) {
+fn persist<const N: usize>(params: &FlashParams<N>, flash: &'static BoardChip) {
     if params.is_dirty() {
         // A failed write stays dirty and is retried next step, as on the MCU.
-        let _ = flash.lock(|f| params.commit(&mut *f.borrow_mut()));
+        let _ = on_layout!(flash, commit_on::<N>(params, flash));
     }
+}
+
+/// Writes `params` to the parameter pages of `flash`.
+fn commit_on<L: ChipLayout, const N: usize>(
+    params: &FlashParams<N>,
+    flash: &'static BoardChip,
+) -> Result<(), chip::FlashError> {
+    params.commit(&mut L::params(flash)).map(|_| ())
 }
 
 /// The node with the module's configuration on the robot's cycle.

@@ -8,11 +8,17 @@ use r2p_world::ranger::RangerKind;
 use r2p_world::robot_file::{Module, ParamValue, RangerMount, Robot, Wiring};
 use r2p_world::BoardKind;
 
-use super::{BoardFlash, PARAMS_AT};
+use super::chip::{ChipLayout, FlashError};
+use super::BoardChip;
+use crate::on_layout;
 
 /// Stores `module`'s parameters from the robot file (and, for the gateway's base controller,
 /// the base geometry of the robot) in `flash`. Errors name the parameter and what is valid.
-pub fn store_params(module: &Module, robot: &Robot, flash: &mut BoardFlash) -> Result<(), String> {
+pub fn store_params(
+    module: &Module,
+    robot: &Robot,
+    flash: &'static BoardChip,
+) -> Result<(), String> {
     let mut values = module.params.clone();
     if module.kind() == BoardKind::Gateway {
         values = base_geometry(robot, values);
@@ -96,10 +102,12 @@ fn check_sensor_types(
 fn store<const N: usize>(
     defaults: [Param; N],
     values: &[(String, ParamValue)],
-    flash: &mut BoardFlash,
+    flash: &'static BoardChip,
 ) -> Result<(), String> {
-    let params = FlashParams::new(defaults, PARAMS_AT);
-    params.load(flash).map_err(|e| format!("reading parameters: {e:?}"))?;
+    // The parameter pages are the map's `params` partition, from its start.
+    let params = FlashParams::new(defaults, 0);
+    on_layout!(flash, load::<N>(&params, flash))
+        .map_err(|e| format!("reading parameters: {e:?}"))?;
     for (name, v) in values {
         let Some(i) = defaults.iter().position(|p| p.name == name) else {
             let known: Vec<&str> = defaults.iter().map(|p| p.name).collect();
@@ -121,8 +129,23 @@ fn store<const N: usize>(
             other => format!("`{name}`: {other:?}"),
         })?;
     }
-    params.commit(flash).map_err(|e| format!("writing parameters: {e:?}"))?;
+    on_layout!(flash, commit::<N>(&params, flash))
+        .map_err(|e| format!("writing parameters: {e:?}"))?;
     Ok(())
+}
+
+fn load<L: ChipLayout, const N: usize>(
+    params: &FlashParams<N>,
+    flash: &'static BoardChip,
+) -> Result<(), FlashError> {
+    params.load(&mut L::params(flash)).map(|_| ())
+}
+
+fn commit<L: ChipLayout, const N: usize>(
+    params: &FlashParams<N>,
+    flash: &'static BoardChip,
+) -> Result<(), FlashError> {
+    params.commit(&mut L::params(flash)).map(|_| ())
 }
 
 fn describe(p: &Param) -> String {

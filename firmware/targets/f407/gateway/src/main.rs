@@ -10,9 +10,11 @@
 //!
 //! The image runs behind the F407 bootloader, in the active slot of the flash map
 //! (firmware/images.toml; build.rs links it there); its parameters sit in the map's two 16 KiB
-//! sectors. After an update it is on trial (r2p-boot's `trial`): it confirms itself once its
-//! node is running and hears the master's sync, within 15 s, under an independent watchdog of
-//! 20 s; otherwise it resets unconfirmed and the bootloader swaps the previous image back.
+//! sectors. It takes updates over the bus as a module does (`update`: r2p-module's `DfuSink`
+//! over the DFU sectors). After an update it is on trial (r2p-boot's `trial`): it confirms
+//! itself once its node is running and hears the master's sync (or, master itself, hears
+//! another node), within 15 s, under an independent watchdog of 20 s; otherwise it resets
+//! unconfirmed and the bootloader swaps the previous image back.
 #![no_std]
 #![no_main]
 
@@ -27,7 +29,7 @@ use embassy_stm32::can::{
     Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
 };
 use embassy_stm32::eth::{self, Ethernet, GenericPhy, PacketQueue, Sma};
-use embassy_stm32::flash::{Bank1Region1, Bank1Region2, Blocking, Flash};
+use embassy_stm32::flash::{Bank1Region1, Blocking, Flash};
 use embassy_stm32::gpio::{Level, Output};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
@@ -56,6 +58,7 @@ mod board {
 }
 #[path = "../../../shared/trial.rs"]
 mod trial;
+mod update;
 use trial::Confirmation;
 
 bind_interrupts!(struct Irqs {
@@ -79,14 +82,12 @@ static PARAMS: FlashParams<{ params::COUNT }> =
 
 /// The parameters' flash: the 16 KiB sectors, so a page of FlashParams is one sector.
 type ParamFlash = Bank1Region1<'static, Blocking>;
-/// embassy-boot's state partition: the 64 KiB sector 4, bank 1 region 2, whole.
-type StateFlash = Bank1Region2<'static, Blocking>;
 
 /// The image's trial after an update (../../shared/trial.rs) and the bootloader state it
 /// confirms in.
 struct Trial {
     confirmation: Confirmation,
-    state: StateFlash,
+    state: update::StatePart,
 }
 static ENDPOINTS: Storage = Storage::new();
 /// `/cmd_vel` from ROS 2, on the bus for whichever module runs the base controller.
@@ -117,10 +118,14 @@ const RUNNING: u8 = 1;
 const SYNCED: u8 = 2;
 const TRAFFIC: u8 = 4;
 const STORAGE_FAULT: u8 = 8;
+/// The node has heard another node (a master alone on its side of the bus is not healthy).
+const HEARD_OTHERS: u8 = 16;
 /// The node's state for the LEDs, written by the bus task, read by the application's step.
 static LED_INPUTS: AtomicU8 = AtomicU8::new(0);
 /// A REBOOT request arrived: the application's task persists parameters, then resets.
 static REBOOT: AtomicBool = AtomicBool::new(false);
+/// The image has just confirmed itself: the bus task says so in FIRMWARE.
+static TRIAL_OVER: AtomicBool = AtomicBool::new(false);
 /// The address in use came from DHCP.
 static FROM_DHCP: AtomicBool = AtomicBool::new(false);
 
@@ -138,6 +143,9 @@ async fn bus(node: &'static mut GatewayNode, mut can: BxCan<'static>, running_af
         if node.take_reboot_request() {
             REBOOT.store(true, Ordering::Relaxed);
         }
+        if TRIAL_OVER.swap(false, Ordering::Relaxed) {
+            node.set_firmware(update::running_image(false)); // confirmed
+        }
         let received = node.stats().frames_received;
         if received != frames {
             (frames, last_frame_at) = (received, Some(now));
@@ -146,8 +154,13 @@ async fn bus(node: &'static mut GatewayNode, mut can: BxCan<'static>, running_af
             || matches!(node.clock().state(now), ClockState::Running(_));
         let traffic = last_frame_at.is_some_and(|t| now - t < 1_000_000);
         let mut bits = 0;
-        for (on, bit) in [(now >= running_after_us, RUNNING), (synced, SYNCED), (traffic, TRAFFIC)]
-        {
+        let heard = node.peer_count() > 0;
+        for (on, bit) in [
+            (now >= running_after_us, RUNNING),
+            (synced, SYNCED),
+            (traffic, TRAFFIC),
+            (heard, HEARD_OTHERS),
+        ] {
             if on {
                 bits |= bit;
             }
@@ -317,10 +330,14 @@ async fn run(
         step = step.wrapping_add(1);
         if step.is_multiple_of(100) {
             let b = LED_INPUTS.load(Ordering::Relaxed);
-            let healthy = b & RUNNING != 0 && b & SYNCED != 0 && b & STORAGE_FAULT == 0;
+            let healthy = b & (RUNNING | SYNCED | HEARD_OTHERS) == RUNNING | SYNCED | HEARD_OTHERS
+                && b & STORAGE_FAULT == 0;
             let now_ms = Instant::now().as_millis();
+            let was_on_trial = trial.confirmation.on_trial();
             if !trial.confirmation.poll(&mut trial.state, now_ms, healthy) {
                 LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
+            } else if was_on_trial && !trial.confirmation.on_trial() {
+                TRIAL_OVER.store(true, Ordering::Relaxed);
             }
             if PARAMS.is_dirty() && PARAMS.commit(&mut flash).is_err() {
                 LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
@@ -399,9 +416,11 @@ async fn main(spawner: Spawner) {
     }
     // Just swapped in by the bootloader (its state says Swap): on trial, under the watchdog.
     // Just rolled back (Revert): say so to the bootloader, so the next update may begin.
-    let mut state = regions.bank1_region2;
+    let shared_state = update::share_state(regions.bank1_region2);
+    let mut state = update::state_partition(shared_state);
     let whole = r2p_boot::layout::Partition { offset: 0, size: MAP.state.size };
     let confirmation = Confirmation::at_boot(&mut state, whole, p.IWDG, Instant::now().as_millis());
+    let on_trial = confirmation.on_trial();
     let trial = Trial { confirmation, state };
     let net = Net::read(&PARAMS, 0);
     let uid = embassy_stm32::uid::uid();
@@ -411,6 +430,8 @@ async fn main(spawner: Spawner) {
     let config = r2p_app_gateway::node_config(uid);
     let mut node = GatewayNode::new(config, &PARAMS).unwrap();
     app.register(&mut node).unwrap();
+    node.set_update_sink(update::sink(regions.bank1_region3, shared_state));
+    node.set_firmware(update::running_image(on_trial));
     let cmd_vel = CMD_VEL.build("cmd_vel", Twist2D::default(), Class::NonRealTime).unwrap();
     node.export(cmd_vel.remote).unwrap();
     let running_after_us = u64::from(STARTING_HEARTBEATS) * u64::from(config.heartbeat_period_us);
