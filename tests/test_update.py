@@ -60,7 +60,8 @@ def test_a_motor_module_is_updated_over_the_bus_and_runs_the_new_image(robot, tm
     assert p.returncode == 0, p.stdout
     assert re.search(r"\[#+\.*\] +\d+ % .* KiB/s, .* left", p.stdout), "a progress bar: " + p.stdout
     assert "verified and marked" in p.stdout, p.stdout
-    assert f"-> 1.4.0 {digest}: running, confirmed" in p.stdout, p.stdout
+    assert re.search(rf"0\.1\.0 [0-9a-f]{{16}} -> 1\.4\.0 {digest}: running, confirmed", p.stdout), \
+        "what it ran before, then what it runs: " + p.stdout
     row = firmware_of(robot, "motor2")
     assert f"1.4.0 {digest}" in row and "on trial" not in row, row
     assert "0.1.0" in firmware_of(robot, "motor3"), "only the module named was updated"

@@ -188,6 +188,14 @@ fn update_one(
 ) -> Result<(), CliError> {
     let label = s.watcher().node_label(target.get());
     let uid = s.watcher().node(target.get()).map(|n| n.uid);
+    // What it runs now, for the line that says what it ran before: FIRMWARE comes every 8th
+    // heartbeat, so a node just heard may not have said it yet.
+    let asked = Instant::now();
+    while s.watcher().node(target.get()).is_some_and(|n| n.firmware.is_none())
+        && asked.elapsed() < HEAR_FIRMWARE
+    {
+        s.step(Duration::from_millis(5))?;
+    }
     let before = s.watcher().node(target.get()).and_then(|n| n.firmware.clone());
     let me = s.host().expect("joined").node_id();
     let id = (Instant::now().elapsed().subsec_nanos() as u16 ^ std::process::id() as u16).max(1);
