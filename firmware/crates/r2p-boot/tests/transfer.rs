@@ -288,3 +288,33 @@ fn progress_is_what_the_receiver_acknowledged_of_the_whole() {
     assert_eq!(tx.progress(), (one, len));
     assert!(matches!(tx.poll(2), Some(Msg::Block { offset, .. }) if offset == one));
 }
+
+#[test]
+fn a_lost_block_is_sent_again_at_the_second_answer_that_still_waits_for_it() {
+    let image = signed(1_000);
+    let mut tx = Sender::new(&image, 7, 4, 1_000);
+    let at = |received: u32| Status { id: 7, state: State::Receiving, received };
+    let block = |m: Option<Msg<'_>>| match m {
+        Some(Msg::Block { offset, .. }) => offset,
+        other => panic!("expected a block, got {other:?}"),
+    };
+    assert!(matches!(tx.poll(0), Some(Msg::Begin { .. })));
+    tx.on_status(&at(0), 1);
+    let b = BLOCK_MAX as u32;
+    let sent: Vec<u32> = (0..4).map(|_| block(tx.poll(1))).collect();
+    assert_eq!(sent, [0, b, 2 * b, 3 * b], "four blocks in flight");
+    assert!(tx.poll(1).is_none());
+    tx.on_status(&at(b), 2); // block 0 in
+    assert_eq!(block(tx.poll(2)), 4 * b, "the window moves on");
+    // Block 1 was lost: blocks 2 and 3 arrive out of order and the receiver still waits at b.
+    tx.on_status(&at(b), 3);
+    assert!(tx.poll(3).is_none(), "the first such answer may answer a block sent before");
+    tx.on_status(&at(b), 4);
+    assert_eq!(block(tx.poll(4)), b, "the second: back to the lost block at once");
+    assert_eq!((tx.fast_goes_back, tx.timeouts), (1, 0));
+    // Answers to the blocks still in flight before the go-back do not send it back again.
+    tx.on_status(&at(b), 5);
+    tx.on_status(&at(b), 5);
+    assert_eq!(block(tx.poll(5)), 2 * b, "it goes on from the resent block");
+    assert_eq!(tx.fast_goes_back, 1, "once per gap");
+}
