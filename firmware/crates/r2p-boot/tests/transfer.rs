@@ -318,3 +318,42 @@ fn a_lost_block_is_sent_again_at_the_second_answer_that_still_waits_for_it() {
     assert_eq!(block(tx.poll(5)), 2 * b, "it goes on from the resent block");
     assert_eq!(tx.fast_goes_back, 1, "once per gap");
 }
+
+#[test]
+fn unanswered_begin_and_end_are_sent_again_and_counted_as_timeouts() {
+    let image = signed(100);
+    let mut tx = Sender::new(&image, 7, 1, 50);
+    assert!(matches!(tx.poll(0), Some(Msg::Begin { len, .. }) if len == image.len() as u32));
+    assert!(tx.poll(49).is_none(), "within its timeout");
+    assert!(matches!(tx.poll(50), Some(Msg::Begin { .. })), "again after it");
+    assert_eq!(tx.timeouts, 1, "the first Begin is no timeout, the second is");
+    tx.on_status(&Status { id: 7, state: State::Receiving, received: image.len() as u32 }, 51);
+    assert_eq!(tx.phase(), Phase::Beginning, "a count before the receiver began is not taken");
+    tx.on_status(&Status { id: 7, state: State::Receiving, received: 0 }, 52);
+    while tx.phase() == Phase::Sending {
+        assert!(matches!(tx.poll(52), Some(Msg::Block { .. })));
+        let received = (tx.progress().0 + BLOCK_MAX as u32).min(image.len() as u32);
+        tx.on_status(&Status { id: 7, state: State::Receiving, received }, 52);
+    }
+    assert_eq!(tx.timeouts, 1);
+    assert!(matches!(tx.poll(53), Some(Msg::End { id: 7 })));
+    assert!(matches!(tx.poll(103), Some(Msg::End { id: 7 })));
+    assert_eq!(tx.timeouts, 2);
+}
+
+#[test]
+fn a_receiver_that_forgot_the_transfer_makes_it_begin_again_under_a_new_id() {
+    let image = signed(100);
+    let mut tx = Sender::new(&image, 7, 1, 50);
+    let idle = Status { id: 0, state: State::Idle, received: 0 };
+    tx.poll(0);
+    tx.on_status(&idle, 1);
+    assert_eq!(tx.restarts, 0, "an idle receiver before it began: still beginning, no restart");
+    tx.on_status(&Status { id: 7, state: State::Receiving, received: 0 }, 2);
+    assert!(matches!(tx.poll(2), Some(Msg::Block { id: 7, .. })));
+    tx.on_status(&Status { id: 3, state: State::Receiving, received: 48 }, 3);
+    assert_eq!((tx.phase(), tx.restarts, tx.progress().0), (Phase::Sending, 0, 0), "another's");
+    tx.on_status(&idle, 4);
+    assert_eq!((tx.phase(), tx.restarts, tx.progress().0), (Phase::Beginning, 1, 0));
+    assert!(matches!(tx.poll(4), Some(Msg::Begin { id: 8, .. })), "a new transfer ID");
+}
