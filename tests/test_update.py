@@ -69,7 +69,7 @@ def test_a_motor_module_is_updated_over_the_bus_and_runs_the_new_image(robot, tm
 
 def test_refused_images_say_why_and_the_module_keeps_its_image(robot, tmp_path):
     before = firmware_of(robot, "motor1")
-    big, _ = signed(tmp_path, "motor", "motor", "2.0.0")  # 57 KB: more than a 55 168 B slot
+    big, _ = signed(tmp_path, "motor", "motor", "2.0.0")  # 59 KB: more than a 56 192 B slot
     p = r2p(robot, "update", "motor1", str(big))
     assert p.returncode != 0
     assert "refused" in p.stdout and "larger than the module's image slot" in p.stdout, p.stdout

@@ -48,6 +48,11 @@ pub(crate) use crate::slots::{Pool, Slot};
 /// fn shared<X: Sync>() {}
 /// shared::<r2p_middleware::Msg<'static, core::cell::Cell<u8>>>(); // `Cell` is not `Sync`
 /// ```
+// `repr(C)` here, on `Shares`, `MsgMut`, `Slot` and `Topic`: the same layout whatever `T`, so
+// the code that handles messages without reading them (a handle's drop, a topic's publish, a
+// remote subscriber's queue) compiles to the same instructions for every message type, and
+// LLVM's function merging keeps one copy (−1.1 KB on the PSU's four topics).
+#[repr(C)]
 pub struct Msg<'a, T> {
     slot: &'a Slot<T>,
     origin: &'a Publisher<'a, T>,
@@ -100,6 +105,7 @@ impl<T: fmt::Debug> fmt::Debug for Msg<'_, T> {
 ///
 /// Each `next()` hands out one of them (nothing to count: the slot's count already includes
 /// it); dropping the iterator early (a sink panicked) releases the ones not handed out.
+#[repr(C)]
 pub(crate) struct Shares<'a, T> {
     slot: &'a Slot<T>,
     origin: &'a Publisher<'a, T>,
@@ -132,6 +138,7 @@ impl<T> Drop for Shares<'_, T> {
 /// The slot holds whatever message last used it (every slot starts as the topic's initial
 /// value): overwrite every field, or assign a whole value with `*draft = value`. Dropping a
 /// draft without publishing it returns the slot to the pool.
+#[repr(C)]
 pub struct MsgMut<'a, T> {
     slot: &'a Slot<T>,
     origin: &'a Publisher<'a, T>,

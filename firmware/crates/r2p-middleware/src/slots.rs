@@ -25,7 +25,9 @@ pub(crate) const FREE: u32 = 0;
 /// `refs` of a slot held by a draft; also the bound on the number of handles of a message.
 pub(crate) const WRITING: u32 = u32::MAX;
 
-/// One message and its state (see the module docs).
+/// One message and its state (see the module docs). Its state first (`repr(C)`): at the same
+/// place whatever `T`, so releasing a handle is the same code for every message type.
+#[repr(C)]
 pub(crate) struct Slot<T> {
     pub(crate) refs: AtomicU32,
     data: DataCell<MaybeUninit<T>>,

@@ -77,10 +77,15 @@ struct Links<'a, T, const SUBS: usize> {
 ///
 /// Publishers of the topic share its pool; every published message goes, by reference, to
 /// every subscriber.
+///
+/// Its subscriber list comes before its pool (`repr(C)`): at the same place whatever `T` and
+/// `SLOTS`, so publishing and the [`TopicInfo`] queries are the same code for every topic with
+/// `SUBS` subscribers, which the compiler then keeps once.
+#[repr(C)]
 pub struct Topic<'a, T, const SLOTS: usize, const SUBS: usize> {
     name: &'static str,
-    pool: Pool<[Slot<T>; SLOTS]>,
     links: Mutex<CriticalSectionRawMutex, Links<'a, T, SUBS>>,
+    pool: Pool<[Slot<T>; SLOTS]>,
 }
 
 impl<'a, T: Copy + Send + Sync, const SLOTS: usize, const SUBS: usize> Topic<'a, T, SLOTS, SUBS> {

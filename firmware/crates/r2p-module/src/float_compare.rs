@@ -1,5 +1,5 @@
 //! One comparison of two `f32` for the bare-metal images' six comparison helpers, instead of
-//! compiler-builtins' six: a module image must fit a 54 KiB bootloader slot (docs/flashing.md,
+//! compiler-builtins' six: a module image must fit a 55 KiB bootloader slot (docs/flashing.md,
 //! "Flash map").
 //!
 //! On the Cortex-M3 (no FPU) LLVM compiles `a < b` on `f32` into a call of `__aeabi_fcmplt`,

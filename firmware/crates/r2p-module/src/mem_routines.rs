@@ -1,5 +1,6 @@
 //! Smaller 8-byte aligned copy and clear for the bare-metal images than compiler-builtins': a
-//! module image must fit a 54 KiB bootloader slot (docs/flashing.md, "Flash map").
+//! module image must fit a 55 KiB bootloader slot (docs/flashing.md, "Flash map"), and the F103's
+//! bootloader, which includes this file, its 14 KiB partition.
 //!
 //! `__aeabi_memcpy8` and `__aeabi_memclr8` (what LLVM calls for 8-byte aligned copies and
 //! clears): compiler-builtins has a word loop for each, a copy of its 4-byte aligned one (156 and

@@ -19,6 +19,11 @@ use r2p_boot::layout::STM32F103CB as MAP;
 
 include!("../../../shared/bootloader.rs");
 
+// The module images' 8-byte aligned copy and clear as a branch to the 4-byte aligned ones
+// (compiler-builtins has a copy of each: 330 B), so the bootloader fits its 14 KiB partition.
+#[path = "../../../../crates/r2p-module/src/mem_routines.rs"]
+mod mem_routines;
+
 #[cortex_m_rt::entry]
 fn main() -> ! {
     // Only the flash controller, on the reset clock (HSI, 8 MHz: enough to copy pages; the image
