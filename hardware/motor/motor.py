@@ -75,8 +75,8 @@ PLACES = {
     "R104": P(78.2, 1.5, 0), "C116": P(81.5, 1.5, 0), "D104": P(85.6, 1.5, 0),
     "C115": P(86.6, 7.6, 270), "R103": P(88.5, 5.0, 90), "C113": P(80.5, 14.9, 0),
     # its VDD regulator above leg B's high side, the collector on VMOT
-    "Q106": P(94.2, 3.0, 0), "R120": P(99.0, 1.4, 0), "D105": P(99.0, 3.4, 0),
-    "C118": P(99.0, 5.4, 0),
+    "Q106": P(94.2, 3.0, 180), "R120": P(90.2, 3.0, 270), "D105": P(98.45, 3.0, 90),
+    "C118": P(100.35, 3.0, 90),
     # the enable inverter and the over-current window comparators in the core's free band
     # (3.3 V logic beside the MCU and the over-voltage comparator)
     "Q105": P(37.8, 40.0, 0), "R115": P(34.0, 40.0, 0),
@@ -229,13 +229,45 @@ def driver_phase_links() -> tuple[list[Track], list[Via]]:
     return tracks, vias
 
 
+REGULATOR_LINKS = (
+    # VMOT: two vias in Q106's collector tab into the In2.Cu plane; R120's VMOT pad onto the tab
+    ("VMOT", [(90.2, 2.225), (92.6, 2.6)], 0.4),
+    # VG: R120 → under the tab → Q106's base → D105's cathode → C118
+    ("DRV_VG", [(90.2, 3.775), (90.2, 5.3), (96.15, 5.3), (96.15, 4.5), (98.45, 4.65)], 0.3),
+    ("DRV_VG", [(98.45, 4.65), (100.35, 3.775)], 0.3),
+    # GND: D105's anode and C118's ground pad to a via into In1.Cu
+    ("GND", [(98.45, 1.35), (100.35, 1.35), (100.35, 2.225)], 0.3),
+    ("GND", [(100.35, 1.35), (101.4, 1.35)], 0.3),
+    # VDD: Q106's emitter over its tab to D104's anode (the router takes it on to the driver)
+    ("DRV_VDD", [(96.15, 1.5), (96.15, 0.8), (87.25, 0.8), (87.25, 1.5)], 0.3),
+    # the supply-sense dividers' VMOT from C112's plane via down the column's left
+    ("VMOT", [(101.3, 22.0), (102.0, 22.7), (102.0, 32.0), (103.225, 32.0)], 0.3),
+    ("VMOT", [(102.0, 26.0), (103.225, 26.0)], 0.3),
+)
+REGULATOR_VIAS = (("VMOT", 93.2, 3.0), ("VMOT", 94.4, 3.0), ("GND", 101.4, 1.35))
+"""The driver's VDD regulator above leg B's high side, drawn: its parts sit between the board
+edge and Q103's tab, where the router left every one of its connections open (second route);
+and the VMOT feed of the VMOT_SENSE and over-voltage dividers, which it also left open."""
+
+
+def regulator_links() -> tuple[list[Track], list[Via]]:
+    return ([Track(net, pts, w) for net, pts, w in REGULATOR_LINKS],
+            [Via(net, x, y, 0.6, 0.3) for net, x, y in REGULATOR_VIAS])
+
+
 GND_FANOUT = (   # (pad centre, via) in mm, F.Cu track 0.3 mm
     ((39.525, 24.865), (41.15, 24.86)), ((44.475, 23.595), (46.1, 23.59)),
     ((38.862, 36.4), (40.17, 36.4)), ((17.8, 27.625), (18.93, 27.62)), ((39.062, 32.6), (40.38, 32.6)),
     ((45.075, 32.6), (46.18, 32.6)), ((34.825, 40.0), (35.88, 40.0)), ((45.075, 35.2), (46.18, 35.2)),
     ((36.862, 40.95), (38.25, 40.95)), ((5.0, 34.475), (6.15, 34.48)), ((11.0, 34.475), (12.15, 34.48)),
     ((37.0, 24.225), (38.04, 24.82)), ((21.775, 24.4), (22.88, 24.4)), ((23.363, 46.5), (22.05, 46.5)),
-    ((47.6, 36.675), (48.73, 36.67)), ((22.4, 28.45), (23.75, 28.45)))
+    ((47.6, 36.675), (48.73, 36.67)), ((22.4, 28.45), (23.75, 28.45)),
+    # found open after the second route: U1's four VSS pins (vias under its body), the core's
+    # C6, C10, C11, D1, R2, TP3 and the Hall sensor's C119
+    ((25.837, 29.25), (27.87, 29.25)), ((32.25, 32.663), (32.25, 30.63)), ((34.163, 26.25), (32.12, 26.25)),
+    ((27.75, 24.337), (27.75, 26.37)), ((81.275, 21.5), (82.38, 21.5)), ((33.337, 16.0), (34.73, 16.0)),
+    ((53.6, 20.2), (54.75, 20.2)), ((30.325, 35.2), (31.38, 35.2)), ((21.6, 30.225), (20.56, 30.82)),
+    ((23.2, 30.225), (24.32, 30.23)), ((20.775, 33.5), (21.88, 33.5)))
 """A via into the In1 GND plane beside each GND pad of the core band's parts (SW1, Y1, C1, C2,
 C4, U3, D102 and this board's comparators and enable inverter), found clear of
 every other net by a search over the placed board: freerouting left six such pads as F.Cu
@@ -383,8 +415,9 @@ def build(core: Sheet) -> Module:
 
     m = Module(NAME, TITLE, REVISION, s,
                tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks(),
-                       *power_tracks(), *gnd_fanout()[0], *driver_phase_links()[0]],
-               vias=power_vias() + gnd_fanout()[1] + driver_phase_links()[1], zones=planes() + power_zones(),
+                       *power_tracks(), *gnd_fanout()[0], *driver_phase_links()[0],
+                       *regulator_links()[0]],
+               vias=power_vias() + gnd_fanout()[1] + driver_phase_links()[1] + regulator_links()[1], zones=planes() + power_zones(),
                seed=19, size=SIZE, holes=HOLES, copper_layers=4,
                netclasses={"HV": list(HV_NETS)}, dru_rules=ipc2221b_rules(),
                netclass_defs={"HV": (0.6, 0.3, 0.8, 0.4)},
