@@ -79,8 +79,11 @@ def _exposed_pad(fp, pad) -> bool:
     10-50 times their pins, a D2PAK's tab 20 times its leads; a two-terminal part's pads are
     never exposed pads). Open vias there still take solder paste down their barrels: a board
     with many of them orders them filled and capped (hardware/motor/README.md, "Before ordering")."""
-    areas = sorted(p.GetSizeX() * p.GetSizeY() for p in fp.Pads() if p.IsOnCopperLayer())
-    return len(areas) >= 3 and pad.GetSizeX() * pad.GetSizeY() >= 4 * areas[len(areas) // 2]
+    def area(p) -> int:              # a custom pad's size is its anchor's: take its outline's box
+        box = p.GetBoundingBox()
+        return box.GetWidth() * box.GetHeight()
+    areas = sorted(area(p) for p in fp.Pads() if p.IsOnCopperLayer())
+    return len(areas) >= 3 and area(pad) >= 4 * areas[len(areas) // 2]
 
 
 def vias_in_pads(pcb: Path) -> list[str]:
