@@ -446,7 +446,7 @@ def test_psu_high_voltage_clearance_rule_catches_a_violation(tmp_path):
     assert ipc_errors(), "a GND via 0.4 mm from VIN_BUCK must break the 0.6 mm rule"
 
 
-@pytest.mark.parametrize("board", ["psu", "proximity", "template"])
+@pytest.mark.parametrize("board", ["psu", "proximity", "template", "motor"])
 def test_no_via_sits_in_an_smd_pad(board):
     """An open via in a pad wicks the joint's solder down the barrel (revision A had a VIN_BUCK via
     in C102's pad); the exposed pads' thermal vias are the only vias allowed in copper pads."""
@@ -544,9 +544,11 @@ MOTOR_ROLES = {
     "R_OV_TOP": ("R110", "R111", "R112"), "R_OV_BOT": ("R113",),
     "C_BULK_EACH": ("C101", "C102", "C103", "C104"),
     "C_CER_EACH": ("C105", "C106", "C107", "C108", "C109", "C110", "C111", "C112"),
-    "C_VCP": ("C114",), "R_ENC_SERIES": ("R118", "R119"), "C_ENC": ("C124", "C125"),
+    "R_ENC_SERIES": ("R118", "R119"), "C_ENC": ("C124", "C125"),
     "R_ENC_PULLUP": ("R116", "R117"), "R_FAULT_PULLUP": ("R114",),
-    # C_CP_FLY (47 nF in SLVSDY6) is C115 = 100 nF 100 V on the board: README errata
+    # the HIP4082's bootstrap, VDD and dead time, its VDD regulator, the over-current window
+    "C_BS": ("C114", "C115"), "C_VDD": ("C113",), "R_GATE": ("R101", "R102", "R103", "R104"),
+    "R_DEL": ("R105",), "R_VDD_BIAS": ("R120",), "R_OC_OUTER": ("R121", "R123"), "R_OC_MID": ("R122",),
 }
 MOTOR_SERIES = {"R_OV_TOP"}
 

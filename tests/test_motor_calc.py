@@ -40,6 +40,14 @@ def test_junction_meets_the_issue_limit_at_20_a_and_40_c():
     ("R_OV_TOP", 430e3, "over-voltage trip"),
     # an encoder filter that eats the encoder's edges
     ("C_ENC", 10e-9, "encoder filter corner"),
+    # 100 nF bootstrap capacitors: the high-side gate sags 2.6 V over one on-time
+    ("C_BS", 100e-9, "bootstrap droop"),
+    # a 10 k / 150 k / 10 k window: its 3.106 V lies beyond the sensor's swing (never trips)
+    ("R_OC_MID", 150e3, "over-current trip"),
+    # a 1 µF VDD reservoir cannot refill the bootstrap capacitors
+    ("C_VDD", 1e-6, "C_VDD vs the bootstrap"),
+    # a 100 k zener feed: at 12 V in, Q106's base current drops VDD below the driver's minimum
+    ("R_VDD_BIAS", 100e3, "driver VDD at the 12 V minimum input"),
 ])
 def test_a_changed_board_value_fails_its_row(monkeypatch, name, value, guarded):
     assert row(guarded).ok
@@ -53,19 +61,30 @@ def test_a_changed_board_value_fails_its_row(monkeypatch, name, value, guarded):
     ("PWM_HZ", 100e3, "T_J worst FET at 20 A"),                         # switching losses × 5
     ("FET_RDS_MAX", 12e-3, "T_J worst FET at 20 A"),                    # a 12 mΩ MOSFET
     ("DEAD_TIME_S", 50e-9, "dead time vs turn-off"),                    # shoot-through
-    ("TVS_VC", 82.4, "DRV8350 VM at the TVS clamp"),                    # SMCJ51A's clamp
+    ("TVS_VC", 82.4, "HIP4082 AHS/BHS at the TVS clamp"),              # SMCJ51A's clamp
     ("ENCODER_MA", 85.0, "from the bus"),                               # HEDS-5540 at its max
     ("ELCAP_T_LOCAL", 85.0, "electrolytic life"),                       # capacitors by the FETs
     ("HALL_RANGE", 15.5, "current resolution"),                         # below ±30 A (issue 19)
-    ("DRV_VCP_BY_VM", {15.0: (9.0, 25e-3), 10.0: (6.0, 8e-3)},
-     "charge pump load"),                                               # a weaker charge pump at 10 V
-    ("DRV_VGLS_MIN_BY_VM", {15.0: 13.0, 12.0: 10.0, 10.0: 5.0, 9.0: 5.0},
-     "gate drive at the 10 V minimum input"),                           # a weaker low-side supply
+    ("ZENER_V", (15.3, 16.0, 17.1), "driver VDD (zener − V_BE)"),    # a 16 V zener: VDD over 15 V
+    ("Q106_HFE_MIN", 20.0, "driver VDD at the 12 V minimum input"),     # a low-gain pass transistor
+    ("HALL_T_RESPONSE", 10e-6, "current at switch-off"),                # a filtered sensor: 1 kA shorts
+    ("OC_SENS_TOL", 0.06, "over-current trip"),                         # a sloppier sensor: trips at 28 A
+    ("DRV_I_PEAK", 0.1, "dead time vs turn-off"),                       # a weak driver: ~1 µs turn-off
 ])
+
 def test_a_changed_part_or_assumption_fails_its_row(monkeypatch, name, value, guarded):
     assert row(guarded).ok
     monkeypatch.setattr(calc, name, value)
     assert not row(guarded).ok
+
+
+def test_the_firmware_duty_limit_keeps_the_bootstrap_refreshed(monkeypatch):
+    """No charge pump: at 100 % duty the low side never conducts and the high side's gate supply
+    runs down; the firmware's duty_limit maximum (params.rs, 0.95) is what the row reads."""
+    assert calc.firmware_assumptions()["duty_limit max"] == pytest.approx(0.95)
+    assert row("bootstrap refresh at the firmware's maximum duty").ok
+    monkeypatch.setattr(calc, "max_duty", lambda: 1.0)
+    assert not row("bootstrap refresh at the firmware's maximum duty").ok
 
 
 def test_narrow_copper_fails_its_ipc_row(monkeypatch):
@@ -105,8 +124,8 @@ def test_the_peak_is_bounded_by_heat_and_by_the_sensor(monkeypatch):
 def test_firmware_constants_are_read_from_their_sources():
     fw = calc.firmware_assumptions()
     assert set(fw) == {"HALL_MV_PER_A", "VMOT_DIVIDER_TOP_OHM", "VMOT_DIVIDER_BOTTOM_OHM",
-                       "pwm_hz", "dead_time_s", "current_limit max", "bridge.rs PWM_HZ",
-                       "bridge.rs DEAD_TIME_NS"}
+                       "pwm_hz", "dead_time_s", "current_limit max", "duty_limit max",
+                       "bridge.rs PWM_HZ", "bridge.rs DEAD_TIME_NS"}
     # the board was designed around the firmware's PWM and dead time: those agree
     assert fw["pwm_hz"] == fw["bridge.rs PWM_HZ"] == calc.PWM_HZ
     assert fw["dead_time_s"] == calc.DEAD_TIME_S

@@ -3,9 +3,16 @@
     XT60 in ─► F102 30 A ─► VMOT ─┬─ D101 SMCJ45A, C101-C104 4 × 1000 µF 63 V, C105-C112 8 × 2.2 µF 100 V
                                   ├─ leg A: Q101 (high) / Q102 (low) ─► SW_A ─► U102 ACS725 ─► MOT_A ─┐
                                   └─ leg B: Q103 (high) / Q104 (low) ─► MOT_B ─────────────────────────┴► XT60 motor
-    U101 DRV8350H (6x PWM, hardware interface, charge pump) drives the four gates through 10 Ω;
-    VM and VDRAIN from VMOT (the driver takes nothing from the bus); nFAULT and U103 (TLV3011,
-    VMOT > 46.4-49.2 V) pull DRV_FAULT low: TIM1's break input stops the PWM in hardware.
+    U101 HIP4082 (four independent inputs = the board file's four PWM pins; its channel B drives
+    leg A, channel A leg B; bootstrap high sides C114/C115 through D103/D104, turn-on delay R105,
+    UVLO) drives the four gates through 10 Ω; its
+    VDD (12.4 V) comes from VMOT through Q106 (BCX56-16 follower on D105's 13 V): the driver takes
+    nothing from the bus. DIS is pulled to VDD by R106 (bridge off) and pulled low by Q105 when
+    DRV_EN (PB0, active high; R115 holds it low in reset) enables the bridge.
+    DRV_FAULT (PB12 = TIM1_BKIN, R114 pull-up) is a wired-OR of open drains: U103 (TLV3011,
+    VMOT > 46.4-49.2 V) and the over-current window U105/U106 (LMV331, |I| > 30.1-32.4 A from the
+    ACS725's raw output against a 10 k / 100 k / 10 k ladder from +3V3): TIM1's break input stops
+    the PWM in hardware.
     U102 ±30 A Hall sensor (3.3 V, ratiometric) → 1 k / 4.7 nF → MOTOR_CURRENT (PA0);
     VMOT → 150 k / 10 k → VMOT_SENSE (PA1); encoder A/B (5 V or 3.3 V) → SRV05-4, 2.2 k pull-ups,
     1 k / 100 pF, U104 74LVC2G17 at 3.3 V → ENC_A/ENC_B (PA6/PA7, not 5 V tolerant).
@@ -17,11 +24,9 @@ GND are the same net, joined at the bulk capacitors' negative (star point) by th
 plane; the motor current's loop (XT60 − → capacitors → low-side sources) stays in the right-hand
 power section and never crosses the core. Isolated CAN is the revision B alternative (README).
 
-NOT VERIFIED, and why this board must not be ordered as is (README, errata): U101's pin NUMBERS
-(R2P:DRV8350H carries the datasheet's pin names; KiCad has no DRV835x symbol and SLVSDY6's pin
-table could not be read here), the IDRIVE and VDS resistor levels, F102's land pattern (KiCad has
-no NANO2 456 footprint: the 462's is used), and LCSC numbers for U101, U102, D101, F102 and the
-electrolytics (parts.csv `-`).
+NOT VERIFIED (README, "Before ordering"): the HIP4082's electrical tables (FN3676's front page was
+read; the pin table is KiCad 9's own symbol), F102's land pattern (KiCad has no NANO2 456
+footprint: the 462's is used), and the LCSC numbers of the parts parts.csv marks `-`.
 
 Board: 164 × 50 mm (docs/bus.md's 60 × 50 mm bus end plus two 52 mm hole pitches: the power
 stage's parts need 2880 mm² of courtyard, more than one pitch's 2525 mm²), 4 layers, 2 oz on every layer (the In1/In2 planes carry the motor current: calc/motor.py PATHS).
@@ -62,13 +67,22 @@ PLACES = {
     "C105": P(74.5, 15.5, 0), "C106": P(74.5, 19.5, 0), "C107": P(86.5, 15.5, 180),
     "C108": P(86.5, 19.5, 180), "C109": P(104.0, 10.0, 0), "C110": P(104.0, 14.0, 0),
     "C111": P(104.0, 18.0, 0), "C112": P(104.0, 22.0, 0),
-    # gate driver between the legs' high sides, its capacitors in a row above it
-    "U101": P(80.5, 8.5, 0),
-    "C113": P(76.0, 3.2, 90), "C116": P(78.0, 3.2, 90), "C114": P(80.0, 3.2, 90),
-    "C115": P(82.0, 3.2, 90), "C117": P(84.0, 3.2, 90), "C118": P(86.0, 3.2, 90),
-    "R101": P(74.5, 6.0, 0), "R102": P(74.5, 8.0, 0), "R103": P(74.5, 10.0, 0),
-    "R104": P(74.5, 12.0, 0), "R105": P(86.5, 6.0, 0), "R106": P(86.5, 8.0, 0),
-    "R115": P(86.5, 10.0, 0),
+    # gate driver between the legs' high sides, turned 90°: its outputs along its top edge, leg
+    # A's (channel B) on the left, leg B's (channel A) on the right; inputs, DEL and DIS below
+    "U101": P(80.5, 7.6, 90),
+    "R102": P(73.6, 3.4, 180), "R101": P(73.6, 5.4, 180), "C114": P(74.4, 7.9, 90),
+    "D103": P(77.4, 12.7, 0), "R105": P(81.3, 12.7, 0), "R106": P(84.4, 12.7, 0),
+    "R104": P(78.2, 1.5, 0), "C116": P(81.5, 1.5, 0), "D104": P(85.6, 1.5, 0),
+    "C115": P(86.6, 7.6, 270), "R103": P(88.5, 5.0, 90), "C113": P(80.5, 14.9, 0),
+    # its VDD regulator above leg B's high side, the collector on VMOT
+    "Q106": P(94.2, 3.0, 180), "R120": P(90.2, 3.0, 270), "D105": P(98.45, 3.0, 90),
+    "C118": P(100.35, 3.0, 90),
+    # the enable inverter and the over-current window comparators in the core's free band
+    # (3.3 V logic beside the MCU and the over-voltage comparator)
+    "Q105": P(37.8, 40.0, 0), "R115": P(34.0, 40.0, 0),
+    "U105": P(40.2, 32.6, 0), "U106": P(40.0, 36.4, 0), "C127": P(44.3, 32.6, 0),
+    "C128": P(44.3, 35.2, 0), "R121": P(47.6, 31.5, 90), "R122": P(47.6, 34.5, 90),
+    "R123": P(47.6, 37.5, 90),
     # supply sense and over-voltage dividers beside leg B
     "R108": P(104.0, 26.0, 0), "R109": P(104.0, 28.0, 0), "C121": P(104.0, 30.0, 0),
     "R110": P(104.0, 32.0, 0), "R111": P(104.0, 34.0, 0), "R112": P(104.0, 36.0, 0),
@@ -189,18 +203,91 @@ def power_vias() -> list[Via]:
     out += _grid("GND", 114.0, 43.4, 2, 3)
     out += _grid("VBAT", 144.2, 38.6, 3, 2, pitch=1.4)
     out += [Via("VMOT", 125.4, 42.0, 0.6, 0.3), Via("VMOT", 124.2, 41.3, 0.6, 0.3)]
-    out += _grid("SW_A", 71.6, 22.3, 5, 3)             # the IP+ pours' stitching (15)
+    out += _grid("SW_A", 72.0, 22.3, 5, 3)             # the IP+ pours' stitching (15)
     out += _grid("MOT_A", 75.2, 29.2, 4, 3)            # the IP− pours' stitching (12)
     return out
 
 
+DRIVER_PHASE_LINKS = (
+    # leg A: BHS (pin 15) under the body to C114, a via, B.Cu down into the SW_A pour
+    ("SW_A", [(77.325, 4.9), (77.325, 7.125), (74.4, 7.125), (73.1, 7.4)], (73.1, 7.4),
+     [(73.1, 7.4), (73.1, 22.2)]),
+    # leg B: AHS (pin 11) under the body to C115, a via, B.Cu under Q103's island into MOT_B's pour
+    ("MOT_B", [(82.405, 4.9), (82.405, 7.7), (85.9, 7.7), (86.6, 8.375), (87.3, 9.6)], (87.3, 9.6),
+     [(87.3, 9.6), (87.3, 16.65), (96.6, 16.65), (96.6, 17.5)]),
+)
+"""The driver's phase-sense pins (high-voltage class) to their bootstrap capacitors and phase
+nodes, drawn: the router could not reach them at 0.6 mm from the driver's other pins (the first
+route left both open). Under the SOIC's body the tracks pass 0.7 mm from the input row."""
+
+
+def driver_phase_links() -> tuple[list[Track], list[Via]]:
+    tracks, vias = [], []
+    for net, top, (vx, vy), bottom in DRIVER_PHASE_LINKS:
+        tracks += [Track(net, top, 0.4), Track(net, bottom, 0.5, "B.Cu")]
+        vias.append(Via(net, vx, vy, 0.6, 0.3))
+    return tracks, vias
+
+
+REGULATOR_LINKS = (
+    # VMOT: two vias in Q106's collector tab into the In2.Cu plane; R120's VMOT pad onto the tab
+    ("VMOT", [(90.2, 2.225), (92.6, 2.6)], 0.4),
+    # VG: R120 → under the tab → Q106's base → D105's cathode → C118
+    ("DRV_VG", [(90.2, 3.775), (90.2, 5.3), (96.15, 5.3), (96.15, 4.5), (98.45, 4.65)], 0.3),
+    ("DRV_VG", [(98.45, 4.65), (100.35, 3.775)], 0.3),
+    # GND: D105's anode and C118's ground pad to a via into In1.Cu
+    ("GND", [(98.45, 1.35), (100.35, 1.35), (100.35, 2.225)], 0.3),
+    ("GND", [(100.35, 1.35), (101.4, 1.35)], 0.3),
+    # VDD: Q106's emitter over its tab to D104's anode (the router takes it on to the driver)
+    ("DRV_VDD", [(96.15, 1.5), (96.15, 0.8), (87.25, 0.8), (87.25, 1.5)], 0.3),
+    # the supply-sense dividers' VMOT from C112's plane via down the column's left
+    ("VMOT", [(101.3, 22.0), (102.0, 22.7), (102.0, 32.0), (103.225, 32.0)], 0.3),
+    ("VMOT", [(102.0, 26.0), (103.225, 26.0)], 0.3),
+)
+REGULATOR_VIAS = (("VMOT", 93.2, 3.0), ("VMOT", 94.4, 3.0), ("GND", 101.4, 1.35))
+"""The driver's VDD regulator above leg B's high side, drawn: its parts sit between the board
+edge and Q103's tab, where the router left every one of its connections open (second route);
+and the VMOT feed of the VMOT_SENSE and over-voltage dividers, which it also left open."""
+
+
+def regulator_links() -> tuple[list[Track], list[Via]]:
+    return ([Track(net, pts, w) for net, pts, w in REGULATOR_LINKS],
+            [Via(net, x, y, 0.6, 0.3) for net, x, y in REGULATOR_VIAS])
+
+
+GND_FANOUT = (   # (pad centre, via) in mm, F.Cu track 0.3 mm
+    ((39.525, 24.865), (41.15, 24.86)), ((44.475, 23.595), (46.1, 23.59)),
+    ((38.862, 36.4), (40.17, 36.4)), ((17.8, 27.625), (18.93, 27.62)), ((39.062, 32.6), (40.38, 32.6)),
+    ((45.075, 32.6), (46.18, 32.6)), ((34.825, 40.0), (35.88, 40.0)), ((45.075, 35.2), (46.18, 35.2)),
+    ((36.862, 40.95), (38.25, 40.95)), ((5.0, 34.475), (6.15, 34.48)), ((11.0, 34.475), (12.15, 34.48)),
+    ((37.0, 24.225), (38.04, 24.82)), ((21.775, 24.4), (22.88, 24.4)), ((23.363, 46.5), (22.05, 46.5)),
+    ((47.6, 36.675), (48.73, 36.67)), ((22.4, 28.45), (23.75, 28.45)),
+    # found open after the second route: U1's four VSS pins (vias under its body), the core's
+    # C6, C10, C11, D1, R2, TP3 and the Hall sensor's C119
+    ((25.837, 29.25), (27.87, 29.25)), ((32.25, 32.663), (32.25, 30.63)), ((34.163, 26.25), (32.12, 26.25)),
+    ((27.75, 24.337), (27.75, 26.37)), ((81.275, 21.5), (82.38, 21.5)), ((33.337, 16.0), (34.73, 16.0)),
+    ((53.6, 20.2), (54.75, 20.2)), ((30.325, 35.2), (31.38, 35.2)), ((21.6, 30.225), (20.56, 30.82)),
+    ((23.2, 30.225), (24.32, 30.23)), ((20.775, 33.5), (21.88, 33.5)))
+"""A via into the In1 GND plane beside each GND pad of the core band's parts (SW1, Y1, C1, C2,
+C4, U3, D102 and this board's comparators and enable inverter), found clear of
+every other net by a search over the placed board: freerouting left six such pads as F.Cu
+islands without one (the previous route's leftovers)."""
+
+
+def gnd_fanout() -> tuple[list[Track], list[Via]]:
+    return ([Track("GND", [pad, via], 0.3) for pad, via in GND_FANOUT],
+            [Via("GND", x, y, 0.6, 0.3) for _, (x, y) in GND_FANOUT])
+
+
 HV_NETS = ("VBAT", "VMOT", "SW_A", "MOT_A", "MOT_B", "GATE_AH", "GATE_BH", "GHA", "GHB",
-           "DRV_VCP", "DRV_CPH", "DRV_CPL", "OV_A", "OV_B")
+           "DRV_BOOT_A", "DRV_BOOT_B", "OV_A", "OV_B")
 """Nets at the motor supply (up to 49.2 V at the trip, 72.7 V at the TVS clamp) or riding on it
-(the high-side gates and the charge pump, ≤ 12 V above it); among themselves they differ by less
+(the high-side gates and the bootstrap supplies, ≤ 15 V above it); among themselves they differ by less
 than 15 V, from every other net by up to the clamp."""
-FINE_PITCH = ("U101", "U102")
-"""The driver (0.5 mm pitch) and the sensor: inside their courtyards the maker's pin spacing rules."""
+FINE_PITCH = ("U102", "Q106")
+"""Inside these courtyards the maker's pin spacing rules: the sensor's (its IP+ and IP− leads are
+one net each) and the VDD regulator's SOT-89 (collector tab on VMOT, 0.5 mm from its base and
+emitter pads). The driver's SOIC-16 keeps 0.67 mm between pads and needs no exemption."""
 
 
 def ipc2221b_rules() -> str:
@@ -217,16 +304,16 @@ def ipc2221b_rules() -> str:
 
 
 def build(core: Sheet) -> Module:
-    s = Sheet(NAME, f"{TITLE}: 10-44 V, 20 A continuous H-bridge, encoder, Hall current sense")
+    s = Sheet(NAME, f"{TITLE}: 12-44 V, 20 A continuous H-bridge, encoder, Hall current sense")
     bus_tap(s, "+5V_MOD", at=BUS_TAP_PLACE)
     pins = {p: "" for p in core_mod.FREE_GPIO}
     pins.update(PINS)
     pins["V5_IN"] = "+5V_MOD"
     s.use(core, pins)
-    s.flags += ["VMOT"]
+    s.flags += ["VMOT", "DRV_VDD"]
 
     # input: XT60 male (pin 1 −, pin 2 +), fuse, TVS, bulk and the commutation-loop ceramics
-    s.part("J101", "XT60_M", {"1": "GND", "2": "VBAT"}, value="BATTERY 10-44V")
+    s.part("J101", "XT60_M", {"1": "GND", "2": "VBAT"}, value="BATTERY 12-44V")
     s.part("F102", "FUSE_30A", {"1": "VBAT", "2": "VMOT"})
     s.part("D101", "SMCJ45A", {"1": "VMOT", "2": "GND"})          # D_SMC pad 1 = cathode
     for i in range(4):
@@ -243,24 +330,33 @@ def build(core: Sheet) -> Module:
                            ("R103", "GHB", "GATE_BH"), ("R104", "GLB", "GATE_BL")):
         s.part(ref, "R_10R", {"1": drv, "2": gate})
 
-    # gate driver: 6x PWM (MODE to AGND), phase C unused (inputs low, outputs open)
-    s.part("U101", "DRV8350H", {
-        "VM": "VMOT", "VDRAIN": "VMOT", "VCP": "DRV_VCP", "CPH": "DRV_CPH", "CPL": "DRV_CPL",
-        "VGLS": "DRV_VGLS", "DVDD": "DRV_DVDD", "AGND": "GND", "GND": "GND", "PAD": "GND",
-        "GHA": "GHA", "SHA": "SW_A", "GLA": "GLA", "SLA": "GND",
-        "GHB": "GHB", "SHB": "MOT_B", "GLB": "GLB", "SLB": "GND", "SHC": "GND", "SLC": "GND",
-        "INHA": "PWM_AH", "INLA": "PWM_AL", "INHB": "PWM_BH", "INLB": "PWM_BL",
-        "INHC": "GND", "INLC": "GND", "ENABLE": "DRV_EN", "nFAULT": "DRV_FAULT",
-        "MODE": "GND", "IDRIVE": "DRV_IDRIVE", "VDS": "DRV_VDS"}, nc=("GHC", "GLC"))
-    s.part("C113", "C_100n_100V", {"1": "VMOT", "2": "GND"})        # VM
-    s.part("C114", "C_1u", {"1": "DRV_VCP", "2": "VMOT"})            # VCP to VDRAIN
-    s.part("C115", "C_100n_100V", {"1": "DRV_CPH", "2": "DRV_CPL"})  # flying cap (47 nF in SLVSDY6)
-    s.part("C116", "C_100n_100V", {"1": "VMOT", "2": "GND"})        # VDRAIN
-    s.part("C117", "C_1u", {"1": "DRV_VGLS", "2": "GND"})
-    s.part("C118", "C_1u", {"1": "DRV_DVDD", "2": "GND"})
-    # hardware-interface levels: one resistor each to AGND (level NOT VERIFIED, README errata)
-    s.part("R105", "R_100k", {"1": "DRV_IDRIVE", "2": "GND"})
-    s.part("R106", "R_100k", {"1": "DRV_VDS", "2": "GND"})
+    # gate driver U101 HIP4082 (Renesas FN3676; KiCad 9's Driver_FET:HIP4082xB symbol and pin
+    # table): four independent inputs (the board file's four PWM pins), bootstrap high sides,
+    # turn-on delay set by R105 on DEL, under-voltage lockout on VDD; DIS high = every output low.
+    # Its two half-bridge channels are alike: channel B drives leg A and channel A leg B, so that
+    # turned 90° each channel's outputs face their leg (motor.py PLACES)
+    s.part("U101", "HIP4082", {
+        "BHI": "PWM_AH", "BLI": "PWM_AL", "AHI": "PWM_BH", "ALI": "PWM_BL", "DIS": "DRV_DIS",
+        "DEL": "DRV_DEL", "VDD": "DRV_VDD", "VSS": "GND",
+        "BHB": "DRV_BOOT_A", "BHO": "GHA", "BHS": "SW_A", "BLO": "GLA",
+        "AHB": "DRV_BOOT_B", "AHO": "GHB", "AHS": "MOT_B", "ALO": "GLB"})
+    s.part("C113", "C_10u", {"1": "DRV_VDD", "2": "GND"})             # VDD reservoir (10 × C_BS)
+    s.part("C116", "C_100n", {"1": "DRV_VDD", "2": "GND"})            # VDD at the pin
+    s.part("C114", "C_470n", {"1": "DRV_BOOT_A", "2": "SW_A"})        # bootstrap, leg A
+    s.part("C115", "C_470n", {"1": "DRV_BOOT_B", "2": "MOT_B"})       # bootstrap, leg B
+    s.part("D103", "1N4148W", {"A": "DRV_VDD", "K": "DRV_BOOT_A"})    # bootstrap diodes: 100 V, 4 ns
+    s.part("D104", "1N4148W", {"A": "DRV_VDD", "K": "DRV_BOOT_B"})
+    s.part("R105", "R_10k", {"1": "DRV_DEL", "2": "GND"})             # DEL: the shortest delays
+    # VDD ≈ 12.4 V from VMOT: Q106 (BCX56-16, 80 V) follows D105's 13 V; R120 feeds the zener
+    # and the base (calc/motor.py: VDD at the 12 V minimum input, Q106's dissipation)
+    s.part("Q106", "BCX56", {"C": "VMOT", "B": "DRV_VG", "E": "DRV_VDD"})
+    s.part("R120", "R_24k9", {"1": "VMOT", "2": "DRV_VG"})
+    s.part("D105", "Z_13V", {"K": "DRV_VG", "A": "GND"})
+    s.part("C118", "C_100n", {"1": "DRV_VG", "2": "GND"})
+    # DRV_EN (PB0, active high) → Q105 pulls DIS low; R106 pulls DIS to VDD (bridge off) while
+    # PB0 floats (MCU in reset, or the bus unpowered) and R115 holds Q105's gate low
+    s.part("Q105", "2N7002", {"G": "DRV_EN", "D": "DRV_DIS", "S": "GND"})
+    s.part("R106", "R_10k", {"1": "DRV_VDD", "2": "DRV_DIS"})
 
     # Hall sensor in leg A's output, ratiometric to the ADC's 3.3 V
     s.part("U102", "ACS725-30AB", {"IP+": "SW_A", "IP-": "MOT_A", "VCC": "+3V3", "GND": "GND",
@@ -286,6 +382,16 @@ def build(core: Sheet) -> Module:
     s.part("R114", "R_10k", {"1": "+3V3", "2": "DRV_FAULT"})
     s.part("R115", "R_100k", {"1": "DRV_EN", "2": "GND"})       # driver off while the MCU resets
 
+    # over-current: the Hall sensor's raw output against a window from the same 3.3 V (ratiometric
+    # like the sensor): U105 pulls DRV_FAULT low above OC_HI, U106 below OC_LO (calc/motor.py)
+    s.part("R121", "R_10k", {"1": "+3V3", "2": "OC_HI"})
+    s.part("R122", "R_100k", {"1": "OC_HI", "2": "OC_LO"})
+    s.part("R123", "R_10k", {"1": "OC_LO", "2": "GND"})
+    s.part("U105", "LMV331", {"1": "OC_HI", "3": "HALL_OUT", "4": "DRV_FAULT", "5": "+3V3", "2": "GND"})
+    s.part("U106", "LMV331", {"1": "HALL_OUT", "3": "OC_LO", "4": "DRV_FAULT", "5": "+3V3", "2": "GND"})
+    s.part("C127", "C_100n", {"1": "+3V3", "2": "GND"})
+    s.part("C128", "C_100n", {"1": "+3V3", "2": "GND"})
+
     # encoder: 1 +5V_MOD, 2 A, 3 B, 4 GND; open-collector pull-ups to the encoder's 5 V
     s.part("J103", "HDR_1x4", {"1": "+5V_MOD", "2": "ENC_A_IN", "3": "ENC_B_IN", "4": "GND"},
            value="ENCODER")
@@ -309,8 +415,9 @@ def build(core: Sheet) -> Module:
 
     m = Module(NAME, TITLE, REVISION, s,
                tracks=[*core_mod.bus_tracks(), bus_tap_track(), tvs_track(), *core_tracks(),
-                       *power_tracks()],
-               vias=power_vias(), zones=planes() + power_zones(),
+                       *power_tracks(), *gnd_fanout()[0], *driver_phase_links()[0],
+                       *regulator_links()[0]],
+               vias=power_vias() + gnd_fanout()[1] + driver_phase_links()[1] + regulator_links()[1], zones=planes() + power_zones(),
                seed=19, size=SIZE, holes=HOLES, copper_layers=4,
                netclasses={"HV": list(HV_NETS)}, dru_rules=ipc2221b_rules(),
                netclass_defs={"HV": (0.6, 0.3, 0.8, 0.4)},
@@ -318,7 +425,7 @@ def build(core: Sheet) -> Module:
                            "Q101", "Q102", "Q103", "Q104", "U102"))
     m.fiducials = list(FIDUCIALS)
     m.texts = frame_texts(NAME, REVISION) + [
-        Text("MOTOR SUPPLY 10-44V", 130.0, 19.3, 1.2, "B.SilkS"),
+        Text("MOTOR SUPPLY 12-44V", 130.0, 19.3, 1.2, "B.SilkS"),
         Text("+", 152.0, 20.2, 1.5, "B.SilkS"), Text("-", 152.0, 13.0, 1.5, "B.SilkS"),
         Text("BATTERY", 152.5, 30.0, 1.0, "B.SilkS"), Text("MOTOR", 80.5, 44.0, 1.0, "B.SilkS")]
     return m

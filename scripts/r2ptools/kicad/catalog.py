@@ -150,10 +150,14 @@ _ITEMS = [
      "63ZLH1000MEFC16X25"),
     ("CSD19536KTT", "Transistor_FET:Q_NMOS_GDS", "Package_TO_SOT_SMD:TO-263-2", "CSD19536KTT",
      "CSD19536KTT"),
-    # KiCad has no DRV835x symbol: R2P:DRV8350H (hardware/core/R2P.kicad_sym) carries the
-    # datasheet's pin names; its pin NUMBERS are NOT VERIFIED against SLVSDY6 (README errata)
-    ("DRV8350H", "R2P:DRV8350H", "Package_DFN_QFN:WQFN-32-1EP_5x5mm_P0.5mm_EP3.1x3.1mm", "DRV8350H",
-     "DRV8350HRTVR"),
+    # the gate driver: KiCad 9's own symbol and pin table (Renesas FN3676's SOIC-16 pinout)
+    ("HIP4082", "Driver_FET:HIP4082xB", "Package_SO:SOIC-16_3.9x9.9mm_P1.27mm", "HIP4082",
+     "HIP4082IBZT"),
+    ("1N4148W", "Diode:1N4148W", "Diode_SMD:D_SOD-123", "1N4148W", "1N4148W"),
+    ("BCX56", "Transistor_BJT:BCX56", "Package_TO_SOT_SMD:SOT-89-3", "BCX56-16", "BCX56-16"),
+    ("Z_13V", "Device:D_Zener", "Diode_SMD:D_SOD-123", "13V", "BZT52C13"),
+    ("2N7002", "Transistor_FET:2N7002", "Package_TO_SOT_SMD:SOT-23", "2N7002", "2N7002"),
+    ("LMV331", "Comparator:LMV331", "Package_TO_SOT_SMD:SOT-23-5", "LMV331", "LMV331IDBVR"),
     ("ACS725-30AB", "Sensor_Current:ACS725xLCTR-30AB", "Package_SO:SOIC-8_3.9x4.9mm_P1.27mm",
      "ACS725 30AB", "ACS725LLCTR-30AB-T"),
     ("TLV3011", "R2P:TLV3011", "Package_TO_SOT_SMD:SOT-23-6", "TLV3011", "TLV3011AIDBVR"),

@@ -72,13 +72,18 @@ def drc(pcb: Path) -> dict:
 
 
 def _exposed_pad(fp, pad) -> bool:
-    """A package's exposed (thermal) pad: vias in it are the datasheet's thermal vias, not a fault.
+    """A package's exposed (thermal) pad or power tab: vias in it are thermal vias, not a fault.
 
-    Told by size, as the footprint libraries do not flag it: a pad of a part with five or more
+    Told by size, as the footprint libraries do not flag it: a pad of a part with three or more
     pads, at least four times the area of the part's median pad (QFN/HTSSOP exposed pads are
-    10-50 times their pins; a two-terminal part's pads are never exposed pads)."""
-    areas = sorted(p.GetSizeX() * p.GetSizeY() for p in fp.Pads() if p.IsOnCopperLayer())
-    return len(areas) >= 5 and pad.GetSizeX() * pad.GetSizeY() >= 4 * areas[len(areas) // 2]
+    10-50 times their pins, a D2PAK's tab 20 times its leads; a two-terminal part's pads are
+    never exposed pads). Open vias there still take solder paste down their barrels: a board
+    with many of them orders them filled and capped (hardware/motor/README.md, "Before ordering")."""
+    def area(p) -> int:              # a custom pad's size is its anchor's: take its outline's box
+        box = p.GetBoundingBox()
+        return box.GetWidth() * box.GetHeight()
+    areas = sorted(area(p) for p in fp.Pads() if p.IsOnCopperLayer())
+    return len(areas) >= 3 and area(pad) >= 4 * areas[len(areas) // 2]
 
 
 def vias_in_pads(pcb: Path) -> list[str]:

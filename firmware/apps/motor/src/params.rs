@@ -102,7 +102,9 @@ params! {
         "Driving with back-EMF above `encoder_emf_v` and no encoder edge for this long: encoder loss (fault bit 1).";
     19 ENCODER_EMF_V encoder_emf_v: f32 = 3.0, 0.5, 50.0, "V",
         "Back-EMF (duty × VMOT − R × I) above which the motor must be turning.";
-    20 DUTY_LIMIT duty_limit: f32 = 0.95, 0.05, 1.0, "",
+    // at most 0.95: the board's HIP4082 has bootstrap high sides, refreshed only while the low
+    // side conducts (hardware/motor, calc/motor.py "bootstrap refresh"); 100 % would starve them
+    20 DUTY_LIMIT duty_limit: f32 = 0.95, 0.05, 0.95, "",
         "Largest duty magnitude the current loop commands.";
 }
 

@@ -9,9 +9,11 @@ Datasheet figures carry their source. A figure this file could not confirm from 
 says NOT VERIFIED (and where it came from); estimates (thermal coefficients, board convection,
 the MOSFET's recovery charge) say so: they are what the first board must measure.
 
-Sources: TI CSD19536KTT SLPS540C (MOSFET; electrical characteristics read on ti.com), TI
-DRV8350/DRV8353 SLVSDY6 (gate driver; IDRIVE, VDS_LVL, dead-time registers read on ti.com; the
-VM range from a third-party summary of the same datasheet), Allegro ACS725 (1.2 mΩ, 120 kHz read),
+Sources: TI CSD19536KTT SLPS540C (MOSFET; electrical characteristics read on ti.com), Renesas
+HIP4082 FN3676 Rev 6.00 (gate driver: its front page read, the pin table is KiCad 9's
+Driver_FET:HIP4082xB symbol; the electrical tables were NOT read here and their figures say so),
+Infineon/Nexperia BCX56 and TI LMV331 (VDD regulator, over-current comparators: summaries, NOT
+VERIFIED), Allegro ACS725 (1.2 mΩ, 120 kHz read),
 TI TLV3011 SBOS300C (comparator with 1.242 V reference), Littelfuse SMCJ series (TVS), Amass XT60
 (30 A), IPC-2221B §6.2 (conductor sizing equation), docs/bus.md §6 (200 mA per module, ground),
 firmware/targets/f103/motor/src/bridge.rs (PWM, dead time, sign-magnitude drive),
@@ -29,9 +31,11 @@ VIN_NOM = 36.0                # the paper: "DC motors up to 36 V"
 LIION_MAX = 4.20 * 10 * 1.01  # 10S Li-ion on a charger at +1 % (as calc/psu.py): 42.42 V
 LEAD_ACID_MAX = 3 * 14.7      # 3 × 12 V lead-acid at absorption charge (14.7 V per block, cold)
 VIN_MAX = max(LIION_MAX, LEAD_ACID_MAX)                  # 44.1 V: highest steady input
-VIN_MIN = 10.0                # below: DRV835x VM range (9 V) with margin; firmware flags it
+VIN_MIN = 12.0                # below: the HIP4082's VDD (from VMOT through Q106) falls under its
+                              # 8.5 V recommended minimum (row "driver VDD at the minimum input")
 I_CONT = 20.0                 # the paper: "a continuous 20 A current"
-I_PEAK = 30.0                 # peak, limited by the current sensor's range (below)
+I_PEAK = 28.0                 # peak: below the hardware over-current trip less the ripple (below)
+SENSE_RANGE_REQUIRED = 30.0   # issue 19: current sensor range ≥ ±30 A
 PEAK_S = 10.0                 # how long the peak may last (heatsink heat capacity, below)
 T_AMB = 40.0                  # issue 19: junction limit checked at 40 °C ambient
 TJ_LIMIT = 110.0              # issue 19: junction ≤ 110 °C at 20 A (the KTT family's T_J max is 175 °C)
@@ -67,30 +71,70 @@ FET_RTH_JC = 0.5              # °C/W max: NOT VERIFIED for this part (CSD19535K
                               # the larger die of the CSD19536KTT should not be worse)
 FET_ID_PULSE = 400.0          # I_DM, abs max (the KTT family's, read for CSD19535KTT)
 
-# --- gate driver: TI DRV8350H (hardware interface, 6x PWM mode), SLVSDY6 -------------------------
-DRV = "DRV8350HRTVR"
-DRV_VM_RANGE = (9.0, 75.0)    # VM recommended (third-party summary of SLVSDY6: NOT VERIFIED on ti.com)
-DRV_VM_ABS = 80.0             # VM abs max (same summary, sheetsdata.com; TI's table NOT read)
-DRV_VDRAIN_ABS = 102.0        # VDRAIN abs max (same summary)
-DRV_IDRIVE_SRC, DRV_IDRIVE_SNK = 0.55, 1.1   # A: the register level 1000b (SLVSDY6A gate drive LS
-                              # register, read on ti.com's DRV8353R document viewer); the H variant's
-                              # IDRIVE pin offers 7 fixed levels: which ones, NOT VERIFIED
-DRV_DEAD_MIN = 100e-9         # H variant's inserted dead time (the SPI default, read): TIM1 adds its own
-DRV_VDS_LVL = 0.2             # V: VDS_OCP level (SLVSDY6 Table 17 lists 0.06–2 V; pin level NOT VERIFIED)
-DRV_VDS_TOL = 0.2             # ±20 % on the VDS comparator (estimate)
-# Read in ZHCSIN3A (TI's Chinese edition of SLVSDY6A), electrical characteristics, "power supplies":
-# VCP (with respect to VDRAIN) and its load capability, and VGLS, fall with VM; the VM current.
-DRV_VCP_BY_VM = {             # VM: (VCP − VDRAIN min, max load A)
-    15.0: (9.0, 25e-3), 12.0: (7.5, 20e-3), 10.0: (6.0, 15e-3), 9.0: (5.5, 10e-3)}
-DRV_VGLS_MIN_BY_VM = {15.0: 13.0, 12.0: 10.0, 10.0: 8.0, 9.0: 7.0}   # V, low-side gate supply min
-DRV_IQ = 13e-3                # VM operating current at 48 V, max (8.5 mA typ), ENABLE high, no switching
+# --- gate driver: Renesas HIP4082 (FN3676): four independent inputs, bootstrap high sides ------
+DRV = "HIP4082IBZT"
+DRV_VHS_ABS = 80.0            # V: "operation up to 80 V" (AHS/BHS), FN3676 front page (read)
+DRV_VHB_ABS = 95.0            # V: "bootstrap supply max voltage to 95 VDC" (read)
+DRV_I_PEAK = 1.25             # A: peak output current (the title, read); source and sink taken alike
+DRV_DEAD_RANGE = (0.1e-6, 4.5e-6)   # s: programmable dead time by R_DEL (read)
+DRV_DEL_S = (0.1e-6, 0.5e-6)  # s: the turn-on delay with R105 = 10 kΩ: FN3676's dead-time curve
+                              # NOT READ (estimate at the short end of the range); it adds to TIM1's
+DRV_VDD_RANGE = (8.5, 15.0)   # V: recommended VDD: NOT VERIFIED (FN3676 operating conditions)
+DRV_VDD_UV = 7.6              # V: VDD under-voltage rising threshold, max: NOT VERIFIED
+DRV_IDD = 3.0e-3              # A: VDD current without gate charge at 20 kHz: NOT VERIFIED (estimate)
+DRV_IHB = 0.5e-3              # A: each high side's bootstrap (xHB) current: NOT VERIFIED (estimate)
+DRV_RTH_JA = 100.0            # °C/W, SOIC-16 on the board: NOT VERIFIED (typical SOIC-16)
+DRV_PROP = 0.1e-6             # s: input to output turn-off: NOT VERIFIED (estimate)
+FET_VPLATEAU = 4.5            # V: CSD19536KTT Miller plateau at 20 A: estimate (from V_th and g_fs)
+FET_RG_INT = 1.4              # Ω: CSD19536KTT internal gate resistance: NOT VERIFIED
+BOOT_DIODE_VF = 0.9           # V: 1N4148W at the refresh current (its 1 V at 50 mA ... 1.25 V at 150 mA)
+BOOT_DIODE_R = 3.0            # Ω: the refresh loop (diode's dynamic resistance, tracks): estimate
+BOOT_DROOP_MAX = 1.0          # V: allowed gate-supply droop over one on-time (gate ≥ 10 V at 12 V VDD)
+C_BS_DC_BIAS = 0.6            # 470 nF 25 V X7R 0603 at ~12 V keeps ~60 %: estimate
+# VDD regulator: Q106 BCX56-16 (80 V NPN, SOT-89) emitter follower on D105 (BZT52C13), R120 feeds both
+ZENER_V = (12.4, 13.0, 14.1)  # BZT52C13 V_Z (min, typ, max): NOT VERIFIED (the series' usual spread)
+VBE = (0.60, 0.65, 0.75)      # V: Q106's base-emitter voltage at ~10 mA (min, typ, max): estimate
+Q106_HFE_MIN = 100.0          # BCX56-16 h_FE min (its 150 mA class limit; NOT VERIFIED at 10 mA)
+Q106_RTH_JA = 150.0           # °C/W, SOT-89 on a small collector pad: NOT VERIFIED (estimate)
+Q106_VCEO = 80.0              # V: BCX56 V_CEO (the BCX56/BCP56 family's 80 V class, NOT VERIFIED)
+T_CORE_BAND = 60.0            # °C: board temperature at the core band at 20 A, 40 °C ambient: estimate
+# over-current: U105/U106 LMV331 on the ACS725's output, window from +3V3 (ratiometric like it)
+OC_SENS_TOL = 0.02            # ACS725 sensitivity error: NOT VERIFIED
+OC_OFFSET_V = 0.010           # ACS725 zero-current output error: NOT VERIFIED
+CMP_VOS = 0.007               # LMV331 input offset, max: NOT VERIFIED
+CMP_TPD = 0.5e-6              # LMV331 propagation delay: twice the 260 ns typical a summary gives; the
+                              # datasheet's maximum at this overdrive NOT VERIFIED
+HALL_T_RESPONSE = 2.9e-6      # ACS725 step response ≈ 0.35 / 120 kHz: from the bandwidth (read)
+TIM1_BREAK_S = 0.1e-6         # TIM1 break input to outputs inactive (a few 72 MHz clocks, no filter)
+L_SHORT = 0.5e-6              # H: a short across the motor leads at the end of ~1 m of cable: estimate
 
 
-def drv_at(vm: float) -> tuple[float, float, float]:
-    """(VCP − VDRAIN min, VCP load capability, VGLS min) at supply `vm`: the datasheet's row at or
-    below it (a supply between two rows gets the lower row's figures)."""
-    row = max(k for k in DRV_VCP_BY_VM if k <= vm)
-    return (*DRV_VCP_BY_VM[row], DRV_VGLS_MIN_BY_VM[row])
+def vdd(vin: float, load: float, worst: str = "min") -> float:
+    """The driver's VDD from Q106 at supply `vin` and VDD load `load` A: the zener's voltage less
+    V_BE while R120 carries the zener's and the base's current, else VMOT less R120's drop."""
+    i = {"min": 0, "typ": 1, "max": 2}[worst]
+    r = DESIGN_VALUES["R_VDD_BIAS"]
+    i_b = load / Q106_HFE_MIN
+    starved = vin - i_b * r - VBE[2 - i]
+    return min(ZENER_V[i] - VBE[2 - i], starved)
+
+
+def vdd_load() -> float:
+    """What VDD supplies: the driver's own current, both bootstrap currents, and the gate charge of
+    the switching leg's two FETs each period (sign-magnitude: one leg switches)."""
+    return DRV_IDD + 2 * DRV_IHB + 2 * SWITCHING_LEGS * FET_QG * PWM_HZ
+
+
+def gate_currents(v_drive: float) -> tuple[float, float]:
+    """Turn-on and turn-off currents through the plateau: the driver's 1.25 A into a short taken as
+    an output resistance V/I_peak, in series with the 10 Ω gate resistor and the FET's own."""
+    r = v_drive / DRV_I_PEAK + DESIGN_VALUES["R_GATE"] + FET_RG_INT
+    return (v_drive - FET_VPLATEAU) / r, FET_VPLATEAU / r
+
+
+def high_side_drive() -> float:
+    """The high side's gate supply: VDD (typical) less the bootstrap diode."""
+    return vdd(VIN_NOM, vdd_load(), "typ") - BOOT_DIODE_VF
 
 
 # --- current sensor: Allegro ACS725LLCTR-30AB-T, 3.3 V, ratiometric ------------------------------
@@ -195,7 +239,9 @@ DESIGN_VALUES = {
     "R_OV_TOP": 375e3, "R_OV_BOT": 10e3,               # over-voltage divider: 174k + 174k + 27k in series
     "C_BULK_EACH": 1000e-6, "N_BULK": 4,
     "C_CER_EACH": 2.2e-6, "N_CER": 8,
-    "C_VCP": 1e-6, "C_CP_FLY": 47e-9,                  # DRV835x charge pump (datasheet values)
+    "C_BS": 470e-9, "C_VDD": 10e-6,                     # bootstrap capacitors, VDD reservoir
+    "R_GATE": 10.0, "R_DEL": 10e3, "R_VDD_BIAS": 24.9e3,
+    "R_OC_OUTER": 10e3, "R_OC_MID": 100e3,             # OC window ladder: 10 k / 100 k / 10 k from +3V3
     "R_ENC_SERIES": 1e3, "C_ENC": 100e-12, "R_ENC_PULLUP": 2.2e3,
     "R_FAULT_PULLUP": 10e3,
 }
@@ -222,9 +268,17 @@ def rds(tj: float, r25: float | None = None) -> float:
 
 
 def switching_times() -> tuple[float, float]:
-    """Turn-on and turn-off voltage transition times at the driver's IDRIVE (Q_gs2 + Q_gd) / I."""
+    """Turn-on and turn-off voltage transition times: (Q_gs2 + Q_gd) / I_gate through the plateau,
+    the high side's gate currents (its drive is the lower, VDD less the bootstrap diode)."""
     q = FET_QGS / 2 + FET_QGD
-    return q / DRV_IDRIVE_SRC, q / DRV_IDRIVE_SNK
+    i_on, i_off = gate_currents(high_side_drive())
+    return q / i_on, q / i_off
+
+
+def dead_time() -> tuple[float, float]:
+    """The dead time the FETs see (min, max): TIM1's, then the driver delays each turn-on by its
+    DEL time (R105)."""
+    return DEAD_TIME_S + DRV_DEL_S[0], DEAD_TIME_S + DRV_DEL_S[1]
 
 
 def leg_switching_loss(v: float, i: float) -> dict[str, float]:
@@ -234,7 +288,7 @@ def leg_switching_loss(v: float, i: float) -> dict[str, float]:
     return {
         "edges": 0.5 * v * i * (t_on + t_off) * PWM_HZ,
         "recovery": FET_QRR * v * PWM_HZ,
-        "dead time": FET_VSD * i * 2 * max(DEAD_TIME_S, DRV_DEAD_MIN) * PWM_HZ,
+        "dead time": FET_VSD * i * 2 * dead_time()[1] * PWM_HZ,
     }
 
 
@@ -253,7 +307,7 @@ def losses(i: float, v: float, tj: float) -> dict[str, float]:
         "conduction (4 FETs)": 2 * i * i * r,
         f"switching ({SWITCHING_LEGS} leg{'s' if SWITCHING_LEGS > 1 else ''})": SWITCHING_LEGS * leg,
         "worst FET": i * i * r + leg,
-        "gate drive (driver)": 4 * FET_QG * 11.0 * PWM_HZ + v * DRV_IQ,
+        "gate drive (driver, VDD regulator)": v * vdd_load(),
         "ACS725": i * i * HALL_R,
         "fuse": (i ** 2) * FUSE_R,   # input current ≤ motor current (its rms, pessimistic)
         "connectors (2 × XT60)": 2 * i * i * XT60_R,
@@ -375,6 +429,7 @@ def firmware_assumptions(root: Path | None = None) -> dict[str, float]:
         "pwm_hz": num(r"pwm_hz: ([\d_.]+)", hb),
         "dead_time_s": num(r"dead_time_s: ([\d_.e-]+)", hb),
         "current_limit max": num(r"current_limit: f32 = [\d.]+, [\d.]+, ([\d.]+)", pr),
+        "duty_limit max": num(r"duty_limit: f32 = [\d.]+, [\d.]+, ([\d.]+)", pr),
         "bridge.rs PWM_HZ": num(r"const PWM_HZ: u32 = ([\d_]+)", br),
         "bridge.rs DEAD_TIME_NS": num(r"const DEAD_TIME_NS: u32 = ([\d_]+)", br) * 1e-9,
     }
@@ -427,10 +482,13 @@ def rows() -> list[Row]:
     add(Row("MOSFET V_DS at the TVS clamp + overshoot (a fault)", f"{TVS_VC + ring:.1f} V",
             f"≤ {FET_VDS:.0f} V", TVS_VC + ring <= FET_VDS,
             f"{(TVS_VC + ring) / FET_VDS:.0%} of rating; reached only when the trip has failed"))
-    add(Row("DRV8350 VM at the TVS clamp", f"{TVS_VC:.1f} V", f"≤ abs max {DRV_VM_ABS:.0f} V (NOT VERIFIED)",
-            TVS_VC <= DRV_VM_ABS, f"{DRV_VM_ABS - TVS_VC:.1f} V margin; VM is RC-filtered, away from the switch nodes"))
-    add(Row("DRV8350 VM at the over-voltage trip", f"{ov_hi:.1f} V", f"≤ {DRV_VM_RANGE[1]:.0f} V recommended",
-            ov_hi <= DRV_VM_RANGE[1]))
+    vhb = TVS_VC + vdd(TVS_VC, vdd_load(), "max")
+    add(Row("HIP4082 AHS/BHS at the TVS clamp", f"{TVS_VC:.1f} V", f"≤ {DRV_VHS_ABS:.0f} V (FN3676)",
+            TVS_VC <= DRV_VHS_ABS and vhb <= DRV_VHB_ABS,
+            f"{DRV_VHS_ABS - TVS_VC:.1f} V margin; AHB/BHB {vhb:.1f} V ≤ {DRV_VHB_ABS:.0f} V"))
+    add(Row(f"Q106 {'BCX56-16'} V_CE at the TVS clamp", f"{TVS_VC - vdd(TVS_VC, vdd_load(), 'min'):.1f} V",
+            f"≤ V_CEO {Q106_VCEO:.0f} V (NOT VERIFIED)", TVS_VC - vdd(TVS_VC, vdd_load(), "min") <= Q106_VCEO,
+            f"R120's 0603 then {TVS_VC - ZENER_V[0]:.0f} V (≤ {RES_0603_VMAX:.0f} V)"))
     add(Row("electrolytics at the TVS clamp", f"{TVS_VC:.1f} V", f"≤ surge {ELCAP_SURGE:.0f} V ({ELCAP_V:.0f} V rated)",
             TVS_VC <= ELCAP_SURGE and ov_hi <= ELCAP_V, f"at the trip {ov_hi / ELCAP_V:.0%} of rated"))
     c_bulk = v["C_BULK_EACH"] * v["N_BULK"] * 0.8
@@ -450,14 +508,20 @@ def rows() -> list[Row]:
     total = sum(x for k, x in p.items() if k != "worst FET")
     add(Row(f"R_DS(on) max, {FET}", f"{FET_RDS_MAX * 1e3:.1f} mΩ at 25 °C", "SLPS540C §4.1", True,
             f"{rds(tj) * 1e3:.1f} mΩ at T_J {tj:.0f} °C (×{1 + FET_RDS_TC * (tj - 25):.2f}, estimate)"))
-    add(Row("switching times (Q_gs/2 + Q_gd) / IDRIVE", f"on {t_on * 1e9:.0f} ns, off {t_off * 1e9:.0f} ns",
-            f"IDRIVE {DRV_IDRIVE_SRC * 1e3:.0f}/{DRV_IDRIVE_SNK * 1e3:.0f} mA", True,
-            f"dv/dt {VIN_MAX / (FET_QGD / DRV_IDRIVE_SRC) / 1e9:.1f} V/ns at turn-on"))
+    i_on, i_off = gate_currents(high_side_drive())
+    add(Row("switching times (Q_gs/2 + Q_gd) / I_gate", f"on {t_on * 1e9:.0f} ns, off {t_off * 1e9:.0f} ns",
+            f"I_gate {i_on * 1e3:.0f}/{i_off * 1e3:.0f} mA", t_on < 0.01 / PWM_HZ,
+            f"HIP4082 1.25 A peak as {high_side_drive() / DRV_I_PEAK:.1f} Ω + R_gate "
+            f"{v['R_GATE']:.0f} Ω + R_G {FET_RG_INT} Ω, from {high_side_drive():.1f} V to the "
+            f"{FET_VPLATEAU} V plateau; dv/dt {VIN_MAX / (FET_QGD / i_on) / 1e9:.2f} V/ns at turn-on"))
     dead_need = t_off + 50e-9
-    add(Row("dead time vs turn-off + driver skew (50 ns)", f"{DEAD_TIME_S * 1e9:.0f} ns",
-            f"≥ {dead_need * 1e9:.0f} ns", DEAD_TIME_S >= dead_need,
+    dt_min, dt_max = dead_time()
+    add(Row("dead time vs turn-off + driver skew (50 ns)", f"{dt_min * 1e9:.0f}–{dt_max * 1e9:.0f} ns",
+            f"≥ {dead_need * 1e9:.0f} ns", dt_min >= dead_need,
+            f"TIM1 {DEAD_TIME_S * 1e9:.0f} ns + HIP4082 DEL {DRV_DEL_S[0] * 1e9:.0f}–{DRV_DEL_S[1] * 1e9:.0f} ns "
+            f"(R105 {v['R_DEL'] / 1e3:.0f} k, curve NOT READ); "
             f"body diode conducts the rest: {leg_switching_loss(VIN_MAX, I_CONT)['dead time']:.2f} W per leg"
-            f" at 20 A; 200 ns would leave {FET_VSD * I_CONT * 2 * 200e-9 * PWM_HZ:.2f} W"))
+            f" at 20 A; 300 ns in all would leave {FET_VSD * I_CONT * 2 * 300e-9 * PWM_HZ:.2f} W"))
     for k, x in p.items():
         add(Row(f"loss at {I_CONT:.0f} A, {VIN_MAX:.1f} V: {k}", f"{x:.2f} W", "", True))
     add(Row("board total at 20 A", f"{total:.1f} W", f"η {1 - total / (VIN_MAX * I_CONT * 0.95):.1%} at full duty",
@@ -474,27 +538,77 @@ def rows() -> list[Row]:
     add(Row(f"T_J at the {I_PEAK:.0f} A peak for {PEAK_S:.0f} s", f"{tj_pk:.0f} °C", f"≤ {TJ_LIMIT:.0f} °C",
             tj_pk <= TJ_LIMIT, f"sink +{(sum(x for k, x in p_pk.items() if k != 'worst FET') - total) * PEAK_S / HEATSINK_J_PER_K:.1f} °C "
             f"in {PEAK_S:.0f} s ({HEATSINK_J_PER_K:.0f} J/K); stack settles in < 1 s"))
-    ocp = (DRV_VDS_LVL * (1 - DRV_VDS_TOL) / rds(tj), DRV_VDS_LVL * (1 + DRV_VDS_TOL) / rds(25, FET_RDS_TYP))
-    add(Row("VDS over-current trip (hot R max … cold R typ)", f"{ocp[0]:.0f}–{ocp[1]:.0f} A",
-            f"> peak {I_PEAK:.0f} A, < I_DM {FET_ID_PULSE:.0f} A", ocp[0] > I_PEAK and ocp[1] < FET_ID_PULSE,
-            f"VDS_LVL {DRV_VDS_LVL} V ±{DRV_VDS_TOL:.0%}: a short, not an overload (the firmware trips those)"))
+    # --- over-current: the Hall sensor's output against a window from +3V3 (U105/U106, LMV331)
+    oc_lo_a, oc_nom, oc_hi_a = oc_trip()
+    swing_a = (HALL_SWING[1] - ADC_FS / 2) / (HALL_MV_PER_A / 1e3)
+    ripple_half = VIN_MAX * 0.25 / (MOTOR_L * RIPPLE_HZ) / 2
+    add(Row("over-current trip (U105/U106 → DRV_FAULT → TIM1_BKIN)", f"±{oc_lo_a:.1f}–{oc_hi_a:.1f} A",
+            f"> peak {I_PEAK:.0f} A + ripple {ripple_half:.1f} A, < sensor swing {swing_a:.1f} A",
+            oc_lo_a > I_PEAK + ripple_half and oc_hi_a < swing_a,
+            f"±{oc_nom:.2f} A nominal: {v['R_OC_OUTER'] / 1e3:.0f} k / {v['R_OC_MID'] / 1e3:.0f} k / "
+            f"{v['R_OC_OUTER'] / 1e3:.0f} k from 3.3 V, {oc_window()[1]:.3f} V and {oc_window()[0]:.3f} V "
+            f"(ratiometric like the sensor); sensitivity ±{OC_SENS_TOL:.0%}, offsets "
+            f"{OC_OFFSET_V * 1e3:.0f} + {CMP_VOS * 1e3:.0f} mV, 1 % resistors (NOT VERIFIED)"))
+    delay = HALL_T_RESPONSE + CMP_TPD + TIM1_BREAK_S + DRV_PROP + t_off
+    i_short = oc_hi_a + VIN_MAX / L_SHORT * delay
+    add(Row("current at switch-off, motor leads shorted", f"{i_short:.0f} A", f"≤ I_DM {FET_ID_PULSE:.0f} A",
+            i_short <= FET_ID_PULSE,
+            f"{VIN_MAX / L_SHORT / 1e6:.0f} A/µs ({L_SHORT * 1e6:.1f} µH of cable, estimate) for "
+            f"{delay * 1e6:.1f} µs: sensor {HALL_T_RESPONSE * 1e6:.1f} + comparator {CMP_TPD * 1e6:.1f} + "
+            f"break {TIM1_BREAK_S * 1e6:.1f} + driver {DRV_PROP * 1e6:.1f} + turn-off {t_off * 1e6:.2f} µs. "
+            "Leg B's own shorts (MOT_B to a rail) bypass the sensor: the fuse"))
 
-    # --- gate drive supply (charge pump: no bootstrap, 100 % duty allowed)
-    i_vcp = 2 * FET_QG * PWM_HZ
-    vcp_min, vcp_max_a, vgls_min = drv_at(VIN_MIN)
-    add(Row("charge pump load: 2 high sides Q_g f", f"{i_vcp * 1e3:.1f} mA",
-            f"≤ half of {vcp_max_a * 1e3:.0f} mA (VM {VIN_MIN:.0f} V; ZHCSIN3A)",
-            i_vcp <= 0.5 * vcp_max_a, f"{i_vcp / vcp_max_a:.0%} at the minimum input "
-            f"({drv_at(15.0)[1] * 1e3:.0f} mA from VM 15 V); no bootstrap refresh limit on duty"))
-    add(Row(f"gate drive at the {VIN_MIN:.0f} V minimum input", f"high side ≥ {vcp_min:.1f} V, low side ≥ {vgls_min:.1f} V",
-            "≥ 6 V (design floor)", min(vcp_min, vgls_min) >= 6.0,
-            f"ZHCSIN3A at VM {VIN_MIN:.0f} V; from VM 15 V: ≥ {drv_at(15.0)[0]:.0f} V / {drv_at(15.0)[2]:.0f} V. "
-            "CSD19536KTT R_DS(on) at V_GS 6 V NOT VERIFIED: below 12 V input the losses above are optimistic"))
-    droop = FET_QG / (v["C_VCP"] * 0.5)
-    add(Row("VCP droop per high-side turn-on", f"{droop * 1e3:.0f} mV", "≤ 0.5 V (gate stays ≥ 10 V)",
-            droop <= 0.5, "1 µF 16 V 0603 X7R at ~11 V keeps ~50 %"))
-    add(Row("driver supply", f"VM from VMOT, {(DRV_IQ + 4 * FET_QG * PWM_HZ) * 1e3:.0f} mA", "not from the bus", True,
-            f"VM min {DRV_VM_RANGE[0]:.0f} V ≤ input min {VIN_MIN:.0f} V"))
+    # --- gate drive: HIP4082 from VDD (Q106), bootstrap high sides
+    load = vdd_load()
+    v_lo = vdd(VIN_MIN, load, "min")
+    add(Row(f"driver VDD at the {VIN_MIN:.0f} V minimum input", f"{v_lo:.1f} V",
+            f"≥ {DRV_VDD_RANGE[0]} V (HIP4082, NOT VERIFIED), > UV {DRV_VDD_UV} V", v_lo >= DRV_VDD_RANGE[0],
+            f"VMOT − I_B R120 − V_BE with {load * 1e3:.1f} mA at h_FE {Q106_HFE_MIN:.0f}; the high-side "
+            f"gate then {v_lo - BOOT_DIODE_VF:.1f} V (R_DS(on) specified at 10 V: below ~14 V input the "
+            "losses above are optimistic)"))
+    v_hi = max(vdd(x, load, "max") for x in (VIN_MAX, TVS_VC))
+    add(Row("driver VDD (zener − V_BE), worst high", f"{vdd(VIN_MAX, load, 'min'):.1f}–{v_hi:.1f} V",
+            f"≤ {DRV_VDD_RANGE[1]} V (HIP4082, NOT VERIFIED)", v_hi <= DRV_VDD_RANGE[1],
+            f"D105 BZT52C13 {ZENER_V[0]}–{ZENER_V[2]} V, V_BE {VBE[0]}–{VBE[2]} V; the gates see ≤ {v_hi:.1f} V (±20 V rated)"))
+    p_q = (ov_hi - vdd(ov_hi, load, "min")) * load
+    t_q = T_CORE_BAND + p_q * Q106_RTH_JA
+    add(Row("Q106 dissipation at the over-voltage trip", f"{p_q:.2f} W, T_J {t_q:.0f} °C", "T_J ≤ 150 °C",
+            t_q <= 150.0, f"{load * 1e3:.1f} mA through {ov_hi - vdd(ov_hi, load, 'min'):.0f} V; θ_JA "
+            f"{Q106_RTH_JA:.0f} °C/W (SOT-89, NOT VERIFIED) from the core band at {T_CORE_BAND:.0f} °C (estimate)"))
+    p_r = (ov_hi - ZENER_V[0]) ** 2 / v["R_VDD_BIAS"]
+    add(Row("R120 (0603) at the over-voltage trip", f"{p_r * 1e3:.0f} mW", "≤ 100 mW (0603)", p_r <= 0.1,
+            f"{(ov_hi - ZENER_V[0]) / v['R_VDD_BIAS'] * 1e3:.2f} mA into D105 and Q106's base"))
+    q_bs = FET_QG * high_side_drive() / 10.0
+    d_max = max_duty()
+    t_hi = d_max / PWM_HZ
+    droop = (q_bs + DRV_IHB * t_hi) / (v["C_BS"] * C_BS_DC_BIAS)
+    add(Row("bootstrap droop over the longest on-time", f"{droop:.2f} V", f"≤ {BOOT_DROOP_MAX} V",
+            droop <= BOOT_DROOP_MAX,
+            f"(Q_g {q_bs * 1e9:.0f} nC + I_HB {DRV_IHB * 1e3:.1f} mA × {t_hi * 1e6:.1f} µs) / "
+            f"({v['C_BS'] * 1e9:.0f} nF × {C_BS_DC_BIAS:.0%} at 12 V)"))
+    t_ref = refresh_time()
+    g_min = high_side_drive() - droop - boot_deficit()
+    add(Row(f"bootstrap refresh at the firmware's maximum duty {d_max:.2f}",
+            f"{t_ref * 1e6:.2f} µs, gate ≥ {g_min:.1f} V", "gate ≥ 10 V (R_DS(on) as specified)",
+            t_ref > 0 and g_min >= 10.0,
+            f"(1 − d)/f − 2 × dead time {dead_time()[1] * 1e9:.0f} ns of low-side conduction each period "
+            f"refills C_BS with τ {BOOT_DIODE_R * v['C_BS'] * C_BS_DC_BIAS * 1e6:.2f} µs ({BOOT_DIODE_R:.0f} Ω, "
+            f"estimate): steady deficit {boot_deficit():.2f} V before each turn-on, plus the droop. "
+            "No charge pump: 100 % duty would starve the bootstrap, so duty_limit's maximum "
+            "(firmware/apps/motor/src/params.rs) is 0.95"))
+    add(Row("C_VDD vs the bootstrap capacitors", f"{v['C_VDD'] * 1e6:.0f} µF",
+            f"≥ 10 × {v['C_BS'] * 1e9:.0f} nF", v["C_VDD"] >= 10 * v["C_BS"],
+            "C113 refills both bootstrap capacitors and the low sides' gates"))
+    p_drv = vdd(VIN_NOM, load, "typ") * (DRV_IDD + 2 * DRV_IHB) + 2 * SWITCHING_LEGS * FET_QG * \
+        vdd(VIN_NOM, load, "typ") * PWM_HZ * (vdd(VIN_NOM, load, "typ") / DRV_I_PEAK) / \
+        (vdd(VIN_NOM, load, "typ") / DRV_I_PEAK + v["R_GATE"] + FET_RG_INT)
+    t_drv = T_CORE_BAND + 20 + p_drv * DRV_RTH_JA
+    add(Row("HIP4082 dissipation", f"{p_drv * 1e3:.0f} mW, T_J {t_drv:.0f} °C", "T_J ≤ 125 °C", t_drv <= 125,
+            f"VDD × (I_DD + 2 I_HB) + the gate charge's share in its output stage "
+            f"(R_out / (R_out + R_gate + R_G)); θ_JA {DRV_RTH_JA:.0f} °C/W (NOT VERIFIED), among the FETs at "
+            f"{T_CORE_BAND + 20:.0f} °C (estimate)"))
+    add(Row("driver supply", f"VDD from VMOT, {load * 1e3:.1f} mA", "not from the bus", True,
+            "Q106 + D105 + R120: 12.4 V nominal"))
 
     # --- input capacitors
     i_rip = ripple_current(I_CONT)
@@ -556,8 +670,8 @@ def rows() -> list[Row]:
             f"within the output swing {HALL_SWING[0]}–{HALL_SWING[1]} V", HALL_SWING[0] <= lo and hi <= HALL_SWING[1],
             f"{HALL_MV_PER_A:.0f} mV/A at 3.3 V (NOT VERIFIED); 0 A = VDDA/2 (ratiometric)"))
     lsb = ADC_FS / ADC_COUNTS / (HALL_MV_PER_A / 1e3)
-    add(Row("current resolution", f"{lsb * 1e3:.1f} mA/count", f"range ≥ ±{I_PEAK:.0f} A (issue 19)",
-            HALL_RANGE >= I_PEAK, f"clips at ±{(ADC_FS / 2) / (HALL_MV_PER_A / 1e3):.1f} A"))
+    add(Row("current resolution", f"{lsb * 1e3:.1f} mA/count", f"range ≥ ±{SENSE_RANGE_REQUIRED:.0f} A (issue 19)",
+            HALL_RANGE >= SENSE_RANGE_REQUIRED, f"clips at ±{(ADC_FS / 2) / (HALL_MV_PER_A / 1e3):.1f} A"))
     di_motor = VIN_MAX * 0.25 / (MOTOR_L * RIPPLE_HZ)
     extra = (di_motor / math.sqrt(12) / I_CONT) ** 2
     add(Row("motor current ripple at d = 0.5", f"{di_motor:.2f} A p-p", "extra copper loss ≤ 1 %",
@@ -590,6 +704,48 @@ def rows() -> list[Row]:
     add(Row("from the bus (core, ACS725, encoder, pull-ups)", f"{bus:.0f} mA", f"≤ {BUS_LIMIT_MA:.0f} mA (docs/bus.md §6)",
             bus <= BUS_LIMIT_MA, f"encoder budget {ENCODER_MA:.0f} mA (5 V); the driver runs from VMOT"))
     return out
+
+
+def oc_window() -> tuple[float, float]:
+    """(OC_LO, OC_HI) in volts: the 10 k / 100 k / 10 k ladder from ADC_FS (the +3V3 rail)."""
+    v = DESIGN_VALUES
+    total = 2 * v["R_OC_OUTER"] + v["R_OC_MID"]
+    return ADC_FS * v["R_OC_OUTER"] / total, ADC_FS * (v["R_OC_OUTER"] + v["R_OC_MID"]) / total
+
+
+def oc_trip() -> tuple[float, float, float]:
+    """The over-current trip magnitude (min, nominal, max) in amperes, either direction: the window's
+    distance from the sensor's zero over its gain, with the sensitivity error, the offsets and the
+    ladder's 1 % resistors."""
+    lo, hi = oc_window()
+    nom = (hi - ADC_FS / 2) / (HALL_MV_PER_A / 1e3)
+    v = DESIGN_VALUES
+    total = 2 * v["R_OC_OUTER"] + v["R_OC_MID"]
+    # 1 % resistors, worst case: the outer one 1 % low, the others 1 % high (and back)
+    ladder = ADC_FS * v["R_OC_OUTER"] * RES_TOL * 2 * (1 - v["R_OC_OUTER"] / total) / total
+    spread = (OC_OFFSET_V + CMP_VOS + ladder) / (HALL_MV_PER_A / 1e3)
+    return nom * (1 - OC_SENS_TOL) - spread, nom, nom * (1 + OC_SENS_TOL) + spread
+
+
+def max_duty() -> float:
+    """The largest duty the firmware may command (duty_limit's maximum, params.rs)."""
+    return firmware_assumptions()["duty_limit max"]
+
+
+def refresh_time() -> float:
+    """The low side's conduction each period at the maximum duty: the bootstrap's refresh window."""
+    return (1 - max_duty()) / PWM_HZ - 2 * dead_time()[1]
+
+
+def boot_deficit() -> float:
+    """Steady bootstrap deficit before each turn-on: the droop recovered by e^(−t/τ) each refresh,
+    D = ΔV k / (1 − k), k = e^(−t_refresh/τ)."""
+    v = DESIGN_VALUES
+    tau = BOOT_DIODE_R * v["C_BS"] * C_BS_DC_BIAS
+    t = max(refresh_time(), 0.0)
+    k = math.exp(-t / tau)
+    droop = (FET_QG * high_side_drive() / 10.0 + DRV_IHB * max_duty() / PWM_HZ) / (v["C_BS"] * C_BS_DC_BIAS)
+    return droop * k / (1 - k) if k < 1 else float("inf")
 
 
 def copper_only_rating() -> float:
