@@ -274,6 +274,15 @@ def _modules() -> list[str]:
     return list(modules(HARDWARE))
 
 
+def test_cases_are_made_for_the_modules_the_manifest_gives_one():
+    from r2ptools.enclosure.__main__ import boards, modules
+    from r2ptools import manifest
+    cased = {m.name for m in manifest.load() if m.case}
+    assert set(modules(HARDWARE)) == cased & set(boards(HARDWARE))
+    # The motor's board exists while its case does not yet (`case = false`): made only when named.
+    assert "motor" in boards(HARDWARE) and "motor" not in modules(HARDWARE)
+
+
 @pytest.mark.parametrize("module", _modules())
 def test_module_case_is_committed_and_passes_every_check(module):
     out = ENCLOSURES / module

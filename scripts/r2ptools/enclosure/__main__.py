@@ -5,6 +5,7 @@
     scripts/enclosures list     [--hardware DIR]
 
 A module is a folder hardware/<m>/ holding <m>.kicad_pcb; its case goes to enclosures/<m>/.
+Without MODULE: the modules that modules.toml marks `case = true`.
 `generate` writes every file and prints the fit and the OpenSCAD/cadquery volume agreement;
 `check` proves the committed files: fit, 2-manifold STLs, no overhang past 45 degrees, volumes
 within 0.1 %. Both exit non-zero on any failure, naming the module and what failed.
@@ -20,10 +21,22 @@ from .. import ROOT
 from . import board_facts, checks, generate, render
 
 
-def modules(hardware: Path) -> dict[str, Path]:
+def boards(hardware: Path) -> dict[str, Path]:
     """module name -> its .kicad_pcb, for every hardware/<m>/<m>.kicad_pcb."""
     return {d.name: d / f"{d.name}.kicad_pcb" for d in sorted(hardware.iterdir())
             if (d / f"{d.name}.kicad_pcb").exists()} if hardware.is_dir() else {}
+
+
+def modules(hardware: Path) -> dict[str, Path]:
+    """The boards that get a case by default: those whose module the manifest beside
+    `hardware` (modules.toml) marks `case = true`; every board where there is no manifest.
+    A board still being designed (the motor's: `case = false`) is made only when named."""
+    found = boards(hardware)
+    if not (hardware.parent / "modules.toml").is_file():
+        return found
+    from .. import manifest
+    cased = {m.name for m in manifest.load(hardware.parent, check_tree=False) if m.case}
+    return {m: pcb for m, pcb in found.items() if m in cased}
 
 
 def source_of(module: str) -> str:
@@ -32,9 +45,9 @@ def source_of(module: str) -> str:
 
 
 def _pick(ap: argparse.ArgumentParser, args) -> dict[str, Path]:
-    found = modules(args.hardware)
     if not args.module:
-        return found
+        return modules(args.hardware)
+    found = boards(args.hardware)
     missing = [m for m in args.module if m not in found]
     if missing:
         ap.error(f"no board for {', '.join(missing)} in {args.hardware} "

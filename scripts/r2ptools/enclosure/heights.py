@@ -63,6 +63,9 @@ TABLE: list[tuple[str, float, str]] = [
     (r"^Capacitor_SMD:C_(0805|1206)", 1.8, "MLCC, high-capacitance"),
     (r"^Capacitor_SMD:C_(1210|1812|2220)", 2.8, "MLCC, high-capacitance"),
     (r"^Capacitor_Tantalum_SMD:", 3.0, "tantalum, case E"),
+    (r"^Capacitor_THT:CP_Radial_D16\.0mm", 27.0,
+     "16 mm radial electrolytics up to 16 x 25 mm (+2 mm: Rubycon ZLH's length tolerance above "
+     "20 mm); a taller can needs a Height field"),
     (r"^Inductor_SMD:L_(0402|0603|0805|1008|1206|1210)", 2.0, "chip inductors and beads"),
     (r"^Inductor_SMD:", 10.0, "shielded power inductors up to 12.5 mm square"),
     (r"^Fuse:Fuse_(0402|0603|0805|1206|1210|1812|2010|2512)", 1.5, "chip fuses and PTCs"),

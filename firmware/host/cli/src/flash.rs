@@ -542,12 +542,12 @@ mod tests {
         let d = scratch();
         let (exe, log) = fake_probe_rs(&d, ONE_PROBE, 0);
         let root = repo();
-        let mut a = args("imu");
+        let mut a = args("motor");
         a.probe_rs = Some(exe);
         let mut out = Vec::new();
         flash(&a, &root, None, &mut out).unwrap();
         let calls = std::fs::read_to_string(&log).unwrap();
-        let image = root.join("firmware/images/imu.elf");
+        let image = root.join("firmware/images/motor.elf");
         assert_eq!(
             calls.lines().collect::<Vec<_>>(),
             [
@@ -558,7 +558,7 @@ mod tests {
             ]
         );
         let out = String::from_utf8(out).unwrap();
-        assert!(out.contains("flashed imu"), "{out}");
+        assert!(out.contains("flashed motor"), "{out}");
         assert!(!out.contains("note:"), "the pinned version draws no note: {out}");
         std::fs::remove_dir_all(d).unwrap();
     }
@@ -569,7 +569,7 @@ mod tests {
         let root = repo();
         let d = scratch();
         let (exe, log) = fake_probe_rs(&d, "No debug probes were found.\\n", 0);
-        let mut a = args("psu");
+        let mut a = args("motor");
         a.probe_rs = Some(exe);
         let err = flash(&a, &root, None, &mut Vec::new()).unwrap_err().to_string();
         assert!(err.starts_with("no debug probe found"), "{err}");
@@ -605,13 +605,13 @@ mod tests {
         let d = scratch();
         let (exe, log) = fake_probe_rs(&d, ONE_PROBE, 0);
         let root = repo();
-        // The IMU's image is flashed alone (too large for a slot: no bootloader first).
-        let mut a = args("imu");
+        // The motor's image is flashed alone (too large for a slot: no bootloader first).
+        let mut a = args("motor");
         a.probe_rs = Some(exe.clone());
         a.dry_run = true;
         let mut out = Vec::new();
         flash(&a, &root, None, &mut out).unwrap();
-        let image = root.join("firmware/images/imu.elf");
+        let image = root.join("firmware/images/motor.elf");
         assert_eq!(
             String::from_utf8(out).unwrap(),
             format!(
