@@ -21,7 +21,9 @@ use crate::watch::{TopicInfo, Watcher, What};
 pub struct EchoArgs {
     /// The topic's name, as its publisher advertises it
     pub topic: String,
-    /// Stop after N messages
+    /// Stop after N messages; until then it waits for them however long they take (--timeout
+    /// covers the advertisement and the subscription only): an event topic such as a fault
+    /// may never publish
     #[arg(long, value_name = "N")]
     pub count: Option<u64>,
 }
