@@ -17,9 +17,8 @@ use embassy_embedded_hal::flash::partition::BlockingPartition;
 use embassy_stm32::flash::{Bank1Region2, Bank1Region3, Blocking, BANK1_REGION2, BANK1_REGION3};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
-use r2p_boot::api::{BootApi, API_MAGIC, API_VERSION};
 use r2p_boot::layout::STM32F407VG as MAP;
-use r2p_boot::{Refusal, Trailer, TRAILER_LEN};
+use r2p_boot::Refusal;
 use r2p_module::DfuSink;
 use r2p_node::FirmwareId;
 use static_cell::StaticCell;
@@ -37,7 +36,10 @@ pub type DfuPart =
 /// The gateway's update sink.
 pub type GatewaySink = DfuSink<DfuPart, StatePart>;
 
-const FLASH_BASE: u32 = 0x0800_0000;
+#[path = "../../../shared/boot_api.rs"]
+mod boot_api;
+use boot_api::FLASH_BASE;
+
 /// The MCU the bootloader checks images for (probe-rs's name, as in images.toml).
 const MCU: &str = "STM32F407VG";
 /// The module kind the gateway's images are signed for (modules.toml).
@@ -69,40 +71,14 @@ pub fn sink(
     SINK.init(DfuSink::new(KIND, MAP.active.size, dfu, state_partition(state), check))
 }
 
-/// The bootloader's check of the DFU slot (signature, MCU, size), through the API table at the
-/// end of its partition: the ed25519 code is in flash once, in the bootloader.
+/// The bootloader's check of the DFU slot (../../shared/boot_api.rs).
 fn check(_dfu: &mut DfuPart) -> Result<(), Refusal> {
-    // SAFETY: the bootloader partition is mapped flash, never written by the image; its last
-    // bytes hold the table (checked by its magic and version before its function is called).
-    let api = unsafe { &*((FLASH_BASE + MAP.api_offset()) as *const BootApi) };
-    if api.magic != API_MAGIC || api.version != API_VERSION {
-        return Err(Refusal::UnknownFormat);
-    }
-    let slot = (FLASH_BASE + MAP.dfu.offset) as *const u8;
-    // SAFETY: the DFU slot is `MAP.active.size` bytes of mapped flash (the DFU partition is one
-    // sector larger); the strings are the lengths given; no kind (the sink checks it).
-    let code = unsafe {
-        (api.verify)(slot, MAP.active.size, MCU.as_ptr(), MCU.len() as u32, MCU.as_ptr(), 0)
-    };
-    match code {
-        0 => Ok(()),
-        c => Err(Refusal::from_code(c as u8).unwrap_or(Refusal::BadSignature)),
-    }
+    let api = boot_api::api(&MAP).ok_or(Refusal::UnknownFormat)?;
+    boot_api::check_dfu(api, &MAP, MCU)
 }
 
-/// What the running image is, from its trailer in the active slot (an image flashed without
-/// one: version 0).
+/// What the running image is (../../shared/boot_api.rs; an image flashed without a trailer:
+/// version 0).
 pub fn running_image(on_trial: bool) -> FirmwareId {
-    let at = FLASH_BASE + MAP.active.end() - TRAILER_LEN as u32;
-    // SAFETY: the active slot is mapped flash; the image is running from it.
-    let raw = unsafe { &*(at as *const [u8; TRAILER_LEN]) };
-    match Trailer::parse(raw) {
-        Ok(t) => FirmwareId {
-            version: t.version.to_bits(),
-            digest: t.digest,
-            kind: t.kind.as_str().try_into().unwrap_or_default(),
-            on_trial,
-        },
-        Err(_) => FirmwareId { kind: KIND.try_into().unwrap_or_default(), ..FirmwareId::default() },
-    }
+    boot_api::running_image(&MAP, KIND, on_trial)
 }
