@@ -15,7 +15,7 @@ import sys
 
 import tomllib
 
-from . import ROOT, firmware
+from . import ROOT, firmware, manifest
 
 FIRMWARE = ROOT / "firmware"
 TRAILER_LEN = 128
@@ -32,8 +32,8 @@ def image() -> tuple[str, str]:
     transfer's time depends on the size only; the emulated module runs its emulated firmware):
     its path and what to call it."""
     limit = slot_limit()
-    sizes = {m: (FIRMWARE / "images" / f"{m}.bin").stat().st_size
-             for m in ("motor", "psu", "imu", "proximity", "template")}
+    sizes = {m.name: (FIRMWARE / "images" / f"{m.name}.bin").stat().st_size
+             for m in manifest.load() if m.image and m.image.mcu == "STM32F103CB"}
     if sizes["motor"] <= limit:
         return str(FIRMWARE / "images" / "motor.bin"), "the motor image"
     name = max((m for m in sizes if sizes[m] <= limit), key=sizes.get)

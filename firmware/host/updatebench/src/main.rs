@@ -142,8 +142,7 @@ fn shares(
 ) -> (f64, f64) {
     let bus = r.sim.bus();
     let (mut others, mut own) = (0u64, 0u64);
-    for (t, p, f) in bus.frames().filter(|(t, _, _)| (from..to).contains(t)) {
-        let _ = t;
+    for (_, p, f) in bus.frames().filter(|(t, _, _)| (from..to).contains(t)) {
         if Some(p) == port || also(p, &f) {
             own += bus.frame_ns(&f);
         } else {
@@ -244,11 +243,11 @@ fn point(
     let end = r.sim.now_ns();
     let missed: u32 =
         (0..r.sim.boards()).filter(|&i| i != m).map(|i| r.sim.node(i).stats().hrt_missed).sum();
-    let motor_port = m; // the robot's boards sit on the ports of their index
+    // The robot's boards sit on the ports of their index: the module's answers are its
+    // management stream's frames.
     let (others, update) = shares(&r, start, end, Some(tool_port), |port, f| {
-        port == motor_port && f.id().message.0 & 0xFF == 0
+        port == m && f.id().message.0 & 0xFF == 0
     });
-    let _ = tool_board;
 
     // The reboot, the swap and the new image's confirmation, as `r2p update` waits for them.
     let boots = r.boards[m].boots.get();
