@@ -51,7 +51,7 @@ pub use topics::{nrt_reserve, ImportState};
 
 use heapless::{Deque, String, Vec};
 use r2p_management::message::{
-    is_name_char, Message, ModuleState, ENCODED_MAX, NAME_MAX, PANIC_TEXT_MAX,
+    is_name_char, DecodeError, Message, ModuleState, ENCODED_MAX, NAME_MAX, PANIC_TEXT_MAX,
 };
 use r2p_management::{NodeId, NodeIdAllocator, MANAGEMENT_INDEX};
 use rtcan::controller::{ErrorCounters, Received, TxMode};
@@ -100,6 +100,10 @@ pub struct Node<
     peers: NodeSet,
     /// Nodes this module sent parameter requests to (their answers become events).
     asked: NodeSet,
+    /// How management messages are read: without the replies only a tool reads until this node
+    /// asks for a parameter (`Message::decode` then), so a module's image, which never asks,
+    /// carries no code for them.
+    decode: fn(&[u8]) -> Result<Message, DecodeError>,
     reboot: bool,
     /// The panic that preceded this boot, repeated after heartbeats ([`Node::set_panic_report`]).
     panic_report: Option<String<PANIC_TEXT_MAX>>,
@@ -166,6 +170,7 @@ impl<
             errors: ErrorCounters::default(),
             peers: NodeSet::default(),
             asked: NodeSet::default(),
+            decode: Message::decode_requests,
             reboot: false,
             panic_report: None,
             firmware: None,
@@ -256,7 +261,7 @@ impl<
         if index == MANAGEMENT_INDEX {
             let decoded = match self.rx.accept(&r.frame, r.at, Expect::Any) {
                 None => return,
-                Some(m) => Message::decode(m.data),
+                Some(m) => (self.decode)(m.data),
             };
             match decoded {
                 Ok(msg @ (Message::HrtRequest { .. } | Message::HrtGrant { .. })) => {
@@ -265,6 +270,7 @@ impl<
                     }
                 }
                 Ok(msg) => self.on_management(from, msg, r.at),
+                Err(DecodeError::Reply(_)) => {} // for the tools on the bus
                 Err(_) => bump(&mut self.stats.malformed),
             }
             return;

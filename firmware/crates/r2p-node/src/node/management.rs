@@ -58,6 +58,7 @@ impl<
     /// [`Event::ParamError`].
     pub fn get_param(&mut self, target: NodeId, index: u16) -> Result<(), NodeError> {
         self.asked.insert(target);
+        self.decode = Message::decode;
         self.send(&Message::ParamGet { target: target.get(), index })
     }
 
@@ -65,6 +66,7 @@ impl<
     /// now held) or [`Event::ParamError`] (refused, unchanged).
     pub fn set_param(&mut self, target: NodeId, index: u16, value: Value) -> Result<(), NodeError> {
         self.asked.insert(target);
+        self.decode = Message::decode;
         self.send(&Message::ParamSet { target: target.get(), index, value })
     }
 
