@@ -47,7 +47,8 @@ impl<
         const TXQ: usize,
         const RX: usize,
         const BUF: usize,
-    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF>
+        const MASTER: bool,
+    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF, MASTER>
 {
     /// Asks `target` (or every node: 255) to reboot.
     pub fn request_reboot(&mut self, target: u8) -> Result<(), NodeError> {
