@@ -1,7 +1,8 @@
-//! Node and topic names of each instance, written once at boot into a [`NameBuf`] that lives as
-//! long as the board (topic names are `&'static str`): a `static` on the MCU, a leaked one per
-//! emulated board. A table of every instance's names as string constants cost 840 B of flash
-//! (eight instances, five names each, their slices); writing them at boot saves 444 B of it.
+//! Node and topic names of each instance (topic names are `&'static str`): the motor image writes
+//! its own once at boot into a [`NameBuf`] ([`Names::write`]), because the table of every
+//! instance's names ([`INSTANCES`], 840 B of constants) cost it 444 B more than that code; other
+//! modules' code that names a motor's topics (the base controller) takes them from the table,
+//! which the motor image then does not carry. A test keeps the two the same.
 
 use heapless::String;
 use r2p_node::ParamStore;
@@ -83,6 +84,11 @@ impl Names {
         }
     }
 
+    /// The names of `instance` from the table (beyond it: the last instance's).
+    pub fn of(instance: u32) -> Self {
+        INSTANCES[(instance as usize).min(INSTANCES.len() - 1)]
+    }
+
     /// The `instance` parameter in `params`.
     pub fn instance(params: &dyn ParamStore) -> u32 {
         let mut c = Config::DEFAULT;
@@ -90,19 +96,27 @@ impl Names {
         c.instance
     }
 
-    /// The names of `instance` on the heap (never freed: an emulated board lives as long as the
-    /// process).
-    #[cfg(feature = "std")]
-    pub fn of(instance: u32) -> Self {
-        Self::write(instance, std::boxed::Box::leak(std::boxed::Box::default()))
-    }
-
-    /// The names the `instance` parameter in `params` selects, on the heap.
-    #[cfg(feature = "std")]
+    /// The names the `instance` parameter in `params` selects, from the table.
     pub fn from_params(params: &dyn ParamStore) -> Self {
         Self::of(Self::instance(params))
     }
 }
+
+macro_rules! names {
+    ($($n:literal),*) => {
+        [$(Names {
+            node: $n,
+            setpoint: concat!($n, "/setpoint"),
+            clear_faults: concat!($n, "/clear_faults"),
+            state: concat!($n, "/state"),
+            fault: concat!($n, "/fault"),
+        }),*]
+    };
+}
+
+/// Names by instance, 0 to [`MAX_INSTANCE`].
+pub const INSTANCES: [Names; MAX_INSTANCE as usize + 1] =
+    names!("motor", "motor1", "motor2", "motor3", "motor4", "motor5", "motor6", "motor7");
 
 #[cfg(test)]
 mod tests {
@@ -115,7 +129,9 @@ mod tests {
     fn every_instance_has_valid_distinct_names_and_the_table_matches_the_range() {
         let Param { min, max, .. } = DEFAULTS[index::INSTANCE as usize];
         assert_eq!((min, max), (Value::U32(0), Value::U32(MAX_INSTANCE)));
-        let all: std::vec::Vec<Names> = (0..=MAX_INSTANCE).map(Names::of).collect();
+        let leak = || std::boxed::Box::leak(std::boxed::Box::new(NameBuf::new()));
+        let all: std::vec::Vec<Names> = (0..=MAX_INSTANCE).map(|i| Names::write(i, leak())).collect();
+        assert_eq!(all, INSTANCES, "written at boot as the table has them");
         for (i, n) in all.iter().enumerate() {
             assert!(n.node.len() <= NAME_MAX && n.node.bytes().all(is_name_char));
             for t in [n.setpoint, n.clear_faults, n.state, n.fault] {
@@ -125,6 +141,7 @@ mod tests {
             assert!(all[..i].iter().all(|o| o.node != n.node), "{} twice", n.node);
         }
         assert_eq!(Names::of(MAX_INSTANCE + 5), all[MAX_INSTANCE as usize], "beyond: the last");
+        assert_eq!(Names::write(MAX_INSTANCE + 5, leak()), all[MAX_INSTANCE as usize]);
         assert_eq!(Names::of(2).state, "motor2/state");
         assert_eq!(Names::of(0).setpoint, "motor/setpoint");
         assert_eq!(Names::of(7).clear_faults, "motor7/clear_faults", "the longest fits");
