@@ -130,7 +130,8 @@ mod tests {
         let Param { min, max, .. } = DEFAULTS[index::INSTANCE as usize];
         assert_eq!((min, max), (Value::U32(0), Value::U32(MAX_INSTANCE)));
         let leak = || std::boxed::Box::leak(std::boxed::Box::new(NameBuf::new()));
-        let all: std::vec::Vec<Names> = (0..=MAX_INSTANCE).map(|i| Names::write(i, leak())).collect();
+        let all: std::vec::Vec<Names> =
+            (0..=MAX_INSTANCE).map(|i| Names::write(i, leak())).collect();
         assert_eq!(all, INSTANCES, "written at boot as the table has them");
         for (i, n) in all.iter().enumerate() {
             assert!(n.node.len() <= NAME_MAX && n.node.bytes().all(is_name_char));
