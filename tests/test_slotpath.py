@@ -28,7 +28,7 @@ def test_one_changed_instruction_on_the_slot_path_is_reported(tmp_path):
     nm = subprocess.run(["arm-none-eabi-nm", "-C", str(MOTOR)], capture_output=True, text=True,
                         check=True).stdout
     addr = next(int(line.split()[0], 16) for line in nm.splitlines()
-                if line.endswith(" rtcan::cycle::SlotClock::on_sync"))
+                if line.endswith(" rtcan::cycle::SlotClock::state"))
     sections = subprocess.run(["arm-none-eabi-readelf", "-SW", str(MOTOR)], capture_output=True,
                               text=True, check=True).stdout
     text = next(line.split("]", 1)[1].split() for line in sections.splitlines() if " .text " in line)
@@ -39,5 +39,5 @@ def test_one_changed_instruction_on_the_slot_path_is_reported(tmp_path):
     data[offset + 2:offset + 4] = (0xBF00).to_bytes(2, "little")  # its second half-word: a nop
     patched.write_bytes(bytes(data))
     _, _, changed = slotpath.compare(str(MOTOR), str(patched))
-    assert [c.split(": ")[0] for c in changed] == ["rtcan::cycle::SlotClock::on_sync"], changed
+    assert [c.split(": ")[0] for c in changed] == ["rtcan::cycle::SlotClock::state"], changed
     assert slotpath.main([str(MOTOR), str(patched)]) == 1
