@@ -279,8 +279,28 @@ def test_cases_are_made_for_the_modules_the_manifest_gives_one():
     from r2ptools import manifest
     cased = {m.name for m in manifest.load() if m.case}
     assert set(modules(HARDWARE)) == cased & set(boards(HARDWARE))
-    # The motor's board exists while its case does not yet (`case = false`): made only when named.
-    assert "motor" in boards(HARDWARE) and "motor" not in modules(HARDWARE)
+    assert "motor" in modules(HARDWARE)
+
+
+def test_a_connector_on_the_dovetail_cuts_it_and_leaves_what_is_below(tmp_path):
+    """The motor's battery XT60 faces the right wall where the rail is: its notch goes through the
+    rail from below the plug's body to the rim and the rail below it stays (the case slides onto a
+    neighbour still); on any board, a connector on that stretch is recorded the same way (it used
+    to stop the generator: the motor had no case)."""
+    import json
+    p = json.loads((ENCLOSURES / "motor" / "motor.json").read_text())
+    c = p["case"] if "case" in p else p
+    j101 = next(k for k in c["cutouts"] if k["ref"] == "J101")
+    assert j101["edge"] == "right" and j101["dovetail"] == "rail"
+    z = c["z"]
+    assert z["floor_top"] < j101["z0"] - DESIGN.cutout_gap < z["rim"]     # rail kept below the notch
+    assert not [k for k in c["cutouts"] if k["ref"] != "J101" and "dovetail" in k]
+
+    def on_the_dovetail(b, mf):
+        mf.place(b, "Connector_JST", "JST_PH_B2B-PH-K_1x02_P2.00mm_Vertical", "J9", 54.5, 25.0)
+    lay = layout.layout(board_facts.read(_fixture_variant(tmp_path, on_the_dovetail), DESIGN), DESIGN)
+    j9 = next(k for k in lay["cutouts"] if k["ref"] == "J9")
+    assert j9["edge"] == "right" and j9["dovetail"] == "rail"
 
 
 @pytest.mark.parametrize("module", _modules())

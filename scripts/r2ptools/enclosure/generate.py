@@ -116,7 +116,9 @@ def readme(doc: dict, r: Result, source: str) -> str:
         f"| board | rests on {len(c['holes'])} bosses {c['boss_h']} mm above the floor, "
         f"{d['board_gap']} mm from the walls |",
         f"| lid | {c['standoff']:.0f} mm standoffs above the board |",
-        f"| cut-outs | " + (", ".join(f"{k['ref']} ({k['edge']} edge)" for k in c["cutouts"]) or "none") + " |",
+        f"| cut-outs | " + (", ".join(f"{k['ref']} ({k['edge']} edge" + (
+            f", through the dovetail {k['dovetail']}: it stays below and beside the notch" if "dovetail" in k else "")
+            + ")" for k in c["cutouts"]) or "none") + " |",
         f"| lid openings | {_count(len(c['leds']), 'light-pipe hole')} Ø{d['led_hole_d']} mm, "
         f"{_count(len(c['led_windows']), 'window')} over a row of LEDs, "
         f"{_count(len(c['pins']), 'pin hole')} Ø{d['pin_hole_d']} mm over push buttons; light pipes: {pipe} |",

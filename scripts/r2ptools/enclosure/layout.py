@@ -11,7 +11,8 @@ cadquery model build from these numbers; they decide nothing the board does not 
   the tallest part by `min_clearance`;
 - every connector (or switch) that faces an edge gets a notch in that wall, from below its body
   to the rim (open at the top, so it prints without support and cables leave whatever their
-  entry); notches closer than `min_pillar` merge;
+  entry); notches closer than `min_pillar` merge; a notch on the dovetail's stretch of a side
+  wall cuts the rail or groove pad too (recorded as the cut-out's `dovetail`);
 - the lid's holes, vents and name: lidplan.py.
 """
 from __future__ import annotations
@@ -136,12 +137,16 @@ def _notches(b: Board, d: Design, F: Frame, z_bot: float, z_top: float) -> list[
             last.update(ref=f"{last['ref']}+{p.ref}", a1=max(last["a1"], a1), z0=min(last["z0"], zlow))
         else:
             cutouts.append({"ref": p.ref, "edge": p.edge, "a0": a0, "a1": a1, "z0": zlow})
+    # A connector on the dovetail's stretch of a side wall (the motor's battery XT60): its notch
+    # goes through the rail (right) or the groove pad (left) like through the wall, from below
+    # its body to the rim; the dovetail keeps the part under the notch and beside it, so the
+    # module still slides onto a neighbour there (with less engagement) and the plug is reachable.
+    # The dovetail's place stays the same on every module: it is what makes them line up.
     cy = b.height / 2
     lo, hi = cy - d.dove_pad_w / 2 - d.cutout_gap, cy + d.dove_pad_w / 2 + d.cutout_gap
     for c in cutouts:
         if c["edge"] in ("left", "right") and c["a0"] - d.cutout_gap < hi and c["a1"] + d.cutout_gap > lo:
-            raise BoardError(f"{b.source}: {c['ref']} faces the {c['edge']} edge where the side-by-side "
-                             f"dovetail is (y {F.Y(hi):.1f}..{F.Y(lo):.1f} mm on the board): move it")
+            c["dovetail"] = "rail" if c["edge"] == "right" else "groove pad"
     return cutouts
 
 
