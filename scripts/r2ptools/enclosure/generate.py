@@ -125,6 +125,10 @@ def readme(doc: dict, r: Result, source: str) -> str:
         f"| vents | {_count(len(c['vents']), 'slot')} {d['vent_w']} mm wide over the warm parts |" if c["vents"]
         else "| vents | none (no warm parts) |",
     ]
+    for w in c.get("floor_windows", []):
+        lines.append(f"| heatsink window | {w[2] - w[0]:.1f} × {w[3] - w[1]:.1f} mm open in the floor under the "
+                     "power packages (their tabs on thermal vias): a heatsink with an insulating gap pad "
+                     "presses against the board's bottom from outside |")
     if r.fit:
         worst = sorted(r.fit.nearest.items(), key=lambda kv: kv[1][0])[:3]
         lines.append("| fit (cadquery, exact) | " + ("passes" if r.fit.ok else "**FAILS**") + "; closest: " +
