@@ -112,3 +112,14 @@ def test_text_boxes_are_the_stroke_fonts():
     assert 5.0 < a[2] - a[0] < 6.2
     assert b[2] - b[0] > a[2] - a[0] + 3
     assert t[3] - t[1] > a[3] - a[1]
+
+
+def test_a_label_against_a_pin_number_is_reported(motor_sheet: Path):
+    """HALL_OUT's label moved back onto U102's pin end reads as "7HALL_OUT" (the pin's number is
+    drawn on the pin, next to its end)."""
+    text = motor_sheet.read_text()
+    m = re.search(r'\(label "HALL_OUT"\s*\(at ([\d.-]+) ([\d.-]+)', text)
+    x, y = float(m[1]), float(m[2])
+    motor_sheet.write_text(text[:m.start(1)] + f"{round(x - 2.54, 2)} {y}" + text[m.end(2):])
+    found = sch_text.problems(motor_sheet)
+    assert any(f.startswith("U102 pin 7") and "label HALL_OUT" in f for f in found), found

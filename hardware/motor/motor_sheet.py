@@ -35,9 +35,9 @@ DRAWING = {
     "flag:VMOT": A(27, 9), "flag:GND": A(6, 19),
     # H-bridge: drains on VMOT at y = 10, sources to GND at y = 24; the Hall sensor right of
     # leg A's low side (its IP+ wire clear of Q102's text), the motor connector right
-    "R101": A(70, 12, 90), "Q101": A(76, 12), "R102": A(70, 22, 90), "Q102": A(76, 22),
-    "R103": A(100, 12, 90), "Q103": A(106, 12), "R104": A(100, 22, 90), "Q104": A(106, 22),
-    "U102": A(94, 34), "C119": A(85, 30.5), "R107": A(104, 34, 90), "C120": A(109, 35.5),
+    "R101": A(70, 12, 90), "Q101": A(78, 12), "R102": A(70, 22, 90), "Q102": A(78, 22),
+    "R103": A(99, 12, 90), "Q103": A(107, 12), "R104": A(99, 22, 90), "Q104": A(107, 22),
+    "U102": A(94, 34), "C119": A(85, 30.5), "R107": A(106, 34, 90), "C120": A(111, 35.5),
     "J102": A(120, 20),
     # gate driver: VDD's regulator top left (VMOT → R120/D105 → Q106), the VDD rail at y = 61
     # with its decoupling, the bootstrap diode and capacitor of each channel in a column right
@@ -50,7 +50,7 @@ DRAWING = {
     "flag:DRV_VDD": A(62, 58),
     # over-current window on the Hall sensor's output
     "R121": A(8, 92.5), "R122": A(8, 99.5), "R123": A(8, 109.5),
-    "U105": A(26, 96), "U106": A(28, 107), "C127": A(34, 94.5), "C128": A(34, 105.5),
+    "U105": A(22, 96), "U106": A(28, 107), "C127": A(34, 94.5), "C128": A(34, 105.5),
     # encoder input (right of the gate driver)
     "J103": A(78, 57, 180), "R116": A(86, 60.5, 180), "R117": A(90, 60.5, 180), "D102": A(101, 70),
     "R118": A(97, 52, 90), "R119": A(97, 60, 90), "C124": A(102, 53.5), "C125": A(104, 61.5),

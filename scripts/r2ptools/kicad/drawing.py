@@ -377,11 +377,12 @@ class DrawnSheetWriter(SheetWriter):
                 # pin): the name reads leftwards from the wire's free end, not over the pin
                 run = abs(s[1][0] - s[0][0])
                 away = run < len(net) * 120 and left not in {p.p for p in pins}
-                # off a corner by a grid where the wire has room: clear of what the corner meets
-                inset = G if not away and run >= len(net) * 120 + 2 * G else 0
+                # off the corner or pin end by a grid where the wire has room: clear of what the
+                # corner meets and of the pin's number (drawn on the pin, next to its end)
+                inset = G if not away and run >= len(net) * 120 + G + 127 else 0
                 self._label(net, (left[0] + inset) / 100, left[1] / 100, 180 if away else 0, f"{tag}/label")
-            else:
-                self._net_label(net, pins[0].p, pins[0].out, f"{tag}/label")
+            else:     # a stub off the pin, so the name does not run into the pin's number
+                self._stub_label(pins[0], f"{tag}/label")
         for pin in labelled:
             if label:
                 self._stub_label(pin, f"{tag}/label/{pin.ref}/{pin.number}")

@@ -2,8 +2,8 @@
 
 A schematic is read by people: a value printed over a neighbour's reference, a label run into
 another part's body, or a wire through a value make the sheet ambiguous although ERC is clean.
-This module reads a `.kicad_sch` and reports every visible text (symbol fields, net, global and
-hierarchical labels, sheet fields, notes) that
+This module reads a `.kicad_sch` and reports every visible text (symbol fields, pin numbers, net,
+global and hierarchical labels, sheet fields, notes) that
 
 - comes closer to another text than `GAP_ALONG` along its reading direction (so two values on
   one baseline do not read as one string) or `GAP_ACROSS` across it, or
@@ -15,8 +15,8 @@ Text extents come from KiCad's own text code (pcbnew's EDA_TEXT with the stroke 
 eeschema draws with), placed the way eeschema places them: a symbol field's box is turned by
 its angle and the symbol's orientation and the text is drawn centred in it (SCH_FIELD::
 GetBoundingBox); a label sits above (or left of) its wire by its text offset; global and
-hierarchical labels add their flag's shape before the text. Pin names and numbers are the
-library's and are not checked.
+hierarchical labels add their flag's shape before the text; a pin's number sits on the pin,
+just above (or left of) its line. Pin names are inside the library's body and are not checked.
 
     scripts/py -m r2ptools.kicad.sch_text hardware/motor/motor.kicad_sch [...]
 """
@@ -192,6 +192,43 @@ class Symbol:
                 out.append((self.lib_point(x, y), self.lib_point(ex, ey)))
         return out
 
+    def pin_numbers(self) -> list[Text]:
+        """The library's pin numbers as eeschema draws them: centred on the pin, just above a
+        level pin or left of an upright one (below or right when the pin names sit outside)."""
+        if self.lib is None or _hidden(self.lib, "pin_numbers"):
+            return []
+        names = sexpr.find(self.lib, "pin_names")
+        off = sexpr.find(names, "offset") if names else None
+        outside = off is not None and float(off[1]) == 0 and not _hidden(self.lib, "pin_names")
+        out = []
+        for sub in self._units():
+            for pin in sexpr.find_all(sub, "pin"):
+                if "hide" in pin[1:] or (sexpr.find(pin, "hide") is not None
+                                         and str(sexpr.find(pin, "hide")[1]) == "yes"):
+                    continue
+                x, y, a = _at(pin)
+                ln = float(sexpr.find(pin, "length")[1])
+                if ln == 0:
+                    continue
+                num = sexpr.find(pin, "number")
+                size, *_ = _effects(num)
+                (ax, ay) = self.lib_point(x, y)
+                (bx, by) = self.lib_point(x + ln * round(math.cos(math.radians(a))),
+                                          y + ln * round(math.sin(math.radians(a))))
+                mx, my = (ax + bx) / 2, (ay + by) / 2
+                x0, y0, x1, y1 = text_box(str(num[1]), size, False, False, "center", "center", ink=True)
+                gap = 0.1016 + DEFAULT_PEN / 2
+                side = 1 if outside else -1
+                if abs(ay - by) < 1e-6:           # level: above the line
+                    dy = side * (gap + (y1 - y0) / 2)
+                    box, vertical = (mx + x0, my + dy + y0, mx + x1, my + dy + y1), False
+                else:                              # upright: left of the line, reading upwards
+                    w, h = y1 - y0, x1 - x0
+                    dx = side * (gap + w / 2)
+                    box, vertical = (mx + dx - w / 2, my - h / 2, mx + dx + w / 2, my + h / 2), True
+                out.append(Text(f"{self.ref} pin {num[1]}", box, vertical, owner=self.ref))
+        return out
+
     def fields(self) -> list[Text]:
         out = []
         for p in sexpr.find_all(self.node, "property"):
@@ -214,6 +251,14 @@ class Symbol:
             out.append(Text(f"{self.ref} {name} {value!r}", (cx + ix0, cy + iy0, cx + ix1, cy + iy1),
                             vertical, owner=self.ref))
         return out
+
+
+def _hidden(lib: list, key: str) -> bool:
+    node = sexpr.find(lib, key)
+    if node is None:
+        return False
+    h = sexpr.find(node, "hide")
+    return "hide" in node[1:] or (h is not None and (len(h) == 1 or str(h[1]) == "yes"))
 
 
 def _label(node: list) -> Text:
@@ -292,7 +337,7 @@ def read(sch: Path) -> Drawing:
         kind = item[0]
         if kind == "symbol":
             s = Symbol(item, lib)
-            texts += s.fields()
+            texts += s.fields() + s.pin_numbers()
             b = s.body()
             if b is not None:
                 bodies.append((s.ref, b))
@@ -372,11 +417,16 @@ def problems(sch: Path) -> list[str]:
             b = d.texts[j]
             if _meet(grown[i], grown[j]):
                 out.append(f"{a.what} overlaps {b.what} (within {GAP_ALONG} mm along, {GAP_ACROSS} mm across)")
+        pin_number = " pin " in a.what
         for whose, box in d.bodies:
+            if pin_number and whose == a.owner:
+                continue          # a pin's number sits by its own symbol by design
             if _meet(a.box, box, shrink=TOUCH):
                 out.append(f"{a.what} over the body of {whose}")
         for what, seg in d.lines:
             if a.anchor is not None and _on(a.anchor, seg):
+                continue
+            if pin_number and what == f"{a.owner} pin":
                 continue
             if _crosses(seg, a.box):
                 out.append(f"{a.what} crossed by a {what} {_fmt(seg)}")
