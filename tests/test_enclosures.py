@@ -279,8 +279,55 @@ def test_cases_are_made_for_the_modules_the_manifest_gives_one():
     from r2ptools import manifest
     cased = {m.name for m in manifest.load() if m.case}
     assert set(modules(HARDWARE)) == cased & set(boards(HARDWARE))
-    # The motor's board exists while its case does not yet (`case = false`): made only when named.
-    assert "motor" in boards(HARDWARE) and "motor" not in modules(HARDWARE)
+    assert "motor" in modules(HARDWARE)
+
+
+def test_the_power_stage_gets_a_heatsink_window_and_the_mounts_stay_at_the_bus_end(tmp_path):
+    """The motor's D2PAKs shed their heat through the board's bottom: the floor opens under all
+    four (a heatsink presses on the gap pad from outside); the M5 pattern (floor and stacking
+    pads) is centred on the bus end on every module, so the motor's sits under its core, clear of
+    the window. A D2PAK over a mount is refused (the window would take the mount away)."""
+    import json
+    for m in _modules():
+        c = json.loads((ENCLOSURES / m / f"{m}.json").read_text())["case"]
+        xs, ys = [p[0] for p in c["mounts"]], [p[1] for p in c["mounts"]]
+        assert (sum(xs) / 4, sum(ys) / 4) == (DESIGN.bus_end_w / 2, (c["interior"][1] + c["interior"][3]) / 2), m
+        fets = [p["box"] for p in c["standin"]["parts"] if p["ref"] in ("Q101", "Q102", "Q103", "Q104")]
+        if m != "motor":
+            assert c["floor_windows"] == [], m
+            continue
+        (w,) = c["floor_windows"]
+        assert len(fets) == 4
+        for b in fets:
+            assert w[0] <= b[0] and w[1] <= b[1] and b[3] <= w[2] and b[4] <= w[3]
+        for mx, my in c["mounts"]:
+            assert not (w[0] - 5 < mx < w[2] + 5 and w[1] - 5 < my < w[3] + 5)
+
+    def d2pak_on_a_mount(b, mf):
+        mf.place(b, "Package_TO_SOT_SMD", "TO-263-2", "Q9", 30.0, 20.0)
+    with pytest.raises(board_facts.BoardError, match="heatsink window .* meets the boss or mount"):
+        layout.layout(board_facts.read(_fixture_variant(tmp_path, d2pak_on_a_mount), DESIGN), DESIGN)
+
+
+def test_a_connector_on_the_dovetail_cuts_it_and_leaves_what_is_below(tmp_path):
+    """The motor's battery XT60 faces the right wall where the rail is: its notch goes through the
+    rail from below the plug's body to the rim and the rail below it stays (the case slides onto a
+    neighbour still); on any board, a connector on that stretch is recorded the same way (it used
+    to stop the generator: the motor had no case)."""
+    import json
+    p = json.loads((ENCLOSURES / "motor" / "motor.json").read_text())
+    c = p["case"] if "case" in p else p
+    j101 = next(k for k in c["cutouts"] if k["ref"] == "J101")
+    assert j101["edge"] == "right" and j101["dovetail"] == "rail"
+    z = c["z"]
+    assert z["floor_top"] < j101["z0"] - DESIGN.cutout_gap < z["rim"]     # rail kept below the notch
+    assert not [k for k in c["cutouts"] if k["ref"] != "J101" and "dovetail" in k]
+
+    def on_the_dovetail(b, mf):
+        mf.place(b, "Connector_JST", "JST_PH_B2B-PH-K_1x02_P2.00mm_Vertical", "J9", 54.5, 25.0)
+    lay = layout.layout(board_facts.read(_fixture_variant(tmp_path, on_the_dovetail), DESIGN), DESIGN)
+    j9 = next(k for k in lay["cutouts"] if k["ref"] == "J9")
+    assert j9["edge"] == "right" and j9["dovetail"] == "rail"
 
 
 @pytest.mark.parametrize("module", _modules())

@@ -70,6 +70,9 @@ def test_a_changed_board_value_fails_its_row(monkeypatch, name, value, guarded):
     ("HALL_T_RESPONSE", 10e-6, "current at switch-off"),                # a filtered sensor: 1 kA shorts
     ("OC_SENS_TOL", 0.06, "over-current trip"),                         # a sloppier sensor: trips at 28 A
     ("DRV_I_PEAK", 0.1, "dead time vs turn-off"),                       # a weak driver: ~1 µs turn-off
+    ("OC_FILTER_C", 1e-9, "over-current input filter"),                 # τ 1 µs: a short passes I_DM
+    ("OC_HYST_R", 10e6, "over-current hysteresis"),                     # 2.8 mV: inside the offsets
+    ("OC_HYST_R", 20e3, "over-current hysteresis"),                     # idle lift past the swing
 ])
 
 def test_a_changed_part_or_assumption_fails_its_row(monkeypatch, name, value, guarded):

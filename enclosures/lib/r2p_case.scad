@@ -20,6 +20,7 @@
 //   insert_m3_d insert_m3_depth: bosses and their heat-set insert holes   mounts: [[x,y]] the
 //   M5 pattern (floor holes, lid stacking pads)   m5_d pad_d pad_h insert_m5_d
 //   cutouts: [[edge, a0, a1, z0]] connector extent along its wall and body bottom; cutout_gap
+//   floor_windows: [[x0,y0,x1,y1]] openings in the floor under power packages (a heatsink)
 //   dove_*: side-by-side dovetail (rail right, groove left) at dove_y
 //   leds: [[x,y]] led_hole_d   pins: [[x,y]] pin_hole_d (push buttons)
 //   led_windows vents: [[x0,y0,x1,y1]]   lid_screw_d lid_csk_d
@@ -90,6 +91,8 @@ module r2p_base(P) {
                 translate([0, 0, r2p(P, "floor")]) linear_extrude(r2p(P, "z_rim"))
                     r2p_rounded(r2p(P, "interior"), r2p(P, "inner_r"), fn);
                 for (c = r2p(P, "cutouts")) r2p_notch(P, c);
+                for (w = r2p(P, "floor_windows"))        // a heatsink reaches the board here
+                    translate([w[0], w[1], -1]) cube([w[2] - w[0], w[3] - w[1], r2p(P, "floor") + 2]);
                 r2p_dove_groove(P);
             }
             for (h = r2p(P, "holes"))

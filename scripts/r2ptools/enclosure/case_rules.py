@@ -36,7 +36,10 @@ class Design:
     lid_screw_d: float = 3.4     # M3 clearance
     lid_csk_d: float = 6.4       # 90 deg countersink for ISO 10642 M3 (head 6.0 mm)
 
-    # --- mounting pattern shared by floor (T-slot) and lid (stacking), about the board centre
+    # --- mounting pattern shared by floor (T-slot) and lid (stacking), about the centre of the
+    # bus end (the form factor's 60 x 50 mm, docs/bus.md: the whole board on a standard module),
+    # so a longer board (the motor's) stacks and mounts like the others, its power end free
+    bus_end_w: float = 60.0
     tslot_dx: float = 15.0       # two M5 holes at centre +/- dx: profile along the 60 mm side
     tslot_dy: float = 12.0       # two M5 holes at centre +/- dy: profile across it
     m5_d: float = 5.5            # M5 clearance

@@ -116,13 +116,19 @@ def readme(doc: dict, r: Result, source: str) -> str:
         f"| board | rests on {len(c['holes'])} bosses {c['boss_h']} mm above the floor, "
         f"{d['board_gap']} mm from the walls |",
         f"| lid | {c['standoff']:.0f} mm standoffs above the board |",
-        f"| cut-outs | " + (", ".join(f"{k['ref']} ({k['edge']} edge)" for k in c["cutouts"]) or "none") + " |",
+        f"| cut-outs | " + (", ".join(f"{k['ref']} ({k['edge']} edge" + (
+            f", through the dovetail {k['dovetail']}: it stays below and beside the notch" if "dovetail" in k else "")
+            + ")" for k in c["cutouts"]) or "none") + " |",
         f"| lid openings | {_count(len(c['leds']), 'light-pipe hole')} Ø{d['led_hole_d']} mm, "
         f"{_count(len(c['led_windows']), 'window')} over a row of LEDs, "
         f"{_count(len(c['pins']), 'pin hole')} Ø{d['pin_hole_d']} mm over push buttons; light pipes: {pipe} |",
         f"| vents | {_count(len(c['vents']), 'slot')} {d['vent_w']} mm wide over the warm parts |" if c["vents"]
         else "| vents | none (no warm parts) |",
     ]
+    for w in c.get("floor_windows", []):
+        lines.append(f"| heatsink window | {w[2] - w[0]:.1f} × {w[3] - w[1]:.1f} mm open in the floor under the "
+                     "power packages (their tabs on thermal vias): a heatsink with an insulating gap pad "
+                     "presses against the board's bottom from outside |")
     if r.fit:
         worst = sorted(r.fit.nearest.items(), key=lambda kv: kv[1][0])[:3]
         lines.append("| fit (cadquery, exact) | " + ("passes" if r.fit.ok else "**FAILS**") + "; closest: " +

@@ -11,12 +11,18 @@ cadquery model build from these numbers; they decide nothing the board does not 
   the tallest part by `min_clearance`;
 - every connector (or switch) that faces an edge gets a notch in that wall, from below its body
   to the rim (open at the top, so it prints without support and cables leave whatever their
-  entry); notches closer than `min_pillar` merge;
+  entry); notches closer than `min_pillar` merge; a notch on the dovetail's stretch of a side
+  wall cuts the rail or groove pad too (recorded as the cut-out's `dovetail`);
+- the floor opens under power packages that shed their heat through the board's bottom (D2PAK
+  tabs on thermal vias): a window a heatsink reaches the board through;
+- the M5 pattern (floor and stacking pads) is centred on the bus end (the standard 60 x 50 mm),
+  the same place on every module;
 - the lid's holes, vents and name: lidplan.py.
 """
 from __future__ import annotations
 
 import math
+import re
 
 from .board_facts import Board, BoardError, Part
 from .case_rules import Design
@@ -47,7 +53,7 @@ class Frame:
 def layout(b: Board, d: Design) -> dict:
     where = b.source
     F = Frame(b)
-    cx, cy = b.width / 2, b.height / 2
+    cx, cy = min(b.width, d.bus_end_w) / 2, b.height / 2
     mounts = [(cx - d.tslot_dx, cy), (cx + d.tslot_dx, cy), (cx, cy - d.tslot_dy), (cx, cy + d.tslot_dy)]
     holes = [(h.x, F.Y(h.y), h.d) for h in b.holes]
     for mx, my in mounts:
@@ -83,6 +89,7 @@ def layout(b: Board, d: Design) -> dict:
         "mounts": [[r4(x), r4(y)] for x, y in mounts],
         "dove_y": r4(cy),
         "cutouts": _notches(b, d, F, z_bot, z_top),
+        "floor_windows": _floor_windows(b, d, F, holes, mounts),
         "leds": lid.leds,
         "led_windows": lid.windows,
         "pins": lid.pins,
@@ -136,13 +143,41 @@ def _notches(b: Board, d: Design, F: Frame, z_bot: float, z_top: float) -> list[
             last.update(ref=f"{last['ref']}+{p.ref}", a1=max(last["a1"], a1), z0=min(last["z0"], zlow))
         else:
             cutouts.append({"ref": p.ref, "edge": p.edge, "a0": a0, "a1": a1, "z0": zlow})
+    # A connector on the dovetail's stretch of a side wall (the motor's battery XT60): its notch
+    # goes through the rail (right) or the groove pad (left) like through the wall, from below
+    # its body to the rim; the dovetail keeps the part under the notch and beside it, so the
+    # module still slides onto a neighbour there (with less engagement) and the plug is reachable.
+    # The dovetail's place stays the same on every module: it is what makes them line up.
     cy = b.height / 2
     lo, hi = cy - d.dove_pad_w / 2 - d.cutout_gap, cy + d.dove_pad_w / 2 + d.cutout_gap
     for c in cutouts:
         if c["edge"] in ("left", "right") and c["a0"] - d.cutout_gap < hi and c["a1"] + d.cutout_gap > lo:
-            raise BoardError(f"{b.source}: {c['ref']} faces the {c['edge']} edge where the side-by-side "
-                             f"dovetail is (y {F.Y(hi):.1f}..{F.Y(lo):.1f} mm on the board): move it")
+            c["dovetail"] = "rail" if c["edge"] == "right" else "groove pad"
     return cutouts
+
+
+# Power packages whose tab is soldered onto thermal vias: their heat leaves through the board's
+# bottom copper, into a gap pad and a heatsink pressed against it from below.
+_HEAT_DOWN = re.compile(r"^Package_TO_SOT_SMD:(TO-263|TO-268|D2PAK)")
+
+
+def _floor_windows(b: Board, d: Design, F: Frame, holes, mounts) -> list[list[float]]:
+    """The floor opens under the power packages that shed their heat downwards (one window over
+    all of them), so a heatsink reaches the board's bottom from outside the case."""
+    boxes = [F.part(p) for p in b.parts if p.side == "top" and _HEAT_DOWN.match(p.fpid)]
+    if not boxes:
+        return []
+    w = [r4(min(x[0] for x in boxes)), r4(min(x[1] for x in boxes)),
+         r4(max(x[2] for x in boxes)), r4(max(x[3] for x in boxes))]
+    keep = [(hx, hy, d.boss_d / 2 + d.min_clearance) for hx, hy, _ in holes] + \
+           [(mx, my, d.m5_head_d / 2 + d.min_clearance) for mx, my in mounts]
+    for x, y, r in keep:
+        nx, ny = min(max(x, w[0]), w[2]), min(max(y, w[1]), w[3])
+        if math.hypot(nx - x, ny - y) < r:
+            raise BoardError(f"{b.source}: the heatsink window under the power packages "
+                             f"({w[0]:.1f}..{w[2]:.1f} x {w[1]:.1f}..{w[3]:.1f} mm in the case) meets the "
+                             f"boss or mount at ({x:.1f}, {y:.1f}): move the packages or the hole")
+    return [w]
 
 
 def _standin(b: Board, d: Design, F: Frame, holes, z_bot: float, z_top: float) -> dict:

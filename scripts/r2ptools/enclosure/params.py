@@ -32,6 +32,7 @@ def scad_values(doc: dict) -> list[tuple[str, object]]:
     out += [("boss_h", c["boss_h"]), ("standoff", c["standoff"]), ("holes", c["holes"]),
             ("mounts", c["mounts"]), ("dove_y", c["dove_y"]),
             ("cutouts", [[k["edge"], k["a0"], k["a1"], k["z0"]] for k in c["cutouts"]]),
+            ("floor_windows", c["floor_windows"]),
             ("leds", c["leds"]), ("led_windows", c["led_windows"]), ("pins", c["pins"]), ("vents", c["vents"]),
             ("name", [c["name"]["text"], c["name"]["x"], c["name"]["y"], c["name"]["size"]])]
     s = c["standin"]

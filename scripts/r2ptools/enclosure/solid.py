@@ -90,6 +90,8 @@ def base_pieces(P: Params) -> tuple[cq.Workplane, list[cq.Workplane], cq.Workpla
             cuts.append(_cube(o[0] - P.dove_pad_t - 1, a0, z0, i[0] + ri + E, a1, z1))
         else:
             cuts.append(_cube(i[2] - ri - E, a0, z0, o[2] + P.dove_depth + 1, a1, z1))
+    for w in P.floor_windows:                 # a heatsink reaches the board through the floor
+        cuts.append(_cube(w[0], w[1], -1, w[2], w[3], P.floor + 1))
     xg = o[0] - P.dove_pad_t
     gr, gt, gd = P.dove_root / 2 + P.dove_gap, P.dove_tip / 2 + P.dove_gap, P.dove_depth + P.dove_gap
     cuts.append(_prism([(xg - 1, y - gr), (xg, y - gr), (xg + gd, y - gt), (xg + gd, y + gt), (xg, y + gr), (xg - 1, y + gr)],

@@ -231,18 +231,21 @@ class DrawnSheetWriter(SheetWriter):
         if pl.lib_id not in self.lib_ids:
             self.lib_ids.append(pl.lib_id)
         x0, y0, x1, y1 = pl.box
-        tall = (y1 - y0) > (x1 - x0) or len(pl.pins) > 2
+        # a connector (every pin out of one side) reads like a tall part: text beside its body
+        one_side = len({p.out for p in pl.pins}) == 1 and pl.pins[0].out[1] == 0
+        tall = (y1 - y0) > (x1 - x0) or len(pl.pins) > 2 or one_side
         if tall:
             rx, ry, vx, vy, just = x1 + 127, (y0 + y1) // 2 - 127, x1 + 127, (y0 + y1) // 2 + 127, "left"
             if len(pl.pins) > 4:       # an IC: reference above, value below the body
                 rx, ry, vx, vy, just = x0, y0 - 127, x0, y1 + 254, "left"
+                rx, vx = _beside_lanes(pl, pl.ref, rx, (0, -1)), _beside_lanes(pl, value, vx, (0, 1))
             elif all(p.out == (1, 0) for p in pl.pins):    # pins on the right (a jack turned
                 rx, vx, just = x0 - 127, x0 - 127, "right"  # to face the circuit): text left
         else:
             rx, ry, vx, vy, just = (x0 + x1) // 2, y0 - 127, (x0 + x1) // 2, y1 + 254, None
         if value_at is not None:
             vx, vy, just = value_at
-        elif pl.rot in (90, 180) and just is not None:
+        if pl.rot in (90, 180) and just is not None:
             # KiCad reads a field's justification in the symbol's frame: turned 90 (with the
             # level field angle below) or 180, "left" is drawn right-justified, over the body
             just = {"left": "right", "right": "left"}[just]
@@ -276,7 +279,9 @@ class DrawnSheetWriter(SheetWriter):
                    if tuple(round(v) for v in _rot(*native, r)) == out)
         ref = f"#PWR{self.key[:3].upper()}{self.power_n:03d}"
         pl = place(lib_id, ref, p, rot, {"1": net}, None)
-        tip = (p[0] + out[0] * 400, p[1] + out[1] * 400 + (100 if out[1] == 0 else 0))
+        # a sideways symbol (an IC's side pin): its name just above the pin's line, where the
+        # next pin's label (drawn above its own wire, below this one) leaves room
+        tip = (p[0] + out[0] * 400, p[1] + out[1] * 400 - (100 if out[1] == 0 else 0))
         just = {(1, 0): "left", (-1, 0): "right"}.get(out)
         self._emit_symbol(pl, net, {"Footprint": "", "Datasheet": "", "Description": ""},
                           in_bom=False, on_board=False, value_at=(*tip, just))
@@ -328,6 +333,15 @@ class DrawnSheetWriter(SheetWriter):
                         if all(self.canvas.ok(net, s) for s in path):
                             best = (_length(path), pin, path, t)
             if best is None:
+                if label and len(todo) > 1 and not segs:
+                    # the first pin reaches none: it takes a stub and label, the rest join
+                    self._stub_label(pins[0], f"{tag}/label/{pins[0].ref}/{pins[0].number}")
+                    return self._route(net, todo, f"{tag}/rest", label)
+                if label and len(todo) > 1 and segs:
+                    # the rest may still join among themselves: a second tree with its label
+                    self._route(net, todo, f"{tag}/rest", label)
+                    todo = []
+                    break
                 labelled += todo
                 break
             _, pin, path, t = best
@@ -359,9 +373,16 @@ class DrawnSheetWriter(SheetWriter):
             if flat:
                 s = max(flat, key=lambda s: (abs(s[1][0] - s[0][0]), -min(s[0][0], s[1][0])))
                 left = min(s, key=lambda q: q[0])
-                self._label(net, left[0] / 100, left[1] / 100, 0, f"{tag}/label")
-            else:
-                self._net_label(net, pins[0].p, pins[0].out, f"{tag}/label")
+                # a wire shorter than the name (two pins side by side, a loop round an IC's
+                # pin): the name reads leftwards from the wire's free end, not over the pin
+                run = abs(s[1][0] - s[0][0])
+                away = run < len(net) * 120 and left not in {p.p for p in pins}
+                # off the corner or pin end by a grid where the wire has room: clear of what the
+                # corner meets and of the pin's number (drawn on the pin, next to its end)
+                inset = G if not away and run >= len(net) * 120 + G + 127 else 0
+                self._label(net, (left[0] + inset) / 100, left[1] / 100, 180 if away else 0, f"{tag}/label")
+            else:     # a stub off the pin, so the name does not run into the pin's number
+                self._stub_label(pins[0], f"{tag}/label")
         for pin in labelled:
             if label:
                 self._stub_label(pin, f"{tag}/label/{pin.ref}/{pin.number}")
@@ -515,6 +536,17 @@ class DrawnSheetWriter(SheetWriter):
         self.height = max(self.height, max(ys) / 100 + 8)
         self.items = items
         return super().document(sheet_uses, root)
+
+
+def _beside_lanes(pl: Placed, text: str, x: int, side: Pt) -> int:
+    """Where a field above (side (0, -1)) or below (0, 1) an IC starts: at `x`, or, when a pin on
+    that side runs under the text (a GND pin with its symbol, a rail's), right of the last such
+    pin, clear of its power symbol and of the symbol's name (about 3.5 mm wide, centred on it)."""
+    width = len(text) * 120                   # the stroke font's advance at 1.27 mm, about
+    lanes = [p.p[0] for p in pl.pins if p.out == side]
+    if not any(x - 254 <= lx <= x + width + 254 for lx in lanes):
+        return x
+    return max(lanes) + 381
 
 
 def _interleaved(pins: list[PinAt], pl: Placed) -> bool:

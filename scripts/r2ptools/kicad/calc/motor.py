@@ -107,6 +107,14 @@ CMP_TPD = 0.5e-6              # LMV331 propagation delay: twice the 260 ns typic
 HALL_T_RESPONSE = 2.9e-6      # ACS725 step response ≈ 0.35 / 120 kHz: from the bandwidth (read)
 TIM1_BREAK_S = 0.1e-6         # TIM1 break input to outputs inactive (a few 72 MHz clocks, no filter)
 L_SHORT = 0.5e-6              # H: a short across the motor leads at the end of ~1 m of cable: estimate
+# The comparators' input filter and hysteresis: NOT ON THE REVISION A BOARD (its U105/U106 take
+# HALL_OUT directly, and nothing feeds DRV_FAULT back); these are revision B's parts, sized here
+# from values already on the board's BOM (no new LCSC line): the 1 k of R107/R118, the 100 pF
+# C0G of C124, the 174 k of R110.
+OC_FILTER_R = 1e3             # Ω, HALL_OUT → the comparators' inputs (the ADC keeps R107/C120)
+OC_FILTER_C = 100e-12         # F, C0G, at the comparators' inputs to GND
+OC_HYST_R = 174e3             # Ω, DRV_FAULT → OC_HI (U105's IN+): positive feedback on the high trip
+RING_HZ = 30e6                # Hz: switch-node ringing picked up by the comparator inputs: estimate
 
 
 def vdd(vin: float, load: float, worst: str = "min") -> float:
@@ -557,6 +565,36 @@ def rows() -> list[Row]:
             f"{delay * 1e6:.1f} µs: sensor {HALL_T_RESPONSE * 1e6:.1f} + comparator {CMP_TPD * 1e6:.1f} + "
             f"break {TIM1_BREAK_S * 1e6:.1f} + driver {DRV_PROP * 1e6:.1f} + turn-off {t_off * 1e6:.2f} µs. "
             "Leg B's own shorts (MOT_B to a rail) bypass the sensor: the fuse"))
+    # the comparators' input filter: every ns it adds lets a short's current rise further (a ramp
+    # lags a one-pole filter by τ), so τ is bounded by what the switch-off current leaves to I_DM
+    tau = OC_FILTER_R * OC_FILTER_C
+    budget = (FET_ID_PULSE - i_short) / (VIN_MAX / L_SHORT)
+    ring_gain = 1 / math.sqrt(1 + (RING_HZ * 2 * math.pi * tau) ** 2)
+    add(Row("over-current input filter (revision B: R_f + C_f before U105/U106)",
+            f"{OC_FILTER_R / 1e3:g} k + {OC_FILTER_C * 1e12:.0f} pF: τ {tau * 1e9:.0f} ns, "
+            f"{1 / (2 * math.pi * tau) / 1e6:.1f} MHz", f"τ ≤ {budget * 1e9:.0f} ns (short-circuit budget to I_DM)",
+            tau <= budget,
+            f"a short then reaches {i_short + VIN_MAX / L_SHORT * tau:.0f} A at switch-off; a "
+            f"{RING_HZ / 1e6:.0f} MHz ring (estimate) passes at {ring_gain:.0%}. NOT ON THE REVISION A "
+            "BOARD: its comparators see HALL_OUT as the sensor drives it (120 kHz), with no filter for "
+            "what the layout picks up after it"))
+    # hysteresis: U105 (HALL on IN−, OC_HI on IN+) trips when HALL_OUT rises above OC_HI; DRV_FAULT
+    # low through R_h pulls OC_HI down (positive feedback); OC_HI's source is R121 ∥ (R122 + R123)
+    r_src = 1 / (1 / v["R_OC_OUTER"] + 1 / (v["R_OC_MID"] + v["R_OC_OUTER"]))
+    v_hi = oc_window()[1]
+    dv_trip = v_hi * r_src / (r_src + OC_HYST_R)
+    dv_idle = (ADC_FS - v_hi) * r_src / (r_src + OC_HYST_R)
+    lift_a = dv_idle / (HALL_MV_PER_A / 1e3)
+    add(Row("over-current hysteresis (revision B: R_h from DRV_FAULT to OC_HI)",
+            f"{dv_trip * 1e3:.0f} mV = {dv_trip / (HALL_MV_PER_A / 1e3):.1f} A",
+            f"> offsets {CMP_VOS * 1e3:.0f} mV; high trip + idle lift < swing {swing_a:.1f} A",
+            dv_trip > CMP_VOS and oc_hi_a + lift_a < swing_a,
+            f"R_h {OC_HYST_R / 1e3:.0f} k against OC_HI's {r_src / 1e3:.2f} k; idle (DRV_FAULT pulled up) it "
+            f"lifts the high trip by {dv_idle * 1e3:.1f} mV ({lift_a:.2f} A: {oc_hi_a + lift_a:.1f} A at most). "
+            "The low trip (U106, OC_LO on "
+            "IN−) cannot take hysteresis from an open-drain low. NOT ON THE REVISION A BOARD: there, and "
+            "for both trips, TIM1's break latches (MOE stays cleared until the firmware re-arms), so a "
+            "chattering comparator cannot switch the bridge back on"))
 
     # --- gate drive: HIP4082 from VDD (Q106), bootstrap high sides
     load = vdd_load()
