@@ -31,9 +31,12 @@ pub const ZENOH_ROUTER: u16 = 6;
 pub const ZENOH_PORT: u16 = 7;
 /// ROS domain ID of the gateway's ROS 2 node and topics (as `ROS_DOMAIN_ID`).
 pub const ROS_DOMAIN: u16 = 8;
+/// The gateway runs the robot's base controller (r2p-app-base, whose parameters come first in
+/// the gateway image's table); off when another node on the bus runs it (docs/ros2.md).
+pub const BASE_CONTROLLER: u16 = 9;
 
-/// Number of network parameters.
-pub const COUNT: usize = 9;
+/// Number of the gateway's own parameters.
+pub const COUNT: usize = 10;
 
 /// 192.168.1.50: a static address in the most common home/lab subnet.
 pub const DEFAULT_IP: u32 = u32::from_be_bytes([192, 168, 1, 50]);
@@ -50,7 +53,14 @@ pub const DEFAULTS: [Param; COUNT] = [
     Param::u32("zenoh_router", 0, 0, u32::MAX),
     Param::u32("zenoh_port", 7447, 1, 65_535),
     Param::u32("ros_domain", 0, 0, 232),
+    Param::bool("base_controller", true),
 ];
+
+/// Whether the gateway runs the base controller, from `store` whose gateway parameters start
+/// at index `first` (as [`Net::read`]'s).
+pub fn base_controller(store: &dyn ParamStore, first: u16) -> bool {
+    Typed::new(&Offset { store, first }, &DEFAULTS).bool(BASE_CONTROLLER)
+}
 
 /// `base` followed by [`DEFAULTS`] (`T` = `B` + [`COUNT`], checked when evaluated): the table
 /// of a node that runs another application beside the gateway's.

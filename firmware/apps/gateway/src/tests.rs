@@ -568,6 +568,11 @@ fn network_parameters_read_from_their_place_in_the_table() {
     assert_eq!((net.zenoh, net.ros_domain), (Some(([10, 0, 0, 9], 7447)), 42));
     assert!(joined.set(2 + params::ROS_DOMAIN, Value::U32(233)).is_err(), "ROS domains end at 232");
     assert!(joined.set(2 + params::PREFIX_LEN, Value::U32(0)).is_err());
+    // The base controller: on unless another node runs it.
+    assert!(params::base_controller(&joined, 2) && params::base_controller(&alone, 0));
+    joined.set(2 + params::BASE_CONTROLLER, Value::Bool(false)).unwrap();
+    assert!(!params::base_controller(&joined, 2));
+    assert_eq!(joined.get(1), Ok(Value::Bool(false)), "the other application's, untouched");
 }
 
 #[test]
