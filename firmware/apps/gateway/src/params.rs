@@ -6,9 +6,11 @@
 //! after setting them): a gateway that changed its address under a connected client would cut
 //! the client off mid-session.
 //!
-//! The table may follow another application's parameters on the same node (the emulated
-//! gateway also runs the base controller, whose table comes first): [`after`] builds the
-//! joined table and [`Net::read`] takes the index of the first network parameter.
+//! Another application's parameters may follow on the same node (the gateway also runs the
+//! base controller): [`followed_by`] builds the joined table, the other application reads its
+//! part through an [`Offset`] view, and [`Net::read`] takes the index of the first network
+//! parameter (0 in the gateway's tables: its own come first, so a gateway's stored parameters
+//! keep their indices when another application's are added after them).
 
 use r2p_management::message::{ParamFault, Value};
 use r2p_node::{Param, ParamStore, Typed};
@@ -62,14 +64,15 @@ pub fn base_controller(store: &dyn ParamStore, first: u16) -> bool {
     Typed::new(&Offset { store, first }, &DEFAULTS).bool(BASE_CONTROLLER)
 }
 
-/// `base` followed by [`DEFAULTS`] (`T` = `B` + [`COUNT`], checked when evaluated): the table
-/// of a node that runs another application beside the gateway's.
-pub const fn after<const B: usize, const T: usize>(base: [Param; B]) -> [Param; T] {
+/// [`DEFAULTS`] followed by `other` (`T` = [`COUNT`] + `B`, checked when evaluated): the table
+/// of a node that runs another application beside the gateway's, whose parameters start at
+/// index [`COUNT`].
+pub const fn followed_by<const B: usize, const T: usize>(other: [Param; B]) -> [Param; T] {
     assert!(T == B + COUNT, "the joined table holds both tables");
     let mut out = [DEFAULTS[0]; T];
     let mut i = 0;
     while i < T {
-        out[i] = if i < B { base[i] } else { DEFAULTS[i - B] };
+        out[i] = if i < COUNT { DEFAULTS[i] } else { other[i - COUNT] };
         i += 1;
     }
     out
@@ -120,10 +123,13 @@ impl Net {
     }
 }
 
-/// A store seen from its parameter `first` on.
-struct Offset<'a> {
-    store: &'a dyn ParamStore,
-    first: u16,
+/// A store seen from its parameter `first` on: the view of one application's part of a joined
+/// table (index 0 of the view is `first` of the store).
+pub struct Offset<'a> {
+    /// The whole table.
+    pub store: &'a dyn ParamStore,
+    /// Index in `store` of the view's first parameter.
+    pub first: u16,
 }
 
 impl ParamStore for Offset<'_> {

@@ -7,11 +7,11 @@
 //! teleoperator behind the gateway would (to the base controller here, or on the bus for the
 //! node that runs it).
 //!
-//! One node serves both applications' parameters: the base controller's first (their indices
-//! are unchanged), the network's after them ([`PARAMS`]).
+//! One node serves both applications' parameters, as the image's does: the gateway's first,
+//! the base controller's after them ([`PARAMS`]).
 
 use r2p_app_base::{params, App, Endpoints, Names};
-use r2p_app_gateway::params::{after, base_controller, COUNT as NET_COUNT};
+use r2p_app_gateway::params::{base_controller, followed_by, Offset, COUNT as NET_COUNT};
 use r2p_app_gateway::{BusLink, BusTap};
 use r2p_middleware::{pool_size, Class, Publisher};
 use r2p_module::OutboundCell;
@@ -23,13 +23,14 @@ use super::{leak, load_params, node, persist, Booted, Ctx, Leds};
 use crate::PortTap;
 
 /// Number of the gateway node's parameters.
-pub const PARAM_COUNT: usize = params::DEFAULTS.len() + NET_COUNT;
+pub const PARAM_COUNT: usize = NET_COUNT + params::COUNT;
 
-/// The gateway node's parameters: the base controller's, then the network's.
-pub const PARAMS: [Param; PARAM_COUNT] = after(params::DEFAULTS);
+/// The gateway node's parameters: the gateway's (network, `base_controller`), then the base
+/// controller's.
+pub const PARAMS: [Param; PARAM_COUNT] = followed_by(params::DEFAULTS);
 
-/// Index of the first network parameter.
-pub const NET_FIRST: u16 = params::DEFAULTS.len() as u16;
+/// Index of the base controller's first parameter.
+pub const BASE_FIRST: u16 = NET_COUNT as u16;
 
 /// The gateway's bus tap between its node and its port, as on the MCU.
 pub struct GatewayTap(pub BusTap<'static>);
@@ -61,9 +62,10 @@ const TELEOP_PERIOD_US: u64 = 50_000;
 /// one node.
 pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
     let p = load_params(PARAMS, ctx.flash)?;
-    let mut base = base_controller(p, NET_FIRST).then(|| {
-        let ep = Endpoints::leak(Names::from_params(p), params::ik_period_us(p));
-        (ep.cmd_local, App::new(ep, p))
+    let mut base = base_controller(p, 0).then(|| {
+        let bp = leak(Offset { store: p, first: BASE_FIRST });
+        let ep = Endpoints::leak(Names::from_params(bp), params::ik_period_us(bp));
+        (ep.cmd_local, App::new(ep, bp))
     });
     let link = leak(BusLink::new());
     let mut gw = r2p_app_gateway::App::new(r2p_app_gateway::Endpoints::leak(), link);

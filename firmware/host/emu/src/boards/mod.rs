@@ -31,7 +31,7 @@ use rtcan::cycle::ClockState;
 use rtcan::failover::Role;
 use rtcan::{CycleConfig, Micros};
 
-pub use gateway::{gateway, GatewayBoot, GatewayTap, NET_FIRST};
+pub use gateway::{gateway, GatewayBoot, GatewayTap, BASE_FIRST};
 pub use host::base_on_host;
 pub use imu::imu;
 pub use motor::motor;
