@@ -1,6 +1,6 @@
 //! The base controller's step: IK, obstacle avoidance, odometry.
 
-use libm::{cosf, sinf};
+use r2p_module::trig::{cosf, sinf};
 use r2p_module::TopicNode;
 use r2p_msgs::{Odometry, Twist2D, WheelSetpoint};
 use r2p_node::{Export, Import, NodeError, ParamStore, Typed};
