@@ -546,8 +546,10 @@ fn network_parameters_read_from_their_place_in_the_table() {
         }
     );
     // Followed by another application's two parameters: the gateway's keep their indices.
-    const JOINED: [r2p_node::Param; params::COUNT + 2] =
-        params::followed_by([r2p_node::Param::u32("a", 1, 0, 9), r2p_node::Param::bool("b", false)]);
+    const JOINED: [r2p_node::Param; params::COUNT + 2] = params::followed_by([
+        r2p_node::Param::u32("a", 1, 0, 9),
+        r2p_node::Param::bool("b", false),
+    ]);
     let joined = RamParams::new(JOINED);
     let other = params::Offset { store: &joined, first: params::COUNT as u16 };
     assert_eq!(other.get(0), Ok(Value::U32(1)));

@@ -23,7 +23,8 @@ pub fn store_params(
     let mut values = module.params.clone();
     if module.kind() == BoardKind::Gateway {
         let index = robot.modules.iter().position(|m| m.name == module.name);
-        let runs = matches!(robot.base_controller, Some(BaseController::Module(i)) if Some(i) == index);
+        let runs =
+            matches!(robot.base_controller, Some(BaseController::Module(i)) if Some(i) == index);
         if !values.iter().any(|(n, _)| n == "base_controller") {
             values.push(("base_controller".into(), ParamValue::Bool(runs)));
         }

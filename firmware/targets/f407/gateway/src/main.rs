@@ -43,8 +43,8 @@ use embassy_stm32::peripherals::{CAN1, ETH, ETH_SMA};
 use embassy_stm32::rng::{self, Rng};
 use embassy_stm32::{bind_interrupts, pac, rcc, time::Hertz, Config};
 use embassy_time::{Delay, Duration, Instant, Ticker, Timer};
-use r2p_app_gateway::link::MAX_CLIENTS;
 use r2p_app_base as base;
+use r2p_app_gateway::link::MAX_CLIENTS;
 use r2p_app_gateway::params::{self, followed_by, Net, Offset};
 use r2p_app_gateway::ros::{zid_of, Latest, RosBridge, RosConfig};
 use r2p_app_gateway::server::{self, serve};
@@ -64,9 +64,9 @@ use static_cell::StaticCell;
 mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
 }
+mod slot_timer;
 #[path = "../../../shared/trial.rs"]
 mod trial;
-mod slot_timer;
 mod update;
 use slot_timer::SlotTimer;
 use trial::Confirmation;
@@ -83,7 +83,8 @@ bind_interrupts!(struct Irqs {
 /// The gateway's node: up to 5 exports (its status and the base controller's 4, or its status
 /// and `cmd_vel`) and 13 imports (its 7 and the base controller's 6), 32 queued frames, 4
 /// streams in reassembly, messages up to 64 bytes (as a module's).
-type GatewayNode = Node<'static, { 1 + base::endpoints::EXPORTS }, { 7 + base::endpoints::IMPORTS }, 32, 4, 64>;
+type GatewayNode =
+    Node<'static, { 1 + base::endpoints::EXPORTS }, { 7 + base::endpoints::IMPORTS }, 32, 4, 64>;
 type Device = Ethernet<'static, ETH, GenericPhy<Sma<'static, ETH_SMA>>>;
 
 /// The node's parameters: the gateway's, then the base controller's.
@@ -353,11 +354,9 @@ async fn run(
             }
             None => (None, None),
         };
-        cortex_m::interrupt::free(|cs| {
-            let l = LATEST.borrow(cs);
-            let status = Some(status);
-            l.set(Latest { status, battery, imu, mirrored, odom, proximity, ..l.get() });
-        });
+        let status = Some(status);
+        let latest = Latest { status, battery, imu, mirrored, odom, proximity };
+        cortex_m::interrupt::free(|cs| LATEST.borrow(cs).set(latest));
         let [status, bus, fault, link] = &mut leds;
         for (out, on, active_low) in [
             (status, c.led_status, board::LED_STATUS_ACTIVE_LOW),
