@@ -92,5 +92,9 @@ mod tests {
         assert!(params.set(p::WHEEL2_INSTANCE, Value::U32(motors)).is_err());
         assert!(params.set(p::PROXIMITY_INSTANCE, Value::U32(proximity - 1)).is_ok());
         assert!(params.set(p::PROXIMITY_INSTANCE, Value::U32(proximity)).is_err());
+        // Beyond the tables (a store without the range check): the last instance.
+        let last = Names::of([99, 8, 7], 99);
+        assert_eq!(last.states, ["motor7/state"; 3]);
+        assert_eq!(last.ranges, "proximity3/ranges");
     }
 }

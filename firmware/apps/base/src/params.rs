@@ -72,3 +72,27 @@ const PROXIMITY_INSTANCE_MAX: u32 = r2p_app_proximity::endpoints::NAMES.len() as
 pub fn ik_period_us(params: &dyn ParamStore) -> u32 {
     1_000_000 / Typed::new(params, &DEFAULTS).u32(IK_RATE_HZ).max(1)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use r2p_management::message::Value;
+    use r2p_node::RamParams;
+
+    #[test]
+    fn the_setpoints_period_follows_the_ik_rate() {
+        let params = RamParams::new(DEFAULTS);
+        assert_eq!(ik_period_us(&params), 10_000, "100 Hz");
+        params.set(IK_RATE_HZ, Value::U32(250)).unwrap();
+        assert_eq!(ik_period_us(&params), 4_000);
+    }
+
+    #[test]
+    fn every_angle_may_be_negative_as_a_ranger_facing_right_is() {
+        let params = RamParams::new(DEFAULTS);
+        for i in [FIRST_WHEEL_DEG, CHANNEL0_DEG, CHANNEL1_DEG, CHANNEL2_DEG, CHANNEL3_DEG] {
+            assert_eq!(params.set(i, Value::F32(-90.0)), Ok(Value::F32(-90.0)), "{i}");
+            assert!(params.set(i, Value::F32(-361.0)).is_err(), "{i}");
+        }
+    }
+}
