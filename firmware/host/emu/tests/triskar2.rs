@@ -155,6 +155,37 @@ fn the_base_controller_moved_to_the_host_drives_triskar2_alike() {
 }
 
 #[test]
+fn the_base_controller_finds_the_motors_and_the_proximity_module_by_their_instances() {
+    let mut robot = robot_file();
+    // Motors 5, 6, 7 on wheels 0, 1, 2 and proximity module 2: the gateway's base controller
+    // takes their topics from its wheelN_instance and proximity_instance parameters.
+    for m in robot.modules.iter_mut() {
+        let instance = match (m.name.as_str(), &m.wiring) {
+            (_, r2p_world::robot_file::Wiring::Motor { wheel, .. }) => 5 + *wheel as i64,
+            ("proximity", _) => 2,
+            _ => continue,
+        };
+        m.params.retain(|(n, _)| n != "instance");
+        m.params.push(("instance".into(), ParamValue::Int(instance)));
+    }
+    let mut r = EmuRobot::build(robot).unwrap();
+    let g = r.board("gateway").unwrap();
+    // Its imports: cmd_vel (0, published on the gateway), the obstacles, ranges and the three
+    // wheel states, each subscribed to its module.
+    let subscribed = r.sim.run_while(MS, S, |s| {
+        (1..6).all(|i| matches!(s.node(g).import_state(i), Some(ImportState::Subscribed { .. })))
+    });
+    assert!(subscribed, "{:?}", (1..6).map(|i| r.sim.node(g).import_state(i)).collect::<Vec<_>>());
+    // The teleop script drives it ahead from 1 s (motors 5-7 turn) until proximity2's
+    // obstacle event stops it before the box, as in the default robot.
+    r.sim.run_until(3 * S);
+    let x = r.world.borrow().pose().x;
+    let front = 1.0 - (x + 0.30);
+    assert!((0.38..=0.46).contains(&front), "stopped {front:.3} m from the box");
+    assert_eq!(r.probe.borrow().command, (0.0, 0.0, 0.0));
+}
+
+#[test]
 fn the_same_robot_file_gives_the_same_bus_trace_and_world() {
     let run = |seed_delta: u64| {
         let mut robot = robot_file();
