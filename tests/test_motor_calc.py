@@ -134,9 +134,6 @@ def test_firmware_constants_are_read_from_their_sources():
     assert any(c.startswith("pwm_hz") for c in calc.firmware_changes(moved))
 
 
-@pytest.mark.xfail(strict=True, reason="issue 19: the firmware still assumes the ACS711-15AB "
-                   "(90 mV/A, ±15 A) and a 100 k/10 k VMOT divider; when it follows the board, "
-                   "remove this marker")
 def test_firmware_agrees_with_the_board():
     assert calc.firmware_changes() == []
 

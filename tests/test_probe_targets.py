@@ -34,10 +34,11 @@ def test_the_f103cb_is_128_kib_of_flash_and_20_kib_of_ram_to_probe_rs(crate):
 
 
 def test_an_image_too_large_for_the_chip_is_refused(crate):
-    # The motor image (~57 KiB, 8.8 KiB of RAM) on the 32 KiB / 10 KiB STM32F103C6: its code lies
+    # The motor image (~54 KiB, 8.4 KiB of RAM) on the 32 KiB / 10 KiB STM32F103C6: its code lies
     # beyond the flash, and its stack (linked for the CB's 20 KiB) starts beyond the RAM.
     elf = probe_targets.read_elf(ROOT / firmware.IMAGES_DIR / "motor.elf")
-    errs = probe_targets.check("motor", elf, probe_targets.chip_regions(crate, "STM32F103C6"), 0x0800_0000)
+    origin = next(i for i in firmware.manifest() if i.name == "motor").origin
+    errs = probe_targets.check("motor", elf, probe_targets.chip_regions(crate, "STM32F103C6"), origin)
     assert any("outside the chip's flash (BANK_1 0x8000000..0x8008000)" in e for e in errs), errs
     assert "motor: the initial stack pointer 0x20005000 is not in the chip's RAM" in errs, errs
 
@@ -45,9 +46,10 @@ def test_an_image_too_large_for_the_chip_is_refused(crate):
 def test_a_vector_table_elsewhere_than_image_origin_is_refused(crate):
     elf = probe_targets.read_elf(ROOT / firmware.IMAGES_DIR / "motor.elf")
     regions = probe_targets.chip_regions(crate, "STM32F103CB")
-    assert probe_targets.check("motor", elf, regions, probe_targets.image_origin("STM32F103CB")) == []
+    motor = next(i for i in firmware.manifest() if i.name == "motor")
+    assert probe_targets.check("motor", elf, regions, motor.origin) == []
     errs = probe_targets.check("motor", elf, regions, 0x0800_8000)
-    assert errs == ["motor: the vector table is at 0x08000000, expected at 0x08008000 (image_origin in "
+    assert errs == ["motor: the vector table is at 0x08003c00, expected at 0x08008000 (image_origin in "
                     "firmware/images.toml, or the active slot of its flash map for an image behind the bootloader)"]
 
 
@@ -57,10 +59,8 @@ def test_an_image_behind_the_bootloader_starts_at_the_active_slot():
     assert gateway.origin == 0x0800_0000 + firmware_map("STM32F407VG")["active"]["offset"] == 0x0802_0000
     images = {i.name: i for i in firmware.manifest()}
     slot = 0x0800_0000 + firmware_map("STM32F103CB")["active"]["offset"]
-    for name in ("template", "proximity", "imu", "psu"):
+    for name in ("template", "proximity", "imu", "psu", "motor"):
         assert images[name].origin == slot == 0x0800_3C00, name
-    # Too large for a slot until the next diet (docs/flashing.md).
-    assert images["motor"].origin == 0x0800_0000
 
 
 def firmware_map(mcu):

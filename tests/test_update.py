@@ -6,6 +6,7 @@ say why and leave the module on its image. The same through the gateway's own ne
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import pytest
 
@@ -35,11 +36,12 @@ def r2p(sim, *args: str, timeout: float = 120, port: int | None = None):
     return run([str(R2P), "--socketcand", f"127.0.0.1:{port}", "--timeout", "2", *args], timeout=timeout)
 
 
-def signed(tmp_path, module_image: str, kind: str, version: str):
-    """The committed image `module_image` signed (development key) as `kind` `version`."""
+def signed(tmp_path, module_image: str | Path, kind: str, version: str):
+    """The committed image `module_image` (or the file at that path) signed (development key) as
+    `kind` `version`."""
     out = tmp_path / f"{kind}-{version}.bin"
-    p = run([str(R2P), "sign", str(FIRMWARE / "images" / f"{module_image}.bin"), "--kind", kind,
-             "--version", version, "-o", str(out)])
+    image = module_image if isinstance(module_image, Path) else FIRMWARE / "images" / f"{module_image}.bin"
+    p = run([str(R2P), "sign", str(image), "--kind", kind, "--version", version, "-o", str(out)])
     assert p.returncode == 0, p.stdout
     digest = re.search(r"digest ([0-9a-f]{16})", p.stdout).group(1)
     return out, digest
@@ -69,7 +71,11 @@ def test_a_motor_module_is_updated_over_the_bus_and_runs_the_new_image(robot, tm
 
 def test_refused_images_say_why_and_the_module_keeps_its_image(robot, tmp_path):
     before = firmware_of(robot, "motor1")
-    big, _ = signed(tmp_path, "motor", "motor", "2.0.0")  # 59 KB: more than a 56 192 B slot
+    # The motor's image grown by 1 KB of code past its end: more than a 56 192 B slot holds.
+    grown = tmp_path / "grown.bin"
+    grown.write_bytes((FIRMWARE / "images" / "motor.bin").read_bytes() + bytes(range(256)) * 4 * 4)
+    assert grown.stat().st_size > 56_192
+    big, _ = signed(tmp_path, grown, "motor", "2.0.0")
     p = r2p(robot, "update", "motor1", str(big))
     assert p.returncode != 0
     assert "refused" in p.stdout and "larger than the module's image slot" in p.stdout, p.stdout
@@ -83,7 +89,7 @@ def test_refused_images_say_why_and_the_module_keeps_its_image(robot, tmp_path):
 
 
 def test_a_motor_module_is_updated_through_the_gateway(robot, tmp_path):
-    image, digest = signed(tmp_path, "template", "motor", "1.5.0")
+    image, digest = signed(tmp_path, "motor", "motor", "1.5.0")
     p = r2p(robot, "update", "motor1", str(image), timeout=180, port=robot.gateway)
     assert p.returncode == 0, p.stdout
     assert f"-> 1.5.0 {digest}: running, confirmed" in p.stdout, p.stdout

@@ -44,9 +44,15 @@ class Image:
     origin: int
     """Where the image is linked to start (its vector table): its MCU's `image_origin`, or the
     flash map's active slot for an image behind the bootloader (`slot = "active"`)."""
+    features: tuple[str, ...] = ()
+    """Cargo features of the release build (module images: `RELEASE_LOG_FEATURES`)."""
 
 
 FLASH_BASE = 0x0800_0000
+
+RELEASE_LOG_FEATURES = {"targets/f103": ("module-core/raw-log",)}
+"""Features a committed module image is built with, by workspace: the F103 module images log
+with defmt's raw encoding (module-core's Cargo.toml says what it saves and costs)."""
 
 
 def manifest(root: Path = ROOT) -> list[Image]:
@@ -64,7 +70,8 @@ def manifest(root: Path = ROOT) -> list[Image]:
             origin = (FLASH_BASE + mcu["partitions"]["active"]["offset"] if i.slot == "active"
                       else mcu["image_origin"])
             out.append(Image(m.name, i.workspace, i.package, i.mcu, mcu["target"], mcu["flash"],
-                             mcu["ram"], i.budget_flash, i.budget_ram, origin))
+                             mcu["ram"], i.budget_flash, i.budget_ram, origin,
+                             RELEASE_LOG_FEATURES.get(i.workspace, ())))
     return out
 
 
@@ -123,7 +130,8 @@ def build(img: Image, root: Path, out: Path) -> Size:
     # above the checkout would change the image's line tables.
     target_dir.mkdir(parents=True, exist_ok=True)
     (target_dir / "rustfmt.toml").write_text("# Written by scripts/firmware: rustfmt defaults for generated code.\n")
-    subprocess.run(["cargo", "build", "--release", "--locked", "-p", img.package,
+    features = ["--features", ",".join(img.features)] if img.features else []
+    subprocess.run(["cargo", "build", "--release", "--locked", "-p", img.package, *features,
                     "--target-dir", str(target_dir)], cwd=ws, env=reproducible_env(root), check=True)
     elf = target_dir / img.target / "release" / img.package
     out.mkdir(parents=True, exist_ok=True)

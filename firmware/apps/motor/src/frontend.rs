@@ -9,19 +9,20 @@
 pub const ADC_COUNTS: u16 = 4096;
 /// ADC reference (VDDA = VREF+ = the 3.3 V rail on the F103CB in LQFP-48), mV.
 pub const VREF_MV: f32 = 3300.0;
-/// Hall sensor fitted: Allegro ACS711KEXLT-15AB, ±15.5 A, supplied from the same 3.3 V rail
-/// as VDDA (ratiometric: its zero and gain track the ADC reference).
-pub const HALL_SENSOR: &str = "ACS711KEXLT-15AB";
-/// Its sensitivity at 3.3 V, mV/A: the default of the `hall_mv_per_a` parameter.
-pub const HALL_MV_PER_A: f32 = 90.0;
+/// Hall sensor fitted (hardware/motor, U102): Allegro ACS725LLCTR-30AB-T, ±30 A, supplied from
+/// the same 3.3 V rail as VDDA (ratiometric: its zero and gain track the ADC reference).
+pub const HALL_SENSOR: &str = "ACS725LLCTR-30AB-T";
+/// Its sensitivity at 3.3 V, mV/A: the default of the `hall_mv_per_a` parameter (±30 A is
+/// ±1.32 V around mid-scale; one ADC count is 18 mA).
+pub const HALL_MV_PER_A: f32 = 44.0;
 /// Its output at 0 A is VCC/2: mid-scale, in ADC counts.
 pub const HALL_ZERO_COUNTS: u16 = ADC_COUNTS / 2;
 /// Largest distance of the calibrated zero from mid-scale (±120 mV, ±1.3 A: the sensor's
 /// zero error is ±1.5 % of VCC): further away, the sensor is missing or broken.
 pub const HALL_ZERO_TOLERANCE: u16 = 150;
-/// Motor-supply divider VMOT → VMOT_SENSE: 100 kΩ over 10 kΩ (÷11: 24 V → 2.18 V, full scale
-/// 36.3 V, the module's maximum supply).
-pub const VMOT_DIVIDER_TOP_OHM: f32 = 100_000.0;
+/// Motor-supply divider VMOT → VMOT_SENSE: 150 kΩ over 10 kΩ (÷16: 24 V → 1.5 V, full scale
+/// 52.8 V, above the 36 V input's regeneration and ringing; the PSU's VIN_SENSE parts).
+pub const VMOT_DIVIDER_TOP_OHM: f32 = 150_000.0;
 /// Lower resistor of the VMOT divider.
 pub const VMOT_DIVIDER_BOTTOM_OHM: f32 = 10_000.0;
 /// VMOT / VMOT_SENSE.
@@ -65,16 +66,19 @@ mod tests {
 
     #[test]
     fn conversions_invert_each_other_within_one_count() {
-        for a in [-15.0f32, -10.0, -0.5, 0.0, 0.5, 10.0, 15.0] {
+        for a in [-30.0f32, -15.0, -10.0, -0.5, 0.0, 0.5, 10.0, 15.0, 30.0] {
             let c = current_counts(a, 2048.0, HALL_MV_PER_A);
-            assert!((amps(c, 2048.0, HALL_MV_PER_A) - a).abs() <= 0.5 * MV_PER_COUNT / 90.0 + 1e-5);
+            assert!((amps(c, 2048.0, HALL_MV_PER_A) - a).abs() <= 0.5 * MV_PER_COUNT / 44.0 + 1e-5);
         }
-        // 24 V → 24 / 11 = 2.182 V → 2708 counts (as the world model's ADC reads it).
-        assert_eq!(vmot_counts(24.0), 2708);
-        assert!((vmot_volts(2708) - 24.0).abs() < 0.01);
-        // One count of current is 0.806 mV / 90 mV/A = 8.95 mA.
-        assert!((amps(2049, 2048.0, 90.0) - 0.008_951).abs() < 1e-6);
-        assert_eq!(current_counts(1000.0, 2048.0, 90.0), 4095, "clipped at full scale");
-        assert_eq!(current_counts(-1000.0, 2048.0, 90.0), 0);
+        // 24 V → 24 / 16 = 1.5 V → 1862 counts (as the world model's ADC reads it).
+        assert_eq!(vmot_counts(24.0), 1862);
+        assert!((vmot_volts(1862) - 24.0).abs() < 0.02);
+        // One count of current is 0.806 mV / 44 mV/A = 18.3 mA.
+        assert!((amps(2049, 2048.0, 44.0) - 0.018_310).abs() < 1e-6);
+        // ±30 A stays inside the ADC's range (the sensor's ±30 A is its linear range).
+        assert!((1..4095).contains(&current_counts(30.0, 2048.0, 44.0)));
+        assert!((1..4095).contains(&current_counts(-30.0, 2048.0, 44.0)));
+        assert_eq!(current_counts(1000.0, 2048.0, 44.0), 4095, "clipped at full scale");
+        assert_eq!(current_counts(-1000.0, 2048.0, 44.0), 0);
     }
 }

@@ -27,7 +27,7 @@
 //! let params: &'static RamParams<{ params::COUNT }> =
 //!     Box::leak(Box::new(RamParams::new(params::DEFAULTS)));
 //! let mut app = App::new(Endpoints::leak(Names::from_params(params)), params);
-//! let idle = Sample { current_adc: 2048, vmot_adc: 2708, ..Default::default() };
+//! let idle = Sample { current_adc: 2048, vmot_adc: 1862, ..Default::default() };
 //! for ms in 0..100 {
 //!     let cmd = app.step(ms * 1000, &idle);
 //!     assert!(!cmd.bridge_enable, "no setpoint yet: the bridge stays off");

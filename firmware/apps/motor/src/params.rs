@@ -82,9 +82,9 @@ params! {
         "Position loop (200 Hz) gain: speed setpoint per rad of error.";
     9 MAX_SPEED max_speed: f32 = 50.0, 0.1, 1_000.0, "rad/s",
         "Output-shaft speed limit of the speed and position modes.";
-    10 CURRENT_LIMIT current_limit: f32 = 10.0, 0.1, 15.0, "A",
-        "Clamps the current setpoint in every mode (the current sensor reads up to ±15.5 A).";
-    11 TRIP_CURRENT trip_current: f32 = 14.0, 1.0, 15.0, "A",
+    10 CURRENT_LIMIT current_limit: f32 = 10.0, 0.1, 28.0, "A",
+        "Clamps the current setpoint in every mode (the board's 28 A peak for 10 s; 20 A continuous on its heatsink).";
+    11 TRIP_CURRENT trip_current: f32 = 14.0, 1.0, 28.5, "A",
         "Over-current trip threshold on the measured current (keep above `current_limit`).";
     12 TRIP_MS trip_ms: u32 = 5, 1, 100, "ms",
         "How long the current must stay above `trip_current` to trip (fault bit 0).";
@@ -92,8 +92,8 @@ params! {
         "Encoder lines per motor revolution (TIM3 counts 4 edges per line).";
     14 GEAR_RATIO gear_ratio: f32 = 15.0, 0.01, 10_000.0, "",
         "Motor revolutions per output-shaft revolution.";
-    15 HALL_MV_PER_A hall_mv_per_a: f32 = 90.0, 5.0, 500.0, "mV/A",
-        "Hall current sensor sensitivity (ACS711KEXLT-15AB at 3.3 V: 90).";
+    15 HALL_MV_PER_A hall_mv_per_a: f32 = 44.0, 5.0, 500.0, "mV/A",
+        "Hall current sensor sensitivity (ACS725LLCTR-30AB-T at 3.3 V: 44).";
     16 TORQUE_CONSTANT torque_constant: f32 = 0.0302, 0.001, 10.0, "N·m/A",
         "Motor torque constant (= back-EMF constant in V·s/rad): torque setpoints (gearbox losses not compensated) and back-EMF feed-forward.";
     17 MOTOR_RESISTANCE motor_resistance: f32 = 0.611, 0.01, 100.0, "Ω",

@@ -9,7 +9,7 @@ use r2p_msgs::{FaultClear, MotorFault, R2pMessage, WheelSetpoint, WheelState};
 
 use crate::endpoints::{FAULT_DEADLINE_US, STATE_DEADLINE_US};
 use crate::faults::Faults;
-use crate::names::INSTANCES;
+use crate::names::{Names, MAX_INSTANCE, PREFIX};
 use crate::params::{DEFAULTS, DOCS};
 
 /// The line that opens the generated section in README.md.
@@ -26,13 +26,12 @@ fn value(v: Value) -> String {
 pub fn render() -> String {
     let mut s = String::new();
     let w = &mut s;
-    let n = INSTANCES[1].node;
+    let n = Names::of(1).node;
     let _ = writeln!(w, "### Topics\n");
     let _ = writeln!(
         w,
         "`<name>` is `{}` for instance 0, `motor<n>` for instance n (1–{}), e.g. `{n}`.\n",
-        INSTANCES[0].node,
-        INSTANCES.len() - 1
+        PREFIX, MAX_INSTANCE
     );
     let _ = writeln!(w, "| topic | type (bytes) | direction | class |");
     let _ = writeln!(w, "|---|---|---|---|");

@@ -84,7 +84,11 @@ fn over_current_trips_after_trip_ms_and_stays_off_until_cleared() {
     r.tamper = Box::new(move |now, s| {
         let t = now - from;
         if !(4 * MS..10 * MS).contains(&t) {
-            s.current_adc = r2p_app_motor::frontend::current_counts(15.0, 2048.0, 90.0);
+            s.current_adc = r2p_app_motor::frontend::current_counts(
+                15.0,
+                2048.0,
+                r2p_app_motor::frontend::HALL_MV_PER_A,
+            );
         }
     });
     let mut tripped = None;

@@ -55,6 +55,12 @@ pub mod ty {
     pub const UPDATE: u8 = 0x51;
 }
 
+/// Whether type byte `ty` is a reply only a tool reads: parameter answers (a node reads them
+/// only after asking), a module's firmware and its panic report (`r2p` shows them).
+pub const fn is_reply(ty: u8) -> bool {
+    matches!(ty, ty::PARAM_VALUE | ty::PARAM_ERROR | ty::FIRMWARE | ty::PANIC_REPORT)
+}
+
 /// What a module is doing, as its heartbeat says.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u8)]
@@ -314,6 +320,9 @@ pub enum DecodeError {
     BadString,
     /// An enumeration or value tag has no meaning.
     BadValue(u8),
+    /// A reply only a tool reads (PARAM_VALUE, PARAM_ERROR, FIRMWARE, PANIC_REPORT), left
+    /// undecoded by [`Message::decode_requests`]: not malformed, not for this node.
+    Reply(u8),
 }
 
 /// The buffer given to [`Message::encode`] is too small (use [`ENCODED_MAX`]).
@@ -529,11 +538,26 @@ impl Message {
     }
 
     /// Reads a message; every byte must be accounted for.
+    pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
+        Self::decode_with::<true>(bytes)
+    }
+
+    /// As [`Message::decode`], but a reply only a tool reads ([`is_reply`]) is
+    /// [`DecodeError::Reply`], unread. What a node decodes until it asks another node something
+    /// (r2p-node): a module never does, so its image carries no code for the replies (416 B of
+    /// the motor's flash, measured).
+    pub fn decode_requests(bytes: &[u8]) -> Result<Message, DecodeError> {
+        Self::decode_with::<false>(bytes)
+    }
+
     // Not inlined into the node's receive path: one copy, its result built in place (smaller).
     #[inline(never)]
-    pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
+    fn decode_with<const REPLIES: bool>(bytes: &[u8]) -> Result<Message, DecodeError> {
         let mut r = Reader { bytes };
         let ty = r.u8().map_err(|_| DecodeError::Empty)?;
+        if !REPLIES && is_reply(ty) {
+            return Err(DecodeError::Reply(ty));
+        }
         let msg = match ty {
             ty::HEARTBEAT => {
                 let mut uid = [0; UID_LEN];
@@ -725,6 +749,25 @@ pub(crate) mod tests {
                 assert_eq!(buf[0], m.type_byte());
                 assert_eq!(Message::decode(&buf[..n]), Ok(m));
             }
+        }
+
+        fn a_nodes_decoder_reads_every_request_and_leaves_the_replies() {
+            let mut buf = [0u8; ENCODED_MAX];
+            let kinds = [ty::PARAM_VALUE, ty::PARAM_ERROR, ty::FIRMWARE, ty::PANIC_REPORT];
+            let mut seen = [false; 4];
+            for m in samples() {
+                let n = m.encode(&mut buf).unwrap();
+                let ty = m.type_byte();
+                if let Some(k) = kinds.iter().position(|&t| t == ty) {
+                    seen[k] = true;
+                    assert!(is_reply(ty));
+                    assert_eq!(Message::decode_requests(&buf[..n]), Err(DecodeError::Reply(ty)));
+                } else {
+                    assert!(!is_reply(ty));
+                    assert_eq!(Message::decode_requests(&buf[..n]), Ok(m));
+                }
+            }
+            assert_eq!(seen, [true; 4], "the samples hold every kind of reply");
         }
 
         fn heartbeat_layout_matches_spec() {

@@ -89,8 +89,15 @@ pub trait TopicNode<'a> {
     fn import(&mut self, topic: &'a dyn Import) -> Result<(), NodeError>;
 }
 
-impl<'a, const E: usize, const I: usize, const T: usize, const R: usize, const B: usize>
-    TopicNode<'a> for Node<'a, E, I, T, R, B>
+impl<
+        'a,
+        const E: usize,
+        const I: usize,
+        const T: usize,
+        const R: usize,
+        const B: usize,
+        const M: bool,
+    > TopicNode<'a> for Node<'a, E, I, T, R, B, M>
 {
     fn export(&mut self, topic: &'a dyn Export) -> Result<(), NodeError> {
         Node::export(self, topic).map(drop)

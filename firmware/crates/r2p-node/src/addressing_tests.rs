@@ -161,3 +161,39 @@ fn answers_a_node_did_not_ask_for_are_not_its_events() {
         ]
     );
 }
+
+#[test]
+fn a_node_that_never_asked_leaves_the_replies_to_the_tools() {
+    // A module never asks for a parameter: it reads the bus's replies (another tool's answers,
+    // modules' firmware and panic reports) as traffic for the tools, not as malformed messages;
+    // once it asks, the answers of the node it asked are events.
+    let bus = Bus::<1>::new();
+    let mut module = TestNode::new(config(1, "motor"), &NoParams).unwrap();
+    run(&bus, &mut [&mut module], 20_000);
+    let _ = events(&mut module);
+    let other = NodeId::new(0x52).unwrap();
+    let value = Value::U32(7);
+    let replies = [
+        Message::ParamValue { index: 0, value },
+        Message::ParamError { index: 1, fault: r2p_management::message::ParamFault::ReadOnly },
+        Message::Firmware {
+            version: 3,
+            digest: [1; r2p_management::message::DIGEST_LEN],
+            kind: "psu".try_into().unwrap(),
+            on_trial: false,
+        },
+        Message::PanicReport { text: "src/main.rs:3:5: boom".try_into().unwrap() },
+    ];
+    for m in &replies {
+        inject(&bus, other.get(), m);
+    }
+    run(&bus, &mut [&mut module], 40_000);
+    assert_eq!(events(&mut module), []);
+    assert_eq!(module.stats().malformed, 0, "replies are not malformed");
+
+    module.get_param(other, 0).unwrap();
+    inject(&bus, other.get(), &replies[0]);
+    run(&bus, &mut [&mut module], 60_000);
+    assert_eq!(events(&mut module), [Event::ParamValue { from: other, index: 0, value }]);
+    assert_eq!(module.stats().malformed, 0);
+}

@@ -440,7 +440,8 @@ mod tests {
         let t = flash_target(&root, "motor").unwrap();
         assert_eq!(t.chip, "STM32F103CB");
         assert_eq!(t.image, Path::new("firmware/images/motor.elf"));
-        assert_eq!(t.bootloader, None, "the F103 images are still alone in flash");
+        // Behind the F103's bootloader: written first.
+        assert_eq!(t.bootloader.as_deref(), Some(Path::new("firmware/images/bootloader-f103.elf")));
         let t = flash_target(&root, "gateway").unwrap();
         assert_eq!(t.chip, "STM32F407VG");
         assert_eq!(t.image, Path::new("firmware/images/gateway.elf"));
@@ -475,6 +476,24 @@ mod tests {
         assert!(err.contains("servo has no firmware image"), "{err}");
         assert!(err.contains("psu"), "{err}");
         assert_eq!(find_root(&d.join("firmware/images")), Some(d.clone()));
+        std::fs::remove_dir_all(d).unwrap();
+    }
+
+    #[test]
+    fn an_image_not_in_a_slot_is_flashed_alone() {
+        // A new module's image, linked at the flash base until it fits a slot: no bootloader.
+        let d = scratch();
+        std::fs::create_dir_all(d.join("firmware/images")).unwrap();
+        std::fs::write(d.join("firmware/images.toml"), "").unwrap();
+        std::fs::write(d.join("firmware/images/servo.elf"), "").unwrap();
+        std::fs::write(
+            d.join("modules.toml"),
+            "[[module]]\nname = \"servo\"\nimage = { mcu = \"STM32F103CB\" }\n",
+        )
+        .unwrap();
+        let t = flash_target(&d, "servo").unwrap();
+        assert_eq!((t.chip.as_str(), t.bootloader), ("STM32F103CB", None));
+        assert_eq!(t.image, Path::new("firmware/images/servo.elf"));
         std::fs::remove_dir_all(d).unwrap();
     }
 
@@ -548,11 +567,13 @@ mod tests {
         flash(&a, &root, None, &mut out).unwrap();
         let calls = std::fs::read_to_string(&log).unwrap();
         let image = root.join("firmware/images/motor.elf");
+        let bootloader = root.join("firmware/images/bootloader-f103.elf");
         assert_eq!(
             calls.lines().collect::<Vec<_>>(),
             [
                 "--version".to_string(),
                 "list".to_string(),
+                format!("download --chip STM32F103CB --verify {}", bootloader.display()),
                 format!("download --chip STM32F103CB --verify {}", image.display()),
                 "reset --chip STM32F103CB".to_string(),
             ]
@@ -591,7 +612,7 @@ mod tests {
         a.probe_rs = Some(exe);
         std::fs::remove_file(&log).ok();
         let err = flash(&a, &root, None, &mut Vec::new()).unwrap_err().to_string();
-        assert!(err.starts_with("writing the image failed"), "{err}");
+        assert!(err.starts_with("writing the bootloader failed"), "{err}");
         assert!(
             !std::fs::read_to_string(&log).unwrap().contains("reset"),
             "no reset after a failed write"
@@ -605,17 +626,20 @@ mod tests {
         let d = scratch();
         let (exe, log) = fake_probe_rs(&d, ONE_PROBE, 0);
         let root = repo();
-        // The motor's image is flashed alone (too large for a slot: no bootloader first).
+        // The motor's image, behind the F103's bootloader: the bootloader first.
         let mut a = args("motor");
         a.probe_rs = Some(exe.clone());
         a.dry_run = true;
         let mut out = Vec::new();
         flash(&a, &root, None, &mut out).unwrap();
         let image = root.join("firmware/images/motor.elf");
+        let bootloader = root.join("firmware/images/bootloader-f103.elf");
         assert_eq!(
             String::from_utf8(out).unwrap(),
             format!(
-                "{e} download --chip STM32F103CB --verify {}\n{e} reset --chip STM32F103CB\n",
+                "{e} download --chip STM32F103CB --verify {}\n\
+                 {e} download --chip STM32F103CB --verify {}\n{e} reset --chip STM32F103CB\n",
+                bootloader.display(),
                 image.display(),
                 e = exe.display()
             )

@@ -53,8 +53,14 @@ pub trait Runtime {
     fn next_slot_at(&self, now: Micros) -> Micros;
 }
 
-impl<const E: usize, const I: usize, const T: usize, const R: usize, const B: usize> Runtime
-    for Node<'_, E, I, T, R, B>
+impl<
+        const E: usize,
+        const I: usize,
+        const T: usize,
+        const R: usize,
+        const B: usize,
+        const M: bool,
+    > Runtime for Node<'_, E, I, T, R, B, M>
 {
     fn poll(&mut self, now: Micros, can: &mut dyn CanController) {
         Node::poll(self, now, can);

@@ -137,11 +137,13 @@ fn the_imu_topic_follows_the_base_turning_on_the_spot() {
     assert!(steady.len() >= 70, "{}", steady.len());
     // Each message against the world when it arrived: the base's rate ripples by a few
     // mrad/s under the wheels' speed control and the message is up to a sample period
-    // (~10 ms) plus the bus old, so each rate is within 0.01 rad/s and each heading within
-    // 10 ms of turn of the device's gain times the truth.
+    // (~10 ms) plus the bus old, so each rate is within 0.012 rad/s and each heading within
+    // 10 ms of turn of the device's gain times the truth. (The motor board's ±30 A sensor,
+    // 18 mA a count and ~140 mA rms of noise, ripples the wheels more than the ±15 A one
+    // did: 10.5 mrad/s at worst here, against 6.7.)
     for s in &steady {
         let err = f64::from(s.msg.rate[2]) - gain * s.wz;
-        assert!(err.abs() < 0.01, "{s:?}: rate error {err}");
+        assert!(err.abs() < 0.012, "{s:?}: rate error {err}");
         let yaw_err = wrap(f64::from(s.msg.yaw) - gain * s.theta);
         assert!(yaw_err.abs() < s.wz.abs() * 0.011 + 5e-3, "{s:?}: heading error {yaw_err}");
     }

@@ -1,4 +1,4 @@
-//! Hall-effect current sensor (Allegro ACS711 class): a voltage centred on Vcc/2.
+//! Hall-effect current sensor (Allegro ACS711/ACS725 class): a voltage centred on Vcc/2.
 //!
 //! Model: Vout = Vcc/2 + S·(Vcc/Vref_sens)·I + noise, ratiometric to the supply as the
 //! datasheet states (zero point and sensitivity scale with Vcc), linear up to the output's
@@ -23,6 +23,16 @@ pub struct HallSensorParams {
 }
 
 impl HallSensorParams {
+    /// Allegro ACS725LLCTR-30AB-T (the motor board's U102): ±30 A, 44 mV/A at 3.3 V. Noise
+    /// 6 mV rms (as the ACS711's: the datasheet's figure is not verified) and a 0.2 V swing
+    /// margin from each rail (hardware/motor's calculation takes the output as 0.2–3.1 V).
+    pub const ACS725_30AB: HallSensorParams = HallSensorParams {
+        part: "ACS725LLCTR-30AB-T",
+        sensitivity_v_per_a: 0.044,
+        sensitivity_vcc: 3.3,
+        noise_v: 0.006,
+        rail_margin_v: 0.2,
+    };
     /// Allegro ACS711KEXLT-15AB: ±15.5 A, 90 mV/A at 3.3 V (datasheet). Noise 6 mV rms and a
     /// 50 mV saturation margin are assumptions of the right order for this part.
     pub const ACS711_15AB: HallSensorParams = HallSensorParams {

@@ -57,13 +57,13 @@ pub fn iin_sense(amps: f64) -> f64 {
 /// PSU `VOUT_SENSE`: the 5 V bus through 10 kΩ / 10 kΩ (÷2).
 pub const VOUT_SENSE: Divider = Divider { top_ohm: 10e3, bottom_ohm: 10e3 };
 
-/// Motor `VMOT_SENSE`: the motor supply (battery) through 100 kΩ / 10 kΩ (÷11).
-pub const VMOT_SENSE: Divider = Divider { top_ohm: 100e3, bottom_ohm: 10e3 };
+/// Motor `VMOT_SENSE`: the motor supply (battery) through 150 kΩ / 10 kΩ (÷16; hardware/motor).
+pub const VMOT_SENSE: Divider = Divider { top_ohm: 150e3, bottom_ohm: 10e3 };
 
-/// Motor `MOTOR_CURRENT`: an ACS711 ±15 A Hall sensor in the motor lead, on 3.3 V, its output
-/// straight to the pin (0 A at 1.65 V, 90 mV/A).
+/// Motor `MOTOR_CURRENT`: an ACS725 ±30 A Hall sensor in the motor lead (hardware/motor, U102),
+/// on 3.3 V, its output straight to the pin (0 A at 1.65 V, 44 mV/A).
 pub const MOTOR_CURRENT: HallCurrentSensor =
-    HallCurrentSensor { params: HallSensorParams::ACS711_15AB, vcc: 3.3 };
+    HallCurrentSensor { params: HallSensorParams::ACS725_30AB, vcc: 3.3 };
 
 /// Proximity `PROX_CH0..3`: each sensor output straight to the pin, with a 100 kΩ pull-down
 /// that holds an unconnected (or unpowered) channel at 0 V. The sensors' outputs stay below
@@ -77,7 +77,7 @@ mod tests {
     #[test]
     fn full_scales() {
         assert!((VIN_SENSE.full_scale(3.3) - 52.8).abs() < 1e-12);
-        assert!((VMOT_SENSE.full_scale(3.3) - 36.3).abs() < 1e-12);
+        assert!((VMOT_SENSE.full_scale(3.3) - 52.8).abs() < 1e-12);
         assert!((VOUT_SENSE.output(5.0) - 2.5).abs() < 1e-12);
         assert!((iin_sense(2.0) - 1.0).abs() < 1e-12);
         assert_eq!(iin_sense(20.0), 3.3, "clips at 13.2 A");

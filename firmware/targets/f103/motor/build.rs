@@ -3,5 +3,5 @@
 include!("../module-core/build_image.rs");
 
 fn main() {
-    build_image("../../../boards/motor.toml", Link::FlashBase);
+    build_image("../../../boards/motor.toml", Link::ActiveSlot);
 }

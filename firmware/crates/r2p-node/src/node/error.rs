@@ -31,6 +31,9 @@ pub enum NodeError {
     },
     /// The rank is above 15 (`rtcan::failover::MAX_RANK`).
     BadRank,
+    /// A rank for a node built without the bus master's side (`Node<…, MASTER = false>`: a
+    /// module image that cannot become master; build it with the master's side).
+    NotMasterCapable,
     /// The cycle configuration is invalid (slots too short, bit rate, slot count).
     BadCycle(ConfigError),
     /// The transmit queue is full: the management message was not queued.

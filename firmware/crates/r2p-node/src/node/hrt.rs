@@ -56,7 +56,8 @@ impl<
         const TXQ: usize,
         const RX: usize,
         const BUF: usize,
-    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF>
+        const MASTER: bool,
+    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF, MASTER>
 {
     /// Where HRT export `export`'s reservation stands (`None` for other exports).
     pub fn hrt_state(&self, export: usize) -> Option<HrtState> {
@@ -67,7 +68,9 @@ impl<
     pub(super) fn on_hrt_management(&mut self, from: NodeId, msg: Message) {
         let me = self.ids.node_id();
         match msg {
-            Message::HrtRequest { message_id, period_cycles, frames } if self.master.is_some() => {
+            Message::HrtRequest { message_id, period_cycles, frames }
+                if MASTER && self.master.is_some() =>
+            {
                 let message = MessageId(message_id);
                 let granted = match NodeId::of(message) {
                     Some((owner, index)) if owner == from && index != MANAGEMENT_INDEX => {
@@ -153,7 +156,7 @@ impl<
             }
             let message = me.message_id(i as u8 + 1);
             let cycles = h.period.cycles();
-            if self.master.is_some() {
+            if MASTER && self.master.is_some() {
                 // The master answers itself at once: `on_grant` sets the state.
                 let r = self.scheduler.register(message, cycles).map_err(hrt_result);
                 self.on_grant(i, r);

@@ -47,7 +47,8 @@ impl<
         const TXQ: usize,
         const RX: usize,
         const BUF: usize,
-    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF>
+        const MASTER: bool,
+    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF, MASTER>
 {
     /// Asks `target` (or every node: 255) to reboot.
     pub fn request_reboot(&mut self, target: u8) -> Result<(), NodeError> {
@@ -58,6 +59,7 @@ impl<
     /// [`Event::ParamError`].
     pub fn get_param(&mut self, target: NodeId, index: u16) -> Result<(), NodeError> {
         self.asked.insert(target);
+        self.decode = Message::decode;
         self.send(&Message::ParamGet { target: target.get(), index })
     }
 
@@ -65,6 +67,7 @@ impl<
     /// now held) or [`Event::ParamError`] (refused, unchanged).
     pub fn set_param(&mut self, target: NodeId, index: u16, value: Value) -> Result<(), NodeError> {
         self.asked.insert(target);
+        self.decode = Message::decode;
         self.send(&Message::ParamSet { target: target.get(), index, value })
     }
 

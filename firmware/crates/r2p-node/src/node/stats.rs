@@ -71,7 +71,8 @@ impl<
         const TXQ: usize,
         const RX: usize,
         const BUF: usize,
-    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF>
+        const MASTER: bool,
+    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF, MASTER>
 {
     /// Counters.
     pub fn stats(&self) -> NodeStats {

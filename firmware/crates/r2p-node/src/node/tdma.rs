@@ -30,7 +30,8 @@ impl<
         const TXQ: usize,
         const RX: usize,
         const BUF: usize,
-    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF>
+        const MASTER: bool,
+    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF, MASTER>
 {
     /// This node's role in the cycle (master, standby candidate or slave).
     pub fn role(&self) -> Role {
@@ -84,7 +85,7 @@ impl<
         self.apply(a);
         self.register_hrt(now);
 
-        if let Some(mut m) = self.master {
+        if let Some(mut m) = self.master.filter(|_| MASTER) {
             if now >= m.next_sync {
                 let sync =
                     SyncFrame::new(m.cycle, self.scheduler.mask(m.cycle.wrapping_add(1)), m.epoch);
@@ -232,7 +233,7 @@ impl<
     }
 
     fn apply(&mut self, a: Actions) {
-        if let Some(s) = a.start_syncing {
+        if let Some(s) = a.start_syncing.filter(|_| MASTER) {
             self.master = Some(MasterCycle { cycle: s.cycle, next_sync: s.at, epoch: s.epoch });
             self.scheduler.clear();
             self.clock.reset();

@@ -77,7 +77,8 @@ impl<
         const TXQ: usize,
         const RX: usize,
         const BUF: usize,
-    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF>
+        const MASTER: bool,
+    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF, MASTER>
 {
     /// Offers a local topic on the bus through its remote subscriber; returns its stream index
     /// (1…): the stream's message ID is `node ID << 8 | index`. It is advertised at the next

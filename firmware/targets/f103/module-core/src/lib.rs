@@ -123,8 +123,9 @@ pub mod __private {
 }
 
 /// The node of a module image: up to 4 exports and 2 imports, 32 queued frames, 4 streams in
-/// reassembly, messages up to 64 bytes.
-pub type ModuleNode = Node<'static, 4, 2, 32, 4, 64>;
+/// reassembly, messages up to 64 bytes; the bus master's side only in an image built with the
+/// `master` feature (the PSU's: rank 0), which the others do without (2 KB of flash).
+pub type ModuleNode = Node<'static, 4, 2, 32, 4, 64, { cfg!(feature = "master") }>;
 
 /// The PLL multiplier that makes `sysclk_hz` from `hse_hz` (the F1's PLL multiplies by
 /// 2…16); evaluated at compile time from the board constants (`const { pll_mul(..) }`), so a

@@ -30,6 +30,7 @@ use embassy_stm32::interrupt::{InterruptExt, Priority};
 use embassy_stm32::peripherals::ADC1;
 use embassy_time::{Duration, Instant, Ticker, Timer};
 use module_core::Leds;
+use r2p_app_motor::names::NameBuf;
 use r2p_app_motor::{params, App, Endpoints, Names, Sample, Storage};
 use r2p_module::FlashParams;
 use r2p_node::NodeConfig;
@@ -45,6 +46,7 @@ module_core::bind_can_interrupts!(struct Irqs {
 static PARAMS: FlashParams<{ params::COUNT }> =
     FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
 static ENDPOINTS: Storage = Storage::new();
+static NAMES: StaticCell<NameBuf> = StaticCell::new();
 
 /// The control loop's executor: above the bus's (P6), below the hardware's interrupts.
 static CONTROL_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
@@ -114,7 +116,7 @@ async fn main(_spawner: Spawner) {
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
     let mut flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
-    let names = Names::from_params(&PARAMS);
+    let names = Names::write(Names::instance(&PARAMS), NAMES.init(NameBuf::new()));
     let ep = ENDPOINTS.build(names);
     let config = NodeConfig {
         slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
