@@ -152,6 +152,12 @@ fn the_base_controller_moved_to_the_host_drives_triskar2_alike() {
     // setpoints drive the wheels; the gateway sends none.
     drive_stop_turn(&mut r, host);
     assert_eq!(r.sim.node(g).stats().hrt_sent, 0, "the gateway runs no base controller");
+    // For ROS 2's /odom and /range_N it imports the host's odometry and the ranges (after its
+    // own seven imports).
+    for i in [7, 8] {
+        let s = r.sim.node(g).import_state(i);
+        assert!(matches!(s, Some(ImportState::Subscribed { .. })), "import {i}: {s:?}");
+    }
 }
 
 #[test]

@@ -12,7 +12,7 @@
 
 use r2p_app_base::{params, App, Endpoints, Names};
 use r2p_app_gateway::params::{base_controller, followed_by, Offset, COUNT as NET_COUNT};
-use r2p_app_gateway::{BusLink, BusTap};
+use r2p_app_gateway::{BusLink, BusTap, RemoteBase};
 use r2p_middleware::{pool_size, Class, Publisher};
 use r2p_module::OutboundCell;
 use r2p_msgs::Twist2D;
@@ -62,11 +62,13 @@ const TELEOP_PERIOD_US: u64 = 50_000;
 /// one node.
 pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
     let p = load_params(PARAMS, ctx.flash)?;
+    let bp = leak(Offset { store: p, first: BASE_FIRST });
     let mut base = base_controller(p, 0).then(|| {
-        let bp = leak(Offset { store: p, first: BASE_FIRST });
         let ep = Endpoints::leak(Names::from_params(bp), params::ik_period_us(bp));
         (ep.cmd_local, App::new(ep, bp))
     });
+    // Elsewhere: its odometry and ranges from the bus, for ROS 2.
+    let mut remote = base.is_none().then(|| RemoteBase::leak(Names::from_params(bp).ranges));
     let link = leak(BusLink::new());
     let mut gw = r2p_app_gateway::App::new(r2p_app_gateway::Endpoints::leak(), link);
     // The standby master: rank 1 after the PSU.
@@ -88,6 +90,9 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
             out.publisher
         }
     };
+    if let Some(r) = &remote {
+        r.register(&mut n).map_err(|e| format!("importing odom and ranges: {e:?}"))?;
+    }
     gw.register(&mut n).map_err(|e| format!("registering gateway/status: {e:?}"))?;
     *ctx.gateway.borrow_mut() = Some(GatewayBoot { tap: GatewayTap(BusTap::new(link)), link });
     let mut leds = Leds::new(&ctx, config.heartbeat_period_us);
@@ -104,12 +109,16 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
             // ROS 2 over Zenoh: the latest values out, /cmd_vel in (it takes over from the
             // teleop script while it arrives; its watchdog's zero command stops the base).
             let mut driving = false;
+            let from_bus = remote.as_mut().map(|r| r.latest());
             if let Some(sh) = ros.lock().unwrap_or_else(|e| e.into_inner()).as_mut() {
                 if let Some((_, a)) = &base {
                     let (x, y, theta) = a.pose();
                     let (vx, vy, wz) = a.velocity();
                     sh.latest.odom = Some(r2p_msgs::Odometry { x, y, theta, vx, vy, wz });
                     sh.latest.proximity = a.ranges();
+                }
+                if let Some((odom, ranges)) = from_bus {
+                    (sh.latest.odom, sh.latest.proximity) = (odom, ranges);
                 }
                 sh.latest.status = Some(gw.status(&net));
                 sh.latest.battery = gw.battery();

@@ -48,7 +48,8 @@ use r2p_app_gateway::link::MAX_CLIENTS;
 use r2p_app_gateway::params::{self, followed_by, Net, Offset};
 use r2p_app_gateway::ros::{zid_of, Latest, RosBridge, RosConfig};
 use r2p_app_gateway::server::{self, serve};
-use r2p_app_gateway::{App, BusLink, BusTap, NetState, Sample, Storage};
+use r2p_app_gateway::Storage;
+use r2p_app_gateway::{App, BusLink, BusTap, NetState, RemoteBase, RemoteBaseStorage, Sample};
 use r2p_boot::layout::STM32F407VG as MAP;
 use r2p_management::message::{ParamFault, Value};
 use r2p_middleware::{pool_size, Class, Publisher};
@@ -81,8 +82,9 @@ bind_interrupts!(struct Irqs {
 });
 
 /// The gateway's node: up to 5 exports (its status and the base controller's 4, or its status
-/// and `cmd_vel`) and 13 imports (its 7 and the base controller's 6), 32 queued frames, 4
-/// streams in reassembly, messages up to 64 bytes (as a module's).
+/// and `cmd_vel`) and 13 imports (its 7 and the base controller's 6, or its 7 and `odom` and
+/// the ranges), 32 queued frames, 4 streams in reassembly, messages up to 64 bytes (as a
+/// module's).
 type GatewayNode =
     Node<'static, { 1 + base::endpoints::EXPORTS }, { 7 + base::endpoints::IMPORTS }, 32, 4, 64>;
 type Device = Ethernet<'static, ETH, GenericPhy<Sma<'static, ETH_SMA>>>;
@@ -109,6 +111,18 @@ impl ParamStore for BaseParams {
 
 /// The base controller's topics (built at boot when the gateway runs it).
 static BASE: base::Storage = base::Storage::new();
+/// Its odometry and ranges from the bus (built at boot when another node runs it).
+static REMOTE_BASE: RemoteBaseStorage = RemoteBaseStorage::new();
+
+/// The base controller here, or its outputs for ROS 2 from the node that runs it.
+// Made once at boot and kept in the application's task: no heap to box the larger variant on.
+#[allow(clippy::large_enum_variant)]
+enum Base {
+    /// Runs in the application's task.
+    Here(base::App<'static>),
+    /// Runs elsewhere: its `odom` and the ranges imported.
+    Elsewhere(RemoteBase<'static>),
+}
 
 /// The parameters' flash: the 16 KiB sectors, so a page of FlashParams is one sector.
 type ParamFlash = Bank1Region1<'static, Blocking>;
@@ -326,11 +340,12 @@ async fn ros_session(
 }
 
 /// The applications: one step per millisecond (the gateway's, then the base controller's if it
-/// runs here); parameters persisted every 100 ms when changed.
+/// runs here, else the latest of its outputs from the bus); parameters persisted every 100 ms
+/// when changed.
 #[embassy_executor::task]
 async fn run(
     mut app: App<'static>,
-    mut base: Option<base::App<'static>>,
+    mut base: Base,
     mut leds: [Output<'static>; 4],
     mut flash: ParamFlash,
     mut trial: Trial,
@@ -347,12 +362,12 @@ async fn run(
         let (status, battery, imu) = (app.status(&net), app.battery(), app.imu());
         let mirrored = app.mirrored();
         let (odom, proximity) = match &mut base {
-            Some(b) => {
+            Base::Here(b) => {
                 b.step(now);
                 let ((x, y, theta), (vx, vy, wz)) = (b.pose(), b.velocity());
                 (Some(Odometry { x, y, theta, vx, vy, wz }), b.ranges())
             }
-            None => (None, None),
+            Base::Elsewhere(r) => r.latest(),
         };
         let status = Some(status);
         let latest = Latest { status, battery, imu, mirrored, odom, proximity };
@@ -479,12 +494,14 @@ async fn main(spawner: Spawner) {
         static BASE_PARAMS: BaseParams = BaseParams;
         let b = base::App::new(ends, &BASE_PARAMS);
         b.register(&mut node).unwrap();
-        (Some(b), cmd_vel)
+        (Base::Here(b), cmd_vel)
     } else {
         let c = CMD_VEL.build(base::names::CMD_VEL, Twist2D::default(), Class::NonRealTime);
         let c = c.unwrap();
         node.export(c.remote).unwrap();
-        (None, c.publisher)
+        let remote = REMOTE_BASE.build(base::Names::from_params(&BaseParams).ranges);
+        remote.register(&mut node).unwrap();
+        (Base::Elsewhere(remote), c.publisher)
     };
     let running_after_us = u64::from(STARTING_HEARTBEATS) * u64::from(config.heartbeat_period_us);
     for irq in [interrupt::CAN1_RX0, interrupt::CAN1_RX1, interrupt::TIM2] {
