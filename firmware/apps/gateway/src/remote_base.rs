@@ -113,4 +113,15 @@ mod tests {
         assert_eq!(ranges, Some(r));
         assert_eq!(b.latest().0.map(|o| o.x), Some(2.0), "kept while nothing newer comes");
     }
+
+    #[test]
+    fn the_node_imports_both() {
+        let b = RemoteBase::leak("proximity/ranges");
+        let config = r2p_node::NodeConfig::new([7; 12], "gateway");
+        let mut node =
+            r2p_node::Node::<'static, 1, 2, 8, 1, 64>::new(config, &r2p_node::NoParams).unwrap();
+        b.register(&mut node).unwrap();
+        assert!(node.import_state(0).is_some() && node.import_state(1).is_some());
+        assert!(node.import_state(2).is_none());
+    }
 }
