@@ -18,8 +18,8 @@ FIRMWARE = ROOT / "firmware"
 R2P = FIRMWARE / "target" / "debug" / "r2p"
 TRISKAR2 = ROOT / "robots" / "triskar2.toml"
 BOARDS = {"psu", "motor1", "motor2", "motor3", "proximity", "gateway"}
-# The gateway node's parameters: the base controller's 12, then the network's (tcp_port the sixth).
-TCP_PORT_PARAM = 12 + 5
+# The gateway node's parameters: the network's first (tcp_port the sixth), then the base controller's.
+TCP_PORT_PARAM = 5
 
 
 @pytest.fixture(scope="module")

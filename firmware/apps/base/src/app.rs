@@ -1,6 +1,6 @@
 //! The base controller's step: IK, obstacle avoidance, odometry.
 
-use libm::{cosf, sinf};
+use r2p_module::trig::{cosf, sinf};
 use r2p_module::TopicNode;
 use r2p_msgs::{Odometry, Twist2D, WheelSetpoint};
 use r2p_node::{Export, Import, NodeError, ParamStore, Typed};
@@ -49,8 +49,8 @@ impl<'a> App<'a> {
     }
 
     /// The application over `ends` with parameters from `params` (read every step, so a
-    /// PARAM_SET applies at once).
-    #[cfg(any(test, feature = "std"))]
+    /// PARAM_SET applies at once; the topics' names and the setpoints' period were read when
+    /// `ends` was built).
     pub fn new(ends: crate::Endpoints<'a>, params: &'a dyn ParamStore) -> Self {
         let ends = Ends {
             cmd: ends.cmd,
@@ -207,13 +207,15 @@ impl<'a> App<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::endpoints::{Endpoints, Names};
+    use crate::endpoints::Endpoints;
+    use crate::names::Names;
     use r2p_node::RamParams;
     use std::boxed::Box;
 
-    fn rig() -> (App<'static>, &'static RamParams<12>) {
-        let params: &'static RamParams<12> = Box::leak(Box::new(RamParams::new(p::DEFAULTS)));
-        let ends = Endpoints::leak(Names::TRISKAR2, 10_000);
+    fn rig() -> (App<'static>, &'static RamParams<{ p::COUNT }>) {
+        let params: &'static RamParams<{ p::COUNT }> =
+            Box::leak(Box::new(RamParams::new(p::DEFAULTS)));
+        let ends = Endpoints::leak(Names::from_params(params), 10_000);
         (App::new(ends, params), params)
     }
 

@@ -7,7 +7,7 @@
 //! `vx = −⅔ Σ sin αᵢ vᵢ`, `vy = ⅔ Σ cos αᵢ vᵢ`, `ωz = Σ vᵢ / 3R` (Σ sin² = Σ cos² = 3/2,
 //! Σ sin·cos = Σ sin = Σ cos = 0).
 
-use libm::{cosf, sinf};
+use r2p_module::trig::{cosf, sinf};
 
 /// Geometry of a three-wheel omni base.
 #[derive(Clone, Copy, Debug, PartialEq)]

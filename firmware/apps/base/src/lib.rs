@@ -8,8 +8,11 @@
 //! - **Odometry**: forward kinematics of the wheels' measured speeds (`motor<i>/state`),
 //!   integrated into a pose, published as `odom`.
 //!
-//! Sans-IO: [`App::step`] every millisecond. On an emulated board the endpoints are built on
-//! the heap ([`Endpoints::leak`], feature `std`).
+//! Sans-IO: [`App::step`] every millisecond. The topics' names come from parameters
+//! ([`Names`]: which motor controller drives each wheel, which proximity module watches), so
+//! the endpoints are made at boot: in a `static` [`Storage`] on an MCU (the gateway's image),
+//! on the heap on an emulated board ([`Endpoints::leak`], feature `std`). Any node may run
+//! it: the one whose board has room (docs/ros2.md, "Where the base controller runs").
 #![no_std]
 #![warn(missing_docs)]
 
@@ -17,12 +20,12 @@
 extern crate std;
 
 pub mod app;
-#[cfg(any(test, feature = "std"))]
 pub mod endpoints;
 pub mod kinematics;
+pub mod names;
 pub mod params;
 
 pub use app::App;
-#[cfg(any(test, feature = "std"))]
-pub use endpoints::Endpoints;
+pub use endpoints::{Endpoints, Storage};
 pub use kinematics::Omni3;
+pub use names::Names;

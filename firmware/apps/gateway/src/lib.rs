@@ -24,6 +24,7 @@ mod app;
 pub mod endpoints;
 pub mod link;
 pub mod params;
+pub mod remote_base;
 pub mod ros;
 pub mod server;
 pub mod tap;
@@ -34,6 +35,7 @@ mod tests;
 pub use app::{App, Command, Mirrored, NetState, Sample};
 pub use endpoints::{Endpoints, Storage};
 pub use link::{BusLink, LinkFrame, LinkStats};
+pub use remote_base::{RemoteBase, RemoteBaseStorage};
 pub use tap::BusTap;
 
 use r2p_node::NodeConfig;

@@ -6,9 +6,11 @@
 //! after setting them): a gateway that changed its address under a connected client would cut
 //! the client off mid-session.
 //!
-//! The table may follow another application's parameters on the same node (the emulated
-//! gateway also runs the base controller, whose table comes first): [`after`] builds the
-//! joined table and [`Net::read`] takes the index of the first network parameter.
+//! Another application's parameters may follow on the same node (the gateway also runs the
+//! base controller): [`followed_by`] builds the joined table, the other application reads its
+//! part through an [`Offset`] view, and [`Net::read`] takes the index of the first network
+//! parameter (0 in the gateway's tables: its own come first, so a gateway's stored parameters
+//! keep their indices when another application's are added after them).
 
 use r2p_management::message::{ParamFault, Value};
 use r2p_node::{Param, ParamStore, Typed};
@@ -31,9 +33,12 @@ pub const ZENOH_ROUTER: u16 = 6;
 pub const ZENOH_PORT: u16 = 7;
 /// ROS domain ID of the gateway's ROS 2 node and topics (as `ROS_DOMAIN_ID`).
 pub const ROS_DOMAIN: u16 = 8;
+/// The gateway runs the robot's base controller (r2p-app-base, whose parameters come first in
+/// the gateway image's table); off when another node on the bus runs it (docs/ros2.md).
+pub const BASE_CONTROLLER: u16 = 9;
 
-/// Number of network parameters.
-pub const COUNT: usize = 9;
+/// Number of the gateway's own parameters.
+pub const COUNT: usize = 10;
 
 /// 192.168.1.50: a static address in the most common home/lab subnet.
 pub const DEFAULT_IP: u32 = u32::from_be_bytes([192, 168, 1, 50]);
@@ -50,16 +55,24 @@ pub const DEFAULTS: [Param; COUNT] = [
     Param::u32("zenoh_router", 0, 0, u32::MAX),
     Param::u32("zenoh_port", 7447, 1, 65_535),
     Param::u32("ros_domain", 0, 0, 232),
+    Param::bool("base_controller", true),
 ];
 
-/// `base` followed by [`DEFAULTS`] (`T` = `B` + [`COUNT`], checked when evaluated): the table
-/// of a node that runs another application beside the gateway's.
-pub const fn after<const B: usize, const T: usize>(base: [Param; B]) -> [Param; T] {
+/// Whether the gateway runs the base controller, from `store` whose gateway parameters start
+/// at index `first` (as [`Net::read`]'s).
+pub fn base_controller(store: &dyn ParamStore, first: u16) -> bool {
+    Typed::new(&Offset { store, first }, &DEFAULTS).bool(BASE_CONTROLLER)
+}
+
+/// [`DEFAULTS`] followed by `other` (`T` = [`COUNT`] + `B`, checked when evaluated): the table
+/// of a node that runs another application beside the gateway's, whose parameters start at
+/// index [`COUNT`].
+pub const fn followed_by<const B: usize, const T: usize>(other: [Param; B]) -> [Param; T] {
     assert!(T == B + COUNT, "the joined table holds both tables");
     let mut out = [DEFAULTS[0]; T];
     let mut i = 0;
     while i < T {
-        out[i] = if i < B { base[i] } else { DEFAULTS[i - B] };
+        out[i] = if i < COUNT { DEFAULTS[i] } else { other[i - COUNT] };
         i += 1;
     }
     out
@@ -110,10 +123,13 @@ impl Net {
     }
 }
 
-/// A store seen from its parameter `first` on.
-struct Offset<'a> {
-    store: &'a dyn ParamStore,
-    first: u16,
+/// A store seen from its parameter `first` on: the view of one application's part of a joined
+/// table (index 0 of the view is `first` of the store).
+pub struct Offset<'a> {
+    /// The whole table.
+    pub store: &'a dyn ParamStore,
+    /// Index in `store` of the view's first parameter.
+    pub first: u16,
 }
 
 impl ParamStore for Offset<'_> {

@@ -545,29 +545,41 @@ fn network_parameters_read_from_their_place_in_the_table() {
             ros_domain: 0,
         }
     );
-    // After another application's two parameters.
-    const JOINED: [r2p_node::Param; 2 + params::COUNT] =
-        params::after([r2p_node::Param::u32("a", 1, 0, 9), r2p_node::Param::bool("b", false)]);
+    // Followed by another application's two parameters: the gateway's keep their indices.
+    const JOINED: [r2p_node::Param; params::COUNT + 2] = params::followed_by([
+        r2p_node::Param::u32("a", 1, 0, 9),
+        r2p_node::Param::bool("b", false),
+    ]);
     let joined = RamParams::new(JOINED);
-    assert_eq!(joined.get(0), Ok(Value::U32(1)));
-    joined.set(2 + params::DHCP, Value::Bool(false)).unwrap();
-    joined.set(2 + params::IP, Value::U32(0x0A00_0002)).unwrap();
-    joined.set(2 + params::ROUTER, Value::U32(0x0A00_0001)).unwrap();
-    joined.set(2 + params::TCP_PORT, Value::U32(5000)).unwrap();
-    let net = Net::read(&joined, 2);
+    let other = params::Offset { store: &joined, first: params::COUNT as u16 };
+    assert_eq!(other.get(0), Ok(Value::U32(1)));
+    assert_eq!(joined.get(params::TCP_PORT), alone.get(params::TCP_PORT));
+    joined.set(params::DHCP, Value::Bool(false)).unwrap();
+    joined.set(params::IP, Value::U32(0x0A00_0002)).unwrap();
+    joined.set(params::ROUTER, Value::U32(0x0A00_0001)).unwrap();
+    joined.set(params::TCP_PORT, Value::U32(5000)).unwrap();
+    let net = Net::read(&joined, 0);
     assert_eq!(
         (net.dhcp, net.ip, net.router, net.tcp_port),
         (false, [10, 0, 0, 2], Some([10, 0, 0, 1]), 5000)
     );
-    assert!(joined.set(2 + params::TCP_PORT, Value::U32(70_000)).is_err(), "ports end at 65535");
+    assert!(joined.set(params::TCP_PORT, Value::U32(70_000)).is_err(), "ports end at 65535");
     // ROS 2 over Zenoh: off until a router is set; its port 7447 by default.
     assert_eq!(net.zenoh, None);
-    joined.set(2 + params::ZENOH_ROUTER, Value::U32(0x0A00_0009)).unwrap();
-    joined.set(2 + params::ROS_DOMAIN, Value::U32(42)).unwrap();
-    let net = Net::read(&joined, 2);
+    joined.set(params::ZENOH_ROUTER, Value::U32(0x0A00_0009)).unwrap();
+    joined.set(params::ROS_DOMAIN, Value::U32(42)).unwrap();
+    let net = Net::read(&joined, 0);
     assert_eq!((net.zenoh, net.ros_domain), (Some(([10, 0, 0, 9], 7447)), 42));
-    assert!(joined.set(2 + params::ROS_DOMAIN, Value::U32(233)).is_err(), "ROS domains end at 232");
-    assert!(joined.set(2 + params::PREFIX_LEN, Value::U32(0)).is_err());
+    assert!(joined.set(params::ROS_DOMAIN, Value::U32(233)).is_err(), "ROS domains end at 232");
+    assert!(joined.set(params::PREFIX_LEN, Value::U32(0)).is_err());
+    // A table that starts elsewhere is read from there.
+    let shifted = params::Offset { store: &joined, first: 2 };
+    assert_eq!(Net::read(&shifted, 0), Net::read(&joined, 2));
+    // The base controller: on unless another node runs it.
+    assert!(params::base_controller(&joined, 0) && params::base_controller(&alone, 0));
+    joined.set(params::BASE_CONTROLLER, Value::Bool(false)).unwrap();
+    assert!(!params::base_controller(&joined, 0));
+    assert_eq!(other.get(1), Ok(Value::Bool(false)), "the other application's, untouched");
 }
 
 #[test]

@@ -27,7 +27,7 @@ use std::sync::{Arc, Mutex};
 
 use embassy_boot::State;
 use r2p_vbus::Config;
-use r2p_world::robot_file::{Module, Robot};
+use r2p_world::robot_file::{BaseController, Module, Robot};
 use r2p_world::BoardKind;
 use r2p_world::World;
 use rtcan::{CycleConfig, Micros};
@@ -79,8 +79,12 @@ pub struct EmuRobot {
     pub robot: Robot,
     /// The boards, in robot-file order.
     pub boards: Vec<BoardInfo>,
-    /// What the robot-level application (on the gateway) computes: odometry and commands.
+    /// What the robot-level application (the base controller) computes: odometry and
+    /// commands.
     pub probe: Rc<RefCell<Probe>>,
+    /// The port of the host's node that runs the base controller (`[base] controller =
+    /// "host"`), after the modules' ports.
+    pub host: Option<usize>,
     booter: Rc<RefCell<Booter>>,
 }
 
@@ -146,8 +150,9 @@ impl EmuRobot {
         Self::build(robot)
     }
 
-    /// Builds `robot`: a bus with one port per module plus a spare (for tools), the world,
-    /// and every board flashed (its image, its parameters) and booted at time 0.
+    /// Builds `robot`: a bus with one port per module (and one for the host's node when the
+    /// base controller runs there) plus a spare (for tools), the world, and every board
+    /// flashed (its image, its parameters) and booted at time 0.
     pub fn build(robot: Robot) -> Result<Self, String> {
         Self::build_with_spares(robot, 1)
     }
@@ -156,7 +161,10 @@ impl EmuRobot {
     /// [`EmuRobot::spare_port`] on: for benches that add nodes of their own (a load, a tool).
     pub fn build_with_spares(robot: Robot, spares: usize) -> Result<Self, String> {
         let config = Config { seed: robot.seed, bit_rate: robot.bus.bit_rate, ..Config::default() };
-        let mut sim = Sim::new(robot.modules.len() + spares.max(1), config, Mode::Tdma);
+        let on_host = robot.base_controller == Some(BaseController::Host);
+        let host = on_host.then_some(robot.modules.len());
+        let ports = robot.modules.len() + usize::from(on_host) + spares.max(1);
+        let mut sim = Sim::new(ports, config, Mode::Tdma);
         let world = Rc::new(RefCell::new(World::from_robot(&robot)));
         let w = world.clone();
         sim.set_world(Box::new(move |now_us| w.borrow_mut().advance_to_ns(now_us * 1_000)));
@@ -194,6 +202,10 @@ impl EmuRobot {
             let chip = b.flash;
             sim.set_stall(i, Box::new(move || chip.lock(|c| c.borrow_mut().take_stall_ns())));
         }
+        if let Some(port) = host {
+            let (node, app) = boards::base_on_host(&robot, probe.clone())?;
+            sim.add_board(node, port, Some(app));
+        }
         let b = booter.clone();
         sim.set_resetter(Box::new(move |i, now_us| {
             // Boards a test added beyond the robot's have no reset line.
@@ -204,7 +216,7 @@ impl EmuRobot {
                 b.borrow_mut().boot(i, now_us).unwrap_or_else(|e| panic!("{e}"));
             Some(Reset { node, app: Some(app), tap, down_ns })
         }));
-        Ok(EmuRobot { sim, world, robot, boards, probe, booter })
+        Ok(EmuRobot { sim, world, robot, boards, probe, host, booter })
     }
 
     /// Serves the bus on TCP at `addr` through the gateway's own socketcand server (its
@@ -243,7 +255,7 @@ impl EmuRobot {
 
     /// The spare port tools and bridges use (the first, with [`EmuRobot::build_with_spares`]).
     pub fn spare_port(&self) -> usize {
-        self.robot.modules.len()
+        self.robot.modules.len() + usize::from(self.host.is_some())
     }
 
     /// Index of the board called `name`.

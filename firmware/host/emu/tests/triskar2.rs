@@ -5,7 +5,7 @@ use r2p_emu::robot::{BoardNode, EmuRobot};
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use r2p_msgs::{Battery, Proximity, PsuEvent, WheelSetpoint, WheelState};
 use r2p_node::{ImportState, NoParams, NodeConfig, RemotePublisher, RemoteSubscriber};
-use r2p_world::robot_file::{ParamValue, Robot};
+use r2p_world::robot_file::{BaseController, ParamValue, Robot};
 use rtcan::failover::Role;
 use rtcan::CycleConfig;
 
@@ -98,9 +98,10 @@ fn every_board_boots_with_the_psu_as_master_and_the_gateway_subscribes_to_everyt
     }
 }
 
-#[test]
-fn triskar2_drives_stops_before_the_box_turns_and_odometry_follows() {
-    let mut r = EmuRobot::build(robot_file()).unwrap();
+/// Runs Triskar2's teleop script for 10 s: it drives ahead, stops before the box (the
+/// obstacle avoidance), turns; the odometry tracks the world. Returns the HRT statistics of the
+/// node on port `controller`, which runs the base controller.
+fn drive_stop_turn(r: &mut EmuRobot, controller: usize) -> r2p_node::NodeStats {
     let mut worst_odometry = 0.0f64;
     for t in 1..=100u64 {
         r.sim.run_until(t * 100 * MS);
@@ -122,13 +123,72 @@ fn triskar2_drives_stops_before_the_box_turns_and_odometry_follows() {
             assert!((deg - 91.7).abs() < 3.0, "heading {deg:.1}°");
         }
     }
-    // Odometry from the three wheels' states, integrated on the gateway, tracks the truth.
+    // Odometry from the three wheels' states, integrated by the base controller, tracks the
+    // truth.
     assert!(worst_odometry < 0.02, "odometry error up to {worst_odometry:.3} m");
     assert_eq!(r.probe.borrow().setpoints_dropped, 0);
-    let g = r.board("gateway").unwrap();
-    let hrt = r.sim.node(g).stats();
+    let hrt = r.sim.node(controller).stats();
     assert!(hrt.hrt_sent >= 2900, "setpoints go out every 10 ms in their slots: {hrt:?}");
     assert_eq!(hrt.hrt_missed, 0);
+    hrt
+}
+
+#[test]
+fn triskar2_drives_stops_before_the_box_turns_and_odometry_follows() {
+    let mut r = EmuRobot::build(robot_file()).unwrap();
+    assert_eq!(r.host, None, "the gateway runs the base controller by default");
+    let g = r.board("gateway").unwrap();
+    drive_stop_turn(&mut r, g);
+}
+
+#[test]
+fn the_base_controller_moved_to_the_host_drives_triskar2_alike() {
+    let mut robot = robot_file();
+    robot.base_controller = Some(BaseController::Host);
+    let mut r = EmuRobot::build(robot).unwrap();
+    let (g, host) = (r.board("gateway").unwrap(), r.host.expect("a port for the host's node"));
+    assert_eq!(r.spare_port(), host + 1, "tools keep a port of their own");
+    // The teleop script's cmd_vel goes from the gateway over the bus to the host's node, whose
+    // setpoints drive the wheels; the gateway sends none.
+    drive_stop_turn(&mut r, host);
+    assert_eq!(r.sim.node(g).stats().hrt_sent, 0, "the gateway runs no base controller");
+    // For ROS 2's /odom and /range_N it imports the host's odometry and the ranges (after its
+    // own seven imports).
+    for i in [7, 8] {
+        let s = r.sim.node(g).import_state(i);
+        assert!(matches!(s, Some(ImportState::Subscribed { .. })), "import {i}: {s:?}");
+    }
+}
+
+#[test]
+fn the_base_controller_finds_the_motors_and_the_proximity_module_by_their_instances() {
+    let mut robot = robot_file();
+    // Motors 5, 6, 7 on wheels 0, 1, 2 and proximity module 2: the gateway's base controller
+    // takes their topics from its wheelN_instance and proximity_instance parameters.
+    for m in robot.modules.iter_mut() {
+        let instance = match (m.name.as_str(), &m.wiring) {
+            (_, r2p_world::robot_file::Wiring::Motor { wheel, .. }) => 5 + *wheel as i64,
+            ("proximity", _) => 2,
+            _ => continue,
+        };
+        m.params.retain(|(n, _)| n != "instance");
+        m.params.push(("instance".into(), ParamValue::Int(instance)));
+    }
+    let mut r = EmuRobot::build(robot).unwrap();
+    let g = r.board("gateway").unwrap();
+    // Its imports: cmd_vel (0, published on the gateway), the obstacles, ranges and the three
+    // wheel states, each subscribed to its module.
+    let subscribed = r.sim.run_while(MS, S, |s| {
+        (1..6).all(|i| matches!(s.node(g).import_state(i), Some(ImportState::Subscribed { .. })))
+    });
+    assert!(subscribed, "{:?}", (1..6).map(|i| r.sim.node(g).import_state(i)).collect::<Vec<_>>());
+    // The teleop script drives it ahead from 1 s (motors 5-7 turn) until proximity2's
+    // obstacle event stops it before the box, as in the default robot.
+    r.sim.run_until(3 * S);
+    let x = r.world.borrow().pose().x;
+    let front = 1.0 - (x + 0.30);
+    assert!((0.38..=0.46).contains(&front), "stopped {front:.3} m from the box");
+    assert_eq!(r.probe.borrow().command, (0.0, 0.0, 0.0));
 }
 
 #[test]

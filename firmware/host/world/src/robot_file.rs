@@ -250,7 +250,24 @@ pub struct Robot {
     pub modules: Vec<Module>,
     /// Velocity commands over time, in time order.
     pub teleop: Vec<TeleopStep>,
+    /// Which node runs the robot-level nodes (`r2p-app-base`), if any.
+    pub base_controller: Option<BaseController>,
 }
+
+/// Where the base controller (`r2p-app-base`: inverse kinematics, obstacle avoidance,
+/// odometry) runs: `[base] controller`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum BaseController {
+    /// On the gateway module of this index in [`Robot::modules`] (its image runs it: the
+    /// default of a robot with a gateway and an omni base).
+    Module(usize),
+    /// On a computer on the bus (`"host"`: in the emulator, a node of the emulator's own, as a
+    /// PC on a CAN adapter).
+    Host,
+}
+
+/// The name `[base] controller` gives a computer on the bus.
+pub const HOST_CONTROLLER: &str = "host";
 
 // ----- The file as written -------------------------------------------------------------
 
@@ -329,6 +346,7 @@ struct BaseSection {
     wheel_distance_m: Option<f64>,
     wheel_angles_deg: Option<Vec<f64>>,
     track_m: Option<f64>,
+    controller: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -589,6 +607,7 @@ fn validate(ctx: &Ctx<'_>, doc: FileDoc) -> Result<Robot, RobotError> {
             ));
         }
     }
+    let base_controller = validate_controller(ctx, &doc.base, &base, &modules)?;
     let mut teleop = Vec::new();
     for (i, t) in doc.teleop.iter().enumerate() {
         let at = format!("teleop[{i}]");
@@ -622,7 +641,53 @@ fn validate(ctx: &Ctx<'_>, doc: FileDoc) -> Result<Robot, RobotError> {
         obstacles,
         modules,
         teleop,
+        base_controller,
     })
+}
+
+/// `[base] controller`: a gateway module's name or `"host"`; by default the robot's gateway
+/// when it has one and its base is one the controller drives (three omni wheels).
+fn validate_controller(
+    ctx: &Ctx<'_>,
+    b: &BaseSection,
+    base: &BaseSpec,
+    modules: &[Module],
+) -> Result<Option<BaseController>, RobotError> {
+    let three_omni = matches!(&base.layout, Layout::Omni { angles, .. } if angles.len() == 3);
+    let gateway = modules.iter().position(|m| m.kind() == BoardKind::Gateway);
+    let Some(name) = &b.controller else {
+        return Ok(gateway.filter(|_| three_omni).map(BaseController::Module));
+    };
+    let key = "base.controller";
+    if !three_omni {
+        return Err(ctx.err(
+            key,
+            "the base controller (r2p-app-base) drives three omni wheels",
+            "remove it: drive this base's wheels from your own node",
+        ));
+    }
+    if name == HOST_CONTROLLER {
+        return Ok(Some(BaseController::Host));
+    }
+    let gateways: Vec<String> = modules
+        .iter()
+        .filter(|m| m.kind() == BoardKind::Gateway)
+        .map(|m| format!("\"{}\"", m.name))
+        .chain([format!("\"{HOST_CONTROLLER}\"")])
+        .collect();
+    let fix = format!("use {}", gateways.join(" or "));
+    match modules.iter().position(|m| m.name == *name) {
+        Some(i) if modules[i].kind() == BoardKind::Gateway => Ok(Some(BaseController::Module(i))),
+        Some(_) => Err(ctx.err(
+            key,
+            format!(
+                "module `{name}` cannot run the base controller: only the gateway's image has \
+                 room for it (an F103 module's does not, docs/ros2.md)"
+            ),
+            fix,
+        )),
+        None => Err(ctx.err(key, format!("no module called `{name}`"), fix)),
+    }
 }
 
 fn validate_base(ctx: &Ctx<'_>, b: &BaseSection) -> Result<BaseSpec, RobotError> {

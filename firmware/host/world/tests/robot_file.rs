@@ -229,3 +229,29 @@ fn an_imu_module_has_a_pose_and_only_it_does() {
     assert_eq!(e.key, "modules[2].pose");
     assert!(e.fix.contains("imu modules"), "{e}");
 }
+
+#[test]
+fn the_base_controller_runs_on_the_gateway_by_default_or_where_the_file_says() {
+    use r2p_world::robot_file::BaseController;
+    let r = Robot::load(triskar_path()).unwrap();
+    let gateway = r.modules.iter().position(|m| m.name == "gateway").unwrap();
+    assert_eq!(r.base_controller, Some(BaseController::Module(gateway)));
+    let at = |v: &str| edit("kind = \"omni\"", &format!("kind = \"omni\"\ncontroller = \"{v}\""));
+    let r = Robot::parse(&at("host"), "a.toml").unwrap();
+    assert_eq!(r.base_controller, Some(BaseController::Host));
+    let r = Robot::parse(&at("gateway"), "a.toml").unwrap();
+    assert_eq!(r.base_controller, Some(BaseController::Module(gateway)));
+    // An F103 module has no room for it; a name that is no module is a typo.
+    let e = refuse(&at("proximity"));
+    assert_eq!(e.key, "base.controller");
+    assert!(e.problem.contains("only the gateway's image has room"), "{e}");
+    assert_eq!(e.fix, "use \"gateway\" or \"host\"");
+    let e = refuse(&at("gatway"));
+    assert!(e.problem.contains("no module called `gatway`"), "{e}");
+    // Without a gateway nothing runs it unless the file says so; a differential base has none.
+    assert_eq!(common::diff().base_controller, None);
+    let t = common::DIFF_ROBOT.replace("track_m = 0.3", "track_m = 0.3\ncontroller = \"host\"");
+    let e = Robot::parse(&t, "diffbot.toml").unwrap_err();
+    assert_eq!(e.key, "base.controller");
+    assert!(e.problem.contains("three omni wheels"), "{e}");
+}

@@ -10,6 +10,7 @@
 pub mod chip;
 pub mod firmware;
 mod gateway;
+mod host;
 mod imu;
 mod motor;
 mod params;
@@ -30,7 +31,8 @@ use rtcan::cycle::ClockState;
 use rtcan::failover::Role;
 use rtcan::{CycleConfig, Micros};
 
-pub use gateway::{gateway, GatewayBoot, GatewayTap, NET_FIRST};
+pub use gateway::{gateway, GatewayBoot, GatewayTap, BASE_FIRST};
+pub use host::base_on_host;
 pub use imu::imu;
 pub use motor::motor;
 pub use params::store_params;
@@ -50,12 +52,22 @@ pub use chip::{BoardChip, TimedFlash as BoardFlash};
 /// What the robot-level application computed, for tests, plots and tools.
 #[derive(Clone, Debug, Default)]
 pub struct Probe {
-    /// Odometry pose (x m, y m, θ rad), as the gateway's base controller integrates it.
+    /// Odometry pose (x m, y m, θ rad), as the base controller integrates it.
     pub odometry: (f32, f32, f32),
     /// The command sent to the wheels after obstacle avoidance (vx, vy, ωz).
     pub command: (f32, f32, f32),
     /// Setpoints that found no room in the publisher's pool.
     pub setpoints_dropped: u32,
+}
+
+impl Probe {
+    /// What the base controller `a` computed at its step at `now`.
+    fn record(&mut self, a: &r2p_app_base::App<'_>, now: Micros) {
+        self.odometry = a.pose();
+        let c = a.command(now);
+        self.command = (c.vx, c.vy, c.wz);
+        self.setpoints_dropped = a.dropped;
+    }
 }
 
 /// What a board's boot needs.

@@ -5,7 +5,7 @@ use r2p_module::FlashParams;
 use r2p_node::{Param, ParamStore};
 use r2p_world::kinematics::Layout;
 use r2p_world::ranger::RangerKind;
-use r2p_world::robot_file::{Module, ParamValue, RangerMount, Robot, Wiring};
+use r2p_world::robot_file::{BaseController, Module, ParamValue, RangerMount, Robot, Wiring};
 use r2p_world::BoardKind;
 
 use super::chip::{ChipLayout, FlashError};
@@ -13,7 +13,8 @@ use super::BoardChip;
 use crate::on_layout;
 
 /// Stores `module`'s parameters from the robot file (and, for the gateway's base controller,
-/// the base geometry of the robot) in `flash`. Errors name the parameter and what is valid.
+/// the robot's base and modules: [`base_values`]; whether it runs it: `[base] controller`) in
+/// `flash`. Errors name the parameter and what is valid.
 pub fn store_params(
     module: &Module,
     robot: &Robot,
@@ -21,7 +22,15 @@ pub fn store_params(
 ) -> Result<(), String> {
     let mut values = module.params.clone();
     if module.kind() == BoardKind::Gateway {
-        values = base_geometry(robot, values);
+        let index = robot.modules.iter().position(|m| m.name == module.name);
+        let runs =
+            matches!(robot.base_controller, Some(BaseController::Module(i)) if Some(i) == index);
+        if !values.iter().any(|(n, _)| n == "base_controller") {
+            values.push(("base_controller".into(), ParamValue::Bool(runs)));
+        }
+        if runs {
+            values = base_values(robot, values);
+        }
     }
     if let Wiring::Proximity { rangers } = &module.wiring {
         check_sensor_types(rangers, &values)
@@ -38,8 +47,10 @@ pub fn store_params(
     r.map_err(|e| format!("{} ({}): {e}", module.name, robot.file.display()))
 }
 
-/// The base controller's geometry follows the robot's base unless the file sets it.
-fn base_geometry(
+/// The base controller's parameters follow the robot unless the file sets them: its geometry,
+/// the proximity channels' directions, and the modules it talks to (each wheel's motor
+/// controller and the proximity module, by their `instance` parameters).
+pub fn base_values(
     robot: &Robot,
     mut values: Vec<(String, ParamValue)>,
 ) -> Vec<(String, ParamValue)> {
@@ -53,11 +64,28 @@ fn base_geometry(
         add("base_radius_m", *wheel_distance);
         add("first_wheel_deg", angles[0].to_degrees());
     }
+    let mut instances = Vec::new();
     for m in &robot.modules {
-        if let Wiring::Proximity { rangers } = &m.wiring {
-            for r in rangers.iter().filter(|r| r.channel < 4) {
-                add(&format!("channel{}_deg", r.channel), r.mount.theta.to_degrees());
+        let instance = m.params.iter().find(|(n, _)| n == "instance").map_or(0, |(_, v)| match v {
+            ParamValue::Int(i) => *i,
+            _ => 0,
+        });
+        match &m.wiring {
+            Wiring::Proximity { rangers } => {
+                for r in rangers.iter().filter(|r| r.channel < 4) {
+                    add(&format!("channel{}_deg", r.channel), r.mount.theta.to_degrees());
+                }
+                instances.push(("proximity_instance".to_string(), instance));
             }
+            Wiring::Motor { wheel, .. } if *wheel < 3 => {
+                instances.push((format!("wheel{wheel}_instance"), instance));
+            }
+            _ => {}
+        }
+    }
+    for (name, instance) in instances {
+        if !values.iter().any(|(n, _)| *n == name) {
+            values.push((name, ParamValue::Int(instance)));
         }
     }
     values
@@ -108,6 +136,18 @@ fn store<const N: usize>(
     let params = FlashParams::new(defaults, 0);
     on_layout!(flash, load::<N>(&params, flash))
         .map_err(|e| format!("reading parameters: {e:?}"))?;
+    set_values(&params, &defaults, values)?;
+    on_layout!(flash, commit::<N>(&params, flash))
+        .map_err(|e| format!("writing parameters: {e:?}"))?;
+    Ok(())
+}
+
+/// Sets each of `values` by name in `params`, whose table is `defaults`.
+pub fn set_values(
+    params: &dyn ParamStore,
+    defaults: &[Param],
+    values: &[(String, ParamValue)],
+) -> Result<(), String> {
     for (name, v) in values {
         let Some(i) = defaults.iter().position(|p| p.name == name) else {
             let known: Vec<&str> = defaults.iter().map(|p| p.name).collect();
@@ -129,8 +169,6 @@ fn store<const N: usize>(
             other => format!("`{name}`: {other:?}"),
         })?;
     }
-    on_layout!(flash, commit::<N>(&params, flash))
-        .map_err(|e| format!("writing parameters: {e:?}"))?;
     Ok(())
 }
 

@@ -6,7 +6,13 @@
 //! settings are parameters kept in flash (r2p-module's `FlashParams`), applied at boot.
 //! With a Zenoh router set (`zenoh_router`), the gateway is also a native ROS 2 node over
 //! Zenoh (r2p-app-gateway's `ros`, docs/ros2.md): `/gateway/status`, `/battery_state`,
-//! `/imu/data` out, `/cmd_vel` in (exported on the bus as `cmd_vel` for the base controller).
+//! `/imu/data`, `/odom` out, `/cmd_vel` in.
+//!
+//! It runs the robot-level nodes for the robot (`r2p-app-base`: inverse kinematics, obstacle
+//! avoidance, odometry; Triskar2's by default), its step in the application's task, its
+//! topics named by its parameters (after the gateway's own in the node's table) in static
+//! cells; unless its `base_controller` parameter is off, when another node runs them: then
+//! `/cmd_vel` goes on the bus as `cmd_vel` for that node (docs/ros2.md).
 //!
 //! The image runs behind the F407 bootloader, in the active slot of the flash map
 //! (firmware/images.toml; build.rs links it there); its parameters sit in the map's two 16 KiB
@@ -37,17 +43,20 @@ use embassy_stm32::peripherals::{CAN1, ETH, ETH_SMA};
 use embassy_stm32::rng::{self, Rng};
 use embassy_stm32::{bind_interrupts, pac, rcc, time::Hertz, Config};
 use embassy_time::{Delay, Duration, Instant, Ticker, Timer};
+use r2p_app_base as base;
 use r2p_app_gateway::link::MAX_CLIENTS;
-use r2p_app_gateway::params::{self, Net};
+use r2p_app_gateway::params::{self, followed_by, Net, Offset};
 use r2p_app_gateway::ros::{zid_of, Latest, RosBridge, RosConfig};
 use r2p_app_gateway::server::{self, serve};
-use r2p_app_gateway::{App, BusLink, BusTap, NetState, Sample, Storage};
+use r2p_app_gateway::Storage;
+use r2p_app_gateway::{App, BusLink, BusTap, NetState, RemoteBase, RemoteBaseStorage, Sample};
 use r2p_boot::layout::STM32F407VG as MAP;
-use r2p_middleware::{pool_size, Class};
-use r2p_module::{leds, FlashParams, Outbound, OutboundCell};
-use r2p_msgs::Twist2D;
+use r2p_management::message::{ParamFault, Value};
+use r2p_middleware::{pool_size, Class, Publisher};
+use r2p_module::{leds, FlashParams, OutboundCell};
+use r2p_msgs::{Odometry, Twist2D};
 use r2p_node::node::STARTING_HEARTBEATS;
-use r2p_node::Node;
+use r2p_node::{Node, ParamStore};
 use rtcan::cycle::ClockState;
 use rtcan::failover::Role;
 use rtcan_bxcan::BxCan;
@@ -56,9 +65,11 @@ use static_cell::StaticCell;
 mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
 }
+mod slot_timer;
 #[path = "../../../shared/trial.rs"]
 mod trial;
 mod update;
+use slot_timer::SlotTimer;
 use trial::Confirmation;
 
 bind_interrupts!(struct Irqs {
@@ -70,15 +81,48 @@ bind_interrupts!(struct Irqs {
     RNG => rng::InterruptHandler<embassy_stm32::peripherals::RNG>;
 });
 
-/// The gateway's node: up to 4 exports and 7 imports, 32 queued frames, 4 streams in
-/// reassembly, messages up to 64 bytes (as a module's).
-type GatewayNode = Node<'static, 4, 7, 32, 4, 64>;
+/// The gateway's node: up to 5 exports (its status and the base controller's 4, or its status
+/// and `cmd_vel`) and 13 imports (its 7 and the base controller's 6, or its 7 and `odom` and
+/// the ranges), 32 queued frames, 4 streams in reassembly, messages up to 64 bytes (as a
+/// module's).
+type GatewayNode =
+    Node<'static, { 1 + base::endpoints::EXPORTS }, { 7 + base::endpoints::IMPORTS }, 32, 4, 64>;
 type Device = Ethernet<'static, ETH, GenericPhy<Sma<'static, ETH_SMA>>>;
+
+/// The node's parameters: the gateway's, then the base controller's.
+const PARAM_COUNT: usize = params::COUNT + base::params::COUNT;
 
 /// In the flash map's parameter sectors (2 and 3, 16 KiB each: embassy-stm32's bank 1 region 1
 /// starts at the flash base, so the map's offset is the region's).
-static PARAMS: FlashParams<{ params::COUNT }> =
-    FlashParams::new(params::DEFAULTS, MAP.params.offset);
+static PARAMS: FlashParams<PARAM_COUNT> =
+    FlashParams::new(followed_by(base::params::DEFAULTS), MAP.params.offset);
+
+/// The base controller's part of [`PARAMS`], as its application indexes it.
+struct BaseParams;
+
+impl ParamStore for BaseParams {
+    fn get(&self, index: u16) -> Result<Value, ParamFault> {
+        Offset { store: &PARAMS, first: params::COUNT as u16 }.get(index)
+    }
+    fn set(&self, index: u16, value: Value) -> Result<Value, ParamFault> {
+        Offset { store: &PARAMS, first: params::COUNT as u16 }.set(index, value)
+    }
+}
+
+/// The base controller's topics (built at boot when the gateway runs it).
+static BASE: base::Storage = base::Storage::new();
+/// Its odometry and ranges from the bus (built at boot when another node runs it).
+static REMOTE_BASE: RemoteBaseStorage = RemoteBaseStorage::new();
+
+/// The base controller here, or its outputs for ROS 2 from the node that runs it.
+// Made once at boot and kept in the application's task: no heap to box the larger variant on.
+#[allow(clippy::large_enum_variant)]
+enum Base {
+    /// Runs in the application's task.
+    Here(base::App<'static>),
+    /// Runs elsewhere: its `odom` and the ranges imported.
+    Elsewhere(RemoteBase<'static>),
+}
 
 /// The parameters' flash: the 16 KiB sectors, so a page of FlashParams is one sector.
 type ParamFlash = Bank1Region1<'static, Blocking>;
@@ -90,7 +134,8 @@ struct Trial {
     state: update::StatePart,
 }
 static ENDPOINTS: Storage = Storage::new();
-/// `/cmd_vel` from ROS 2, on the bus for whichever module runs the base controller.
+/// `/cmd_vel` from ROS 2, on the bus for the node that runs the base controller when the
+/// gateway does not.
 static CMD_VEL: OutboundCell<Twist2D, { pool_size(&[2], 1) }, 1, 2> = OutboundCell::new();
 /// The latest values the ROS 2 side publishes (the application's step writes them).
 static LATEST: cortex_m::interrupt::Mutex<Cell<Latest>> =
@@ -105,14 +150,8 @@ static LATEST: cortex_m::interrupt::Mutex<Cell<Latest>> =
 static LINK: BusLink = BusLink::new();
 static NODE: StaticCell<GatewayNode> = StaticCell::new();
 
-/// The bus runs here, woken through an interrupt no peripheral of the gateway uses.
+/// The bus runs here: in the slot timer's interrupt (TIM5, [`slot_timer`]).
 static BUS_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
-
-#[interrupt]
-unsafe fn USART3() {
-    // SAFETY: the interrupt is reserved for this executor (started in `main`).
-    unsafe { BUS_EXECUTOR.on_interrupt() }
-}
 
 const RUNNING: u8 = 1;
 const SYNCED: u8 = 2;
@@ -130,10 +169,15 @@ static TRIAL_OVER: AtomicBool = AtomicBool::new(false);
 static FROM_DHCP: AtomicBool = AtomicBool::new(false);
 
 /// The node on the bus, through the tap that copies the bus to the network clients. It wakes
-/// at each slot boundary from embassy-time's queue (the F103 modules' dedicated slot timer is
-/// not ported to the F407 yet: the gateway holds no HRT slot).
+/// at each slot boundary from the slot timer's compare, as a module's bus task does: the base
+/// controller's HRT setpoints leave in their slots.
 #[embassy_executor::task]
-async fn bus(node: &'static mut GatewayNode, mut can: BxCan<'static>, running_after_us: u64) {
+async fn bus(
+    node: &'static mut GatewayNode,
+    mut can: BxCan<'static>,
+    mut timer: SlotTimer,
+    running_after_us: u64,
+) {
     let mut tap = BusTap::new(&LINK);
     let (mut frames, mut last_frame_at) = (0u32, None::<u64>);
     loop {
@@ -167,7 +211,7 @@ async fn bus(node: &'static mut GatewayNode, mut can: BxCan<'static>, running_af
         }
         LED_INPUTS.fetch_and(STORAGE_FAULT, Ordering::Relaxed);
         LED_INPUTS.fetch_or(bits, Ordering::Relaxed);
-        Timer::at(embassy_time::Instant::from_micros(node.next_slot_at(now))).await;
+        timer.wait_until(node.next_slot_at(now)).await;
     }
 }
 
@@ -225,7 +269,7 @@ async fn zenoh(
     router: ([u8; 4], u16),
     domain: u32,
     zid: [u8; 16],
-    cmd_vel: Outbound<'static, Twist2D, { pool_size(&[2], 1) }, 1, 2>,
+    cmd_vel: &'static Publisher<'static, Twist2D>,
 ) -> ! {
     let Some(mut bridge) = RosBridge::new(&RosConfig { domain, namespace: "", zid }) else {
         loop {
@@ -243,7 +287,7 @@ async fn zenoh(
         let mut socket = TcpSocket::new(stack, &mut rx, &mut tx);
         socket.set_timeout(Some(Duration::from_secs(20)));
         if socket.connect(endpoint).await.is_ok() {
-            let _ = ros_session(&mut bridge, &mut socket, &mut out, &mut batch, &cmd_vel).await;
+            let _ = ros_session(&mut bridge, &mut socket, &mut out, &mut batch, cmd_vel).await;
         }
         socket.abort();
         let _ = socket.flush().await;
@@ -257,7 +301,7 @@ async fn ros_session(
     socket: &mut TcpSocket<'_>,
     out: &mut [u8],
     batch: &mut [u8],
-    cmd_vel: &Outbound<'static, Twist2D, { pool_size(&[2], 1) }, 1, 2>,
+    cmd_vel: &'static Publisher<'static, Twist2D>,
 ) -> Result<(), ()> {
     use embedded_io_async::Write;
     let now = || Instant::now().as_micros();
@@ -287,7 +331,7 @@ async fn ros_session(
         }
         let t = now();
         if let Some(c) = bridge.take_cmd(t) {
-            let _ = cmd_vel.publisher.publish_with(|m| *m = c);
+            let _ = cmd_vel.publish_with(|m| *m = c);
         }
         let latest = cortex_m::interrupt::free(|cs| LATEST.borrow(cs).get());
         let n = bridge.poll(t, (t * 1000) as i64, &latest, out).map_err(|_| ())?;
@@ -295,10 +339,13 @@ async fn ros_session(
     }
 }
 
-/// The application: one step per millisecond; parameters persisted every 100 ms when changed.
+/// The applications: one step per millisecond (the gateway's, then the base controller's if it
+/// runs here, else the latest of its outputs from the bus); parameters persisted every 100 ms
+/// when changed.
 #[embassy_executor::task]
 async fn run(
     mut app: App<'static>,
+    mut base: Base,
     mut leds: [Output<'static>; 4],
     mut flash: ParamFlash,
     mut trial: Trial,
@@ -314,10 +361,17 @@ async fn run(
         let c = app.step(now, &Sample { status: led_status(), net });
         let (status, battery, imu) = (app.status(&net), app.battery(), app.imu());
         let mirrored = app.mirrored();
-        cortex_m::interrupt::free(|cs| {
-            let l = LATEST.borrow(cs);
-            l.set(Latest { status: Some(status), battery, imu, mirrored, ..l.get() });
-        });
+        let (odom, proximity) = match &mut base {
+            Base::Here(b) => {
+                b.step(now);
+                let ((x, y, theta), (vx, vy, wz)) = (b.pose(), b.velocity());
+                (Some(Odometry { x, y, theta, vx, vy, wz }), b.ranges())
+            }
+            Base::Elsewhere(r) => r.latest(),
+        };
+        let status = Some(status);
+        let latest = Latest { status, battery, imu, mirrored, odom, proximity };
+        cortex_m::interrupt::free(|cs| LATEST.borrow(cs).set(latest));
         let [status, bus, fault, link] = &mut leds;
         for (out, on, active_low) in [
             (status, c.led_status, board::LED_STATUS_ACTIVE_LOW),
@@ -432,17 +486,33 @@ async fn main(spawner: Spawner) {
     app.register(&mut node).unwrap();
     node.set_update_sink(update::sink(regions.bank1_region3, shared_state));
     node.set_firmware(update::running_image(on_trial));
-    let cmd_vel = CMD_VEL.build("cmd_vel", Twist2D::default(), Class::NonRealTime).unwrap();
-    node.export(cmd_vel.remote).unwrap();
+    // The base controller here, or `cmd_vel` on the bus for the node that runs it.
+    let (base_app, cmd_vel) = if params::base_controller(&PARAMS, 0) {
+        let ik_period_us = base::params::ik_period_us(&BaseParams);
+        let ends = BASE.build(base::Names::from_params(&BaseParams), ik_period_us);
+        let cmd_vel = ends.cmd_local;
+        static BASE_PARAMS: BaseParams = BaseParams;
+        let b = base::App::new(ends, &BASE_PARAMS);
+        b.register(&mut node).unwrap();
+        (Base::Here(b), cmd_vel)
+    } else {
+        let c = CMD_VEL.build(base::names::CMD_VEL, Twist2D::default(), Class::NonRealTime);
+        let c = c.unwrap();
+        node.export(c.remote).unwrap();
+        let remote = REMOTE_BASE.build(base::Names::from_params(&BaseParams).ranges);
+        remote.register(&mut node).unwrap();
+        (Base::Elsewhere(remote), c.publisher)
+    };
     let running_after_us = u64::from(STARTING_HEARTBEATS) * u64::from(config.heartbeat_period_us);
     for irq in [interrupt::CAN1_RX0, interrupt::CAN1_RX1, interrupt::TIM2] {
         irq.set_priority(Priority::P1);
     }
-    interrupt::USART3.set_priority(Priority::P0);
+    interrupt::TIM5.set_priority(Priority::P0);
     let can = BxCan::new(can, pac::CAN1, 1_000_000);
+    let timer = SlotTimer::new(p.TIM5);
     BUS_EXECUTOR
-        .start(interrupt::USART3)
-        .spawn(bus(NODE.init(node), can, running_after_us))
+        .start(interrupt::TIM5)
+        .spawn(bus(NODE.init(node), can, timer, running_after_us))
         .unwrap();
 
     // The network.
@@ -482,7 +552,7 @@ async fn main(spawner: Spawner) {
     if let Some(router) = net.zenoh {
         spawner.spawn(zenoh(stack, router, net.ros_domain, zid_of(uid), cmd_vel)).unwrap();
     }
-    spawner.spawn(run(app, leds, flash, trial, stack)).unwrap();
+    spawner.spawn(run(app, base_app, leds, flash, trial, stack)).unwrap();
 }
 
 #[panic_handler]

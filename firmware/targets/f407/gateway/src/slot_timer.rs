@@ -1,0 +1,121 @@
+//! The TDMA slot timer on the gateway: module-core's (firmware/targets/f103/module-core/src/
+//! slot_timer.rs) on the F407's TIM5. Slot boundaries come from a compare of TIM5, whose
+//! interrupt runs the bus executor at once, so the path from the boundary to the mailbox
+//! request is one interrupt and the node's `slot_tick` — not embassy's timer queue and a second
+//! interrupt to pend the executor: the base controller's HRT setpoints leave in their slots as
+//! a module's HRT frames do (docs/rtcan.md "The slot timer on a module").
+//!
+//! TIM5 counts the time driver's 1 MHz ticks (TIM2, same APB1 timer clock and prescaler), so a
+//! slot boundary in the node's µs is a compare value less a constant offset, measured once at
+//! start; both counters are 32-bit here. The two prescalers run at a fixed phase to each other:
+//! the offset may be one tick off, a constant bias below 1 µs, not jitter.
+
+use core::future::poll_fn;
+use core::task::Poll;
+
+use embassy_stm32::interrupt;
+use embassy_stm32::pac;
+use embassy_stm32::peripherals::TIM5;
+use embassy_stm32::time::Hertz;
+use embassy_stm32::timer::low_level::Timer;
+use embassy_stm32::Peri;
+use embassy_sync::waitqueue::AtomicWaker;
+use embassy_time::{Instant, TICK_HZ};
+
+use crate::BUS_EXECUTOR;
+
+const _: () = assert!(TICK_HZ == 1_000_000, "the slot timer counts the time driver's µs ticks");
+
+/// Furthest ahead a compare is set: three quarters of the 32-bit counter, so that a target is
+/// never mistaken for one a wrap earlier.
+const MAX_AHEAD_TICKS: u64 = 0xC000_0000;
+
+/// The bus task waiting for the compare.
+static SLOT_WAKER: AtomicWaker = AtomicWaker::new();
+
+/// TIM5's compare on channel 1 as the bus's slot timer.
+pub struct SlotTimer {
+    /// Owns TIM5 (and keeps its clock enabled).
+    _tim: Timer<'static, TIM5>,
+    /// (time driver ticks − TIM5 count) mod 2³².
+    offset: u32,
+}
+
+impl SlotTimer {
+    /// Starts TIM5 at the time driver's tick rate, free-running over 32 bits, and relates it
+    /// to the node's clock.
+    pub fn new(tim: Peri<'static, TIM5>) -> Self {
+        let mut t = Timer::new(tim);
+        t.set_tick_freq(Hertz(TICK_HZ as u32));
+        let r = pac::TIM5;
+        r.arr().write_value(u32::MAX);
+        r.dier().write(|w| w.set_ccie(0, false));
+        t.start();
+        Self { _tim: t, offset: relate() }
+    }
+
+    /// Returns at the node's time `at` (µs), woken by the compare interrupt (at once if `at`
+    /// has passed).
+    pub async fn wait_until(&mut self, at: u64) {
+        let r = pac::TIM5;
+        loop {
+            let now = Instant::now().as_ticks();
+            if at <= now {
+                return;
+            }
+            let target = at.min(now + MAX_AHEAD_TICKS);
+            r.ccr(0).write_value((target as u32).wrapping_sub(self.offset));
+            r.sr().write(|w| {
+                w.0 = !0;
+                w.set_ccif(0, false);
+            });
+            r.dier().modify(|w| w.set_ccie(0, true));
+            // The counter may have passed the compare value while it was written.
+            if Instant::now().as_ticks() >= target {
+                r.dier().modify(|w| w.set_ccie(0, false));
+                continue;
+            }
+            poll_fn(|cx| {
+                SLOT_WAKER.register(cx.waker());
+                if r.dier().read().ccie(0) {
+                    Poll::Pending
+                } else {
+                    Poll::Ready(())
+                }
+            })
+            .await;
+            if target == at {
+                return;
+            }
+        }
+    }
+}
+
+/// (time driver ticks − TIM5 count) mod 2³², read between two equal readings of the clock.
+fn relate() -> u32 {
+    loop {
+        let before = Instant::now().as_ticks();
+        let cnt = pac::TIM5.cnt().read();
+        if Instant::now().as_ticks() == before {
+            return (before as u32).wrapping_sub(cnt);
+        }
+    }
+}
+
+/// The compare: wakes the bus task and runs the bus executor in this interrupt. (The executor
+/// also pends this interrupt when the task is woken; that second entry finds no compare and
+/// nothing to run.)
+#[interrupt]
+unsafe fn TIM5() {
+    let r = pac::TIM5;
+    if r.sr().read().ccif(0) && r.dier().read().ccie(0) {
+        r.dier().modify(|w| w.set_ccie(0, false));
+        r.sr().write(|w| {
+            w.0 = !0;
+            w.set_ccif(0, false);
+        });
+        SLOT_WAKER.wake();
+    }
+    // SAFETY: the interrupt is reserved for the bus executor (started in `main`).
+    unsafe { BUS_EXECUTOR.on_interrupt() }
+}
