@@ -60,7 +60,7 @@ def test_a_missing_file_and_bad_toml_name_the_file(tmp_path):
      "image = { workspace = \"targets/f103\", package = \"motor\"", "must be positive and within the STM32F103CB's"),
     ('package = "imu", mcu = "STM32F103CB"', 'package = "imu", mcu = "STM32F103C8"',
      'image = { workspace = "targets/f103", package = "imu"', "mcu 'STM32F103C8' is not a [mcu.*]"),
-    ('budget_ram = 65536, slot = "active" }', 'budget_ram = 65536, slot = "dfu" }',
+    ('budget_ram = 69632, slot = "active" }', 'budget_ram = 69632, slot = "dfu" }',
      'image = { workspace = "targets/f407"', "slot 'dfu' is not one of active"),
 ])
 def test_a_bad_entry_names_the_file_the_line_and_the_fix(tmp_path, old, new, anchor, expect):
