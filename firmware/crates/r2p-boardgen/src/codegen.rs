@@ -80,6 +80,14 @@ pub fn generate(board: &Board) -> String {
                 wl(w, format!("#[allow(dead_code)]\npub fn {f}(pin: Peri<'static, peripherals::{name}>) -> Input<'static> {{\n    Input::new(pin, Pull::{pull})\n}}"));
                 wl(w, format!("/// Whether {} is on when low.\n#[allow(dead_code)]\npub const {}_ACTIVE_LOW: bool = {active_low};\n", p.signal, p.signal));
             }
+            Mode::Analog => {
+                // `ADCx_INn`: the channel number, for code that programs the ADC's sequences.
+                let channel =
+                    p.function.as_deref().and_then(|f| f.rsplit_once("_IN")).map(|(_, n)| n);
+                if let Some(n) = channel.filter(|n| n.parse::<u8>().is_ok()) {
+                    wl(w, format!("/// {}: {name}'s ADC channel ({}).\n#[allow(dead_code)]\npub const {}_ADC_CHANNEL: u8 = {n};\n", p.signal, describe(p), p.signal));
+                }
+            }
             _ => {}
         }
     }
@@ -176,6 +184,17 @@ mod tests {
         assert!(src.contains("pub const LED_STATUS_ACTIVE_LOW: bool = true;"));
         assert!(src.contains("pub const BUS_EN_ACTIVE_LOW: bool = false;"));
         assert!(src.contains("pub const HSE_HZ: u32 = 8000000;"));
+    }
+
+    #[test]
+    fn analog_pins_name_their_adc_channel() {
+        // The motor's ADC sequence is programmed from these (targets/f103/motor/src/sensors.rs).
+        let b = Board::load(&boards_dir().join("motor.toml")).unwrap();
+        let src = generate(&b);
+        assert!(src.contains("pub const MOTOR_CURRENT_ADC_CHANNEL: u8 = 0;"), "{src}");
+        assert!(src.contains("pub const VMOT_SENSE_ADC_CHANNEL: u8 = 1;"), "{src}");
+        let b = Board::load(&boards_dir().join("proximity.toml")).unwrap();
+        assert_eq!(generate(&b).matches("_ADC_CHANNEL: u8 = ").count(), 4, "one per sensor");
     }
 
     #[test]

@@ -6,7 +6,8 @@
 //! individual edges. The current ripple around that average (at most Vs·T/(2L) ≈ 5 A
 //! peak-to-peak, locked anti-phase at zero duty, RE 35 at 24 V) is not modelled: it is
 //! symmetric about the average, which is what a current sample taken at the centre of a
-//! centre-aligned PWM period reads. Leg X's high side is on for duty dX of the period
+//! centre-aligned PWM period reads, as the motor image takes it (ADC1's injected group on
+//! TIM1's update events: firmware/targets/f103/motor/src/sensors.rs). Leg X's high side is on for duty dX of the period
 //! and its low side for the rest (TIM1 CHx / CHxN), except for a dead time td at each edge
 //! when both are off and the phase current picks the rail through a body diode: current
 //! leaving the leg pulls it low, current entering pulls it high. So a switching leg's average

@@ -63,8 +63,8 @@ fn break_input<P: BreakInputPin<TIM1, BkIn1, AfioRemap<0>>>(
 }
 
 impl Bridge {
-    /// TIM1 at [`PWM_HZ`], centre-aligned, with [`DEAD_TIME_NS`] and the break input armed; the
-    /// bridge starts off.
+    /// TIM1 at [`PWM_HZ`], centre-aligned, with [`DEAD_TIME_NS`] and the break input armed, its
+    /// update event as the ADC's trigger (TRGO); the bridge starts off.
     pub fn new(tim: Peri<'static, TIM1>, pins: Pins) -> Self {
         let pwm = ComplementaryPwm::new::<AfioRemap<0>>(
             tim,
@@ -96,6 +96,9 @@ impl Bridge {
         b.set(0, 0);
         b.pwm.enable(Channel::Ch1);
         b.pwm.enable(Channel::Ch2);
+        // TRGO on the update event: at the top and the bottom of the centre-aligned count, where
+        // ADC1 samples the motor current (sensors.rs).
+        pac::TIM1.cr2().modify(|w| w.set_mms(pac::timer::vals::Mms::UPDATE));
         take_break_flag();
         b
     }

@@ -76,7 +76,7 @@ async fn control(ep: Endpoints<'static>, io: &'static mut (Sensors, Bridge, Leds
     loop {
         ticker.next().await;
         let now = Instant::now().as_micros();
-        let (encoder_count, current_adc, vmot_adc) = sensors.read().await;
+        let (encoder_count, current_adc, vmot_adc) = sensors.read();
         let sample = Sample {
             encoder_count,
             current_adc,
