@@ -357,3 +357,21 @@ fn a_receiver_that_forgot_the_transfer_makes_it_begin_again_under_a_new_id() {
     assert_eq!((tx.phase(), tx.restarts, tx.progress().0), (Phase::Beginning, 1, 0));
     assert!(matches!(tx.poll(4), Some(Msg::Begin { id: 8, .. })), "a new transfer ID");
 }
+
+#[test]
+fn an_unanswered_block_is_sent_again_after_the_timeout_and_counted() {
+    let image = signed(1_000);
+    let mut tx = Sender::new(&image, 7, 1, 100);
+    let at = |received: u32| Status { id: 7, state: State::Receiving, received };
+    assert!(matches!(tx.poll(0), Some(Msg::Begin { .. })));
+    tx.on_status(&at(0), 1);
+    // Polled late with nothing in flight: no timeout, the first block goes, its clock starts.
+    assert!(matches!(tx.poll(500), Some(Msg::Block { offset: 0, .. })));
+    assert_eq!(tx.timeouts, 0, "nothing was in flight");
+    assert!(tx.poll(599).is_none(), "the window is full and the block within its timeout");
+    assert!(matches!(tx.poll(600), Some(Msg::Block { offset: 0, .. })), "sent again after it");
+    assert_eq!(tx.timeouts, 1);
+    assert!(tx.poll(699).is_none());
+    assert!(matches!(tx.poll(700), Some(Msg::Block { offset: 0, .. })));
+    assert_eq!(tx.timeouts, 2, "each timeout counted");
+}
