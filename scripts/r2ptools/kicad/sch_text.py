@@ -177,8 +177,9 @@ class Symbol:
             return None
         return _normal([self.lib_point(*p) for p in pts])
 
-    def pins(self) -> list[Seg]:
-        out = []
+    def _drawn_pins(self):
+        """Each visible pin with a line (a power symbol's has none: its graphics are the body),
+        and its two ends on the sheet: the connection point, then the body end."""
         for sub in self._units():
             for pin in sexpr.find_all(sub, "pin"):
                 if "hide" in pin[1:] or (sexpr.find(pin, "hide") is not None
@@ -186,11 +187,13 @@ class Symbol:
                     continue
                 x, y, a = _at(pin)
                 ln = float(sexpr.find(pin, "length")[1])
-                if ln == 0:              # a power symbol's pin: its graphics are the body
+                if ln == 0:
                     continue
                 ex, ey = x + ln * round(math.cos(math.radians(a))), y + ln * round(math.sin(math.radians(a)))
-                out.append((self.lib_point(x, y), self.lib_point(ex, ey)))
-        return out
+                yield pin, self.lib_point(x, y), self.lib_point(ex, ey)
+
+    def pins(self) -> list[Seg]:
+        return [(a, b) for _, a, b in self._drawn_pins()]
 
     def pin_numbers(self) -> list[Text]:
         """The library's pin numbers as eeschema draws them: centred on the pin, just above a
@@ -201,32 +204,21 @@ class Symbol:
         off = sexpr.find(names, "offset") if names else None
         outside = off is not None and float(off[1]) == 0 and not _hidden(self.lib, "pin_names")
         out = []
-        for sub in self._units():
-            for pin in sexpr.find_all(sub, "pin"):
-                if "hide" in pin[1:] or (sexpr.find(pin, "hide") is not None
-                                         and str(sexpr.find(pin, "hide")[1]) == "yes"):
-                    continue
-                x, y, a = _at(pin)
-                ln = float(sexpr.find(pin, "length")[1])
-                if ln == 0:
-                    continue
-                num = sexpr.find(pin, "number")
-                size, *_ = _effects(num)
-                (ax, ay) = self.lib_point(x, y)
-                (bx, by) = self.lib_point(x + ln * round(math.cos(math.radians(a))),
-                                          y + ln * round(math.sin(math.radians(a))))
-                mx, my = (ax + bx) / 2, (ay + by) / 2
-                x0, y0, x1, y1 = text_box(str(num[1]), size, False, False, "center", "center", ink=True)
-                gap = 0.1016 + DEFAULT_PEN / 2
-                side = 1 if outside else -1
-                if abs(ay - by) < 1e-6:           # level: above the line
-                    dy = side * (gap + (y1 - y0) / 2)
-                    box, vertical = (mx + x0, my + dy + y0, mx + x1, my + dy + y1), False
-                else:                              # upright: left of the line, reading upwards
-                    w, h = y1 - y0, x1 - x0
-                    dx = side * (gap + w / 2)
-                    box, vertical = (mx + dx - w / 2, my - h / 2, mx + dx + w / 2, my + h / 2), True
-                out.append(Text(f"{self.ref} pin {num[1]}", box, vertical, owner=self.ref))
+        for pin, (ax, ay), (bx, by) in self._drawn_pins():
+            num = sexpr.find(pin, "number")
+            size, *_ = _effects(num)
+            mx, my = (ax + bx) / 2, (ay + by) / 2
+            x0, y0, x1, y1 = text_box(str(num[1]), size, False, False, "center", "center", ink=True)
+            gap = 0.1016 + DEFAULT_PEN / 2
+            side = 1 if outside else -1
+            if abs(ay - by) < 1e-6:           # level: above the line
+                dy = side * (gap + (y1 - y0) / 2)
+                box, vertical = (mx + x0, my + dy + y0, mx + x1, my + dy + y1), False
+            else:                              # upright: left of the line, reading upwards
+                w, h = y1 - y0, x1 - x0
+                dx = side * (gap + w / 2)
+                box, vertical = (mx + dx - w / 2, my - h / 2, mx + dx + w / 2, my + h / 2), True
+            out.append(Text(f"{self.ref} pin {num[1]}", box, vertical, owner=self.ref))
         return out
 
     def fields(self) -> list[Text]:
