@@ -770,6 +770,12 @@ pub(crate) mod tests {
             assert_eq!(seen, [true; 4], "the samples hold every kind of reply");
         }
 
+        fn the_longest_update_fills_a_management_message_exactly() {
+            let data = heapless::Vec::from_slice(&[7u8; UPDATE_MAX]).unwrap();
+            let mut buf = [0u8; ENCODED_MAX];
+            assert_eq!(Message::Update { target: 1, data }.encode(&mut buf), Ok(ENCODED_MAX));
+        }
+
         fn heartbeat_layout_matches_spec() {
             let mut buf = [0u8; ENCODED_MAX];
             let n = samples()[0].encode(&mut buf).unwrap();
