@@ -27,7 +27,7 @@ import sys
 
 from pathlib import Path
 
-from . import ROOT, bench_ros2, bench_update, firmware, qemu
+from . import ROOT, bench_ros2, bench_update, firmware, qemu, slotlead
 
 PLOT = ROOT / "docs" / "img" / "bench-pubsub-cortex-m3.png"
 # The paper's figure for the original middleware on a 72 MHz Cortex-M3, one subscriber:
@@ -416,6 +416,10 @@ def main() -> int:
           f"over the direct call; jitter ≥ {(ihi - ilo) / 72:.1f} µs at 72 MHz from the path "
           f"(≤ {2 * (ihi - ilo) / 72:.1f} µs at 2 cycles per instruction), plus the longest "
           f"critical section and a bit time of CAN start-of-frame quantisation")
+
+    print("\n=== the slot lead per MCU (QEMU, -icount: the path built for each core; r2ptools.slotlead)")
+    if slotlead.main() != 0:
+        print("a SlotPath constant of r2p-node no longer gives the measured lead: measure it again")
 
     print("\n=== host: messages per second, higher is better (this machine, median of 7)")
     print(f"{'subscribers':>11} {'R2P':>12} {'embassy-sync':>13} {'ratio':>6}")

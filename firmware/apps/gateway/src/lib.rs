@@ -43,12 +43,8 @@ use r2p_node::NodeConfig;
 /// The module's name: its node's name and its topics' prefix.
 pub const NAME: &str = "gateway";
 
-/// The node configuration: the standby sync master (rank 1, after the PSU's 0), the modules'
-/// slot lead.
-pub fn node_config(uid: [u8; 12]) -> NodeConfig {
-    NodeConfig {
-        rank: Some(1),
-        slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
-        ..NodeConfig::new(uid, NAME)
-    }
+/// The node configuration: the standby sync master (rank 1, after the PSU's 0), with the slot
+/// lead of the MCU it runs on (the F407's: `r2p_node::CORTEX_M4_SLOT_PATH.lead_us(SYSCLK_HZ)`).
+pub fn node_config(uid: [u8; 12], slot_lead_us: u32) -> NodeConfig {
+    NodeConfig { rank: Some(1), slot_lead_us, ..NodeConfig::new(uid, NAME) }
 }

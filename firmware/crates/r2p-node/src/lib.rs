@@ -73,7 +73,8 @@ mod unslotted_tests;
 mod update_tests;
 
 pub use node::{
-    Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats, MODULE_SLOT_LEAD_US,
+    Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats, SlotPath,
+    CORTEX_M3_SLOT_PATH, CORTEX_M4_SLOT_PATH, MODULE_SLOT_LEAD_US,
 };
 pub use params::{NoParams, Param, ParamStore, RamParams, Typed};
 pub use remote::{Export, Import, ImportError, RemotePublisher, RemoteSubscriber};

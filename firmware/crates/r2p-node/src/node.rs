@@ -41,7 +41,9 @@ mod stats;
 mod tdma;
 mod topics;
 
-pub use config::{NodeConfig, MODULE_SLOT_LEAD_US};
+pub use config::{
+    NodeConfig, SlotPath, CORTEX_M3_SLOT_PATH, CORTEX_M4_SLOT_PATH, MODULE_SLOT_LEAD_US,
+};
 pub use error::NodeError;
 pub use events::{Event, EVENT_QUEUE};
 pub use hrt::{HrtState, MASTER_STREAMS};

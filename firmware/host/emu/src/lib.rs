@@ -118,12 +118,13 @@ pub type App<'a, N> = Box<dyn FnMut(Micros, &mut N) + 'a>;
 /// computes from the controller's counter capture and its receive-interrupt stamp.
 pub type SimPort = r2p_vbus::BxCanPort;
 
-/// µs from a board's clock read to its frame's mailbox request: the module's slot path from
-/// the compare interrupt (`make bench`, QEMU slot-path image: 1 984–2 084 instructions,
-/// 27.6–28.9 µs at 72 MHz and one cycle per instruction), its longest rounded up. Every
-/// emulated frame reaches its mailbox this much after the node's tick; the boards' firmware
-/// ticks [`r2p_node::MODULE_SLOT_LEAD_US`] (the shortest path) before each boundary.
-pub const SLOT_PATH_US: u64 = 29;
+/// µs from an F103 module's clock read to its frame's mailbox request: its slot path from the
+/// compare interrupt ([`r2p_node::CORTEX_M3_SLOT_PATH`], 1 979–2 084 instructions, 27.5–28.9 µs
+/// at 72 MHz and one cycle per instruction), the longest rounded up. Every emulated frame of a
+/// board added with [`Sim::add_board`] reaches its mailbox this much after the node's tick; the
+/// boards' firmware ticks [`r2p_node::MODULE_SLOT_LEAD_US`] (the shortest path) before each
+/// boundary. Boards on another MCU (the F407 gateway) take theirs: [`Sim::add_board_on`].
+pub const SLOT_PATH_US: u64 = r2p_node::CORTEX_M3_SLOT_PATH.longest_us(72_000_000) as u64;
 
 /// CPU time a board's firmware lost since the last call, ns: what its flash took (on the
 /// F103 the CPU stalls while a page is erased or a half-word programmed).
@@ -233,14 +234,26 @@ impl<'a, N: Runtime> Sim<'a, N> {
         self.resetter = Some(resetter);
     }
 
-    /// Adds a board: `node` on port `port`, with application step `app` (if any). Returns the
-    /// board's index. Its first tick is at the current time.
+    /// Adds an F103 board: `node` on port `port`, with application step `app` (if any). Returns
+    /// the board's index. Its first tick is at the current time.
     pub fn add_board(&mut self, node: N, port: usize, app: Option<App<'a, N>>) -> usize {
+        self.add_board_on(node, port, app, SLOT_PATH_US)
+    }
+
+    /// Adds a board whose slot path takes `slot_path_us` from its tick to its frame's mailbox
+    /// request (its MCU's: `boards::Mcu::slot_path_us`).
+    pub fn add_board_on(
+        &mut self,
+        node: N,
+        port: usize,
+        app: Option<App<'a, N>>,
+        slot_path_us: u64,
+    ) -> usize {
         assert!(self.boards.iter().all(|b| b.port.port().index() != port), "port {port} taken");
         let bit_rate = self.bus.config().bit_rate;
         self.boards.push(Board {
             node,
-            port: SimPort::new(self.bus.port(port), bit_rate).with_load_latency(SLOT_PATH_US),
+            port: SimPort::new(self.bus.port(port), bit_rate).with_load_latency(slot_path_us),
             app,
             tap: None,
             stall: None,

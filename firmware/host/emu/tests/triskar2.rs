@@ -384,3 +384,38 @@ fn the_gateway_takes_over_as_master_and_hrt_setpoints_keep_flowing() {
     let pose = r.world.borrow().pose();
     assert!(pose.x > 0.1, "the base kept driving: {pose:?}");
 }
+
+#[test]
+fn the_gateways_hrt_setpoints_start_at_their_slot_boundaries_with_the_f407s_lead() {
+    use r2p_emu::boards::Mcu;
+    use r2p_vbus::EventKind;
+    use rtcan::{Laxity, SyncFrame};
+    let mut r = EmuRobot::build(robot_file()).unwrap();
+    r.sim.run_until(2 * S);
+    let g = r.board("gateway").unwrap();
+    let cycle = CycleConfig { cycle_us: r.robot.bus.cycle_us, ..CycleConfig::DEFAULT };
+    // The F407's slot timer fires its lead (11 µs) before each boundary; its path (13 µs) puts
+    // the frame in the mailbox 2 µs after it. The F103's 27 µs would start it 14 µs early,
+    // in the previous slot.
+    let slack_ns = (Mcu::F407.slot_path_us() - u64::from(Mcu::F407.slot_lead_us())) * 1_000;
+    assert_eq!(slack_ns, 2_000);
+    let (mut sync_at, mut checked) = (None, 0);
+    for e in r.sim.bus().trace() {
+        let EventKind::Sent { start_ns, frame, .. } = e.kind else { continue };
+        if SyncFrame::from_frame(&frame).is_ok() {
+            sync_at = Some(start_ns);
+        } else if let (Some(sync), true) =
+            (sync_at, e.port == g && frame.id().laxity == Laxity::HRT)
+        {
+            let into_cycle = start_ns - sync;
+            let slot = (0..cycle.slots)
+                .rev()
+                .find(|&s| u64::from(cycle.slot_offset_us(s)) * 1_000 <= into_cycle)
+                .unwrap();
+            let late = into_cycle - u64::from(cycle.slot_offset_us(slot)) * 1_000;
+            assert!(late <= slack_ns, "HRT frame {late} ns into slot {slot}, at {start_ns} ns");
+            checked += 1;
+        }
+    }
+    assert!(checked >= 150, "the base's setpoints went out: {checked} HRT frames in 2 s");
+}

@@ -45,11 +45,45 @@ pub struct NodeConfig {
     pub slot_lead_us: u32,
 }
 
-/// The modules' slot lead: the F103's slot path at 72 MHz, from the compare interrupt to the
-/// HRT frame's mailbox request, 1 984–2 084 instructions under QEMU (`make bench`, the
-/// slot-path image), 27.6–28.9 µs at one cycle per instruction; the shortest, rounded down, so
-/// that a frame never reaches its mailbox before its boundary.
-pub const MODULE_SLOT_LEAD_US: u32 = 27;
+/// The slot path's length in instructions, from the slot timer's compare interrupt to the HRT
+/// frame's mailbox request (the node in a task of an interrupt executor, as module-core's and
+/// the gateway's slot timers run it): the shortest and the longest of 400 slots under QEMU
+/// (`make bench`, the slot-path image, `-icount`), built for the core it runs on.
+/// `tests/test_slot_lead.py` measures both again and fails when a lead or the emulator's path
+/// would change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SlotPath {
+    /// The shortest path (instructions).
+    pub min_instructions: u32,
+    /// The longest path (instructions).
+    pub max_instructions: u32,
+}
+
+/// The slot path built for the F103's Cortex-M3 (thumbv7m).
+pub const CORTEX_M3_SLOT_PATH: SlotPath =
+    SlotPath { min_instructions: 1_979, max_instructions: 2_084 };
+/// The slot path built for the F407's Cortex-M4F (thumbv7em, hard float).
+pub const CORTEX_M4_SLOT_PATH: SlotPath =
+    SlotPath { min_instructions: 1_984, max_instructions: 2_089 };
+
+impl SlotPath {
+    /// The slot lead for a core clocked at `sysclk_hz` (µs): the shortest path at one cycle per
+    /// instruction (no core runs faster; flash wait states only add), rounded down, so that a
+    /// frame never reaches its mailbox before its boundary.
+    pub const fn lead_us(self, sysclk_hz: u32) -> u32 {
+        (self.min_instructions as u64 * 1_000_000 / sysclk_hz as u64) as u32
+    }
+
+    /// The longest path at `sysclk_hz` and one cycle per instruction, rounded up (µs): what the
+    /// emulator takes from a board's tick to its frame's mailbox request.
+    pub const fn longest_us(self, sysclk_hz: u32) -> u32 {
+        (self.max_instructions as u64 * 1_000_000).div_ceil(sysclk_hz as u64) as u32
+    }
+}
+
+/// The F103 modules' slot lead: [`CORTEX_M3_SLOT_PATH`] at 72 MHz, 27.5–28.9 µs, so 27 µs. The
+/// F407 gateway's is [`CORTEX_M4_SLOT_PATH`] at 168 MHz, 11 µs (`SlotPath::lead_us`).
+pub const MODULE_SLOT_LEAD_US: u32 = CORTEX_M3_SLOT_PATH.lead_us(72_000_000);
 
 impl NodeConfig {
     /// Defaults: heartbeat every 100 ms, subscription retried after 300 ms, reassembly timeout
@@ -70,5 +104,30 @@ impl NodeConfig {
             free_slots: FreeSlots::Merged,
             slot_lead_us: 0,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_mcu_leads_by_its_shortest_slot_path_rounded_down() {
+        // 1 979 / 72 = 27.5 µs; 1 984 / 168 = 11.8 µs.
+        assert_eq!(MODULE_SLOT_LEAD_US, 27);
+        assert_eq!(CORTEX_M4_SLOT_PATH.lead_us(168_000_000), 11);
+        // Exactly on a microsecond: not rounded.
+        let p = SlotPath { min_instructions: 144, max_instructions: 144 };
+        assert_eq!(p.lead_us(72_000_000), 2);
+        assert_eq!(p.longest_us(72_000_000), 2);
+    }
+
+    #[test]
+    fn the_emulated_path_is_the_longest_rounded_up() {
+        // 2 084 / 72 = 28.9 µs; 2 089 / 168 = 12.4 µs.
+        assert_eq!(CORTEX_M3_SLOT_PATH.longest_us(72_000_000), 29);
+        assert_eq!(CORTEX_M4_SLOT_PATH.longest_us(168_000_000), 13);
+        let p = SlotPath { min_instructions: 145, max_instructions: 145 };
+        assert_eq!(p.longest_us(72_000_000), 3);
     }
 }

@@ -25,6 +25,7 @@ use embedded_storage::nor_flash::{
     ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
 };
 use r2p_boot::layout::{FlashMap, Partition, STM32F103CB, STM32F407VG};
+use r2p_node::{SlotPath, CORTEX_M3_SLOT_PATH, CORTEX_M4_SLOT_PATH};
 use r2p_world::BoardKind;
 
 /// The MCUs the emulated boards have.
@@ -34,6 +35,34 @@ pub enum Mcu {
     F103,
     /// The gateway's STM32F407VG.
     F407,
+}
+
+impl Mcu {
+    /// Its core clock as the firmware configures it (Hz): the boards' `sysclk_hz`.
+    pub const fn sysclk_hz(self) -> u32 {
+        match self {
+            Mcu::F103 => 72_000_000,
+            Mcu::F407 => 168_000_000,
+        }
+    }
+
+    /// The slot path built for its core (instructions, measured under QEMU).
+    pub const fn slot_path(self) -> SlotPath {
+        match self {
+            Mcu::F103 => CORTEX_M3_SLOT_PATH,
+            Mcu::F407 => CORTEX_M4_SLOT_PATH,
+        }
+    }
+
+    /// The slot lead its firmware configures (µs): the shortest path at its clock.
+    pub const fn slot_lead_us(self) -> u32 {
+        self.slot_path().lead_us(self.sysclk_hz())
+    }
+
+    /// How long its slot path takes in the emulator (µs): the longest at its clock.
+    pub const fn slot_path_us(self) -> u64 {
+        self.slot_path().longest_us(self.sysclk_hz()) as u64
+    }
 }
 
 /// What an MCU's flash is: its erase units, their times, its program unit and time, and the

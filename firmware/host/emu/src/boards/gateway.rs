@@ -19,7 +19,7 @@ use r2p_msgs::Twist2D;
 use r2p_node::Param;
 use rtcan::{CanController, Micros};
 
-use super::{leak, load_params, node, persist, Booted, Ctx, Leds};
+use super::{leak, load_params, node, persist, Booted, Ctx, Leds, Mcu};
 use crate::PortTap;
 
 /// Number of the gateway node's parameters.
@@ -72,7 +72,7 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
     let link = leak(BusLink::new());
     let mut gw = r2p_app_gateway::App::new(r2p_app_gateway::Endpoints::leak(), link);
     // The standby master: rank 1 after the PSU.
-    let config = r2p_app_gateway::node_config(ctx.module.uid.0);
+    let config = r2p_app_gateway::node_config(ctx.module.uid.0, Mcu::F407.slot_lead_us());
     let mut n = node(config, &ctx, p)?;
     // `cmd_vel` to the base controller here, or on the bus for the node that runs it.
     let cmd_local: &'static Publisher<'static, Twist2D> = match &base {

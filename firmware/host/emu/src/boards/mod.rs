@@ -47,7 +47,7 @@ pub type BoardNode = Node<'static, 8, 16, 64, 16, 64>;
 
 use crate::on_layout;
 use chip::ChipLayout;
-pub use chip::{BoardChip, TimedFlash as BoardFlash};
+pub use chip::{BoardChip, Mcu, TimedFlash as BoardFlash};
 
 /// What the robot-level application computed, for tests, plots and tools.
 #[derive(Clone, Debug, Default)]
@@ -157,12 +157,12 @@ fn node(
     params: &'static dyn ParamStore,
 ) -> Result<BoardNode, String> {
     let name: &'static str = Box::leak(ctx.module.name.clone().into_boxed_str());
-    // Every board runs the modules' slot timer (the emulated port models its path).
+    // Every board runs its MCU's slot timer (the emulated port models its path: `Sim::add_board_on`).
     let config = NodeConfig {
         uid: ctx.module.uid.0,
         name,
         cycle: ctx.cycle,
-        slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
+        slot_lead_us: Mcu::of(ctx.module.kind()).slot_lead_us(),
         ..config
     };
     BoardNode::new(config, params).map_err(|e| format!("node: {e:?}"))

@@ -1,0 +1,51 @@
+"""Each MCU's slot lead matches its slot path measured under QEMU (scripts/r2ptools/slotlead.py):
+a lead longer than the shortest path puts HRT frames in their mailbox before their boundary, a
+shorter one sends them late; the emulator's path is the longest."""
+import functools
+
+import pytest
+
+from r2ptools import slotlead
+
+
+@pytest.fixture(scope="module")
+def measured(monkeypatch_module):
+    """Measures each core's path once for the module's tests."""
+    m = functools.cache(slotlead.measure)
+    monkeypatch_module.setattr(slotlead, "measure", m)
+    return m
+
+
+@pytest.fixture(scope="module")
+def monkeypatch_module():
+    with pytest.MonkeyPatch.context() as mp:
+        yield mp
+
+
+def test_the_constants_give_the_measured_leads(measured, capsys):
+    assert slotlead.main() == 0, capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "STM32F103 (modules)" in out and " 72 MHz  27 µs     29 µs" in out
+    assert "STM32F407 (gateway)" in out and "168 MHz  11 µs     13 µs" in out
+
+
+def test_the_f407_path_is_measured_on_its_own_core(measured):
+    m3, m4 = measured("cortex-m3"), measured("cortex-m4")
+    # The same source for another core: a few instructions apart, not the same image.
+    assert m3 != m4 and abs(m3.min_instructions - m4.min_instructions) < 50
+
+
+def test_a_stale_constant_is_caught_with_what_to_do(measured, tmp_path, monkeypatch, capsys):
+    src = slotlead.CONFIG_RS.read_text()
+    stale = src.replace("pub const CORTEX_M4_SLOT_PATH: SlotPath = SlotPath { min_instructions: 1_984",
+                        "pub const CORTEX_M4_SLOT_PATH: SlotPath = SlotPath { min_instructions: 4_600")
+    assert stale != src
+    (tmp_path / "config.rs").write_text(stale)
+    monkeypatch.setattr(slotlead, "CONFIG_RS", tmp_path / "config.rs")
+    assert slotlead.main() == 1
+    assert "CORTEX_M4_SLOT_PATH gives 27/13 µs: measure it again" in capsys.readouterr().out
+
+
+def test_a_missing_constant_is_named():
+    with pytest.raises(RuntimeError, match="no `pub const CORTEX_M7_SLOT_PATH: SlotPath"):
+        slotlead.constant("CORTEX_M7_SLOT_PATH")
