@@ -320,6 +320,33 @@ def test_other_r2p_topics_are_ros_topics_of_their_r2p_msgs_type(ros):
     assert state.output_on and state.bus_voltage == pytest.approx(bus["bus_voltage"], abs=0.05)
 
 
+def test_with_the_base_controller_on_the_host_ros_still_drives_the_robot_through_the_gateway(built, tmp_path):
+    """`[base] controller = "host"`: the gateway runs no base; /cmd_vel goes on the bus to the
+    node that does, and /odom comes back from it (apps/gateway/src/remote_base.rs)."""
+    robot = tmp_path / "triskar2-host.toml"
+    text = TRISKAR2.read_text().split("[[teleop]]")[0]
+    robot.write_text(text.replace('kind = "omni"', 'kind = "omni"\ncontroller = "host"', 1))
+    assert 'controller = "host"' in robot.read_text()
+    port = free_port()
+    router = Router(port)
+    sim = SocketcandProcess([str(R2P), "sim", str(robot), "--realtime", "--zenoh", f"tcp/127.0.0.1:{port}"],
+                            "r2p sim")
+    peer = Peer(port)
+    try:
+        start = wait_for("/odom", lambda: peer.samples_since(time.monotonic() - 0.5))[-1][0].pose.pose.position
+        t0 = time.monotonic()
+        peer.drive(1.2, vx=0.3)
+        during = [m for m, _ in peer.samples_since(t0)]
+        assert 0.25 < max(m.twist.twist.linear.x for m in during) < 0.4
+        moved = during[-1].pose.pose.position
+        assert moved.x - start.x > 0.2 and abs(moved.y - start.y) < 0.05, (start, moved)
+        assert during[-1].header.frame_id == "odom"
+    finally:
+        peer.close()
+        sim.kill()
+        router.close()
+
+
 def test_the_gateways_tokens_go_when_it_goes(ros):
     """Last (it stops the robot): `ros2 node list` forgets a gateway that is switched off."""
     peer = ros["peer"]
