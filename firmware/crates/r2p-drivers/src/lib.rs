@@ -6,6 +6,9 @@
 //! - [`lsm6dso`]: ST LSM6DSO 6-axis IMU (accelerometer + gyroscope) over I2C or SPI — probe,
 //!   configure output data rate and full scale, read gyro + accel + temperature in one
 //!   auto-incremented burst, convert to SI units with the datasheet sensitivities.
+//! - [`lis3mdl`]: ST LIS3MDL 3-axis magnetometer over I2C or SPI (4-wire) — probe, configure
+//!   ultra-high-performance mode, rate and full scale, read field and temperature in one
+//!   burst, convert to µT with the datasheet sensitivities.
 //! - [`rangers`]: analog rangers (Sharp GP2Y0A21/GP2Y0A02 infrared, MaxBotix LV-MaxSonar-EZ):
 //!   their datasheet transfer curves, voltage to distance and back, shared by the proximity
 //!   firmware and the world model that emulates the sensors.
@@ -25,6 +28,8 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod lis3mdl;
 pub mod lsm6dso;
 pub mod rangers;
+pub mod register_bus;
 pub mod tfmini;

@@ -234,15 +234,8 @@ impl Default for Config {
     }
 }
 
-/// Register access over some bus.
-pub trait RegisterBus {
-    /// The bus's error.
-    type Error;
-    /// Writes `value` to register `reg`.
-    fn write_register(&mut self, reg: u8, value: u8) -> Result<(), Self::Error>;
-    /// Reads `buf.len()` consecutive registers from `reg` (needs IF_INC, set at reset).
-    fn read_registers(&mut self, reg: u8, buf: &mut [u8]) -> Result<(), Self::Error>;
-}
+/// Register access over some bus (here `read_registers` needs IF_INC, set at reset).
+pub use crate::register_bus::RegisterBus;
 
 /// I2C address, set by the SA0 pin.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -114,7 +114,7 @@ impl I2c for SimI2c {
                     let mut data = bytes.iter();
                     if previous_was_write != Some(true) {
                         if let Some(&p) = data.next() {
-                            t.pointer = p;
+                            t.pointer = dev.i2c_pointer(p);
                         }
                     }
                     for &b in data {

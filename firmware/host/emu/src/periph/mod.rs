@@ -3,7 +3,8 @@
 //! device ([`spi::SimSpi`], `embedded_hal::spi::SpiDevice`) and a UART ([`uart::SimUart`],
 //! `embedded_io::{Read, ReadReady, Write}`), so a sensor driver (`r2p-drivers`) runs
 //! unchanged against them. Devices on them are models of real parts fed by the world:
-//! [`lsm6dso::Lsm6dsoModel`] (IMU registers, samples from [`r2p_world::imu`]) and
+//! [`lsm6dso::Lsm6dsoModel`] (IMU registers, samples from [`r2p_world::imu`]),
+//! [`lis3mdl::Lis3mdlModel`] (magnetometer registers) and
 //! [`tfmini::TfminiModel`] (LiDAR frames, from [`r2p_world::lidar`]).
 //!
 //! Register devices implement [`registers::RegisterDevice`]; the I2C and SPI models turn bus
@@ -13,6 +14,7 @@
 //! new simulated peripheral".
 
 pub mod i2c;
+pub mod lis3mdl;
 pub mod lsm6dso;
 pub mod registers;
 pub mod spi;

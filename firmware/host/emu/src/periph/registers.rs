@@ -20,4 +20,14 @@ pub trait RegisterDevice {
     /// The register after `reg` in a multi-byte access: `reg + 1` with auto-increment on,
     /// `reg` itself with it off.
     fn next_register(&self, reg: u8) -> u8;
+    /// The register an SPI command addresses, given the command less its read bit (7): bits
+    /// 6:0 on most parts; parts with an increment bit there (ST's MS, bit 6) take it.
+    fn spi_address(&mut self, command: u8) -> u8 {
+        command
+    }
+    /// The register an I2C sub-address byte points at: the byte itself on most parts; parts
+    /// that take their increment from its MSB take it.
+    fn i2c_pointer(&mut self, sub_address: u8) -> u8 {
+        sub_address
+    }
 }

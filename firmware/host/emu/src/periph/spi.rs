@@ -59,7 +59,7 @@ impl ErrorType for SimSpi {
 fn shift(dev: &mut dyn RegisterDevice, state: &mut State, mosi: u8) -> u8 {
     match *state {
         State::Command => {
-            let reg = mosi & !READ_BIT;
+            let reg = dev.spi_address(mosi & !READ_BIT);
             *state = if mosi & READ_BIT != 0 { State::Read(reg) } else { State::Write(reg) };
             0x00
         }
