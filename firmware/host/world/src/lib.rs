@@ -30,6 +30,7 @@ pub mod imu;
 pub mod kinematics;
 pub mod lidar;
 mod linalg;
+pub mod magnetic;
 pub mod motor;
 pub mod noise;
 pub mod obstacles;

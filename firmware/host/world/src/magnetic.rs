@@ -1,0 +1,232 @@
+//! The magnetic field a magnetometer on the base measures (issue 21): the Earth's field at the
+//! robot's site, turned into the base frame by its heading, distorted by the robot's own iron,
+//! plus the sensor's noise.
+//!
+//! **Frames.** The world is east-north-up (x east, y north, z up: ROS REP 103); the base's
+//! heading θ is its x axis's angle from east, counter-clockwise ([`crate::geometry::Pose`]).
+//! The sensor sits flat at the base's mount, turned by ψ about z, as the IMU does
+//! ([`crate::imu`]); the field is uniform over the base, so its position does not matter.
+//!
+//! **The Earth's field** from its three elements, as geomagnetic models give them (e.g. NOAA's
+//! World Magnetic Model): total intensity F, inclination I (positive down, the northern
+//! hemisphere) and declination D (magnetic north east of true north, positive):
+//!
+//! ```text
+//! B_enu = F · (cos I · sin D,  cos I · cos D,  −sin I)
+//! ```
+//!
+//! **The robot's iron** (what a calibration removes): soft iron S (a 3 × 3 matrix: the robot's
+//! ferrous parts bend and scale the field, fixed to the base) and hard iron h (a field of its
+//! own: magnets, magnetised steel, DC currents), both in the base frame:
+//! B_base = S · Rz(−θ) · B_enu + h. Then B_sensor = Rz(−ψ) · B_base + noise.
+//!
+//! **Sensor errors**: white Gaussian noise of σ per axis at the sensor's output. ST's
+//! LIS3MDL datasheet (DocID024204, table 3) gives its RMS noise in ultra-high-performance mode;
+//! the value used here, 0.32 µT (3.2 mgauss) on each axis, is NOT VERIFIED against that table
+//! (it was not readable here). Its zero-gauss offset is part of the hard iron a calibration
+//! finds. Not modelled: sensitivity and cross-axis errors of the die, temperature drift, the
+//! floor's steel, motors' fields that change with their current, tilt.
+
+use crate::geometry::Pose;
+use crate::noise::Noise;
+
+const DEG: f64 = std::f64::consts::PI / 180.0;
+
+/// The Earth's field at a site.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EarthField {
+    /// Total intensity F, µT.
+    pub intensity_ut: f64,
+    /// Inclination I (dip), degrees, positive down.
+    pub inclination_deg: f64,
+    /// Declination D, degrees, positive when magnetic north is east of true north.
+    pub declination_deg: f64,
+}
+
+impl EarthField {
+    /// Milan (Politecnico di Milano, where R2P and Triskar2 were built), approximately, for
+    /// 2026: F ≈ 47.4 µT, I ≈ 60°, D ≈ +3.3° (NOT VERIFIED: NOAA's World Magnetic Model
+    /// calculator was not reachable here; a robot file will give its own site).
+    pub const MILAN: EarthField =
+        EarthField { intensity_ut: 47.4, inclination_deg: 60.0, declination_deg: 3.3 };
+
+    /// The field in the world's east-north-up frame, µT.
+    pub fn enu(&self) -> [f64; 3] {
+        let (i, d) = (self.inclination_deg * DEG, self.declination_deg * DEG);
+        let h = self.intensity_ut * i.cos();
+        [h * d.sin(), h * d.cos(), -self.intensity_ut * i.sin()]
+    }
+}
+
+/// The robot's own distortion of the field, in the base frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Iron {
+    /// Hard iron h, µT.
+    pub hard_ut: [f64; 3],
+    /// Soft iron S (row-major).
+    pub soft: [[f64; 3]; 3],
+}
+
+impl Iron {
+    /// No distortion.
+    pub const NONE: Iron =
+        Iron { hard_ut: [0.0; 3], soft: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] };
+
+    /// `S · b + h`.
+    pub fn apply(&self, b: [f64; 3]) -> [f64; 3] {
+        let s = &self.soft;
+        [0, 1, 2].map(|r| s[r][0] * b[0] + s[r][1] * b[1] + s[r][2] * b[2] + self.hard_ut[r])
+    }
+}
+
+/// A magnetometer's error figures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MagParams {
+    /// White noise σ per axis at the output, µT.
+    pub noise_ut: f64,
+    /// Die temperature, °C.
+    pub temperature_c: f64,
+}
+
+impl MagParams {
+    /// ST LIS3MDL in ultra-high-performance mode (σ NOT VERIFIED: see the module's doc).
+    pub const LIS3MDL: MagParams = MagParams { noise_ut: 0.32, temperature_c: 30.0 };
+    /// An ideal sensor: for tests of the geometry.
+    pub const IDEAL: MagParams = MagParams { noise_ut: 0.0, temperature_c: 25.0 };
+}
+
+/// The field around the base and one magnetometer on it, with its own noise stream.
+#[derive(Clone, Debug)]
+pub struct Magnetometer {
+    /// Its error figures.
+    pub params: MagParams,
+    /// Its pose in the base frame (z up).
+    pub mount: Pose,
+    /// The Earth's field at the site.
+    pub earth: EarthField,
+    /// The robot's iron.
+    pub iron: Iron,
+    noise: Noise,
+}
+
+impl Magnetometer {
+    /// A magnetometer at `mount` on a base at a site with field `earth` and iron `iron`; its
+    /// noise is stream `stream` of `seed`.
+    pub fn new(
+        params: MagParams,
+        mount: Pose,
+        earth: EarthField,
+        iron: Iron,
+        seed: u64,
+        stream: u64,
+    ) -> Self {
+        Self { params, mount, earth, iron, noise: Noise::new(seed, stream) }
+    }
+
+    /// What it reads without noise with the base at heading `heading_rad` (from east,
+    /// counter-clockwise), µT in the sensor's axes.
+    pub fn expected(&self, heading_rad: f64) -> [f64; 3] {
+        let base = self.iron.apply(rotate_z(self.earth.enu(), -heading_rad));
+        rotate_z(base, -self.mount.theta)
+    }
+
+    /// One sample with the base at heading `heading_rad`.
+    pub fn measure(&mut self, heading_rad: f64) -> [f64; 3] {
+        let sigma = self.params.noise_ut;
+        self.expected(heading_rad).map(|b| b + self.noise.gaussian(sigma))
+    }
+}
+
+/// `v` turned by `angle` about z.
+fn rotate_z(v: [f64; 3], angle: f64) -> [f64; 3] {
+    let (s, c) = angle.sin_cos();
+    [c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]]
+}
+
+/// The compass heading a level sensor's field gives (radians, clockwise from magnetic north,
+/// of the sensor's x axis, in (−π, π]): what a tilt-free e-compass computes.
+pub fn magnetic_heading(b: [f64; 3]) -> f64 {
+    b[1].atan2(b[0])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ideal(earth: EarthField, iron: Iron, mount: Pose) -> Magnetometer {
+        Magnetometer::new(MagParams::IDEAL, mount, earth, iron, 1, 0)
+    }
+
+    fn wrap(a: f64) -> f64 {
+        (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+    }
+
+    #[test]
+    fn the_field_points_north_and_down_with_its_intensity() {
+        let b =
+            EarthField { intensity_ut: 50.0, inclination_deg: 60.0, declination_deg: 0.0 }.enu();
+        assert!(b[0].abs() < 1e-12 && (b[1] - 25.0).abs() < 1e-9 && (b[2] + 43.301).abs() < 1e-3);
+        let e = EarthField::MILAN.enu();
+        assert!(((e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt() - 47.4).abs() < 1e-9);
+        assert!(e[0] > 0.0, "declination east: magnetic north leans east");
+    }
+
+    #[test]
+    fn a_level_compass_reads_the_heading_from_magnetic_north_clockwise() {
+        let m = ideal(EarthField::MILAN, Iron::NONE, Pose::default());
+        let d = EarthField::MILAN.declination_deg * DEG;
+        for deg in [0.0f64, 30.0, 90.0, 135.0, 180.0, 270.0, 359.0] {
+            // The base faces `deg` clockwise from magnetic north: θ from east, CCW.
+            let theta = std::f64::consts::FRAC_PI_2 - d - deg * DEG;
+            let h = magnetic_heading(m.expected(theta));
+            assert!(wrap(h - deg * DEG).abs() < 1e-9, "{deg}°: read {}°", h / DEG);
+        }
+    }
+
+    #[test]
+    fn the_mount_turns_the_reading_and_hard_iron_shifts_it() {
+        let quarter = Pose { theta: std::f64::consts::FRAC_PI_2, ..Pose::default() };
+        let flat = ideal(EarthField::MILAN, Iron::NONE, Pose::default()).expected(0.3);
+        let turned = ideal(EarthField::MILAN, Iron::NONE, quarter).expected(0.3);
+        // The sensor's x is the base's y: it reads the base's y component.
+        assert!((turned[0] - flat[1]).abs() < 1e-9 && (turned[1] + flat[0]).abs() < 1e-9);
+        let iron = Iron { hard_ut: [10.0, -5.0, 2.0], ..Iron::NONE };
+        let shifted = ideal(EarthField::MILAN, iron, Pose::default()).expected(0.3);
+        for i in 0..3 {
+            assert!((shifted[i] - flat[i] - iron.hard_ut[i]).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn soft_iron_bends_the_heading_a_compass_reads() {
+        // 20 % more sensitive along the base's x: headings between the axes are pulled to x.
+        let iron = Iron { soft: [[1.2, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], ..Iron::NONE };
+        let earth = EarthField { declination_deg: 0.0, ..EarthField::MILAN };
+        let m = ideal(earth, iron, Pose::default());
+        let theta = std::f64::consts::FRAC_PI_2 - 45.0 * DEG; // facing 45° east of north
+        let h = magnetic_heading(m.expected(theta)) / DEG;
+        assert!((h - (1.0f64 / 1.2).atan().to_degrees()).abs() < 1e-9, "{h}°");
+    }
+
+    #[test]
+    fn noise_has_its_sigma_and_the_same_seed_gives_the_same_samples() {
+        let mk = |seed| {
+            Magnetometer::new(
+                MagParams::LIS3MDL,
+                Pose::default(),
+                EarthField::MILAN,
+                Iron::NONE,
+                seed,
+                9,
+            )
+        };
+        let (mut a, mut b, mut c) = (mk(1), mk(1), mk(2));
+        let xa: Vec<[f64; 3]> = (0..4000).map(|_| a.measure(0.0)).collect();
+        let xb: Vec<[f64; 3]> = (0..4000).map(|_| b.measure(0.0)).collect();
+        assert_eq!(xa, xb);
+        assert_ne!(xa[0], c.measure(0.0));
+        let mean = a.expected(0.0);
+        let var = xa.iter().map(|s| (s[0] - mean[0]).powi(2)).sum::<f64>() / xa.len() as f64;
+        assert!((var.sqrt() - 0.32).abs() < 0.02, "σ {}", var.sqrt());
+    }
+}
