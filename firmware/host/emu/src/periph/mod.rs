@@ -4,7 +4,8 @@
 //! `embedded_io::{Read, ReadReady, Write}`), so a sensor driver (`r2p-drivers`) runs
 //! unchanged against them. Devices on them are models of real parts fed by the world:
 //! [`lsm6dso::Lsm6dsoModel`] (IMU registers, samples from [`r2p_world::imu`]),
-//! [`lis3mdl::Lis3mdlModel`] (magnetometer registers) and
+//! [`lis3mdl::Lis3mdlModel`] (magnetometer registers), [`lps22df::Lps22dfModel`] (barometer
+//! registers) and
 //! [`tfmini::TfminiModel`] (LiDAR frames, from [`r2p_world::lidar`]).
 //!
 //! Register devices implement [`registers::RegisterDevice`]; the I2C and SPI models turn bus
@@ -15,6 +16,7 @@
 
 pub mod i2c;
 pub mod lis3mdl;
+pub mod lps22df;
 pub mod lsm6dso;
 pub mod registers;
 pub mod spi;
