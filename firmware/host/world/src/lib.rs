@@ -3,8 +3,9 @@
 //! sensors, a wheeled base (three-wheel omni or differential) with its rigid-body dynamics, a
 //! battery discharging under the motors' load, the PSU's 5 V bus, and IR/ultrasonic rangers
 //! seeing 2-D obstacles through their datasheet transfer curves; an IMU feeling the base's
-//! motion ([`imu`]) and a single-point LiDAR ranging the obstacles ([`lidar`]), which the
-//! emulator's I2C/SPI/UART device models encode.
+//! motion ([`imu`]), the Earth's magnetic field with the robot's iron ([`magnetic`]), the
+//! air pressure at its altitude ([`pressure`]) and a single-point LiDAR ranging the obstacles
+//! ([`lidar`]), which the emulator's I2C/SPI/UART device models encode.
 //!
 //! A [`Robot`] is read from a robot file (`robots/*.toml`, format in `robots/README.md`);
 //! [`World::from_robot`] builds its world; [`World::advance_ns`] steps it in virtual time;
@@ -34,6 +35,7 @@ pub mod magnetic;
 pub mod motor;
 pub mod noise;
 pub mod obstacles;
+pub mod pressure;
 pub mod psu;
 pub mod ranger;
 pub mod robot_file;
