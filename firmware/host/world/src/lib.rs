@@ -4,7 +4,8 @@
 //! battery discharging under the motors' load, the PSU's 5 V bus, and IR/ultrasonic rangers
 //! seeing 2-D obstacles through their datasheet transfer curves; an IMU feeling the base's
 //! motion ([`imu`]), the Earth's magnetic field with the robot's iron ([`magnetic`]), the
-//! air pressure at its altitude ([`pressure`]) and a single-point LiDAR ranging the obstacles
+//! air pressure at its altitude ([`pressure`]), a GNSS receiver's fixes around the robot's
+//! origin ([`gnss`]) and a single-point LiDAR ranging the obstacles
 //! ([`lidar`]), which the emulator's I2C/SPI/UART device models encode.
 //!
 //! A [`Robot`] is read from a robot file (`robots/*.toml`, format in `robots/README.md`);
@@ -26,6 +27,7 @@ pub mod current_sensor;
 pub mod encoder;
 pub mod frontends;
 pub mod geometry;
+pub mod gnss;
 pub mod hbridge;
 pub mod imu;
 pub mod kinematics;
