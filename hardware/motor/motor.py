@@ -75,8 +75,8 @@ PLACES = {
     "R104": P(78.2, 1.5, 0), "C116": P(81.5, 1.5, 0), "D104": P(85.6, 1.5, 0),
     "C115": P(86.6, 7.6, 270), "R103": P(88.5, 5.0, 90), "C113": P(80.5, 14.9, 0),
     # its VDD regulator above leg B's high side, the collector on VMOT
-    "Q106": P(94.2, 3.0, 180), "R120": P(90.2, 3.0, 270), "D105": P(98.45, 3.0, 90),
-    "C118": P(100.35, 3.0, 90),
+    "Q106": P(94.2, 3.0, 180), "R120": P(90.2, 3.0, 90), "D105": P(98.45, 3.0, 270),
+    "C118": P(100.35, 3.0, 270),
     # the enable inverter and the over-current window comparators in the core's free band
     # (3.3 V logic beside the MCU and the over-voltage comparator)
     "Q105": P(37.8, 40.0, 0), "R115": P(34.0, 40.0, 0),
@@ -230,28 +230,36 @@ def driver_phase_links() -> tuple[list[Track], list[Via]]:
 
 
 REGULATOR_LINKS = (
+    # Q106's pads (SOT-89, turned 180°): 1 emitter at (96.15, 4.5), 3 base at (96.15, 1.5), the
+    # collector tab between them (NXP BCP56_BCX56_BC56PA Rev. 9, Table 3: SOT89 1 E, 2 C, 3 B)
     # VMOT: two vias in Q106's collector tab into the In2.Cu plane; R120's VMOT pad onto the tab
-    ("VMOT", [(90.2, 2.225), (92.6, 2.6)], 0.4),
-    # VG: R120 → under the tab → Q106's base → D105's cathode → C118
-    ("DRV_VG", [(90.2, 3.775), (90.2, 5.3), (96.15, 5.3), (96.15, 4.5), (98.45, 4.65)], 0.3),
-    ("DRV_VG", [(98.45, 4.65), (100.35, 3.775)], 0.3),
+    ("VMOT", [(90.2, 3.825), (92.6, 3.4)], 0.4),
+    ("VMOT", [(93.2, 3.0), (92.8, 3.4), (92.6, 3.4)], 0.3),
+    # VG: R120 → along the board edge → Q106's base → D105's cathode → C118
+    ("DRV_VG", [(90.2, 2.175), (90.2, 0.8), (96.15, 0.8), (96.15, 1.5)], 0.3),
+    ("DRV_VG", [(96.15, 1.5), (98.45, 1.35)], 0.3),
+    ("DRV_VG", [(98.45, 1.35), (100.35, 2.225)], 0.3),
     # GND: D105's anode and C118's ground pad to a via into In1.Cu
-    ("GND", [(98.45, 1.35), (100.35, 1.35), (100.35, 2.225)], 0.3),
-    ("GND", [(100.35, 1.35), (101.4, 1.35)], 0.3),
-    # VDD: Q106's emitter over its tab to D104's anode (the router takes it on to the driver)
-    ("DRV_VDD", [(96.15, 1.5), (96.15, 0.8), (87.25, 0.8), (87.25, 1.5)], 0.3),
+    ("GND", [(98.45, 4.65), (100.35, 4.65), (100.35, 3.775)], 0.3),
+    ("GND", [(100.35, 4.65), (101.4, 4.65)], 0.3),
+    # VDD: Q106's emitter to a via, on B.Cu above GATE_BH's via to D104's anode via (the router
+    # takes it on to the driver)
+    ("DRV_VDD", [(96.15, 4.5), (96.15, 5.55)], 0.3),
+    ("DRV_VDD", [(96.15, 5.55), (91.6, 5.55), (90.0, 3.95), (90.0, 0.9), (86.17, 0.9), (85.57, 1.5)],
+     0.3, "B.Cu"),
     # the supply-sense dividers' VMOT from C112's plane via down the column's left
     ("VMOT", [(101.3, 22.0), (102.0, 22.7), (102.0, 32.0), (103.225, 32.0)], 0.3),
     ("VMOT", [(102.0, 26.0), (103.225, 26.0)], 0.3),
 )
-REGULATOR_VIAS = (("VMOT", 93.2, 3.0), ("VMOT", 94.4, 3.0), ("GND", 101.4, 1.35))
+REGULATOR_VIAS = (("VMOT", 93.2, 3.0), ("VMOT", 94.4, 3.0), ("GND", 101.4, 4.65),
+                  ("DRV_VDD", 96.15, 5.55))
 """The driver's VDD regulator above leg B's high side, drawn: its parts sit between the board
 edge and Q103's tab, where the router left every one of its connections open (second route);
 and the VMOT feed of the VMOT_SENSE and over-voltage dividers, which it also left open."""
 
 
 def regulator_links() -> tuple[list[Track], list[Via]]:
-    return ([Track(net, pts, w) for net, pts, w in REGULATOR_LINKS],
+    return ([Track(net, pts, w, *layer) for net, pts, w, *layer in REGULATOR_LINKS],
             [Via(net, x, y, 0.6, 0.3) for net, x, y in REGULATOR_VIAS])
 
 
@@ -304,7 +312,7 @@ def ipc2221b_rules() -> str:
 
 
 def build(core: Sheet) -> Module:
-    s = Sheet(NAME, f"{TITLE}: 12-44 V, 20 A continuous H-bridge, encoder, Hall current sense")
+    s = Sheet(NAME, f"{TITLE}: 13-44 V, 20 A continuous H-bridge, encoder, Hall current sense")
     bus_tap(s, "+5V_MOD", at=BUS_TAP_PLACE)
     pins = {p: "" for p in core_mod.FREE_GPIO}
     pins.update(PINS)
@@ -313,7 +321,7 @@ def build(core: Sheet) -> Module:
     s.flags += ["VMOT", "DRV_VDD"]
 
     # input: XT60 male (pin 1 −, pin 2 +), fuse, TVS, bulk and the commutation-loop ceramics
-    s.part("J101", "XT60_M", {"1": "GND", "2": "VBAT"}, value="BATTERY 12-44V")
+    s.part("J101", "XT60_M", {"1": "GND", "2": "VBAT"}, value="BATTERY 13-44V")
     s.part("F102", "FUSE_30A", {"1": "VBAT", "2": "VMOT"})
     s.part("D101", "SMCJ45A", {"1": "VMOT", "2": "GND"})          # D_SMC pad 1 = cathode
     for i in range(4):
@@ -348,7 +356,7 @@ def build(core: Sheet) -> Module:
     s.part("D104", "1N4148W", {"A": "DRV_VDD", "K": "DRV_BOOT_B"})
     s.part("R105", "R_10k", {"1": "DRV_DEL", "2": "GND"})             # DEL: the shortest delays
     # VDD ≈ 12.4 V from VMOT: Q106 (BCX56-16, 80 V) follows D105's 13 V; R120 feeds the zener
-    # and the base (calc/motor.py: VDD at the 12 V minimum input, Q106's dissipation)
+    # and the base (calc/motor.py: VDD at the 13 V minimum input, Q106's dissipation)
     s.part("Q106", "BCX56", {"C": "VMOT", "B": "DRV_VG", "E": "DRV_VDD"})
     s.part("R120", "R_24k9", {"1": "VMOT", "2": "DRV_VG"})
     s.part("D105", "Z_13V", {"K": "DRV_VG", "A": "GND"})
@@ -425,7 +433,7 @@ def build(core: Sheet) -> Module:
                            "Q101", "Q102", "Q103", "Q104", "U102"))
     m.fiducials = list(FIDUCIALS)
     m.texts = frame_texts(NAME, REVISION) + [
-        Text("MOTOR SUPPLY 12-44V", 130.0, 19.3, 1.2, "B.SilkS"),
+        Text("MOTOR SUPPLY 13-44V", 130.0, 19.3, 1.2, "B.SilkS"),
         Text("+", 152.0, 20.2, 1.5, "B.SilkS"), Text("-", 152.0, 13.0, 1.5, "B.SilkS"),
         Text("BATTERY", 152.5, 30.0, 1.0, "B.SilkS"), Text("MOTOR", 80.5, 44.0, 1.0, "B.SilkS")]
     return m

@@ -154,7 +154,10 @@ _ITEMS = [
     ("HIP4082", "Driver_FET:HIP4082xB", "Package_SO:SOIC-16_3.9x9.9mm_P1.27mm", "HIP4082",
      "HIP4082IBZT"),
     ("1N4148W", "Diode:1N4148W", "Diode_SMD:D_SOD-123", "1N4148W", "1N4148W"),
-    ("BCX56", "Transistor_BJT:BCX56", "Package_TO_SOT_SMD:SOT-89-3", "BCX56-16", "BCX56-16"),
+    # BCX56 in SOT89 is pin 1 emitter, 2 collector, 3 base (NXP BCP56_BCX56_BC56PA Rev. 9,
+    # Table 3); KiCad 9's Transistor_BJT:BCX56 numbers it B-C-E (Q_NPN_BCE), which would swap
+    # base and emitter: the generic E-C-B symbol carries the datasheet's numbering
+    ("BCX56", "Transistor_BJT:Q_NPN_ECB", "Package_TO_SOT_SMD:SOT-89-3", "BCX56-16", "BCX56-16"),
     ("Z_13V", "Device:D_Zener", "Diode_SMD:D_SOD-123", "13V", "BZT52C13"),
     ("2N7002", "Transistor_FET:2N7002", "Package_TO_SOT_SMD:SOT-23", "2N7002", "2N7002"),
     ("LMV331", "Comparator:LMV331", "Package_TO_SOT_SMD:SOT-23-5", "LMV331", "LMV331IDBVR"),

@@ -12,8 +12,9 @@ the MOSFET's recovery charge) say so: they are what the first board must measure
 Sources: TI CSD19536KTT SLPS540C (MOSFET; electrical characteristics read on ti.com), Renesas
 HIP4082 FN3676 Rev 6.00 (gate driver: its front page read, the pin table is KiCad 9's
 Driver_FET:HIP4082xB symbol; the electrical tables were NOT read here and their figures say so),
-Infineon/Nexperia BCX56 and TI LMV331 (VDD regulator, over-current comparators: summaries, NOT
-VERIFIED), Allegro ACS725 (1.2 mΩ, 120 kHz read),
+NXP/Nexperia BCP56_BCX56_BC56PA Rev. 9 (Q106: Table 2 V_CEO, Table 3 SOT89 pinning 1 E 2 C 3 B,
+Table 8 h_FE), TI LMV331 (over-current comparators: summary, NOT VERIFIED), Allegro ACS725
+(1.2 mΩ, 120 kHz read),
 TI TLV3011 SBOS300C (comparator with 1.242 V reference), Littelfuse SMCJ series (TVS), Amass XT60
 (30 A), IPC-2221B §6.2 (conductor sizing equation), docs/bus.md §6 (200 mA per module, ground),
 firmware/targets/f103/motor/src/bridge.rs (PWM, dead time, sign-magnitude drive),
@@ -31,8 +32,9 @@ VIN_NOM = 36.0                # the paper: "DC motors up to 36 V"
 LIION_MAX = 4.20 * 10 * 1.01  # 10S Li-ion on a charger at +1 % (as calc/psu.py): 42.42 V
 LEAD_ACID_MAX = 3 * 14.7      # 3 × 12 V lead-acid at absorption charge (14.7 V per block, cold)
 VIN_MAX = max(LIION_MAX, LEAD_ACID_MAX)                  # 44.1 V: highest steady input
-VIN_MIN = 12.0                # below: the HIP4082's VDD (from VMOT through Q106) falls under its
-                              # 8.5 V recommended minimum (row "driver VDD at the minimum input")
+VIN_MIN = 13.0                # below: the HIP4082's VDD (from VMOT through Q106) falls under its
+                              # 8.5 V recommended minimum (row "driver VDD at the minimum input");
+                              # 12 V until Q106's h_FE was read: 63, not 100, at ~10 mA (below)
 I_CONT = 20.0                 # the paper: "a continuous 20 A current"
 I_PEAK = 28.0                 # peak: below the hardware over-current trip less the ripple (below)
 SENSE_RANGE_REQUIRED = 30.0   # issue 19: current sensor range ≥ ±30 A
@@ -94,9 +96,10 @@ C_BS_DC_BIAS = 0.6            # 470 nF 25 V X7R 0603 at ~12 V keeps ~60 %: estim
 # VDD regulator: Q106 BCX56-16 (80 V NPN, SOT-89) emitter follower on D105 (BZT52C13), R120 feeds both
 ZENER_V = (12.4, 13.0, 14.1)  # BZT52C13 V_Z (min, typ, max): NOT VERIFIED (the series' usual spread)
 VBE = (0.60, 0.65, 0.75)      # V: Q106's base-emitter voltage at ~10 mA (min, typ, max): estimate
-Q106_HFE_MIN = 100.0          # BCX56-16 h_FE min (its 150 mA class limit; NOT VERIFIED at 10 mA)
+Q106_HFE_MIN = 63.0           # BCX56 h_FE min at V_CE 2 V, I_C 5 mA (NXP BCP56_BCX56_BC56PA Rev. 9,
+                              # Table 8; the -16 selection's 100-250 is stated at 150 mA only)
 Q106_RTH_JA = 150.0           # °C/W, SOT-89 on a small collector pad: NOT VERIFIED (estimate)
-Q106_VCEO = 80.0              # V: BCX56 V_CEO (the BCX56/BCP56 family's 80 V class, NOT VERIFIED)
+Q106_VCEO = 80.0              # V: BCX56 V_CEO, open base (NXP BCP56_BCX56_BC56PA Rev. 9, Table 2)
 T_CORE_BAND = 60.0            # °C: board temperature at the core band at 20 A, 40 °C ambient: estimate
 # over-current: U105/U106 LMV331 on the ACS725's output, window from +3V3 (ratiometric like it)
 OC_SENS_TOL = 0.02            # ACS725 sensitivity error: NOT VERIFIED
@@ -495,7 +498,7 @@ def rows() -> list[Row]:
             TVS_VC <= DRV_VHS_ABS and vhb <= DRV_VHB_ABS,
             f"{DRV_VHS_ABS - TVS_VC:.1f} V margin; AHB/BHB {vhb:.1f} V ≤ {DRV_VHB_ABS:.0f} V"))
     add(Row(f"Q106 {'BCX56-16'} V_CE at the TVS clamp", f"{TVS_VC - vdd(TVS_VC, vdd_load(), 'min'):.1f} V",
-            f"≤ V_CEO {Q106_VCEO:.0f} V (NOT VERIFIED)", TVS_VC - vdd(TVS_VC, vdd_load(), "min") <= Q106_VCEO,
+            f"≤ V_CEO {Q106_VCEO:.0f} V (NXP Table 2)", TVS_VC - vdd(TVS_VC, vdd_load(), "min") <= Q106_VCEO,
             f"R120's 0603 then {TVS_VC - ZENER_V[0]:.0f} V (≤ {RES_0603_VMAX:.0f} V)"))
     add(Row("electrolytics at the TVS clamp", f"{TVS_VC:.1f} V", f"≤ surge {ELCAP_SURGE:.0f} V ({ELCAP_V:.0f} V rated)",
             TVS_VC <= ELCAP_SURGE and ov_hi <= ELCAP_V, f"at the trip {ov_hi / ELCAP_V:.0%} of rated"))
