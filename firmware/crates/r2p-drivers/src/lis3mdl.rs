@@ -339,3 +339,29 @@ impl<B: RegisterBus> Lis3mdl<B> {
         }))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rates_and_scales_are_the_datasheets() {
+        // DO codes 0..7: 0.625 Hz doubling to 80 Hz.
+        let hz: [f32; 8] = [0.625, 1.25, 2.5, 5.0, 10.0, 20.0, 40.0, 80.0];
+        for (code, want) in hz.iter().enumerate() {
+            assert_eq!(Odr::from_code(code as u8).hz(), *want);
+        }
+        assert_eq!(Scale::from_bits(0b10), Scale::Gauss12);
+        assert!((Scale::Gauss4.ut_per_lsb() - 0.014_616).abs() < 1e-6);
+        assert!((Scale::Gauss16.ut_per_lsb() - 0.058_445).abs() < 1e-6);
+    }
+
+    #[test]
+    fn control_bits_are_where_the_datasheet_puts_them() {
+        // CTRL_REG1 TEMP_EN bit 7; CTRL_REG2 SOFT_RST bit 2; CTRL_REG5 BDU bit 6; STATUS_REG
+        // ZYXDA bit 3, ZYXOR bit 7.
+        assert_eq!([CTRL1_TEMP_EN, CTRL2_SOFT_RST, CTRL5_BDU], [0x80, 0x04, 0x40]);
+        assert_eq!([STATUS_ZYXDA, STATUS_ZYXOR], [0x08, 0x80]);
+        assert_eq!([SPI_READ, SPI_INCREMENT, I2C_INCREMENT], [0x80, 0x40, 0x80]);
+    }
+}

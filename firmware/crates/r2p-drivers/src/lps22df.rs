@@ -306,3 +306,23 @@ impl<B: RegisterBus> Lps22df<B> {
         }))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rates_and_control_bits_are_the_datasheets() {
+        let hz: [f32; 9] = [0.0, 1.0, 4.0, 10.0, 25.0, 50.0, 75.0, 100.0, 200.0];
+        for (code, want) in hz.iter().enumerate() {
+            assert_eq!(Odr::from_code(code as u8).unwrap().hz(), *want);
+        }
+        assert_eq!(Odr::from_code(9), None);
+        assert_eq!(
+            [CTRL2_BDU, CTRL2_SWRESET, CTRL2_EN_LPFP, CTRL3_IF_ADD_INC],
+            [0x08, 0x04, 0x20, 0x01]
+        );
+        assert_eq!([STATUS_P_DA, STATUS_P_OR], [0x01, 0x10]);
+        assert_eq!((LSB_PER_HPA, LSB_PER_DEG_C), (4096.0, 100.0));
+    }
+}
