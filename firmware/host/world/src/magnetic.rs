@@ -198,6 +198,20 @@ mod tests {
     }
 
     #[test]
+    fn iron_is_the_soft_matrix_times_the_field_plus_the_hard_field() {
+        let iron = Iron {
+            hard_ut: [1.0, 2.0, 3.0],
+            soft: [[1.1, 0.2, -0.1], [0.3, 0.9, 0.05], [-0.2, 0.1, 1.2]],
+        };
+        let b = iron.apply([10.0, 20.0, -40.0]);
+        // Row by row: 11 + 4 + 4 + 1, 3 + 18 − 2 + 2, −2 + 2 − 48 + 3.
+        let want = [20.0, 21.0, -45.0];
+        for i in 0..3 {
+            assert!((b[i] - want[i]).abs() < 1e-12, "{b:?}");
+        }
+    }
+
+    #[test]
     fn soft_iron_bends_the_heading_a_compass_reads() {
         // 20 % more sensitive along the base's x: headings between the axes are pulled to x.
         let iron = Iron { soft: [[1.2, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], ..Iron::NONE };

@@ -302,6 +302,34 @@ mod tests {
         assert_eq!((dev.borrow().peek(CTRL_REG1), dev.borrow().peek(CTRL_REG5)), (0x10, 0));
     }
 
+    /// The model with one register that keeps its reset value (a stuck bit, a bus fault).
+    struct Stuck(Lis3mdlModel, u8);
+
+    impl RegisterDevice for Stuck {
+        fn read_register(&mut self, reg: u8) -> u8 {
+            self.0.read_register(reg)
+        }
+        fn write_register(&mut self, reg: u8, value: u8) {
+            if reg & 0x3F != self.1 {
+                self.0.write_register(reg, value);
+            }
+        }
+        fn next_register(&self, reg: u8) -> u8 {
+            self.0.next_register(reg)
+        }
+        fn spi_address(&mut self, command: u8) -> u8 {
+            self.0.spi_address(command)
+        }
+    }
+
+    #[test]
+    fn a_control_register_that_does_not_take_its_value_is_named() {
+        let mut mag = Lis3mdl::new_spi(SimSpi::new(shared(Stuck(Lis3mdlModel::new(), 0x23))));
+        let e = mag.init(Config::default()).unwrap_err();
+        assert_eq!(e, Error::ConfigNotApplied { register: 0x23, wrote: 0x0C, read: 0x00 });
+        assert!(e.to_string().contains("register 0x23 reads back 0x00 after writing 0x0c"), "{e}");
+    }
+
     #[test]
     fn fields_beyond_the_full_scale_saturate() {
         let mut m = Lis3mdlModel::new();
