@@ -31,6 +31,7 @@ pub mod kinematics;
 pub mod lidar;
 mod linalg;
 pub mod motor;
+pub mod motor_bus;
 pub mod noise;
 pub mod obstacles;
 pub mod psu;
