@@ -196,18 +196,30 @@ impl Cascade {
 
     /// The 1 kHz step: the duty (−`duty_limit`..`duty_limit`) that drives the current to its
     /// setpoint. The voltage is computed first (gains in V/A, independent of the supply), with
-    /// the back-EMF as feed-forward, then divided by the measured supply. The setpoint's braking
-    /// side is derated here, every millisecond, by the supply measured now (the bus can rise
-    /// by volts between two 200 Hz steps).
+    /// the back-EMF as feed-forward, then divided by the measured supply.
+    ///
+    /// The braking side of the setpoint is derated here, every millisecond, by the supply
+    /// measured now, and while it is derated it bounds the voltage too: turning forward, a
+    /// braking current of at most B needs v ≥ e − R·B. Braking into a supply that cannot take
+    /// it lifts the bulk capacitors by volts per millisecond; the PI alone would follow a
+    /// lowered bound only over several steps, the voltage bound holds the current to it from
+    /// this step on (the winding's L/R is 0.2 ms).
     pub fn inner(&mut self, cfg: &Config, m: &Measured) -> f32 {
         let (lo, hi) = bounds(cfg, m);
         self.current_ref = self.current_ref.clamp(lo, hi);
         let vbus = m.vbus.max(VBUS_MIN);
         let vmax = cfg.duty_limit * vbus;
         let emf = cfg.torque_constant * cfg.gear_ratio * m.speed_now;
+        let (mut vlo, mut vhi) = (-vmax, vmax);
+        if lo > -cfg.current_limit {
+            vlo = (emf + cfg.motor_resistance * lo).clamp(-vmax, vmax);
+        }
+        if hi < cfg.current_limit {
+            vhi = (emf + cfg.motor_resistance * hi).clamp(-vmax, vmax);
+        }
         let gains = Gains { kp: cfg.current_kp, ki: cfg.current_ki };
         let err = self.current_ref - m.current;
-        let v = self.current_pi.step(gains, err, INNER_DT_S, emf, -vmax, vmax);
+        let v = self.current_pi.step(gains, err, INNER_DT_S, emf, vlo, vhi);
         v / vbus
     }
 }
@@ -298,6 +310,33 @@ mod tests {
         assert!((c.current_ref() + 0.5 * cfg.current_limit).abs() < 1e-4, "{}", c.current_ref());
         c.outer(&cfg, Setpoint::Torque(100.0), &m(45.5));
         assert_eq!(c.current_ref(), cfg.current_limit);
+    }
+
+    #[test]
+    fn while_derated_the_braking_bound_bounds_the_voltage_at_once() {
+        let cfg = Config::DEFAULT;
+        let r = cfg.motor_resistance;
+        for dir in [1.0f32, -1.0] {
+            // Turning at 10 rad/s, asked to stop, the current not following (the PI winds to
+            // a strong braking voltage).
+            let m = |vbus| Measured { vbus, speed: 10.0 * dir, speed_now: 10.0 * dir, ..Default::default() };
+            let emf = cfg.torque_constant * cfg.gear_ratio * 10.0 * dir;
+            let mut c = Cascade::new();
+            c.outer(&cfg, Setpoint::Speed(0.0), &m(24.0));
+            let mut v = 0.0;
+            for _ in 0..20 {
+                v = c.inner(&cfg, &m(24.0)) * 24.0;
+            }
+            // Not derated: no voltage bound but the duty limit.
+            assert!((v - emf) * dir < -r * cfg.current_limit, "dir {dir}: {v} V vs e = {emf} V");
+            // Half-way: the voltage that holds half the limit's braking current, this step.
+            let v = c.inner(&cfg, &m(44.8)) * 44.8;
+            let want = emf - dir * r * 0.5 * cfg.current_limit;
+            assert!((v - want).abs() < 1e-3, "dir {dir}: {v} V vs {want} V");
+            // At the stop: no braking voltage at all, the back-EMF.
+            let v = c.inner(&cfg, &m(45.5)) * 45.5;
+            assert!((v - emf).abs() < 1e-3, "dir {dir}: {v} V vs {emf} V");
+        }
     }
 
     #[test]
