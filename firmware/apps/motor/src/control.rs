@@ -190,8 +190,7 @@ impl Cascade {
         let (lo, hi) = bounds(cfg, m);
         let err = self.speed_ref - m.speed;
         let p_err = cfg.speed_weight * self.speed_ref - m.speed;
-        self.current_ref =
-            self.speed_pi.step_weighted(gains, err, p_err, OUTER_DT_S, 0.0, lo, hi);
+        self.current_ref = self.speed_pi.step_weighted(gains, err, p_err, OUTER_DT_S, 0.0, lo, hi);
     }
 
     /// The 1 kHz step: the duty (−`duty_limit`..`duty_limit`) that drives the current to its
@@ -319,7 +318,12 @@ mod tests {
         for dir in [1.0f32, -1.0] {
             // Turning at 10 rad/s, asked to stop, the current not following (the PI winds to
             // a strong braking voltage).
-            let m = |vbus| Measured { vbus, speed: 10.0 * dir, speed_now: 10.0 * dir, ..Default::default() };
+            let m = |vbus| Measured {
+                vbus,
+                speed: 10.0 * dir,
+                speed_now: 10.0 * dir,
+                ..Default::default()
+            };
             let emf = cfg.torque_constant * cfg.gear_ratio * 10.0 * dir;
             let mut c = Cascade::new();
             c.outer(&cfg, Setpoint::Speed(0.0), &m(24.0));

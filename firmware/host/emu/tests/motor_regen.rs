@@ -37,7 +37,8 @@ fn attach(r: &mut EmuRobot) -> Tool {
         leak(Topic::new("motor1/state", WheelState::default()));
     let state = leak(Subscriber::new());
     topic.subscribe(state).unwrap();
-    let state_in = leak(RemotePublisher::new(leak(Publisher::new(topic, Class::NonRealTime)), topic));
+    let state_in =
+        leak(RemotePublisher::new(leak(Publisher::new(topic, Class::NonRealTime)), topic));
     let mut uid = [0u8; 12];
     uid[11] = 0x7D;
     let cycle = CycleConfig { cycle_us: r.robot.bus.cycle_us, ..CycleConfig::DEFAULT };
@@ -131,7 +132,11 @@ fn braking_into_a_supply_that_cannot_sink_trips_without_the_derating_and_not_wit
     );
     assert!(off.spin_before > 7.0, "{}", off.spin_before);
     assert!(off.peak_v >= OVER_VOLTAGE_TRIP_V, "the bus reached the trip: {:.2} V", off.peak_v);
-    assert!(off.faults.iter().any(|f| f & DRIVER_FAULT != 0), "DRV_FAULT latched: {:?}", off.faults);
+    assert!(
+        off.faults.iter().any(|f| f & DRIVER_FAULT != 0),
+        "DRV_FAULT latched: {:?}",
+        off.faults
+    );
 
     let on = spin_then_stop(36.0, 8, false);
     let seen = |bit: u8| on.faults.iter().filter(|f| *f & bit != 0).count();

@@ -513,7 +513,9 @@ fn the_current_sampled_at_the_pwm_centre_is_the_average_and_out_of_step_it_is_no
         (0..n).map(|_| f64::from(w.read_adc_now("motor1", "MOTOR_CURRENT").unwrap())).sum::<f64>()
             / n as f64,
     );
-    println!("average {truth:.3} A: at TIM1's update {centre:.3} A, a quarter period later {now:.3} A");
+    println!(
+        "average {truth:.3} A: at TIM1's update {centre:.3} A, a quarter period later {now:.3} A"
+    );
     assert!((centre - truth).abs() < tol, "triggered at the centre: {centre} vs {truth}");
     assert!((now - truth - half).abs() < tol, "at the pulse's end: {now} vs {truth} + {half}");
     // Half a period on (the top of the count, the middle of the low side's time): the average.
@@ -564,8 +566,8 @@ fn braking_into_a_supply_that_cannot_sink_charges_the_bulk_to_the_over_voltage_t
     assert!((OVER_VOLTAGE_TRIP_V..OVER_VOLTAGE_TRIP_V + 0.5).contains(&peak), "{peak}");
     assert!(battery_min >= 0.0, "the battery never took charge: {battery_min}");
     // VMOT_SENSE reads the bus, not the battery.
-    let vmot = mean_adc(&mut w, "motor2", "VMOT_SENSE", 2000) * ADC.lsb()
-        / frontends::VMOT_SENSE.ratio();
+    let vmot =
+        mean_adc(&mut w, "motor2", "VMOT_SENSE", 2000) * ADC.lsb() / frontends::VMOT_SENSE.ratio();
     assert!((vmot - w.motor_bus_voltage()).abs() < 0.15 * ADC.lsb() * 16.0 * 11.0, "{vmot}");
     assert!(vmot > w.supply_voltage() + 15.0, "{vmot} V over a {} V battery", w.supply_voltage());
 }
