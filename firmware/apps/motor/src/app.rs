@@ -429,6 +429,15 @@ impl<'a> App<'a> {
         Command { duty, bridge_enable: true, ..Command::OFF }
     }
 
+    /// The condition bits for the next state (beside the latched faults).
+    fn conditions(&self) -> Faults {
+        if self.regen_limited {
+            Faults::REGEN_LIMITED
+        } else {
+            Faults::NONE
+        }
+    }
+
     fn publish_state(&mut self, now_us: u64) {
         if now_us < self.next_publish_us {
             return;
@@ -442,7 +451,7 @@ impl<'a> App<'a> {
             position: self.m.position,
             speed: self.m.speed,
             current: self.current_filter.value().unwrap_or(0.0),
-            faults: self.faults.0 | if self.regen_limited { Faults::REGEN_LIMITED.0 } else { 0 },
+            faults: (self.faults | self.conditions()).0,
         };
         self.regen_limited = false;
         match self.ep.state.publisher.publish_with(|m| *m = state) {

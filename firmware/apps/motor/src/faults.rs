@@ -111,6 +111,7 @@ mod tests {
         for (bit, _, _) in Faults::ALL {
             assert_eq!(Faults::DISABLING.any(bit), bit != Faults::WATCHDOG);
         }
+        assert_eq!(Faults::REGEN_LIMITED.0, 0b10_0000, "bit 5, as WheelState.msg says");
         for (bit, _, _) in Faults::CONDITIONS {
             assert!(!Faults::DISABLING.any(bit), "a condition never stops the motor");
             assert!(Faults::ALL.iter().all(|(f, _, _)| !f.any(bit)), "its own bit");
