@@ -116,6 +116,8 @@ pub struct App<'a> {
     encoder_loss: Persistence,
     stop_since: Option<u64>,
     braked: bool,
+    /// VMOT was above `regen_start_v` at some step since the last state (its bit 5).
+    regen_limited: bool,
     applied_duty: f32,
     next_publish_us: u64,
     stats: Stats,
@@ -149,6 +151,7 @@ impl<'a> App<'a> {
             encoder_loss: Persistence::new(),
             stop_since: None,
             braked: false,
+            regen_limited: false,
             applied_duty: 0.0,
             next_publish_us: 0,
             stats: Stats::default(),
@@ -258,6 +261,9 @@ impl<'a> App<'a> {
         }
         self.m.position = self.scale.position(count);
         self.m.vbus = frontend::vmot_volts(s.vmot_adc);
+        let cfg = &self.cfg;
+        self.regen_limited |=
+            crate::control::regen_share(self.m.vbus, cfg.regen_start_v, cfg.regen_stop_v) < 1.0;
         self.zero = match self.zero {
             Zero::Calibrating { sum, n } => {
                 let sum = sum + u32::from(s.current_adc);
@@ -423,6 +429,15 @@ impl<'a> App<'a> {
         Command { duty, bridge_enable: true, ..Command::OFF }
     }
 
+    /// The condition bits for the next state (beside the latched faults).
+    fn conditions(&self) -> Faults {
+        if self.regen_limited {
+            Faults::REGEN_LIMITED
+        } else {
+            Faults::NONE
+        }
+    }
+
     fn publish_state(&mut self, now_us: u64) {
         if now_us < self.next_publish_us {
             return;
@@ -436,8 +451,9 @@ impl<'a> App<'a> {
             position: self.m.position,
             speed: self.m.speed,
             current: self.current_filter.value().unwrap_or(0.0),
-            faults: self.faults.0,
+            faults: (self.faults | self.conditions()).0,
         };
+        self.regen_limited = false;
         match self.ep.state.publisher.publish_with(|m| *m = state) {
             Some(_) => self.stats.states += 1,
             None => self.stats.pool_empty += 1,

@@ -26,6 +26,48 @@ pub const OUTER_DT_S: f32 = INNER_DT_S * OUTER_DIVIDER as f32;
 /// Below this motor supply (V) duty is computed as if it were this much (no division by ~0).
 pub const VBUS_MIN: f32 = 3.0;
 
+/// Share (0..1) of the braking current allowed at motor supply `vbus`: all of it up to
+/// `start`, falling linearly to none at `stop` (with `stop` ≤ `start`: all below `stop`, none
+/// from it on).
+///
+/// Why: the board has no brake chopper. Braking returns energy to the supply; when the supply
+/// cannot take it (a charger or bench supply that does not sink, a pulled battery lead), it
+/// charges the bulk capacitors (4 mF: 10 A of regenerated current lifts them 2.5 V per ms)
+/// until the over-voltage comparator coasts the bridge (46.4–49.2 V), leaving the motor
+/// uncontrolled. Cutting the braking current as VMOT nears the trip keeps the motor under
+/// control: it slows on friction and on what the supply's other loads take.
+pub fn regen_share(vbus: f32, start: f32, stop: f32) -> f32 {
+    if vbus >= stop {
+        0.0
+    } else if vbus <= start {
+        1.0
+    } else {
+        (stop - vbus) / (stop - start)
+    }
+}
+
+/// Bounds (lo, hi) of the current setpoint, A: ±`limit`, the braking side cut to `brake` A.
+/// Braking is a current against the rotation `speed`: only then can the supply receive power
+/// (V·I = (e + R·I)·I < 0 needs I against the back-EMF e), so a current with the speed's sign,
+/// or any current at standstill, returns nothing.
+pub fn current_bounds(limit: f32, brake: f32, speed: f32) -> (f32, f32) {
+    let brake = brake.min(limit);
+    if speed > 0.0 {
+        (-brake, limit)
+    } else if speed < 0.0 {
+        (-limit, brake)
+    } else {
+        (-limit, limit)
+    }
+}
+
+/// The current setpoint's bounds for the measurements `m`: the current limit, its braking side
+/// derated by the motor supply ([`regen_share`]).
+fn bounds(cfg: &Config, m: &Measured) -> (f32, f32) {
+    let share = regen_share(m.vbus, cfg.regen_start_v, cfg.regen_stop_v);
+    current_bounds(cfg.current_limit, share * cfg.current_limit, m.speed_now)
+}
+
 /// What the motor is asked to do (output shaft).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Setpoint {
@@ -128,11 +170,11 @@ impl Cascade {
             self.speed_pi.preset(self.current_ref);
             self.mode = Some(sp.mode());
         }
-        let limit = cfg.current_limit;
         match sp {
             Setpoint::Torque(t) => {
+                let (lo, hi) = bounds(cfg, m);
                 let amps = t / (cfg.torque_constant * cfg.gear_ratio);
-                self.current_ref = amps.clamp(-limit, limit);
+                self.current_ref = amps.clamp(lo, hi);
                 self.speed_ref = m.speed;
                 self.speed_pi.preset(self.current_ref);
             }
@@ -145,23 +187,38 @@ impl Cascade {
         let max = cfg.max_speed;
         self.speed_ref = w.clamp(-max, max);
         let gains = Gains { kp: cfg.speed_kp, ki: cfg.speed_ki };
-        let limit = cfg.current_limit;
+        let (lo, hi) = bounds(cfg, m);
         let err = self.speed_ref - m.speed;
         let p_err = cfg.speed_weight * self.speed_ref - m.speed;
-        self.current_ref =
-            self.speed_pi.step_weighted(gains, err, p_err, OUTER_DT_S, 0.0, -limit, limit);
+        self.current_ref = self.speed_pi.step_weighted(gains, err, p_err, OUTER_DT_S, 0.0, lo, hi);
     }
 
     /// The 1 kHz step: the duty (−`duty_limit`..`duty_limit`) that drives the current to its
     /// setpoint. The voltage is computed first (gains in V/A, independent of the supply), with
     /// the back-EMF as feed-forward, then divided by the measured supply.
+    ///
+    /// The braking side of the setpoint is derated here, every millisecond, by the supply
+    /// measured now, and while it is derated it bounds the voltage too: turning forward, a
+    /// braking current of at most B needs v ≥ e − R·B. Braking into a supply that cannot take
+    /// it lifts the bulk capacitors by volts per millisecond; the PI alone would follow a
+    /// lowered bound only over several steps, the voltage bound holds the current to it from
+    /// this step on (the winding's L/R is 0.2 ms).
     pub fn inner(&mut self, cfg: &Config, m: &Measured) -> f32 {
+        let (lo, hi) = bounds(cfg, m);
+        self.current_ref = self.current_ref.clamp(lo, hi);
         let vbus = m.vbus.max(VBUS_MIN);
         let vmax = cfg.duty_limit * vbus;
         let emf = cfg.torque_constant * cfg.gear_ratio * m.speed_now;
+        let (mut vlo, mut vhi) = (-vmax, vmax);
+        if lo > -cfg.current_limit {
+            vlo = (emf + cfg.motor_resistance * lo).clamp(-vmax, vmax);
+        }
+        if hi < cfg.current_limit {
+            vhi = (emf + cfg.motor_resistance * hi).clamp(-vmax, vmax);
+        }
         let gains = Gains { kp: cfg.current_kp, ki: cfg.current_ki };
         let err = self.current_ref - m.current;
-        let v = self.current_pi.step(gains, err, INNER_DT_S, emf, -vmax, vmax);
+        let v = self.current_pi.step(gains, err, INNER_DT_S, emf, vlo, vhi);
         v / vbus
     }
 }
@@ -196,6 +253,94 @@ mod tests {
         // 1 N·m at the output = 1 / (0.0302 × 15) = 2.208 A.
         c.outer(&cfg, Setpoint::Torque(1.0), &m);
         assert!((c.current_ref() - 2.207_506).abs() < 1e-5);
+    }
+
+    #[test]
+    fn the_braking_share_falls_linearly_from_start_to_stop() {
+        let share = |v| regen_share(v, 44.0, 46.0);
+        assert_eq!(share(24.0), 1.0);
+        assert_eq!(share(44.0), 1.0, "all of it up to the start");
+        assert_eq!(share(44.5), 0.75);
+        assert_eq!(share(45.0), 0.5);
+        assert_eq!(share(46.0), 0.0, "none from the stop on");
+        assert_eq!(share(52.0), 0.0);
+        // A stop at or below the start: a step at the stop, never a division by zero.
+        assert_eq!(regen_share(44.9, 45.0, 45.0), 1.0);
+        assert_eq!(regen_share(45.0, 45.0, 45.0), 0.0);
+        assert_eq!(regen_share(44.0, 46.0, 45.0), 1.0);
+        assert_eq!(regen_share(45.5, 46.0, 45.0), 0.0);
+        // The defaults: 44.1 V (the board's highest steady input) to 45.5 V.
+        let cfg = Config::DEFAULT;
+        assert_eq!((cfg.regen_start_v, cfg.regen_stop_v), (44.1, 45.5));
+    }
+
+    #[test]
+    fn only_the_current_against_the_rotation_is_derated() {
+        assert_eq!(current_bounds(10.0, 4.0, 3.0), (-4.0, 10.0), "turning forward: brake ≥ −4 A");
+        assert_eq!(current_bounds(10.0, 4.0, -3.0), (-10.0, 4.0), "turning backward");
+        assert_eq!(current_bounds(10.0, 4.0, 0.0), (-10.0, 10.0), "standstill returns nothing");
+        assert_eq!(current_bounds(10.0, 25.0, 3.0), (-10.0, 10.0), "never beyond the limit");
+        assert_eq!(current_bounds(10.0, 0.0, -1e-3), (-10.0, 0.0));
+    }
+
+    #[test]
+    fn a_high_supply_cuts_braking_in_every_mode_and_in_the_current_loop() {
+        let cfg = Config::DEFAULT;
+        // Turning forward at 10 rad/s, asked to stop: the speed loop wants −10 A.
+        let m = |vbus| Measured { vbus, speed: 10.0, speed_now: 10.0, ..Default::default() };
+        let mut c = Cascade::new();
+        c.outer(&cfg, Setpoint::Speed(0.0), &m(24.0));
+        assert_eq!(c.current_ref(), -cfg.current_limit);
+        // Half-way between start and stop: half the braking current, at the next 1 kHz step.
+        c.inner(&cfg, &m(44.8));
+        assert!((c.current_ref() + 0.5 * cfg.current_limit).abs() < 1e-4, "{}", c.current_ref());
+        // At the stop, none; the speed loop's integrator does not wind up against the bound.
+        for _ in 0..100 {
+            c.outer(&cfg, Setpoint::Speed(0.0), &m(45.5));
+            assert!(c.inner(&cfg, &m(45.5)) >= 0.0, "no braking voltage");
+            assert_eq!(c.current_ref(), 0.0);
+        }
+        // The supply falls back: braking again at once (the integrator held at the bound).
+        c.outer(&cfg, Setpoint::Speed(0.0), &m(30.0));
+        assert_eq!(c.current_ref(), -cfg.current_limit);
+        // Torque mode: a braking torque is derated, a driving one is not.
+        let mut c = Cascade::new();
+        c.outer(&cfg, Setpoint::Torque(-100.0), &m(44.8));
+        assert!((c.current_ref() + 0.5 * cfg.current_limit).abs() < 1e-4, "{}", c.current_ref());
+        c.outer(&cfg, Setpoint::Torque(100.0), &m(45.5));
+        assert_eq!(c.current_ref(), cfg.current_limit);
+    }
+
+    #[test]
+    fn while_derated_the_braking_bound_bounds_the_voltage_at_once() {
+        let cfg = Config::DEFAULT;
+        let r = cfg.motor_resistance;
+        for dir in [1.0f32, -1.0] {
+            // Turning at 10 rad/s, asked to stop, the current not following (the PI winds to
+            // a strong braking voltage).
+            let m = |vbus| Measured {
+                vbus,
+                speed: 10.0 * dir,
+                speed_now: 10.0 * dir,
+                ..Default::default()
+            };
+            let emf = cfg.torque_constant * cfg.gear_ratio * 10.0 * dir;
+            let mut c = Cascade::new();
+            c.outer(&cfg, Setpoint::Speed(0.0), &m(24.0));
+            let mut v = 0.0;
+            for _ in 0..20 {
+                v = c.inner(&cfg, &m(24.0)) * 24.0;
+            }
+            // Not derated: no voltage bound but the duty limit.
+            assert!((v - emf) * dir < -r * cfg.current_limit, "dir {dir}: {v} V vs e = {emf} V");
+            // Half-way: the voltage that holds half the limit's braking current, this step.
+            let v = c.inner(&cfg, &m(44.8)) * 44.8;
+            let want = emf - dir * r * 0.5 * cfg.current_limit;
+            assert!((v - want).abs() < 1e-3, "dir {dir}: {v} V vs {want} V");
+            // At the stop: no braking voltage at all, the back-EMF.
+            let v = c.inner(&cfg, &m(45.5)) * 45.5;
+            assert!((v - emf).abs() < 1e-3, "dir {dir}: {v} V vs {emf} V");
+        }
     }
 
     #[test]

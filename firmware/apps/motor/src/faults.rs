@@ -22,6 +22,17 @@ impl Faults {
     /// The current sensor's zero, calibrated at start-up, is off mid-scale by more than
     /// `frontend::HALL_ZERO_TOLERANCE`: sensor missing or broken, bridge disabled.
     pub const CURRENT_SENSOR: Self = Self(1 << 4);
+    /// Not a fault but a condition, in `WheelState.faults` beside them: VMOT was above
+    /// `regen_start_v` since the last state, so the braking current was derated
+    /// (`control::regen_share`). Never latched, no `MotorFault` event: it clears by itself once
+    /// VMOT falls (a charger or a supply that does not sink, a pulled battery lead).
+    pub const REGEN_LIMITED: Self = Self(1 << 5);
+    /// The condition bits: bit, name, what the motor does.
+    pub const CONDITIONS: [(Self, &'static str, &'static str); 1] = [(
+        Self::REGEN_LIMITED,
+        "regeneration limited: VMOT above `regen_start_v` (not latched)",
+        "braking current derated, none from `regen_stop_v`; clears when VMOT falls",
+    )];
     /// Every fault bit, for documentation and "clear all".
     pub const ALL: [(Self, &'static str, &'static str); 5] = [
         (Self::OVER_CURRENT, "over-current", "bridge disabled"),
@@ -99,6 +110,11 @@ mod tests {
     fn only_the_watchdog_leaves_the_bridge_on() {
         for (bit, _, _) in Faults::ALL {
             assert_eq!(Faults::DISABLING.any(bit), bit != Faults::WATCHDOG);
+        }
+        assert_eq!(Faults::REGEN_LIMITED.0, 0b10_0000, "bit 5, as WheelState.msg says");
+        for (bit, _, _) in Faults::CONDITIONS {
+            assert!(!Faults::DISABLING.any(bit), "a condition never stops the motor");
+            assert!(Faults::ALL.iter().all(|(f, _, _)| !f.any(bit)), "its own bit");
         }
     }
 }

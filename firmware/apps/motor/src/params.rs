@@ -106,6 +106,16 @@ params! {
     // side conducts (hardware/motor, calc/motor.py "bootstrap refresh"); 100 % would starve them
     20 DUTY_LIMIT duty_limit: f32 = 0.95, 0.05, 0.95, "",
         "Largest duty magnitude the current loop commands.";
+    // No brake chopper on the board (hardware/motor, decision 2): regenerated current that the
+    // supply cannot take charges the bulk capacitors, and the over-voltage comparator coasts the
+    // bridge at 46.4–49.2 V (calc/motor.py). The default start is the highest steady input,
+    // VIN_MAX 44.1 V (calc/motor.py: 10S Li-ion on a charger, 3 × 12 V lead-acid charging), so a
+    // charging battery is never derated; the default stop, 45.5 V, reads at most 46.4 V with the
+    // VMOT_SENSE divider's 1 % resistors (ratio 16 ± 1.9 %), below the trip's minimum.
+    21 REGEN_START_V regen_start_v: f32 = 44.1, 12.0, 52.8, "V",
+        "VMOT above which the braking (regenerative) current is derated, linearly to none at `regen_stop_v` (state bit 5 while derated): the board has no brake chopper and coasts at its 46.4–49.2 V over-voltage trip.";
+    22 REGEN_STOP_V regen_stop_v: f32 = 45.5, 12.0, 52.8, "V",
+        "VMOT at and above which no braking current is allowed (keep above `regen_start_v` and below the over-voltage trip's 46.4 V less the VMOT_SENSE divider's 1.9 % tolerance).";
 }
 
 /// The store's value as a Rust type.

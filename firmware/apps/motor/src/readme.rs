@@ -73,10 +73,10 @@ pub fn render() -> String {
     }
 
     let _ = writeln!(w, "\n### Faults\n");
-    let _ = writeln!(w, "Latched until a `FaultClear` whose `mask` has their bit (255: all).\n");
+    let _ = writeln!(w, "Latched until a `FaultClear` whose `mask` has their bit (255: all); bit 5 is a condition, set in `WheelState.faults` while it lasts.\n");
     let _ = writeln!(w, "| bit | fault | the motor |");
     let _ = writeln!(w, "|---|---|---|");
-    for (f, name, action) in Faults::ALL {
+    for (f, name, action) in Faults::ALL.iter().chain(&Faults::CONDITIONS) {
         let _ = writeln!(w, "| {} | {name} | {action} |", f.0.trailing_zeros());
     }
 

@@ -246,3 +246,42 @@ fn leds_show_calibration_running_bus_and_faults() {
     r.step();
     assert!(!r.last.leds[2]);
 }
+
+#[test]
+fn a_high_supply_derates_braking_and_sets_state_bit_5_until_it_falls() {
+    let mut r = Rig::calibrated();
+    r.hold(SPEED, 10.0, 300, |_| {});
+    assert!((r.speed() - 10.0).abs() < 0.2);
+    // The supply cannot take the braking energy and sits at `regen_stop_v` (45.5 V) for 200 ms:
+    // asked to stop, the motor gets no braking current and slows on its friction only.
+    r.motor.vbus = 45.5;
+    let mut bits = Vec::new();
+    let mut least: f64 = 0.0;
+    for k in 0..400u64 {
+        if k == 200 {
+            r.motor.vbus = 24.0;
+        }
+        if k % 10 == 0 {
+            r.send(SPEED, 0.0);
+        }
+        r.step();
+        if k < 200 {
+            least = least.min(r.motor.i);
+        }
+        if k == 199 {
+            assert!(r.speed() > 5.0, "still turning: {}", r.speed());
+        }
+        while let Some(s) = r.states.try_recv() {
+            bits.push((k, s.faults));
+        }
+    }
+    // The current loop held the current at its setpoint, 0 A: no braking, within its ripple.
+    assert!(least > -0.05, "braking current while the supply was high: {least:.3} A");
+    let flagged = |from: u64, to: u64| bits.iter().filter(move |(k, _)| (from..to).contains(k));
+    assert!(flagged(0, 200).all(|(_, f)| *f == Faults::REGEN_LIMITED.0), "{bits:?}");
+    assert!(flagged(210, 400).all(|(_, f)| *f == 0), "clears by itself: {bits:?}");
+    assert!(flagged(0, 400).count() >= 39, "100 Hz states: {bits:?}");
+    assert!(r.app.faults().is_empty() && r.take_events().is_empty(), "not latched, no event");
+    // Once the supply fell, braking resumed: the motor stopped.
+    assert!(r.speed().abs() < 0.2, "{}", r.speed());
+}

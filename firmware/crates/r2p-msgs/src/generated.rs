@@ -540,7 +540,7 @@ pub struct WheelState {
     pub speed: f32,
     /// A through the motor (`float32`, bytes 8..12)
     pub current: f32,
-    /// bit 0 over-current, 1 encoder loss, 2 watchdog, 3 driver fault, 4 current sensor (latched until cleared) (`uint8`, bytes 12..13)
+    /// bit 0 over-current, 1 encoder loss, 2 watchdog, 3 driver fault, 4 current sensor (latched until cleared); 5 regeneration limited (while VMOT is high, not latched) (`uint8`, bytes 12..13)
     pub faults: u8,
 }
 

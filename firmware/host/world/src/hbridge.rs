@@ -3,24 +3,23 @@
 //!
 //! Average-voltage model: the PWM period (50 µs at 20 kHz) is short against the winding's
 //! L/R (≈ 0.19 ms), so the motor follows each leg's average voltage over a period, not the
-//! individual edges. The current ripple around that average (at most Vs·T/(2L) ≈ 5 A
-//! peak-to-peak, locked anti-phase at zero duty, RE 35 at 24 V) is not modelled: it is
-//! symmetric about the average, which is what a current sample taken at the centre of a
-//! centre-aligned PWM period reads, as the motor image takes it (ADC1's injected group on
-//! TIM1's update events: firmware/targets/f103/motor/src/sensors.rs). Leg X's high side is on for duty dX of the period
-//! and its low side for the rest (TIM1 CHx / CHxN), except for a dead time td at each edge
-//! when both are off and the phase current picks the rail through a body diode: current
-//! leaving the leg pulls it low, current entering pulls it high. So a switching leg's average
-//! is Vs·(dX − td·f·s(iX)), with s the sign of the leg's current, smoothed over ±`band` (the
-//! current reverses within the dead time near zero). A leg at 0 % or 100 % does not switch
-//! and has no dead time. The terminal voltage is V_A − V_B through two switches' on-resistance.
+//! individual edges. Leg X's high side is on for duty dX of the period and its low side for
+//! the rest (TIM1 CHx / CHxN), except for a dead time td at each edge when both are off and
+//! the phase current picks the rail through a body diode: current leaving the leg pulls it
+//! low, current entering pulls it high. So a switching leg's average is Vs·(dX − td·f·s(iX)),
+//! with s the sign of the leg's current, smoothed over ±`band` (the current reverses within
+//! the dead time near zero). A leg at 0 % or 100 % does not switch and has no dead time. The
+//! terminal voltage is V_A − V_B through two switches' on-resistance.
 //!
-//! - Locked anti-phase drive of a signed duty d: dA = (1 + d)/2, dB = (1 − d)/2 → d·Vs, and
-//!   both legs' dead times: −2·td·f·Vs·s(i).
-//! - Sign–magnitude: dA = d, dB = 0 → d·Vs, one leg's dead time.
-//! - Brake: dA = dB = 0, both low sides on: the winding is shorted through 2·Rds(on).
-//! - Coast: enable low (or a driver fault): all switches off; current, if any, returns to the
-//!   supply through the diodes until it reaches zero (see [`Terminal::Open`]).
+//! The current ripple around that average is added where the current is measured
+//! ([`HBridge::ripple`]): the edges put Vs·(pulse − d) across the inductance, a triangle of
+//! up to Vs·T/(4L) peak-to-peak (sign-magnitude at d = 0.5; 2.5 A for the RE 35 at 24 V).
+//! TIM1 counts up and down (centre-aligned, PWM mode 1: a high side is on while the count is
+//! below its compare value), so every leg's pulse is centred on the bottom of the count and
+//! the triangle crosses its average there and at the top: where TIM1's update events fall,
+//! which trigger the motor image's current samples (ADC1's injected group:
+//! firmware/targets/f103/motor/src/sensors.rs). A sample at any other instant reads the
+//! average plus the ripple's value there.
 //!
 //! Supply current: power in = power out on average, Vs·Is = V_term·i (the switches' losses
 //! show up in the winding's circuit as their resistance); coasting returns |i| to the supply
@@ -134,6 +133,25 @@ impl HBridge {
         }
     }
 
+    /// The winding current's deviation from its period average at PWM phase `phase` (in
+    /// periods; 0: the bottom of TIM1's centre-aligned count, the middle of every high-side
+    /// pulse; 0.5: its top), with supply `supply_v` and winding inductance `inductance_h`, A.
+    ///
+    /// Each leg's pulse (width dX, centred on phase 0) less its average, over the inductance,
+    /// integrates to a zero-mean triangle, odd about phases 0 and ½ ([`pulse_integral`]): the
+    /// deviation is Vs·T/L times leg A's less leg B's. Piecewise linear, i.e. neglecting the
+    /// resistance's curvature over a period (R·T/L = 0.26 for the RE 35: the slopes change by
+    /// up to that fraction along a segment, not where they cross the average, which stays at
+    /// the centres by symmetry) and the dead time (1 % of the period). No ripple while the
+    /// bridge is off or braking (no leg switches).
+    pub fn ripple(&self, supply_v: f64, inductance_h: f64, phase: f64) -> f64 {
+        if !self.active() || inductance_h <= 0.0 {
+            return 0.0;
+        }
+        let k = supply_v.max(0.0) / (self.params.pwm_hz * inductance_h);
+        k * (pulse_integral(self.input.duty_a, phase) - pulse_integral(self.input.duty_b, phase))
+    }
+
     /// Charge drawn from the supply over a sub-step in which `terminal` drove the motor
     /// through `step` (negative: returned to the supply).
     pub fn supply_charge(&self, terminal: Terminal, supply_v: f64, step: &ElectricalStep) -> f64 {
@@ -142,6 +160,21 @@ impl HBridge {
             Terminal::Driven { .. } => 0.0,
             Terminal::Open { .. } => -step.abs_charge,
         }
+    }
+}
+
+/// ∫₀^φ (p(x) − d) dx over a period of 1, for a unit pulse p of width `duty` d centred on 0:
+/// φ(1 − d) inside the pulse, d/2 − dφ after it, (φ − 1)(1 − d) in the next pulse's first
+/// half. Zero at φ = 0 and ½; ±d(1 − d)/2 at the pulse's edges.
+pub fn pulse_integral(duty: f64, phase: f64) -> f64 {
+    let d = duty.clamp(0.0, 1.0);
+    let x = phase - phase.floor();
+    if x <= d / 2.0 {
+        x * (1.0 - d)
+    } else if x <= 1.0 - d / 2.0 {
+        d / 2.0 - d * x
+    } else {
+        (x - 1.0) * (1.0 - d)
     }
 }
 
@@ -207,6 +240,65 @@ mod tests {
         let mut b = bridge(HBridgeInput::signed(0.8));
         b.fault = true;
         assert!(matches!(b.terminal(24.0, 1.0), Terminal::Open { .. }));
+    }
+
+    #[test]
+    fn the_ripple_is_a_triangle_crossing_its_average_at_the_pwm_centres() {
+        // Sign-magnitude at d = 0.5 from 24 V into 0.119 mH at 20 kHz: the high side is on for
+        // phases −0.25…0.25; half the peak-to-peak, Vs·d(1 − d)/(2·L·f), is 1.26 A.
+        let l = 0.119e-3;
+        let b = bridge(HBridgeInput { duty_a: 0.5, duty_b: 0.0, enabled: true });
+        let half: f64 = 24.0 * 0.25 / (2.0 * l * 20_000.0);
+        assert!((half - 1.2605).abs() < 1e-4, "{half}");
+        for (phase, expect) in [
+            (0.0, 0.0),
+            (0.5, 0.0),
+            (0.25, half),
+            (0.125, half / 2.0),
+            (0.75, -half),
+            (-0.25, -half),
+            (1.25, half),
+            (0.625, -half / 2.0),
+        ] {
+            let got = b.ripple(24.0, l, phase);
+            assert!((got - expect).abs() < 1e-12, "phase {phase}: {got} vs {expect}");
+        }
+        // Its mean over a period is zero: the average model's current is the ripple's centre.
+        let mean: f64 = (0..1000).map(|k| b.ripple(24.0, l, (k as f64 + 0.5) / 1000.0)).sum();
+        assert!(mean.abs() / 1000.0 < 1e-12, "{mean}");
+        // Negative duty (leg B switches): the same triangle, inverted. Locked anti-phase at
+        // d = 0 (both legs at 50 %): none, the legs' pulses coincide.
+        let neg = bridge(HBridgeInput { duty_a: 0.0, duty_b: 0.5, enabled: true });
+        assert!((neg.ripple(24.0, l, 0.25) + half).abs() < 1e-12);
+        assert_eq!(bridge(HBridgeInput::signed(0.0)).ripple(24.0, l, 0.25), 0.0);
+        // Both legs switching at 75 % and 25 % (`signed(0.5)`, pulses centred together): leg
+        // A's triangle less leg B's, at twice the frequency and half sign-magnitude's height.
+        let lap = bridge(HBridgeInput::signed(0.5));
+        for (phase, expect) in [(0.125, -half / 2.0), (0.375, half / 2.0), (0.25, 0.0)] {
+            let got = lap.ripple(24.0, l, phase);
+            assert!((got - expect).abs() < 1e-12, "phase {phase}: {got} vs {expect}");
+        }
+        // Nothing switches: full duty, brake, coast, a fault.
+        for input in [HBridgeInput::signed(1.0), HBridgeInput::brake(), HBridgeInput::coast()] {
+            assert_eq!(bridge(input).ripple(24.0, l, 0.2), 0.0);
+        }
+        let mut f = bridge(HBridgeInput { duty_a: 0.5, duty_b: 0.0, enabled: true });
+        f.fault = true;
+        assert_eq!(f.ripple(24.0, l, 0.25), 0.0);
+        assert_eq!(b.ripple(24.0, 0.0, 0.25), 0.0, "no inductance: no defined ripple");
+    }
+
+    #[test]
+    fn the_pulse_integral_is_continuous_and_odd() {
+        for d in [0.0, 0.1, 0.5, 0.95, 1.0] {
+            for k in 0..=200 {
+                let x = k as f64 / 200.0;
+                assert!((pulse_integral(d, x) + pulse_integral(d, -x)).abs() < 1e-12, "odd");
+                assert!((pulse_integral(d, x) - pulse_integral(d, x + 1e-9)).abs() < 1e-8);
+            }
+            assert!((pulse_integral(d, d / 2.0) - d * (1.0 - d) / 2.0).abs() < 1e-15);
+            assert_eq!(pulse_integral(d, 0.5), d / 2.0 - d * 0.5);
+        }
     }
 
     #[test]

@@ -35,6 +35,7 @@ pub mod lidar;
 mod linalg;
 pub mod magnetic;
 pub mod motor;
+pub mod motor_bus;
 pub mod noise;
 pub mod obstacles;
 pub mod pressure;

@@ -5,7 +5,9 @@
 //! registers and GPIOs hold them between the firmware's writes). Each sub-step:
 //!
 //! 1. the battery's terminal voltage from the loads at the start of the sub-step (motor
-//!    bridges, and the PSU's converter as a constant-power load);
+//!    bridges and boards through their leads, and the PSU's converter as a constant-power
+//!    load), and the motor boards' supply VMOT ([`crate::motor_bus`]: the battery's, or its
+//!    bulk capacitors' while a supply that cannot sink blocks braking current);
 //! 2. each H-bridge's terminal voltage, each winding current (exact exponential step);
 //! 3. the coupled mechanics of base, wheels and rotors ([`Base::accelerate`]), the pose;
 //! 4. the charge drawn from the battery, and the energy books.
@@ -30,6 +32,7 @@ use crate::imu::{Imu, ImuParams, ImuReading};
 use crate::kinematics::Kinematics;
 use crate::linalg::{self, Mat3};
 use crate::motor::{Gearbox, Motor, Terminal};
+use crate::motor_bus::{MotorBus, MotorSupply};
 use crate::noise::Noise;
 use crate::obstacles::Obstacles;
 use crate::psu::{supply_voltage, Psu, PsuParams};
@@ -42,9 +45,7 @@ use crate::sensor_switch::SensorSwitch;
 /// ~0.1 % of accuracy in transients; halving it halves that (the energy test shows it).
 pub const DEFAULT_SUBSTEP_NS: u64 = 50_000;
 
-/// Gate-driver under-voltage lockout: below this supply the bridge turns off and DRV_FAULT
-/// is asserted (assumed, typical of 12–36 V gate drivers).
-pub const DRIVER_UVLO_V: f64 = 6.0;
+pub use crate::motor_bus::DRIVER_UVLO_V;
 
 /// Up to this many wheels the inverse mass matrices are cached (2^n of them).
 const MASS_CACHE_WHEELS: usize = 8;
@@ -142,15 +143,18 @@ pub struct EnergyLedger {
     pub bus_j: f64,
     /// Lost in windings and bridge switches (I²R), J.
     pub conduction_loss_j: f64,
-    /// Lost in bridge diodes while coasting, J.
+    /// Lost in bridge diodes while coasting, and in a motor supply's diode, J.
     pub diode_loss_j: f64,
+    /// Taken by the motor boards' own circuits from VMOT (gate driver supply, dividers), J.
+    pub motor_boards_j: f64,
     /// Lost to motor friction, J.
     pub friction_loss_j: f64,
     /// Lost in gearboxes, J.
     pub gear_loss_j: f64,
     /// Lost to rolling resistance, J.
     pub rolling_loss_j: f64,
-    /// Charge drawn by the motor bridges, C.
+    /// Charge drawn by the motor boards' leads (bridges, the boards' own circuits, their bulk
+    /// capacitors), C.
     pub motor_charge_c: f64,
     /// Charge drawn by the PSU's converter, C.
     pub bus_charge_c: f64,
@@ -163,6 +167,7 @@ impl EnergyLedger {
             + self.bus_j
             + self.conduction_loss_j
             + self.diode_loss_j
+            + self.motor_boards_j
             + self.friction_loss_j
             + self.gear_loss_j
             + self.rolling_loss_j
@@ -238,6 +243,8 @@ pub struct World {
     wheels: Vec<Wheel>,
     battery: Battery,
     supply_v: f64,
+    /// The motor boards' supply: their leads, bulk capacitors and own draw.
+    motor_bus: MotorBus,
     /// The PSU's input current from the battery, A (what its shunt measures).
     psu_input_a: f64,
     psu: Option<Psu>,
@@ -332,6 +339,7 @@ impl World {
             boards.push(Board { name: m.name.clone(), kind, uid: m.uid, link, noise });
         }
         let supply_v = battery.ocv();
+        let motor_boards = boards.iter().filter(|b| matches!(b.link, Link::Motor { .. })).count();
         let mut w = World {
             time_ns: 0,
             substep_ns: DEFAULT_SUBSTEP_NS,
@@ -343,6 +351,7 @@ impl World {
             wheels: std::mem::take(&mut wheels),
             battery,
             supply_v,
+            motor_bus: MotorBus::new(motor_boards, supply_v),
             psu_input_a: 0.0,
             psu,
             bus_base_load_a,
@@ -450,48 +459,61 @@ impl World {
     fn substep(&mut self, h: f64) {
         let ocv = self.battery.ocv();
         let rb = self.battery.params.internal_resistance_ohm;
-        // 1. Supply voltage from the loads now.
-        let mut motor_a = 0.0;
+        // 1. Supply voltage from the loads now: the motor boards' through their leads (none
+        // while a diode in them blocks), the PSU's converter.
+        let mut motor_a = self.motor_bus.load_a;
+        let driver_off = self.motor_bus.driver_off();
         for w in &mut self.wheels {
-            w.bridge.fault = w.fault_injected || self.supply_v < DRIVER_UVLO_V;
+            w.bridge.fault = w.fault_injected || driver_off;
             let i = w.motor.current();
             motor_a += match w.bridge.terminal(1.0, i) {
                 Terminal::Driven { volts, .. } => volts * i,
                 Terminal::Open { .. } => -i.abs(),
             };
         }
+        let lead_a = self.motor_bus.lead_current(motor_a, h, self.supply_v);
+        let conducting = lead_a.is_some();
+        let motor_a = lead_a.unwrap_or(0.0);
+        let (ocv_seen, r_seen) = self.motor_bus.source(conducting, ocv, rb, h);
         let load_a = self.bus_load_a();
         let (v, power) = match &mut self.psu {
             Some(psu) => {
                 psu.check_load(load_a);
                 let want = psu.input_power(load_a);
                 let min = psu.params.min_input_v;
-                match supply_voltage(ocv, rb, motor_a, want).filter(|&v| v >= min) {
+                match supply_voltage(ocv_seen, r_seen, motor_a, want).filter(|&v| v >= min) {
                     Some(v) => {
                         psu.set_input_ok(true);
                         (v, want)
                     }
                     None => {
                         psu.set_input_ok(false);
-                        ((ocv - rb * motor_a).max(0.0), 0.0)
+                        ((ocv_seen - r_seen * motor_a).max(0.0), 0.0)
                     }
                 }
             }
-            None => ((ocv - rb * motor_a).max(0.0), 0.0),
+            None => ((ocv_seen - r_seen * motor_a).max(0.0), 0.0),
         };
         self.supply_v = v;
         self.psu_input_a = if v > 0.0 { power / v } else { 0.0 };
+        let vm = self.motor_bus.voltage(conducting, v);
         // 2. Bridges and windings.
         let mut charge = 0.0;
         for w in &mut self.wheels {
-            let term = w.bridge.terminal(v, w.motor.current());
+            let term = w.bridge.terminal(vm, w.motor.current());
             let e = w.motor.update_current(term, h);
-            let q = w.bridge.supply_charge(term, v, &e);
+            let q = w.bridge.supply_charge(term, vm, &e);
             w.supply_current = q / h;
             charge += q;
             self.ledger.conduction_loss_j += e.resistance * e.i2t;
-            self.ledger.diode_loss_j += v * q - e.energy_in;
+            self.ledger.diode_loss_j += vm * q - e.energy_in;
         }
+        let boards_q = self.motor_bus.load_a * h;
+        self.ledger.motor_boards_j += vm * boards_q;
+        let bulk_q = self.motor_bus.settle(conducting, vm, charge + boards_q);
+        // What the leads carried from the battery, and lost in a diode on the way.
+        let lead_q = if conducting { charge + boards_q + bulk_q } else { 0.0 };
+        self.ledger.diode_loss_j += (v - vm) * lead_q;
         // 3. Mechanics: wheel torques through the gearboxes, inertias turning with each wheel.
         let (torques, inertias) = &mut self.scratch;
         torques.clear();
@@ -544,12 +566,12 @@ impl World {
         self.ledger.rolling_loss_j += acc.rolling_loss * h;
         // 4. Battery.
         let bus_charge = if v > 0.0 { power / v * h } else { 0.0 };
-        let total = charge + bus_charge;
+        let total = lead_q + bus_charge;
         self.battery.draw(total, h);
         self.ledger.chemical_j += ocv * total;
         self.ledger.battery_loss_j += rb * total * total / h;
         self.ledger.bus_j += power * h;
-        self.ledger.motor_charge_c += charge;
+        self.ledger.motor_charge_c += lead_q;
         self.ledger.bus_charge_c += bus_charge;
     }
 
@@ -588,26 +610,52 @@ impl World {
         }
     }
 
-    /// Voltage on an analog pin (noise-free: the Hall sensor's and the ADC's noise left out,
-    /// a ranger's held output with its measurement noise).
+    /// Voltage on an analog pin now (noise-free: the Hall sensor's and the ADC's noise left
+    /// out, a ranger's held output with its measurement noise).
     pub fn pin_volts(&self, board: &str, signal: &str) -> Result<f64, IoError> {
         let b = self.board_index(board)?;
         let s = self.signal(b, signal, SignalKind::Analog)?;
-        Ok(self.analog(b, s, None))
+        Ok(self.analog(b, s, None, self.pwm_phase()))
     }
 
-    /// What the board's ADC reads on `signal` now, counts (0..4095), with noise.
+    /// What the board's ADC read on `signal` at its latest conversion, counts (0..4095), with
+    /// noise. A motor board converts MOTOR_CURRENT and VMOT_SENSE on TIM1's update events
+    /// (its injected group, as the motor image sets it up): the latest is at the bottom or the
+    /// top of TIM1's count at or before now, where the current ripple crosses its average.
+    /// Every other signal is converted now.
     pub fn read_adc(&mut self, board: &str, signal: &str) -> Result<u16, IoError> {
+        let phase = self.pwm_phase();
+        let update = (2.0 * phase).floor() / 2.0;
+        self.convert(board, signal, update)
+    }
+
+    /// What the board's ADC reads on `signal` converting now (a software start: SWSTART),
+    /// counts, with noise: on a motor board's MOTOR_CURRENT, the average current plus the
+    /// ripple at this instant, the error a conversion out of step with the PWM makes.
+    pub fn read_adc_now(&mut self, board: &str, signal: &str) -> Result<u16, IoError> {
+        let phase = self.pwm_phase();
+        self.convert(board, signal, phase)
+    }
+
+    /// The PWM phase now, in periods (0..1): TIM1 starts counting with the world, at the bottom
+    /// of its centre-aligned count (every motor board's TIM1 at the same frequency).
+    pub fn pwm_phase(&self) -> f64 {
+        let hz = self.wheels.first().map_or(20_000.0, |w| w.bridge.params.pwm_hz);
+        (self.time_ns as f64 * hz / 1e9).fract()
+    }
+
+    fn convert(&mut self, board: &str, signal: &str, phase: f64) -> Result<u16, IoError> {
         let b = self.board_index(board)?;
         let s = self.signal(b, signal, SignalKind::Analog)?;
         let mut noise = self.boards[b].noise[s].clone();
-        let v = self.analog(b, s, Some(&mut noise));
+        let v = self.analog(b, s, Some(&mut noise), phase);
         let code = frontends::ADC.convert(v, &mut noise);
         self.boards[b].noise[s] = noise;
         Ok(code)
     }
 
-    fn analog(&self, b: usize, s: usize, noise: Option<&mut Noise>) -> f64 {
+    /// Signal `s`'s voltage on board `b`, at PWM phase `phase` for a motor current.
+    fn analog(&self, b: usize, s: usize, noise: Option<&mut Noise>, phase: f64) -> f64 {
         let board = &self.boards[b];
         let name = board.kind.signals()[s].name;
         match (&board.link, name) {
@@ -615,13 +663,17 @@ impl World {
             (Link::Psu, "IIN_SENSE") => frontends::iin_sense(self.psu_input_a),
             (Link::Psu, "VOUT_SENSE") => frontends::VOUT_SENSE.output(self.bus_voltage()),
             (Link::Motor { wheel }, "MOTOR_CURRENT") => {
-                let i = self.wheels[*wheel].motor.current();
+                let w = &self.wheels[*wheel];
+                let l = w.motor.params.inductance_h;
+                let i = w.motor.current() + w.bridge.ripple(self.motor_bus.volts(), l, phase);
                 match noise {
                     Some(n) => frontends::MOTOR_CURRENT.output(i, n),
                     None => frontends::MOTOR_CURRENT.output_ideal(i),
                 }
             }
-            (Link::Motor { .. }, "VMOT_SENSE") => frontends::VMOT_SENSE.output(self.supply_v),
+            (Link::Motor { .. }, "VMOT_SENSE") => {
+                frontends::VMOT_SENSE.output(self.motor_bus.volts())
+            }
             (Link::Proximity { channels, .. }, ch) => {
                 let c = usize::from(ch.as_bytes()[ch.len() - 1] - b'0');
                 channels[c].map_or(0.0, |r| self.rangers[r].output_v())
@@ -713,7 +765,7 @@ impl World {
         let b = self.board_index(board)?;
         let w = self.wheel_of(b)?;
         self.wheels[w].fault_injected = fault;
-        self.wheels[w].bridge.fault = fault || self.supply_v < DRIVER_UVLO_V;
+        self.wheels[w].bridge.fault = fault || self.motor_bus.driver_off();
         Ok(())
     }
 
@@ -857,9 +909,24 @@ impl World {
         &self.battery
     }
 
-    /// Battery terminal voltage at the last sub-step (the motors' supply), V.
+    /// Battery terminal voltage at the last sub-step, V (the motors' supply while their leads
+    /// conduct: [`Self::motor_bus_voltage`]).
     pub fn supply_voltage(&self) -> f64 {
         self.supply_v
+    }
+
+    /// The motor boards' supply VMOT at the last sub-step (what VMOT_SENSE divides), V: the
+    /// battery's terminal voltage, less a diode, or above it while a supply that cannot sink
+    /// blocks braking current ([`Self::set_motor_supply`]).
+    pub fn motor_bus_voltage(&self) -> f64 {
+        self.motor_bus.volts()
+    }
+
+    /// Connects the motor boards' leads to the battery as `supply` says (the world starts with
+    /// [`MotorSupply::Battery`]). Their bulk capacitors keep their charge: behind a diode they
+    /// first discharge into the boards' loads to the battery less its drop.
+    pub fn set_motor_supply(&mut self, supply: MotorSupply) {
+        self.motor_bus.supply = supply;
     }
 
     /// The PSU's input current from the battery (what its shunt measures), A.
@@ -898,7 +965,7 @@ impl World {
                     + w.motor.magnetic_energy()
             })
             .sum();
-        self.base.kinetic_energy(&self.q) + wheels
+        self.base.kinetic_energy(&self.q) + wheels + self.motor_bus.stored_energy_j()
     }
 
     /// Energy drawn from the battery's source not accounted for by storage, losses and the
