@@ -129,6 +129,17 @@ mod tests {
     }
 
     #[test]
+    fn a_device_reads_the_atmosphere_plus_its_offset() {
+        let b = Barometer::new(BaroParams::LPS22DF, 100_000.0, 4, 3);
+        for h in [0.0, 122.0, 900.0] {
+            assert_eq!(b.expected(h), isa_pressure(h, 100_000.0) + b.offset_pa());
+        }
+        let ideal = Barometer::new(BaroParams::IDEAL, P0_PA, 4, 3);
+        // 101 325 · (1 − 0.0065 · 122 / 288.15)^5.25588 = 99 868.0 Pa.
+        assert!((ideal.expected(122.0) - 99_868.0).abs() < 0.1, "{}", ideal.expected(122.0));
+    }
+
+    #[test]
     fn a_device_has_its_offset_within_bound_and_its_noise() {
         let mk = |seed| Barometer::new(BaroParams::LPS22DF, P0_PA, seed, 3);
         let (mut a, b) = (mk(1), mk(1));

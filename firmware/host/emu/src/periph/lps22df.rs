@@ -233,6 +233,30 @@ mod tests {
         assert!(e.to_string().contains("read 0xff, expected 0xb4"), "{e}");
     }
 
+    /// The model with one register that keeps its reset value.
+    struct Stuck(Lps22dfModel, u8);
+
+    impl RegisterDevice for Stuck {
+        fn read_register(&mut self, reg: u8) -> u8 {
+            self.0.read_register(reg)
+        }
+        fn write_register(&mut self, reg: u8, value: u8) {
+            if reg & 0x7F != self.1 {
+                self.0.write_register(reg, value);
+            }
+        }
+        fn next_register(&self, reg: u8) -> u8 {
+            self.0.next_register(reg)
+        }
+    }
+
+    #[test]
+    fn a_control_register_that_does_not_take_its_value_is_named() {
+        let mut baro = Lps22df::new_spi(SimSpi::new(shared(Stuck(Lps22dfModel::new(), CTRL_REG2))));
+        let e = baro.init(Config::default()).unwrap_err();
+        assert_eq!(e, Error::ConfigNotApplied { register: 0x11, wrote: 0x08, read: 0x00 });
+    }
+
     #[test]
     fn without_auto_increment_a_burst_reads_one_register_again() {
         let dev = shared(Lps22dfModel::new());
