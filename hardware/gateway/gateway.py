@@ -57,7 +57,7 @@ P = Place
 PLACES = {
     # the bus end keeps the core's places (J1, J2, J3, SW3, R3, R7, C12, D1, D5, U2, C7, C8, F101,
     # TP1-TP8); the transceiver moves beside the MCU's CAN pins
-    "U3": P(20.5, 37.0, 0), "C9": P(22.5, 32.9, 0),
+    "U3": P(20.5, 37.0, 0), "C9": P(15.3, 37.6, 90),
     # MCU, turned 90°: RMII on its right and lower right towards the PHY, the HSE pins at the
     # bottom, SWD top left
     "U1": P(36.0, 33.0, 90),
@@ -75,7 +75,7 @@ PLACES = {
     # PHY, turned 270°: RMII on its left, MDI on its right towards the jack, the crystal above
     "U101": P(62.0, 35.0, 270),
     "Y101": P(62.0, 28.0, 0), "C101": P(58.6, 28.0, 90), "C102": P(65.4, 28.0, 90),
-    "R101": P(66.6, 30.8, 0), "C103": P(58.0, 31.4, 90), "C104": P(56.3, 31.4, 90),
+    "R101": P(66.4, 30.8, 0), "C103": P(58.0, 31.4, 90), "C104": P(56.3, 31.4, 90),
     "C105": P(66.4, 39.2, 0), "C106": P(66.4, 41.0, 0), "C107": P(58.0, 40.0, 90),
     "R102": P(69.4, 31.0, 90), "R103": P(71.0, 31.0, 90), "R104": P(72.6, 31.0, 90),
     "R105": P(74.2, 31.0, 90), "C110": P(73.7, 27.6, 0), "C109": P(78.3, 27.6, 0),
@@ -167,7 +167,9 @@ def build(core: Sheet) -> Module:
                vias=phy_pad_vias(),
                seed=20, size=SIZE, holes=HOLES)
     m.fiducials = list(FIDUCIALS)
-    m.texts = frame_texts(NAME, REVISION) + [Text("ETHERNET", 85.0, 26.0, 1.2, "B.SilkS")]
+    # BUS OUT moved right of its usual place, where the status LEDs sit on this board
+    m.texts = [Text(t.text, 47.2, t.y, t.size, t.layer) if (t.text, t.layer) == ("BUS OUT", "F.SilkS")
+               else t for t in frame_texts(NAME, REVISION)] + [Text("ETHERNET", 85.0, 26.0, 1.2, "B.SilkS")]
     return m
 
 

@@ -188,7 +188,7 @@ _ITEMS = [
     ("C_470p", C, C0603, "470pF", "0603B471K500NT"),
     ("R_49R9", R, R0603, "49.9", "0603WAF499JT5E"),
     ("R_1k5", R, R0603, "1.5k", "0603WAF1501T5E"),
-    ("R_12k1", R, R0603, "12.1k", "0603WAF1212T5E"),
+    ("R_12k1", R, R0805, "12.1k", "0805W8F1212T5E"),     # 0805: the 1 % value public JLC BOMs confirm
     ("LED_B", "Device:LED", "LED_SMD:LED_0603_1608Metric", "blue", "KT-0603B"),
 ]
 
