@@ -69,9 +69,11 @@ PLACES = {
     "C10": P(28.5, 44.6, 0), "R1": P(25.7, 35.6, 90), "R2": P(46.4, 32.4, 0),
     "J4": P(17.5, 28.0, 90),
     # status LEDs, lit high, under BUS OUT
-    # (in the order of their pins, PD15 leftmost on the MCU's top side, so no two tracks cross)
-    "D6": P(34.2, 19.4, 90), "D4": P(36.4, 19.4, 90), "D3": P(38.6, 19.4, 90), "D2": P(40.8, 19.4, 90),
-    "R8": P(34.2, 22.6, 90), "R6": P(36.4, 22.6, 90), "R5": P(38.6, 22.6, 90), "R4": P(40.8, 22.6, 90),
+    # (in the order of their pins, PD15 leftmost on the MCU's top side, so no two tracks cross;
+    # 1.85 mm apart so each clears the case's stacking pads at (30, 13) and (45, 25) by the
+    # lid's light hole and bar, enclosure/lidplan.py)
+    **{d: P(34.3 + 1.85 * i, 19.4, 90) for i, d in enumerate(("D6", "D4", "D3", "D2"))},
+    **{r: P(34.3 + 1.85 * i, 22.6, 90) for i, r in enumerate(("R8", "R6", "R5", "R4"))},
     # PHY, turned 270°: RMII on its left, MDI on its right towards the jack, the crystal above
     "U101": P(62.0, 35.0, 270),
     "Y101": P(62.0, 28.0, 0), "C101": P(58.6, 28.0, 90), "C102": P(65.4, 28.0, 90),
