@@ -74,6 +74,8 @@ JLC_ZERO = [
     Zero(r"PinHeader_1x04_P2\.54mm_Vertical", 90, "THT header: pin 1 at the top (KiCad)"),
     Zero(r"RJ45_Amphenol_54602-x08_Horizontal", 135,
          "THT RJ45, cable opening down: pin 1 upper left (KiCad's orientation; fitted by hand)"),
+    Zero(r"RJ45_Hanrun_HR911105A_Horizontal", 135,
+         "THT RJ45 with magnetics, cable opening down: pin 1 upper left (KiCad's orientation; fitted by hand)"),
     Zero(r"AMASS_XT30PW-M_1x02_P2\.50mm_Horizontal", 315,
          "THT XT30, cable entry down: pin 1 lower right of the pads' centre (KiCad's orientation)"),
     Zero(r"TO-263-2$", 160, "D2PAK: leads to the left, pin 1 the upper lead (IPC-7351, no correction)"),
@@ -243,7 +245,8 @@ def test_cpl_is_what_jlc_py_computes_for_the_board(board, tmp_path):
     broken.write_text(text.replace("Designator,Mid X,Mid Y,Layer,Rotation", "Ref,PosX,PosY,Side,Rot", 1))
     assert jlc.cpl_problems(broken, placed)
     u1 = next(line for line in text.splitlines() if line.startswith("U1,"))
-    broken.write_text(text.replace(u1, u1.rsplit(",", 1)[0] + ",0.00"))
+    turned = (float(u1.rsplit(",", 1)[1]) + 90) % 360       # a quarter turn off, whatever it was
+    broken.write_text(text.replace(u1, u1.rsplit(",", 1)[0] + f",{turned:.2f}"))
     assert any("U1 " in p for p in jlc.cpl_problems(broken, placed))
 
 

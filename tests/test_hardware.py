@@ -26,7 +26,7 @@ from conftest import ROOT
 if shutil.which("kicad-cli") is None:
     pytest.fail("kicad-cli is not installed: run scripts/setup (installs KiCad 9)", pytrace=False)
 
-from r2ptools.kicad import check, fab, libsym, netlist  # noqa: E402
+from r2ptools.kicad import catalog, check, fab, libsym, netlist  # noqa: E402
 from r2ptools import manifest  # noqa: E402
 
 HARDWARE = ROOT / "hardware"
@@ -40,6 +40,12 @@ def test_the_expected_boards_exist():
 def test_board_passes_erc_drc_parity_and_bom(board):
     r = check.check(board)
     assert r.ok, "\n".join(r.problems)
+
+
+def _board_mcu(module: str) -> str:
+    """The MCU part of firmware/boards/<module>.toml (or of the file it extends)."""
+    d = tomllib.loads((ROOT / "firmware" / "boards" / f"{module}.toml").read_text())["board"]
+    return d["mcu"] if "mcu" in d else _board_mcu(d["extends"].removesuffix(".toml"))
 
 
 def _board_file(module: str) -> dict[str, str]:
@@ -57,7 +63,7 @@ def _board_file(module: str) -> dict[str, str]:
                                     if m.board_file and (HARDWARE / m.name / f"{m.name}.kicad_sch").is_file()])
 def test_mcu_pins_carry_the_board_file_signals(module):
     net = netlist.export(HARDWARE / module / f"{module}.kicad_sch")
-    pad_names = {p.number: p.name for p in libsym.pins("MCU_ST_STM32F1:STM32F103CBTx")}
+    pad_names = {p.number: p.name for p in libsym.pins(catalog.item(_board_mcu(module)).symbol)}
     wanted = _board_file(module)
     seen = {}
     for name, nodes in net.nets.items():
@@ -516,16 +522,21 @@ def test_a_test_pad_put_on_the_bom_is_reported(scratch):
 
 
 def test_design_numbers_hold():
-    """The equations behind revision B's values (calc/core.py, calc/proximity.py print them)
+    """The equations behind revision B's values (calc/core.py, calc/proximity.py and
+    calc/gateway.py print them)
     hold, the boards' KiCad schematics carry the values they assume, and the emulated sensor
     switch uses the hardware's nominal limit."""
-    from r2ptools.kicad.calc import core, proximity
+    from r2ptools.kicad.calc import core, gateway, proximity
     x = core.crystal_load()
     assert abs(x["chosen_pf"] - x["ideal_pf"]) <= 0.1 * x["ideal_pf"] and x["gain_margin"] >= 5
     assert x["cl_min_pf"] < core.CRYSTAL_CL_PF < x["cl_max_pf"]
     lo, nom, hi = proximity.switch_limit_ma()
     assert lo >= 4 * max(proximity.SENSORS_MA.values()) and hi < 200
-    for board, values in [(b.name, core.BOARD_VALUES) for b in BOARDS] + [("proximity", proximity.BOARD_VALUES)]:
+    assert gateway.main() == 0, "a gateway design number fails: scripts/py -m r2ptools.kicad.calc.gateway"
+    # the gateway draws the core's blocks around its own MCU (an F407, its own decoupling)
+    core_values = {b.name: gateway.BOARD_VALUES if b.name == "gateway" else core.BOARD_VALUES
+                   for b in BOARDS}
+    for board, values in list(core_values.items()) + [("proximity", proximity.BOARD_VALUES)]:
         parts = netlist.export(HARDWARE / board / f"{board}.kicad_sch").components
         wrong = [f"{board} {ref}: calc assumes {want:g}, board has {parts[ref].value}"
                  for ref, want in values.items()

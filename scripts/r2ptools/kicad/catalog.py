@@ -172,6 +172,27 @@ _ITEMS = [
      "XT60 IN", "XT60PW-M"),
     ("XT60_F", "Connector_Generic:Conn_01x02", "R2P:AMASS_XT60PW-F_1x02_P7.20mm_Horizontal",
      "XT60 MOTOR", "XT60PW-F"),
+    # --- gateway (hardware/gateway/gateway.py; design numbers in calc/gateway.py)
+    ("STM32F407VGT6", "MCU_ST_STM32F4:STM32F407VGTx", "Package_QFP:LQFP-100_14x14mm_P0.5mm",
+     "STM32F407VGT6", "STM32F407VGT6"),
+    # KiCad 9's Interface_Ethernet:LAN8742A with VDDCR (the 1.2 V regulator's output) drawn right of
+    # VDD2A instead of between VDDIO and VDD1A, so the three 3.3 V pins join one rail on the sheet
+    ("LAN8742A", "R2P:LAN8742A",
+     "Package_DFN_QFN:VQFN-24-1EP_4x4mm_P0.5mm_EP2.5x2.5mm", "LAN8742A",
+     "LAN8742A-CZ-TR"),
+    # the Ethernet jack: magnetics, Bob Smith termination and two LEDs inside (HanRun HR911105A),
+    # shielded metal, unlike the bus jacks' plastic 54602 (no magnetics): it cannot be mistaken
+    ("RJ45_MAG", "Connector:RJ45_Hanrun_HR911105A_Horizontal",
+     "R2P:RJ45_Hanrun_HR911105A_Horizontal", "ETHERNET", "HR911105A"),
+    ("XTAL_25M", "Device:Crystal_GND24", "Crystal:Crystal_SMD_3225-4Pin_3.2x2.5mm",
+     "25MHz", "X322525MOB4SI"),
+    ("C_15p", C, C0603, "15pF C0G", "CL10C150JB8NNNC"),
+    ("C_2u2", C, C0603, "2.2uF", "CL10A225KO8NNNC"),
+    ("C_470p", C, C0603, "470pF", "0603B471K500NT"),
+    ("R_49R9", R, R0603, "49.9", "0603WAF499JT5E"),
+    ("R_1k5", R, R0603, "1.5k", "0603WAF1501T5E"),
+    ("R_12k1", R, R0805, "12.1k", "0805W8F1212T5E"),     # 0805: the 1 % value public JLC BOMs confirm
+    ("LED_B", "Device:LED", "LED_SMD:LED_0603_1608Metric", "blue", "KT-0603B"),
 ]
 
 _BY_KEY = {k: Item(k, s, f, v, m) for k, s, f, v, m in _ITEMS}

@@ -378,8 +378,12 @@ class DrawnSheetWriter(SheetWriter):
                 run = abs(s[1][0] - s[0][0])
                 away = run < len(net) * 120 and left not in {p.p for p in pins}
                 # off the corner or pin end by a grid where the wire has room: clear of what the
-                # corner meets and of the pin's number (drawn on the pin, next to its end)
-                inset = G if not away and run >= len(net) * 120 + G + 127 else 0
+                # corner meets and of the pin's number (drawn on the pin, next to its end); off a
+                # pin end by two where it has room for that, clear of a field printed beside the
+                # part's first pin too (a connector's reference above its top right pin)
+                fits = run - len(net) * 120 - 127
+                inset = 0 if away else 2 * G if left in {p.p for p in pins} and fits >= 2 * G \
+                    else G if fits >= G else 0
                 self._label(net, (left[0] + inset) / 100, left[1] / 100, 180 if away else 0, f"{tag}/label")
             else:     # a stub off the pin, so the name does not run into the pin's number
                 self._stub_label(pins[0], f"{tag}/label")

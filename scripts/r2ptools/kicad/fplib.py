@@ -1,8 +1,8 @@
 """The project footprint library `R2P` (hardware/core/R2P.pretty): KiCad footprints, silk trimmed.
 
-Some KiCad library outlines cannot sit cleanly on our boards: the RJ45, XT30 and JST PH bodies
-overhang the edge they face out of (their outline crosses the board edge), and the PSU's eFuse
-(HTSSOP-20) outline runs along J2's pin-1 arrow. A fab clips silk at the edge anyway, but DRC
+Some KiCad library outlines cannot sit cleanly on our boards: the RJ45 (the bus jacks and the
+gateway's Ethernet jack), XT30 and JST PH bodies overhang the edge they face out of (their outline
+crosses the board edge), and the PSU's eFuse (HTSSOP-20) outline runs along J2's pin-1 arrow. A fab clips silk at the edge anyway, but DRC
 rightly warns, so these parts use a **variant**: the KiCad footprint with identical pads, fab,
 courtyard and fields, whose silkscreen lines are cut where they would come within 0.3 mm of the
 board edge, 0.15 mm of another part's pad or silk, on any board that places it (every placement
@@ -37,6 +37,7 @@ LIB = libtables.PROJECT_FP_LIB
 VARIANTS = {
     # variant name (= the KiCad footprint it is cut from) -> KiCad library
     "RJ45_Amphenol_54602-x08_Horizontal": "Connector_RJ",
+    "RJ45_Hanrun_HR911105A_Horizontal": "Connector_RJ",
     "AMASS_XT30PW-M_1x02_P2.50mm_Horizontal": "Connector_AMASS",
     "AMASS_XT60PW-M_1x02_P7.20mm_Horizontal": "Connector_AMASS",
     "AMASS_XT60PW-F_1x02_P7.20mm_Horizontal": "Connector_AMASS",

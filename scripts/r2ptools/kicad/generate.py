@@ -59,8 +59,8 @@ def generate(m: Module, out: Path, force_route: bool = False, rewrite_core: bool
     if rewrite_core or not core_sch.exists():
         projects = sch_gen.core_projects(core_sch) if core_sch.exists() else []
         sch_gen.write_core(core.build(), [m], out, projects=projects)
-    else:
-        sch_gen.add_project(core_sch, m.name)
+    elif any(u.sheet.name == "core" for u in m.root.children):
+        sch_gen.add_project(core_sch, m.name)     # a board without the core sheet (the gateway) is not recorded
     sch = sch_gen.write_module(m, out)
     folder = sch.parent
     symbols = {p.item.symbol.split(":")[0] for _, p in m.all_parts()} | {"power"}

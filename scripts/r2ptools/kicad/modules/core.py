@@ -72,27 +72,10 @@ def build() -> Sheet:
     s.part("C5", "C_100n", {"1": "+3V3", "2": "GND"}, at=Place(33.8, 35.0, 0))     # VDD 24
     s.part("C6", "C_10n", {"1": "+3V3", "2": "GND"}, at=Place(23.2, 31.0, 90))     # VDDA
     s.part("C11", "C_1u", {"1": "+3V3", "2": "GND"}, at=Place(21.6, 31.0, 90))     # VDDA
-    # crystal: load capacitors from CL and the stray capacitance (crystal_load())
-    s.part("Y1", "XTAL_8M", {"1": "OSC_IN", "3": "OSC_OUT", "G": "GND"}, at=Place(21.3, 27.6, 0))
-    s.part("C1", "C_30p", {"1": "OSC_IN", "2": "GND"}, at=Place(17.8, 28.4, 90))
-    s.part("C2", "C_30p", {"1": "OSC_OUT", "2": "GND"}, at=Place(21.0, 24.4, 0))
-
-    # 3.3 V from the 5 V input
-    s.part("U2", "AP2112K-3.3", {"VIN": "V5_IN", "EN": "V5_IN", "GND": "GND", "VOUT": "+3V3"},
-           at=Place(14.0, 20.5, 0))
-    s.part("C8", "C_10u", {"1": "V5_IN", "2": "GND"}, at=Place(10.2, 20.5, 90))
-    s.part("C7", "C_10u", {"1": "+3V3", "2": "GND"}, at=Place(17.8, 20.5, 90))
-
-    # reset, BOOT0 button, BOOT1 strap
-    s.part("C10", "C_100n", {"1": "NRST", "2": "GND"}, at=Place(20.0, 33.5, 0))
-    s.part("SW1", "SW_TACT", {"1": "NRST", "2": "GND"}, at=Place(8.0, 32.6, 0))
-    s.part("SW2", "SW_TACT", {"1": "+3V3", "2": "BOOT0"}, at=Place(6.0, 39.0, 0))
-    s.part("R1", "R_10k", {"1": "BOOT0", "2": "GND"}, at=Place(29.5, 21.3, 0))
-    s.part("R2", "R_10k", {"1": "BOOT1", "2": "GND"}, at=Place(29.5, 35.2, 0))
-
-    # SWD: Cortex 10-pin, 1.27 mm; SWO is not wired (PB3 stays a module GPIO)
-    s.part("J4", "SWD_2x5", {"1": "+3V3", "2": "SWDIO", "3": "GND", "4": "SWCLK", "5": "GND",
-                             "9": "GND", "10": "NRST"}, nc=("6", "8"), at=Place(53.5, 32.0, 90))
+    hse_crystal(s)
+    regulator(s, "V5_IN")
+    reset_boot(s)
+    swd(s)
 
     # status LEDs (AlInGaP, Vf ~2 V) sinking into PC13-15 (3 mA max there): 1 k gives ~1.3 mA
     for ref, rref, key, rkey, sig, y in (("D2", "R4", "LED_G", "R_1k", "LED_STATUS", 24.0),
@@ -101,6 +84,52 @@ def build() -> Sheet:
         s.part(ref, key, {"A": "+3V3", "K": f"{sig}_K"}, at=Place(2.8, y, 180))
         s.part(rref, rkey, {"1": f"{sig}_K", "2": sig}, at=Place(6.5, y, 0))
 
+    can_transceiver(s)
+    test_pads(s)
+    bus_jacks(s)
+    from . import core_sheet          # the drawing imports this module's numbers
+    s.drawing, s.blocks = core_sheet.DRAWING, core_sheet.BLOCKS
+    return s
+
+
+# The core's blocks as functions: the F103 core sheet (build() above) and the gateway's own sheet
+# (hardware/gateway/gateway.py, an STM32F407) draw the same circuits with the same references
+# from them; the places are the core's defaults (a board moves them with its own places).
+
+def hse_crystal(s: Sheet) -> None:
+    """The 8 MHz HSE crystal on OSC_IN/OSC_OUT, load capacitors from CL and the stray
+    capacitance (crystal_load())."""
+    s.part("Y1", "XTAL_8M", {"1": "OSC_IN", "3": "OSC_OUT", "G": "GND"}, at=Place(21.3, 27.6, 0))
+    s.part("C1", "C_30p", {"1": "OSC_IN", "2": "GND"}, at=Place(17.8, 28.4, 90))
+    s.part("C2", "C_30p", {"1": "OSC_OUT", "2": "GND"}, at=Place(21.0, 24.4, 0))
+
+
+def regulator(s: Sheet, vin: str) -> None:
+    """3.3 V from the module's 5 V input `vin` (docs/bus.md §6: at most 0.4 V dropout)."""
+    s.part("U2", "AP2112K-3.3", {"VIN": vin, "EN": vin, "GND": "GND", "VOUT": "+3V3"},
+           at=Place(14.0, 20.5, 0))
+    s.part("C8", "C_10u", {"1": vin, "2": "GND"}, at=Place(10.2, 20.5, 90))
+    s.part("C7", "C_10u", {"1": "+3V3", "2": "GND"}, at=Place(17.8, 20.5, 90))
+
+
+def reset_boot(s: Sheet) -> None:
+    """NRST's 100 nF and reset button, the BOOT0 button with its pull-down, the BOOT1 strap."""
+    s.part("C10", "C_100n", {"1": "NRST", "2": "GND"}, at=Place(20.0, 33.5, 0))
+    s.part("SW1", "SW_TACT", {"1": "NRST", "2": "GND"}, at=Place(8.0, 32.6, 0))
+    s.part("SW2", "SW_TACT", {"1": "+3V3", "2": "BOOT0"}, at=Place(6.0, 39.0, 0))
+    s.part("R1", "R_10k", {"1": "BOOT0", "2": "GND"}, at=Place(29.5, 21.3, 0))
+    s.part("R2", "R_10k", {"1": "BOOT1", "2": "GND"}, at=Place(29.5, 35.2, 0))
+
+
+def swd(s: Sheet) -> None:
+    """SWD: Cortex 10-pin, 1.27 mm; SWO is not wired."""
+    s.part("J4", "SWD_2x5", {"1": "+3V3", "2": "SWDIO", "3": "GND", "4": "SWCLK", "5": "GND",
+                             "9": "GND", "10": "NRST"}, nc=("6", "8"), at=Place(53.5, 32.0, 90))
+
+
+def can_transceiver(s: Sheet) -> None:
+    """The CAN transceiver on CAN_TX/CAN_RX, its ESD clamp, the +5V TVS and the switchable split
+    termination (docs/bus.md §4, §7)."""
     # CAN transceiver, slope control off (Rs to GND) for 1 Mbit/s
     s.part("U3", "SN65HVD230", {"D": "CAN_TX", "R": "CAN_RX", "VCC": "+3V3", "GND": "GND",
                                 "CANH": "CAN_H", "CANL": "CAN_L", "Rs": "GND"}, nc=("Vref",),
@@ -120,6 +149,9 @@ def build() -> Sheet:
     s.part("R7", "R_60R4", {"1": "TERM_MID", "2": "TERM_L"}, at=Place(27.4, 15.4, 90))
     s.part("C12", "C_4n7", {"1": "TERM_MID", "2": "GND"}, at=Place(29.3, 15.4, 90))
 
+
+def test_pads(s: Sheet) -> None:
+    """Bare 1 mm copper pads (no BOM line, no placement) for a probe: rails, bus, reset, SWD."""
     # test pads (bare copper, no BOM line, no placement): the right edge, beside U3 and J4
     for ref, net, x, y in (("TP1", "+5V", 48.6, 20.2), ("TP2", "+3V3", 51.1, 20.2),
                            ("TP3", "GND", 53.6, 20.2), ("TP4", "CAN_H", 56.1, 20.2),
@@ -127,14 +159,14 @@ def build() -> Sheet:
                            ("TP7", "SWCLK", 53.6, 23.4), ("TP8", "CAN_L", 56.1, 23.4)):
         s.part(ref, "TP", {"1": net}, at=Place(x, y, 0), value=net)
 
+
+def bus_jacks(s: Sheet) -> None:
+    """The bus: BUS IN and BUS OUT RJ45 jacks and the 1x4 header, in parallel (docs/bus.md)."""
     # the bus: two RJ45 jacks and the 1x4 header in parallel
     s.part("J1", "RJ45", RJ45_PINS, at=Place(20.2, 13.52, 180), value="BUS IN")
     s.part("J2", "RJ45", RJ45_PINS, at=Place(48.6, 13.52, 180), value="BUS OUT")
     s.part("J3", "HDR_1x4", {"1": "+5V", "2": "CAN_H", "3": "CAN_L", "4": "GND"},
            at=Place(26.0, 10.2, 90))
-    from . import core_sheet          # the drawing imports this module's numbers
-    s.drawing, s.blocks = core_sheet.DRAWING, core_sheet.BLOCKS
-    return s
 
 
 def bus_tracks(extend_to: float | None = None) -> list[Track]:
