@@ -102,6 +102,25 @@ def run(samples: int = 200) -> dict:
                             latencies.append(time.perf_counter() - t0)
                             break
                 time.sleep(random.uniform(0.02, 0.08))
+            # A wheel's new state on the bus to /odom out: turn one way, then the other; from the
+            # first motor1/state whose speed has the new turn's sign (reassembled here from its
+            # two frames) to the first /odom whose yaw rate has it.
+            state_msg = topics["motor1/state"]["message_id"]
+            odom_key = f"0/odom/nav_msgs::msg::dds_::Odometry_/{ts.hash_rihs01('nav_msgs/msg/Odometry')}"
+            odoms: list[tuple[float, float]] = []
+            lock = threading.Lock()
+
+            def on_odom(sample):
+                msg = ts.deserialize_cdr(bytes(sample.payload.to_bytes()), "nav_msgs/msg/Odometry")
+                with lock:
+                    odoms.append((time.perf_counter(), msg.twist.twist.angular.z))
+
+            odom_sub = peer.declare_subscriber(odom_key, on_odom)
+            try:
+                odom_latencies = _state_to_odom(bus, peer, cmd_key, twist, state_msg, odoms, lock,
+                                                max(samples // 4, 10))
+            finally:
+                odom_sub.undeclare()
             # Baseline: the same put, through the same router, to a subscriber here.
             got = threading.Event()
             echo = peer.declare_subscriber("bench/echo", lambda s: got.set())
@@ -127,7 +146,51 @@ def run(samples: int = 200) -> dict:
             sim.wait(timeout=10)
             router.close()
     ms = lambda v: [x * 1e3 for x in v]
-    return {"samples": len(latencies), "cmd_vel_to_setpoint_ms": ms(latencies), "zenoh_put_to_peer_ms": ms(base)}
+    return {"samples": len(latencies), "cmd_vel_to_setpoint_ms": ms(latencies), "zenoh_put_to_peer_ms": ms(base),
+            "state_to_odom_ms": ms(odom_latencies)}
+
+
+def _state_to_odom(bus, peer, cmd_key, twist, state_msg, odoms, lock, samples: int) -> list[float]:
+    """Seconds from a wheel state on the bus showing a turn's new direction to the first /odom
+    showing it, over `samples` reversals of a 0.8 rad/s turn."""
+    from .rtcan_fragment import Reassembler, split
+
+    out, sign = [], 1.0
+    for _ in range(samples):
+        sign = -sign
+        rx = Reassembler(slots=4, buffer=64, timeout_us=20_000)
+        while bus.recv(timeout=0) is not None:  # frames from before the reversal
+            pass
+        deadline = time.perf_counter() + 3.0
+        t_state, next_put = None, 0.0
+        while t_state is None:
+            now = time.perf_counter()
+            if now >= next_put:  # 20 Hz, as teleop would: keeps the watchdog fed
+                peer.put(cmd_key, twist(0.8 * sign))
+                next_put = now + 0.05
+            if now > deadline:
+                raise RuntimeError("no motor1/state with the new direction within 3 s")
+            m = bus.recv(timeout=0.01)
+            if m is None or split(m.arbitration_id)[1] != state_msg:
+                continue
+            payload = rx.accept(m.arbitration_id, bytes(m.data), int(m.timestamp * 1e6), 13)
+            # Triskar2 turning at wz: each wheel (the state's speed is the gearbox output's) at
+            # wz · 0.25 m / 0.05 m = 5·wz rad/s, so 0.1 rad/s of wheel speed is the 0.02 rad/s
+            # of yaw rate /odom is tested for.
+            if payload is not None and struct.unpack_from("<f", payload, 4)[0] * sign > 0.1:
+                t_state = time.perf_counter()
+        while True:
+            with lock:
+                seen = [t for t, wz in odoms if t >= t_state and wz * sign > 0.02]
+            if seen:
+                out.append(seen[0] - t_state)
+                break
+            if time.perf_counter() > t_state + 1.0:
+                raise RuntimeError("no /odom with the new direction within 1 s of the wheel state")
+            peer.put(cmd_key, twist(0.8 * sign))
+            time.sleep(0.01)
+        time.sleep(random.uniform(0.2, 0.4))
+    return out
 
 
 def report(r: dict) -> None:
@@ -135,10 +198,12 @@ def report(r: dict) -> None:
     print("\n=== ROS 2 over Zenoh (emulated Triskar2, real time, this machine): latency, ms")
     print(f"{'path':<58} {'p50':>6} {'p99':>6} {'max':>6}")
     for name, v in (("/cmd_vel put -> wheel setpoint on the bus (seen by a CAN tool)", a),
+                    ("wheel state on the bus -> /odom at a ROS peer", r["state_to_odom_ms"]),
                     ("baseline: Zenoh put -> peer, same router", b)):
         print(f"{name:<58} {_percentile(v, 50):>6.2f} {_percentile(v, 99):>6.2f} {max(v):>6.2f}")
     print(f"({r['samples']} commands; the base's inverse kinematics run at 100 Hz, so ~5 ms of the "
-          f"median and up to 10 ms are its period, plus the TDMA cycle's slot)")
+          f"median and up to 10 ms are its period, plus the TDMA cycle's slot; /odom is published "
+          f"at ~20 Hz, so up to 50 ms of the state's path is waiting for the next one)")
 
 
 def main(argv: list[str] | None = None) -> int:
