@@ -16,12 +16,10 @@
 //! register map is the LSM9DS1's magnetic sensor, whose SPI protocol text (DocID025715 §5.3)
 //! was read to check the MS bit.
 
-use core::fmt;
-
 use embedded_hal::i2c::{I2c, SevenBitAddress};
 use embedded_hal::spi::{Operation, SpiDevice};
 
-pub use crate::register_bus::RegisterBus;
+pub use crate::register_bus::{Error, RegisterBus};
 
 /// WHO_AM_I register.
 pub const WHO_AM_I: u8 = 0x0F;
@@ -201,52 +199,6 @@ impl<S: SpiDevice> RegisterBus for SpiBus<S> {
     }
 }
 
-/// What went wrong.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Error<E> {
-    /// The bus failed (e.g. no acknowledge: nothing at that address).
-    Bus(E),
-    /// WHO_AM_I did not read 0x3D: another chip, no chip (0xFF, 0x00), or the wrong address
-    /// or chip select.
-    WrongDevice {
-        /// The value read.
-        found: u8,
-    },
-    /// A control register read back other than written (a bus or wiring fault).
-    ConfigNotApplied {
-        /// The register.
-        register: u8,
-        /// Written.
-        wrote: u8,
-        /// Read back.
-        read: u8,
-    },
-}
-
-impl<E> From<E> for Error<E> {
-    fn from(e: E) -> Self {
-        Error::Bus(e)
-    }
-}
-
-impl<E: fmt::Debug> fmt::Display for Error<E> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Error::Bus(e) => write!(f, "LIS3MDL bus error: {e:?}"),
-            Error::WrongDevice { found } => write!(
-                f,
-                "not an LIS3MDL: WHO_AM_I (0x0F) read {found:#04x}, expected {WHO_AM_I_VALUE:#04x}; \
-                 check the I2C address (SA1) or the chip select"
-            ),
-            Error::ConfigNotApplied { register, wrote, read } => write!(
-                f,
-                "LIS3MDL register {register:#04x} reads back {read:#04x} after writing \
-                 {wrote:#04x}; check the bus wiring"
-            ),
-        }
-    }
-}
-
 /// One sample in sensor axes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Sample {
@@ -291,7 +243,11 @@ impl<B: RegisterBus> Lis3mdl<B> {
         let mut id = [0];
         self.bus.read_registers(WHO_AM_I, &mut id)?;
         if id[0] != WHO_AM_I_VALUE {
-            return Err(Error::WrongDevice { found: id[0] });
+            return Err(Error::WrongDevice {
+                part: "LIS3MDL",
+                found: id[0],
+                expected: WHO_AM_I_VALUE,
+            });
         }
         Ok(())
     }
@@ -315,7 +271,12 @@ impl<B: RegisterBus> Lis3mdl<B> {
         self.bus.read_registers(CTRL_REG1, &mut back)?;
         for (i, (&wrote, &read)) in ctrl.iter().zip(&back).enumerate() {
             if read != wrote {
-                return Err(Error::ConfigNotApplied { register: CTRL_REG1 + i as u8, wrote, read });
+                return Err(Error::ConfigNotApplied {
+                    part: "LIS3MDL",
+                    register: CTRL_REG1 + i as u8,
+                    wrote,
+                    read,
+                });
             }
         }
         self.scale = config.scale;

@@ -11,12 +11,10 @@
 //! from STATUS reads a whole sample. SPI: the first byte is the address with bit 7 set for a
 //! read (as the LSM6DSO). I2C addresses 0x5C (SA0 to GND) and 0x5D (SA0 to VDD).
 
-use core::fmt;
-
 use embedded_hal::i2c::{I2c, SevenBitAddress};
 use embedded_hal::spi::{Operation, SpiDevice};
 
-pub use crate::register_bus::RegisterBus;
+pub use crate::register_bus::{Error, RegisterBus};
 
 /// WHO_AM_I register.
 pub const WHO_AM_I: u8 = 0x0F;
@@ -177,52 +175,6 @@ impl<S: SpiDevice> RegisterBus for SpiBus<S> {
     }
 }
 
-/// What went wrong.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Error<E> {
-    /// The bus failed (e.g. no acknowledge: nothing at that address).
-    Bus(E),
-    /// WHO_AM_I did not read 0xB4: another chip, no chip (0xFF, 0x00), or the wrong address
-    /// or chip select.
-    WrongDevice {
-        /// The value read.
-        found: u8,
-    },
-    /// A control register read back other than written (a bus or wiring fault).
-    ConfigNotApplied {
-        /// The register.
-        register: u8,
-        /// Written.
-        wrote: u8,
-        /// Read back.
-        read: u8,
-    },
-}
-
-impl<E> From<E> for Error<E> {
-    fn from(e: E) -> Self {
-        Error::Bus(e)
-    }
-}
-
-impl<E: fmt::Debug> fmt::Display for Error<E> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Error::Bus(e) => write!(f, "LPS22DF bus error: {e:?}"),
-            Error::WrongDevice { found } => write!(
-                f,
-                "not an LPS22DF: WHO_AM_I (0x0F) read {found:#04x}, expected {WHO_AM_I_VALUE:#04x}; \
-                 check the I2C address (SA0) or the chip select"
-            ),
-            Error::ConfigNotApplied { register, wrote, read } => write!(
-                f,
-                "LPS22DF register {register:#04x} reads back {read:#04x} after writing \
-                 {wrote:#04x}; check the bus wiring"
-            ),
-        }
-    }
-}
-
 /// One sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Sample {
@@ -265,7 +217,11 @@ impl<B: RegisterBus> Lps22df<B> {
         let mut id = [0];
         self.bus.read_registers(WHO_AM_I, &mut id)?;
         if id[0] != WHO_AM_I_VALUE {
-            return Err(Error::WrongDevice { found: id[0] });
+            return Err(Error::WrongDevice {
+                part: "LPS22DF",
+                found: id[0],
+                expected: WHO_AM_I_VALUE,
+            });
         }
         Ok(())
     }
@@ -282,7 +238,12 @@ impl<B: RegisterBus> Lps22df<B> {
         self.bus.read_registers(CTRL_REG1, &mut back)?;
         for (i, (&wrote, &read)) in ctrl.iter().zip(&back).enumerate() {
             if read != wrote {
-                return Err(Error::ConfigNotApplied { register: CTRL_REG1 + i as u8, wrote, read });
+                return Err(Error::ConfigNotApplied {
+                    part: "LPS22DF",
+                    register: CTRL_REG1 + i as u8,
+                    wrote,
+                    read,
+                });
             }
         }
         Ok(())

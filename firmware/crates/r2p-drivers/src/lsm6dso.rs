@@ -18,8 +18,6 @@
 //! (on a module: embassy-stm32's I2C, or its SPI with a chip-select pin through
 //! embedded-hal-bus's `ExclusiveDevice`).
 
-use core::fmt;
-
 use embedded_hal::i2c::{I2c, SevenBitAddress};
 use embedded_hal::spi::{Operation, SpiDevice};
 
@@ -235,7 +233,7 @@ impl Default for Config {
 }
 
 /// Register access over some bus (here `read_registers` needs IF_INC, set at reset).
-pub use crate::register_bus::RegisterBus;
+pub use crate::register_bus::{Error, RegisterBus};
 
 /// I2C address, set by the SA0 pin.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -289,53 +287,6 @@ impl<S: SpiDevice> RegisterBus for SpiBus<S> {
     }
     fn read_registers(&mut self, reg: u8, buf: &mut [u8]) -> Result<(), S::Error> {
         self.spi.transaction(&mut [Operation::Write(&[reg | SPI_READ]), Operation::Read(buf)])
-    }
-}
-
-/// What went wrong.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Error<E> {
-    /// The bus failed (e.g. no acknowledge: nothing at that address).
-    Bus(E),
-    /// WHO_AM_I did not read 0x6C: another chip, or the wrong address or chip select.
-    WrongDevice {
-        /// The value read.
-        found: u8,
-        /// The LSM6DSO's value, 0x6C.
-        expected: u8,
-    },
-    /// A control register read back other than written (a bus or wiring fault).
-    ConfigNotApplied {
-        /// The register.
-        register: u8,
-        /// Written.
-        wrote: u8,
-        /// Read back.
-        read: u8,
-    },
-}
-
-impl<E> From<E> for Error<E> {
-    fn from(e: E) -> Self {
-        Error::Bus(e)
-    }
-}
-
-impl<E: fmt::Debug> fmt::Display for Error<E> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Error::Bus(e) => write!(f, "LSM6DSO bus error: {e:?}"),
-            Error::WrongDevice { found, expected } => write!(
-                f,
-                "not an LSM6DSO: WHO_AM_I (0x0F) read {found:#04x}, expected {expected:#04x}; \
-                 check the I2C address (SA0) or the chip select"
-            ),
-            Error::ConfigNotApplied { register, wrote, read } => write!(
-                f,
-                "LSM6DSO register {register:#04x} reads back {read:#04x} after writing \
-                 {wrote:#04x}; check the bus wiring"
-            ),
-        }
     }
 }
 
@@ -418,7 +369,11 @@ impl<B: RegisterBus> Lsm6dso<B> {
         let mut id = [0];
         self.bus.read_registers(WHO_AM_I, &mut id)?;
         if id[0] != WHO_AM_I_VALUE {
-            return Err(Error::WrongDevice { found: id[0], expected: WHO_AM_I_VALUE });
+            return Err(Error::WrongDevice {
+                part: "LSM6DSO",
+                found: id[0],
+                expected: WHO_AM_I_VALUE,
+            });
         }
         Ok(())
     }
@@ -439,7 +394,12 @@ impl<B: RegisterBus> Lsm6dso<B> {
             [(CTRL1_XL, ctrl1, back[0]), (CTRL2_G, ctrl2, back[1]), (CTRL3_C, ctrl3, back[2])]
         {
             if read != wrote {
-                return Err(Error::ConfigNotApplied { register: reg, wrote, read });
+                return Err(Error::ConfigNotApplied {
+                    part: "LSM6DSO",
+                    register: reg,
+                    wrote,
+                    read,
+                });
             }
         }
         self.config = config;
@@ -576,7 +536,7 @@ mod tests {
         let mut r = regs();
         r.r[usize::from(WHO_AM_I)] = 0x6A; // an LSM6DS3
         let e = Lsm6dso::new(r).init(Config::default()).unwrap_err();
-        assert_eq!(e, Error::WrongDevice { found: 0x6A, expected: 0x6C });
+        assert_eq!(e, Error::WrongDevice { part: "LSM6DSO", found: 0x6A, expected: 0x6C });
         let text = std::format!("{e}");
         assert!(text.contains("read 0x6a") && text.contains("expected 0x6c"), "{text}");
     }
@@ -629,6 +589,9 @@ mod tests {
             }
         }
         let e = Lsm6dso::new(Stuck(regs())).init(Config::default()).unwrap_err();
-        assert_eq!(e, Error::ConfigNotApplied { register: CTRL2_G, wrote: 0x44, read: 0 });
+        assert_eq!(
+            e,
+            Error::ConfigNotApplied { part: "LSM6DSO", register: CTRL2_G, wrote: 0x44, read: 0 }
+        );
     }
 }

@@ -1,6 +1,10 @@
-//! What a register-mapped sensor's driver needs of its bus: write one register, read a run of
-//! consecutive ones. Each driver implements it for I2C and SPI with its chip's own rule for
-//! multi-byte access (an auto-increment bit in a control register, or in the address byte).
+//! What a register-mapped sensor's driver needs of its bus — write one register, read a run of
+//! consecutive ones — and what can go wrong: the same for every ST MEMS part the modules use
+//! (LSM6DSO, LIS3MDL, LPS22DF). Each driver implements the bus for I2C and SPI with its chip's
+//! own rule for multi-byte access (an auto-increment bit in a control register, or in the
+//! address byte).
+
+use core::fmt;
 
 /// Register access over some bus.
 pub trait RegisterBus {
@@ -10,4 +14,56 @@ pub trait RegisterBus {
     fn write_register(&mut self, reg: u8, value: u8) -> Result<(), Self::Error>;
     /// Reads `buf.len()` consecutive registers from `reg`.
     fn read_registers(&mut self, reg: u8, buf: &mut [u8]) -> Result<(), Self::Error>;
+}
+
+/// What went wrong talking to a register-mapped sensor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Error<E> {
+    /// The bus failed (e.g. no acknowledge: nothing at that address).
+    Bus(E),
+    /// WHO_AM_I did not read the part's value: another chip, no chip (0xFF, 0x00), or the wrong
+    /// I2C address or chip select.
+    WrongDevice {
+        /// The part the driver is for.
+        part: &'static str,
+        /// The value read.
+        found: u8,
+        /// The part's value.
+        expected: u8,
+    },
+    /// A control register read back other than written (a bus or wiring fault).
+    ConfigNotApplied {
+        /// The part the driver is for.
+        part: &'static str,
+        /// The register.
+        register: u8,
+        /// Written.
+        wrote: u8,
+        /// Read back.
+        read: u8,
+    },
+}
+
+impl<E> From<E> for Error<E> {
+    fn from(e: E) -> Self {
+        Error::Bus(e)
+    }
+}
+
+impl<E: fmt::Debug> fmt::Display for Error<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Bus(e) => write!(f, "sensor bus error: {e:?}"),
+            Error::WrongDevice { part, found, expected } => write!(
+                f,
+                "not an {part}: WHO_AM_I read {found:#04x}, expected {expected:#04x}; check the \
+                 I2C address pin or the chip select"
+            ),
+            Error::ConfigNotApplied { part, register, wrote, read } => write!(
+                f,
+                "{part} register {register:#04x} reads back {read:#04x} after writing \
+                 {wrote:#04x}; check the bus wiring"
+            ),
+        }
+    }
 }

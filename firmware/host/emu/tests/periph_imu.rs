@@ -204,10 +204,10 @@ fn wrong_chip_or_no_chip_names_the_value_read() {
     let mut bus = SimI2c::new();
     bus.attach(0x6B, Rc::new(RefCell::new(OtherChip)));
     let e = Lsm6dso::new_i2c(&mut bus, Address::Sa0High).probe().unwrap_err();
-    assert_eq!(e, Error::WrongDevice { found: 0x69, expected: 0x6C });
+    assert_eq!(e, Error::WrongDevice { part: "LSM6DSO", found: 0x69, expected: 0x6C });
     // SPI with nothing behind the chip select: MISO floats high.
     let e = Lsm6dso::new_spi(SimSpi::unconnected()).probe().unwrap_err();
-    assert_eq!(e, Error::WrongDevice { found: 0xFF, expected: 0x6C });
+    assert_eq!(e, Error::WrongDevice { part: "LSM6DSO", found: 0xFF, expected: 0x6C });
     assert!(e.to_string().contains("read 0xff, expected 0x6c"), "{e}");
 }
 

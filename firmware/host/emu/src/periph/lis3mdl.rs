@@ -282,7 +282,7 @@ mod tests {
     fn an_absent_or_wrong_chip_is_named_by_what_it_read() {
         let mut mag = Lis3mdl::new_spi(SimSpi::unconnected());
         let e = mag.init(Config::default()).unwrap_err();
-        assert_eq!(e, Error::WrongDevice { found: 0xFF });
+        assert_eq!(e, Error::WrongDevice { part: "LIS3MDL", found: 0xFF, expected: 0x3D });
         assert!(e.to_string().contains("read 0xff, expected 0x3d"), "{e}");
     }
 
@@ -326,7 +326,10 @@ mod tests {
     fn a_control_register_that_does_not_take_its_value_is_named() {
         let mut mag = Lis3mdl::new_spi(SimSpi::new(shared(Stuck(Lis3mdlModel::new(), 0x23))));
         let e = mag.init(Config::default()).unwrap_err();
-        assert_eq!(e, Error::ConfigNotApplied { register: 0x23, wrote: 0x0C, read: 0x00 });
+        assert_eq!(
+            e,
+            Error::ConfigNotApplied { part: "LIS3MDL", register: 0x23, wrote: 0x0C, read: 0x00 }
+        );
         assert!(e.to_string().contains("register 0x23 reads back 0x00 after writing 0x0c"), "{e}");
     }
 

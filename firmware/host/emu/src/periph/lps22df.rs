@@ -229,7 +229,7 @@ mod tests {
         dev.borrow_mut().advance_with(41 * MS, input);
         assert!(baro.read().unwrap().is_some());
         let e = Lps22df::new_spi(SimSpi::unconnected()).init(Config::default()).unwrap_err();
-        assert_eq!(e, Error::WrongDevice { found: 0xFF });
+        assert_eq!(e, Error::WrongDevice { part: "LPS22DF", found: 0xFF, expected: 0xB4 });
         assert!(e.to_string().contains("read 0xff, expected 0xb4"), "{e}");
     }
 
@@ -254,7 +254,10 @@ mod tests {
     fn a_control_register_that_does_not_take_its_value_is_named() {
         let mut baro = Lps22df::new_spi(SimSpi::new(shared(Stuck(Lps22dfModel::new(), CTRL_REG2))));
         let e = baro.init(Config::default()).unwrap_err();
-        assert_eq!(e, Error::ConfigNotApplied { register: 0x11, wrote: 0x08, read: 0x00 });
+        assert_eq!(
+            e,
+            Error::ConfigNotApplied { part: "LPS22DF", register: 0x11, wrote: 0x08, read: 0x00 }
+        );
     }
 
     #[test]
