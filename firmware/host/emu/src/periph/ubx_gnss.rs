@@ -227,6 +227,19 @@ mod tests {
             Utc::from_unix(951_782_400 + 3661),
             Utc { year: 2000, month: 2, day: 29, hour: 1, min: 1, sec: 1 }
         );
+        // Against Python's datetime (an independent implementation): ends of days, leap years
+        // 2000 and 2024, the non-leap 2100, 2038's 32-bit limit.
+        let cases = [
+            (946_688_399, (2000, 1, 1, 0, 59, 59)),
+            (1_709_251_199, (2024, 2, 29, 23, 59, 59)),
+            (4_102_447_025, (2100, 1, 1, 0, 37, 5)),
+            (1_234_567_890, (2009, 2, 13, 23, 31, 30)),
+            (2_147_483_647, (2038, 1, 19, 3, 14, 7)),
+            (4_107_542_400, (2100, 3, 1, 0, 0, 0)),
+        ];
+        for (unix, (year, month, day, hour, min, sec)) in cases {
+            assert_eq!(Utc::from_unix(unix), Utc { year, month, day, hour, min, sec }, "{unix}");
+        }
     }
 
     #[test]
@@ -255,6 +268,8 @@ mod tests {
                         pvt.ground_speed_2d(),
                         pvt.heading_motion(),
                         pvt.sec(),
+                        pvt.horizontal_accuracy(),
+                        pvt.vertical_accuracy(),
                     ));
                 }
             }
@@ -269,6 +284,12 @@ mod tests {
         assert!((back[0] - 12.0).abs() < 5.0 && (back[1] + 3.0).abs() < 5.0, "{back:?}");
         assert!((last.6 - 0.5).abs() < 1e-3 && (last.7 - 36.8699).abs() < 1e-3, "{last:?}");
         assert_eq!(last.8, 29, "UTC second of the epoch at 29.8 s");
+        // Accuracy: unknown (u32::MAX mm) before the fix, the receiver's σ after it.
+        assert_eq!((early.9, early.10), (f64::from(u32::MAX) / 1e3, f64::from(u32::MAX) / 1e3));
+        assert_eq!((last.9, last.10), (1.0, 2.0));
+        // One epoch each 0.2 s up to 29.8 s: 149 sent (the parser saw them all but any still
+        // on the wire).
+        assert_eq!(gnss.epochs(), 149);
     }
 
     #[test]
