@@ -1,11 +1,13 @@
-//! The LSM6DSO poll both board-support layers run every step (the MCU over embassy-stm32's
+//! The sensors' poll both board-support layers run every step (the MCU over embassy-stm32's
 //! SPI, the emulated board over the simulated SPI bus and register model), so that what the
 //! application sees of the sensor is the same code on both.
 
+use r2p_drivers::lis3mdl::Lis3mdl;
+use r2p_drivers::lps22df::Lps22df;
 use r2p_drivers::lsm6dso::{Lsm6dso, RegisterBus};
 use r2p_module::leds;
 
-use crate::app::Sample;
+use crate::app::{Reading, Sample};
 
 /// Reads the data-ready flags and, when the gyro has a new sample, the 14-byte burst of
 /// temperature, gyro and accel. `initialised` is whether [`Lsm6dso::init`] succeeded at boot
@@ -29,4 +31,31 @@ pub fn poll<B: RegisterBus>(
         Err(_) => s.sensor_ok = false,
     }
     s
+}
+
+/// Reads the LIS3MDL's status and field in one burst (`initialised`: its `init` succeeded).
+pub fn poll_mag<B: RegisterBus>(
+    mag: &mut Lis3mdl<B>,
+    initialised: bool,
+) -> Reading<r2p_drivers::lis3mdl::Sample> {
+    reading(initialised, || mag.read())
+}
+
+/// Reads the LPS22DF's status, pressure and temperature in one burst.
+pub fn poll_baro<B: RegisterBus>(
+    baro: &mut Lps22df<B>,
+    initialised: bool,
+) -> Reading<r2p_drivers::lps22df::Sample> {
+    reading(initialised, || baro.read())
+}
+
+fn reading<T, E>(initialised: bool, read: impl FnOnce() -> Result<Option<T>, E>) -> Reading<T> {
+    if !initialised {
+        return Reading::Failed;
+    }
+    match read() {
+        Ok(Some(s)) => Reading::Fresh(s),
+        Ok(None) => Reading::Idle,
+        Err(_) => Reading::Failed,
+    }
 }

@@ -55,6 +55,21 @@ pub struct R2pRosType {
 /// Every R2P type, in name order.
 pub const R2P_TYPES: &[R2pRosType] = &[
     R2pRosType {
+        name: "Barometer",
+        r2p_hash: 0x2D66_E029,
+        ros: RosType {
+            dds_name: "r2p_msgs::msg::dds_::Barometer_",
+            hash: "RIHS01_5ba323578dfb500a062da70e5f186f10bb876aaaf227caeb0463d70a9ab1a11f",
+        },
+        fields: &[
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::U8, count: 1 },
+        ],
+    },
+    R2pRosType {
         name: "Battery",
         r2p_hash: 0x471D_E2CA,
         ros: RosType {
@@ -106,11 +121,31 @@ pub const R2P_TYPES: &[R2pRosType] = &[
         ],
     },
     R2pRosType {
+        name: "GnssFix",
+        r2p_hash: 0x527E_F678,
+        ros: RosType {
+            dds_name: "r2p_msgs::msg::dds_::GnssFix_",
+            hash: "RIHS01_f8bbd91bf6033a85e565563cf840c8102aedd4d75930d740fb090f1c2c7b6691",
+        },
+        fields: &[
+            Field { kind: Kind::I32, count: 1 },
+            Field { kind: Kind::I32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::U8, count: 1 },
+            Field { kind: Kind::U8, count: 1 },
+            Field { kind: Kind::U64, count: 1 },
+            Field { kind: Kind::Bool, count: 1 },
+            Field { kind: Kind::U8, count: 1 },
+        ],
+    },
+    R2pRosType {
         name: "Imu",
-        r2p_hash: 0x0F53_2940,
+        r2p_hash: 0xFB1F_2638,
         ros: RosType {
             dds_name: "r2p_msgs::msg::dds_::Imu_",
-            hash: "RIHS01_495b11e3e0bccf6835c72a3f7ccdd72de768a2bcd5aeae75c0897a2bb5dbaba0",
+            hash: "RIHS01_d7db5760d118ae83d8b93b8e15ab569e3983ec9895eec32a51bb42619b494ad5",
         },
         fields: &[
             Field { kind: Kind::F32, count: 3 },
@@ -118,6 +153,21 @@ pub const R2P_TYPES: &[R2pRosType] = &[
             Field { kind: Kind::F32, count: 1 },
             Field { kind: Kind::F32, count: 1 },
             Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::U8, count: 1 },
+            Field { kind: Kind::U8, count: 1 },
+        ],
+    },
+    R2pRosType {
+        name: "MagneticField",
+        r2p_hash: 0x7F66_2741,
+        ros: RosType {
+            dds_name: "r2p_msgs::msg::dds_::MagneticField_",
+            hash: "RIHS01_e75efd56e2ab1b5ca0bc3341132e3899484f4c8357858a9e78016d310857c834",
+        },
+        fields: &[
+            Field { kind: Kind::F32, count: 3 },
+            Field { kind: Kind::F32, count: 3 },
             Field { kind: Kind::F32, count: 1 },
             Field { kind: Kind::U8, count: 1 },
         ],
