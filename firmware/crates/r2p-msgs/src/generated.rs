@@ -218,42 +218,45 @@ crate::impl_wire!(GatewayStatus);
 
 /// Position and time from the GNSS receiver on an IMU module's serial port (UBX NAV-PVT). Published at its `gnss_rate_hz`.
 ///
-/// 32 bytes on the bus, type hash `0x527EF678`; schema `firmware/msgs/GnssFix.msg`.
+/// 36 bytes on the bus, type hash `0xCA3FBF0B`; schema `firmware/msgs/GnssFix.msg`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GnssFix {
     /// 1e-7 deg, WGS-84, north positive (`int32`, bytes 0..4)
     pub latitude: i32,
     /// 1e-7 deg, WGS-84, east positive (`int32`, bytes 4..8)
     pub longitude: i32,
-    /// m above mean sea level (`float32`, bytes 8..12)
+    /// m above the WGS-84 ellipsoid (as sensor_msgs/NavSatFix) (`float32`, bytes 8..12)
     pub altitude: f32,
-    /// m, the receiver's horizontal accuracy estimate (1 sigma) (`float32`, bytes 12..16)
+    /// m above mean sea level (the receiver's geoid model) (`float32`, bytes 12..16)
+    pub altitude_msl: f32,
+    /// m, the receiver's horizontal accuracy estimate (1 sigma) (`float32`, bytes 16..20)
     pub h_acc: f32,
-    /// m, vertical accuracy estimate (`float32`, bytes 16..20)
+    /// m, vertical accuracy estimate (`float32`, bytes 20..24)
     pub v_acc: f32,
-    /// 0 = none, 1 = dead reckoning, 2 = 2-D, 3 = 3-D, 4 = GNSS + dead reckoning, 5 = time only (NAV-PVT's) (`uint8`, bytes 20..21)
+    /// 0 = none, 1 = dead reckoning, 2 = 2-D, 3 = 3-D, 4 = GNSS + dead reckoning, 5 = time only (NAV-PVT's) (`uint8`, bytes 24..25)
     pub fix_type: u8,
-    /// used in the solution (`uint8`, bytes 21..22)
+    /// used in the solution (`uint8`, bytes 25..26)
     pub satellites: u8,
-    /// UTC now, us since 1970-01-01, from the last epoch's time at its PPS edge; 0 = unknown (`uint64`, bytes 22..30)
+    /// UTC now, us since 1970-01-01, from the last epoch's time at its PPS edge; 0 = unknown (`uint64`, bytes 26..34)
     pub utc_us: u64,
-    /// utc_us is disciplined by the time pulse (else from the message's arrival, tens of ms late) (`bool`, bytes 30..31)
+    /// utc_us is disciplined by the time pulse (else from the message's arrival, tens of ms late) (`bool`, bytes 34..35)
     pub pps: bool,
-    /// 0 = ok, 2 = no data from the receiver (`uint8`, bytes 31..32)
+    /// 0 = ok, 2 = no data from the receiver (`uint8`, bytes 35..36)
     pub status: u8,
 }
 
 impl crate::R2pMessage for GnssFix {
     const NAME: &'static str = "GnssFix";
-    const CANONICAL: &'static str = "GnssFix:int32 latitude;int32 longitude;float32 altitude;float32 h_acc;float32 v_acc;uint8 fix_type;uint8 satellites;uint64 utc_us;bool pps;uint8 status";
-    const SIZE: usize = 32;
-    const TYPE_HASH: u32 = 0x527E_F678;
+    const CANONICAL: &'static str = "GnssFix:int32 latitude;int32 longitude;float32 altitude;float32 altitude_msl;float32 h_acc;float32 v_acc;uint8 fix_type;uint8 satellites;uint64 utc_us;bool pps;uint8 status";
+    const SIZE: usize = 36;
+    const TYPE_HASH: u32 = 0xCA3F_BF0B;
 
     fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
         let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
         w.put(&self.latitude);
         w.put(&self.longitude);
         w.put(&self.altitude);
+        w.put(&self.altitude_msl);
         w.put(&self.h_acc);
         w.put(&self.v_acc);
         w.put(&self.fix_type);
@@ -270,6 +273,7 @@ impl crate::R2pMessage for GnssFix {
             latitude: r.get()?,
             longitude: r.get()?,
             altitude: r.get()?,
+            altitude_msl: r.get()?,
             h_acc: r.get()?,
             v_acc: r.get()?,
             fix_type: r.get()?,
@@ -732,7 +736,7 @@ pub const ALL: &[(&str, u32, usize)] = &[
     ("BusPower", 0xC2BD_8B69, 1),
     ("FaultClear", 0x9688_B902, 1),
     ("GatewayStatus", 0x4E80_AA5A, 24),
-    ("GnssFix", 0x527E_F678, 32),
+    ("GnssFix", 0xCA3F_BF0B, 36),
     ("Imu", 0xFB1F_2638, 42),
     ("MagneticField", 0x7F66_2741, 29),
     ("MotorFault", 0x2D53_828B, 6),
