@@ -165,11 +165,14 @@ pub struct NavPvt {
 }
 
 impl NavPvt {
-    /// Decodes a 92-byte payload.
-    pub fn from_payload(p: &[u8; NAV_PVT_LEN]) -> NavPvt {
+    /// Decodes a NAV-PVT payload; `None` unless it has 92 bytes.
+    pub fn from_payload(p: &[u8]) -> Option<NavPvt> {
+        if p.len() != NAV_PVT_LEN {
+            return None;
+        }
         let u32_at = |i: usize| u32::from_le_bytes([p[i], p[i + 1], p[i + 2], p[i + 3]]);
         let i32_at = |i: usize| u32_at(i) as i32;
-        NavPvt {
+        Some(NavPvt {
             itow_ms: u32_at(0),
             year: u16::from_le_bytes([p[4], p[5]]),
             month: p[6],
@@ -197,7 +200,7 @@ impl NavPvt {
             s_acc_mm_s: u32_at(68),
             head_acc_e5: u32_at(72),
             p_dop: u16::from_le_bytes([p[76], p[77]]),
-        }
+        })
     }
 
     /// gnssFixOK: the fix is within the receiver's DOP and accuracy masks.
@@ -248,31 +251,15 @@ pub struct Stats {
     pub dropped_bytes: u32,
 }
 
-/// Where the decoder is in a frame.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-enum State {
-    /// Looking for the first sync character.
-    #[default]
-    Sync1,
-    /// Looking for the second.
-    Sync2,
-    /// Class, id and length: `header[n]` next.
-    Header(u8),
-    /// Payload byte `n` next.
-    Payload(u8),
-    /// CK_A next.
-    CkA,
-    /// CK_B next.
-    CkB,
-}
+/// The longest frame the decoder holds: sync, class, id, length, NAV-PVT's payload, checksum.
+pub const MAX_FRAME: usize = MAX_PAYLOAD + 8;
 
 /// Byte-at-a-time UBX frame decoder; see the module documentation.
 #[derive(Clone, Debug)]
 pub struct Decoder {
-    state: State,
-    header: [u8; 4],
-    payload: [u8; MAX_PAYLOAD],
-    ck: [u8; 2],
+    /// The frame so far: `buf[..pos]`.
+    buf: [u8; MAX_FRAME],
+    pos: usize,
     stats: Stats,
 }
 
@@ -286,10 +273,8 @@ impl Decoder {
     /// An empty decoder.
     pub const fn new() -> Self {
         Self {
-            state: State::Sync1,
-            header: [0; 4],
-            payload: [0; MAX_PAYLOAD],
-            ck: [0; 2],
+            buf: [0; MAX_FRAME],
+            pos: 0,
             stats: Stats { frames: 0, checksum_errors: 0, length_errors: 0, dropped_bytes: 0 },
         }
     }
@@ -299,102 +284,73 @@ impl Decoder {
         self.stats
     }
 
-    fn len(&self) -> usize {
-        usize::from(u16::from_le_bytes([self.header[2], self.header[3]]))
+    /// Bytes of a frame held (received, not yet complete).
+    pub fn held(&self) -> usize {
+        self.pos
     }
 
-    /// Drops the frame in progress: its bytes so far (sync, header, payload, checksum) and
-    /// this one are counted as dropped.
-    fn drop_frame(&mut self, in_frame: usize) -> Option<Message> {
-        self.stats.dropped_bytes += in_frame as u32;
-        self.state = State::Sync1;
+    /// The payload length the frame in progress declares (its header must be in).
+    fn len(&self) -> usize {
+        usize::from(u16::from_le_bytes([self.buf[4], self.buf[5]]))
+    }
+
+    /// Drops the frame in progress, its bytes counted (wrapping: counters of a receiver that
+    /// runs for years, never a panic).
+    fn drop_frame(&mut self) -> Option<Message> {
+        self.stats.dropped_bytes = self.stats.dropped_bytes.wrapping_add(self.pos as u32);
+        self.pos = 0;
         None
     }
 
     /// Takes one byte; returns the message this byte completes, if any.
     pub fn push(&mut self, byte: u8) -> Option<Message> {
-        match self.state {
-            State::Sync1 => {
-                if byte == SYNC1 {
-                    self.state = State::Sync2;
-                } else {
-                    self.stats.dropped_bytes += 1;
-                }
-            }
-            State::Sync2 => match byte {
-                SYNC2 => {
-                    self.state = State::Header(0);
-                    self.ck = [0; 2];
-                }
-                // 0xB5 0xB5 0x62: the second 0xB5 may start the frame.
-                SYNC1 => self.stats.dropped_bytes += 1,
-                _ => return self.drop_frame(2),
-            },
-            State::Header(n) => {
-                self.header[usize::from(n)] = byte;
-                self.add_ck(byte);
-                if n < 3 {
-                    self.state = State::Header(n + 1);
-                } else if self.len() > MAX_PAYLOAD {
-                    self.stats.length_errors += 1;
-                    return self.drop_frame(6);
-                } else if self.len() == 0 {
-                    self.state = State::CkA;
-                } else {
-                    self.state = State::Payload(0);
-                }
-            }
-            State::Payload(n) => {
-                self.payload[usize::from(n)] = byte;
-                self.add_ck(byte);
-                let next = usize::from(n) + 1;
-                self.state = if next == self.len() { State::CkA } else { State::Payload(n + 1) };
-            }
-            State::CkA => {
-                if byte != self.ck[0] {
-                    self.stats.checksum_errors += 1;
-                    return self.drop_frame(7 + self.len());
-                }
-                self.state = State::CkB;
-            }
-            State::CkB => {
-                self.state = State::Sync1;
-                if byte != self.ck[1] {
-                    self.stats.checksum_errors += 1;
-                    return self.drop_frame(8 + self.len());
-                }
-                return self.complete();
-            }
-        }
-        None
-    }
-
-    fn add_ck(&mut self, byte: u8) {
-        self.ck[0] = self.ck[0].wrapping_add(byte);
-        self.ck[1] = self.ck[1].wrapping_add(self.ck[0]);
-    }
-
-    /// A frame with a good checksum.
-    fn complete(&mut self) -> Option<Message> {
-        let [class, id, _, _] = self.header;
-        let len = self.len();
-        let expected = match (class, id) {
-            (CLASS_NAV, ID_NAV_PVT) => NAV_PVT_LEN,
-            (CLASS_ACK, ID_ACK_ACK | ID_ACK_NAK) => 2,
-            _ => len,
+        let sync = match self.pos {
+            0 => SYNC1,
+            1 => SYNC2,
+            _ => byte,
         };
-        if len != expected {
-            self.stats.length_errors += 1;
-            return self.drop_frame(8 + len);
+        if byte != sync {
+            // 0xB5 0xB5 0x62: the second 0xB5 may start the frame.
+            if byte == SYNC1 {
+                self.stats.dropped_bytes = self.stats.dropped_bytes.wrapping_add(1);
+                return None;
+            }
+            self.pos += 1;
+            return self.drop_frame();
         }
-        self.stats.frames += 1;
-        let [c, i] = [self.payload[0], self.payload[1]];
-        Some(match (class, id) {
-            (CLASS_NAV, ID_NAV_PVT) => Message::NavPvt(NavPvt::from_payload(&self.payload)),
-            (CLASS_ACK, ID_ACK_ACK) => Message::Ack(c, i),
-            (CLASS_ACK, _) => Message::Nak(c, i),
-            _ => Message::Other(class, id),
-        })
+        self.buf[self.pos] = byte;
+        self.pos += 1;
+        if self.pos < 6 {
+            return None;
+        }
+        let len = self.len();
+        if len > MAX_PAYLOAD {
+            self.stats.length_errors = self.stats.length_errors.wrapping_add(1);
+            return self.drop_frame();
+        }
+        if self.pos < len + 8 {
+            return None;
+        }
+        if checksum(&self.buf[2..6 + len]) != [self.buf[6 + len], self.buf[7 + len]] {
+            self.stats.checksum_errors = self.stats.checksum_errors.wrapping_add(1);
+            return self.drop_frame();
+        }
+        let [class, id] = [self.buf[2], self.buf[3]];
+        let payload = &self.buf[6..6 + len];
+        let m = match (class, id, len) {
+            (CLASS_NAV, ID_NAV_PVT, _) => NavPvt::from_payload(payload).map(Message::NavPvt),
+            (CLASS_ACK, ID_ACK_ACK, 2) => Some(Message::Ack(payload[0], payload[1])),
+            (CLASS_ACK, ID_ACK_NAK, 2) => Some(Message::Nak(payload[0], payload[1])),
+            (CLASS_ACK, ID_ACK_ACK | ID_ACK_NAK, _) => None,
+            _ => Some(Message::Other(class, id)),
+        };
+        if m.is_none() {
+            self.stats.length_errors = self.stats.length_errors.wrapping_add(1);
+            return self.drop_frame();
+        }
+        self.stats.frames = self.stats.frames.wrapping_add(1);
+        self.pos = 0;
+        m
     }
 }
 
@@ -434,8 +390,7 @@ pub fn encode(class: u8, id: u8, payload: &[u8], out: &mut [u8]) -> Result<usize
     let [l0, l1] = (payload.len() as u16).to_le_bytes();
     f[..6].copy_from_slice(&[SYNC1, SYNC2, class, id, l0, l1]);
     f[6..n - 2].copy_from_slice(payload);
-    let ck = checksum(&f[2..n - 2]);
-    f[n - 2..].copy_from_slice(&ck);
+    seal(f);
     Ok(n)
 }
 
@@ -493,29 +448,89 @@ pub fn cfg_rate(meas_ms: u16, out: &mut [u8]) -> Result<usize, Error> {
     encode(CLASS_CFG, ID_CFG_RATE, &[m0, m1, 1, 0, 1, 0], out)
 }
 
+/// Writes the frame (`class`, `id`, `payload`) into `buf` at `at`, at compile time.
+const fn put_frame(buf: &mut [u8; BOOT_CONFIG_LEN], at: usize, class: u8, id: u8, payload: &[u8]) {
+    let n = payload.len();
+    let head = [SYNC1, SYNC2, class, id, n as u8, (n >> 8) as u8];
+    let mut i = 0;
+    while i < 6 + n {
+        buf[at + i] = if i < 6 { head[i] } else { payload[i - 6] };
+        i += 1;
+    }
+}
+
+/// Byte offsets in [`boot_config`]'s output: the frames, and the two copies of the
+/// measurement period (CFG-VALSET's CFG-RATE-MEAS value, CFG-RATE's measRate).
+const VALSET_AT: usize = 0;
+const MSG_AT: usize = 33;
+const RATE_AT: usize = 44;
+const PRT_AT: usize = 58;
+const VALSET_MEAS_AT: usize = VALSET_AT + 6 + 4 + 3 * 5 + 4;
+const RATE_MEAS_AT: usize = RATE_AT + 6;
+
+/// [`boot_config`] at 1 Hz without its checksums, built at compile time: the image holds these
+/// 86 bytes and patches the period and two checksums rather than linking the encoders.
+const BOOT_TEMPLATE: [u8; BOOT_CONFIG_LEN] = {
+    let mut b = [0u8; BOOT_CONFIG_LEN];
+    let (nmea, ubx, pvt, meas) = (
+        KEY_UART1OUTPROT_NMEA.to_le_bytes(),
+        KEY_UART1OUTPROT_UBX.to_le_bytes(),
+        KEY_MSGOUT_UBX_NAV_PVT_UART1.to_le_bytes(),
+        KEY_RATE_MEAS.to_le_bytes(),
+    );
+    #[rustfmt::skip]
+    let valset = [
+        0, 1, 0, 0, // version 0, layers: RAM
+        nmea[0], nmea[1], nmea[2], nmea[3], 0,
+        ubx[0], ubx[1], ubx[2], ubx[3], 1,
+        pvt[0], pvt[1], pvt[2], pvt[3], 1,
+        meas[0], meas[1], meas[2], meas[3], 0, 0,
+    ];
+    put_frame(&mut b, VALSET_AT, CLASS_CFG, ID_CFG_VALSET, &valset);
+    put_frame(&mut b, MSG_AT, CLASS_CFG, ID_CFG_MSG, &[CLASS_NAV, ID_NAV_PVT, 1]);
+    put_frame(&mut b, RATE_AT, CLASS_CFG, ID_CFG_RATE, &[0, 0, 1, 0, 1, 0]);
+    let baud = OPERATING_BAUD.to_le_bytes();
+    #[rustfmt::skip]
+    let prt = [
+        1, 0, 0, 0, // UART1, reserved, txReady off
+        0xD0, 0x08, 0, 0, // mode: 8N1 (see cfg_prt_uart1)
+        baud[0], baud[1], baud[2], baud[3],
+        0x03, 0, 0x01, 0, // in UBX + NMEA, out UBX
+        0, 0, 0, 0,
+    ];
+    put_frame(&mut b, PRT_AT, CLASS_CFG, ID_CFG_PRT, &prt);
+    b
+};
+
+/// Sets the checksum of the whole frame `f`.
+fn seal(f: &mut [u8]) {
+    let n = f.len();
+    let ck = checksum(&f[2..n - 2]);
+    f[n - 2..].copy_from_slice(&ck);
+}
+
 /// Everything the module sends at boot for NAV-PVT on UART1 at `rate_hz` (1–10) and no NMEA,
-/// [`BOOT_CONFIG_LEN`] bytes: CFG-VALSET to RAM (M9/M10), then CFG-MSG, CFG-RATE and CFG-PRT
-/// to [`OPERATING_BAUD`] (M8; CFG-PRT last, as it changes the baud). Send it at each rate of
-/// [`BOOT_BAUDS`]; see the module documentation.
+/// [`BOOT_CONFIG_LEN`] bytes: CFG-VALSET to RAM (M9/M10: UART1 NMEA output off, UBX on, NAV-PVT
+/// every solution, CFG-RATE-MEAS), then CFG-MSG (NAV-PVT every solution), CFG-RATE and CFG-PRT
+/// to [`OPERATING_BAUD`], input UBX + NMEA, output UBX (M8; CFG-PRT last, as it changes the
+/// baud). The same bytes as [`cfg_valset`], [`cfg_msg`], [`cfg_rate`] and [`cfg_prt_uart1`]
+/// (tested), from a compile-time template. Send it at each rate of [`BOOT_BAUDS`]; see the
+/// module documentation.
 pub fn boot_config(rate_hz: u8, out: &mut [u8]) -> Result<usize, Error> {
     if !(1..=10).contains(&rate_hz) {
         return Err(Error::Rate(rate_hz));
     }
-    if out.len() < BOOT_CONFIG_LEN {
+    let Some(out) = out.get_mut(..BOOT_CONFIG_LEN) else {
         return Err(Error::BufferTooSmall { needed: BOOT_CONFIG_LEN });
+    };
+    out.copy_from_slice(&BOOT_TEMPLATE);
+    let meas = (1000 / u16::from(rate_hz)).to_le_bytes();
+    out[VALSET_MEAS_AT..VALSET_MEAS_AT + 2].copy_from_slice(&meas);
+    out[RATE_MEAS_AT..RATE_MEAS_AT + 2].copy_from_slice(&meas);
+    for f in [VALSET_AT..MSG_AT, MSG_AT..RATE_AT, RATE_AT..PRT_AT, PRT_AT..BOOT_CONFIG_LEN] {
+        seal(&mut out[f]);
     }
-    let meas_ms = 1000 / u16::from(rate_hz);
-    let items = [
-        (KEY_UART1OUTPROT_NMEA, 0),
-        (KEY_UART1OUTPROT_UBX, 1),
-        (KEY_MSGOUT_UBX_NAV_PVT_UART1, 1),
-        (KEY_RATE_MEAS, u32::from(meas_ms)),
-    ];
-    let mut n = cfg_valset(1, &items, out)?;
-    n += cfg_msg(CLASS_NAV, ID_NAV_PVT, 1, &mut out[n..])?;
-    n += cfg_rate(meas_ms, &mut out[n..])?;
-    n += cfg_prt_uart1(OPERATING_BAUD, &mut out[n..])?;
-    Ok(n)
+    Ok(BOOT_CONFIG_LEN)
 }
 
 #[cfg(test)]
@@ -633,7 +648,7 @@ mod tests {
         s.extend(frame(0x0A, 0x09, &[]));
         let (m, st) = decode_all(&s);
         assert_eq!(m.len(), 5);
-        assert_eq!(m[0], Message::NavPvt(NavPvt::from_payload(&pvt_payload())));
+        assert_eq!(m[0], Message::NavPvt(NavPvt::from_payload(&pvt_payload()).unwrap()));
         assert_eq!(m[1..], [
             Message::Ack(0x06, 0x8A),
             Message::Nak(0x06, 0x00),
@@ -774,6 +789,27 @@ mod tests {
     }
 
     #[test]
+    fn boot_config_is_the_encoders_output_at_every_rate() {
+        for hz in 1..=10u8 {
+            let meas = 1000 / u16::from(hz);
+            let mut want = [0u8; 256];
+            let items = [
+                (KEY_UART1OUTPROT_NMEA, 0),
+                (KEY_UART1OUTPROT_UBX, 1),
+                (KEY_MSGOUT_UBX_NAV_PVT_UART1, 1),
+                (KEY_RATE_MEAS, u32::from(meas)),
+            ];
+            let mut n = cfg_valset(1, &items, &mut want).unwrap();
+            n += cfg_msg(CLASS_NAV, ID_NAV_PVT, 1, &mut want[n..]).unwrap();
+            n += cfg_rate(meas, &mut want[n..]).unwrap();
+            n += cfg_prt_uart1(OPERATING_BAUD, &mut want[n..]).unwrap();
+            let mut got = [0u8; BOOT_CONFIG_LEN];
+            assert_eq!(boot_config(hz, &mut got), Ok(n));
+            assert_eq!(got[..], want[..n], "{hz} Hz");
+        }
+    }
+
+    #[test]
     fn errors_display() {
         assert!(std::format!("{}", Error::Rate(11)).contains("11 Hz"));
         assert!(std::format!("{}", Error::KeySize(0x5000_0001)).contains("0x50000001"));
@@ -787,18 +823,12 @@ mod tests {
             let mut d = Decoder::new();
             let mut in_frames = 0usize;
             for &b in &bytes {
+                let before = d.held();
                 if d.push(b).is_some() {
-                    in_frames += 8 + d.len();
+                    in_frames += before + 1;
                 }
             }
-            let held = match d.state {
-                State::Sync1 => 0,
-                State::Sync2 => 1,
-                State::Header(n) => 2 + usize::from(n),
-                State::Payload(n) => 6 + usize::from(n),
-                State::CkA => 6 + d.len(),
-                State::CkB => 7 + d.len(),
-            };
+            let held = d.held();
             prop_assert_eq!(in_frames + d.stats().dropped_bytes as usize + held, bytes.len());
         }
 
@@ -815,7 +845,7 @@ mod tests {
                 let mut p = pvt_payload();
                 p[..16].copy_from_slice(seed);
                 s.extend(frame(CLASS_NAV, ID_NAV_PVT, &p));
-                want.push(Message::NavPvt(NavPvt::from_payload(&p)));
+                want.push(Message::NavPvt(NavPvt::from_payload(&p).unwrap()));
             }
             let (m, st) = decode_all(&s);
             prop_assert_eq!(m, want);
@@ -830,7 +860,7 @@ mod tests {
             let mut bad = good.clone();
             bad[at] ^= 1 << bit;
             let (m, _) = decode_all(&[&bad[..], &good].concat());
-            let want = Message::NavPvt(NavPvt::from_payload(&pvt_payload()));
+            let want = Message::NavPvt(NavPvt::from_payload(&pvt_payload()).unwrap());
             prop_assert!(!m.is_empty() && m.iter().all(|x| *x == want), "{:?}", m);
         }
 
@@ -841,7 +871,7 @@ mod tests {
             let good = frame(CLASS_NAV, ID_NAV_PVT, &pvt_payload());
             let s = [&good[..cut], &good, &good].concat();
             let (m, st) = decode_all(&s);
-            let want = Message::NavPvt(NavPvt::from_payload(&pvt_payload()));
+            let want = Message::NavPvt(NavPvt::from_payload(&pvt_payload()).unwrap());
             prop_assert!(m.iter().all(|x| *x == want));
             prop_assert!(!m.is_empty(), "the third frame always decodes");
             prop_assert_eq!(st.frames as usize, m.len());
