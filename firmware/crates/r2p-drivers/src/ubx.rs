@@ -38,6 +38,7 @@
 //!   §5.9.17.2 warns of that), so success is judged by NAV-PVT arriving at 38400, not by it;
 //! - an M8 already at 38400 (the module reset while the receiver kept power) takes the legacy
 //!   messages at 38400.
+//!
 //! If no NAV-PVT arrives within a few navigation periods the module reports the receiver absent
 //! and tries again later; everything else it publishes goes on.
 //!
@@ -259,7 +260,7 @@ pub const MAX_FRAME: usize = MAX_PAYLOAD + 8;
 pub struct Decoder {
     /// The frame so far: `buf[..pos]`.
     buf: [u8; MAX_FRAME],
-    pos: usize,
+    pos: u8,
     stats: Stats,
 }
 
@@ -286,7 +287,7 @@ impl Decoder {
 
     /// Bytes of a frame held (received, not yet complete).
     pub fn held(&self) -> usize {
-        self.pos
+        usize::from(self.pos)
     }
 
     /// The payload length the frame in progress declares (its header must be in).
@@ -297,7 +298,7 @@ impl Decoder {
     /// Drops the frame in progress, its bytes counted (wrapping: counters of a receiver that
     /// runs for years, never a panic).
     fn drop_frame(&mut self) -> Option<Message> {
-        self.stats.dropped_bytes = self.stats.dropped_bytes.wrapping_add(self.pos as u32);
+        self.stats.dropped_bytes = self.stats.dropped_bytes.wrapping_add(u32::from(self.pos));
         self.pos = 0;
         None
     }
@@ -318,9 +319,10 @@ impl Decoder {
             self.pos += 1;
             return self.drop_frame();
         }
-        self.buf[self.pos] = byte;
+        self.buf[usize::from(self.pos)] = byte;
         self.pos += 1;
-        if self.pos < 6 {
+        let pos = usize::from(self.pos);
+        if pos < 6 {
             return None;
         }
         let len = self.len();
@@ -328,7 +330,7 @@ impl Decoder {
             self.stats.length_errors = self.stats.length_errors.wrapping_add(1);
             return self.drop_frame();
         }
-        if self.pos < len + 8 {
+        if pos < len + 8 {
             return None;
         }
         if checksum(&self.buf[2..6 + len]) != [self.buf[6 + len], self.buf[7 + len]] {
@@ -366,6 +368,8 @@ pub enum Error {
     KeySize(u32),
     /// A navigation rate outside 1–10 Hz.
     Rate(u8),
+    /// More key-value pairs than one CFG-VALSET carries ([`VALSET_MAX_ITEMS`]).
+    TooManyItems(usize),
 }
 
 impl core::fmt::Display for Error {
@@ -378,6 +382,9 @@ impl core::fmt::Display for Error {
                 write!(f, "configuration key {k:#010x}: value size not 1, 2 or 4 bytes")
             }
             Error::Rate(hz) => write!(f, "navigation rate {hz} Hz outside 1–10 Hz"),
+            Error::TooManyItems(n) => {
+                write!(f, "{n} configuration items, one CFG-VALSET carries {VALSET_MAX_ITEMS}")
+            }
         }
     }
 }
@@ -404,30 +411,41 @@ pub fn key_value_size(key: u32) -> Result<usize, Error> {
     }
 }
 
-/// Most key-value pairs [`cfg_valset`] takes at once (a fixed payload buffer).
-pub const VALSET_MAX_ITEMS: usize = 8;
+/// Most key-value pairs one CFG-VALSET carries (UBX-18010854 §5.9.27: "limited to containing
+/// a maximum of 64 key-value pairs").
+pub const VALSET_MAX_ITEMS: usize = 64;
 
 /// UBX-CFG-VALSET, version 0 (applied at once), to the `layers` (bit 0 RAM, 1 BBR, 2 flash):
 /// each `(key, value)` with the value's low bytes in the key's size.
 pub fn cfg_valset(layers: u8, items: &[(u32, u32)], out: &mut [u8]) -> Result<usize, Error> {
-    let mut p = [0u8; 4 + VALSET_MAX_ITEMS * 8];
-    p[1] = layers;
-    let mut n = 4;
-    for &(key, value) in items.iter().take(VALSET_MAX_ITEMS) {
-        let size = key_value_size(key)?;
-        p[n..n + 4].copy_from_slice(&key.to_le_bytes());
-        p[n + 4..n + 4 + size].copy_from_slice(&value.to_le_bytes()[..size]);
-        n += 4 + size;
+    if items.len() > VALSET_MAX_ITEMS {
+        return Err(Error::TooManyItems(items.len()));
     }
-    encode(CLASS_CFG, ID_CFG_VALSET, &p[..n], out)
+    let mut len = 4;
+    for &(key, _) in items {
+        len += 4 + key_value_size(key)?;
+    }
+    let n = len + 8;
+    let Some(f) = out.get_mut(..n) else { return Err(Error::BufferTooSmall { needed: n }) };
+    let [l0, l1] = (len as u16).to_le_bytes();
+    f[..10].copy_from_slice(&[SYNC1, SYNC2, CLASS_CFG, ID_CFG_VALSET, l0, l1, 0, layers, 0, 0]);
+    let mut at = 10;
+    for &(key, value) in items {
+        let size = key_value_size(key)?;
+        f[at..at + 4].copy_from_slice(&key.to_le_bytes());
+        f[at + 4..at + 4 + size].copy_from_slice(&value.to_le_bytes()[..size]);
+        at += 4 + size;
+    }
+    seal(f);
+    Ok(n)
 }
 
 /// UBX-CFG-PRT for UART1 (port 1): 8N1 at `baud`, input UBX and NMEA, output UBX only.
 pub fn cfg_prt_uart1(baud: u32, out: &mut [u8]) -> Result<usize, Error> {
     let mut p = [0u8; 20];
     p[0] = 1; // portID: UART1
-    // mode: charLen 8 bit (bits 7–6 = 11), parity none (bits 11–9 = 100), 1 stop bit (13–12 =
-    // 00), bit 4 set as the receivers' own default (0x000008D0).
+              // mode: charLen 8 bit (bits 7–6 = 11), parity none (bits 11–9 = 100), 1 stop bit (13–12 =
+              // 00), bit 4 set as the receivers' own default (0x000008D0).
     p[4..8].copy_from_slice(&0x0000_08D0u32.to_le_bytes());
     p[8..12].copy_from_slice(&baud.to_le_bytes());
     p[12] = 0x03; // inProtoMask: UBX, NMEA
@@ -451,7 +469,8 @@ pub fn cfg_rate(meas_ms: u16, out: &mut [u8]) -> Result<usize, Error> {
 /// Writes the frame (`class`, `id`, `payload`) into `buf` at `at`, at compile time.
 const fn put_frame(buf: &mut [u8; BOOT_CONFIG_LEN], at: usize, class: u8, id: u8, payload: &[u8]) {
     let n = payload.len();
-    let head = [SYNC1, SYNC2, class, id, n as u8, (n >> 8) as u8];
+    assert!(n < 256, "the boot frames' lengths fit their low byte");
+    let head = [SYNC1, SYNC2, class, id, n as u8, 0];
     let mut i = 0;
     while i < 6 + n {
         buf[at + i] = if i < 6 { head[i] } else { payload[i - 6] };
@@ -562,17 +581,17 @@ mod tests {
     #[test]
     fn checksum_of_the_ack_for_cfg_msg() {
         // ACK-ACK for CFG-MSG as receivers send it: B5 62 05 01 02 00 06 01 0F 38.
-        assert_eq!(frame(CLASS_ACK, ID_ACK_ACK, &[0x06, 0x01]), [
-            0xB5, 0x62, 0x05, 0x01, 0x02, 0x00, 0x06, 0x01, 0x0F, 0x38
-        ]);
+        assert_eq!(
+            frame(CLASS_ACK, ID_ACK_ACK, &[0x06, 0x01]),
+            [0xB5, 0x62, 0x05, 0x01, 0x02, 0x00, 0x06, 0x01, 0x0F, 0x38]
+        );
     }
 
     #[test]
     fn nav_pvt_fields_at_their_offsets() {
         let mut p = [0u8; NAV_PVT_LEN];
-        let put = |p: &mut [u8; NAV_PVT_LEN], at: usize, b: &[u8]| {
-            p[at..at + b.len()].copy_from_slice(b)
-        };
+        let put =
+            |p: &mut [u8; NAV_PVT_LEN], at: usize, b: &[u8]| p[at..at + b.len()].copy_from_slice(b);
         put(&mut p, 0, &475_218_200u32.to_le_bytes());
         put(&mut p, 4, &2026u16.to_le_bytes());
         put(&mut p, 6, &[11, 27, 12, 34, 56, 0x07]);
@@ -649,12 +668,15 @@ mod tests {
         let (m, st) = decode_all(&s);
         assert_eq!(m.len(), 5);
         assert_eq!(m[0], Message::NavPvt(NavPvt::from_payload(&pvt_payload()).unwrap()));
-        assert_eq!(m[1..], [
-            Message::Ack(0x06, 0x8A),
-            Message::Nak(0x06, 0x00),
-            Message::Other(0x0A, 0x04),
-            Message::Other(0x0A, 0x09)
-        ]);
+        assert_eq!(
+            m[1..],
+            [
+                Message::Ack(0x06, 0x8A),
+                Message::Nak(0x06, 0x00),
+                Message::Other(0x0A, 0x04),
+                Message::Other(0x0A, 0x09)
+            ]
+        );
         assert_eq!(st, Stats { frames: 5, dropped_bytes: 2 * nmea.len() as u32, ..st });
         assert_eq!((st.checksum_errors, st.length_errors), (0, 0));
     }
@@ -760,26 +782,33 @@ mod tests {
         let n = boot_config(5, &mut out).unwrap();
         assert_eq!(n, BOOT_CONFIG_LEN);
         let (m, st) = decode_all(&out[..n]);
-        assert_eq!(m, [
-            Message::Other(CLASS_CFG, ID_CFG_VALSET),
-            Message::Other(CLASS_CFG, ID_CFG_MSG),
-            Message::Other(CLASS_CFG, ID_CFG_RATE),
-            Message::Other(CLASS_CFG, ID_CFG_PRT)
-        ]);
+        assert_eq!(
+            m,
+            [
+                Message::Other(CLASS_CFG, ID_CFG_VALSET),
+                Message::Other(CLASS_CFG, ID_CFG_MSG),
+                Message::Other(CLASS_CFG, ID_CFG_RATE),
+                Message::Other(CLASS_CFG, ID_CFG_PRT)
+            ]
+        );
         assert_eq!(st.dropped_bytes, 0);
         // VALSET: NMEA off, UBX on, NAV-PVT every solution, 200 ms.
         assert_eq!(out[6..10], [0, 1, 0, 0]);
-        assert_eq!(out[10..31], [
-            0x02, 0x00, 0x74, 0x10, 0, 0x01, 0x00, 0x74, 0x10, 1, 0x07, 0x00, 0x91, 0x20, 1,
-            0x01, 0x00, 0x21, 0x30, 200, 0
-        ]);
+        assert_eq!(
+            out[10..31],
+            [
+                0x02, 0x00, 0x74, 0x10, 0, 0x01, 0x00, 0x74, 0x10, 1, 0x07, 0x00, 0x91, 0x20, 1,
+                0x01, 0x00, 0x21, 0x30, 200, 0
+            ]
+        );
         // CFG-MSG NAV-PVT 1, CFG-RATE 200 ms / 1 / GPS.
         assert_eq!(out[33 + 6..33 + 9], [0x01, 0x07, 1]);
         assert_eq!(out[44 + 6..44 + 12], [200, 0, 1, 0, 1, 0]);
         // CFG-PRT: UART1, 8N1, 38400, in UBX+NMEA, out UBX.
-        assert_eq!(out[58 + 6..58 + 26], [
-            1, 0, 0, 0, 0xD0, 0x08, 0, 0, 0x00, 0x96, 0, 0, 3, 0, 1, 0, 0, 0, 0, 0
-        ]);
+        assert_eq!(
+            out[58 + 6..58 + 26],
+            [1, 0, 0, 0, 0xD0, 0x08, 0, 0, 0x00, 0x96, 0, 0, 3, 0, 1, 0, 0, 0, 0, 0]
+        );
         assert_eq!(boot_config(0, &mut out), Err(Error::Rate(0)));
         assert_eq!(boot_config(11, &mut out), Err(Error::Rate(11)));
         boot_config(10, &mut out).unwrap();
@@ -810,7 +839,33 @@ mod tests {
     }
 
     #[test]
+    fn valset_limits() {
+        let mut out = [0u8; 600];
+        let items = [(0x4052_0001u32, 0x0102_0304u32); VALSET_MAX_ITEMS + 1];
+        assert_eq!(cfg_valset(1, &items, &mut out), Err(Error::TooManyItems(65)));
+        // 64 four-byte values: 4 + 64 × 8 = 516 bytes of payload, a two-byte length.
+        let n = cfg_valset(1, &items[..64], &mut out).unwrap();
+        assert_eq!((n, out[4], out[5]), (524, 0x04, 0x02));
+        assert_eq!(out[n - 10..n - 2], [0x01, 0x00, 0x52, 0x40, 0x04, 0x03, 0x02, 0x01]);
+        assert_eq!(
+            cfg_valset(1, &items[..64], &mut out[..523]),
+            Err(Error::BufferTooSmall { needed: 524 })
+        );
+        let (m, st) = decode_all(&out[..n]);
+        assert_eq!((m.len(), st.length_errors), (0, 1), "longer than the decoder keeps");
+        assert_eq!(cfg_valset(2, &[], &mut out), Ok(12));
+        assert_eq!(out[..12], frame(CLASS_CFG, ID_CFG_VALSET, &[0, 2, 0, 0])[..]);
+    }
+
+    #[test]
+    fn the_decoder_is_one_frame_of_ram() {
+        assert_eq!(MAX_FRAME, 100);
+        assert!(core::mem::size_of::<Decoder>() <= MAX_FRAME + 24);
+    }
+
+    #[test]
     fn errors_display() {
+        assert!(std::format!("{}", Error::TooManyItems(65)).contains("65"));
         assert!(std::format!("{}", Error::Rate(11)).contains("11 Hz"));
         assert!(std::format!("{}", Error::KeySize(0x5000_0001)).contains("0x50000001"));
         assert!(std::format!("{}", Error::BufferTooSmall { needed: 86 }).contains("86"));
