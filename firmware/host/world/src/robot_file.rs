@@ -767,9 +767,7 @@ fn validate_imu(
             &key("soft_iron"),
             "a 3 × 3 matrix of numbers within -10..=10 (rows: the base's x, y, z)",
         )?;
-        let det = s[0][0] * (s[1][1] * s[2][2] - s[1][2] * s[2][1])
-            - s[0][1] * (s[1][0] * s[2][2] - s[1][2] * s[2][0])
-            + s[0][2] * (s[1][0] * s[2][1] - s[1][1] * s[2][0]);
+        let det = crate::linalg::det(&s);
         if det < 0.01 {
             return Err(ctx.err(
                 key("soft_iron"),

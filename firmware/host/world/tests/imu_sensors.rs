@@ -82,6 +82,7 @@ fn the_barometer_reads_the_sites_atmosphere_and_the_receiver_its_place() {
     assert!(offset.abs() <= BaroParams::LPS22DF.offset_pa);
     // The receiver has no fix before its time to first fix, then one near the antenna.
     w.set_pose(Pose::new(3.0, -4.0, 1.0));
+    assert_eq!(w.gnss_antenna("imu").unwrap().enu, [3.0, -4.0, 0.0], "the module at the centre");
     assert_eq!(w.gnss_fix("imu").unwrap().fix, FixType::None);
     w.set_substep_ns(1_000_000);
     w.advance_ns(30_000_000_000);
@@ -139,6 +140,7 @@ fn an_unplugged_sensor_cannot_be_sampled_until_plugged_again() {
          (set_imu_sensor_connected)"
     );
     w.set_imu_sensor_connected("imu", ImuSensor::Gnss, true).unwrap();
+    assert!(w.imu_sensor_connected("imu", ImuSensor::Gnss).unwrap());
     assert!(w.gnss_fix("imu").is_ok());
     for (s, sample) in [
         (

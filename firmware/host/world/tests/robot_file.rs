@@ -295,6 +295,13 @@ fn an_imu_module_takes_the_robots_iron_and_sensors_unplugged_at_start() {
     assert_eq!(e.key, "modules[6].soft_iron");
     assert!(e.problem.contains("determinant -1.000"), "{e}");
     assert!(e.fix.contains("near the identity"), "{e}");
+    // Down to a determinant of 0.01 exactly (0.5 · 0.02 · 1: a field squeezed to a hundredth
+    // in the plane), not below.
+    let flat = "soft_iron = [[0.5, 0.0, 0.0], [0.0, 0.02, 0.0], [0.0, 0.0, 1.0]]\n";
+    assert!(Robot::parse(&with_imu(flat), "a.toml").is_ok());
+    let flatter = "soft_iron = [[0.5, 0.0, 0.0], [0.0, 0.018, 0.0], [0.0, 0.0, 1.0]]\n";
+    let e = Robot::parse(&with_imu(flatter), "a.toml").unwrap_err();
+    assert!(e.problem.contains("determinant 0.009"), "{e}");
     let huge = "soft_iron = [[11.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]\n";
     let e = Robot::parse(&with_imu(huge), "a.toml").unwrap_err();
     assert_eq!(e.key, "modules[6].soft_iron");
