@@ -89,7 +89,7 @@ pub const DEFAULTS: [Param; COUNT] = [
     Param::f32("mag_soft_yy", 1.0, -4.0, 4.0),
     Param::f32("mag_soft_yz", 0.0, -4.0, 4.0),
     Param::f32("mag_soft_zz", 1.0, -4.0, 4.0),
-    Param::u32("mag_heading", 1, 0, 1),
+    Param::u32("mag_heading", 0, 0, 1),
     Param::u32("mag_rate_hz", 10, 1, 80),
     Param::u32("baro_rate_hz", 10, 1, 25),
     Param::f32("qnh_pa", 101_325.0, 85_000.0, 110_000.0),
@@ -135,7 +135,11 @@ pub const DOCS: [ParamDoc; COUNT] = [
     doc("", "soft iron yy"),
     doc("", "soft iron yz"),
     doc("", "soft iron zz"),
-    doc("", "1: the heading follows the magnetometer; 0: gyro only (steel floors, strong motors)"),
+    doc(
+        "",
+        "1: the heading follows the magnetometer (`r2p imu calibrate` turns it on once the \
+         field is calibrated); 0: gyro only (uncalibrated, steel floors, strong motors)",
+    ),
     doc("Hz", "rate of the `mag` topic"),
     doc("Hz", "rate of the `baro` topic"),
     doc(

@@ -49,9 +49,9 @@ const EAST_FIELD: [f32; 3] = [0.0, 23.7, -41.0];
 impl Rig {
     fn new(set: &[(u16, Value)]) -> Self {
         let params = leak(RamParams::new(DEFAULTS));
-        // The heading from the gyro only unless a test turns the magnetometer's on: the rig's
-        // field does not turn with the rates the tests give.
-        params.set(params::MAG_HEADING, Value::U32(0)).unwrap();
+        // The heading from the gyro only (the default) unless a test turns the magnetometer's
+        // on: the rig's field does not turn with the rates the tests give.
+        assert_eq!(params.get(params::MAG_HEADING), Ok(Value::U32(0)));
         for (i, v) in set {
             params.set(*i, *v).unwrap();
         }

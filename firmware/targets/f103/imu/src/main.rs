@@ -47,13 +47,13 @@ const SENSOR_BOOT_MS: u64 = 10;
 type Device<'a> =
     RefCellDevice<'a, Spi<'static, BlockingMode, spi::mode::Master>, Output<'static>, NoDelay>;
 
+/// The three sensors on SPI1, each set up by the poll (and again after it stops answering).
+type Parts<'a> =
+    sensor::Sensors<SpiBus<Device<'a>>, lis3mdl::SpiBus<Device<'a>>, lps22df::SpiBus<Device<'a>>>;
+
 /// The board's I/O the application step reads and drives.
 struct Io<'a> {
-    imu: Lsm6dso<SpiBus<Device<'a>>>,
-    mag: Lis3mdl<lis3mdl::SpiBus<Device<'a>>>,
-    baro: Lps22df<lps22df::SpiBus<Device<'a>>>,
-    /// Whose `init` succeeded at boot: LSM6DSO, LIS3MDL, LPS22DF.
-    initialised: [bool; 3],
+    sensors: Parts<'a>,
     leds: Leds,
 }
 
@@ -66,11 +66,9 @@ struct Io<'a> {
 /// cost flash; `main`'s task holds this future instead.
 async fn run(mut app: App<'static>, mut io: Io<'_>, flash: ModuleFlash) -> ! {
     let mut ms = EveryMs::new(&PARAMS, flash);
-    let [imu_ok, mag_ok, baro_ok] = io.initialised;
+    let config = app.sensor_config();
     loop {
-        let mut sample = sensor::poll(&mut io.imu, imu_ok, module_core::led_status());
-        sample.mag = sensor::poll_mag(&mut io.mag, mag_ok);
-        sample.baro = sensor::poll_baro(&mut io.baro, baro_ok);
+        let sample = io.sensors.poll(ms.now(), config, module_core::led_status());
         let c = app.step(ms.now(), &sample);
         io.leds.show([c.led_status, c.led_bus, c.led_fault]);
         ms.next().await;
@@ -102,24 +100,22 @@ async fn main(_spawner: Spawner) {
         Ok(d) => d,
         Err(e) => match e {},
     };
-    let mut imu = Lsm6dso::new_spi(device(cs));
-    let mut mag = Lis3mdl::new_spi(device(mag_cs));
-    let mut baro = Lps22df::new_spi(device(baro_cs));
+    let sensors = sensor::Sensors::new(
+        Lsm6dso::new_spi(device(cs)),
+        Lis3mdl::new_spi(device(mag_cs)),
+        Lps22df::new_spi(device(baro_cs)),
+    );
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
     let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
     let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
     Timer::after_millis(SENSOR_BOOT_MS).await;
-    // A sensor that does not answer leaves the module on the bus, reporting it (`Imu::sensors`,
-    // "no data") and publishing what the others give.
-    let initialised = [
-        imu.init(app.sensor_config()).is_ok(),
-        mag.init(lis3mdl::Config::default()).is_ok(),
-        baro.init(lps22df::Config::default()).is_ok(),
-    ];
+    // The parts are set up by the first poll, after their boot time: a part that does not
+    // answer leaves the module on the bus, reporting it (`Imu::sensors`, "no data") and
+    // publishing what the others give; it is set up again when it answers.
     let config = r2p_app_imu::node_config(embassy_stm32::uid::uid(), &PARAMS);
     module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
 
-    run(app, Io { imu, mag, baro, initialised, leds }, flash).await
+    run(app, Io { sensors, leds }, flash).await
 }
