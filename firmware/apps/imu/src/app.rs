@@ -1,16 +1,18 @@
 //! The IMU application: one step per millisecond, sans-IO.
 
 use r2p_drivers::lsm6dso::RawSample;
+use r2p_drivers::ubx::NavPvt;
 use r2p_drivers::{lis3mdl, lps22df};
 use r2p_module::leds;
 use r2p_module::TopicNode;
-use r2p_msgs::{Barometer, Imu, MagneticField};
+use r2p_msgs::{Barometer, GnssFix, Imu, MagneticField};
 use r2p_node::{NodeError, ParamStore};
 
 use crate::ahrs::Ahrs;
 use crate::altitude::{isa_altitude, Vertical};
 use crate::bias::BiasEstimator;
 use crate::endpoints::Endpoints;
+use crate::gnss::Gnss;
 use crate::params::{Config, SensorConfig};
 
 /// `Imu::status`: estimates are valid.
@@ -80,6 +82,11 @@ pub struct Sample {
     pub mag: Reading<lis3mdl::Sample>,
     /// The LPS22DF's read.
     pub baro: Reading<lps22df::Sample>,
+    /// A NAV-PVT the GNSS receiver's link decoded this step ([`crate::gnss::Link`]).
+    pub gnss: Option<NavPvt>,
+    /// The time pulse's last rising edge captured since the previous step, µs (the module's
+    /// clock, as `now_us`).
+    pub pps_us: Option<u64>,
 }
 
 /// What the board-support layer applies after each step (logical levels: `true` = on).
@@ -115,6 +122,10 @@ pub struct App<'a> {
     vertical: Vertical,
     baro: Barometer,
     next_baro_us: u64,
+    gnss: Gnss,
+    gnss_live: Liveness,
+    next_gnss_us: u64,
+    gnss_period_us: u64,
 }
 
 /// The magnetometer's sample period, µs (the driver's default set-up, 80 Hz).
@@ -144,6 +155,10 @@ impl<'a> App<'a> {
             vertical: Vertical::default(),
             baro: Barometer { status: STATUS_NO_DATA, ..Barometer::default() },
             next_baro_us: 0,
+            gnss: Gnss::default(),
+            gnss_live: Liveness::default(),
+            next_gnss_us: 0,
+            gnss_period_us: 1_000_000 / u64::from(crate::params::gnss_rate_hz(params)),
         }
     }
 
@@ -157,6 +172,7 @@ impl<'a> App<'a> {
         node.export(self.ep.imu.remote)?;
         node.export(self.ep.mag.remote)?;
         node.export(self.ep.baro.remote)?;
+        node.export(self.ep.gnss.remote)?;
         Ok(())
     }
 
@@ -185,6 +201,17 @@ impl<'a> App<'a> {
         self.baro
     }
 
+    /// What `gnss` carries at `now_us`.
+    pub fn gnss(&self, now_us: u64) -> GnssFix {
+        self.gnss.fix(now_us, self.gnss_live.alive(now_us, self.gnss_period_us))
+    }
+
+    /// The GNSS receiver's navigation rate, Hz (`gnss_rate_hz`, read at boot): the board-support
+    /// layer configures the receiver with it ([`crate::gnss::Link::new`]).
+    pub fn gnss_rate_hz(&self) -> u32 {
+        (1_000_000 / self.gnss_period_us) as u32
+    }
+
     /// One step at `now_us`: scale a fresh reading, estimate the bias or integrate the
     /// attitude, publish `imu` when due; returns the LEDs to show.
     pub fn step(&mut self, now_us: u64, sample: &Sample) -> Command {
@@ -210,6 +237,15 @@ impl<'a> App<'a> {
         if !baro_alive {
             self.baro.status = STATUS_NO_DATA;
         }
+        if let Some(edge) = sample.pps_us {
+            self.gnss.take_pps(edge);
+        }
+        let epoch = sample.gnss.map_or(Reading::Idle, Reading::Fresh);
+        self.gnss_live.see(now_us, &epoch);
+        if let Some(p) = &sample.gnss {
+            self.gnss.take_epoch(now_us, p);
+        }
+        let gnss_alive = self.gnss_live.alive(now_us, self.gnss_period_us);
         if sample.sensor_ok && sample.fresh {
             self.take(now_us, &sample.raw, &cfg, period_us, mag_alive);
         }
@@ -220,7 +256,8 @@ impl<'a> App<'a> {
         }
         self.state.sensors = (u8::from(!lost) * SENSOR_IMU)
             | (u8::from(mag_alive) * SENSOR_MAG)
-            | (u8::from(baro_alive) * SENSOR_BARO);
+            | (u8::from(baro_alive) * SENSOR_BARO)
+            | (u8::from(gnss_alive) * SENSOR_GNSS);
         if now_us >= self.next_publish_us {
             self.next_publish_us = next_due(self.next_publish_us, now_us, cfg.period_us);
             let m = self.state;
@@ -236,9 +273,15 @@ impl<'a> App<'a> {
             let m = self.baro;
             self.ep.baro.publisher.publish_with(|x| *x = m);
         }
+        if now_us >= self.next_gnss_us {
+            self.next_gnss_us = next_due(self.next_gnss_us, now_us, self.gnss_period_us);
+            let m = self.gnss(now_us);
+            self.ep.gnss.publisher.publish_with(|x| *x = m);
+        }
         let mut status = sample.status;
         // A missing magnetometer or barometer is a fault too: the module still publishes what
-        // it has, and says which are missing in `Imu::sensors`.
+        // it has, and says which are missing in `Imu::sensors`. (The GNSS receiver is an
+        // optional external part: its absence is reported, not a fault.)
         status.fault |= lost || !mag_alive || !baro_alive;
         let [led_status, led_bus, led_fault] = leds::levels(status, now_us / 1000);
         Command { led_status, led_bus, led_fault }

@@ -5,6 +5,7 @@
 //! | `imu` | `Imu` | NRT, at `rate_hz` |
 //! | `imu/mag` | `MagneticField` | NRT, at `mag_rate_hz` |
 //! | `imu/baro` | `Barometer` | NRT, at `baro_rate_hz` |
+//! | `imu/gnss` | `GnssFix` | NRT, at `gnss_rate_hz` |
 //!
 //! The topic's name depends on the `instance` parameter, so the objects are made at boot from
 //! the parameters, in a [`Storage`] of cells (`r2p_module`'s [`Outbound`], each topic written
@@ -13,7 +14,7 @@
 
 use r2p_middleware::{pool_size, Class};
 use r2p_module::{Outbound, OutboundCell};
-use r2p_msgs::{Barometer, Imu, MagneticField};
+use r2p_msgs::{Barometer, GnssFix, Imu, MagneticField};
 use r2p_node::ParamStore;
 
 use crate::params::INSTANCE;
@@ -29,14 +30,16 @@ pub struct Names {
     pub mag: &'static str,
     /// The `Barometer` topic.
     pub baro: &'static str,
+    /// The `GnssFix` topic.
+    pub gnss: &'static str,
 }
 
 /// Names by `instance` parameter.
 pub const NAMES: [Names; 4] = [
-    Names { node: "imu", imu: "imu", mag: "imu/mag", baro: "imu/baro" },
-    Names { node: "imu1", imu: "imu1", mag: "imu1/mag", baro: "imu1/baro" },
-    Names { node: "imu2", imu: "imu2", mag: "imu2/mag", baro: "imu2/baro" },
-    Names { node: "imu3", imu: "imu3", mag: "imu3/mag", baro: "imu3/baro" },
+    Names { node: "imu", imu: "imu", mag: "imu/mag", baro: "imu/baro", gnss: "imu/gnss" },
+    Names { node: "imu1", imu: "imu1", mag: "imu1/mag", baro: "imu1/baro", gnss: "imu1/gnss" },
+    Names { node: "imu2", imu: "imu2", mag: "imu2/mag", baro: "imu2/baro", gnss: "imu2/gnss" },
+    Names { node: "imu3", imu: "imu3", mag: "imu3/mag", baro: "imu3/baro", gnss: "imu3/gnss" },
 ];
 
 /// The names the parameters select.
@@ -64,6 +67,8 @@ pub struct Endpoints<'a> {
     pub mag: Outbound<'a, MagneticField, POOL, 2, REMOTE_QUEUE>,
     /// Pressure and altitude.
     pub baro: Outbound<'a, Barometer, POOL, 2, REMOTE_QUEUE>,
+    /// Position and time.
+    pub gnss: Outbound<'a, GnssFix, POOL, 2, REMOTE_QUEUE>,
 }
 
 /// Room for one set of endpoints: declare it `static` on the MCU, then [`Storage::build`] once.
@@ -72,12 +77,18 @@ pub struct Storage {
     imu: OutboundCell<Imu, POOL, 2, REMOTE_QUEUE>,
     mag: OutboundCell<MagneticField, POOL, 2, REMOTE_QUEUE>,
     baro: OutboundCell<Barometer, POOL, 2, REMOTE_QUEUE>,
+    gnss: OutboundCell<GnssFix, POOL, 2, REMOTE_QUEUE>,
 }
 
 impl Storage {
     /// Empty storage.
     pub const fn new() -> Self {
-        Self { imu: OutboundCell::new(), mag: OutboundCell::new(), baro: OutboundCell::new() }
+        Self {
+            imu: OutboundCell::new(),
+            mag: OutboundCell::new(),
+            baro: OutboundCell::new(),
+            gnss: OutboundCell::new(),
+        }
     }
 
     /// Makes and wires the endpoints with the names `params` give.
@@ -90,6 +101,7 @@ impl Storage {
         let imu = Imu { status: no_data, ..Imu::default() };
         let mag = MagneticField { status: no_data, ..MagneticField::default() };
         let baro = Barometer { status: no_data, ..Barometer::default() };
+        let gnss = GnssFix { status: no_data, ..GnssFix::default() };
         // Sized by `pool_size` for exactly these: cannot fail.
         const SIZED: &str = "the topics are sized for their endpoints";
         Endpoints {
@@ -97,6 +109,7 @@ impl Storage {
             imu: self.imu.build(names.imu, imu, Class::NonRealTime).expect(SIZED),
             mag: self.mag.build(names.mag, mag, Class::NonRealTime).expect(SIZED),
             baro: self.baro.build(names.baro, baro, Class::NonRealTime).expect(SIZED),
+            gnss: self.gnss.build(names.gnss, gnss, Class::NonRealTime).expect(SIZED),
         }
     }
 }

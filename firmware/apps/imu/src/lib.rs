@@ -25,6 +25,7 @@ mod app;
 pub mod attitude;
 pub mod bias;
 pub mod endpoints;
+pub mod gnss;
 pub mod mag_cal;
 pub mod params;
 #[cfg(any(test, feature = "std"))]

@@ -253,6 +253,11 @@ impl SensorConfig {
     }
 }
 
+/// The GNSS rate the parameters ask for, Hz (1–10; at boot).
+pub fn gnss_rate_hz(store: &dyn ParamStore) -> u32 {
+    typed(store).u32(GNSS_RATE_HZ).clamp(1, 10)
+}
+
 /// The parameters as the application reads them: each as its type, the default from
 /// [`DEFAULTS`] if the store lacks it.
 pub fn typed(store: &dyn ParamStore) -> Typed<'_> {

@@ -8,7 +8,7 @@ use std::string::String;
 
 use r2p_middleware::TopicInfo;
 use r2p_module::readme::{class_cell, leds_table, line, params_table, topics_header, Section};
-use r2p_msgs::{Barometer, Imu, MagneticField, R2pMessage};
+use r2p_msgs::{Barometer, GnssFix, Imu, MagneticField, R2pMessage};
 use r2p_node::RamParams;
 
 use crate::endpoints::Endpoints;
@@ -33,7 +33,8 @@ pub fn render() -> String {
             "| `{}` | `{}` ({} bytes) | publishes | {} | every 1/`rate_hz`: angular rate (rad/s, bias \
              tracked), specific force (m/s²), roll, pitch, yaw (rad; from east, true north with \
              the magnetometer), die temperature (°C), status 0 ok, 1 estimating the gyro bias, \
-             2 no data; `sensors` bits: 0 LSM6DSO, 1 magnetometer, 2 barometer answering |",
+             2 no data; `sensors` bits: 0 LSM6DSO, 1 magnetometer, 2 barometer, 3 GNSS receiver \
+             answering |",
             ep.imu.topic.name(),
             Imu::NAME,
             Imu::SIZE,
@@ -57,8 +58,18 @@ pub fn render() -> String {
             Barometer::SIZE,
             class_cell(ep.baro.publisher.class(), None),
         );
+        let _ = writeln!(
+            w,
+            "| `{}` | `{}` ({} bytes) | publishes | {} | every 1/`gnss_rate_hz`: the external \
+             receiver's position (1e-7°, m), accuracies, fix type, satellites, UTC (µs, `pps`: \
+             disciplined by the time pulse), status |",
+            ep.gnss.topic.name(),
+            GnssFix::NAME,
+            GnssFix::SIZE,
+            class_cell(ep.gnss.publisher.class(), None),
+        );
         line(w, "");
-        line(w, "Instance *n* > 0 names the node `imu`*n* and the topics `imu`*n*, `imu`*n*`/mag`, `imu`*n*`/baro`.");
+        line(w, "Instance *n* > 0 names the node `imu`*n* and the topics `imu`*n*, `imu`*n*`/mag`, `imu`*n*`/baro`, `imu`*n*`/gnss`.");
         line(w, "");
         params_table(w, &DEFAULTS, &DOCS);
         line(w, "");

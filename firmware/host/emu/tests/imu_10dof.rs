@@ -6,7 +6,7 @@
 
 use r2p_emu::robot::{BoardNode, EmuRobot};
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
-use r2p_msgs::{Barometer, Imu, MagneticField, WheelSetpoint};
+use r2p_msgs::{Barometer, GnssFix, Imu, MagneticField, WheelSetpoint};
 use r2p_node::{NoParams, NodeConfig, RemotePublisher, RemoteSubscriber};
 use r2p_world::imu_module::ImuSensor;
 use r2p_world::robot_file::Robot;
@@ -42,6 +42,7 @@ struct Tool {
     imu: &'static Subscriber<'static, Imu, 64>,
     mag: &'static Subscriber<'static, MagneticField, 64>,
     baro: &'static Subscriber<'static, Barometer, 64>,
+    gnss: &'static Subscriber<'static, GnssFix, 64>,
     left: &'static Publisher<'static, WheelSetpoint>,
     right: &'static Publisher<'static, WheelSetpoint>,
 }
@@ -82,6 +83,7 @@ fn tool(r: &mut EmuRobot) -> Tool {
         imu: import(&mut node, "imu"),
         mag: import(&mut node, "imu/mag"),
         baro: import(&mut node, "imu/baro"),
+        gnss: import(&mut node, "imu/gnss"),
         left: setpoint(&mut node, "motor1/setpoint"),
         right: setpoint(&mut node, "motor2/setpoint"),
     };
@@ -96,6 +98,8 @@ struct Log {
     imu: Vec<(u64, Imu, f64)>,
     mag: Vec<(u64, MagneticField)>,
     baro: Vec<(u64, Barometer)>,
+    /// With the world's UTC (µs) and the antenna's place (lat, lon, height) when it arrived.
+    gnss: Vec<(u64, GnssFix, i64, [f64; 3])>,
 }
 
 fn run(r: &mut EmuRobot, t: &Tool, ms: u64, wheels: (f32, f32), log: &mut Log) {
@@ -115,6 +119,14 @@ fn run(r: &mut EmuRobot, t: &Tool, ms: u64, wheels: (f32, f32), log: &mut Log) {
         }
         while let Some(m) = t.baro.try_recv() {
             log.baro.push((now, *m));
+        }
+        while let Some(m) = t.gnss.try_recv() {
+            let w = r.world.borrow();
+            let a = w.gnss_antenna("imu").unwrap();
+            let g = w.site().origin().offset(a.enu);
+            // The rig's receiver: the world started at 2026-11-27 12:00:00 UTC.
+            let utc = 1_795_780_800_000_000 + (r.sim.now_ns() / 1000) as i64;
+            log.gnss.push((now, *m, utc, [g.lat_deg, g.lon_deg, g.height_m]));
         }
     }
 }
@@ -185,7 +197,7 @@ fn a_calibrated_magnetometer_holds_the_heading_through_turns_where_the_gyro_drif
     assert!(worst < 0.5, "calibrated heading error {worst:.2}°");
     let first_ok = log.imu.iter().find(|s| s.1.status == 0).unwrap();
     assert!(wrap(f64::from(first_ok.1.yaw) - first_ok.2).abs() < 3f64.to_radians());
-    assert!(log.imu.iter().filter(|s| s.0 > 1500).all(|s| s.1.sensors == 0b111));
+    assert!(log.imu.iter().filter(|s| s.0 > 1500).all(|s| s.1.sensors == 0b1111));
 
     // The gyro alone on the same robot (the default, mag_heading 0): the LSM6DSO's scale error
     // on 36 rad of turning leaves degrees.
@@ -242,7 +254,9 @@ fn a_sensor_unplugged_mid_run_is_reported_the_rest_published_and_it_comes_back()
     let t = tool(&mut r);
     let mut log = Log::default();
     run(&mut r, &t, 2000, (0.0, 0.0), &mut log);
-    assert_eq!(log.imu.last().unwrap().1.sensors, 0b111);
+    // All four, the GNSS receiver configured and sending epochs (no fix yet: that is not a
+    // missing receiver).
+    assert_eq!(log.imu.last().unwrap().1.sensors, 0b1111);
     let connect = |r: &mut EmuRobot, s, on| {
         r.world.borrow_mut().set_imu_sensor_connected("imu", s, on).unwrap();
     };
@@ -251,22 +265,69 @@ fn a_sensor_unplugged_mid_run_is_reported_the_rest_published_and_it_comes_back()
     run(&mut r, &t, 1000, (0.0, 0.0), &mut off);
     // Reported within a step of the first read of all ones; `imu` goes on at 50 Hz.
     assert!(off.imu.len() >= 48, "imu still published: {}", off.imu.len());
-    assert!(off.imu.iter().skip(2).all(|s| s.1.sensors == 0b101 && s.1.status == 0));
+    assert!(off.imu.iter().skip(2).all(|s| s.1.sensors == 0b1101 && s.1.status == 0));
     assert!(off.mag.iter().skip(2).all(|m| m.1.status == 2), "imu/mag says no data");
     assert!(off.baro.iter().all(|b| b.1.status == 0));
-    // The barometer too.
+    // The barometer and the GNSS receiver too: lost after 10 of its periods (10 s at 1 Hz).
     connect(&mut r, ImuSensor::Barometer, false);
+    connect(&mut r, ImuSensor::Gnss, false);
     let mut off2 = Log::default();
     run(&mut r, &t, 500, (0.0, 0.0), &mut off2);
-    assert_eq!(off2.imu.last().unwrap().1.sensors, 0b001);
+    assert_eq!(off2.imu.last().unwrap().1.sensors, 0b1001);
+    run(&mut r, &t, 12_000, (0.0, 0.0), &mut off2);
+    assert_eq!(off2.imu.last().unwrap().1.sensors, 0b0001);
+    assert_eq!(off2.gnss.last().unwrap().1.status, 2);
+    assert!(off2.imu.len() > 500, "imu still at 50 Hz");
     // Plugged back: each part powers up unconfigured; the firmware sets it up again within its
     // retry period (1 s) and reports it.
     connect(&mut r, ImuSensor::Magnetometer, true);
     connect(&mut r, ImuSensor::Barometer, true);
+    connect(&mut r, ImuSensor::Gnss, true);
     let mut back = Log::default();
     run(&mut r, &t, 2500, (0.0, 0.0), &mut back);
-    let again = back.imu.iter().find(|s| s.1.sensors == 0b111).map(|s| s.0);
+    let again = back.imu.iter().find(|s| s.1.sensors == 0b1111).map(|s| s.0);
     assert!(again.is_some_and(|t| t < back.imu[0].0 + 1600), "back at {again:?}");
     assert_eq!(back.mag.last().unwrap().1.status, 0);
     assert_eq!(back.baro.last().unwrap().1.status, 0);
+}
+
+#[test]
+fn the_gnss_receiver_is_configured_from_its_factory_settings_and_gives_position_and_pps_time() {
+    // A u-blox M8 as shipped (NMEA at 9600 baud): the firmware configures it for NAV-PVT at
+    // 38 400; its first fix comes after its time to first fix (26 s, NOT VERIFIED), then the
+    // position is the antenna's within the receiver's noise (σ 1 m horizontal, 2 m vertical)
+    // and UTC follows the time pulse to the microsecond.
+    let mut r = EmuRobot::build(robot("")).unwrap();
+    let t = tool(&mut r);
+    let mut log = Log::default();
+    run(&mut r, &t, 20_000, (0.0, 0.0), &mut log);
+    run(&mut r, &t, 8_000, (2.0, 2.0), &mut log); // rolling forward at 0.05 m/s
+    run(&mut r, &t, 12_000, (0.0, 0.0), &mut log);
+    assert!(log.gnss.len() >= 38, "imu/gnss at 1 Hz: {}", log.gnss.len());
+    let before: Vec<_> = log.gnss.iter().filter(|g| g.0 < 25_000).collect();
+    assert!(before.iter().all(|g| g.1.fix_type == 0), "no fix before the TTFF");
+    assert!(before.iter().filter(|g| g.0 > 3_000).all(|g| g.1.status == 0), "configured and heard");
+    let fixed: Vec<_> = log.gnss.iter().filter(|g| g.0 > 28_000).collect();
+    assert!(fixed.len() >= 10);
+    for (_, f, utc, truth) in &fixed {
+        assert_eq!((f.fix_type, f.status), (3, 0), "{f:?}");
+        assert!(f.satellites >= 4);
+        let north = (f64::from(f.latitude) * 1e-7 - truth[0]).to_radians() * 6_367_000.0;
+        let east = (f64::from(f.longitude) * 1e-7 - truth[1]).to_radians()
+            * 6_389_000.0
+            * truth[0].to_radians().cos();
+        let up = f64::from(f.altitude) - truth[2];
+        assert!(north.hypot(east) < 5.0 && up.abs() < 10.0, "{north:.2} {east:.2} {up:.2} m");
+        assert!(f.h_acc > 0.0 && f.h_acc < 5.0, "{}", f.h_acc);
+        // UTC when the module made the message, exact to the microsecond: the module steps on
+        // whole milliseconds, so the message's UTC is the world's at a whole millisecond, which
+        // the bus then carried to the tool in a few ms (4 ms measured).
+        assert!(f.pps, "disciplined by the pulse");
+        let late = utc - f.utc_us as i64;
+        assert!(late % 1000 == 0 && (0..=10_000).contains(&late), "UTC {late} µs behind");
+    }
+    // The altitude above sea level is the ellipsoid height less the geoid's (47 m here).
+    let f = fixed.last().unwrap().1;
+    assert!((f.altitude - f.altitude_msl - 47.0).abs() < 0.01);
+    assert!(log.imu.last().unwrap().1.sensors & 0b1000 != 0);
 }

@@ -8,7 +8,9 @@
 //! from their reset values and the driver configures them again (the devices' offsets and
 //! noise streams belong to the world and carry on).
 
+use embedded_io::{Read, ReadReady, Write};
 use r2p_app_imu as app;
+use r2p_app_imu::gnss::{Action, Link};
 use r2p_drivers::lis3mdl::Lis3mdl;
 use r2p_drivers::lps22df::Lps22df;
 use r2p_drivers::lsm6dso::Lsm6dso;
@@ -33,6 +35,8 @@ pub fn imu(ctx: Ctx<'_>) -> Result<Booted, String> {
         Lps22df::new_spi(rig.lps22df_spi()),
     );
     let config = a.sensor_config();
+    let mut link = Link::new(a.gnss_rate_hz());
+    let boot_us = ctx.boot_us;
     let (world, flash) = (ctx.world, ctx.flash);
     Ok((
         n,
@@ -40,7 +44,33 @@ pub fn imu(ctx: Ctx<'_>) -> Result<Booted, String> {
             rig.advance(now, &mut world.borrow_mut());
             // As on the MCU: a part that does not answer leaves the module running, reporting
             // it (`Imu::sensors`, status 2, the fault LED), and is set up again later.
-            let sample = sensors.poll(now, config, leds.status(now, node, false));
+            let mut sample = sensors.poll(now, config, leds.status(now, node, false));
+            // USART1 as the MCU's board-support layer drives it (what `Link` asks), and
+            // TIM3_CH4's captures (since boot on the rig; the application's clock here is the
+            // emulator's).
+            let uart = rig.gnss_uart();
+            match link.poll(now) {
+                Some(Action::Send { baud }) => {
+                    uart.set_baud(baud);
+                    let _ = uart.write_all(link.config());
+                }
+                Some(Action::Listen { baud }) => uart.set_baud(baud),
+                None => {}
+            }
+            let mut buf = [0u8; 256];
+            // What the ring buffer holds (a few reads at most: an overrun is reported once).
+            for _ in 0..4 {
+                if !uart.read_ready().unwrap_or(true) {
+                    break;
+                }
+                // An overrun's error: the decoder drops the frame the lost bytes were in.
+                if let Ok(n) = uart.read(&mut buf) {
+                    if let Some(p) = link.receive(now, &buf[..n]) {
+                        sample.gnss = Some(p);
+                    }
+                }
+            }
+            sample.pps_us = rig.take_pps_us().last().map(|t| t + boot_us);
             a.step(now, &sample);
             persist(params, flash);
         }),

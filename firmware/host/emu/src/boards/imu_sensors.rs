@@ -45,7 +45,7 @@ use crate::periph::lps22df::{BaroInput, Lps22dfModel};
 use crate::periph::lsm6dso::Lsm6dsoModel;
 use crate::periph::spi::{Plug, SimSpi};
 use crate::periph::uart::SimUart;
-use crate::periph::ubx_gnss::UbxGnssModel;
+use crate::periph::ubx_gnss::{Generation, UbxGnssModel};
 use crate::periph::{shared, Shared};
 
 /// Unix time of 1980-01-06 00:00:00 UTC, the start of GPS time.
@@ -60,10 +60,13 @@ const PPS_KEPT: usize = 8;
 /// How the external receiver is set up and connected.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct GnssLink {
-    /// Line rate, baud (8N1), as the receiver's port is configured (CFG-PRT is not modelled:
-    /// the receiver comes configured) and the MCU's USART1 set.
+    /// The MCU's USART1 rate at power-up, baud (8N1); the firmware sets its own after.
     pub baud: u32,
-    /// Navigation rate, Hz (1–10).
+    /// `Some`: a receiver of that generation with its factory settings (NMEA at its default
+    /// baud, no UBX until the firmware configures it); `None`: one already configured to send
+    /// NAV-PVT at `rate_hz` at `baud`.
+    pub factory: Option<Generation>,
+    /// Navigation rate of a configured receiver, Hz (1–10).
     pub rate_hz: u32,
     /// The MCU's receive buffer, bytes (its DMA ring buffer; 1 = the bare data register).
     pub rx_buffer: usize,
@@ -72,10 +75,16 @@ pub struct GnssLink {
 }
 
 impl GnssLink {
-    /// 115 200 baud, 5 Hz NAV-PVT (100-byte frames: 4.3 % of the line), a 256-byte ring
-    /// buffer, the world starting 2026-11-27 12:00:00 UTC.
-    pub const DEFAULT: GnssLink =
-        GnssLink { baud: 115_200, rate_hz: 5, rx_buffer: 256, start_unix_s: 1_795_780_800 };
+    /// A u-blox M8 as it leaves the factory (NMEA at 9600 baud: the firmware must configure it
+    /// and move it to 38 400), the MCU's USART1 at 38 400, a 256-byte ring buffer, the world
+    /// starting 2026-11-27 12:00:00 UTC.
+    pub const DEFAULT: GnssLink = GnssLink {
+        baud: 38_400,
+        factory: Some(Generation::M8),
+        rate_hz: 5,
+        rx_buffer: 256,
+        start_unix_s: 1_795_780_800,
+    };
 
     /// GPS time of week at the world's time 0, ms.
     pub fn start_tow_ms(&self) -> u32 {
@@ -123,12 +132,11 @@ impl ImuSensors {
         let module = world.imu_module(name).map_err(|e| e.to_string())?;
         let boot_ns = boot_us * 1000;
         let plugs = SPI_PARTS.map(|s| Plug::new(module.connected(s)));
-        let mut gnss = UbxGnssModel::new(
-            module.gnss.clone(),
-            link.rate_hz,
-            link.start_unix_s,
-            link.start_tow_ms(),
-        );
+        let (rx, start, tow) = (module.gnss.clone(), link.start_unix_s, link.start_tow_ms());
+        let mut gnss = match link.factory {
+            Some(generation) => UbxGnssModel::factory(rx, generation, start, tow),
+            None => UbxGnssModel::new(rx, link.rate_hz, start, tow),
+        };
         // The epochs before this boot went nowhere.
         let a = world.gnss_antenna(name).map_err(|e| e.to_string())?;
         gnss.update(boot_ns, &mut SimUart::new(link.baud, 1), a.enu, a.velocity_enu);

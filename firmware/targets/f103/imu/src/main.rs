@@ -2,7 +2,9 @@
 //! three ST sensors sharing SPI1 — the LSM6DSO (accelerometer and gyro), the LIS3MDL
 //! (magnetometer) and the LPS22DF (barometer), each with its chip select — through the
 //! `r2p-drivers` drivers (the same drivers and poll the emulated board runs over its simulated
-//! SPI bus), the status LEDs, bxCAN and parameters in flash. Pins come only from the board file (firmware/boards/imu.toml) through the generated
+//! SPI bus); an external u-blox receiver on USART1 (interrupt-driven ring buffers, the link
+//! `r2p_app_imu::gnss::Link` sets up) with its time pulse captured by TIM3_CH4; the status LEDs,
+//! bxCAN and parameters in flash. Pins come only from the board file (firmware/boards/imu.toml) through the generated
 //! `board` module.
 #![no_std]
 #![no_main]
@@ -15,9 +17,17 @@ use embassy_stm32::gpio::Output;
 use embassy_stm32::mode::Blocking as BlockingMode;
 use embassy_stm32::spi::{self, Spi, MODE_3};
 use embassy_stm32::time::Hertz;
+use embassy_stm32::timer::input_capture::{CapturePin, InputCapture};
+use embassy_stm32::timer::low_level::{CountingMode, InputCaptureMode, InputTISelection};
+use embassy_stm32::timer::Channel;
+use embassy_stm32::usart::{self, BufferedUart};
+use embassy_time::Instant;
 use embassy_time::Timer;
 use embedded_hal_bus::spi::{NoDelay, RefCellDevice};
+use embedded_io::{Read, Write};
+use embedded_io_async::ReadReady;
 use module_core::{EveryMs, Leds, ModuleFlash};
+use r2p_app_imu::gnss::{Action, Link};
 use r2p_app_imu::{params, sensor, App, Storage};
 use r2p_drivers::lis3mdl::{self, Lis3mdl};
 use r2p_drivers::lps22df::{self, Lps22df};
@@ -29,7 +39,10 @@ mod board {
 }
 
 module_core::bind_can_interrupts!(
-    struct Irqs {}
+    struct Irqs {
+        USART1 => usart::BufferedInterruptHandler<embassy_stm32::peripherals::USART1>;
+        TIM3 => embassy_stm32::timer::CaptureCompareInterruptHandler<embassy_stm32::peripherals::TIM3>;
+    }
 );
 
 static PARAMS: FlashParams<{ params::COUNT }> =
@@ -51,9 +64,57 @@ type Device<'a> =
 type Parts<'a> =
     sensor::Sensors<SpiBus<Device<'a>>, lis3mdl::SpiBus<Device<'a>>, lps22df::SpiBus<Device<'a>>>;
 
+/// The GNSS receiver's port and its time pulse.
+struct Gnss<'a> {
+    uart: BufferedUart<'a>,
+    link: Link,
+    /// TIM3 counting µs (1 MHz), channel 4 capturing the pulse's rising edge.
+    pps: InputCapture<'a, embassy_stm32::peripherals::TIM3>,
+}
+
+impl Gnss<'_> {
+    /// One step at `now_us`: the link's action, the bytes received (a NAV-PVT among them), the
+    /// pulse's edge if one was captured (on the module's clock: the capture's count is TIM3's
+    /// at the edge, which shares the 72 MHz clock with the time base; the count and the time
+    /// are read within a few µs of each other).
+    fn poll(&mut self, now_us: u64, sample: &mut r2p_app_imu::Sample) {
+        match self.link.poll(now_us) {
+            Some(Action::Send { baud }) => {
+                let _ = self.uart.set_baudrate(baud);
+                // 86 bytes into a 128-byte transmit buffer: sent by the interrupt, no wait.
+                let _ = self.uart.write_all(self.link.config());
+            }
+            Some(Action::Listen { baud }) => {
+                let _ = self.uart.set_baudrate(baud);
+            }
+            None => {}
+        }
+        let mut buf = [0u8; 64];
+        for _ in 0..8 {
+            if !self.uart.read_ready().unwrap_or(false) {
+                break;
+            }
+            // An overrun's error: the decoder drops the frame it hit.
+            if let Ok(n) = self.uart.read(&mut buf) {
+                if let Some(p) = self.link.receive(now_us, &buf[..n]) {
+                    sample.gnss = Some(p);
+                }
+            }
+        }
+        if self.pps.get_input_interrupt(Channel::Ch4) {
+            // Reading the capture clears its flag.
+            let at = self.pps.get_capture_value(Channel::Ch4);
+            let count = embassy_stm32::pac::TIM3.cnt().read().cnt();
+            let now = Instant::now().as_micros();
+            sample.pps_us = Some(now - u64::from(count.wrapping_sub(at)));
+        }
+    }
+}
+
 /// The board's I/O the application step reads and drives.
 struct Io<'a> {
     sensors: Parts<'a>,
+    gnss: Gnss<'a>,
     leds: Leds,
 }
 
@@ -68,7 +129,9 @@ async fn run(mut app: App<'static>, mut io: Io<'_>, flash: ModuleFlash) -> ! {
     let mut ms = EveryMs::new(&PARAMS, flash);
     let config = app.sensor_config();
     loop {
-        let sample = io.sensors.poll(ms.now(), config, module_core::led_status());
+        let now = ms.now();
+        let mut sample = io.sensors.poll(now, config, module_core::led_status());
+        io.gnss.poll(now, &mut sample);
         let c = app.step(ms.now(), &sample);
         io.leds.show([c.led_status, c.led_bus, c.led_fault]);
         ms.next().await;
@@ -106,6 +169,49 @@ async fn main(_spawner: Spawner) {
         Lps22df::new_spi(device(baro_cs)),
     );
 
+    // The GNSS port at the link's first rate (it sets its own from then on); the pulse on
+    // TIM3_CH4, TIM3 counting microseconds.
+    let (mut tx_buf, mut rx_buf) = ([0u8; 128], [0u8; 256]);
+    let mut uart_config = usart::Config::default();
+    uart_config.baudrate = r2p_drivers::ubx::OPERATING_BAUD;
+    let Ok(uart) = BufferedUart::new(
+        p.USART1,
+        pins.gnss_rx,
+        pins.gnss_tx,
+        &mut tx_buf,
+        &mut rx_buf,
+        Irqs,
+        uart_config,
+    ) else {
+        panic!("USART1: 38400 baud from a 72 MHz APB2 is always reachable")
+    };
+    let mut pps = InputCapture::new(
+        p.TIM3,
+        None,
+        None,
+        None,
+        // TIM3 not remapped (AFIO): CH4 on PB1; CH1/CH2 (PA6/PA7, SPI1's) are not enabled.
+        Some(CapturePin::<_, _, embassy_stm32::gpio::AfioRemap<0>>::new(
+            pins.gnss_pps,
+            embassy_stm32::gpio::Pull::Down,
+        )),
+        Irqs,
+        Hertz(1_000_000),
+        CountingMode::EdgeAlignedUp,
+    );
+    // Below the bus: the slot timer (TIM2) is P0, CAN and the time base P1 (module-core).
+    // USART1 interrupts at every received byte (3 840 a second at 38 400 baud); at the reset
+    // priority, 0, each would hold off a slot boundary by its length. TIM3's is never enabled
+    // at the source (the capture flag is polled), but is kept low as well.
+    {
+        use embassy_stm32::interrupt::{self, InterruptExt, Priority};
+        interrupt::USART1.set_priority(Priority::P3);
+        interrupt::TIM3.set_priority(Priority::P3);
+    }
+    pps.set_input_ti_selection(Channel::Ch4, InputTISelection::Normal);
+    pps.set_input_capture_mode(Channel::Ch4, InputCaptureMode::Rising);
+    pps.enable(Channel::Ch4);
+
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
     let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
@@ -117,5 +223,6 @@ async fn main(_spawner: Spawner) {
     let config = r2p_app_imu::node_config(embassy_stm32::uid::uid(), &PARAMS);
     module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
 
-    run(app, Io { sensors, leds }, flash).await
+    let gnss = Gnss { uart, link: Link::new(app.gnss_rate_hz()), pps };
+    run(app, Io { sensors, gnss, leds }, flash).await
 }
