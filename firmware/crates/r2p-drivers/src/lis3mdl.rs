@@ -240,16 +240,7 @@ impl<B: RegisterBus> Lis3mdl<B> {
 
     /// Checks WHO_AM_I.
     pub fn probe(&mut self) -> Result<(), Error<B::Error>> {
-        let mut id = [0];
-        self.bus.read_registers(WHO_AM_I, &mut id)?;
-        if id[0] != WHO_AM_I_VALUE {
-            return Err(Error::WrongDevice {
-                part: "LIS3MDL",
-                found: id[0],
-                expected: WHO_AM_I_VALUE,
-            });
-        }
-        Ok(())
+        crate::register_bus::probe(&mut self.bus, "LIS3MDL", WHO_AM_I, WHO_AM_I_VALUE)
     }
 
     /// Probes, then sets ultra-high-performance mode on all axes, `config`'s rate and scale,

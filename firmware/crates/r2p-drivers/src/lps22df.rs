@@ -214,16 +214,7 @@ impl<B: RegisterBus> Lps22df<B> {
 
     /// Checks WHO_AM_I.
     pub fn probe(&mut self) -> Result<(), Error<B::Error>> {
-        let mut id = [0];
-        self.bus.read_registers(WHO_AM_I, &mut id)?;
-        if id[0] != WHO_AM_I_VALUE {
-            return Err(Error::WrongDevice {
-                part: "LPS22DF",
-                found: id[0],
-                expected: WHO_AM_I_VALUE,
-            });
-        }
-        Ok(())
+        crate::register_bus::probe(&mut self.bus, "LPS22DF", WHO_AM_I, WHO_AM_I_VALUE)
     }
 
     /// Probes, then sets auto-increment, block data update and `config`'s rate and

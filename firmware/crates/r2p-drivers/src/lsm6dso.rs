@@ -366,16 +366,7 @@ impl<B: RegisterBus> Lsm6dso<B> {
 
     /// Checks WHO_AM_I.
     pub fn probe(&mut self) -> Result<(), Error<B::Error>> {
-        let mut id = [0];
-        self.bus.read_registers(WHO_AM_I, &mut id)?;
-        if id[0] != WHO_AM_I_VALUE {
-            return Err(Error::WrongDevice {
-                part: "LSM6DSO",
-                found: id[0],
-                expected: WHO_AM_I_VALUE,
-            });
-        }
-        Ok(())
+        crate::register_bus::probe(&mut self.bus, "LSM6DSO", WHO_AM_I, WHO_AM_I_VALUE)
     }
 
     /// Probes, then sets BDU and auto-increment and `config`'s rates and scales, checking

@@ -79,6 +79,21 @@ impl<E: fmt::Debug> fmt::Display for Error<E> {
     }
 }
 
+/// Reads WHO_AM_I (`register`) and checks it is the part's `value` (ST parts all have one).
+pub(crate) fn probe<B: RegisterBus>(
+    bus: &mut B,
+    part: &'static str,
+    register: u8,
+    value: u8,
+) -> Result<(), Error<B::Error>> {
+    let mut id = [0];
+    bus.read_registers(register, &mut id).map_err(Error::Bus)?;
+    if id[0] != value {
+        return Err(Error::WrongDevice { part, found: id[0], expected: value });
+    }
+    Ok(())
+}
+
 /// `Err(NotAnswering)` if every byte of a read is 0xFF (see [`Error::NotAnswering`]).
 pub(crate) fn answered<E>(part: &'static str, bytes: &[u8]) -> Result<(), Error<E>> {
     if bytes.iter().all(|&b| b == 0xFF) {
