@@ -437,9 +437,12 @@ mod tests {
         let mut w = diffbot("");
         w.set_pose(Pose::new(2.0, -1.0, 0.0));
         // Booted at 0.5 s: PPS in µs since boot; the epochs before boot never reach the line.
-        let mut first = ImuSensors::new(&w, "imu", 0, GnssLink::DEFAULT).unwrap();
+        // A receiver already configured for NAV-PVT at 5 Hz and 115 200 baud (the default one
+        // is factory-fresh: the firmware's configuration is tested on the robot).
+        let link = GnssLink { baud: 115_200, factory: None, ..GnssLink::DEFAULT };
+        let mut first = ImuSensors::new(&w, "imu", 0, link).unwrap();
         run_to(&mut w, &mut first, 500 * MS);
-        let mut rig = ImuSensors::new(&w, "imu", 500 * MS, GnssLink::DEFAULT).unwrap();
+        let mut rig = ImuSensors::new(&w, "imu", 500 * MS, link).unwrap();
         let mut parser = Parser::<_, Proto23>::new(Vec::new());
         run_to(&mut w, &mut rig, 501 * MS);
         assert!(nav_pvts(&mut rig, &mut parser).is_empty());
