@@ -530,6 +530,20 @@ mod tests {
     }
 
     #[test]
+    fn pps_edges_not_taken_are_kept_up_to_the_last_eight() {
+        let mut w = diffbot("");
+        let mut rig = ImuSensors::new(&w, "imu", 0, GnssLink::DEFAULT).unwrap();
+        run_for(&mut w, &mut rig, 3500 * MS);
+        assert_eq!(rig.take_pps_us(), [1_000_000, 2_000_000, 3_000_000]);
+        assert!(rig.take_pps_us().is_empty(), "taken once");
+        // A firmware that looks only every 12 s finds the last eight (a capture register would
+        // hold the last one and its overcapture flag).
+        run_for(&mut w, &mut rig, 12_000 * MS);
+        let want: Vec<Micros> = (8..=15).map(|s| s * 1_000_000).collect();
+        assert_eq!(rig.take_pps_us(), want);
+    }
+
+    #[test]
     fn the_same_seed_gives_the_same_bytes_and_registers() {
         let run = |seed: u64| {
             let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../robots/diffbot.toml");
