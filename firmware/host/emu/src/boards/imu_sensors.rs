@@ -8,9 +8,12 @@
 //!   `r2p-drivers` driver the firmware owns. The chip selects are separate, so a transaction
 //!   to one part never reaches another, as on the board.
 //! - **USART1**, an external u-blox receiver ([`UbxGnssModel`]) on the paced UART
-//!   ([`ImuSensors::gnss_uart`]: the bytes the firmware reads, at the line's rate), and its
-//!   time pulse on TIM3_CH4 ([`ImuSensors::take_pps_us`]: the edges the input capture would
-//!   take, in µs since boot).
+//!   ([`ImuSensors::gnss_uart`]: the bytes the firmware reads at its USART's rate, and writes
+//!   to configure the receiver), and its time pulse on TIM3_CH4 ([`ImuSensors::take_pps_us`]:
+//!   the edges the input capture would take, in µs since boot). By default the receiver starts
+//!   from its factory settings ([`GnssSetup::Factory`]: NMEA at 1 Hz at its default baud rate),
+//!   as a receiver bought and plugged in does: the firmware configures it at boot
+//!   (`r2p_drivers::ubx::boot_config`), and again whenever it comes back.
 //!
 //! [`ImuSensors::advance`] runs every emulator step (1 ms): it follows the world's plugs, runs
 //! the samples each part has due at its configured rate from the world at that moment
@@ -19,20 +22,22 @@
 //! line. Nothing here corrects what the parts get wrong: offsets, noise, iron and the
 //! receiver's error reach the firmware as the world makes them.
 //!
-//! **Boot.** A board boot is a power cycle: the three parts start from their power-up
-//! registers, their clocks at the boot instant (no sample before the firmware configures
-//! them). The receiver model takes its copy of the world's receiver (`ImuModule::gnss`: the
-//! same device and error stream) and runs through the epochs before the boot without
-//! sending them: `UbxGnssModel` counts its power-up from time 0, so after a reboot the
-//! receiver keeps the fix it had (a cold start after a reboot needs a power-up time in that
-//! model: not modelled yet).
+//! **Boot.** A board boot is a power cycle, the receiver's too (the board's connector powers
+//! it): the three parts start from their power-up registers, their clocks at the boot instant
+//! (no sample before the firmware configures them), and the receiver from its power-up
+//! settings. The receiver model takes its copy of the world's receiver (`ImuModule::gnss`:
+//! the same device and error stream) and runs through the epochs before the boot without
+//! sending them: `UbxGnssModel` counts its power-up from time 0, so a receiver powered up
+//! later has its fix at once (its time to first fix counts from the world's start: a cold
+//! start needs a power-up time in that model, not modelled yet).
 //!
 //! **Unplugging** (`World::set_imu_sensor_connected`, or `unplugged = [...]` in the robot
 //! file): an SPI part off its bus reads 0xFF on every byte (MISO floats high) and takes no
 //! writes; plugged again, it restarts from its power-up registers and the firmware must
-//! configure it again. The receiver unplugged sends nothing and its PPS stops; plugged again,
-//! its next epoch is on the line (it kept running, as one with its own supply would; a frame
-//! already on the wire when the cable comes off is not cut short).
+//! configure it again. The receiver unplugged sends nothing, hears nothing and its PPS stops;
+//! plugged again, it powers up as at boot (factory settings, or its stored ones) and its next
+//! epoch is on the line (a frame already on the wire when the cable comes off is not cut
+//! short).
 
 use std::collections::VecDeque;
 
@@ -45,7 +50,8 @@ use crate::periph::lps22df::{BaroInput, Lps22dfModel};
 use crate::periph::lsm6dso::Lsm6dsoModel;
 use crate::periph::spi::{Plug, SimSpi};
 use crate::periph::uart::SimUart;
-use crate::periph::ubx_gnss::{Generation, UbxGnssModel};
+pub use crate::periph::ubx_gnss::Generation;
+use crate::periph::ubx_gnss::UbxGnssModel;
 use crate::periph::{shared, Shared};
 
 /// Unix time of 1980-01-06 00:00:00 UTC, the start of GPS time.
@@ -57,17 +63,28 @@ const SECONDS_PER_WEEK: u64 = 604_800;
 /// overcapture flag set); a few let a step that took several seconds lose none.
 const PPS_KEPT: usize = 8;
 
+/// What the receiver runs when it powers up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GnssSetup {
+    /// Its factory settings ([`UbxGnssModel::factory`]): NMEA at 1 Hz at the generation's
+    /// default baud rate, until the firmware configures it (in RAM: lost at power-down).
+    Factory(Generation),
+    /// Configured in its flash ([`UbxGnssModel::new`]): NAV-PVT alone at `rate_hz` (1–10), at
+    /// the MCU's baud rate.
+    Configured {
+        /// Navigation rate, Hz.
+        rate_hz: u32,
+    },
+}
+
 /// How the external receiver is set up and connected.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct GnssLink {
-    /// The MCU's USART1 rate at power-up, baud (8N1); the firmware sets its own after.
-    pub baud: u32,
-    /// `Some`: a receiver of that generation with its factory settings (NMEA at its default
-    /// baud, no UBX until the firmware configures it); `None`: one already configured to send
-    /// NAV-PVT at `rate_hz` at `baud`.
-    pub factory: Option<Generation>,
-    /// Navigation rate of a configured receiver, Hz (1–10).
-    pub rate_hz: u32,
+    /// What the receiver runs at power-up.
+    pub receiver: GnssSetup,
+    /// The MCU's USART1 rate at boot, baud (8N1; the firmware changes it through
+    /// [`SimUart::set_baud`]).
+    pub mcu_baud: u32,
     /// The MCU's receive buffer, bytes (its DMA ring buffer; 1 = the bare data register).
     pub rx_buffer: usize,
     /// UTC at the world's time 0, Unix seconds (a whole second).
@@ -75,13 +92,12 @@ pub struct GnssLink {
 }
 
 impl GnssLink {
-    /// A u-blox M8 as it leaves the factory (NMEA at 9600 baud: the firmware must configure it
-    /// and move it to 38 400), the MCU's USART1 at 38 400, a 256-byte ring buffer, the world
-    /// starting 2026-11-27 12:00:00 UTC.
+    /// An M10 from the factory (NMEA at 38 400 baud), the MCU's USART1 at the rate
+    /// `r2p_drivers::ubx` runs the link at (38 400), a 256-byte ring buffer, the world starting
+    /// 2026-11-27 12:00:00 UTC.
     pub const DEFAULT: GnssLink = GnssLink {
-        baud: 38_400,
-        factory: Some(Generation::M8),
-        rate_hz: 5,
+        receiver: GnssSetup::Factory(Generation::M10),
+        mcu_baud: r2p_drivers::ubx::OPERATING_BAUD,
         rx_buffer: 256,
         start_unix_s: 1_795_780_800,
     };
@@ -110,10 +126,29 @@ pub struct ImuSensors {
     plugs: [Plug; 3],
     gnss: UbxGnssModel,
     gnss_plugged: bool,
+    link: GnssLink,
     uart: SimUart,
-    baud: u32,
     pps_us: VecDeque<Micros>,
     pps_seen_ns: u64,
+}
+
+/// The receiver of IMU board `name` powered up (at time 0, as `UbxGnssModel` counts) as `link`
+/// says, brought to `now_ns` with what it sent before going nowhere: a line it was not on.
+fn power_up_receiver(world: &World, name: &str, link: &GnssLink, now_ns: u64) -> UbxGnssModel {
+    let receiver = world.imu_module(name).unwrap_or_else(|e| bug(e)).gnss.clone();
+    let (start, tow) = (link.start_unix_s, link.start_tow_ms());
+    let mut gnss = match link.receiver {
+        GnssSetup::Factory(generation) => UbxGnssModel::factory(receiver, generation, start, tow),
+        GnssSetup::Configured { rate_hz } => UbxGnssModel::new(receiver, rate_hz, start, tow),
+    };
+    let a = world.gnss_antenna(name).unwrap_or_else(|e| bug(e));
+    // 100 ms at a time on a line that drains, so that its transmit buffer never fills.
+    let mut nowhere = SimUart::new(link.mcu_baud, 1);
+    for t in (100_000_000..=now_ns).step_by(100_000_000).chain([now_ns]) {
+        gnss.update(t, &mut nowhere, a.enu, a.velocity_enu);
+        nowhere.advance_to(t);
+    }
+    gnss
 }
 
 /// A board that asks the world for what its own rig has: a bug of this layer.
@@ -132,15 +167,8 @@ impl ImuSensors {
         let module = world.imu_module(name).map_err(|e| e.to_string())?;
         let boot_ns = boot_us * 1000;
         let plugs = SPI_PARTS.map(|s| Plug::new(module.connected(s)));
-        let (rx, start, tow) = (module.gnss.clone(), link.start_unix_s, link.start_tow_ms());
-        let mut gnss = match link.factory {
-            Some(generation) => UbxGnssModel::factory(rx, generation, start, tow),
-            None => UbxGnssModel::new(rx, link.rate_hz, start, tow),
-        };
-        // The epochs before this boot went nowhere.
-        let a = world.gnss_antenna(name).map_err(|e| e.to_string())?;
-        gnss.update(boot_ns, &mut SimUart::new(link.baud, 1), a.enu, a.velocity_enu);
-        let mut uart = SimUart::new(link.baud, link.rx_buffer);
+        let gnss = power_up_receiver(world, name, &link, boot_ns);
+        let mut uart = SimUart::new(link.mcu_baud, link.rx_buffer);
         uart.advance_to(boot_ns);
         let mut rig = Self {
             name: name.to_string(),
@@ -151,8 +179,8 @@ impl ImuSensors {
             plugs,
             gnss,
             gnss_plugged: module.connected(ImuSensor::Gnss),
+            link,
             uart,
-            baud: link.baud,
             pps_us: VecDeque::new(),
             pps_seen_ns: boot_ns,
         };
@@ -192,7 +220,11 @@ impl ImuSensors {
         let now_ns = now_us * 1000;
         let plugged = |s| world.imu_sensor_connected(&self.name, s).unwrap_or_else(|e| bug(e));
         let states = SPI_PARTS.map(plugged);
-        self.gnss_plugged = plugged(ImuSensor::Gnss);
+        let gnss_plugged = plugged(ImuSensor::Gnss);
+        if gnss_plugged && !self.gnss_plugged {
+            self.gnss = power_up_receiver(world, &self.name, &self.link, now_ns);
+        }
+        self.gnss_plugged = gnss_plugged;
         for (k, part) in SPI_PARTS.into_iter().enumerate() {
             if states[k] && !self.plugs[k].plugged() {
                 self.power_up(part, now_ns);
@@ -221,8 +253,8 @@ impl ImuSensors {
         if self.gnss_plugged {
             self.gnss.update(now_ns, &mut self.uart, a.enu, a.velocity_enu);
         } else {
-            // The receiver runs on; its bytes reach no wire.
-            self.gnss.update(now_ns, &mut SimUart::new(self.baud, 1), a.enu, a.velocity_enu);
+            // What the MCU sends reaches no receiver.
+            self.uart.device_receive();
         }
         self.uart.advance_to(now_ns);
         let mut edge = self.gnss.pps_at(self.pps_seen_ns + 1);
@@ -283,7 +315,8 @@ mod tests {
     use super::*;
     use embedded_hal::spi::{Operation, SpiDevice};
     use embedded_io::Read;
-    use r2p_drivers::{lis3mdl, lps22df, lsm6dso};
+    use embedded_io::Write;
+    use r2p_drivers::{lis3mdl, lps22df, lsm6dso, ubx};
     use r2p_world::magnetic::MagParams;
     use r2p_world::pressure::BaroParams;
     use r2p_world::{Pose, Robot};
@@ -415,6 +448,13 @@ mod tests {
         assert!(lis3mdl::Lis3mdl::new_spi(rig.lis3mdl_spi()).probe().is_ok());
     }
 
+    /// A receiver configured in its flash for NAV-PVT at 5 Hz, at 115 200 baud.
+    const PVT_5HZ: GnssLink = GnssLink {
+        receiver: GnssSetup::Configured { rate_hz: 5 },
+        mcu_baud: 115_200,
+        ..GnssLink::DEFAULT
+    };
+
     /// NAV-PVT epochs read from the rig's UART: (iTOW, fix type, lat, lon).
     fn nav_pvts(
         rig: &mut ImuSensors,
@@ -437,12 +477,9 @@ mod tests {
         let mut w = diffbot("");
         w.set_pose(Pose::new(2.0, -1.0, 0.0));
         // Booted at 0.5 s: PPS in µs since boot; the epochs before boot never reach the line.
-        // A receiver already configured for NAV-PVT at 5 Hz and 115 200 baud (the default one
-        // is factory-fresh: the firmware's configuration is tested on the robot).
-        let link = GnssLink { baud: 115_200, factory: None, ..GnssLink::DEFAULT };
-        let mut first = ImuSensors::new(&w, "imu", 0, link).unwrap();
+        let mut first = ImuSensors::new(&w, "imu", 0, GnssLink::DEFAULT).unwrap();
         run_to(&mut w, &mut first, 500 * MS);
-        let mut rig = ImuSensors::new(&w, "imu", 500 * MS, link).unwrap();
+        let mut rig = ImuSensors::new(&w, "imu", 500 * MS, PVT_5HZ).unwrap();
         let mut parser = Parser::<_, Proto23>::new(Vec::new());
         run_to(&mut w, &mut rig, 501 * MS);
         assert!(nav_pvts(&mut rig, &mut parser).is_empty());
@@ -493,6 +530,20 @@ mod tests {
     }
 
     #[test]
+    fn pps_edges_not_taken_are_kept_up_to_the_last_eight() {
+        let mut w = diffbot("");
+        let mut rig = ImuSensors::new(&w, "imu", 0, GnssLink::DEFAULT).unwrap();
+        run_for(&mut w, &mut rig, 3500 * MS);
+        assert_eq!(rig.take_pps_us(), [1_000_000, 2_000_000, 3_000_000]);
+        assert!(rig.take_pps_us().is_empty(), "taken once");
+        // A firmware that looks only every 12 s finds the last eight (a capture register would
+        // hold the last one and its overcapture flag).
+        run_for(&mut w, &mut rig, 12_000 * MS);
+        let want: Vec<Micros> = (8..=15).map(|s| s * 1_000_000).collect();
+        assert_eq!(rig.take_pps_us(), want);
+    }
+
+    #[test]
     fn the_same_seed_gives_the_same_bytes_and_registers() {
         let run = |seed: u64| {
             let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../robots/diffbot.toml");
@@ -500,7 +551,7 @@ mod tests {
             assert!(text.contains("seed = 2026"));
             let text = text.replace("seed = 2026", &format!("seed = {seed}"));
             let mut w = World::from_robot(&Robot::parse(&text, "diffbot.toml").unwrap());
-            let mut rig = ImuSensors::new(&w, "imu", 0, GnssLink::DEFAULT).unwrap();
+            let mut rig = ImuSensors::new(&w, "imu", 0, PVT_5HZ).unwrap();
             let mut mag = lis3mdl::Lis3mdl::new_spi(rig.lis3mdl_spi());
             mag.init(lis3mdl::Config::default()).unwrap();
             let (mut field, mut line) = (Vec::new(), Vec::new());
@@ -523,6 +574,67 @@ mod tests {
         assert_eq!(a.1.len(), b.1.len(), "the same frames at the same times");
         assert_ne!(a.0, b.0, "another device and noise");
         assert_ne!(a.1, b.1, "another receiver error once fixed");
+    }
+
+    /// Reads what the rig's UART has each millisecond for `ms` into `ubx`'s decoder; returns
+    /// (NMEA RMC sentences seen, NAV-PVTs decoded).
+    fn listen(
+        w: &mut World,
+        rig: &mut ImuSensors,
+        dec: &mut ubx::Decoder,
+        ms: u64,
+    ) -> (usize, usize) {
+        let (mut bytes, mut pvts) = (Vec::new(), 0);
+        for _ in 0..ms {
+            run_for(w, rig, MS);
+            let mut buf = [0u8; 512];
+            let n = rig.gnss_uart().read(&mut buf).unwrap_or(0);
+            bytes.extend_from_slice(&buf[..n]);
+            for &b in &buf[..n] {
+                pvts += usize::from(matches!(dec.push(b), Some(ubx::Message::NavPvt(_))));
+            }
+        }
+        (bytes.windows(6).filter(|w| w == b"$GNRMC").count(), pvts)
+    }
+
+    #[test]
+    fn a_factory_receiver_is_configured_by_the_firmware_and_back_at_its_factory_settings_after_a_replug(
+    ) {
+        let mut w = diffbot("");
+        let mut rig = ImuSensors::new(&w, "imu", 0, GnssLink::DEFAULT).unwrap();
+        let mut dec = ubx::Decoder::default();
+        // An M10 from the factory: NMEA (RMC first) once a second at 38 400 baud.
+        let (rmc, pvts) = listen(&mut w, &mut rig, &mut dec, 2500);
+        assert_eq!((rmc, pvts), (2, 0));
+        // What the module does at boot (r2p_drivers::ubx): the configuration at each rate of
+        // BOOT_BAUDS, then the operating rate.
+        let boot = |w: &mut World, rig: &mut ImuSensors, dec: &mut ubx::Decoder| {
+            let mut cfg = [0u8; ubx::BOOT_CONFIG_LEN];
+            ubx::boot_config(5, &mut cfg).unwrap();
+            for baud in ubx::BOOT_BAUDS {
+                rig.gnss_uart().set_baud(baud);
+                rig.gnss_uart().write_all(&cfg).unwrap();
+                listen(w, rig, dec, 300);
+            }
+            rig.gnss_uart().set_baud(ubx::OPERATING_BAUD);
+        };
+        boot(&mut w, &mut rig, &mut dec);
+        // 5 Hz for 2 s (the window's last frame maybe still on the wire).
+        let (rmc, pvts) = listen(&mut w, &mut rig, &mut dec, 2000);
+        assert!(rmc == 0 && (9..=10).contains(&pvts), "NAV-PVT alone: {rmc} RMC, {pvts} PVT");
+        assert_eq!(rig.gnss().rate_hz(), 5.0);
+        // Unplugged: what the firmware sends is lost; plugged again the receiver is back at its
+        // factory settings and must be configured again.
+        w.set_imu_sensor_connected("imu", ImuSensor::Gnss, false).unwrap();
+        listen(&mut w, &mut rig, &mut dec, 20);
+        rig.gnss_uart().write_all(&[0xB5, 0x62, 0x06, 0x8A]).unwrap();
+        listen(&mut w, &mut rig, &mut dec, 1000);
+        w.set_imu_sensor_connected("imu", ImuSensor::Gnss, true).unwrap();
+        let (rmc, pvts) = listen(&mut w, &mut rig, &mut dec, 2500);
+        assert_eq!((rmc, pvts), (2, 0));
+        assert_eq!(rig.gnss().acks_naks(), (0, 0), "a fresh receiver, nothing heard");
+        boot(&mut w, &mut rig, &mut dec);
+        assert!((9..=10).contains(&listen(&mut w, &mut rig, &mut dec, 2000).1));
     }
 
     #[test]
