@@ -49,7 +49,7 @@ def test_a_missing_file_and_bad_toml_name_the_file(tmp_path):
     ('name = "motor"', 'name = "Motor"', 'name = "Motor"', "is not lowercase letters"),
     ('name = "imu"', 'name = "psu"', '"psu"\nkind = "inertial', "listed twice (also at line"),
     ('case = true\nemulator = "imu"', 'case = true\nemulatr = "imu"', "emulatr", "unknown key `emulatr`"),
-    ('fab = true\ncase = true\nemulator = "imu"', 'fab = "no"\ncase = true\nemulator = "imu"',
+    ('fab = false\ncase = true\nemulator = "imu"', 'fab = "no"\ncase = true\nemulator = "imu"',
      'fab = "no"', "`fab` must be true or false"),
     ('board_file = "firmware/boards/imu.toml"', 'board_file = "firmware/boards/imu2.toml"', "imu2.toml",
      "a module's board_file is 'firmware/boards/imu.toml'"),
@@ -72,7 +72,7 @@ def test_a_bad_entry_names_the_file_the_line_and_the_fix(tmp_path, old, new, anc
 
 def test_fab_or_case_without_a_board_names_the_missing_file(tmp_path):
     """A module whose board is not designed yet cannot ask for a fab package or a case: the IMU's
-    entry (fab = true, case = true) over a hardware/imu/ that holds only its README."""
+    entry with fab = true and case = true over a hardware/imu/ that holds only its README."""
     hw = tmp_path / "hardware"
     hw.mkdir()
     for d in (ROOT / "hardware").iterdir():
@@ -81,12 +81,13 @@ def test_fab_or_case_without_a_board_names_the_missing_file(tmp_path):
     (hw / "imu").mkdir()
     (hw / "imu" / "README.md").write_text("# imu\n")
     (tmp_path / "firmware").symlink_to(ROOT / "firmware")
-    (tmp_path / "modules.toml").write_text(TEXT)
+    anchor = 'fab = true\ncase = true\nemulator = "imu"'
+    text = TEXT.replace('fab = false\ncase = true\nemulator = "imu"', anchor, 1)
+    (tmp_path / "modules.toml").write_text(text)
     with pytest.raises(manifest.ManifestError) as e:
         manifest.load(tmp_path)
     assert "`fab = true` but hardware/imu/imu.kicad_pcb does not exist" in str(e.value), e.value
-    anchor = 'fab = true\ncase = true\nemulator = "imu"'
-    assert str(e.value).startswith(f"modules.toml:{line_of(TEXT, anchor)}: "), e.value
+    assert str(e.value).startswith(f"modules.toml:{line_of(text, anchor)}: "), e.value
 
 
 def test_an_entry_missing_a_key_says_which(tmp_path):
