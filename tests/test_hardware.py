@@ -557,15 +557,17 @@ def test_imu_field_estimates_use_the_boards_places():
     must be where the parts are on hardware/imu/imu.kicad_pcb, so moving U102 or JP101 in KiCad
     fails here until the calculation (and the numbers it prints) follow."""
     import pcbnew
+    from r2ptools.kicad.board import ORIGIN
     from r2ptools.kicad.calc import imu
     b = pcbnew.LoadBoard(str(HARDWARE / "imu" / "imu.kicad_pcb"))
+
+    def at(fp) -> tuple[float, float]:          # mm from the board's top-left corner
+        return (round(pcbnew.ToMM(fp.GetPosition().x) - ORIGIN[0], 2),
+                round(pcbnew.ToMM(fp.GetPosition().y) - ORIGIN[1], 2))
     for ref in ("U102", "JP101"):
-        fp = b.FindFootprintByReference(ref)
-        at = (pcbnew.ToMM(fp.GetPosition().x), pcbnew.ToMM(fp.GetPosition().y))
-        want = imu.PLACES[ref]
-        assert abs(at[0] - want[0]) < 0.05 and abs(at[1] - want[1]) < 0.05, (ref, at, want)
-    holes = sorted((round(pcbnew.ToMM(fp.GetPosition().x), 2), round(pcbnew.ToMM(fp.GetPosition().y), 2))
-                   for fp in b.GetFootprints() if fp.GetReference().startswith("H"))
+        got, want = at(b.FindFootprintByReference(ref)), imu.PLACES[ref]
+        assert abs(got[0] - want[0]) < 0.05 and abs(got[1] - want[1]) < 0.05, (ref, got, want)
+    holes = sorted(at(fp) for fp in b.GetFootprints() if fp.GetReference().startswith("H"))
     assert tuple(imu.PLACES["H3"]) in holes and tuple(imu.PLACES["H4"]) in holes, holes
 
 MOTOR_ROLES = {
