@@ -452,7 +452,7 @@ def test_psu_high_voltage_clearance_rule_catches_a_violation(tmp_path):
     assert ipc_errors(), "a GND via 0.4 mm from VIN_BUCK must break the 0.6 mm rule"
 
 
-@pytest.mark.parametrize("board", ["psu", "proximity", "template", "motor"])
+@pytest.mark.parametrize("board", ["psu", "proximity", "template", "motor", "imu"])
 def test_no_via_sits_in_an_smd_pad(board):
     """An open via in a pad wicks the joint's solder down the barrel (revision A had a VIN_BUCK via
     in C102's pad); the exposed pads' thermal vias are the only vias allowed in copper pads."""
@@ -522,8 +522,8 @@ def test_a_test_pad_put_on_the_bom_is_reported(scratch):
 
 
 def test_design_numbers_hold():
-    """The equations behind revision B's values (calc/core.py, calc/proximity.py and
-    calc/gateway.py print them)
+    """The equations behind revision B's values (calc/core.py, calc/proximity.py,
+    calc/gateway.py and calc/imu.py print them)
     hold, the boards' KiCad schematics carry the values they assume, and the emulated sensor
     switch uses the hardware's nominal limit."""
     from r2ptools.kicad.calc import core, gateway, proximity
@@ -536,7 +536,10 @@ def test_design_numbers_hold():
     # the gateway draws the core's blocks around its own MCU (an F407, its own decoupling)
     core_values = {b.name: gateway.BOARD_VALUES if b.name == "gateway" else core.BOARD_VALUES
                    for b in BOARDS}
-    for board, values in list(core_values.items()) + [("proximity", proximity.BOARD_VALUES)]:
+    from r2ptools.kicad.calc import imu
+    assert imu.main() == 0, "an IMU design number fails: scripts/py -m r2ptools.kicad.calc.imu"
+    for board, values in list(core_values.items()) + [("proximity", proximity.BOARD_VALUES),
+                                                      ("imu", imu.BOARD_VALUES)]:
         parts = netlist.export(HARDWARE / board / f"{board}.kicad_sch").components
         wrong = [f"{board} {ref}: calc assumes {want:g}, board has {parts[ref].value}"
                  for ref, want in values.items()
@@ -547,6 +550,25 @@ def test_design_numbers_hold():
     assert abs(limit_a * 1000 - nom) < 1.0, (limit_a, nom)
 
 
+
+
+def test_imu_field_estimates_use_the_boards_places():
+    """calc/imu.py states the magnetometer's distances (README, schematic note) from PLACES: they
+    must be where the parts are on hardware/imu/imu.kicad_pcb, so moving U102 or JP101 in KiCad
+    fails here until the calculation (and the numbers it prints) follow."""
+    import pcbnew
+    from r2ptools.kicad.board import ORIGIN
+    from r2ptools.kicad.calc import imu
+    b = pcbnew.LoadBoard(str(HARDWARE / "imu" / "imu.kicad_pcb"))
+
+    def at(fp) -> tuple[float, float]:          # mm from the board's top-left corner
+        return (round(pcbnew.ToMM(fp.GetPosition().x) - ORIGIN[0], 2),
+                round(pcbnew.ToMM(fp.GetPosition().y) - ORIGIN[1], 2))
+    for ref in ("U102", "JP101"):
+        got, want = at(b.FindFootprintByReference(ref)), imu.PLACES[ref]
+        assert abs(got[0] - want[0]) < 0.05 and abs(got[1] - want[1]) < 0.05, (ref, got, want)
+    holes = sorted(at(fp) for fp in b.GetFootprints() if fp.GetReference().startswith("H"))
+    assert tuple(imu.PLACES["H3"]) in holes and tuple(imu.PLACES["H4"]) in holes, holes
 
 MOTOR_ROLES = {
     # calc/motor.py DESIGN_VALUES role -> the references on hardware/motor that realise it

@@ -48,13 +48,11 @@ def test_a_missing_file_and_bad_toml_name_the_file(tmp_path):
 @pytest.mark.parametrize("old, new, anchor, expect", [
     ('name = "motor"', 'name = "Motor"', 'name = "Motor"', "is not lowercase letters"),
     ('name = "imu"', 'name = "psu"', '"psu"\nkind = "inertial', "listed twice (also at line"),
-    ('case = false\nemulator = "imu"', 'case = false\nemulatr = "imu"', "emulatr", "unknown key `emulatr`"),
-    ('fab = false\ncase = false\nemulator = "imu"', 'fab = "no"\ncase = false\nemulator = "imu"',
+    ('case = true\nemulator = "imu"', 'case = true\nemulatr = "imu"', "emulatr", "unknown key `emulatr`"),
+    ('fab = false\ncase = true\nemulator = "imu"', 'fab = "no"\ncase = true\nemulator = "imu"',
      'fab = "no"', "`fab` must be true or false"),
     ('board_file = "firmware/boards/imu.toml"', 'board_file = "firmware/boards/imu2.toml"', "imu2.toml",
      "a module's board_file is 'firmware/boards/imu.toml'"),
-    ('app = "firmware/apps/imu"\nfab = false', 'app = "firmware/apps/imu"\nfab = true',
-     "fab = true\ncase = false\nemulator = \"imu\"", "`fab = true` but hardware/imu/imu.kicad_pcb does not exist"),
     ('mcu = "STM32F103CB", budget_flash = 56192, budget_ram = 16384, slot = "active" }\n\n[[module]]\nname = "imu"',
      'mcu = "STM32F103CB", budget_flash = 655360, budget_ram = 16384, slot = "active" }\n\n[[module]]\nname = "imu"',
      "image = { workspace = \"targets/f103\", package = \"motor\"", "must be positive and within the STM32F103CB's"),
@@ -69,6 +67,27 @@ def test_a_bad_entry_names_the_file_the_line_and_the_fix(tmp_path, old, new, anc
     e = error(tmp_path, text)
     assert e.startswith(f"modules.toml:{line_of(text, anchor)}: module "), e
     assert expect in e, e
+
+
+
+def test_fab_or_case_without_a_board_names_the_missing_file(tmp_path):
+    """A module whose board is not designed yet cannot ask for a fab package or a case: the IMU's
+    entry with fab = true and case = true over a hardware/imu/ that holds only its README."""
+    hw = tmp_path / "hardware"
+    hw.mkdir()
+    for d in (ROOT / "hardware").iterdir():
+        if d.name != "imu":
+            (hw / d.name).symlink_to(d)
+    (hw / "imu").mkdir()
+    (hw / "imu" / "README.md").write_text("# imu\n")
+    (tmp_path / "firmware").symlink_to(ROOT / "firmware")
+    anchor = 'fab = true\ncase = true\nemulator = "imu"'
+    text = TEXT.replace('fab = false\ncase = true\nemulator = "imu"', anchor, 1)
+    (tmp_path / "modules.toml").write_text(text)
+    with pytest.raises(manifest.ManifestError) as e:
+        manifest.load(tmp_path)
+    assert "`fab = true` but hardware/imu/imu.kicad_pcb does not exist" in str(e.value), e.value
+    assert str(e.value).startswith(f"modules.toml:{line_of(text, anchor)}: "), e.value
 
 
 def test_an_entry_missing_a_key_says_which(tmp_path):

@@ -193,6 +193,24 @@ _ITEMS = [
     ("R_1k5", R, R0603, "1.5k", "0603WAF1501T5E"),
     ("R_12k1", R, R0805, "12.1k", "0805W8F1212T5E"),     # 0805: the 1 % value public JLC BOMs confirm
     ("LED_B", "Device:LED", "LED_SMD:LED_0603_1608Metric", "blue", "KT-0603B"),
+    # --- imu (hardware/imu/imu.py; design numbers in calc/imu.py)
+    # KiCad 9 has no LSM6DSO symbol: the LSM6DSM's is the same LGA-14L pin table (1 SDO/SA0, 2 SDx,
+    # 3 SCx, 4 INT1, 5 VDDIO, 6-7 GND, 8 VDD, 9 INT2, 10 OCS_Aux, 11 SDO_Aux, 12 CS, 13 SCL, 14 SDA;
+    # LSM6DSO DS12140 Table 2) on the same 2.5 x 3 mm land pattern
+    ("LSM6DSO", "Sensor_Motion:LSM6DSM", "Package_LGA:LGA-14_3x2.5mm_P0.5mm_LayoutBorder3x4y",
+     "LSM6DSO", "LSM6DSOTR"),
+    ("LIS3MDL", "Sensor_Magnetic:LIS3MDL", "Package_LGA:LGA-12_2x2mm_P0.5mm", "LIS3MDL", "LIS3MDLTR"),
+    ("LPS22DF", "Sensor_Pressure:LPS22DF", "Package_LGA:ST_HLGA-10_2x2mm_P0.5mm_LayoutBorder3x2y",
+     "LPS22DF", "LPS22DFTR"),
+    # the Pixhawk connector standard's (DS-009) basic GPS port: JST GH 6 pins, side entry
+    ("JST_GH_6", "Connector_Generic_MountingPin:Conn_01x06_MountingPin",
+     "Connector_JST:JST_GH_SM06B-GHS-TB_1x06-1MP_P1.25mm_Horizontal", "GPS (DS-009)",
+     "SM06B-GHS-TB(LF)(SN)"),
+    ("HDR_1x5", "Connector_Generic:Conn_01x05",
+     "Connector_PinHeader_2.54mm:PinHeader_1x05_P2.54mm_Vertical", "GNSS", "PZ254V-11-05P"),
+    # a 3-pad solder jumper, pads 1-2 bridged by a copper trace: a board feature, no BOM line
+    ("SJ_3_BRIDGED12", "Jumper:SolderJumper_3_Bridged12",
+     "Jumper:SolderJumper-3_P1.3mm_Bridged12_RoundedPad1.0x1.5mm", "GNSS VCC", ""),
 ]
 
 _BY_KEY = {k: Item(k, s, f, v, m) for k, s, f, v, m in _ITEMS}
