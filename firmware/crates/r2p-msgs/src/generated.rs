@@ -224,6 +224,45 @@ impl crate::R2pMessage for Imu {
 
 crate::impl_wire!(Imu);
 
+/// The magnetic field at an IMU module (LIS3MDL), in the sensor's axes. Published at its `mag_rate_hz`.
+///
+/// 29 bytes on the bus, type hash `0x7F662741`; schema `firmware/msgs/MagneticField.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MagneticField {
+    /// uT, calibrated: hard and soft iron removed (the module's mag_* parameters) (`float32[3]`, bytes 0..12)
+    pub field: [f32; 3],
+    /// uT as measured: what `r2p imu calibrate` fits (`float32[3]`, bytes 12..24)
+    pub raw: [f32; 3],
+    /// rad, tilt-compensated magnetic heading of the field alone, declination applied, as Imu.yaw (from east, counter-clockwise) (`float32`, bytes 24..28)
+    pub heading: f32,
+    /// 0 = ok, 2 = no data from the magnetometer (`uint8`, bytes 28..29)
+    pub status: u8,
+}
+
+impl crate::R2pMessage for MagneticField {
+    const NAME: &'static str = "MagneticField";
+    const CANONICAL: &'static str =
+        "MagneticField:float32[3] field;float32[3] raw;float32 heading;uint8 status";
+    const SIZE: usize = 29;
+    const TYPE_HASH: u32 = 0x7F66_2741;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.field);
+        w.put(&self.raw);
+        w.put(&self.heading);
+        w.put(&self.status);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self { field: r.get()?, raw: r.get()?, heading: r.get()?, status: r.get()? })
+    }
+}
+
+crate::impl_wire!(MagneticField);
+
 /// Event of a DC motor controller: a fault latched, or latched faults were cleared. Sent SRT when it happens; the same bits are in every WheelState.faults.
 ///
 /// 6 bytes on the bus, type hash `0x2D53828B`; schema `firmware/msgs/MotorFault.msg`.
@@ -575,6 +614,7 @@ pub const ALL: &[(&str, u32, usize)] = &[
     ("FaultClear", 0x9688_B902, 1),
     ("GatewayStatus", 0x4E80_AA5A, 24),
     ("Imu", 0x0F53_2940, 41),
+    ("MagneticField", 0x7F66_2741, 29),
     ("MotorFault", 0x2D53_828B, 6),
     ("Obstacle", 0x24BE_C850, 5),
     ("Odometry", 0xEEDD_D804, 24),
@@ -595,6 +635,7 @@ macro_rules! for_each_message {
         $f::<crate::FaultClear>($($arg),*);
         $f::<crate::GatewayStatus>($($arg),*);
         $f::<crate::Imu>($($arg),*);
+        $f::<crate::MagneticField>($($arg),*);
         $f::<crate::MotorFault>($($arg),*);
         $f::<crate::Obstacle>($($arg),*);
         $f::<crate::Odometry>($($arg),*);

@@ -123,6 +123,20 @@ pub const R2P_TYPES: &[R2pRosType] = &[
         ],
     },
     R2pRosType {
+        name: "MagneticField",
+        r2p_hash: 0x7F66_2741,
+        ros: RosType {
+            dds_name: "r2p_msgs::msg::dds_::MagneticField_",
+            hash: "RIHS01_e75efd56e2ab1b5ca0bc3341132e3899484f4c8357858a9e78016d310857c834",
+        },
+        fields: &[
+            Field { kind: Kind::F32, count: 3 },
+            Field { kind: Kind::F32, count: 3 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::U8, count: 1 },
+        ],
+    },
+    R2pRosType {
         name: "MotorFault",
         r2p_hash: 0x2D53_828B,
         ros: RosType {

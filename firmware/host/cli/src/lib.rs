@@ -16,6 +16,7 @@ pub mod args;
 pub mod cli;
 pub mod describe;
 pub mod echo;
+pub mod ellipsoid;
 pub mod error;
 pub mod flash;
 pub mod host;

@@ -408,6 +408,7 @@ const GENERATED: &[Generated] = generated!(
     FaultClear,
     GatewayStatus,
     Imu,
+    MagneticField,
     MotorFault,
     Obstacle,
     Odometry,
