@@ -307,7 +307,7 @@ pub fn fit(samples: &[[f64; 3]], kind: Kind) -> Result<Fit, FitError> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A small deterministic generator (xorshift64*), so the tests need no crate and repeat.
@@ -361,7 +361,8 @@ mod tests {
         let (bh, bv) = (48.0 * 60f64.to_radians().cos(), -48.0 * 60f64.to_radians().sin());
         // Rotate the world's (bh, 0, bv) into the body: yaw about z, then pitch about y.
         let (x, y) = (bh * yaw.cos(), -bh * yaw.sin());
-        (|c: f64, s: f64| [c * x - s * bv, y, s * x + c * bv])(pitch.cos(), pitch.sin())
+        let (c, s) = (pitch.cos(), pitch.sin());
+        [c * x - s * bv, y, s * x + c * bv]
     }
 
     fn full_samples(n: usize, noise: f64, seed: u64) -> Vec<[f64; 3]> {
@@ -397,14 +398,10 @@ mod tests {
             .map(|i| (0..n).map(|j| (0..n).map(|k| fit.soft[i][k] * d.w[k][j]).sum()).collect())
             .collect();
         let scale = sw[0][0];
-        for i in 0..n {
-            for j in 0..n {
+        for (i, row) in sw.iter().enumerate() {
+            for (j, x) in row.iter().enumerate() {
                 let want = if i == j { scale } else { 0.0 };
-                assert!(
-                    (sw[i][j] - want).abs() < tol,
-                    "S·W[{i}][{j}] = {} (scale {scale})",
-                    sw[i][j]
-                );
+                assert!((x - want).abs() < tol, "S·W[{i}][{j}] = {x} (scale {scale})");
             }
         }
     }

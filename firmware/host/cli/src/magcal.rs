@@ -1,0 +1,869 @@
+//! `r2p imu calibrate`: the magnetometer's hard- and soft-iron calibration, run by the user
+//! (issue 21). It subscribes to the IMU module's `mag` topic (`imu/mag`, `imuN/mag`) as
+//! `r2p echo` does, shows the headings covered while the user turns the robot, fits the raw
+//! field ([`crate::ellipsoid`]: 3-D, or x/y only for a robot that turns on the floor), reports
+//! the fit's quality and, unless it is refused or `--dry-run`, sets the module's `mag_offset_*`
+//! and `mag_soft_*` parameters (the module keeps them in flash), reads them back and prints them.
+//!
+//! The parameters are found by name in the IMU application's own table
+//! (`r2p_app_imu::params::DEFAULTS`, the source the module's image is built from), so their
+//! indices and ranges cannot drift from the firmware's; the bus carries indices only.
+//!
+//! Nothing is lost on a refusal: the module's parameters are written only after every check has
+//! passed, and if a write fails part-way the values already written are set back to what the
+//! module held before.
+
+use std::io::Write;
+use std::time::{Duration, Instant};
+
+use clap::{Args, Subcommand};
+use r2p_management::message::Value;
+use r2p_management::NodeId;
+use r2p_msgs::{MagneticField, R2pMessage};
+use r2p_node::{Event, Param};
+use serde_json::json;
+
+use crate::args::{emit, parse_seconds, BusArgs};
+use crate::coverage::{Coverage, MIN_BANDS, MIN_SECTORS, SECTORS};
+use crate::describe::result_name;
+use crate::ellipsoid::{fit, Fit, Kind, MAX_AXIS_RATIO, MIN_DETERMINACY};
+use crate::error::CliError;
+use crate::param::{ask, refused, resolve};
+use crate::session::Session;
+
+/// `r2p imu` subcommands.
+#[derive(Subcommand, Debug)]
+pub enum ImuCommand {
+    /// Calibrate the magnetometer (hard and soft iron): turn the robot while it collects the
+    /// raw field, fit it, write the module's mag_offset_* and mag_soft_* parameters and read
+    /// them back (docs/magnetometer-calibration.md)
+    Calibrate(CalibrateArgs),
+}
+
+/// `r2p imu calibrate` options.
+#[derive(Args, Debug)]
+pub struct CalibrateArgs {
+    /// The IMU module: its name as heartbeats give it (imu, imu1, …) or its node ID
+    #[arg(long, default_value = "imu")]
+    pub node: String,
+    /// How long to collect samples while the robot turns
+    #[arg(long, value_name = "SECONDS", default_value = "60", value_parser = parse_seconds)]
+    pub seconds: Duration,
+    /// Fit the x/y ellipse only (a robot that can only turn on the floor); the z terms are
+    /// left as they are. Chosen by itself when the field's z spread is under a quarter of its
+    /// horizontal spread
+    #[arg(long, conflicts_with = "full")]
+    pub planar: bool,
+    /// Fit the 3-D ellipsoid: the robot must be rolled and pitched as well as turned
+    #[arg(long)]
+    pub full: bool,
+    /// Collect, fit and report, but write nothing
+    #[arg(long)]
+    pub dry_run: bool,
+}
+
+/// The hard-iron parameters, x, y, z.
+pub const OFFSET: [&str; 3] = ["mag_offset_x", "mag_offset_y", "mag_offset_z"];
+/// The soft-iron parameters with the matrix entry each holds.
+pub const SOFT: [(&str, usize, usize); 6] = [
+    ("mag_soft_xx", 0, 0),
+    ("mag_soft_xy", 0, 1),
+    ("mag_soft_xz", 0, 2),
+    ("mag_soft_yy", 1, 1),
+    ("mag_soft_yz", 1, 2),
+    ("mag_soft_zz", 2, 2),
+];
+
+/// The planar choice: a robot turning on the floor sees the field's vertical component still,
+/// so z varies by the noise (and a slope's tilt) while x and y swing by the horizontal field.
+/// Below this ratio of z's standard deviation to x's and y's (RMS of the two), the fit is planar.
+pub const PLANAR_RATIO: f64 = 0.25;
+
+/// Above this residual (percent of the radius) a fit is refused: the samples do not lie on one
+/// ellipsoid, so the field changed during the run. A magnetometer's noise and a calibrated
+/// soft-iron model leave about 1 %.
+pub const MAX_RMS_PERCENT: f64 = 10.0;
+
+/// How often the progress line is printed.
+const PROGRESS: Duration = Duration::from_secs(1);
+
+/// The values to write for `fit`: every parameter (full), or x/y's (planar).
+pub fn values(fit: &Fit) -> Vec<(&'static str, f32)> {
+    let planar = fit.kind == Kind::Planar;
+    let mut v: Vec<(&str, f32)> = OFFSET
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !planar || *i < 2)
+        .map(|(i, n)| (*n, fit.offset[i] as f32))
+        .collect();
+    v.extend(
+        SOFT.iter()
+            .filter(|(_, i, j)| !planar || (*i < 2 && *j < 2))
+            .map(|&(n, i, j)| (n, fit.soft[i][j] as f32)),
+    );
+    v
+}
+
+/// A parameter of the module's table: its index and range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Slot {
+    /// Its name.
+    pub name: &'static str,
+    /// Its index on the bus.
+    pub index: u16,
+    /// Its range.
+    pub min: f32,
+    /// Its range.
+    pub max: f32,
+}
+
+/// Finds each parameter the calibration writes in `table` (the IMU application's).
+pub fn layout(table: &[Param]) -> Result<Vec<Slot>, CliError> {
+    let names = OFFSET.iter().copied().chain(SOFT.iter().map(|s| s.0));
+    names
+        .map(|name| {
+            let (index, p) =
+                table.iter().enumerate().find(|(_, p)| p.name == name).ok_or_else(|| {
+                    CliError::new(format!(
+                        "the IMU firmware this r2p was built with has no parameter {name:?}: \
+                         build r2p from the same source as the module's image"
+                    ))
+                })?;
+            match (p.min, p.max) {
+                (Value::F32(min), Value::F32(max)) => {
+                    Ok(Slot { name, index: index as u16, min, max })
+                }
+                _ => Err(CliError::new(format!(
+                    "the IMU firmware's parameter {name:?} is not an f32: build r2p from the same \
+                     source as the module's image"
+                ))),
+            }
+        })
+        .collect()
+}
+
+/// Which fit: as asked, or planar when z hardly moved (see [`PLANAR_RATIO`]). Returns the kind
+/// and the spreads (z's standard deviation, x's and y's RMS), µT.
+pub fn choose(samples: &[[f64; 3]], args: &CalibrateArgs) -> (Kind, f64, f64) {
+    let n = samples.len().max(1) as f64;
+    let sd = |i: usize| {
+        let mean = samples.iter().map(|m| m[i]).sum::<f64>() / n;
+        (samples.iter().map(|m| (m[i] - mean).powi(2)).sum::<f64>() / n).sqrt()
+    };
+    let (z, h) = (sd(2), ((sd(0).powi(2) + sd(1).powi(2)) / 2.0).sqrt());
+    let kind =
+        if args.planar || (!args.full && z < PLANAR_RATIO * h) { Kind::Planar } else { Kind::Full };
+    (kind, z, h)
+}
+
+/// The coverage of samples about a centre: the fit's, or while collecting the midrange of
+/// what came so far (an estimate of the hard iron that needs no fit).
+pub fn coverage(samples: &[[f64; 3]], correct: impl Fn([f64; 3]) -> [f64; 3]) -> Coverage {
+    let mut c = Coverage::new();
+    samples.iter().for_each(|&m| c.add(correct(m)));
+    c
+}
+
+/// Subtracts the midrange of `samples` (per axis).
+fn midrange(samples: &[[f64; 3]]) -> impl Fn([f64; 3]) -> [f64; 3] {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for m in samples {
+        for i in 0..3 {
+            lo[i] = lo[i].min(m[i]);
+            hi[i] = hi[i].max(m[i]);
+        }
+    }
+    move |m: [f64; 3]| std::array::from_fn(|i| m[i] - (lo[i] + hi[i]) / 2.0)
+}
+
+/// A refusal: what, then that nothing was written.
+fn refuse(why: impl std::fmt::Display) -> CliError {
+    CliError::new(format!(
+        "not calibrated: {why}. Nothing was written: the module keeps its calibration"
+    ))
+}
+
+/// Checks a fit against the coverage and quality rules; the reason if it must not be written.
+pub fn check(fit: &Fit, cov: &Coverage) -> Result<(), String> {
+    check_sectors(cov)?;
+    if fit.kind == Kind::Full && cov.bands_covered() < MIN_BANDS {
+        return Err(format!(
+            "the samples cover {} of 6 30° elevation bands, a full fit needs at least \
+             {MIN_BANDS}; roll and pitch the robot through every orientation, or use --planar \
+             for a robot that only turns on the floor",
+            cov.bands_covered()
+        ));
+    }
+    if fit.rms_percent() > MAX_RMS_PERCENT {
+        return Err(format!(
+            "the residual is {:.1} µT RMS, {:.1} % of the field (at most {MAX_RMS_PERCENT} %): \
+             the field changed during the run; calibrate away from steel, magnets and running \
+             motors, and keep the robot's own motors off",
+            fit.rms,
+            fit.rms_percent()
+        ));
+    }
+    Ok(())
+}
+
+/// Checks the heading coverage alone.
+fn check_sectors(cov: &Coverage) -> Result<(), String> {
+    if cov.sectors_covered() < MIN_SECTORS {
+        return Err(format!(
+            "the samples cover {} of {SECTORS} 10° heading sectors, at least {MIN_SECTORS} are \
+             needed (missing: {}); turn the robot slowly through a whole turn while it collects",
+            cov.sectors_covered(),
+            cov.missing()
+        ));
+    }
+    Ok(())
+}
+
+/// Checks each value against its parameter's range.
+fn in_range(values: &[(&'static str, f32)], slots: &[Slot]) -> Result<(), String> {
+    for (name, v) in values {
+        let s = slots.iter().find(|s| s.name == *name).expect("layout has every name");
+        if !(s.min..=s.max).contains(v) {
+            return Err(format!(
+                "{name} = {v} is outside the module's range {}…{}: the sensor sits too close to \
+                 a magnet or a piece of steel; move it or the steel and calibrate again",
+                s.min, s.max
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The fit's report, as lines.
+fn report(fit: &Fit, cov: &Coverage, z: f64, h: f64) -> Vec<String> {
+    let planar = fit.kind == Kind::Planar;
+    let cell = |i: usize, j: usize| {
+        if planar && (i == 2 || j == 2) {
+            "     —".to_string()
+        } else {
+            format!("{:7.4}", fit.soft[i][j])
+        }
+    };
+    let mut lines = vec![format!(
+        "fit: {} (z spread {z:.2} µT, horizontal {h:.2} µT; planar below {PLANAR_RATIO} × \
+         horizontal){}",
+        fit.kind.name(),
+        if planar { "; z terms not fitted, left as the module has them" } else { "" }
+    )];
+    let hz = if planar { "—".to_string() } else { format!("{:.2}", fit.offset[2]) };
+    lines.push(format!("  hard iron h = ({:.2}, {:.2}, {hz}) µT", fit.offset[0], fit.offset[1]));
+    lines.push("  soft iron S =".into());
+    for i in 0..3 {
+        lines.push(format!("    [{} {} {} ]", cell(i, 0), cell(i, 1), cell(i, 2)));
+    }
+    lines.push(format!(
+        "  |S(m − h)| = {:.2} µT, residual {:.3} µT RMS ({:.2} %), {} samples",
+        fit.radius,
+        fit.rms,
+        fit.rms_percent(),
+        fit.samples
+    ));
+    lines.push(format!(
+        "  coverage: {}/{SECTORS} heading sectors [{}], {}/6 elevation bands",
+        cov.sectors_covered(),
+        cov.rose(),
+        cov.bands_covered()
+    ));
+    lines.push(format!(
+        "  determinacy {:.3e} (λ2/λ1, ≥ {MIN_DETERMINACY}), axis ratio {:.3} (≤ {MAX_AXIS_RATIO})",
+        fit.determinacy, fit.axis_ratio
+    ));
+    lines
+}
+
+fn f32_of(v: Value) -> Option<f32> {
+    match v {
+        Value::F32(x) => Some(x),
+        _ => None,
+    }
+}
+
+/// Runs `r2p imu …` with the IMU application's parameter table.
+pub fn run(
+    cmd: &ImuCommand,
+    bus: &BusArgs,
+    s: Session,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
+    match cmd {
+        ImuCommand::Calibrate(args) => calibrate(args, bus, s, out, &r2p_app_imu::params::DEFAULTS),
+    }
+}
+
+/// Collects the `raw` field of `topic` for `args.seconds`, printing the progress.
+fn collect(
+    args: &CalibrateArgs,
+    bus: &BusArgs,
+    s: &mut Session,
+    target: NodeId,
+    topic: &str,
+    out: &mut dyn Write,
+) -> Result<(Vec<[f64; 3]>, u64), CliError> {
+    s.host().expect("joined").want_import(topic);
+    let start = Instant::now();
+    let mut collecting: Option<Instant> = None;
+    let mut subscribed = false;
+    let mut next = PROGRESS;
+    let mut samples = Vec::new();
+    let mut no_data = 0u64;
+    loop {
+        s.step(Duration::from_millis(2))?;
+        let host = s.host().expect("joined");
+        if let Some(e) = host.import_error() {
+            return Err(e.clone());
+        }
+        while let Some(e) = host.next_event() {
+            match e {
+                Event::Subscribed { .. } => subscribed = true,
+                Event::SubscriptionRefused { from, result, .. } => {
+                    return Err(CliError::new(format!(
+                        "node {} refused the subscription to {topic:?}: {}",
+                        from.get(),
+                        result_name(result)
+                    )))
+                }
+                _ => {}
+            }
+        }
+        let messages = host.take_messages();
+        let Some(info) = host.imported().cloned() else {
+            if start.elapsed() >= bus.timeout {
+                return Err(CliError::new(format!(
+                    "node {} does not publish {topic:?} (no advertisement within {:?}): its \
+                     image has no magnetometer topic; update it (r2p update) to one that has",
+                    s.watcher().node_label(target.get()),
+                    bus.timeout
+                )));
+            }
+            continue;
+        };
+        if info.type_hash != MagneticField::TYPE_HASH {
+            return Err(CliError::new(format!(
+                "{topic:?} carries {}, not MagneticField: r2p and the module's image come from \
+                 different sources; build r2p from the image's",
+                info.type_name()
+            )));
+        }
+        let at = *collecting.get_or_insert_with(Instant::now);
+        if !subscribed && at.elapsed() >= bus.timeout && samples.is_empty() {
+            return Err(CliError::new(format!(
+                "node {} advertised {topic:?} but did not answer the subscription within {:?}",
+                s.watcher().node_label(target.get()),
+                bus.timeout
+            )));
+        }
+        for bytes in messages {
+            match MagneticField::decode(&bytes) {
+                Ok(m) if m.status == 0 => samples.push(m.raw.map(f64::from)),
+                Ok(_) => no_data += 1,
+                Err(e) => {
+                    return Err(CliError::new(format!(
+                        "{topic:?}: a message did not decode: {e:?}"
+                    )))
+                }
+            }
+        }
+        let elapsed = at.elapsed();
+        if elapsed >= next && !bus.json {
+            let c = coverage(&samples, midrange(&samples));
+            emit(
+                out,
+                &format!(
+                    "{:4.0} s  [{}] {:2}/{SECTORS} sectors, {}/6 elevations, {} samples",
+                    elapsed.as_secs_f64(),
+                    c.rose(),
+                    c.sectors_covered(),
+                    c.bands_covered(),
+                    samples.len()
+                ),
+            )?;
+            next += PROGRESS;
+        }
+        if elapsed >= args.seconds {
+            return Ok((samples, no_data));
+        }
+    }
+}
+
+/// Runs `r2p imu calibrate` with `table` as the module's parameter table.
+pub fn calibrate(
+    args: &CalibrateArgs,
+    bus: &BusArgs,
+    mut s: Session,
+    out: &mut dyn Write,
+    table: &[Param],
+) -> Result<(), CliError> {
+    let slots = layout(table)?;
+    s.join()?;
+    let target = resolve(&args.node, bus, &mut s)?;
+    let name = s.watcher().node(target.get()).map(|n| n.name.clone()).unwrap_or_default();
+    let topic = format!("{name}/mag");
+    if !bus.json {
+        emit(
+            out,
+            &format!(
+                "Calibrating the magnetometer of node {} from {topic} for {:?}. Turn the robot slowly \
+                 through at least one whole turn on the floor (a planar fit), or roll, pitch and \
+                 turn it through every orientation (a full fit), away from steel, magnets and \
+                 running motors. The rose below marks the 10° headings seen (# seen, . not yet).",
+                s.watcher().node_label(target.get()),
+                args.seconds
+            ),
+        )?;
+    }
+    let (samples, no_data) = collect(args, bus, &mut s, target, &topic, out)?;
+    if samples.is_empty() && no_data > 0 {
+        return Err(refuse(format!(
+            "the module's {no_data} messages all said \"no data\" (status 2): its magnetometer \
+             does not answer; check the module with `r2p echo {topic}`"
+        )));
+    }
+    let (kind, z, h) = choose(&samples, args);
+    if args.full && z < PLANAR_RATIO * h {
+        return Err(refuse(format!(
+            "--full needs the robot rolled and pitched, but the field's z spread ({z:.2} µT) is \
+             under {PLANAR_RATIO} × its horizontal spread ({h:.2} µT): the robot only turned \
+             about its vertical axis; tumble it through every orientation, or use --planar for \
+             a robot that only turns on the floor"
+        )));
+    }
+    let fit = fit(&samples, kind).map_err(|e| {
+        // A short arc fits no single ellipse: the coverage about the samples' midrange says
+        // why in the user's terms (turn further), so it comes first.
+        check_sectors(&coverage(&samples, midrange(&samples))).map_or_else(refuse, |()| refuse(e))
+    })?;
+    let cov = coverage(&samples, |m| {
+        let c = fit.apply(m);
+        if kind == Kind::Planar {
+            [c[0], c[1], 0.0]
+        } else {
+            c
+        }
+    });
+    let lines = report(&fit, &cov, z, h);
+    if !bus.json {
+        for l in &lines {
+            emit(out, l)?;
+        }
+    }
+    check(&fit, &cov).map_err(refuse)?;
+    let values = values(&fit);
+    in_range(&values, &slots).map_err(refuse)?;
+    let slot = |name: &str| *slots.iter().find(|s| s.name == name).expect("layout has every name");
+    let mut result = json!({
+        "node": target.get(),
+        "topic": topic,
+        "kind": kind.name(),
+        "samples": fit.samples,
+        "no_data": no_data,
+        "offset_ut": if kind == Kind::Planar { json!(&fit.offset[..2]) } else { json!(fit.offset) },
+        "soft": fit.soft,
+        "radius_ut": fit.radius,
+        "rms_ut": fit.rms,
+        "rms_percent": fit.rms_percent(),
+        "heading_sectors": cov.sectors_covered(),
+        "elevation_bands": cov.bands_covered(),
+        "determinacy": fit.determinacy,
+        "axis_ratio": fit.axis_ratio,
+        "z_spread_ut": z,
+        "horizontal_spread_ut": h,
+        "written": false,
+    });
+    if args.dry_run {
+        if bus.json {
+            return emit(out, &result.to_string());
+        }
+        return emit(out, "--dry-run: nothing written");
+    }
+    // What the module holds now, so that a failed write can be undone and the user sees it.
+    let mut before = Vec::new();
+    for (name, _) in &values {
+        let i = slot(name).index;
+        let v = ask(&mut s, bus, target, i, "PARAM_GET", |h| h.get_param(target, i))?
+            .map_err(|f| refused(&s, target, "PARAM_GET", i, f))?;
+        before.push(v);
+    }
+    for (k, (name, v)) in values.iter().enumerate() {
+        let i = slot(name).index;
+        let set =
+            ask(&mut s, bus, target, i, "PARAM_SET", |h| h.set_param(target, i, Value::F32(*v)));
+        let err = match set {
+            Ok(Ok(_)) => continue,
+            Ok(Err(f)) => refused(&s, target, "PARAM_SET", i, f),
+            Err(e) => e,
+        };
+        let mut undo = Vec::new();
+        for ((n, _), old) in values[..k].iter().zip(&before) {
+            let j = slot(n).index;
+            let r = ask(&mut s, bus, target, j, "PARAM_SET", |h| h.set_param(target, j, *old));
+            if !matches!(r, Ok(Ok(_))) {
+                undo.push(*n);
+            }
+        }
+        return Err(CliError::new(format!(
+            "writing {name} failed ({err}); {}",
+            if undo.is_empty() {
+                "the parameters written before it were set back: the module keeps its \
+                 calibration"
+                    .to_string()
+            } else {
+                format!(
+                    "setting back {} failed too: the module holds a mixed calibration; run \
+                     `r2p imu calibrate` again",
+                    undo.join(", ")
+                )
+            }
+        )));
+    }
+    if !bus.json {
+        emit(out, "written (before → read back):")?;
+    }
+    let mut read = serde_json::Map::new();
+    for ((name, want), old) in values.iter().zip(&before) {
+        let i = slot(name).index;
+        let v = ask(&mut s, bus, target, i, "PARAM_GET", |h| h.get_param(target, i))?
+            .map_err(|f| refused(&s, target, "PARAM_GET", i, f))?;
+        let got = f32_of(v);
+        if got != Some(*want) {
+            return Err(CliError::new(format!(
+                "{name} reads back as {v:?} after it was set to {want}: the module did not keep \
+                 it; run `r2p imu calibrate` again"
+            )));
+        }
+        read.insert((*name).into(), json!(want));
+        if !bus.json {
+            let old = f32_of(*old).map_or(format!("{old:?}"), |x| format!("{x:.4}"));
+            emit(out, &format!("  {name:<13} {old:>10} → {want:.4}"))?;
+        }
+    }
+    result["written"] = json!(true);
+    result["params"] = json!(read);
+    if bus.json {
+        emit(out, &result.to_string())
+    } else {
+        emit(out, "the module keeps them in flash")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::{Arc, Mutex};
+
+    use r2p_canlink::{BroadcastHub, Hub};
+    use r2p_middleware::{pool_size, Class, Publisher, Topic};
+    use r2p_node::{Node, NodeConfig, RamParams, RemoteSubscriber};
+
+    use super::*;
+    use crate::ellipsoid::tests::{distortion, field, Rng};
+    use crate::host::tests::drive;
+    use crate::link::HubLink;
+
+    type Mag = Topic<'static, MagneticField, { pool_size(&[8], 1) }, 1>;
+
+    /// The module's table as the CLI knows it: something before the calibration, so the
+    /// indices are not the names' positions in [`OFFSET`] and [`SOFT`].
+    const TABLE: [Param; 10] = [
+        Param::u32("rate_hz", 50, 1, 200),
+        Param::f32("mag_offset_x", 0.0, -400.0, 400.0),
+        Param::f32("mag_offset_y", 0.0, -400.0, 400.0),
+        Param::f32("mag_offset_z", 0.0, -400.0, 400.0),
+        Param::f32("mag_soft_xx", 1.0, -4.0, 4.0),
+        Param::f32("mag_soft_xy", 0.0, -4.0, 4.0),
+        Param::f32("mag_soft_xz", 0.0, -4.0, 4.0),
+        Param::f32("mag_soft_yy", 1.0, -4.0, 4.0),
+        Param::f32("mag_soft_yz", 0.0, -4.0, 4.0),
+        Param::f32("mag_soft_zz", 1.0, -4.0, 4.0),
+    ];
+
+    /// How the robot moves: yaw and pitch (rad) at a time (s).
+    type Motion = fn(f64) -> (f64, f64);
+
+    /// An IMU module on the hub named `imu`, publishing `imu/mag` every 5 ms: the raw field of
+    /// [`distortion`] as the robot moves by `motion`, with 0.3 µT of noise; its parameters are
+    /// `module` (as the CLI's table, or changed to test a refusal).
+    fn imu(
+        hub: Arc<BroadcastHub>,
+        stop: Arc<AtomicBool>,
+        motion: Motion,
+        module: [Param; 10],
+        status: u8,
+    ) -> (std::thread::JoinHandle<()>, &'static RamParams<10>) {
+        let topic: &'static Mag =
+            Box::leak(Box::new(Topic::new("imu/mag", MagneticField::default())));
+        let publisher: &'static Publisher<'static, MagneticField> =
+            Box::leak(Box::new(Publisher::new(topic, Class::NonRealTime)));
+        let out: &'static RemoteSubscriber<'static, MagneticField, 8> =
+            Box::leak(Box::new(RemoteSubscriber::new(publisher)));
+        let params: &'static RamParams<10> = Box::leak(Box::new(RamParams::new(module)));
+        topic.subscribe(out).unwrap();
+        let make = move || {
+            let mut uid = [0u8; 12];
+            uid[11] = 0x21;
+            let mut node: Node<'static, 1, 1, 32, 4, 64> =
+                Node::new(NodeConfig::new(uid, "imu"), params).unwrap();
+            node.export(out).unwrap();
+            node
+        };
+        let (d, mut rng, mut n) = (distortion(), Rng::new(17), 0u128);
+        let handle = drive(hub, stop, make, move |elapsed| {
+            if elapsed.as_millis() / 5 > n {
+                n += 1;
+                let (yaw, pitch) = motion(elapsed.as_secs_f64());
+                let raw = d.measure(field(yaw, pitch), 0.3, &mut rng).map(|x| x as f32);
+                publisher
+                    .publish_with(|m| *m = MagneticField { field: raw, raw, heading: 0.0, status });
+            }
+        });
+        (handle, params)
+    }
+
+    fn bus(json: bool) -> BusArgs {
+        BusArgs {
+            socketcand: None,
+            socketcan: None,
+            trace: None,
+            channel: "vcan0".into(),
+            timeout: Duration::from_secs(2),
+            json,
+        }
+    }
+
+    fn args(seconds: f64, planar: bool, full: bool, dry_run: bool) -> CalibrateArgs {
+        CalibrateArgs {
+            node: "imu".into(),
+            seconds: Duration::from_secs_f64(seconds),
+            planar,
+            full,
+            dry_run,
+        }
+    }
+
+    /// Runs the command against a module moving by `motion`; its output (or error) and the
+    /// module's parameters afterwards.
+    fn calibrate_over(
+        a: CalibrateArgs,
+        motion: Motion,
+        module: [Param; 10],
+        status: u8,
+        json: bool,
+    ) -> (Result<String, CliError>, Vec<f32>) {
+        let hub = Arc::new(BroadcastHub::new());
+        let stop = Arc::new(AtomicBool::new(false));
+        let (handle, params) = imu(hub.clone(), stop.clone(), motion, module, status);
+        let s = Session::new(Box::new(HubLink::join(hub as Arc<dyn Hub>, 4096)));
+        let out = Mutex::new(Vec::new());
+        let r = calibrate(&a, &bus(json), s, &mut *out.lock().unwrap(), &TABLE);
+        stop.store(true, Ordering::SeqCst);
+        handle.join().unwrap();
+        let held = (1..10).map(|i| f32_of(params.param(i).unwrap().value).unwrap()).collect();
+        let text = String::from_utf8(out.into_inner().unwrap()).unwrap();
+        (r.map(|()| text), held)
+    }
+
+    /// One turn a second on the floor.
+    fn spin(t: f64) -> (f64, f64) {
+        (std::f64::consts::TAU * t, 0.0)
+    }
+
+    /// Every orientation: turning and pitching at rates whose ratio is irrational.
+    fn tumble(t: f64) -> (f64, f64) {
+        (std::f64::consts::TAU * t / 0.9, std::f64::consts::TAU * t / (0.9 * 1.618))
+    }
+
+    /// A quarter turn, back and forth.
+    fn wiggle(t: f64) -> (f64, f64) {
+        ((std::f64::consts::TAU * t).sin() * 45f64.to_radians(), 0.0)
+    }
+
+    const IDENTITY: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1.0];
+
+    #[test]
+    fn spinning_on_the_floor_calibrates_x_and_y_and_leaves_z() {
+        let mut module = TABLE;
+        module[3].value = Value::F32(7.5); // mag_offset_z: must stay as it is
+        let (r, held) = calibrate_over(args(2.5, false, false, false), spin, module, 0, false);
+        let text = r.unwrap();
+        assert!(text.contains("fit: planar"), "{text}");
+        assert!(text.contains("z terms not fitted, left as the module has them"), "{text}");
+        assert!(text.contains("36/36 heading sectors"), "{text}");
+        assert!(text.contains("written (before → read back):"), "{text}");
+        assert!(text.contains("  mag_offset_x      0.0000 → "), "{text}");
+        assert!(!text.contains("mag_offset_z "), "{text}");
+        let (d, bv) = (distortion(), field(0.0, 0.0)[2]);
+        for i in 0..2 {
+            let want = d.h[i] + d.w[i][2] * bv;
+            assert!((f64::from(held[i]) - want).abs() < 0.2, "{held:?} want {want}");
+        }
+        assert_eq!((held[2], held[5], held[7], held[8]), (7.5, 0.0, 0.0, 1.0));
+        // S's x/y block undoes W's: S·W is a multiple of the identity.
+        let s = [[held[3], held[4]], [held[4], held[6]]].map(|r| r.map(f64::from));
+        let sw = |i: usize, j: usize| s[i][0] * d.w[0][j] + s[i][1] * d.w[1][j];
+        assert!(sw(0, 1).abs() < 0.01 && (sw(0, 0) - sw(1, 1)).abs() < 0.01, "{s:?}");
+    }
+
+    #[test]
+    fn tumbling_calibrates_all_nine_and_json_reports_them() {
+        let (r, held) = calibrate_over(args(4.0, false, true, false), tumble, TABLE, 0, true);
+        let text = r.unwrap();
+        let j: serde_json::Value = serde_json::from_str(text.trim()).unwrap();
+        assert_eq!((j["kind"].as_str(), j["written"].as_bool()), (Some("full"), Some(true)));
+        assert!(j["rms_percent"].as_f64().unwrap() < 2.0, "{j}");
+        assert!(j["elevation_bands"].as_u64().unwrap() >= MIN_BANDS as u64, "{j}");
+        let d = distortion();
+        for i in 0..3 {
+            assert!((f64::from(held[i]) - d.h[i]).abs() < 0.3, "{held:?}");
+        }
+        assert_eq!(j["params"]["mag_soft_zz"].as_f64().map(|x| x as f32), Some(held[8]));
+        let s = nalgebra::Matrix3::new(
+            held[3], held[4], held[5], held[4], held[6], held[7], held[5], held[7], held[8],
+        )
+        .map(f64::from);
+        let sw = s * nalgebra::Matrix3::from_fn(|i, j| d.w[i][j]);
+        assert!((sw - nalgebra::Matrix3::identity() * sw[(0, 0)]).abs().max() < 0.02, "{sw}");
+    }
+
+    #[test]
+    fn a_quarter_turn_is_refused_and_nothing_is_written() {
+        let (r, held) = calibrate_over(args(2.0, false, false, false), wiggle, TABLE, 0, false);
+        let e = r.unwrap_err().to_string();
+        assert!(e.starts_with("not calibrated: the samples cover "), "{e}");
+        assert!(e.contains("of 36 10° heading sectors, at least 27 are needed (missing: "), "{e}");
+        assert!(e.contains("turn the robot slowly through a whole turn"), "{e}");
+        assert!(e.ends_with("Nothing was written: the module keeps its calibration"), "{e}");
+        assert_eq!(held, IDENTITY);
+    }
+
+    #[test]
+    fn a_full_fit_of_a_robot_that_only_spun_is_refused() {
+        let (r, held) = calibrate_over(args(2.0, false, true, false), spin, TABLE, 0, false);
+        let e = r.unwrap_err().to_string();
+        assert!(e.starts_with("not calibrated: --full needs the robot rolled and pitched"), "{e}");
+        assert!(e.contains("tumble it through every orientation, or use --planar"), "{e}");
+        assert_eq!(held, IDENTITY);
+    }
+
+    #[test]
+    fn a_dry_run_reports_and_writes_nothing() {
+        let (r, held) = calibrate_over(args(2.0, true, false, true), spin, TABLE, 0, false);
+        let text = r.unwrap();
+        assert!(
+            text.contains("fit: planar") && text.ends_with("--dry-run: nothing written\n"),
+            "{text}"
+        );
+        assert!(text.contains("[####################################] 36/36 sectors"), "{text}");
+        assert_eq!(held, IDENTITY);
+    }
+
+    #[test]
+    fn a_write_the_module_refuses_sets_back_what_was_written() {
+        // The module's mag_soft_yy only takes 0.9..1.0 (a narrower range than the CLI's table):
+        // its PARAM_SET fails after the offsets and two soft terms are written.
+        let mut module = TABLE;
+        module[7] = Param::f32("mag_soft_yy", 1.0, 0.9, 1.0);
+        module[1].value = Value::F32(3.0);
+        let (r, held) = calibrate_over(args(2.0, true, false, false), spin, module, 0, false);
+        let e = r.unwrap_err().to_string();
+        assert!(e.starts_with("writing mag_soft_yy failed (node "), "{e}");
+        assert!(e.contains("refused PARAM_SET of parameter 7: value out of range"), "{e}");
+        assert!(e.contains("were set back: the module keeps its calibration"), "{e}");
+        let mut want = IDENTITY;
+        want[0] = 3.0;
+        assert_eq!(held, want);
+    }
+
+    #[test]
+    fn a_magnetometer_without_data_is_named() {
+        let (r, held) = calibrate_over(args(1.0, false, false, false), spin, TABLE, 2, false);
+        let e = r.unwrap_err().to_string();
+        assert!(
+            e.contains("all said \"no data\" (status 2)") && e.contains("r2p echo imu/mag"),
+            "{e}"
+        );
+        assert_eq!(held, IDENTITY);
+    }
+
+    #[test]
+    fn the_parameters_are_found_by_name_in_the_firmwares_table() {
+        let slots = layout(&TABLE).unwrap();
+        assert_eq!(slots.len(), 9);
+        assert_eq!(slots[0], Slot { name: "mag_offset_x", index: 1, min: -400.0, max: 400.0 });
+        assert_eq!(slots[8], Slot { name: "mag_soft_zz", index: 9, min: -4.0, max: 4.0 });
+        let e = layout(&TABLE[..9]).unwrap_err().to_string();
+        assert!(e.contains("no parameter \"mag_soft_zz\"") && e.contains("same source"), "{e}");
+        let mut bad = TABLE;
+        bad[2] = Param::u32("mag_offset_y", 0, 0, 1);
+        assert!(layout(&bad).unwrap_err().to_string().contains("\"mag_offset_y\" is not an f32"));
+    }
+
+    #[test]
+    fn values_out_of_the_modules_range_are_refused() {
+        let slots = layout(&TABLE).unwrap();
+        assert!(in_range(&[("mag_soft_zz", 4.0), ("mag_offset_x", -400.0)], &slots).is_ok());
+        let e = in_range(&[("mag_offset_x", 1.0), ("mag_soft_zz", 4.5)], &slots).unwrap_err();
+        assert!(e.starts_with("mag_soft_zz = 4.5 is outside the module's range -4…4"), "{e}");
+        assert!(in_range(&[("mag_offset_y", -400.5)], &slots).is_err());
+        assert!(in_range(&[("mag_offset_y", f32::NAN)], &slots).is_err());
+    }
+
+    #[test]
+    fn planar_is_chosen_when_z_hardly_moves() {
+        let circle = |z: f64| -> Vec<[f64; 3]> {
+            (0..360)
+                .map(|d| {
+                    let t = (d as f64).to_radians();
+                    // z swings ±z over the turn: its standard deviation is z/√2.
+                    [40.0 * t.cos(), 40.0 * t.sin(), z * (2.0 * t).sin()]
+                })
+                .collect()
+        };
+        // x and y: standard deviation 40/√2 each, so planar below z = 0.25 × 40 = 10.
+        let auto = args(1.0, false, false, false);
+        assert_eq!(choose(&circle(9.9), &auto).0, Kind::Planar);
+        assert_eq!(choose(&circle(10.1), &auto).0, Kind::Full);
+        let (_, z, h) = choose(&circle(10.0), &auto);
+        assert!((z - 10.0 / 2f64.sqrt()).abs() < 1e-9 && (h - 40.0 / 2f64.sqrt()).abs() < 1e-9);
+        assert_eq!(choose(&circle(0.0), &args(1.0, false, true, false)).0, Kind::Full);
+        assert_eq!(choose(&circle(30.0), &args(1.0, true, false, false)).0, Kind::Planar);
+    }
+
+    #[test]
+    fn planar_writes_only_the_x_y_terms() {
+        let fit = Fit {
+            kind: Kind::Planar,
+            offset: [1.0, 2.0, 0.0],
+            soft: [[1.1, 0.1, 0.0], [0.1, 0.9, 0.0], [0.0, 0.0, 1.0]],
+            radius: 40.0,
+            rms: 0.4,
+            determinacy: 1e4,
+            axis_ratio: 1.2,
+            samples: 100,
+        };
+        let names: Vec<&str> = values(&fit).iter().map(|v| v.0).collect();
+        assert_eq!(
+            names,
+            ["mag_offset_x", "mag_offset_y", "mag_soft_xx", "mag_soft_xy", "mag_soft_yy"]
+        );
+        assert_eq!(values(&fit)[3].1, 0.1);
+        let full = Fit { kind: Kind::Full, ..fit.clone() };
+        assert_eq!(values(&full).len(), 9);
+        assert_eq!(values(&full)[2], ("mag_offset_z", 0.0));
+        // Quality rules: coverage first, then the residual.
+        let mut cov = Coverage::new();
+        (0..360).for_each(|d| {
+            cov.add([(d as f64).to_radians().cos(), (d as f64).to_radians().sin(), 0.0])
+        });
+        assert!(check(&fit, &cov).is_ok());
+        let e = check(&full, &cov).unwrap_err();
+        assert!(e.contains("1 of 6 30° elevation bands") && e.contains("--planar"), "{e}");
+        let noisy = Fit { rms: 4.1, ..fit };
+        let e = check(&noisy, &cov).unwrap_err();
+        assert!(e.contains("10.2 % of the field (at most 10 %)"), "{e}");
+    }
+}
