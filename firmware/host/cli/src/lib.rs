@@ -9,16 +9,14 @@
 //!   is learnt at run time, and the [`session::Session`] that drives it beside the watcher;
 //! - [`types`]: the message types, found by type hash, decoded and encoded;
 //! - the commands: [`monitor`], [`listing`] (`nodes`, `topics`), [`echo`], [`publish`]
-//!   (`pub`), [`param`], [`magcal`] (`imu calibrate`, with [`ellipsoid`] and [`coverage`]),
+//!   (`pub`), [`param`], [`magcal`] (`imu calibrate`, its fit in the `r2p-magcal` crate),
 //!   [`traces`] (`replay`, `convert`), [`sim`], [`flash`]; [`args`]: the bus options
 //!   and output they share; [`cli`] parses the command line and runs them.
 
 pub mod args;
 pub mod cli;
-pub mod coverage;
 pub mod describe;
 pub mod echo;
-pub mod ellipsoid;
 pub mod error;
 pub mod flash;
 pub mod host;

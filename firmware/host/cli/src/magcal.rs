@@ -1,7 +1,7 @@
 //! `r2p imu calibrate`: the magnetometer's hard- and soft-iron calibration, run by the user
 //! (issue 21). It subscribes to the IMU module's `mag` topic (`imu/mag`, `imuN/mag`) as
 //! `r2p echo` does, shows the headings covered while the user turns the robot, fits the raw
-//! field ([`crate::ellipsoid`]: 3-D, or x/y only for a robot that turns on the floor), reports
+//! field ([`r2p_magcal::ellipsoid`]: 3-D, or x/y only for a robot that turns on the floor), reports
 //! the fit's quality and, unless it is refused or `--dry-run`, sets the module's `mag_offset_*`
 //! and `mag_soft_*` parameters (the module keeps them in flash), reads them back and prints them.
 //!
@@ -24,12 +24,12 @@ use r2p_node::{Event, Param};
 use serde_json::json;
 
 use crate::args::{emit, parse_seconds, BusArgs};
-use crate::coverage::{Coverage, MIN_BANDS, MIN_SECTORS, SECTORS};
 use crate::describe::result_name;
-use crate::ellipsoid::{fit, Fit, Kind, MAX_AXIS_RATIO, MIN_DETERMINACY};
 use crate::error::CliError;
 use crate::param::{ask, refused, resolve};
 use crate::session::Session;
+use r2p_magcal::coverage::{Coverage, MIN_BANDS, MIN_SECTORS, SECTORS};
+use r2p_magcal::ellipsoid::{fit, Fit, Kind, MAX_AXIS_RATIO, MIN_DETERMINACY};
 
 /// `r2p imu` subcommands.
 #[derive(Subcommand, Debug)]
@@ -561,9 +561,9 @@ mod tests {
     use r2p_node::{Node, NodeConfig, RamParams, RemoteSubscriber};
 
     use super::*;
-    use crate::ellipsoid::tests::{distortion, field, Rng};
     use crate::host::tests::drive;
     use crate::link::HubLink;
+    use r2p_magcal::synthetic::{distortion, field, Rng};
 
     type Mag = Topic<'static, MagneticField, { pool_size(&[8], 1) }, 1>;
 

@@ -307,63 +307,9 @@ pub fn fit(samples: &[[f64; 3]], kind: Kind) -> Result<Fit, FitError> {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
-
-    /// A small deterministic generator (xorshift64*), so the tests need no crate and repeat.
-    pub(crate) struct Rng(u64);
-
-    impl Rng {
-        pub(crate) fn new(seed: u64) -> Self {
-            Self(seed.max(1))
-        }
-        /// Uniform in [0, 1).
-        pub(crate) fn uniform(&mut self) -> f64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-        }
-        /// Standard normal (Box–Muller).
-        pub(crate) fn normal(&mut self) -> f64 {
-            let u = self.uniform().max(1e-300);
-            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * self.uniform()).cos()
-        }
-    }
-
-    fn mat_vec(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
-        std::array::from_fn(|i| (0..3).map(|j| m[i][j] * v[j]).sum())
-    }
-
-    /// A distortion: the sensor measures `W·b + h` for a true field b, with W = S⁻¹.
-    pub(crate) struct Distortion {
-        pub(crate) h: [f64; 3],
-        /// W, symmetric positive definite.
-        pub(crate) w: [[f64; 3]; 3],
-    }
-
-    pub(crate) fn distortion() -> Distortion {
-        Distortion {
-            h: [31.5, -12.25, 48.0],
-            w: [[1.12, 0.06, -0.03], [0.06, 0.91, 0.04], [-0.03, 0.04, 1.02]],
-        }
-    }
-
-    impl Distortion {
-        pub(crate) fn measure(&self, b: [f64; 3], noise: f64, rng: &mut Rng) -> [f64; 3] {
-            let m = mat_vec(&self.w, b);
-            std::array::from_fn(|i| m[i] + self.h[i] + noise * rng.normal())
-        }
-    }
-
-    /// The true field (48 µT, inclined 60° down) in the sensor's axes after yaw ψ, pitch θ.
-    pub(crate) fn field(yaw: f64, pitch: f64) -> [f64; 3] {
-        let (bh, bv) = (48.0 * 60f64.to_radians().cos(), -48.0 * 60f64.to_radians().sin());
-        // Rotate the world's (bh, 0, bv) into the body: yaw about z, then pitch about y.
-        let (x, y) = (bh * yaw.cos(), -bh * yaw.sin());
-        let (c, s) = (pitch.cos(), pitch.sin());
-        [c * x - s * bv, y, s * x + c * bv]
-    }
+    use crate::synthetic::{distortion, field, Rng};
 
     fn full_samples(n: usize, noise: f64, seed: u64) -> Vec<[f64; 3]> {
         let d = distortion();
