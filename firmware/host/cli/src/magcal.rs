@@ -104,6 +104,22 @@ pub fn values(fit: &Fit) -> Vec<(&'static str, f32)> {
     v
 }
 
+/// For a planar fit, the module's z terms stay, and the module computes
+/// `x/y = S₂·(m_xy − h_xy) + (s_xz, s_yz)·(m_z − h_z)`: with cross terms already set (by an
+/// earlier full calibration), the second part is a constant shift of the horizontal field
+/// while the robot is level (m_z is constant then), and it would move the heading circle off
+/// the origin. Moving h_xy by `S₂⁻¹·(s_xz, s_yz)·(m̄_z − h_z)` (m̄_z the samples' mean raw z)
+/// cancels it. Returns the shift (zero with the default identity's zero cross terms).
+pub fn keep_z(fit: &mut Fit, mean_z: f64, h_z: f64, s_xz: f64, s_yz: f64) -> [f64; 2] {
+    let [[a, b, _], [_, c, _], _] = fit.soft;
+    let det = a * c - b * b;
+    let (vx, vy) = (s_xz * (mean_z - h_z), s_yz * (mean_z - h_z));
+    let shift = [(c * vx - b * vy) / det, (a * vy - b * vx) / det];
+    fit.offset[0] += shift[0];
+    fit.offset[1] += shift[1];
+    shift
+}
+
 /// A parameter of the module's table: its index and range.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Slot {
@@ -453,9 +469,31 @@ pub fn calibrate(
         }
     }
     check(&fit, &cov).map_err(refuse)?;
+    let slot = |name: &str| *slots.iter().find(|s| s.name == name).expect("layout has every name");
+    let mut fit = fit;
+    if kind == Kind::Planar {
+        let mut z = [0.0; 3];
+        for (k, name) in ["mag_offset_z", "mag_soft_xz", "mag_soft_yz"].iter().enumerate() {
+            let i = slot(name).index;
+            let v = ask(&mut s, bus, target, i, "PARAM_GET", |h| h.get_param(target, i))?
+                .map_err(|f| refused(&s, target, "PARAM_GET", i, f))?;
+            z[k] = f32_of(v).map_or(0.0, f64::from);
+        }
+        let mean_z = samples.iter().map(|m| m[2]).sum::<f64>() / samples.len() as f64;
+        let shift = keep_z(&mut fit, mean_z, z[0], z[1], z[2]);
+        if shift != [0.0, 0.0] && !bus.json {
+            emit(
+                out,
+                &format!(
+                    "  the module's mag_soft_xz, _yz ({}, {}) mix z into x and y: h moved by \
+                     ({:.2}, {:.2}) µT to ({:.2}, {:.2}) µT to cancel it while the robot is level",
+                    z[1] as f32, z[2] as f32, shift[0], shift[1], fit.offset[0], fit.offset[1]
+                ),
+            )?;
+        }
+    }
     let values = values(&fit);
     in_range(&values, &slots).map_err(refuse)?;
-    let slot = |name: &str| *slots.iter().find(|s| s.name == name).expect("layout has every name");
     let mut result = json!({
         "node": target.get(),
         "topic": topic,
@@ -684,6 +722,56 @@ mod tests {
 
     const IDENTITY: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1.0];
 
+    /// What the module publishes as `field` with parameters `held` (h, then S's six): S·(m − h).
+    fn as_module(held: &[f32], m: [f64; 3]) -> [f64; 3] {
+        let p: Vec<f64> = held.iter().map(|&x| f64::from(x)).collect();
+        let s = [[p[3], p[4], p[5]], [p[4], p[6], p[7]], [p[5], p[7], p[8]]];
+        let d = [m[0] - p[0], m[1] - p[1], m[2] - p[2]];
+        std::array::from_fn(|i| (0..3).map(|j| s[i][j] * d[j]).sum())
+    }
+
+    /// The horizontal field the module publishes over a level turn with `held`: its centre's
+    /// distance from the origin and the spread of its radius, µT (noise-free samples).
+    fn level_turn(held: &[f32]) -> (f64, f64) {
+        let (d, mut rng) = (distortion(), Rng::new(1));
+        let xy: Vec<[f64; 2]> = (0..360)
+            .map(|deg| {
+                let c = as_module(
+                    held,
+                    d.measure(field(f64::from(deg).to_radians(), 0.0), 0.0, &mut rng),
+                );
+                [c[0], c[1]]
+            })
+            .collect();
+        let centre = [0, 1].map(|i| xy.iter().map(|c| c[i]).sum::<f64>() / 360.0);
+        let r: Vec<f64> = xy.iter().map(|c| c[0].hypot(c[1])).collect();
+        let (lo, hi) = r.iter().fold((f64::MAX, 0.0f64), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+        (centre[0].hypot(centre[1]), hi - lo)
+    }
+
+    #[test]
+    fn planar_keeps_the_modules_z_terms_and_cancels_their_shift() {
+        let mut module = TABLE;
+        module[3].value = Value::F32(-40.0); // mag_offset_z: m_z − h_z ≈ 45 µT
+        module[6].value = Value::F32(0.1); // mag_soft_xz
+        module[8].value = Value::F32(-0.05); // mag_soft_yz
+        let (r, held) = calibrate_over(args(2.0, false, false, false), spin, module, 0, false);
+        let text = r.unwrap();
+        assert!(
+            text.contains("the module's mag_soft_xz, _yz (0.1, -0.05) mix z into x and y"),
+            "{text}"
+        );
+        assert_eq!((held[2], held[5], held[7], held[8]), (-40.0, 0.1, -0.05, 1.0));
+        let (off, spread) = level_turn(&held);
+        assert!(off < 0.2 && spread < 0.5, "centre {off} µT off, radius spread {spread} µT");
+        // Without the shift the circle would sit (0.1, −0.05)·(m_z − h_z) ≈ 5 µT off the origin.
+        let mut unshifted = held.clone();
+        let bz = distortion().measure(field(0.0, 0.0), 0.0, &mut Rng::new(1))[2];
+        unshifted[0] -= (held[6] * 0.1 - held[4] * -0.05) as f32 * (bz + 40.0) as f32;
+        unshifted[1] -= (held[3] * -0.05 - held[4] * 0.1) as f32 * (bz + 40.0) as f32;
+        assert!(level_turn(&unshifted).0 > 3.0, "{:?}", level_turn(&unshifted));
+    }
+
     #[test]
     fn spinning_on_the_floor_calibrates_x_and_y_and_leaves_z() {
         let mut module = TABLE;
@@ -702,6 +790,9 @@ mod tests {
             assert!((f64::from(held[i]) - want).abs() < 0.2, "{held:?} want {want}");
         }
         assert_eq!((held[2], held[5], held[7], held[8]), (7.5, 0.0, 0.0, 1.0));
+        let (off, spread) = level_turn(&held);
+        assert!(off < 0.2 && spread < 0.5, "centre {off} µT off, radius spread {spread} µT");
+        assert!(!text.contains("mix z into x and y"), "{text}");
         // S's x/y block undoes W's: S·W is a multiple of the identity.
         let s = [[held[3], held[4]], [held[4], held[6]]].map(|r| r.map(f64::from));
         let sw = |i: usize, j: usize| s[i][0] * d.w[0][j] + s[i][1] * d.w[1][j];
