@@ -767,8 +767,8 @@ mod tests {
         // Without the shift the circle would sit (0.1, −0.05)·(m_z − h_z) ≈ 5 µT off the origin.
         let mut unshifted = held.clone();
         let bz = distortion().measure(field(0.0, 0.0), 0.0, &mut Rng::new(1))[2];
-        unshifted[0] -= (held[6] * 0.1 - held[4] * -0.05) as f32 * (bz + 40.0) as f32;
-        unshifted[1] -= (held[3] * -0.05 - held[4] * 0.1) as f32 * (bz + 40.0) as f32;
+        unshifted[0] -= (held[6] * 0.1 - held[4] * -0.05) * (bz + 40.0) as f32;
+        unshifted[1] -= (held[3] * -0.05 - held[4] * 0.1) * (bz + 40.0) as f32;
         assert!(level_turn(&unshifted).0 > 3.0, "{:?}", level_turn(&unshifted));
     }
 
