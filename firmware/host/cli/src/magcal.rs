@@ -69,6 +69,15 @@ pub struct CalibrateArgs {
 /// How often the progress line is printed.
 const PROGRESS: Duration = Duration::from_secs(1);
 
+/// The index of `mag_heading` in `table`, if the firmware has it (a u32 switch): a written
+/// calibration turns the magnetic heading on.
+pub fn heading_switch(table: &[Param]) -> Option<u16> {
+    table
+        .iter()
+        .position(|p| p.name == "mag_heading" && matches!(p.max, Value::U32(1)))
+        .map(|i| i as u16)
+}
+
 /// Finds each parameter the calibration writes in `table` (the IMU application's).
 pub fn layout(table: &[Param]) -> Result<Vec<Slot>, CliError> {
     let names = OFFSET.iter().copied().chain(SOFT.iter().map(|s| s.0));
@@ -430,6 +439,32 @@ pub fn calibrate(
             emit(out, &format!("  {name:<13} {old:>10} → {want:.4}"))?;
         }
     }
+    if let Some(i) = heading_switch(table) {
+        // The module's heading ignores an uncalibrated magnetometer (`mag_heading` 0 by default:
+        // its zero-gauss offset alone is larger than the Earth's field); calibrated, it follows.
+        let on =
+            ask(&mut s, bus, target, i, "PARAM_SET", |h| h.set_param(target, i, Value::U32(1)))?
+                .map_err(|f| {
+                    CliError::new(format!(
+                        "the calibration is written, but turning the magnetic heading on failed \
+                     ({}); set it with `r2p param set {} {i} u32:1`",
+                        refused(&s, target, "PARAM_SET", i, f),
+                        target.get()
+                    ))
+                })?;
+        read.insert("mag_heading".into(), crate::describe::value_json(on)["value"].clone());
+        if !bus.json {
+            emit(
+                out,
+                &format!(
+                    "  {:<13} {:>10} → {} (the heading follows the magnetometer)",
+                    "mag_heading",
+                    "",
+                    crate::describe::value_text(on)
+                ),
+            )?;
+        }
+    }
     result["written"] = json!(true);
     result["params"] = json!(read);
     if bus.json {
@@ -457,7 +492,7 @@ mod tests {
 
     /// The module's table as the CLI knows it: something before the calibration, so the
     /// indices are not the names' positions in [`OFFSET`] and [`SOFT`].
-    const TABLE: [Param; 10] = [
+    const TABLE: [Param; 11] = [
         Param::u32("rate_hz", 50, 1, 200),
         Param::f32("mag_offset_x", 0.0, -400.0, 400.0),
         Param::f32("mag_offset_y", 0.0, -400.0, 400.0),
@@ -468,6 +503,7 @@ mod tests {
         Param::f32("mag_soft_yy", 1.0, -4.0, 4.0),
         Param::f32("mag_soft_yz", 0.0, -4.0, 4.0),
         Param::f32("mag_soft_zz", 1.0, -4.0, 4.0),
+        Param::u32("mag_heading", 0, 0, 1),
     ];
 
     /// How the robot moves: yaw and pitch (rad) at a time (s).
@@ -480,16 +516,16 @@ mod tests {
         hub: Arc<BroadcastHub>,
         stop: Arc<AtomicBool>,
         motion: Motion,
-        module: [Param; 10],
+        module: [Param; 11],
         status: u8,
-    ) -> (std::thread::JoinHandle<()>, &'static RamParams<10>) {
+    ) -> (std::thread::JoinHandle<()>, &'static RamParams<11>) {
         let topic: &'static Mag =
             Box::leak(Box::new(Topic::new("imu/mag", MagneticField::default())));
         let publisher: &'static Publisher<'static, MagneticField> =
             Box::leak(Box::new(Publisher::new(topic, Class::NonRealTime)));
         let out: &'static RemoteSubscriber<'static, MagneticField, 8> =
             Box::leak(Box::new(RemoteSubscriber::new(publisher)));
-        let params: &'static RamParams<10> = Box::leak(Box::new(RamParams::new(module)));
+        let params: &'static RamParams<11> = Box::leak(Box::new(RamParams::new(module)));
         topic.subscribe(out).unwrap();
         let make = move || {
             let mut uid = [0u8; 12];
@@ -538,7 +574,7 @@ mod tests {
     fn calibrate_over(
         a: CalibrateArgs,
         motion: Motion,
-        module: [Param; 10],
+        module: [Param; 11],
         status: u8,
         json: bool,
     ) -> (Result<String, CliError>, Vec<f32>) {
@@ -550,7 +586,12 @@ mod tests {
         let r = calibrate(&a, &bus(json), s, &mut *out.lock().unwrap(), &TABLE);
         stop.store(true, Ordering::SeqCst);
         handle.join().unwrap();
-        let held = (1..10).map(|i| f32_of(params.param(i).unwrap().value).unwrap()).collect();
+        // The nine calibration parameters, then mag_heading (as 0.0 or 1.0).
+        let value = |i| match params.param(i).unwrap().value {
+            Value::U32(x) => x as f32,
+            v => f32_of(v).unwrap(),
+        };
+        let held = (1..11).map(value).collect();
         let text = String::from_utf8(out.into_inner().unwrap()).unwrap();
         (r.map(|()| text), held)
     }
@@ -570,7 +611,8 @@ mod tests {
         ((std::f64::consts::TAU * t).sin() * 45f64.to_radians(), 0.0)
     }
 
-    const IDENTITY: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1.0];
+    /// The module's defaults: no calibration, the magnetic heading off.
+    const IDENTITY: [f32; 10] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0];
 
     /// What the module publishes as `field` with parameters `held` (h, then S's six): S·(m − h).
     fn as_module(held: &[f32], m: [f64; 3]) -> [f64; 3] {
@@ -640,6 +682,8 @@ mod tests {
             assert!((f64::from(held[i]) - want).abs() < 0.2, "{held:?} want {want}");
         }
         assert_eq!((held[2], held[5], held[7], held[8]), (7.5, 0.0, 0.0, 1.0));
+        assert_eq!(held[9], 1.0, "mag_heading on");
+        assert!(text.contains("mag_heading              → u32:1 (the heading follows"), "{text}");
         let (off, spread) = level_turn(&held);
         assert!(off < 0.2 && spread < 0.5, "centre {off} µT off, radius spread {spread} µT");
         assert!(!text.contains("mix z into x and y"), "{text}");
@@ -665,6 +709,7 @@ mod tests {
             assert!((f64::from(held[i]) - d.h[i]).abs() < 0.3, "{held:?}");
         }
         assert_eq!(j["params"]["mag_soft_zz"].as_f64().map(|x| x as f32), Some(held[8]));
+        assert_eq!((j["params"]["mag_heading"].as_u64(), held[9]), (Some(1), 1.0));
         let s = nalgebra::Matrix3::new(
             held[3], held[4], held[5], held[4], held[6], held[7], held[5], held[7], held[8],
         )
@@ -739,6 +784,9 @@ mod tests {
         assert_eq!(slots.len(), 9);
         assert_eq!(slots[0], Slot { name: "mag_offset_x", index: 1, min: -400.0, max: 400.0 });
         assert_eq!(slots[8], Slot { name: "mag_soft_zz", index: 9, min: -4.0, max: 4.0 });
+        assert_eq!(heading_switch(&TABLE), Some(10));
+        assert_eq!(heading_switch(&TABLE[..10]), None, "older firmware: no switch, none set");
+        assert_eq!(heading_switch(&[Param::f32("mag_heading", 0.0, 0.0, 1.0)]), None);
         let e = layout(&TABLE[..9]).unwrap_err().to_string();
         assert!(e.contains("no parameter \"mag_soft_zz\"") && e.contains("same source"), "{e}");
         let mut bad = TABLE;
