@@ -83,12 +83,17 @@ def test_flash_builds_the_probe_rs_commands_and_says_what_is_missing(built, tmp_
         f"{fake} download --chip STM32F407VG --verify {ROOT}/firmware/images/gateway.elf",
         f"{fake} reset --chip STM32F407VG"], p.stdout
     # F103 modules behind their bootloader (slot = "active" in modules.toml): bootloader-f103 first.
-    for module in ("motor", "proximity", "imu", "psu"):
+    for module in ("motor", "proximity", "psu"):
         p = run([str(R2P), "flash", module, "--probe-rs", str(fake), "--dry-run"], timeout=30)
         assert p.returncode == 0 and p.stdout.splitlines() == [
             f"{fake} download --chip STM32F103CB --verify {ROOT}/firmware/images/bootloader-f103.elf",
             f"{fake} download --chip STM32F103CB --verify {ROOT}/firmware/images/{module}.elf",
             f"{fake} reset --chip STM32F103CB"], p.stdout
+    # The IMU out of a slot (docs/flashing.md, "The IMU's flash"): its image alone, at the base.
+    p = run([str(R2P), "flash", "imu", "--probe-rs", str(fake), "--dry-run"], timeout=30)
+    assert p.returncode == 0 and p.stdout.splitlines() == [
+        f"{fake} download --chip STM32F103CB --verify {ROOT}/firmware/images/imu.elf",
+        f"{fake} reset --chip STM32F103CB"], p.stdout
     p = run([str(R2P), "flash"], timeout=30)
     assert p.returncode == 2 and "<MODULE>" in p.stdout
 

@@ -11,7 +11,8 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from r2ptools import msggen, msgs, rihs
 
 ROS_TYPES = {"geometry_msgs/msg/Twist", "nav_msgs/msg/Odometry", "sensor_msgs/msg/BatteryState",
-             "sensor_msgs/msg/Range", "sensor_msgs/msg/Imu"}
+             "sensor_msgs/msg/Range", "sensor_msgs/msg/Imu", "sensor_msgs/msg/MagneticField",
+             "sensor_msgs/msg/FluidPressure", "sensor_msgs/msg/NavSatFix"}
 
 
 @pytest.fixture(scope="module")

@@ -59,6 +59,23 @@ def slot_path() -> dict:
     return next(r for r in json_lines(out) if r["bench"] == "cortex_m3_slot_path")
 
 
+def imu_fusion() -> dict:
+    """Instructions per step of the IMU's estimators in soft float (QEMU, -icount), and of the
+    Euler-angle filter the module ran before issue 21 (the baseline, same run)."""
+    outdir = qemu.build(profile="release")
+    rc, out = qemu.run_image(outdir / "fusion")
+    if rc != 0:
+        raise RuntimeError(f"QEMU fusion image failed (exit {rc}):\n{out}")
+    return next(r for r in json_lines(out) if r["bench"] == "cortex_m3_imu_fusion")
+
+
+def imu_image() -> tuple[int, int, int, int]:
+    """The committed IMU image's flash and static RAM, and its budgets (modules.toml)."""
+    img = next(i for i in firmware.manifest() if i.name == "imu")
+    size = firmware.size_of(ROOT / "firmware" / "images" / "imu.elf")
+    return size.flash, img.budget_flash, size.ram, img.budget_ram
+
+
 def host() -> list[dict]:
     p = subprocess.run(["cargo", "run", "-q", "--release", "--locked", "-p", "r2p-bench-host"],
                        cwd=ROOT / "firmware", capture_output=True, text=True, check=True)
@@ -384,6 +401,7 @@ def main() -> int:
     try:
         m3 = cortex_m3()
         sp = slot_path()
+        fu = imu_fusion()
         hs = host()
         load_points, load_sim = rtcan_load()
         load_seeds = rtcan_seeds()
@@ -416,6 +434,22 @@ def main() -> int:
           f"over the direct call; jitter ≥ {(ihi - ilo) / 72:.1f} µs at 72 MHz from the path "
           f"(≤ {2 * (ihi - ilo) / 72:.1f} µs at 2 cycles per instruction), plus the longest "
           f"critical section and a bit time of CAN start-of-frame quantisation")
+
+    print("\n=== Cortex-M3 (QEMU, -icount): the IMU's estimators per step, soft float (r2p-app-imu)")
+    base = fu["euler_filter_insn"]
+    for key, what in (("ahrs_insn", "quaternion filter, gyro + accelerometer"),
+                      ("ahrs_mag_insn", "quaternion filter with a magnetometer sample"),
+                      ("ahrs_euler_out_insn", "quaternion to roll/pitch/yaw"),
+                      ("baro_insn", "ISA altitude + vertical filter")):
+        print(f"{what:<46} {fu[key]:>6} instructions  ({fu[key] / base:.2f}× the Euler filter's {base})")
+    per_s = 104 * (fu["ahrs_insn"] + fu["ahrs_euler_out_insn"]) + 80 * (
+        fu["ahrs_mag_insn"] - fu["ahrs_insn"]) + 25 * fu["baro_insn"]
+    print(f"at the default rates (gyro 104 Hz, magnetometer 80 Hz, barometer 25 Hz): {per_s:,} "
+          f"instructions/s, ≥ {per_s / 72e6:.1%} of a 72 MHz Cortex-M3 (cycles ≥ instructions)")
+    flash, flash_budget, ram, ram_budget = imu_image()
+    print(f"IMU image: flash {flash:,} B of {flash_budget:,} ({flash / flash_budget:.0%}), "
+          f"static RAM {ram:,} B of {ram_budget:,} ({ram / ram_budget:.0%}); a 55 KiB update slot "
+          f"holds 56,192 B: {'fits' if flash <= 56_192 else f'{flash - 56_192:,} B over (docs/flashing.md)'}")
 
     print("\n=== the slot lead per MCU (QEMU, -icount: the path built for each core; r2ptools.slotlead)")
     if slotlead.main() != 0:

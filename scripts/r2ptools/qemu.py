@@ -22,7 +22,7 @@ TARGET = "thumbv7m-none-eabi"
 # Exists to prove that a failure fails the run (tests/test_qemu_runner.py); not part of the suite.
 DELIBERATE_FAILURE = "deliberate-failure"
 # Images that are not test suites: run only when named (the benchmarks are run by scripts/bench).
-NOT_SUITES = {DELIBERATE_FAILURE, "bench", "slot-path"}
+NOT_SUITES = {DELIBERATE_FAILURE, "bench", "slot-path", "fusion"}
 TIMEOUT_S = 60
 
 

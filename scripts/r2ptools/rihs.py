@@ -55,10 +55,19 @@ STANDARD = {
         "float64[9] orientation_covariance\ngeometry_msgs/Vector3 angular_velocity\n"
         "float64[9] angular_velocity_covariance\ngeometry_msgs/Vector3 linear_acceleration\n"
         "float64[9] linear_acceleration_covariance"),
+    "sensor_msgs/msg/MagneticField": (
+        "std_msgs/Header header\ngeometry_msgs/Vector3 magnetic_field\n"
+        "float64[9] magnetic_field_covariance"),
+    "sensor_msgs/msg/FluidPressure": "std_msgs/Header header\nfloat64 fluid_pressure\nfloat64 variance",
+    "sensor_msgs/msg/NavSatStatus": "int8 status\nuint16 service",
+    "sensor_msgs/msg/NavSatFix": (
+        "std_msgs/Header header\nNavSatStatus status\nfloat64 latitude\nfloat64 longitude\n"
+        "float64 altitude\nfloat64[9] position_covariance\nuint8 position_covariance_type"),
 }
 # The ones the gateway maps R2P topics to (the rest are parts of these).
 MAPPED = ("geometry_msgs/msg/Twist", "nav_msgs/msg/Odometry", "sensor_msgs/msg/BatteryState",
-          "sensor_msgs/msg/Range", "sensor_msgs/msg/Imu")
+          "sensor_msgs/msg/Range", "sensor_msgs/msg/Imu", "sensor_msgs/msg/MagneticField",
+          "sensor_msgs/msg/FluidPressure", "sensor_msgs/msg/NavSatFix")
 
 _LINE = re.compile(r"^(?P<type>[A-Za-z0-9_/]+)(?P<arr>\[(?P<bound><=)?(?P<n>\d*)\])?"
                    r"\s+(?P<name>[a-z][a-z0-9_]*)(?:\s+(?P<default>[^#]*?))?\s*(?:#.*)?$")

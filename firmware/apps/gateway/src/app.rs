@@ -2,7 +2,7 @@
 
 use r2p_module::leds::{self, Pattern};
 use r2p_module::TopicNode;
-use r2p_msgs::{Battery, GatewayStatus, Imu, R2pMessage};
+use r2p_msgs::{Barometer, Battery, GatewayStatus, GnssFix, Imu, MagneticField, R2pMessage};
 
 use crate::endpoints::MIRRORED;
 
@@ -84,6 +84,9 @@ pub struct App<'a> {
     next_status_us: u64,
     battery: Option<Battery>,
     imu: Option<Imu>,
+    mag: Option<MagneticField>,
+    baro: Option<Barometer>,
+    gnss: Option<GnssFix>,
     mirrored: [Mirrored; MIRRORED.len()],
 }
 
@@ -97,6 +100,9 @@ impl<'a> App<'a> {
             next_status_us: 0,
             battery: None,
             imu: None,
+            mag: None,
+            baro: None,
+            gnss: None,
             mirrored: [Mirrored::default(); MIRRORED.len()],
         }
     }
@@ -107,6 +113,9 @@ impl<'a> App<'a> {
         node.export(self.ep.status.remote)?;
         node.import(self.ep.battery.remote)?;
         node.import(self.ep.imu.remote)?;
+        node.import(self.ep.mag.remote)?;
+        node.import(self.ep.baro.remote)?;
+        node.import(self.ep.gnss.remote)?;
         node.import(self.ep.psu_state.remote)?;
         node.import(self.ep.psu_event.remote)?;
         for f in &self.ep.motor_faults {
@@ -128,6 +137,11 @@ impl<'a> App<'a> {
     /// The latest IMU reading received, if any.
     pub fn imu(&self) -> Option<Imu> {
         self.imu
+    }
+
+    /// The latest magnetic field, barometer reading and GNSS fix from the IMU module, if any.
+    pub fn imu_extras(&self) -> (Option<MagneticField>, Option<Barometer>, Option<GnssFix>) {
+        (self.mag, self.baro, self.gnss)
     }
 
     /// The endpoints.
@@ -159,6 +173,15 @@ impl<'a> App<'a> {
         }
         while let Some(m) = self.ep.imu.subscriber.try_recv() {
             self.imu = Some(*m);
+        }
+        while let Some(m) = self.ep.mag.subscriber.try_recv() {
+            self.mag = Some(*m);
+        }
+        while let Some(m) = self.ep.baro.subscriber.try_recv() {
+            self.baro = Some(*m);
+        }
+        while let Some(m) = self.ep.gnss.subscriber.try_recv() {
+            self.gnss = Some(*m);
         }
         while let Some(m) = self.ep.psu_state.subscriber.try_recv() {
             self.mirrored[0].update(&*m);

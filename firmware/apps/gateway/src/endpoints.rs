@@ -5,6 +5,7 @@
 //! | `gateway/status` | `GatewayStatus` | NRT, 1 Hz |
 //! | `psu/battery` | `Battery` | imported: for ROS 2's `/battery_state` |
 //! | `imu` | `Imu` | imported: for ROS 2's `/imu/data` |
+//! | `imu/mag`, `imu/baro`, `imu/gnss` | `MagneticField`, `Barometer`, `GnssFix` | imported: for ROS 2's `/imu/mag`, `/imu/pressure`, `/gnss/fix` |
 //! | `psu/state`, `psu/event`, `motor1/fault` … `motor3/fault` | their types | imported: ROS 2 topics of the same names, as `r2p_msgs` types ([`MIRRORED`]) |
 //!
 //! The objects are made at boot in a [`Storage`] of cells (`r2p_module`'s [`Outbound`], each
@@ -13,7 +14,9 @@
 
 use r2p_middleware::{pool_size, Class};
 use r2p_module::{Inbound, InboundCell, Outbound, OutboundCell};
-use r2p_msgs::{Battery, GatewayStatus, Imu, MotorFault, PsuEvent, PsuState};
+use r2p_msgs::{
+    Barometer, Battery, GatewayStatus, GnssFix, Imu, MagneticField, MotorFault, PsuEvent, PsuState,
+};
 
 /// The topic's name.
 pub const STATUS_TOPIC: &str = "gateway/status";
@@ -21,6 +24,12 @@ pub const STATUS_TOPIC: &str = "gateway/status";
 pub const BATTERY_TOPIC: &str = "psu/battery";
 /// The IMU module's reading (what `/imu/data` carries).
 pub const IMU_TOPIC: &str = "imu";
+/// The IMU module's magnetic field (`/imu/mag`).
+pub const MAG_TOPIC: &str = "imu/mag";
+/// The IMU module's barometer (`/imu/pressure`).
+pub const BARO_TOPIC: &str = "imu/baro";
+/// The GNSS receiver on the IMU module (`/gnss/fix`).
+pub const GNSS_TOPIC: &str = "imu/gnss";
 
 /// The R2P topics without a standard ROS 2 type that the gateway imports and republishes as
 /// their `r2p_msgs` type under the same name (what no robot-level node imports itself: a node
@@ -32,6 +41,10 @@ pub const MIRRORED: [(&str, &str); 5] = [
     ("motor2/fault", "MotorFault"),
     ("motor3/fault", "MotorFault"),
 ];
+
+/// Topics the gateway imports ([`crate::App::register`]): the battery, the IMU's four and the
+/// mirrored topics; the image's node is sized with it.
+pub const IMPORTS: usize = 5 + MIRRORED.len();
 
 /// Queue each remote subscriber may ask for.
 pub const REMOTE_QUEUE: usize = 2;
@@ -52,6 +65,12 @@ pub struct Endpoints<'a> {
     pub battery: Inbound<'a, Battery, IN_POOL, 1, 2>,
     /// The IMU's reading, imported.
     pub imu: Inbound<'a, Imu, IN_POOL, 1, 2>,
+    /// The IMU's magnetic field, imported.
+    pub mag: Inbound<'a, MagneticField, IN_POOL, 1, 2>,
+    /// The IMU's barometer, imported.
+    pub baro: Inbound<'a, Barometer, IN_POOL, 1, 2>,
+    /// The IMU's GNSS fix, imported.
+    pub gnss: Inbound<'a, GnssFix, IN_POOL, 1, 2>,
     /// The PSU's state, imported ([`MIRRORED`]).
     pub psu_state: Inbound<'a, PsuState, IN_POOL, 1, 2>,
     /// The PSU's events, imported.
@@ -66,6 +85,9 @@ pub struct Storage {
     status: OutboundCell<GatewayStatus, POOL, 2, REMOTE_QUEUE>,
     battery: InboundCell<Battery, IN_POOL, 1, 2>,
     imu: InboundCell<Imu, IN_POOL, 1, 2>,
+    mag: InboundCell<MagneticField, IN_POOL, 1, 2>,
+    baro: InboundCell<Barometer, IN_POOL, 1, 2>,
+    gnss: InboundCell<GnssFix, IN_POOL, 1, 2>,
     psu_state: InboundCell<PsuState, IN_POOL, 1, 2>,
     psu_event: InboundCell<PsuEvent, IN_POOL, 1, 2>,
     motor_faults: [InboundCell<MotorFault, IN_POOL, 1, 2>; 3],
@@ -78,6 +100,9 @@ impl Storage {
             status: OutboundCell::new(),
             battery: InboundCell::new(),
             imu: InboundCell::new(),
+            mag: InboundCell::new(),
+            baro: InboundCell::new(),
+            gnss: InboundCell::new(),
             psu_state: InboundCell::new(),
             psu_event: InboundCell::new(),
             motor_faults: [InboundCell::new(), InboundCell::new(), InboundCell::new()],
@@ -103,6 +128,9 @@ impl Storage {
             status: status.expect("the status topic is sized for its endpoints"),
             battery: battery.expect(sized),
             imu: imu.expect(sized),
+            mag: self.mag.build(MAG_TOPIC, MagneticField::default()).expect(sized),
+            baro: self.baro.build(BARO_TOPIC, Barometer::default()).expect(sized),
+            gnss: self.gnss.build(GNSS_TOPIC, GnssFix::default()).expect(sized),
             psu_state,
             psu_event,
             motor_faults: [fault(0), fault(1), fault(2)],

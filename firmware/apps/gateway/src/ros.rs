@@ -8,6 +8,9 @@
 //! | `/battery_state` | sensor_msgs/msg/BatteryState | PSU → ROS | 1 Hz | best effort |
 //! | `/range_0` … `/range_3` | sensor_msgs/msg/Range | proximity → ROS | 10 Hz | best effort |
 //! | `/imu/data` | sensor_msgs/msg/Imu | IMU → ROS | 50 Hz | best effort |
+//! | `/imu/mag` | sensor_msgs/msg/MagneticField | IMU → ROS | 10 Hz | best effort |
+//! | `/imu/pressure` | sensor_msgs/msg/FluidPressure | IMU → ROS | 10 Hz | best effort |
+//! | `/gnss/fix` | sensor_msgs/msg/NavSatFix | IMU's GNSS receiver → ROS | 5 Hz | best effort |
 //! | `/gateway/status` | r2p_msgs/msg/GatewayStatus | gateway → ROS | 1 Hz | reliable |
 //! | `/psu/state`, `/psu/event`, `/motor1/fault` … `/motor3/fault` | r2p_msgs/msg/PsuState, PsuEvent, MotorFault | modules → ROS | each message once, as it comes | reliable |
 //!
@@ -15,7 +18,9 @@
 //! hands this bridge each batch it reads and the latest value of each R2P topic, and sends what
 //! the bridge writes. A dropped link is [`RosBridge::connect`]ed again.
 
-use r2p_msgs::{Battery, Imu, Odometry, Proximity, R2pMessage, Twist2D};
+use r2p_msgs::{
+    Barometer, Battery, GnssFix, Imu, MagneticField, Odometry, Proximity, R2pMessage, Twist2D,
+};
 use r2p_zenoh::mapping::{self, RangerSpec, Stamp};
 use r2p_zenoh::ros::{self, Entity, KeyString, NodeInfo, RosType, DEFAULT_QOS, SENSOR_QOS};
 use r2p_zenoh::session::{Config, Event, Session, SessionError, State, Stats};
@@ -75,10 +80,16 @@ pub mod topic {
     pub const IMU: usize = 6;
     /// `/gateway/status`.
     pub const STATUS: usize = 7;
+    /// `/imu/mag`.
+    pub const MAG: usize = 8;
+    /// `/imu/pressure`.
+    pub const PRESSURE: usize = 9;
+    /// `/gnss/fix`.
+    pub const GNSS: usize = 10;
     /// The first of the mirrored R2P topics (`crate::endpoints::MIRRORED`, in its order).
-    pub const MIRRORED0: usize = 8;
+    pub const MIRRORED0: usize = 11;
     /// How many.
-    pub const COUNT: usize = 13;
+    pub const COUNT: usize = 16;
 }
 
 const TOPICS: [(&str, u32); topic::COUNT] = [
@@ -90,6 +101,9 @@ const TOPICS: [(&str, u32); topic::COUNT] = [
     ("/range_3", 10),
     ("/imu/data", 50),
     ("/gateway/status", 1),
+    ("/imu/mag", 10),
+    ("/imu/pressure", 10),
+    ("/gnss/fix", 5),
     // The mirrored topics: each message once, as it arrives (rate 0).
     ("/psu/state", 0),
     ("/psu/event", 0),
@@ -103,6 +117,9 @@ fn ros_type(i: usize) -> RosType {
         topic::ODOM => types::ODOMETRY,
         topic::BATTERY => types::BATTERY_STATE,
         topic::IMU => types::IMU,
+        topic::MAG => types::MAGNETIC_FIELD,
+        topic::PRESSURE => types::FLUID_PRESSURE,
+        topic::GNSS => types::NAV_SAT_FIX,
         topic::STATUS => r2p_type("GatewayStatus").map_or(types::ODOMETRY, |t| t.ros),
         i if i >= topic::MIRRORED0 => {
             r2p_type(MIRRORED[i - topic::MIRRORED0].1).map_or(types::ODOMETRY, |t| t.ros)
@@ -144,6 +161,12 @@ pub struct Latest {
     pub proximity: Option<Proximity>,
     /// The IMU's reading.
     pub imu: Option<Imu>,
+    /// The IMU's magnetic field.
+    pub mag: Option<MagneticField>,
+    /// The IMU's barometer.
+    pub baro: Option<Barometer>,
+    /// The IMU's GNSS fix.
+    pub gnss: Option<GnssFix>,
     /// The gateway's status.
     pub status: Option<r2p_msgs::GatewayStatus>,
     /// The mirrored R2P topics' latest messages (`crate::endpoints::MIRRORED`).
@@ -319,6 +342,19 @@ impl RosBridge {
                     latest.battery.map(|b| mapping::battery_state(&b, stamp, &mut cdr))
                 }
                 topic::IMU => latest.imu.map(|m| mapping::imu(&m, stamp, &mut cdr)),
+                // A sensor with no data is not published (its R2P topic says why).
+                topic::MAG => latest
+                    .mag
+                    .filter(|m| m.status == 0)
+                    .map(|m| mapping::magnetic_field(&m, stamp, &mut cdr)),
+                topic::PRESSURE => latest
+                    .baro
+                    .filter(|b| b.status == 0)
+                    .map(|b| mapping::fluid_pressure(&b, stamp, &mut cdr)),
+                topic::GNSS => latest
+                    .gnss
+                    .filter(|g| g.status == 0)
+                    .map(|g| mapping::nav_sat_fix(&g, stamp, &mut cdr)),
                 topic::STATUS => latest.status.and_then(|s| {
                     let t = r2p_type("GatewayStatus")?;
                     let mut packed = [0u8; r2p_msgs::GatewayStatus::SIZE];

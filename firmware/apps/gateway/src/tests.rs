@@ -516,13 +516,14 @@ fn the_link_led_shows_link_address_and_clients() {
 fn the_node_exports_status_under_the_module_name() {
     let (app, _, _) = rig();
     let params = leak(RamParams::new(params::DEFAULTS));
-    // The image's node: 7 imports (battery, imu and the mirrored topics).
-    let mut node: Node<'static, 4, 7, 8, 4, 64> =
+    // The image's node: 10 imports (battery, the IMU's four and the mirrored topics).
+    assert_eq!(crate::endpoints::IMPORTS, 10);
+    let mut node: Node<'static, 4, 10, 8, 4, 64> =
         Node::new(node_config([1; 12], 11), params).unwrap();
     app.register(&mut node).unwrap();
-    let mut small: Node<'static, 4, 6, 8, 4, 64> =
+    let mut small: Node<'static, 4, 9, 8, 4, 64> =
         Node::new(node_config([1; 12], 11), params).unwrap();
-    assert!(app.register(&mut small).is_err(), "one import more than 6");
+    assert!(app.register(&mut small).is_err(), "one import more than 9");
     assert_eq!(app.endpoints().status.topic.name(), STATUS_TOPIC);
     assert!(STATUS_TOPIC.starts_with(crate::NAME));
     assert_eq!(node_config([1; 12], 11).rank, Some(1), "the standby sync master");

@@ -1,4 +1,7 @@
-//! Roll, pitch and heading from the bias-corrected gyro and the accelerometer.
+//! Roll, pitch and heading from the bias-corrected gyro and the accelerometer: the module's
+//! filter until issue 21, replaced by [`crate::ahrs`] (quaternion, magnetometer, bias tracked).
+//! Kept for its helpers ([`wrap`], [`tilt`]) and as `make bench`'s baseline for the new filter's
+//! cost (firmware/targets/qemu/src/bin/fusion.rs); the images do not link [`Attitude`].
 //!
 //! **Propagation**: the Euler angles (roll φ, pitch θ, yaw ψ; z-y-x, as ROS's `rpy`) follow
 //! the body rates (p, q, r) by the Euler kinematic equations

@@ -19,10 +19,13 @@
 #[cfg(any(test, feature = "std"))]
 extern crate std;
 
+pub mod ahrs;
+pub mod altitude;
 mod app;
 pub mod attitude;
 pub mod bias;
 pub mod endpoints;
+pub mod mag_cal;
 pub mod params;
 #[cfg(any(test, feature = "std"))]
 pub mod readme;
@@ -32,7 +35,8 @@ pub mod sensor;
 mod tests;
 
 pub use app::{
-    App, Command, Sample, LOST_AFTER_PERIODS, STATUS_CALIBRATING, STATUS_NO_DATA, STATUS_OK,
+    App, Command, Reading, Sample, BARO_PERIOD_US, LOST_AFTER_PERIODS, MAG_PERIOD_US, SENSOR_BARO,
+    SENSOR_GNSS, SENSOR_IMU, SENSOR_MAG, STATUS_CALIBRATING, STATUS_NO_DATA, STATUS_OK,
 };
 pub use endpoints::{names, Endpoints, Names, Storage, NAMES};
 

@@ -25,8 +25,31 @@ pub const TILT_TAU_MS: u16 = 7;
 /// The accelerometer corrects roll/pitch only while |a| is within this fraction of g.
 pub const ACCEL_GATE: u16 = 8;
 
+/// Time constant of the heading's correction towards the magnetometer, ms.
+pub const HEADING_TAU_MS: u16 = 9;
+/// Time constant of the gyro bias tracking, s (0: the boot estimate is kept).
+pub const BIAS_TAU_S: u16 = 10;
+/// Magnetic declination at the site, degrees east.
+pub const DECLINATION_DEG: u16 = 11;
+/// Hard iron: the offset removed from the measured field, µT, x (y, z follow).
+pub const MAG_OFFSET_X: u16 = 12;
+/// Soft iron: the symmetric matrix applied after the offset, xx (xy, xz, yy, yz, zz follow).
+pub const MAG_SOFT_XX: u16 = 15;
+/// Whether the heading follows the magnetometer (1) or only the gyro (0).
+pub const MAG_HEADING: u16 = 21;
+/// `mag` publication rate, Hz.
+pub const MAG_RATE_HZ: u16 = 22;
+/// `baro` publication rate, Hz.
+pub const BARO_RATE_HZ: u16 = 23;
+/// Sea-level pressure the altitude is computed under, Pa.
+pub const QNH_PA: u16 = 24;
+/// Time constant of the altitude/vertical speed filter, ms.
+pub const VERTICAL_TAU_MS: u16 = 25;
+/// GNSS receiver's navigation rate and the `gnss` publication rate, Hz (at boot).
+pub const GNSS_RATE_HZ: u16 = 26;
+
 /// Number of parameters.
-pub const COUNT: usize = 9;
+pub const COUNT: usize = 27;
 
 /// Gyroscope full scales by `gyro_range`: ±125, ±250, ±500, ±1000, ±2000 °/s.
 pub const GYRO_RANGES: [GyroScale; 5] = [
@@ -54,6 +77,24 @@ pub const DEFAULTS: [Param; COUNT] = [
     Param::f32("still_dps", 1.0, 0.1, 10.0),
     Param::u32("tilt_tau_ms", 2000, 10, 60_000),
     Param::f32("accel_gate", 0.1, 0.0, 1.0),
+    Param::u32("heading_tau_ms", 5000, 100, 600_000),
+    Param::u32("bias_tau_s", 100, 0, 3600),
+    Param::f32("declination_deg", 0.0, -180.0, 180.0),
+    Param::f32("mag_offset_x", 0.0, -400.0, 400.0),
+    Param::f32("mag_offset_y", 0.0, -400.0, 400.0),
+    Param::f32("mag_offset_z", 0.0, -400.0, 400.0),
+    Param::f32("mag_soft_xx", 1.0, -4.0, 4.0),
+    Param::f32("mag_soft_xy", 0.0, -4.0, 4.0),
+    Param::f32("mag_soft_xz", 0.0, -4.0, 4.0),
+    Param::f32("mag_soft_yy", 1.0, -4.0, 4.0),
+    Param::f32("mag_soft_yz", 0.0, -4.0, 4.0),
+    Param::f32("mag_soft_zz", 1.0, -4.0, 4.0),
+    Param::u32("mag_heading", 0, 0, 1),
+    Param::u32("mag_rate_hz", 10, 1, 80),
+    Param::u32("baro_rate_hz", 10, 1, 25),
+    Param::f32("qnh_pa", 101_325.0, 85_000.0, 110_000.0),
+    Param::u32("vertical_tau_ms", 1000, 100, 60_000),
+    Param::u32("gnss_rate_hz", 1, 1, 10),
 ];
 
 /// Documentation of each parameter (index = position).
@@ -82,6 +123,31 @@ pub const DOCS: [ParamDoc; COUNT] = [
         "the accelerometer corrects roll/pitch only while its magnitude is within this \
          fraction of g (not while the base accelerates hard)",
     ),
+    doc("ms", "time constant of the heading's correction towards the magnetometer"),
+    doc("s", "time constant of the gyro bias tracking after boot; 0 = keep the boot estimate"),
+    doc("°", "magnetic declination at the site, east positive (NOAA's World Magnetic Model)"),
+    doc("µT", "hard iron x: subtracted from the field (`r2p imu calibrate` writes mag_*)"),
+    doc("µT", "hard iron y"),
+    doc("µT", "hard iron z"),
+    doc("", "soft iron matrix (symmetric), xx: applied after the offset"),
+    doc("", "soft iron xy"),
+    doc("", "soft iron xz"),
+    doc("", "soft iron yy"),
+    doc("", "soft iron yz"),
+    doc("", "soft iron zz"),
+    doc(
+        "",
+        "1: the heading follows the magnetometer (`r2p imu calibrate` turns it on once the \
+         field is calibrated); 0: gyro only (uncalibrated, steel floors, strong motors)",
+    ),
+    doc("Hz", "rate of the `mag` topic"),
+    doc("Hz", "rate of the `baro` topic"),
+    doc(
+        "Pa",
+        "sea-level pressure for the altitude: the local QNH, or 101325 for pressure altitude",
+    ),
+    doc("ms", "time constant of the altitude and vertical speed filter"),
+    boot("Hz", "GNSS receiver's navigation rate and the `gnss` topic's rate"),
 ];
 
 /// The parameters the application runs with, read from the store every step.
@@ -97,6 +163,22 @@ pub struct Config {
     pub tilt_tau_s: f32,
     /// Accelerometer gate, fraction of g.
     pub accel_gate: f32,
+    /// The filter's gains (from the time constants above and the heading's and bias's).
+    pub gains: crate::ahrs::Gains,
+    /// Declination, rad east.
+    pub declination: f32,
+    /// The magnetometer's calibration.
+    pub mag_cal: crate::mag_cal::MagCal,
+    /// Whether the heading follows the magnetometer.
+    pub mag_heading: bool,
+    /// Time between two `mag` messages, µs.
+    pub mag_period_us: u64,
+    /// Time between two `baro` messages, µs.
+    pub baro_period_us: u64,
+    /// Sea-level pressure, Pa.
+    pub qnh_pa: f32,
+    /// Altitude filter's time constant, s.
+    pub vertical_tau_s: f32,
 }
 
 impl Config {
@@ -104,12 +186,35 @@ impl Config {
     pub fn read(store: &dyn ParamStore) -> Self {
         let t = typed(store);
         let u = |i| t.u32(i);
+        let period = |i| 1_000_000 / u64::from(u(i).max(1));
+        let tilt_tau_s = u(TILT_TAU_MS) as f32 * 1e-3;
+        let accel_gate = t.f32(ACCEL_GATE);
+        let f = |i: u16| t.f32(i);
         Self {
-            period_us: 1_000_000 / u64::from(u(RATE_HZ).max(1)),
+            period_us: period(RATE_HZ),
             bias_us: u64::from(u(BIAS_MS)) * 1000,
             still_rad_s: t.f32(STILL_DPS).to_radians(),
-            tilt_tau_s: u(TILT_TAU_MS) as f32 * 1e-3,
-            accel_gate: t.f32(ACCEL_GATE),
+            tilt_tau_s,
+            accel_gate,
+            gains: crate::ahrs::Gains {
+                tilt_tau_s,
+                heading_tau_s: u(HEADING_TAU_MS) as f32 * 1e-3,
+                bias_tau_s: u(BIAS_TAU_S) as f32,
+                accel_gate,
+            },
+            declination: f(DECLINATION_DEG).to_radians(),
+            mag_cal: crate::mag_cal::MagCal {
+                offset: core::array::from_fn(|i| f(MAG_OFFSET_X + i as u16)),
+                soft: {
+                    let s: [f32; 6] = core::array::from_fn(|i| f(MAG_SOFT_XX + i as u16));
+                    [[s[0], s[1], s[2]], [s[1], s[3], s[4]], [s[2], s[4], s[5]]]
+                },
+            },
+            mag_heading: u(MAG_HEADING) == 1,
+            mag_period_us: period(MAG_RATE_HZ),
+            baro_period_us: period(BARO_RATE_HZ),
+            qnh_pa: f(QNH_PA),
+            vertical_tau_s: u(VERTICAL_TAU_MS) as f32 * 1e-3,
         }
     }
 }

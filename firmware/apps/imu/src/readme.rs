@@ -8,7 +8,7 @@ use std::string::String;
 
 use r2p_middleware::TopicInfo;
 use r2p_module::readme::{class_cell, leds_table, line, params_table, topics_header, Section};
-use r2p_msgs::{Imu, R2pMessage};
+use r2p_msgs::{Barometer, Imu, MagneticField, R2pMessage};
 use r2p_node::RamParams;
 
 use crate::endpoints::Endpoints;
@@ -31,15 +31,34 @@ pub fn render() -> String {
         let _ = writeln!(
             w,
             "| `{}` | `{}` ({} bytes) | publishes | {} | every 1/`rate_hz`: angular rate (rad/s, bias \
-             removed), specific force (m/s²), roll, pitch, yaw (rad), die temperature (°C), status \
-             0 ok, 1 estimating the gyro bias, 2 no data |",
+             tracked), specific force (m/s²), roll, pitch, yaw (rad; from east, true north with \
+             the magnetometer), die temperature (°C), status 0 ok, 1 estimating the gyro bias, \
+             2 no data; `sensors` bits: 0 LSM6DSO, 1 magnetometer, 2 barometer answering |",
             ep.imu.topic.name(),
             Imu::NAME,
             Imu::SIZE,
             class_cell(ep.imu.publisher.class(), None),
         );
+        let _ = writeln!(
+            w,
+            "| `{}` | `{}` ({} bytes) | publishes | {} | every 1/`mag_rate_hz`: the field (µT) \
+             calibrated and as measured, its tilt-compensated heading (rad), status |",
+            ep.mag.topic.name(),
+            MagneticField::NAME,
+            MagneticField::SIZE,
+            class_cell(ep.mag.publisher.class(), None),
+        );
+        let _ = writeln!(
+            w,
+            "| `{}` | `{}` ({} bytes) | publishes | {} | every 1/`baro_rate_hz`: pressure (Pa), \
+             die temperature (°C), altitude (m, ISA under `qnh_pa`), vertical speed (m/s), status |",
+            ep.baro.topic.name(),
+            Barometer::NAME,
+            Barometer::SIZE,
+            class_cell(ep.baro.publisher.class(), None),
+        );
         line(w, "");
-        line(w, "Instance *n* > 0 names the node and the topic `imu`*n*.");
+        line(w, "Instance *n* > 0 names the node `imu`*n* and the topics `imu`*n*, `imu`*n*`/mag`, `imu`*n*`/baro`.");
         line(w, "");
         params_table(w, &DEFAULTS, &DOCS);
         line(w, "");
@@ -47,7 +66,7 @@ pub fn render() -> String {
             w,
             &[
                 "| bus | on / fast blink / off | following the sync / traffic without sync / silent |",
-                "| fault | on / fast blink | no data from the sensor / parameters could not be stored in flash |",
+                "| fault | on / fast blink | no data from a sensor (`Imu::sensors` says which) / parameters could not be stored in flash |",
             ],
         );
     })
@@ -65,9 +84,12 @@ mod tests {
     #[test]
     fn the_section_follows_the_code() {
         let s = render();
-        assert!(s.contains("| `imu` | `Imu` (41 bytes) | publishes | NRT |"), "{s}");
+        assert!(s.contains("| `imu` | `Imu` (42 bytes) | publishes | NRT |"), "{s}");
         assert!(s.contains("| 3 | `gyro_range` | u32 | 2 | 0 … 4 |  | gyroscope full scale"));
         assert!(s.contains("| 6 | `still_dps` | f32 | 1 | 0.1 … 10 | °/s |"));
+        assert!(s.contains("| `imu/mag` | `MagneticField` (29 bytes) | publishes | NRT |"), "{s}");
+        assert!(s.contains("| `imu/baro` | `Barometer` (17 bytes) | publishes | NRT |"), "{s}");
+        assert!(s.contains("| 24 | `qnh_pa` | f32 | 101325 | 85000 … 110000 | Pa |"), "{s}");
         assert_eq!(SECTION.splice("a\n", &s), None);
     }
 }

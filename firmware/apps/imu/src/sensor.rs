@@ -1,11 +1,18 @@
-//! The LSM6DSO poll both board-support layers run every step (the MCU over embassy-stm32's
-//! SPI, the emulated board over the simulated SPI bus and register model), so that what the
-//! application sees of the sensor is the same code on both.
+//! The sensors' poll both board-support layers run every step (the MCU over embassy-stm32's
+//! SPI, the emulated board over the simulated SPI bus and register models), so that what the
+//! application sees of the sensors is the same code on both.
+//!
+//! [`Sensors`] owns the three drivers and sets each part up: at its first poll, and again
+//! [`RETRY_US`] after it stops answering or stops giving samples — a part unplugged and
+//! plugged back (or browned out) powers up unconfigured, with no data-ready flag ever set, and
+//! only the firmware can notice and configure it again.
 
+use r2p_drivers::lis3mdl::{self, Lis3mdl};
+use r2p_drivers::lps22df::{self, Lps22df};
 use r2p_drivers::lsm6dso::{Lsm6dso, RegisterBus};
 use r2p_module::leds;
 
-use crate::app::Sample;
+use crate::app::{Reading, Sample};
 
 /// Reads the data-ready flags and, when the gyro has a new sample, the 14-byte burst of
 /// temperature, gyro and accel. `initialised` is whether [`Lsm6dso::init`] succeeded at boot
@@ -29,4 +36,144 @@ pub fn poll<B: RegisterBus>(
         Err(_) => s.sensor_ok = false,
     }
     s
+}
+
+fn reading<T, E>(initialised: bool, read: impl FnOnce() -> Result<Option<T>, E>) -> Reading<T> {
+    if !initialised {
+        return Reading::Failed;
+    }
+    match read() {
+        Ok(Some(s)) => Reading::Fresh(s),
+        Ok(None) => Reading::Idle,
+        Err(_) => Reading::Failed,
+    }
+}
+
+/// How long a part that does not answer (or gives no sample) waits before its set-up is
+/// tried again, µs.
+pub const RETRY_US: u64 = 1_000_000;
+
+/// One part's set-up state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Setup {
+    configured: bool,
+    /// When the set-up may be tried (again).
+    next_try_us: u64,
+    /// The last fresh sample, or the set-up.
+    last_fresh_us: u64,
+}
+
+impl Setup {
+    /// Sets the part up if due (`init`), then reads it (`read`); a part configured but silent
+    /// for `stale_us` counts as lost and is set up again [`RETRY_US`] later.
+    fn poll<D, T>(
+        &mut self,
+        dev: &mut D,
+        now_us: u64,
+        stale_us: u64,
+        init: impl FnOnce(&mut D) -> bool,
+        read: impl FnOnce(&mut D) -> Reading<T>,
+    ) -> Reading<T> {
+        if !self.configured {
+            if now_us < self.next_try_us {
+                return Reading::Failed;
+            }
+            self.configured = init(dev);
+            self.next_try_us = now_us + RETRY_US;
+            self.last_fresh_us = now_us;
+            if !self.configured {
+                return Reading::Failed;
+            }
+        }
+        let r = read(dev);
+        match r {
+            Reading::Fresh(_) => self.last_fresh_us = now_us,
+            Reading::Failed => self.lost(now_us),
+            Reading::Idle if now_us - self.last_fresh_us > stale_us => self.lost(now_us),
+            Reading::Idle => {}
+        }
+        r
+    }
+
+    fn lost(&mut self, now_us: u64) {
+        self.configured = false;
+        self.next_try_us = self.next_try_us.max(now_us + RETRY_US);
+    }
+}
+
+/// The board's three sensors and their set-up states.
+pub struct Sensors<I, M, B> {
+    /// The LSM6DSO.
+    pub imu: Lsm6dso<I>,
+    /// The LIS3MDL.
+    pub mag: Lis3mdl<M>,
+    /// The LPS22DF.
+    pub baro: Lps22df<B>,
+    setup: [Setup; 3],
+}
+
+impl<I: RegisterBus, M: RegisterBus, B: RegisterBus> Sensors<I, M, B> {
+    /// The drivers, none set up yet (the first [`Self::poll`] does it: call it once the
+    /// parts have booted, 10 ms after power-up).
+    pub fn new(imu: Lsm6dso<I>, mag: Lis3mdl<M>, baro: Lps22df<B>) -> Self {
+        Self { imu, mag, baro, setup: [Setup::default(); 3] }
+    }
+
+    /// Whether each part is set up now: LSM6DSO, LIS3MDL, LPS22DF.
+    pub fn configured(&self) -> [bool; 3] {
+        self.setup.map(|s| s.configured)
+    }
+
+    /// One step's reads at `now_us` (µs since boot): each part set up with `config` (the
+    /// LSM6DSO's, [`crate::App::sensor_config`]) or the drivers' defaults when due.
+    pub fn poll(
+        &mut self,
+        now_us: u64,
+        config: r2p_drivers::lsm6dso::Config,
+        status: leds::Status,
+    ) -> Sample {
+        let [si, sm, sb] = &mut self.setup;
+        let period = |hz: f32| (1e6 / hz) as u64;
+        let lost = crate::app::LOST_AFTER_PERIODS;
+        let mut raw = None;
+        let r = si.poll(
+            &mut self.imu,
+            now_us,
+            lost * period(config.gyro_odr.hz()),
+            |imu| imu.init(config).is_ok(),
+            |imu| match imu.data_ready() {
+                Ok(d) if d.gyro => match imu.read_raw() {
+                    Ok(x) => {
+                        raw = Some(x);
+                        Reading::Fresh(())
+                    }
+                    Err(_) => Reading::Failed,
+                },
+                Ok(_) => Reading::Idle,
+                Err(_) => Reading::Failed,
+            },
+        );
+        let mut s = Sample { status, ..Sample::default() };
+        s.sensor_ok = !matches!(r, Reading::Failed);
+        if let Some(x) = raw {
+            (s.fresh, s.raw) = (true, x);
+        }
+        let mag = lis3mdl::Config::default();
+        s.mag = sm.poll(
+            &mut self.mag,
+            now_us,
+            lost * period(mag.odr.hz()),
+            |m| m.init(mag).is_ok(),
+            |m| reading(true, || m.read()),
+        );
+        let baro = lps22df::Config::default();
+        s.baro = sb.poll(
+            &mut self.baro,
+            now_us,
+            lost * period(baro.odr.hz()),
+            |b| b.init(baro).is_ok(),
+            |b| reading(true, || b.read()),
+        );
+        s
+    }
 }

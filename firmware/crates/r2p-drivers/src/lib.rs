@@ -16,6 +16,9 @@
 //!   firmware and the world model that emulates the sensors.
 //! - [`tfmini`]: Benewake TFmini-S single-point LiDAR over UART — a frame parser that
 //!   resynchronises on garbage and counts bad checksums, and the frame-rate command.
+//! - [`ubx`]: u-blox GNSS receivers (M8, M9, M10) over UART — a byte-at-a-time UBX decoder
+//!   (NAV-PVT, ACK-ACK/NAK; NMEA and noise skipped and counted) and the boot configuration
+//!   (CFG-VALSET for M9/M10, CFG-MSG/RATE/PRT for M8) for NAV-PVT alone at 1–10 Hz, 38400 baud.
 //!
 //! Why our own drivers rather than crates.io's: the `lsm6dso` crate (0.2) speaks I2C only (the
 //! IMU module may use SPI), reports a wrong chip as a bare `ChipDetectFailed` without the value
@@ -32,6 +35,11 @@
 //! (ST's say `UnexpectedValue`), it reads status, pressure and temperature in one burst, and it
 //! matches the other drivers' tests against register models. Its flash cost against
 //! `lps22df-rs`'s in the IMU image is NOT measured yet: measure both before the image takes one.
+//!
+//! The GNSS receiver's UBX: the `ublox` crate (0.10) decodes NAV-PVT correctly (the emulator's
+//! tests use it as the independent check) but costs ~6.9 KB of flash in the F103 IMU image,
+//! which has ~3.7 KB left for all of issue 21; [`ubx`] decodes the one message the module
+//! needs by hand (field offsets from u-blox's interface descriptions, cited there).
 #![no_std]
 #![warn(missing_docs)]
 
@@ -44,3 +52,4 @@ pub mod lsm6dso;
 pub mod rangers;
 pub mod register_bus;
 pub mod tfmini;
+pub mod ubx;

@@ -288,6 +288,9 @@ impl<B: RegisterBus> Lis3mdl<B> {
     pub fn read(&mut self) -> Result<Option<Sample>, Error<B::Error>> {
         let mut b = [0; 9];
         self.bus.read_registers(STATUS_REG, &mut b)?;
+        // Every status bit may be set (overrun on all axes), but not with −1 LSB on each axis
+        // and the temperature too: nine bytes of ones are a part not answering.
+        crate::register_bus::answered("LIS3MDL", &b)?;
         if b[0] & STATUS_ZYXDA == 0 {
             return Ok(None);
         }

@@ -254,6 +254,8 @@ impl<B: RegisterBus> Lps22df<B> {
     pub fn read(&mut self) -> Result<Option<Sample>, Error<B::Error>> {
         let mut b = [0; 6];
         self.bus.read_registers(STATUS, &mut b)?;
+        // STATUS's bits 7:6 and 3:2 are reserved (0): all ones is a part not answering.
+        crate::register_bus::answered("LPS22DF", &b)?;
         if b[0] & STATUS_P_DA == 0 {
             return Ok(None);
         }

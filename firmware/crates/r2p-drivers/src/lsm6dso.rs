@@ -415,6 +415,8 @@ impl<B: RegisterBus> Lsm6dso<B> {
     pub fn data_ready(&mut self) -> Result<DataReady, Error<B::Error>> {
         let mut s = [0];
         self.bus.read_registers(STATUS_REG, &mut s)?;
+        // STATUS_REG's bits 7:3 are reserved (0): all ones is a part not answering.
+        crate::register_bus::answered("LSM6DSO", &s)?;
         Ok(DataReady { accel: s[0] & 1 != 0, gyro: s[0] & 2 != 0, temp: s[0] & 4 != 0 })
     }
 

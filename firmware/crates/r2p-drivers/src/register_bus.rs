@@ -31,6 +31,13 @@ pub enum Error<E> {
         /// The part's value.
         expected: u8,
     },
+    /// A read came back all ones: nothing drove the data line (SPI's MISO or I2C's SDA idles
+    /// high), so the part is unplugged or unpowered. A status register whose reserved bits read
+    /// 0 cannot be 0xFF, so the drivers tell this from data.
+    NotAnswering {
+        /// The part the driver is for.
+        part: &'static str,
+    },
     /// A control register read back other than written (a bus or wiring fault).
     ConfigNotApplied {
         /// The part the driver is for.
@@ -59,11 +66,24 @@ impl<E: fmt::Debug> fmt::Display for Error<E> {
                 "not an {part}: WHO_AM_I read {found:#04x}, expected {expected:#04x}; check the \
                  I2C address pin or the chip select"
             ),
+            Error::NotAnswering { part } => write!(
+                f,
+                "the {part} does not answer: its read was all ones (unplugged or unpowered?)"
+            ),
             Error::ConfigNotApplied { part, register, wrote, read } => write!(
                 f,
                 "{part} register {register:#04x} reads back {read:#04x} after writing \
                  {wrote:#04x}; check the bus wiring"
             ),
         }
+    }
+}
+
+/// `Err(NotAnswering)` if every byte of a read is 0xFF (see [`Error::NotAnswering`]).
+pub(crate) fn answered<E>(part: &'static str, bytes: &[u8]) -> Result<(), Error<E>> {
+    if bytes.iter().all(|&b| b == 0xFF) {
+        Err(Error::NotAnswering { part })
+    } else {
+        Ok(())
     }
 }

@@ -4,6 +4,53 @@
 
 //! The message types, one per schema in `firmware/msgs` (see the crate's documentation).
 
+/// Pressure, altitude and vertical speed from an IMU module's barometer (LPS22DF). Published at its `baro_rate_hz`.
+///
+/// 17 bytes on the bus, type hash `0x2D66E029`; schema `firmware/msgs/Barometer.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Barometer {
+    /// Pa (`float32`, bytes 0..4)
+    pub pressure: f32,
+    /// degC, the sensor's die (`float32`, bytes 4..8)
+    pub temperature: f32,
+    /// m above sea level: ISA troposphere under the `qnh_pa` parameter (101325 Pa: pressure altitude) (`float32`, bytes 8..12)
+    pub altitude: f32,
+    /// m/s, up positive (alpha-beta filter on the altitude, `vertical_tau_ms`) (`float32`, bytes 12..16)
+    pub vertical_speed: f32,
+    /// 0 = ok, 2 = no data from the barometer (`uint8`, bytes 16..17)
+    pub status: u8,
+}
+
+impl crate::R2pMessage for Barometer {
+    const NAME: &'static str = "Barometer";
+    const CANONICAL: &'static str = "Barometer:float32 pressure;float32 temperature;float32 altitude;float32 vertical_speed;uint8 status";
+    const SIZE: usize = 17;
+    const TYPE_HASH: u32 = 0x2D66_E029;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.pressure);
+        w.put(&self.temperature);
+        w.put(&self.altitude);
+        w.put(&self.vertical_speed);
+        w.put(&self.status);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self {
+            pressure: r.get()?,
+            temperature: r.get()?,
+            altitude: r.get()?,
+            vertical_speed: r.get()?,
+            status: r.get()?,
+        })
+    }
+}
+
+crate::impl_wire!(Barometer);
+
 /// Battery state, published by the PSU module.
 ///
 /// 16 bytes on the bus, type hash `0x471DE2CA`; schema `firmware/msgs/Battery.msg`.
@@ -169,32 +216,105 @@ impl crate::R2pMessage for GatewayStatus {
 
 crate::impl_wire!(GatewayStatus);
 
-/// Motion and attitude from an IMU module (LSM6DSO), in the sensor's axes (x forward, y left, z up when mounted flat and aligned with the base). Published by the IMU module at its `rate_hz`.
+/// Position and time from the GNSS receiver on an IMU module's serial port (UBX NAV-PVT). Published at its `gnss_rate_hz`.
 ///
-/// 41 bytes on the bus, type hash `0x0F532940`; schema `firmware/msgs/Imu.msg`.
+/// 36 bytes on the bus, type hash `0xCA3FBF0B`; schema `firmware/msgs/GnssFix.msg`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GnssFix {
+    /// 1e-7 deg, WGS-84, north positive (`int32`, bytes 0..4)
+    pub latitude: i32,
+    /// 1e-7 deg, WGS-84, east positive (`int32`, bytes 4..8)
+    pub longitude: i32,
+    /// m above the WGS-84 ellipsoid (as sensor_msgs/NavSatFix) (`float32`, bytes 8..12)
+    pub altitude: f32,
+    /// m above mean sea level (the receiver's geoid model) (`float32`, bytes 12..16)
+    pub altitude_msl: f32,
+    /// m, the receiver's horizontal accuracy estimate (1 sigma) (`float32`, bytes 16..20)
+    pub h_acc: f32,
+    /// m, vertical accuracy estimate (`float32`, bytes 20..24)
+    pub v_acc: f32,
+    /// 0 = none, 1 = dead reckoning, 2 = 2-D, 3 = 3-D, 4 = GNSS + dead reckoning, 5 = time only (NAV-PVT's) (`uint8`, bytes 24..25)
+    pub fix_type: u8,
+    /// used in the solution (`uint8`, bytes 25..26)
+    pub satellites: u8,
+    /// UTC now, us since 1970-01-01, from the last epoch's time at its PPS edge; 0 = unknown (`uint64`, bytes 26..34)
+    pub utc_us: u64,
+    /// utc_us is disciplined by the time pulse (else from the message's arrival, tens of ms late) (`bool`, bytes 34..35)
+    pub pps: bool,
+    /// 0 = ok, 2 = no data from the receiver (`uint8`, bytes 35..36)
+    pub status: u8,
+}
+
+impl crate::R2pMessage for GnssFix {
+    const NAME: &'static str = "GnssFix";
+    const CANONICAL: &'static str = "GnssFix:int32 latitude;int32 longitude;float32 altitude;float32 altitude_msl;float32 h_acc;float32 v_acc;uint8 fix_type;uint8 satellites;uint64 utc_us;bool pps;uint8 status";
+    const SIZE: usize = 36;
+    const TYPE_HASH: u32 = 0xCA3F_BF0B;
+
+    fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
+        let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
+        w.put(&self.latitude);
+        w.put(&self.longitude);
+        w.put(&self.altitude);
+        w.put(&self.altitude_msl);
+        w.put(&self.h_acc);
+        w.put(&self.v_acc);
+        w.put(&self.fix_type);
+        w.put(&self.satellites);
+        w.put(&self.utc_us);
+        w.put(&self.pps);
+        w.put(&self.status);
+        Ok(w.finish())
+    }
+
+    fn decode(bytes: &[u8]) -> core::result::Result<Self, crate::DecodeError> {
+        let mut r = crate::wire::Reader::new(bytes, Self::SIZE)?;
+        Ok(Self {
+            latitude: r.get()?,
+            longitude: r.get()?,
+            altitude: r.get()?,
+            altitude_msl: r.get()?,
+            h_acc: r.get()?,
+            v_acc: r.get()?,
+            fix_type: r.get()?,
+            satellites: r.get()?,
+            utc_us: r.get()?,
+            pps: r.get()?,
+            status: r.get()?,
+        })
+    }
+}
+
+crate::impl_wire!(GnssFix);
+
+/// Motion and attitude from an IMU module (LSM6DSO, with its LIS3MDL magnetometer for the heading), in the sensor's axes (x forward, y left, z up when mounted flat and aligned with the base). Published by the IMU module at its `rate_hz`.
+///
+/// 42 bytes on the bus, type hash `0xFB1F2638`; schema `firmware/msgs/Imu.msg`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Imu {
     /// rad/s, angular rate about x, y, z, gyro bias removed (`float32[3]`, bytes 0..12)
     pub rate: [f32; 3],
     /// m/s^2, specific force: +9.81 on z at rest (`float32[3]`, bytes 12..24)
     pub accel: [f32; 3],
-    /// rad, about x (complementary filter of gyro and accelerometer) (`float32`, bytes 24..28)
+    /// rad, about x (quaternion complementary filter of gyro, accelerometer, magnetometer) (`float32`, bytes 24..28)
     pub roll: f32,
-    /// rad, about y (complementary filter of gyro and accelerometer) (`float32`, bytes 28..32)
+    /// rad, about y (`float32`, bytes 28..32)
     pub pitch: f32,
-    /// rad, heading: yaw rate integrated since start, counter-clockwise, in (-pi, pi] (`float32`, bytes 32..36)
+    /// rad, heading in (-pi, pi], counter-clockwise: from east (true north at +pi/2, declination applied) while sensors bit 1 is set, else integrated since start (`float32`, bytes 32..36)
     pub yaw: f32,
     /// degC, the sensor's die (`float32`, bytes 36..40)
     pub temperature: f32,
-    /// 0 = ok, 1 = estimating the gyro bias (hold still), 2 = no data from the sensor (`uint8`, bytes 40..41)
+    /// 0 = ok, 1 = estimating the gyro bias (hold still), 2 = no data from the LSM6DSO (`uint8`, bytes 40..41)
     pub status: u8,
+    /// answering now: bit 0 LSM6DSO, 1 magnetometer (heading from it), 2 barometer, 3 GNSS receiver (`uint8`, bytes 41..42)
+    pub sensors: u8,
 }
 
 impl crate::R2pMessage for Imu {
     const NAME: &'static str = "Imu";
-    const CANONICAL: &'static str = "Imu:float32[3] rate;float32[3] accel;float32 roll;float32 pitch;float32 yaw;float32 temperature;uint8 status";
-    const SIZE: usize = 41;
-    const TYPE_HASH: u32 = 0x0F53_2940;
+    const CANONICAL: &'static str = "Imu:float32[3] rate;float32[3] accel;float32 roll;float32 pitch;float32 yaw;float32 temperature;uint8 status;uint8 sensors";
+    const SIZE: usize = 42;
+    const TYPE_HASH: u32 = 0xFB1F_2638;
 
     fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
         let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
@@ -205,6 +325,7 @@ impl crate::R2pMessage for Imu {
         w.put(&self.yaw);
         w.put(&self.temperature);
         w.put(&self.status);
+        w.put(&self.sensors);
         Ok(w.finish())
     }
 
@@ -218,6 +339,7 @@ impl crate::R2pMessage for Imu {
             yaw: r.get()?,
             temperature: r.get()?,
             status: r.get()?,
+            sensors: r.get()?,
         })
     }
 }
@@ -609,11 +731,13 @@ crate::impl_wire!(WheelState);
 
 /// Every generated type as (name, type hash, size), in name order.
 pub const ALL: &[(&str, u32, usize)] = &[
+    ("Barometer", 0x2D66_E029, 17),
     ("Battery", 0x471D_E2CA, 16),
     ("BusPower", 0xC2BD_8B69, 1),
     ("FaultClear", 0x9688_B902, 1),
     ("GatewayStatus", 0x4E80_AA5A, 24),
-    ("Imu", 0x0F53_2940, 41),
+    ("GnssFix", 0xCA3F_BF0B, 36),
+    ("Imu", 0xFB1F_2638, 42),
     ("MagneticField", 0x7F66_2741, 29),
     ("MotorFault", 0x2D53_828B, 6),
     ("Obstacle", 0x24BE_C850, 5),
@@ -630,10 +754,12 @@ pub const ALL: &[(&str, u32, usize)] = &[
 #[cfg(any(test, feature = "selftest"))]
 macro_rules! for_each_message {
     ($f:ident $(, $arg:expr)*) => {
+        $f::<crate::Barometer>($($arg),*);
         $f::<crate::Battery>($($arg),*);
         $f::<crate::BusPower>($($arg),*);
         $f::<crate::FaultClear>($($arg),*);
         $f::<crate::GatewayStatus>($($arg),*);
+        $f::<crate::GnssFix>($($arg),*);
         $f::<crate::Imu>($($arg),*);
         $f::<crate::MagneticField>($($arg),*);
         $f::<crate::MotorFault>($($arg),*);

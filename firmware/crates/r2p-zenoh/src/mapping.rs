@@ -1,13 +1,15 @@
 //! R2P messages as the standard ROS 2 messages they stand for, in CDR: Odometry →
 //! nav_msgs/Odometry, Battery → sensor_msgs/BatteryState, one Proximity channel →
-//! sensor_msgs/Range, Imu → sensor_msgs/Imu; geometry_msgs/Twist → Twist2D.
+//! sensor_msgs/Range, Imu → sensor_msgs/Imu, MagneticField → sensor_msgs/MagneticField,
+//! Barometer → sensor_msgs/FluidPressure, GnssFix → sensor_msgs/NavSatFix; geometry_msgs/Twist
+//! → Twist2D.
 //!
 //! Conventions (REP 103, REP 105, REP 117): metres, radians, SI; the odometry in frame `odom`
 //! for child `base_link`, yaw as a quaternion about z; BatteryState's current negative while
 //! discharging (R2P's is positive drawn); a range too near is -inf, too far +inf.
 
 use r2p_module::trig::sin_cos;
-use r2p_msgs::{Battery, Imu, Odometry, Proximity, Twist2D};
+use r2p_msgs::{Barometer, Battery, GnssFix, Imu, MagneticField, Odometry, Proximity, Twist2D};
 
 use crate::cdr::{CdrReader, CdrWriter};
 use crate::codec::{Malformed, Overflow};
@@ -157,6 +159,54 @@ pub fn imu(m: &Imu, stamp: Stamp, out: &mut [u8]) -> Result<usize, Overflow> {
     w.finish()
 }
 
+/// sensor_msgs/msg/MagneticField in frame `imu_link`: the calibrated field in tesla (R2P's is in
+/// µT); covariance unknown (zeros, REP 145).
+pub fn magnetic_field(m: &MagneticField, stamp: Stamp, out: &mut [u8]) -> Result<usize, Overflow> {
+    let mut w = CdrWriter::new(out);
+    header(&mut w, stamp, "imu_link");
+    for v in m.field {
+        w.f64(f64::from(v) * 1e-6);
+    }
+    w.zeros_f64(9);
+    w.finish()
+}
+
+/// sensor_msgs/msg/FluidPressure in frame `imu_link`: pascals; variance unknown (0).
+pub fn fluid_pressure(b: &Barometer, stamp: Stamp, out: &mut [u8]) -> Result<usize, Overflow> {
+    let mut w = CdrWriter::new(out);
+    header(&mut w, stamp, "imu_link");
+    w.f64(f64::from(b.pressure));
+    w.f64(0.0);
+    w.finish()
+}
+
+/// NavSatStatus's `status` for no fix (its STATUS_NO_FIX).
+pub const NAV_SAT_NO_FIX: i8 = -1;
+/// NavSatStatus's `service`: GPS (SERVICE_GPS; a u-blox receiver tracks more, NAV-PVT does not
+/// say which constellations the solution used).
+pub const NAV_SAT_SERVICE_GPS: u16 = 1;
+
+/// sensor_msgs/msg/NavSatFix in frame `gnss`: status STATUS_FIX (0) for a 2-D or 3-D fix (with
+/// or without dead reckoning), else STATUS_NO_FIX; height above the WGS-84 ellipsoid, as ROS
+/// defines it; the receiver's accuracy estimates as a diagonal covariance
+/// (COVARIANCE_TYPE_DIAGONAL_KNOWN).
+pub fn nav_sat_fix(g: &GnssFix, stamp: Stamp, out: &mut [u8]) -> Result<usize, Overflow> {
+    let mut w = CdrWriter::new(out);
+    header(&mut w, stamp, "gnss");
+    let fix = matches!(g.fix_type, 2..=4) && g.status == 0;
+    w.u8(if fix { 0 } else { NAV_SAT_NO_FIX as u8 });
+    w.prim(&NAV_SAT_SERVICE_GPS.to_le_bytes());
+    w.f64(f64::from(g.latitude) * 1e-7);
+    w.f64(f64::from(g.longitude) * 1e-7);
+    w.f64(f64::from(g.altitude));
+    let (h, v) = (f64::from(g.h_acc), f64::from(g.v_acc));
+    for c in [h * h, 0.0, 0.0, 0.0, h * h, 0.0, 0.0, 0.0, v * v] {
+        w.f64(c);
+    }
+    w.u8(2);
+    w.finish()
+}
+
 /// geometry_msgs/msg/Twist as the base's planar velocity command (linear x, y; angular z; the
 /// rest ignored). Non-finite values are refused.
 pub fn twist(cdr: &[u8]) -> Result<Twist2D, Malformed> {
@@ -203,6 +253,47 @@ mod tests {
         assert_eq!(f64::from_le_bytes(buf[pos..pos + 8].try_into().unwrap()), 1.5);
         let qz = f64::from_le_bytes(buf[pos + 40..pos + 48].try_into().unwrap());
         assert!((qz - core::f64::consts::FRAC_1_SQRT_2).abs() < 1e-6, "{qz}");
+    }
+
+    #[test]
+    fn the_imu_modules_other_readings_in_si_units_where_ros_reads_them() {
+        let stamp = Stamp { sec: 7, nanosec: 5 };
+        let mut out = [0u8; 400];
+        // Header: 4 (encapsulation) + 8 (stamp) + 4 + 9 ("imu_link\0") = 25; the f64s aligned
+        // to 8 from the encapsulation's end: at 28.
+        let m = MagneticField { field: [20.0, -5.0, -40.0], ..MagneticField::default() };
+        let n = magnetic_field(&m, stamp, &mut out).unwrap();
+        assert_eq!(n, 28 + 3 * 8 + 9 * 8);
+        let f = |o: usize| f64::from_le_bytes(out[o..o + 8].try_into().unwrap());
+        let (x, z) = (f(28), f(44));
+        assert!((x - 20e-6).abs() < 1e-12 && (z + 40e-6).abs() < 1e-12, "{x} {z}");
+        let b = Barometer { pressure: 98_765.5, ..Barometer::default() };
+        assert_eq!(fluid_pressure(&b, stamp, &mut out).unwrap(), 28 + 16);
+        assert_eq!(f64::from_le_bytes(out[28..36].try_into().unwrap()), 98_765.5);
+        // NavSatFix after "gnss\0" (16..21): status int8 at 21, service uint16 at 22, latitude
+        // at 28, longitude 36, altitude 44, covariance 52..124, its type at 124.
+        let g = GnssFix {
+            latitude: 454_780_000,
+            longitude: 92_270_000,
+            altitude: 170.5,
+            h_acc: 2.0,
+            v_acc: 3.0,
+            fix_type: 3,
+            ..GnssFix::default()
+        };
+        let n = nav_sat_fix(&g, stamp, &mut out).unwrap();
+        assert_eq!(n, 125);
+        assert_eq!((out[21], u16::from_le_bytes([out[22], out[23]])), (0, 1));
+        let f = |o: usize| f64::from_le_bytes(out[o..o + 8].try_into().unwrap());
+        assert!((f(28) - 45.478).abs() < 1e-9 && (f(36) - 9.227).abs() < 1e-9, "{}", f(28));
+        assert_eq!((f(44), f(52), f(84), f(116), out[124]), (170.5, 4.0, 4.0, 9.0, 2));
+        // No fix, or no receiver: STATUS_NO_FIX.
+        for g in
+            [GnssFix { fix_type: 0, ..g }, GnssFix { status: 2, ..g }, GnssFix { fix_type: 5, ..g }]
+        {
+            nav_sat_fix(&g, stamp, &mut out).unwrap();
+            assert_eq!(out[21] as i8, NAV_SAT_NO_FIX);
+        }
     }
 
     #[test]

@@ -39,6 +39,24 @@ pub const IMU: RosType = RosType {
     hash: "RIHS01_7d9a00ff131080897a5ec7e26e315954b8eae3353c3f995c55faf71574000b5b",
 };
 
+/// `sensor_msgs/msg/MagneticField`.
+pub const MAGNETIC_FIELD: RosType = RosType {
+    dds_name: "sensor_msgs::msg::dds_::MagneticField_",
+    hash: "RIHS01_e80f32f56a20486c9923008fc1a1db07bbb273cbbf6a5b3bfa00835ee00e4dff",
+};
+
+/// `sensor_msgs/msg/FluidPressure`.
+pub const FLUID_PRESSURE: RosType = RosType {
+    dds_name: "sensor_msgs::msg::dds_::FluidPressure_",
+    hash: "RIHS01_22dfb2b145a0bd5a31a1ac3882a1b32148b51d9b2f3bab250290d66f3595bc32",
+};
+
+/// `sensor_msgs/msg/NavSatFix`.
+pub const NAV_SAT_FIX: RosType = RosType {
+    dds_name: "sensor_msgs::msg::dds_::NavSatFix_",
+    hash: "RIHS01_62223ab3fe210a15976021da7afddc9e200dc9ec75231c1b6a557fc598a65404",
+};
+
 /// An R2P message type as the ROS 2 type `r2p_msgs/msg/<name>`.
 #[derive(Clone, Copy, Debug)]
 pub struct R2pRosType {
@@ -54,6 +72,21 @@ pub struct R2pRosType {
 
 /// Every R2P type, in name order.
 pub const R2P_TYPES: &[R2pRosType] = &[
+    R2pRosType {
+        name: "Barometer",
+        r2p_hash: 0x2D66_E029,
+        ros: RosType {
+            dds_name: "r2p_msgs::msg::dds_::Barometer_",
+            hash: "RIHS01_5ba323578dfb500a062da70e5f186f10bb876aaaf227caeb0463d70a9ab1a11f",
+        },
+        fields: &[
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::U8, count: 1 },
+        ],
+    },
     R2pRosType {
         name: "Battery",
         r2p_hash: 0x471D_E2CA,
@@ -106,11 +139,32 @@ pub const R2P_TYPES: &[R2pRosType] = &[
         ],
     },
     R2pRosType {
+        name: "GnssFix",
+        r2p_hash: 0xCA3F_BF0B,
+        ros: RosType {
+            dds_name: "r2p_msgs::msg::dds_::GnssFix_",
+            hash: "RIHS01_fe9c158c15ab45b0ce9ca1d27a9f54afc0e1911a9b8efadb7e4913da3daf790e",
+        },
+        fields: &[
+            Field { kind: Kind::I32, count: 1 },
+            Field { kind: Kind::I32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::U8, count: 1 },
+            Field { kind: Kind::U8, count: 1 },
+            Field { kind: Kind::U64, count: 1 },
+            Field { kind: Kind::Bool, count: 1 },
+            Field { kind: Kind::U8, count: 1 },
+        ],
+    },
+    R2pRosType {
         name: "Imu",
-        r2p_hash: 0x0F53_2940,
+        r2p_hash: 0xFB1F_2638,
         ros: RosType {
             dds_name: "r2p_msgs::msg::dds_::Imu_",
-            hash: "RIHS01_495b11e3e0bccf6835c72a3f7ccdd72de768a2bcd5aeae75c0897a2bb5dbaba0",
+            hash: "RIHS01_d7db5760d118ae83d8b93b8e15ab569e3983ec9895eec32a51bb42619b494ad5",
         },
         fields: &[
             Field { kind: Kind::F32, count: 3 },
@@ -119,6 +173,7 @@ pub const R2P_TYPES: &[R2pRosType] = &[
             Field { kind: Kind::F32, count: 1 },
             Field { kind: Kind::F32, count: 1 },
             Field { kind: Kind::F32, count: 1 },
+            Field { kind: Kind::U8, count: 1 },
             Field { kind: Kind::U8, count: 1 },
         ],
     },

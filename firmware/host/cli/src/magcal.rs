@@ -784,6 +784,13 @@ mod tests {
         assert_eq!(slots.len(), 9);
         assert_eq!(slots[0], Slot { name: "mag_offset_x", index: 1, min: -400.0, max: 400.0 });
         assert_eq!(slots[8], Slot { name: "mag_soft_zz", index: 9, min: -4.0, max: 4.0 });
+        // The IMU firmware's own table, the one `r2p imu calibrate` uses.
+        let imu = layout(&r2p_app_imu::params::DEFAULTS).unwrap();
+        assert_eq!(imu[0].index, r2p_app_imu::params::MAG_OFFSET_X);
+        assert_eq!(imu[3].index, r2p_app_imu::params::MAG_SOFT_XX);
+        assert_eq!((imu[0].min, imu[0].max, imu[8].min, imu[8].max), (-400.0, 400.0, -4.0, 4.0));
+        let switch = heading_switch(&r2p_app_imu::params::DEFAULTS);
+        assert_eq!(switch, Some(r2p_app_imu::params::MAG_HEADING));
         assert_eq!(heading_switch(&TABLE), Some(10));
         assert_eq!(heading_switch(&TABLE[..10]), None, "older firmware: no switch, none set");
         assert_eq!(heading_switch(&[Param::f32("mag_heading", 0.0, 0.0, 1.0)]), None);

@@ -5,7 +5,8 @@
 //! seeing 2-D obstacles through their datasheet transfer curves; an IMU feeling the base's
 //! motion ([`imu`]), the Earth's magnetic field with the robot's iron ([`magnetic`]), the
 //! air pressure at its altitude ([`pressure`]), a GNSS receiver's fixes around the robot's
-//! origin ([`gnss`]) and a single-point LiDAR ranging the obstacles
+//! origin ([`gnss`]) at the robot file's site ([`site`]), the four wired to each IMU module
+//! ([`imu_module`]), and a single-point LiDAR ranging the obstacles
 //! ([`lidar`]), which the emulator's I2C/SPI/UART device models encode.
 //!
 //! A [`Robot`] is read from a robot file (`robots/*.toml`, format in `robots/README.md`);
@@ -30,6 +31,7 @@ pub mod geometry;
 pub mod gnss;
 pub mod hbridge;
 pub mod imu;
+pub mod imu_module;
 pub mod kinematics;
 pub mod lidar;
 mod linalg;
@@ -43,6 +45,7 @@ pub mod psu;
 pub mod ranger;
 pub mod robot_file;
 pub mod sensor_switch;
+pub mod site;
 pub mod world;
 
 pub use boards::{BoardKind, ModuleKind, SignalKind, MODULE_KINDS};

@@ -34,6 +34,13 @@ pub(crate) fn solve(m: &Mat3, b: &[f64; 3], n: usize) -> [f64; 3] {
     x
 }
 
+/// The determinant of `m` (the rule of Sarrus).
+pub(crate) fn det(m: &Mat3) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+}
+
 /// The inverse of the leading `n` × `n` block (zeros elsewhere).
 pub(crate) fn inverse(m: &Mat3, n: usize) -> Mat3 {
     let mut inv = [[0.0; 3]; 3];
@@ -70,6 +77,16 @@ mod tests {
                 assert!((p - f64::from(u8::from(i == j))).abs() < 1e-14);
             }
         }
+    }
+
+    #[test]
+    fn determinant_of_a_full_matrix() {
+        // By cofactors of the first row: 2·(4·6 − 1·2) − 3·(5·6 − 1·7) + 1·(5·2 − 4·7)
+        // = 44 − 69 − 18 = −43; swapping two rows flips its sign.
+        let m = [[2.0, 3.0, 1.0], [5.0, 4.0, 1.0], [7.0, 2.0, 6.0]];
+        assert_eq!(det(&m), -43.0);
+        assert_eq!(det(&[m[1], m[0], m[2]]), 43.0);
+        assert_eq!(det(&[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]), 1.0);
     }
 
     #[test]

@@ -20,12 +20,16 @@
 //! own: magnets, magnetised steel, DC currents), both in the base frame:
 //! B_base = S · Rz(−θ) · B_enu + h. Then B_sensor = Rz(−ψ) · B_base + noise.
 //!
-//! **Sensor errors**: white Gaussian noise of σ per axis at the sensor's output. ST's
-//! LIS3MDL datasheet (DocID024204, table 3) gives its RMS noise in ultra-high-performance mode;
-//! the value used here, 0.32 µT (3.2 mgauss) on each axis, is NOT VERIFIED against that table
-//! (it was not readable here). Its zero-gauss offset is part of the hard iron a calibration
-//! finds. Not modelled: sensitivity and cross-axis errors of the die, temperature drift, the
-//! floor's steel, motors' fields that change with their current, tilt.
+//! **Sensor errors**: the die's zero-gauss offset o (per axis, in the sensor's axes, drawn once
+//! per device within its bound: the datasheet gives a typical spread, not a distribution) and
+//! white Gaussian noise of σ per axis at the sensor's output:
+//! B_sensor = Rz(−ψ) · B_base + o + noise. The offset adds to the robot's hard iron: a
+//! calibration finds their sum. ST's LIS3MDL datasheet (DocID024204, table 3) gives the RMS
+//! noise in ultra-high-performance mode and the zero-gauss level offset accuracy (TyOff) at
+//! ±4 gauss; the values used here, σ 0.32 µT (3.2 mgauss) and ±100 µT (±1 gauss), are NOT
+//! VERIFIED against that table (it was not readable here). Not modelled: sensitivity and
+//! cross-axis errors of the die, temperature drift, the floor's steel, motors' fields that
+//! change with their current, tilt.
 
 use crate::geometry::Pose;
 use crate::noise::Noise;
@@ -84,15 +88,28 @@ impl Iron {
 pub struct MagParams {
     /// White noise σ per axis at the output, µT.
     pub noise_ut: f64,
+    /// Bound of the per-axis zero-gauss offset, µT.
+    pub offset_ut: f64,
     /// Die temperature, °C.
     pub temperature_c: f64,
 }
 
 impl MagParams {
-    /// ST LIS3MDL in ultra-high-performance mode (σ NOT VERIFIED: see the module's doc).
-    pub const LIS3MDL: MagParams = MagParams { noise_ut: 0.32, temperature_c: 30.0 };
+    /// ST LIS3MDL in ultra-high-performance mode (σ and offset NOT VERIFIED: see the module's
+    /// doc).
+    pub const LIS3MDL: MagParams =
+        MagParams { noise_ut: 0.32, offset_ut: 100.0, temperature_c: 30.0 };
     /// An ideal sensor: for tests of the geometry.
-    pub const IDEAL: MagParams = MagParams { noise_ut: 0.0, temperature_c: 25.0 };
+    pub const IDEAL: MagParams = MagParams { noise_ut: 0.0, offset_ut: 0.0, temperature_c: 25.0 };
+}
+
+/// One sample as the sensor's outputs carry it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MagSample {
+    /// Flux density at the die, µT, in the sensor's axes.
+    pub field_ut: [f64; 3],
+    /// Die temperature, °C.
+    pub temperature_c: f64,
 }
 
 /// The field around the base and one magnetometer on it, with its own noise stream.
@@ -106,12 +123,14 @@ pub struct Magnetometer {
     pub earth: EarthField,
     /// The robot's iron.
     pub iron: Iron,
+    offset_ut: [f64; 3],
     noise: Noise,
 }
 
 impl Magnetometer {
     /// A magnetometer at `mount` on a base at a site with field `earth` and iron `iron`; its
-    /// noise is stream `stream` of `seed`.
+    /// zero-gauss offset is drawn from stream `stream` of `seed` and its noise from the next
+    /// stream, so the same seed gives the same device.
     pub fn new(
         params: MagParams,
         mount: Pose,
@@ -120,20 +139,33 @@ impl Magnetometer {
         seed: u64,
         stream: u64,
     ) -> Self {
-        Self { params, mount, earth, iron, noise: Noise::new(seed, stream) }
+        let mut d = Noise::new(seed, stream);
+        let offset_ut = [(); 3].map(|_| (2.0 * d.uniform() - 1.0) * params.offset_ut);
+        Self { params, mount, earth, iron, offset_ut, noise: Noise::new(seed, stream + 1) }
+    }
+
+    /// This device's zero-gauss offset, µT in its axes.
+    pub fn offset_ut(&self) -> [f64; 3] {
+        self.offset_ut
     }
 
     /// What it reads without noise with the base at heading `heading_rad` (from east,
     /// counter-clockwise), µT in the sensor's axes.
     pub fn expected(&self, heading_rad: f64) -> [f64; 3] {
         let base = self.iron.apply(rotate_z(self.earth.enu(), -heading_rad));
-        rotate_z(base, -self.mount.theta)
+        let b = rotate_z(base, -self.mount.theta);
+        [0, 1, 2].map(|i| b[i] + self.offset_ut[i])
     }
 
     /// One sample with the base at heading `heading_rad`.
     pub fn measure(&mut self, heading_rad: f64) -> [f64; 3] {
         let sigma = self.params.noise_ut;
         self.expected(heading_rad).map(|b| b + self.noise.gaussian(sigma))
+    }
+
+    /// One sample with the base at heading `heading_rad`, with the die's temperature.
+    pub fn sample(&mut self, heading_rad: f64) -> MagSample {
+        MagSample { field_ut: self.measure(heading_rad), temperature_c: self.params.temperature_c }
     }
 }
 
@@ -242,5 +274,22 @@ mod tests {
         let mean = a.expected(0.0);
         let var = xa.iter().map(|s| (s[0] - mean[0]).powi(2)).sum::<f64>() / xa.len() as f64;
         assert!((var.sqrt() - 0.32).abs() < 0.02, "σ {}", var.sqrt());
+    }
+
+    #[test]
+    fn each_device_has_its_own_offset_within_the_bound_added_in_its_axes() {
+        let mk = |seed| {
+            let turned = Pose { theta: 0.7, ..Pose::default() };
+            Magnetometer::new(MagParams::LIS3MDL, turned, EarthField::MILAN, Iron::NONE, seed, 4)
+        };
+        let (a, b) = (mk(5), mk(6));
+        assert_eq!(a.offset_ut(), mk(5).offset_ut());
+        assert_ne!(a.offset_ut(), b.offset_ut());
+        let geometry = ideal(EarthField::MILAN, Iron::NONE, a.mount).expected(1.1);
+        let (e, o) = (a.expected(1.1), a.offset_ut());
+        assert_eq!(e, [0, 1, 2].map(|i| geometry[i] + o[i]));
+        let spread = (0..200).flat_map(|s| mk(s).offset_ut()).fold(0.0f64, |m, o| m.max(o.abs()));
+        assert!(spread <= 100.0 && spread > 90.0, "offsets spread to ±{spread} µT");
+        assert_eq!(ideal(EarthField::MILAN, Iron::NONE, Pose::default()).offset_ut(), [0.0; 3]);
     }
 }

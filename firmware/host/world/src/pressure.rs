@@ -65,6 +65,15 @@ impl BaroParams {
     pub const IDEAL: BaroParams = BaroParams { offset_pa: 0.0, noise_pa: 0.0, temperature_c: 25.0 };
 }
 
+/// One sample as the sensor's outputs carry it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BaroSample {
+    /// Static pressure at the port, Pa.
+    pub pressure_pa: f64,
+    /// Die temperature, °C.
+    pub temperature_c: f64,
+}
+
 /// A barometer on the base, with its own offset and noise stream.
 #[derive(Clone, Debug)]
 pub struct Barometer {
@@ -99,6 +108,14 @@ impl Barometer {
     /// One sample at altitude `altitude_m`, Pa.
     pub fn measure(&mut self, altitude_m: f64) -> f64 {
         self.expected(altitude_m) + self.noise.gaussian(self.params.noise_pa)
+    }
+
+    /// One sample at altitude `altitude_m`, with the die's temperature.
+    pub fn sample(&mut self, altitude_m: f64) -> BaroSample {
+        BaroSample {
+            pressure_pa: self.measure(altitude_m),
+            temperature_c: self.params.temperature_c,
+        }
     }
 }
 

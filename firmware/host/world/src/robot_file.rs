@@ -14,10 +14,13 @@ use crate::battery::{BatteryParams, Chemistry};
 use crate::boards::{BoardKind, ModuleKind, MODULE_KINDS};
 use crate::geometry::{Pose, Vec2};
 use crate::hbridge::HBridgeParams;
+use crate::imu_module::ImuSensor;
 use crate::kinematics::Layout;
+use crate::magnetic::{EarthField, Iron};
 use crate::motor::{Gearbox, MotorParams};
 use crate::obstacles::Obstacle;
 use crate::ranger::RangerKind;
+use crate::site::Site;
 
 /// Where the format is documented (quoted in error messages).
 const FORMAT_DOC: &str = "robots/README.md";
@@ -161,10 +164,14 @@ pub enum Wiring {
     },
     /// Gateway: nothing in the world.
     Gateway,
-    /// IMU module, mounted on the base.
+    /// IMU module, mounted on the base, and the robot's iron around it.
     Imu {
         /// Its pose on the base (the sensor's x along the pose's heading, z up).
         mount: Pose,
+        /// The robot's hard and soft iron at the module, in the base frame.
+        iron: Iron,
+        /// Sensors unplugged at start (`unplugged`).
+        unplugged: Vec<ImuSensor>,
     },
     /// The module template (or a new module's stub model): nothing in the world.
     Template,
@@ -252,6 +259,8 @@ pub struct Robot {
     pub teleop: Vec<TeleopStep>,
     /// Which node runs the robot-level nodes (`r2p-app-base`), if any.
     pub base_controller: Option<BaseController>,
+    /// Where on Earth the world's origin is (`[site]`; Milan by default).
+    pub site: Site,
 }
 
 /// Where the base controller (`r2p-app-base`: inverse kinematics, obstacle avoidance,
@@ -284,6 +293,21 @@ struct FileDoc {
     modules: Vec<ModuleSection>,
     #[serde(default)]
     teleop: Vec<TeleopSection>,
+    site: Option<SiteSection>,
+}
+
+/// `[site]`: every key optional, Milan's value by default ([`Site::MILAN`]).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SiteSection {
+    latitude_deg: Option<f64>,
+    longitude_deg: Option<f64>,
+    altitude_m: Option<f64>,
+    geoid_separation_m: Option<f64>,
+    field_intensity_ut: Option<f64>,
+    field_inclination_deg: Option<f64>,
+    field_declination_deg: Option<f64>,
+    sea_level_pressure_pa: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -396,6 +420,9 @@ struct ModuleSection {
     bus_load_a: Option<f64>,
     rangers: Option<Vec<RangerSection>>,
     pose: Option<PoseSection>,
+    hard_iron_ut: Option<[f64; 3]>,
+    soft_iron: Option<[[f64; 3]; 3]>,
+    unplugged: Option<Vec<String>>,
     #[serde(default)]
     params: std::collections::BTreeMap<String, toml::Value>,
 }
@@ -608,6 +635,7 @@ fn validate(ctx: &Ctx<'_>, doc: FileDoc) -> Result<Robot, RobotError> {
         }
     }
     let base_controller = validate_controller(ctx, &doc.base, &base, &modules)?;
+    let site = doc.site.as_ref().map_or(Ok(Site::MILAN), |s| validate_site(ctx, s))?;
     let mut teleop = Vec::new();
     for (i, t) in doc.teleop.iter().enumerate() {
         let at = format!("teleop[{i}]");
@@ -642,7 +670,134 @@ fn validate(ctx: &Ctx<'_>, doc: FileDoc) -> Result<Robot, RobotError> {
         modules,
         teleop,
         base_controller,
+        site,
     })
+}
+
+/// `[site]`: each key within what the Earth has (and the models handle), Milan's by default.
+fn validate_site(ctx: &Ctx<'_>, s: &SiteSection) -> Result<Site, RobotError> {
+    let d = Site::MILAN;
+    let get = |v: Option<f64>, default: f64, key: &str, range: (f64, f64), need: &str| {
+        let x = v.unwrap_or(default);
+        ctx.check(x.is_finite() && (range.0..=range.1).contains(&x), &format!("site.{key}"), need)
+            .map(|()| x)
+    };
+    let site = Site {
+        latitude_deg: get(
+            s.latitude_deg,
+            d.latitude_deg,
+            "latitude_deg",
+            (-89.0, 89.0),
+            "-89..=89 degrees (the local plane's longitude scale fails at the poles)",
+        )?,
+        longitude_deg: get(
+            s.longitude_deg,
+            d.longitude_deg,
+            "longitude_deg",
+            (-180.0, 180.0),
+            "-180..=180 degrees",
+        )?,
+        altitude_m: get(
+            s.altitude_m,
+            d.altitude_m,
+            "altitude_m",
+            (-500.0, 9000.0),
+            "-500..=9000 m above sea level (the standard atmosphere's troposphere)",
+        )?,
+        geoid_separation_m: get(
+            s.geoid_separation_m,
+            d.geoid_separation_m,
+            "geoid_separation_m",
+            (-110.0, 90.0),
+            "-110..=90 m (the geoid's extremes)",
+        )?,
+        field: EarthField {
+            intensity_ut: get(
+                s.field_intensity_ut,
+                d.field.intensity_ut,
+                "field_intensity_ut",
+                (1.0, 100.0),
+                "1..=100 µT (the Earth's is 22-67 µT)",
+            )?,
+            inclination_deg: get(
+                s.field_inclination_deg,
+                d.field.inclination_deg,
+                "field_inclination_deg",
+                (-90.0, 90.0),
+                "-90..=90 degrees (positive down)",
+            )?,
+            declination_deg: get(
+                s.field_declination_deg,
+                d.field.declination_deg,
+                "field_declination_deg",
+                (-180.0, 180.0),
+                "-180..=180 degrees (positive east)",
+            )?,
+        },
+        sea_level_pa: get(
+            s.sea_level_pressure_pa,
+            d.sea_level_pa,
+            "sea_level_pressure_pa",
+            (87_000.0, 108_500.0),
+            "87000..=108500 Pa (the records of sea-level pressure)",
+        )?,
+    };
+    Ok(site)
+}
+
+/// An IMU module's `hard_iron_ut`, `soft_iron` and `unplugged`.
+fn validate_imu(
+    ctx: &Ctx<'_>,
+    i: usize,
+    m: &ModuleSection,
+) -> Result<(Iron, Vec<ImuSensor>), RobotError> {
+    let key = |k: &str| format!("modules[{i}].{k}");
+    let mut iron = Iron::NONE;
+    if let Some(h) = m.hard_iron_ut {
+        ctx.check(
+            h.iter().all(|x| x.is_finite() && x.abs() <= 1600.0),
+            &key("hard_iron_ut"),
+            "three fields of -1600..=1600 µT (the LIS3MDL's widest full scale, ±16 gauss)",
+        )?;
+        iron.hard_ut = h;
+    }
+    if let Some(s) = m.soft_iron {
+        ctx.check(
+            s.iter().flatten().all(|x| x.is_finite() && x.abs() <= 10.0),
+            &key("soft_iron"),
+            "a 3 × 3 matrix of numbers within -10..=10 (rows: the base's x, y, z)",
+        )?;
+        let det = crate::linalg::det(&s);
+        if det < 0.01 {
+            return Err(ctx.err(
+                key("soft_iron"),
+                format!("determinant {det:.3}: iron bends and scales the field, it cannot mirror or flatten it"),
+                "give a matrix near the identity, e.g. [[1.1, 0.05, 0.0], [0.05, 0.9, 0.0], [0.0, 0.0, 1.0]]",
+            ));
+        }
+        iron.soft = s;
+    }
+    let mut unplugged = Vec::new();
+    for (j, name) in m.unplugged.iter().flatten().enumerate() {
+        let sensor = ImuSensor::from_name(name).ok_or_else(|| {
+            let known: Vec<_> =
+                ImuSensor::ALL.iter().map(|s| format!("\"{}\"", s.name())).collect();
+            ctx.err(
+                format!("modules[{i}].unplugged[{j}]"),
+                format!("unknown sensor `{name}`"),
+                format!("use one of {}", known.join(", ")),
+            )
+        })?;
+        if unplugged.contains(&sensor) {
+            return Err(ctx.err(
+                format!("modules[{i}].unplugged[{j}]"),
+                format!("`{name}` is listed twice"),
+                "list each sensor once",
+            ));
+        }
+        unplugged.push(sensor);
+    }
+    Ok((iron, unplugged))
 }
 
 /// `[base] controller`: a gateway module's name or `"host"`; by default the robot's gateway
@@ -934,6 +1089,9 @@ fn validate_module(
         ("bus_load_a", m.bus_load_a.is_some(), BoardKind::Psu),
         ("rangers", m.rangers.is_some(), BoardKind::Proximity),
         ("pose", m.pose.is_some(), BoardKind::Imu),
+        ("hard_iron_ut", m.hard_iron_ut.is_some(), BoardKind::Imu),
+        ("soft_iron", m.soft_iron.is_some(), BoardKind::Imu),
+        ("unplugged", m.unplugged.is_some(), BoardKind::Imu),
     ];
     for (k, present, owner) in given {
         if present && owner != kind {
@@ -1013,7 +1171,10 @@ fn validate_module(
         }
         BoardKind::Gateway => Wiring::Gateway,
         BoardKind::Template => Wiring::Template,
-        BoardKind::Imu => Wiring::Imu { mount: m.pose.unwrap_or_default().pose() },
+        BoardKind::Imu => {
+            let (iron, unplugged) = validate_imu(ctx, i, m)?;
+            Wiring::Imu { mount: m.pose.unwrap_or_default().pose(), iron, unplugged }
+        }
     };
     let mut params = Vec::new();
     for (name, v) in &m.params {

@@ -27,18 +27,23 @@ use crate::boards::{BoardKind, SignalKind};
 use crate::encoder::Encoder;
 use crate::frontends;
 use crate::geometry::{Pose, Twist};
+use crate::gnss::GnssFix;
 use crate::hbridge::{HBridge, HBridgeInput};
-use crate::imu::{Imu, ImuParams, ImuReading};
+use crate::imu::{Imu, ImuReading};
+use crate::imu_module::{GnssAntenna, ImuModule, ImuSensor};
 use crate::kinematics::Kinematics;
 use crate::linalg::{self, Mat3};
+use crate::magnetic::MagSample;
 use crate::motor::{Gearbox, Motor, Terminal};
 use crate::motor_bus::{MotorBus, MotorSupply};
 use crate::noise::Noise;
 use crate::obstacles::Obstacles;
+use crate::pressure::BaroSample;
 use crate::psu::{supply_voltage, Psu, PsuParams};
 use crate::ranger::Ranger;
 use crate::robot_file::{Robot, Uid, Wiring};
 use crate::sensor_switch::SensorSwitch;
+use crate::site::Site;
 
 /// Longest sub-step, ns: 50 µs, one PWM period. The electrical step is exact for any length
 /// and the coupled mechanics' fastest pole is ~20 s⁻¹ (see `motor.rs`), so this costs
@@ -54,8 +59,7 @@ const MASS_CACHE_WHEELS: usize = 8;
 const STREAM_BOARD: u64 = 1;
 const STREAM_RANGER: u64 = 10_000;
 const STREAM_PHASE: u64 = 20_000;
-/// IMU `i` draws its device errors from stream `STREAM_IMU + 2i` and its noise from the next.
-const STREAM_IMU: u64 = 30_000;
+// IMU modules' devices: streams from 30 000 (crate::imu_module).
 
 /// A wheel and its drive train.
 #[derive(Clone, Debug)]
@@ -251,7 +255,8 @@ pub struct World {
     bus_base_load_a: f64,
     rangers: Vec<Ranger>,
     ranger_noise: Vec<Noise>,
-    imus: Vec<Imu>,
+    imus: Vec<ImuModule>,
+    site: Site,
     obstacles: Obstacles,
     boards: Vec<Board>,
     ledger: EnergyLedger,
@@ -327,10 +332,10 @@ impl World {
                 }
                 Wiring::Gateway => Link::Gateway,
                 Wiring::Template => Link::Template,
-                Wiring::Imu { mount } => {
-                    let stream = STREAM_IMU + 2 * imus.len() as u64;
-                    imus.push(Imu::new(ImuParams::LSM6DSO, *mount, robot.seed, stream));
-                    Link::Imu { imu: imus.len() - 1 }
+                Wiring::Imu { mount, iron, unplugged } => {
+                    let i = imus.len();
+                    imus.push(ImuModule::new(*mount, *iron, unplugged, &robot.site, robot.seed, i));
+                    Link::Imu { imu: i }
                 }
             };
             let noise = (0..kind.signals().len())
@@ -358,6 +363,7 @@ impl World {
             rangers,
             ranger_noise,
             imus,
+            site: robot.site,
             obstacles: Obstacles::new(robot.obstacles.clone()),
             boards,
             ledger: EnergyLedger::default(),
@@ -819,15 +825,98 @@ impl World {
 
     /// The IMU on board `board`: its device (mount, offsets, gains) and noise stream.
     pub fn imu(&self, board: &str) -> Result<&Imu, IoError> {
+        Ok(&self.imus[self.imu_index(board)?].imu)
+    }
+
+    /// Everything IMU board `board` is wired to: its four devices (offsets, iron, receiver)
+    /// and their plugs, for checks against the truth.
+    pub fn imu_module(&self, board: &str) -> Result<&ImuModule, IoError> {
         Ok(&self.imus[self.imu_index(board)?])
+    }
+
+    /// Where the world's origin is, and its field and weather.
+    pub fn site(&self) -> &Site {
+        &self.site
     }
 
     /// One sample of the IMU on board `board` at output data rate `odr_hz`, for the base's
     /// motion now (what the board's LSM6DSO latches when a sample falls due).
     pub fn sample_imu(&mut self, board: &str, odr_hz: f64) -> Result<ImuReading, IoError> {
-        let i = self.imu_index(board)?;
+        let i = self.plugged(board, ImuSensor::AccelGyro)?;
         let (t, dt) = (self.twist(), self.twist_rate());
-        Ok(self.imus[i].measure(&t, &dt, odr_hz))
+        Ok(self.imus[i].imu.measure(&t, &dt, odr_hz))
+    }
+
+    /// One sample of the magnetometer on board `board` for the base's heading now: the Earth's
+    /// field through the robot's iron, the device's offset and noise (what the board's LIS3MDL
+    /// latches when a sample falls due; its noise does not depend on the rate).
+    pub fn sample_magnetometer(&mut self, board: &str) -> Result<MagSample, IoError> {
+        let i = self.plugged(board, ImuSensor::Magnetometer)?;
+        let heading = self.pose.theta;
+        Ok(self.imus[i].magnetometer.sample(heading))
+    }
+
+    /// One sample of the barometer on board `board`: the atmosphere at the site's altitude
+    /// under its sea-level pressure, the device's offset and noise (what the board's LPS22DF
+    /// latches when a sample falls due).
+    pub fn sample_pressure(&mut self, board: &str) -> Result<BaroSample, IoError> {
+        let i = self.plugged(board, ImuSensor::Barometer)?;
+        let m = &mut self.imus[i];
+        Ok(m.barometer.sample(m.altitude_m))
+    }
+
+    /// Where the GNSS antenna of board `board` is and how it moves now (east-north-up from the
+    /// site's origin), plugged or not: the truth a receiver's solution follows.
+    pub fn gnss_antenna(&self, board: &str) -> Result<GnssAntenna, IoError> {
+        let i = self.imu_index(board)?;
+        Ok(self.imus[i].antenna(&self.pose, &self.twist()))
+    }
+
+    /// The navigation solution of the GNSS receiver on board `board` now (seconds since the
+    /// world started, when the receiver powered up): no fix before its time to first fix,
+    /// then its antenna's place on the ellipsoid with the receiver's wandering error. Calls
+    /// advance the receiver's error: make them in time order. (The emulated board's u-blox
+    /// model solves with its own copy of this receiver: `ImuModule::gnss`.)
+    pub fn gnss_fix(&mut self, board: &str) -> Result<GnssFix, IoError> {
+        let i = self.plugged(board, ImuSensor::Gnss)?;
+        let (a, now) = (self.gnss_antenna(board)?, self.time_s());
+        Ok(self.imus[i].gnss.solve(now, a.enu))
+    }
+
+    /// Plugs or unplugs `sensor` of IMU board `board` (fault injection: a sensor that fails or
+    /// whose cable comes off). An unplugged sensor cannot be sampled; the emulated board's
+    /// bus then reads what a bus with nothing on it reads.
+    pub fn set_imu_sensor_connected(
+        &mut self,
+        board: &str,
+        sensor: ImuSensor,
+        connected: bool,
+    ) -> Result<(), IoError> {
+        let i = self.imu_index(board)?;
+        self.imus[i].set_connected(sensor, connected);
+        Ok(())
+    }
+
+    /// Whether `sensor` of IMU board `board` is plugged.
+    pub fn imu_sensor_connected(&self, board: &str, sensor: ImuSensor) -> Result<bool, IoError> {
+        Ok(self.imus[self.imu_index(board)?].connected(sensor))
+    }
+
+    /// The IMU module of board `board`, if `sensor` is plugged on it.
+    fn plugged(&self, board: &str, sensor: ImuSensor) -> Result<usize, IoError> {
+        let i = self.imu_index(board)?;
+        if self.imus[i].connected(sensor) {
+            Ok(i)
+        } else {
+            Err(IoError::Invalid {
+                board: board.to_string(),
+                problem: format!(
+                    "its {} ({}) is unplugged: nothing to sample (set_imu_sensor_connected)",
+                    sensor.name(),
+                    sensor.part()
+                ),
+            })
+        }
     }
 
     fn imu_index(&self, board: &str) -> Result<usize, IoError> {

@@ -6,9 +6,12 @@ mod common;
 use std::path::Path;
 
 use r2p_world::boards::BoardKind;
+use r2p_world::imu_module::ImuSensor;
 use r2p_world::kinematics::Layout;
+use r2p_world::magnetic::{EarthField, Iron};
 use r2p_world::ranger::RangerKind;
 use r2p_world::robot_file::Wiring;
+use r2p_world::site::Site;
 use r2p_world::{Robot, RobotError};
 
 use common::triskar_path;
@@ -219,10 +222,11 @@ fn an_imu_module_has_a_pose_and_only_it_does() {
     let imu = "\n[[modules]]\nkind = \"imu\"\nname = \"imu\"\nuid = \"0070001F3137510939383538\"\n";
     let r = Robot::parse(&(triskar_text() + imu), "a.toml").unwrap();
     let m = r.module("imu").unwrap();
-    assert_eq!((m.kind(), &m.wiring), (BoardKind::Imu, &Wiring::Imu { mount: Default::default() }));
+    let plain = Wiring::Imu { mount: Default::default(), iron: Iron::NONE, unplugged: vec![] };
+    assert_eq!((m.kind(), &m.wiring), (BoardKind::Imu, &plain));
     let posed = format!("{imu}pose = {{ x_m = -0.05, y_m = 0.02, theta_deg = 180.0 }}\n");
     let r = Robot::parse(&(triskar_text() + &posed), "a.toml").unwrap();
-    let Wiring::Imu { mount } = r.module("imu").unwrap().wiring else { panic!() };
+    let Wiring::Imu { mount, .. } = r.module("imu").unwrap().wiring else { panic!() };
     assert_eq!((mount.x, mount.y), (-0.05, 0.02));
     assert!((mount.theta.abs() - std::f64::consts::PI).abs() < 1e-12);
     let e = refuse(&edit("wheel = 1", "wheel = 1\npose = { x_m = 0.1 }"));
@@ -254,4 +258,104 @@ fn the_base_controller_runs_on_the_gateway_by_default_or_where_the_file_says() {
     let e = Robot::parse(&t, "diffbot.toml").unwrap_err();
     assert_eq!(e.key, "base.controller");
     assert!(e.problem.contains("three omni wheels"), "{e}");
+}
+
+/// The Triskar2 file with an IMU module carrying `keys`.
+fn with_imu(keys: &str) -> String {
+    triskar_text()
+        + "\n[[modules]]\nkind = \"imu\"\nname = \"imu\"\nuid = \"0070001F3137510939383538\"\n"
+        + keys
+}
+
+#[test]
+fn an_imu_module_takes_the_robots_iron_and_sensors_unplugged_at_start() {
+    let keys = "hard_iron_ut = [12.5, -8.0, 30.0]\n\
+                soft_iron = [[1.1, 0.05, 0.0], [0.05, 0.9, 0.0], [0.0, 0.0, 1.0]]\n\
+                unplugged = [\"gnss\", \"barometer\"]\n";
+    let r = Robot::parse(&with_imu(keys), "a.toml").unwrap();
+    let Wiring::Imu { iron, unplugged, .. } = &r.module("imu").unwrap().wiring else { panic!() };
+    assert_eq!(iron.hard_ut, [12.5, -8.0, 30.0]);
+    assert_eq!(iron.soft, [[1.1, 0.05, 0.0], [0.05, 0.9, 0.0], [0.0, 0.0, 1.0]]);
+    assert_eq!(unplugged, &[ImuSensor::Gnss, ImuSensor::Barometer]);
+    // Each refused with its key and what to do.
+    let e = Robot::parse(&with_imu("unplugged = [\"gps\"]\n"), "a.toml").unwrap_err();
+    assert_eq!(e.key, "modules[6].unplugged[0]");
+    assert!(e.problem.contains("unknown sensor `gps`"), "{e}");
+    assert!(e.fix.contains("\"accel_gyro\", \"magnetometer\", \"barometer\", \"gnss\""), "{e}");
+    let e = Robot::parse(&with_imu("unplugged = [\"gnss\", \"gnss\"]\n"), "a.toml").unwrap_err();
+    assert_eq!(e.key, "modules[6].unplugged[1]");
+    assert!(e.problem.contains("listed twice"), "{e}");
+    let e = Robot::parse(&with_imu("hard_iron_ut = [0.0, 2000.0, 0.0]\n"), "a.toml").unwrap_err();
+    assert_eq!(e.key, "modules[6].hard_iron_ut");
+    assert!(e.problem.contains("-1600..=1600"), "{e}");
+    let e = Robot::parse(&with_imu("hard_iron_ut = [0.0, 1.0]\n"), "a.toml").unwrap_err();
+    assert_eq!(e.key, "modules[6].hard_iron_ut");
+    let mirror = "soft_iron = [[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]\n";
+    let e = Robot::parse(&with_imu(mirror), "a.toml").unwrap_err();
+    assert_eq!(e.key, "modules[6].soft_iron");
+    assert!(e.problem.contains("determinant -1.000"), "{e}");
+    assert!(e.fix.contains("near the identity"), "{e}");
+    // Down to a determinant of 0.01 exactly (0.5 · 0.02 · 1: a field squeezed to a hundredth
+    // in the plane), not below.
+    let flat = "soft_iron = [[0.5, 0.0, 0.0], [0.0, 0.02, 0.0], [0.0, 0.0, 1.0]]\n";
+    assert!(Robot::parse(&with_imu(flat), "a.toml").is_ok());
+    let flatter = "soft_iron = [[0.5, 0.0, 0.0], [0.0, 0.018, 0.0], [0.0, 0.0, 1.0]]\n";
+    let e = Robot::parse(&with_imu(flatter), "a.toml").unwrap_err();
+    assert!(e.problem.contains("determinant 0.009"), "{e}");
+    let huge = "soft_iron = [[11.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]\n";
+    let e = Robot::parse(&with_imu(huge), "a.toml").unwrap_err();
+    assert_eq!(e.key, "modules[6].soft_iron");
+    assert!(e.problem.contains("-10..=10"), "{e}");
+    // On another kind of module they belong to imu modules.
+    let e = refuse(&edit("wheel = 1", "wheel = 1\nunplugged = [\"gnss\"]"));
+    assert_eq!(e.key, "modules[2].unplugged");
+    assert!(e.fix.contains("imu modules"), "{e}");
+    let e = refuse(&edit("wheel = 1", "wheel = 1\nhard_iron_ut = [1.0, 2.0, 3.0]"));
+    assert_eq!(e.key, "modules[2].hard_iron_ut");
+}
+
+#[test]
+fn the_site_defaults_to_milan_and_each_key_is_checked() {
+    assert_eq!(Robot::load(triskar_path()).unwrap().site, Site::MILAN);
+    let site = "\n[site]\nlatitude_deg = -33.87\nlongitude_deg = 151.21\naltitude_m = 40.0\n\
+                geoid_separation_m = 22.5\nfield_intensity_ut = 57.3\n\
+                field_inclination_deg = -64.3\nfield_declination_deg = 12.8\n\
+                sea_level_pressure_pa = 100900.0\n";
+    let r = Robot::parse(&(triskar_text() + site), "a.toml").unwrap();
+    let want = Site {
+        latitude_deg: -33.87,
+        longitude_deg: 151.21,
+        altitude_m: 40.0,
+        geoid_separation_m: 22.5,
+        field: EarthField { intensity_ut: 57.3, inclination_deg: -64.3, declination_deg: 12.8 },
+        sea_level_pa: 100_900.0,
+    };
+    assert_eq!(r.site, want);
+    // A key left out takes Milan's value.
+    let r = Robot::parse(&(triskar_text() + "\n[site]\naltitude_m = 300.0\n"), "a.toml").unwrap();
+    assert_eq!(r.site, Site { altitude_m: 300.0, ..Site::MILAN });
+    for (key, bad, need) in [
+        ("latitude_deg", "89.5", "-89..=89"),
+        ("longitude_deg", "-181.0", "-180..=180"),
+        ("altitude_m", "12000.0", "-500..=9000"),
+        ("geoid_separation_m", "-120.0", "-110..=90"),
+        ("field_intensity_ut", "0.0", "1..=100"),
+        ("field_inclination_deg", "91.0", "-90..=90"),
+        ("field_declination_deg", "200.0", "-180..=180"),
+        ("sea_level_pressure_pa", "1013.25", "87000..=108500"),
+        ("altitude_m", "nan", "-500..=9000"),
+    ] {
+        let text = triskar_text() + &format!("\n[site]\n{key} = {bad}\n");
+        let e = Robot::parse(&text, "robots/bad.toml").unwrap_err();
+        assert_eq!(e.key, format!("site.{key}"), "{e}");
+        assert!(e.problem.contains(need), "{e}");
+        assert_eq!(e.file, Path::new("robots/bad.toml"));
+    }
+    let e = Robot::parse(&(triskar_text() + "\n[site]\nlatitude = 45.0\n"), "a.toml").unwrap_err();
+    assert_eq!((e.key.as_str(), e.problem.as_str()), ("site.latitude", "unknown key"));
+    assert!(e.fix.contains("latitude_deg"), "{e}");
+    let e = Robot::parse(&(triskar_text() + "\n[site]\naltitude_m = \"high\"\n"), "a.toml")
+        .unwrap_err();
+    assert_eq!(e.key, "site.altitude_m");
+    assert!(e.problem.contains("invalid type"), "{e}");
 }

@@ -3,5 +3,5 @@
 include!("../module-core/build_image.rs");
 
 fn main() {
-    build_image("../../../boards/imu.toml", Link::ActiveSlot);
+    build_image("../../../boards/imu.toml", Link::FlashBase);
 }

@@ -123,6 +123,7 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
                 sh.latest.status = Some(gw.status(&net));
                 sh.latest.battery = gw.battery();
                 sh.latest.imu = gw.imu();
+                (sh.latest.mag, sh.latest.baro, sh.latest.gnss) = gw.imu_extras();
                 sh.latest.mirrored = gw.mirrored();
                 if let Some(c) = sh.cmd.take() {
                     let _ = cmd_local.publish_with(|m| *m = c);

@@ -1,20 +1,20 @@
-//! The IMU board: the module's firmware on an LSM6DSO behind SPI1, here the simulated SPI bus
-//! ([`SimSpi`]) and the register model ([`Lsm6dsoModel`]), whose samples come from the world's
-//! IMU on the board's mount ([`r2p_world::World::sample_imu`]). The firmware's side is the
-//! MCU's: the `r2p-drivers` LSM6DSO driver configured at boot with the application's sensor
-//! set-up, then polled every millisecond by `r2p_app_imu::sensor::poll`.
+//! The IMU board: the module's firmware on the board's sensor rig ([`ImuSensors`]: the
+//! LSM6DSO, LIS3MDL and LPS22DF register models on SPI1's chip selects, the GNSS receiver on
+//! USART1 and its PPS), fed from the world's devices on the board's mount. The firmware's side
+//! is the MCU's: the `r2p-drivers` drivers of the three parts, set up and polled every
+//! millisecond by `r2p_app_imu::sensor::Sensors` (set up again after a part stops answering).
 //!
-//! A reboot is a power cycle of the board, the sensor included: the register model starts
-//! from its reset values and the driver configures it again (the device's offsets and noise
-//! stream belong to the world and carry on).
+//! A reboot is a power cycle of the board, the sensors included: the register models start
+//! from their reset values and the driver configures them again (the devices' offsets and
+//! noise streams belong to the world and carry on).
 
 use r2p_app_imu as app;
+use r2p_drivers::lis3mdl::Lis3mdl;
+use r2p_drivers::lps22df::Lps22df;
 use r2p_drivers::lsm6dso::Lsm6dso;
 
-use super::{leak, load_params, node, persist, Booted, Ctx, Leds};
-use crate::periph::lsm6dso::Lsm6dsoModel;
-use crate::periph::shared;
-use crate::periph::spi::SimSpi;
+use super::imu_sensors::{GnssLink, ImuSensors};
+use super::{load_params, node, persist, Booted, Ctx, Leds};
 
 /// Boots the IMU firmware.
 pub fn imu(ctx: Ctx<'_>) -> Result<Booted, String> {
@@ -24,25 +24,23 @@ pub fn imu(ctx: Ctx<'_>) -> Result<Booted, String> {
     let mut n = node(config, &ctx, params)?;
     a.register(&mut n).map_err(|e| format!("registering topics: {e:?}"))?;
     let mut leds = Leds::new(&ctx, config.heartbeat_period_us);
-    let device = shared(Lsm6dsoModel::new());
-    // The device's clock starts at boot (both sensors are still powered down: no sample).
-    device.borrow_mut().advance_with(ctx.boot_us * 1000, |_| unreachable!("sensors off"));
-    let mut sensor = Lsm6dso::new_spi(SimSpi::new(device.clone()));
-    // As on the MCU: a sensor that does not answer leaves the module running, reporting
-    // "no data" (status 2, fault LED).
-    let initialised = sensor.init(a.sensor_config()).is_ok();
+    // The parts' clocks start at boot (their sensors still powered down: no sample).
+    let mut rig =
+        ImuSensors::new(&ctx.world.borrow(), &ctx.module.name, ctx.boot_us, GnssLink::DEFAULT)?;
+    let mut sensors = app::sensor::Sensors::new(
+        Lsm6dso::new_spi(rig.lsm6dso_spi()),
+        Lis3mdl::new_spi(rig.lis3mdl_spi()),
+        Lps22df::new_spi(rig.lps22df_spi()),
+    );
+    let config = a.sensor_config();
     let (world, flash) = (ctx.world, ctx.flash);
-    let name: &'static str = leak(ctx.module.name.clone()).as_str();
     Ok((
         n,
         Box::new(move |now, node| {
-            {
-                let mut w = world.borrow_mut();
-                device.borrow_mut().advance_with(now * 1000, |odr_hz| {
-                    w.sample_imu(name, odr_hz).unwrap_or_else(|e| panic!("{e}"))
-                });
-            }
-            let sample = app::sensor::poll(&mut sensor, initialised, leds.status(now, node, false));
+            rig.advance(now, &mut world.borrow_mut());
+            // As on the MCU: a part that does not answer leaves the module running, reporting
+            // it (`Imu::sensors`, status 2, the fault LED), and is set up again later.
+            let sample = sensors.poll(now, config, leds.status(now, node, false));
             a.step(now, &sample);
             persist(params, flash);
         }),

@@ -12,6 +12,7 @@ pub mod firmware;
 mod gateway;
 mod host;
 mod imu;
+pub mod imu_sensors;
 mod motor;
 mod params;
 mod proximity;

@@ -5,8 +5,8 @@
 //! unchanged against them. Devices on them are models of real parts fed by the world:
 //! [`lsm6dso::Lsm6dsoModel`] (IMU registers, samples from [`r2p_world::imu`]),
 //! [`lis3mdl::Lis3mdlModel`] (magnetometer registers), [`lps22df::Lps22dfModel`] (barometer
-//! registers), [`ubx_gnss::UbxGnssModel`] (a u-blox receiver's UBX-NAV-PVT, from
-//! [`r2p_world::gnss`]) and
+//! registers), [`ubx_gnss::UbxGnssModel`] (a u-blox receiver: NMEA from its factory settings,
+//! UBX configuration and UBX-NAV-PVT, from [`r2p_world::gnss`]) and
 //! [`tfmini::TfminiModel`] (LiDAR frames, from [`r2p_world::lidar`]).
 //!
 //! Register devices implement [`registers::RegisterDevice`]; the I2C and SPI models turn bus

@@ -8,12 +8,16 @@
 //! MISO is idle (0x00) during it. Then a read returns registers from the address on MISO
 //! (MOSI ignored), a write stores MOSI bytes; the address advances by the device's rule
 //! ([`RegisterDevice::next_register`]). With no device behind the chip select
-//! ([`SimSpi::unconnected`]) MISO floats high: every byte reads 0xFF.
+//! ([`SimSpi::unconnected`]), or with its device unplugged ([`SimSpi::pluggable`], [`Plug`]:
+//! a part that failed or came off, injected at run time) MISO floats high: every byte reads
+//! 0xFF, and writes go nowhere.
 //!
 //! Not modelled: clock polarity/phase and speed (a transaction takes no virtual time),
 //! 3-wire mode, the device's own address-space limits.
 
+use std::cell::Cell;
 use std::convert::Infallible;
+use std::rc::Rc;
 
 use embedded_hal::spi::{ErrorType, Operation, SpiDevice};
 
@@ -28,21 +32,49 @@ enum State {
     Write(u8),
 }
 
+/// Whether a device is on its bus: one switch shared by every handle of the device's bus and
+/// whoever injects the fault (a board's sensor rig following the world's plugs).
+#[derive(Clone, Debug)]
+pub struct Plug(Rc<Cell<bool>>);
+
+impl Plug {
+    /// A plug, in or out.
+    pub fn new(plugged: bool) -> Self {
+        Self(Rc::new(Cell::new(plugged)))
+    }
+
+    /// Whether the device is on the bus.
+    pub fn plugged(&self) -> bool {
+        self.0.get()
+    }
+
+    /// Puts the device on the bus or takes it off.
+    pub fn set(&self, plugged: bool) {
+        self.0.set(plugged);
+    }
+}
+
 /// A register device on its own chip select.
 pub struct SimSpi {
     device: Option<Shared<dyn RegisterDevice>>,
+    plug: Option<Plug>,
     transactions: u64,
 }
 
 impl SimSpi {
     /// `device` behind the chip select.
     pub fn new(device: Shared<dyn RegisterDevice>) -> Self {
-        Self { device: Some(device), transactions: 0 }
+        Self { device: Some(device), plug: None, transactions: 0 }
+    }
+
+    /// `device` behind the chip select while `plug` is in; nothing behind it while it is out.
+    pub fn pluggable(device: Shared<dyn RegisterDevice>, plug: Plug) -> Self {
+        Self { device: Some(device), plug: Some(plug), transactions: 0 }
     }
 
     /// A chip select with nothing behind it (MISO pulled high).
     pub fn unconnected() -> Self {
-        Self { device: None, transactions: 0 }
+        Self { device: None, plug: None, transactions: 0 }
     }
 
     /// Transactions (chip-select assertions) so far.
@@ -78,7 +110,8 @@ fn shift(dev: &mut dyn RegisterDevice, state: &mut State, mosi: u8) -> u8 {
 impl SpiDevice for SimSpi {
     fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), Infallible> {
         self.transactions += 1;
-        let Some(device) = &self.device else {
+        let unplugged = self.plug.as_ref().is_some_and(|p| !p.plugged());
+        let Some(device) = self.device.as_ref().filter(|_| !unplugged) else {
             for op in operations {
                 match op {
                     Operation::Read(b) | Operation::TransferInPlace(b) => b.fill(0xFF),

@@ -24,8 +24,15 @@
 //! call); callers poll with `read_ready` first. `write` queues the bytes at the current time
 //! and returns at once; `flush` returns at once (the bytes still take their wire time).
 //!
-//! Not modelled: parity, framing and noise errors as flags, baud-rate mismatch, flow control,
-//! break.
+//! **Baud rates.** Each end has its own rate ([`SimUart::set_baud`] for the MCU's USART, as
+//! embassy's `set_baudrate`; [`SimUart::set_device_baud`] for the device, e.g. a GNSS receiver
+//! told to change its rate). A byte takes its sender's bit time on the wire. A receiver at
+//! another rate samples the sender's waveform at its own bit centres (1.5, 2.5 … 8.5 of its bit
+//! times after the start edge) and gets that byte instead, counted in
+//! [`UartStats::baud_mismatched`]; e.g. 0x55 sent at 9600 reads 0x78 at 38400.
+//!
+//! Not modelled: parity, framing and noise errors as flags, the extra bytes a receiver faster
+//! than its sender finds in one slow byte, flow control, break.
 
 use std::collections::VecDeque;
 use std::fmt;
@@ -67,29 +74,58 @@ impl embedded_io::Error for UartError {
     }
 }
 
-/// One direction of the line: bytes in flight with the time their stop bit ends.
+/// One direction of the line: bytes in flight with the time their stop bit ends and the baud
+/// rate they were sent at.
 #[derive(Debug, Default)]
 struct Wire {
-    in_flight: VecDeque<(u64, u8)>,
+    in_flight: VecDeque<(u64, u8, u32)>,
     free_at_ns: u64,
 }
 
 impl Wire {
-    fn send(&mut self, at_ns: u64, byte_ns: u64, bytes: &[u8]) {
+    fn send(&mut self, at_ns: u64, baud: u32, bytes: &[u8]) {
+        let byte_ns = byte_ns(baud);
         for &b in bytes {
             let start = self.free_at_ns.max(at_ns);
             self.free_at_ns = start + byte_ns;
-            self.in_flight.push_back((self.free_at_ns, b));
+            self.in_flight.push_back((self.free_at_ns, b, baud));
         }
     }
 
-    /// Pops the next byte received by `now_ns`.
-    fn arrived(&mut self, now_ns: u64) -> Option<u8> {
+    /// Pops the next byte received by `now_ns`, as a receiver at `baud` reads it, and whether
+    /// it was sent at another rate.
+    fn arrived(&mut self, now_ns: u64, baud: u32) -> Option<(u8, bool)> {
         match self.in_flight.front() {
-            Some(&(t, _)) if t <= now_ns => self.in_flight.pop_front().map(|(_, b)| b),
+            Some(&(t, b, sent)) if t <= now_ns => {
+                self.in_flight.pop_front();
+                Some(if sent == baud { (b, false) } else { (resample(b, sent, baud), true) })
+            }
             _ => None,
         }
     }
+}
+
+/// One 8N1 byte's time at `baud`, ns (10 bit times, rounded to the ns).
+fn byte_ns(baud: u32) -> u64 {
+    (BITS_PER_BYTE * 1_000_000_000 + u64::from(baud) / 2) / u64::from(baud)
+}
+
+/// The byte a receiver at `rx_baud` reads from `byte` sent at `tx_baud`: data bit j is the
+/// line level at (j + 1.5) of its bit times after the start edge; the sender's frame is start
+/// bit (low), data LSB first, then stop and idle (high).
+pub fn resample(byte: u8, tx_baud: u32, rx_baud: u32) -> u8 {
+    let mut out = 0u8;
+    for j in 0..8u64 {
+        // Position in sender bit times, in halves: (2j + 3) / 2 · tx / rx.
+        let sender_bit = ((2 * j + 3) * u64::from(tx_baud)) / (2 * u64::from(rx_baud));
+        let level = match sender_bit {
+            0 => 0,
+            1..=8 => (byte >> (sender_bit - 1)) & 1,
+            _ => 1,
+        };
+        out |= level << j;
+    }
+    out
 }
 
 /// Counters of the line.
@@ -103,12 +139,15 @@ pub struct UartStats {
     pub corrupted: u64,
     /// Bytes the MCU sent that reached the device.
     pub delivered: u64,
+    /// Bytes (either way) read at a baud rate other than the one they were sent at.
+    pub baud_mismatched: u64,
 }
 
 /// The line and the MCU's UART.
 #[derive(Debug)]
 pub struct SimUart {
     baud: u32,
+    device_baud: u32,
     now_ns: u64,
     to_mcu: Wire,
     to_device: Wire,
@@ -126,6 +165,7 @@ impl SimUart {
         assert!(baud > 0, "baud rate 0");
         Self {
             baud,
+            device_baud: baud,
             now_ns: 0,
             to_mcu: Wire::default(),
             to_device: Wire::default(),
@@ -138,9 +178,31 @@ impl SimUart {
         }
     }
 
-    /// One byte's time on the wire, ns (10 bit times, rounded to the ns).
+    /// One byte's time on the wire at the MCU's rate, ns (10 bit times, rounded to the ns).
     pub fn byte_ns(&self) -> u64 {
-        (BITS_PER_BYTE * 1_000_000_000 + u64::from(self.baud) / 2) / u64::from(self.baud)
+        byte_ns(self.baud)
+    }
+
+    /// The MCU's baud rate.
+    pub fn baud(&self) -> u32 {
+        self.baud
+    }
+
+    /// The device's baud rate (the MCU's unless set).
+    pub fn device_baud(&self) -> u32 {
+        self.device_baud
+    }
+
+    /// The MCU reconfigures its USART to `baud` (bytes already on the wire keep theirs).
+    pub fn set_baud(&mut self, baud: u32) {
+        assert!(baud > 0, "baud rate 0");
+        self.baud = baud;
+    }
+
+    /// The device changes its rate to `baud`.
+    pub fn set_device_baud(&mut self, baud: u32) {
+        assert!(baud > 0, "baud rate 0");
+        self.device_baud = baud;
     }
 
     /// Virtual time of the line, ns.
@@ -166,8 +228,12 @@ impl SimUart {
 
     /// The device starts sending `bytes` at `at_ns` (or when the line is free).
     pub fn device_send_at(&mut self, at_ns: u64, bytes: &[u8]) {
-        let byte_ns = self.byte_ns();
-        self.to_mcu.send(at_ns, byte_ns, bytes);
+        self.to_mcu.send(at_ns, self.device_baud, bytes);
+    }
+
+    /// When the line towards the MCU is free: the stop bit of the last byte queued, ns.
+    pub fn device_free_at(&self) -> u64 {
+        self.to_mcu.free_at_ns
     }
 
     /// Bytes from the MCU that have fully arrived at the device since the last call.
@@ -178,7 +244,8 @@ impl SimUart {
     /// Moves the line to `t_ns`: bytes whose stop bit has ended are received.
     pub fn advance_to(&mut self, t_ns: u64) {
         self.now_ns = self.now_ns.max(t_ns);
-        while let Some(mut b) = self.to_mcu.arrived(self.now_ns) {
+        while let Some((mut b, mismatched)) = self.to_mcu.arrived(self.now_ns, self.baud) {
+            self.stats.baud_mismatched += u64::from(mismatched);
             if let Some((p, noise)) = &mut self.corrupt {
                 if noise.uniform() < *p {
                     b ^= 1 << ((noise.uniform() * 8.0) as u32).min(7);
@@ -193,7 +260,8 @@ impl SimUart {
                 self.overrun_pending = true;
             }
         }
-        while let Some(b) = self.to_device.arrived(self.now_ns) {
+        while let Some((b, mismatched)) = self.to_device.arrived(self.now_ns, self.device_baud) {
+            self.stats.baud_mismatched += u64::from(mismatched);
             self.at_device.push(b);
             self.stats.delivered += 1;
         }
@@ -231,8 +299,7 @@ impl Read for SimUart {
 
 impl Write for SimUart {
     fn write(&mut self, buf: &[u8]) -> Result<usize, UartError> {
-        let (now, byte_ns) = (self.now_ns, self.byte_ns());
-        self.to_device.send(now, byte_ns, buf);
+        self.to_device.send(self.now_ns, self.baud, buf);
         Ok(buf.len())
     }
 
@@ -286,6 +353,37 @@ mod tests {
         u.advance_to(5_000 + 2 * u.byte_ns());
         assert_eq!(u.device_receive(), [0x04]);
         assert_eq!(u.stats().delivered, 2);
+    }
+
+    #[test]
+    fn a_byte_read_at_another_rate_is_resampled() {
+        // 0x55 = start 0, then 1 0 1 0 1 0 1 0, stop 1. At 38400, a 9600 byte's bits are 4 bit
+        // times long: samples 1.5, 2.5, 3.5 fall in its start bit (0), 4.5–7.5 in bit 0 (1),
+        // 8.5 in bit 1 (0)... : 0b0111_1000.
+        assert_eq!(resample(0x55, 9_600, 38_400), 0x78);
+        // At 9600, a 38400 byte: samples at 6, 10, 14 … of its bit times: data bit 5 (0), then
+        // stop and idle (1): 0xFE.
+        assert_eq!(resample(0x55, 38_400, 9_600), 0xFE);
+        assert_eq!(resample(0xA3, 9_600, 9_600), 0xA3);
+        let mut u = SimUart::new(38_400, 64);
+        u.set_device_baud(9_600);
+        assert_eq!(u.device_baud(), 9_600);
+        u.device_send_at(0, &[0x55, 0x62]);
+        u.write_all(&[0xB5]).unwrap();
+        u.advance_to(1_000_000_000);
+        let mut b = [0; 4];
+        assert_eq!(u.read(&mut b), Ok(2));
+        assert_eq!(b[..2], [0x78, resample(0x62, 9_600, 38_400)]);
+        assert_eq!(u.device_receive(), [resample(0xB5, 38_400, 9_600)]);
+        assert_eq!(u.stats().baud_mismatched, 3);
+        // Both at 9600: bytes pass, each 1.04 ms.
+        u.set_baud(9_600);
+        assert_eq!((u.baud(), u.byte_ns()), (9_600, 1_041_667));
+        u.device_send_at(1_000_000_000, &[0x55]);
+        assert_eq!(u.device_free_at(), 1_000_000_000 + 1_041_667);
+        u.advance_to(2_000_000_000);
+        assert_eq!((u.read(&mut b), b[0]), (Ok(1), 0x55));
+        assert_eq!(u.stats().baud_mismatched, 3);
     }
 
     #[test]

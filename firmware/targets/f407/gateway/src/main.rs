@@ -82,11 +82,17 @@ bind_interrupts!(struct Irqs {
 });
 
 /// The gateway's node: up to 5 exports (its status and the base controller's 4, or its status
-/// and `cmd_vel`) and 13 imports (its 7 and the base controller's 6, or its 7 and `odom` and
+/// and `cmd_vel`) and 16 imports (its 10 and the base controller's 6, or its 10 and `odom` and
 /// the ranges), 32 queued frames, 4 streams in reassembly, messages up to 64 bytes (as a
 /// module's).
-type GatewayNode =
-    Node<'static, { 1 + base::endpoints::EXPORTS }, { 7 + base::endpoints::IMPORTS }, 32, 4, 64>;
+type GatewayNode = Node<
+    'static,
+    { 1 + base::endpoints::EXPORTS },
+    { r2p_app_gateway::endpoints::IMPORTS + base::endpoints::IMPORTS },
+    32,
+    4,
+    64,
+>;
 type Device = Ethernet<'static, ETH, GenericPhy<Sma<'static, ETH_SMA>>>;
 
 /// The node's parameters: the gateway's, then the base controller's.
@@ -144,6 +150,9 @@ static LATEST: cortex_m::interrupt::Mutex<Cell<Latest>> =
         battery: None,
         proximity: None,
         imu: None,
+        mag: None,
+        baro: None,
+        gnss: None,
         status: None,
         mirrored: [r2p_app_gateway::Mirrored { bytes: [0; 16], len: 0, count: 0 }; 5],
     }));
@@ -370,7 +379,8 @@ async fn run(
             Base::Elsewhere(r) => r.latest(),
         };
         let status = Some(status);
-        let latest = Latest { status, battery, imu, mirrored, odom, proximity };
+        let (mag, baro, gnss) = app.imu_extras();
+        let latest = Latest { status, battery, imu, mag, baro, gnss, mirrored, odom, proximity };
         cortex_m::interrupt::free(|cs| LATEST.borrow(cs).set(latest));
         let [status, bus, fault, link] = &mut leds;
         for (out, on, active_low) in [
