@@ -258,10 +258,10 @@ pub fn fit(samples: &[[f64; 3]], kind: Kind) -> Result<Fit, FitError> {
         d = -d;
     }
     let centre = a.clone().lu().solve(&(-&b)).ok_or(FitError::NotAnEllipsoid)?;
+    // (u − c)ᵀ A (u − c) = k: an ellipsoid when A is positive definite and k > 0. E = A/(kσ²)
+    // in µT, but only E's shape matters below (S is scaled to det 1), so A stands for it.
     let k = (centre.transpose() * &a * &centre)[(0, 0)] - d;
-    // E in µT: (m − h)ᵀ (A / (k σ²)) (m − h) = 1.
-    let e = a / (k * sigma * sigma);
-    let se = SymmetricEigen::new(e);
+    let se = SymmetricEigen::new(a);
     let (lo, hi) =
         se.eigenvalues.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &l| (lo.min(l), hi.max(l)));
     if !(k > 0.0 && lo > 0.0 && lo.is_finite()) {
@@ -271,7 +271,7 @@ pub fn fit(samples: &[[f64; 3]], kind: Kind) -> Result<Fit, FitError> {
     if axis_ratio > MAX_AXIS_RATIO {
         return Err(FitError::TooFlat { axis_ratio });
     }
-    // S = r·E^½ with r the geometric mean semi-axis (det S = 1).
+    // S = r·A^½ with r making det S = 1 (the geometric mean semi-axis, in A's units).
     let r = se.eigenvalues.iter().map(|l| l.ln()).sum::<f64>() / (-2.0 * n as f64);
     let root = DMatrix::from_diagonal(&se.eigenvalues.map(|l| l.sqrt() * r.exp()));
     let s_n = &se.eigenvectors * root * se.eigenvectors.transpose();
@@ -496,6 +496,41 @@ mod tests {
             "{:?}",
             fit.offset
         );
+    }
+
+    #[test]
+    fn the_fit_moves_with_the_samples_and_does_not_depend_on_their_units() {
+        // The samples are centred and scaled before the fit: shifted, the same S and a shifted
+        // h come out; in nT instead of µT, the same S and h × 1000 (with noise: a fit that
+        // weighted its terms by where the samples sit or their units would differ).
+        let samples = full_samples(300, 0.5, 21);
+        let a = fit(&samples, Kind::Full).unwrap();
+        let shift = [250.0, -180.0, 90.0];
+        let moved: Vec<[f64; 3]> =
+            samples.iter().map(|m| std::array::from_fn(|i| m[i] + shift[i])).collect();
+        let b = fit(&moved, Kind::Full).unwrap();
+        let nano: Vec<[f64; 3]> = samples.iter().map(|m| m.map(|x| x * 1000.0)).collect();
+        let c = fit(&nano, Kind::Full).unwrap();
+        for i in 0..3 {
+            assert!(
+                (b.offset[i] - a.offset[i] - shift[i]).abs() < 1e-7,
+                "{:?} {:?}",
+                a.offset,
+                b.offset
+            );
+            assert!(
+                (c.offset[i] - 1000.0 * a.offset[i]).abs() < 1e-5,
+                "{:?} {:?}",
+                a.offset,
+                c.offset
+            );
+            for j in 0..3 {
+                assert!((b.soft[i][j] - a.soft[i][j]).abs() < 1e-9);
+                assert!((c.soft[i][j] - a.soft[i][j]).abs() < 1e-9);
+            }
+        }
+        assert!((b.rms - a.rms).abs() < 1e-9 && (c.rms - 1000.0 * a.rms).abs() < 1e-6);
+        assert!((b.determinacy / a.determinacy - 1.0).abs() < 1e-6);
     }
 
     #[test]
