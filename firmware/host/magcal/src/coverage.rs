@@ -45,6 +45,7 @@ impl Coverage {
             return;
         }
         let heading = v[1].atan2(v[0]).to_degrees().rem_euclid(360.0);
+        // `min`: rem_euclid rounds a heading a hair below 0° up to exactly 360.
         self.sectors[((heading / 10.0) as usize).min(SECTORS - 1)] += 1;
         let elevation = (v[2] / norm).clamp(-1.0, 1.0).asin().to_degrees() + 90.0;
         self.bands[((elevation / 30.0) as usize).min(BANDS - 1)] += 1;
@@ -114,6 +115,16 @@ mod tests {
         assert_eq!(&rose[..3], "##.");
         assert_eq!(rose.chars().filter(|&ch| ch == '#').count(), 5);
         assert_eq!(rose.chars().nth(35), Some('#'));
+    }
+
+    #[test]
+    fn a_heading_just_below_zero_is_in_the_last_sector() {
+        // atan2 gives −1e-300 rad; rem_euclid(360) rounds −5.7e-299° up to exactly 360.0,
+        // which would be sector 36 of 0…35.
+        assert_eq!((-1e-300f64).to_degrees().rem_euclid(360.0), 360.0);
+        let mut c = Coverage::new();
+        c.add([40.0, -1e-300, 0.0]);
+        assert_eq!((c.sectors[35], c.sectors_covered()), (1, 1));
     }
 
     #[test]

@@ -511,13 +511,8 @@ mod tests {
         let b = fit(&moved, Kind::Full).unwrap();
         let nano: Vec<[f64; 3]> = samples.iter().map(|m| m.map(|x| x * 1000.0)).collect();
         let c = fit(&nano, Kind::Full).unwrap();
-        for i in 0..3 {
-            assert!(
-                (b.offset[i] - a.offset[i] - shift[i]).abs() < 1e-7,
-                "{:?} {:?}",
-                a.offset,
-                b.offset
-            );
+        for (i, d) in shift.iter().enumerate() {
+            assert!((b.offset[i] - a.offset[i] - d).abs() < 1e-7, "{:?} {:?}", a.offset, b.offset);
             assert!(
                 (c.offset[i] - 1000.0 * a.offset[i]).abs() < 1e-5,
                 "{:?} {:?}",

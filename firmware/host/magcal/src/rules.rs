@@ -39,7 +39,8 @@ pub fn values(fit: &Fit) -> Vec<(&'static str, f32)> {
         .collect();
     v.extend(
         SOFT.iter()
-            .filter(|(_, i, j)| !planar || (*i < 2 && *j < 2))
+            // SOFT is the upper triangle (i ≤ j): j < 2 is the x/y block.
+            .filter(|(_, _, j)| !planar || *j < 2)
             .map(|&(n, i, j)| (n, fit.soft[i][j] as f32)),
     );
     v
@@ -74,8 +75,9 @@ pub struct Slot {
     pub max: f32,
 }
 
-/// Which fit: as asked (`planar`, `full`: at most one), or planar when z hardly moved (see [`PLANAR_RATIO`]). Returns the kind
-/// and the spreads (z's standard deviation, x's and y's RMS), µT.
+/// Which fit: as asked (`planar`, `full`: at most one), or planar when z hardly moved (see
+/// [`PLANAR_RATIO`]). Returns the kind and the spreads (z's standard deviation, x's and y's
+/// RMS), µT.
 pub fn choose(samples: &[[f64; 3]], planar: bool, full: bool) -> (Kind, f64, f64) {
     let n = samples.len().max(1) as f64;
     let sd = |i: usize| {
@@ -199,6 +201,12 @@ mod tests {
         assert_eq!(choose(&circle(10.1), false, false).0, Kind::Full);
         let (_, z, h) = choose(&circle(10.0), false, false);
         assert!((z - 10.0 / 2f64.sqrt()).abs() < 1e-9 && (h - 40.0 / 2f64.sqrt()).abs() < 1e-9);
+        // The spreads are about the samples' means: a hard-iron offset changes nothing.
+        let offset: Vec<[f64; 3]> =
+            circle(10.0).iter().map(|m| [m[0] + 30.0, m[1] - 20.0, m[2] + 50.0]).collect();
+        let (kind, z2, h2) = choose(&offset, false, false);
+        assert!((z2 - z).abs() < 1e-9 && (h2 - h).abs() < 1e-9, "{z2} {h2}");
+        assert_eq!(kind, choose(&circle(10.0), false, false).0);
         assert_eq!(choose(&circle(0.0), false, true).0, Kind::Full);
         assert_eq!(choose(&circle(30.0), true, false).0, Kind::Planar);
     }
