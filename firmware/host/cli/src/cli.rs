@@ -7,7 +7,7 @@ use clap::{Parser, Subcommand};
 use crate::args::{open_link, BusArgs};
 use crate::error::CliError;
 use crate::session::Session;
-use crate::{echo, flash, keys, listing, monitor, param, publish, sim, traces, update};
+use crate::{echo, flash, keys, listing, magcal, monitor, param, publish, sim, traces, update};
 
 const ABOUT: &str = "R2P host tool: watch and talk to an R2P robot's CAN bus";
 
@@ -30,6 +30,7 @@ Examples:
   r2p monitor --count 20
   r2p param get motor 0
   r2p pub speed --type float32 1.5
+  r2p imu calibrate --seconds 60     # turn the robot; writes the magnetometer's calibration
   r2p --trace bus.log monitor        # offline, from a candump log or pcap
   r2p convert bus.log bus.pcap       # for Wireshark
   r2p flash motor                    # firmware/images/motor.elf through an SWD probe";
@@ -64,6 +65,9 @@ pub enum Command {
     /// Read or set a module's parameter (PARAM_GET / PARAM_SET)
     #[command(subcommand)]
     Param(param::ParamCommand),
+    /// The IMU module: calibrate its magnetometer (imu calibrate)
+    #[command(subcommand)]
+    Imu(magcal::ImuCommand),
     /// Send a trace's frames (candump log or pcap) onto the bus again
     Replay(traces::ReplayArgs),
     /// Convert a trace between candump log and pcap (by the output's extension)
@@ -98,6 +102,7 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Echo(args) => echo::run(&args, bus, Session::new(open_link(bus)?), out),
         Command::Pub(args) => publish::run(&args, bus, Session::new(open_link(bus)?), out),
         Command::Param(cmd) => param::run(&cmd, bus, Session::new(open_link(bus)?), out),
+        Command::Imu(cmd) => magcal::run(&cmd, bus, Session::new(open_link(bus)?), out),
         Command::Sim(args) => sim::run(&args, bus, out),
         Command::Flash(args) => flash::run(&args, out),
         Command::Keygen(args) => keys::keygen(&args, out),

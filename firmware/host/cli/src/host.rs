@@ -443,25 +443,48 @@ pub(crate) mod tests {
             Param::f32("gain", 0.5, 0.0, 2.0),
         ])));
         speed.subscribe(speed_out).unwrap();
-        std::thread::spawn(move || {
+        let make = move || {
             let mut uid = [0u8; 12];
             uid[11] = 0x42;
             let mut node: Node<'static, 1, 1, 32, 4, 64> =
                 Node::new(NodeConfig::new(uid, "sensor"), params).unwrap();
             node.export(speed_out).unwrap();
+            node
+        };
+        let mut n = 0u32;
+        drive(hub, stop, make, move |elapsed| {
+            if elapsed.as_millis() as u32 / 5 > n {
+                n += 1;
+                speed_pub.publish_with(|v| *v = n);
+            }
+        })
+    }
+
+    /// Runs the node `make` makes as a module on the hub on its own thread until `stop`: every millisecond
+    /// it takes the frames that came, calls `tick` with the time since the start, and polls.
+    pub(crate) fn drive<
+        const E: usize,
+        const I: usize,
+        const T: usize,
+        const R: usize,
+        const B: usize,
+    >(
+        hub: Arc<BroadcastHub>,
+        stop: Arc<std::sync::atomic::AtomicBool>,
+        make: impl FnOnce() -> Node<'static, E, I, T, R, B> + Send + 'static,
+        mut tick: impl FnMut(Duration) + Send + 'static,
+    ) -> std::thread::JoinHandle<()> {
+        std::thread::spawn(move || {
+            let mut node = make();
             let mut link = HubLink::join(hub, 1024);
             let start = Instant::now();
-            let mut n = 0u32;
             let mut rx = VecDeque::new();
             while !stop.load(std::sync::atomic::Ordering::SeqCst) {
                 while let Ok(crate::link::Recv::Frame(s)) = link.recv(Duration::ZERO) {
                     let frame = Frame::from_raw(s.frame.id(), s.frame.data()).unwrap();
                     rx.push_back(Received { frame, at: start.elapsed().as_micros() as u64 });
                 }
-                if start.elapsed().as_millis() as u32 / 5 > n {
-                    n += 1;
-                    speed_pub.publish_with(|v| *v = n);
-                }
+                tick(start.elapsed());
                 let mut ctl = Controller {
                     link: &mut link,
                     rx: &mut rx,

@@ -9,7 +9,8 @@
 //!   is learnt at run time, and the [`session::Session`] that drives it beside the watcher;
 //! - [`types`]: the message types, found by type hash, decoded and encoded;
 //! - the commands: [`monitor`], [`listing`] (`nodes`, `topics`), [`echo`], [`publish`]
-//!   (`pub`), [`param`], [`traces`] (`replay`, `convert`), [`sim`], [`flash`]; [`args`]: the bus options
+//!   (`pub`), [`param`], [`magcal`] (`imu calibrate`, its fit in the `r2p-magcal` crate),
+//!   [`traces`] (`replay`, `convert`), [`sim`], [`flash`]; [`args`]: the bus options
 //!   and output they share; [`cli`] parses the command line and runs them.
 
 pub mod args;
@@ -22,6 +23,7 @@ pub mod host;
 pub mod keys;
 pub mod link;
 pub mod listing;
+pub mod magcal;
 pub mod monitor;
 pub mod param;
 pub mod publish;

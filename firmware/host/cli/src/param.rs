@@ -120,7 +120,7 @@ pub const RETRY: Duration = Duration::from_millis(300);
 
 /// Sends a request (`ask`), again every [`RETRY`] while unanswered, and waits up to the
 /// bus timeout for the answer about `index` from `target`.
-fn ask(
+pub(crate) fn ask(
     s: &mut Session,
     bus: &BusArgs,
     target: NodeId,
@@ -157,7 +157,13 @@ fn ask(
     )))
 }
 
-fn refused(s: &Session, target: NodeId, what: &str, index: u16, fault: ParamFault) -> CliError {
+pub(crate) fn refused(
+    s: &Session,
+    target: NodeId,
+    what: &str,
+    index: u16,
+    fault: ParamFault,
+) -> CliError {
     CliError::new(format!(
         "node {} refused {what} of parameter {index}: {}",
         s.watcher().node_label(target.get()),
