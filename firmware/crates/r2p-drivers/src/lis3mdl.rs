@@ -31,6 +31,8 @@ pub const CTRL_REG1: u8 = 0x20;
 pub const CTRL_REG2: u8 = 0x21;
 /// I2C_DISABLE \[7\], LP \[5\], SIM \[2\], MD \[1:0\]; reset 0x03 (power-down).
 pub const CTRL_REG3: u8 = 0x22;
+/// CTRL_REG3: the I2C interface off (bit 7, I2C_DISABLE).
+pub const CTRL3_I2C_DISABLE: u8 = 1 << 7;
 /// OMZ \[3:2\], BLE \[1\].
 pub const CTRL_REG4: u8 = 0x23;
 /// FAST_READ \[7\], BDU \[6\].
@@ -190,6 +192,7 @@ pub struct SpiBus<S> {
 
 impl<S: SpiDevice> RegisterBus for SpiBus<S> {
     type Error = S::Error;
+    const SPI: bool = true;
     fn write_register(&mut self, reg: u8, value: u8) -> Result<(), S::Error> {
         self.spi.write(&[reg & 0x3F, value])
     }
@@ -251,7 +254,8 @@ impl<B: RegisterBus> Lis3mdl<B> {
         let ctrl = [
             CTRL1_TEMP_EN | MODE_ULTRA_HIGH_PERFORMANCE << 5 | (config.odr as u8) << 2,
             (config.scale as u8) << 5,
-            0, // MD = 00: continuous conversion
+            // MD = 00: continuous conversion; on SPI, I2C_DISABLE (bit 7).
+            if B::SPI { CTRL3_I2C_DISABLE } else { 0 },
             MODE_ULTRA_HIGH_PERFORMANCE << 2,
             CTRL5_BDU,
         ];

@@ -20,6 +20,10 @@ pub use crate::register_bus::{Error, RegisterBus};
 pub const WHO_AM_I: u8 = 0x0F;
 /// WHO_AM_I's fixed value.
 pub const WHO_AM_I_VALUE: u8 = 0xB4;
+/// IF_CTRL register.
+pub const IF_CTRL: u8 = 0x0E;
+/// IF_CTRL: I2C and I3C off (bit 6, I2C_I3C_DIS; ST's LPS22DF register header).
+pub const IF_CTRL_I2C_I3C_DIS: u8 = 1 << 6;
 /// ODR \[6:3\], AVG \[2:0\].
 pub const CTRL_REG1: u8 = 0x10;
 /// BOOT \[7\], EN_LPFP \[5\], LFPF_CFG \[4\], BDU \[3\], SWRESET \[2\], ONESHOT \[0\].
@@ -167,6 +171,7 @@ pub struct SpiBus<S> {
 
 impl<S: SpiDevice> RegisterBus for SpiBus<S> {
     type Error = S::Error;
+    const SPI: bool = true;
     fn write_register(&mut self, reg: u8, value: u8) -> Result<(), S::Error> {
         self.spi.write(&[reg & !SPI_READ, value])
     }
@@ -221,6 +226,19 @@ impl<B: RegisterBus> Lps22df<B> {
     /// averaging, checking the control registers read back what was written.
     pub fn init(&mut self, config: Config) -> Result<(), Error<B::Error>> {
         self.probe()?;
+        if B::SPI {
+            self.bus.write_register(IF_CTRL, IF_CTRL_I2C_I3C_DIS)?;
+            let mut back = [0];
+            self.bus.read_registers(IF_CTRL, &mut back)?;
+            if back[0] != IF_CTRL_I2C_I3C_DIS {
+                return Err(Error::ConfigNotApplied {
+                    part: "LPS22DF",
+                    register: IF_CTRL,
+                    wrote: IF_CTRL_I2C_I3C_DIS,
+                    read: back[0],
+                });
+            }
+        }
         let ctrl = [(config.odr as u8) << 3 | config.averaging as u8, CTRL2_BDU, CTRL3_IF_ADD_INC];
         self.bus.write_register(CTRL_REG3, ctrl[2])?;
         self.bus.write_register(CTRL_REG2, ctrl[1])?;

@@ -31,6 +31,10 @@ pub const CTRL1_XL: u8 = 0x10;
 pub const CTRL2_G: u8 = 0x11;
 /// Control 3: BOOT, BDU, H_LACTIVE, PP_OD, SIM, IF_INC, -, SW_RESET.
 pub const CTRL3_C: u8 = 0x12;
+/// CTRL4_C register.
+pub const CTRL4_C: u8 = 0x13;
+/// CTRL4_C: the I2C interface off (ST's LSM6DSO register header: `i2c_disable`, bit 2).
+pub const CTRL4_I2C_DISABLE: u8 = 1 << 2;
 /// Data-ready flags: TDA \[2\], GDA \[1\], XLDA \[0\].
 pub const STATUS_REG: u8 = 0x1E;
 /// First output register (temperature, low byte); gyro from 0x22, accel from 0x28.
@@ -282,6 +286,7 @@ pub const SPI_READ: u8 = 0x80;
 
 impl<S: SpiDevice> RegisterBus for SpiBus<S> {
     type Error = S::Error;
+    const SPI: bool = true;
     fn write_register(&mut self, reg: u8, value: u8) -> Result<(), S::Error> {
         self.spi.write(&[reg & !SPI_READ, value])
     }
@@ -376,14 +381,20 @@ impl<B: RegisterBus> Lsm6dso<B> {
         let ctrl3 = CTRL3_BDU | CTRL3_IF_INC;
         let ctrl1 = (config.accel_odr as u8) << 4 | config.accel_scale.bits() << 2;
         let ctrl2 = (config.gyro_odr as u8) << 4 | config.gyro_scale.bits() << 1;
-        for (reg, value) in [(CTRL3_C, ctrl3), (CTRL1_XL, ctrl1), (CTRL2_G, ctrl2)] {
+        let ctrl4 = if B::SPI { CTRL4_I2C_DISABLE } else { 0 };
+        for (reg, value) in
+            [(CTRL3_C, ctrl3), (CTRL4_C, ctrl4), (CTRL1_XL, ctrl1), (CTRL2_G, ctrl2)]
+        {
             self.bus.write_register(reg, value)?;
         }
-        let mut back = [0; 3];
+        let mut back = [0; 4];
         self.bus.read_registers(CTRL1_XL, &mut back)?;
-        for (reg, wrote, read) in
-            [(CTRL1_XL, ctrl1, back[0]), (CTRL2_G, ctrl2, back[1]), (CTRL3_C, ctrl3, back[2])]
-        {
+        for (reg, wrote, read) in [
+            (CTRL1_XL, ctrl1, back[0]),
+            (CTRL2_G, ctrl2, back[1]),
+            (CTRL3_C, ctrl3, back[2]),
+            (CTRL4_C, ctrl4, back[3]),
+        ] {
             if read != wrote {
                 return Err(Error::ConfigNotApplied {
                     part: "LSM6DSO",

@@ -10,6 +10,11 @@ use core::fmt;
 pub trait RegisterBus {
     /// The bus's error.
     type Error;
+    /// The part is on SPI. Its chip select is high whenever another part on the bus is
+    /// addressed, which to a part with its I2C interface on is I2C mode: it then reads the
+    /// other parts' SCK and MOSI as SCL and SDA, and may take them for a START and its own
+    /// address. ST's parts have a bit that turns I2C off; the drivers set it on SPI.
+    const SPI: bool = false;
     /// Writes `value` to register `reg`.
     fn write_register(&mut self, reg: u8, value: u8) -> Result<(), Self::Error>;
     /// Reads `buf.len()` consecutive registers from `reg`.

@@ -809,7 +809,9 @@ mod tests {
         assert!(b.decode(&[2]).unwrap_err().contains("neither 0 nor 1"));
         let state = MsgType::by_name("WheelState").unwrap();
         assert!(state.decode(&[0; 12]).unwrap_err().contains("12 bytes, WheelState has 13"));
-        assert!(MsgType::by_name("Nope").unwrap_err().contains("known types are Barometer, Battery"));
+        assert!(MsgType::by_name("Nope")
+            .unwrap_err()
+            .contains("known types are Barometer, Battery"));
         assert!(MsgType::by_name("uint32[0]").is_err() && MsgType::by_name("uint32[257]").is_err());
     }
 }

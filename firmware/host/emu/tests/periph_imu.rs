@@ -273,3 +273,41 @@ fn data_ready_flags_clear_on_read_and_outputs_saturate() {
     assert_eq!(rig.dev.borrow().peek(0x10), 0x00);
     assert_eq!(rig.dev.borrow().peek(0x12), 0x04);
 }
+
+/// On SPI the three ST parts of the IMU board get their I2C interface turned off (a part whose
+/// chip select is high while another is addressed is in I2C mode and reads SCK and MOSI as
+/// SCL and SDA); on I2C it stays on.
+#[test]
+fn on_spi_each_st_part_turns_its_i2c_interface_off() {
+    use r2p_drivers::{lis3mdl, lps22df};
+    use r2p_emu::periph::lis3mdl::Lis3mdlModel;
+    use r2p_emu::periph::lps22df::Lps22dfModel;
+    let imu = shared(Lsm6dsoModel::new());
+    let mag = shared(Lis3mdlModel::new());
+    let baro = shared(Lps22dfModel::new());
+    Lsm6dso::new_spi(SimSpi::new(imu.clone())).init(Config::default()).unwrap();
+    lis3mdl::Lis3mdl::new_spi(SimSpi::new(mag.clone())).init(lis3mdl::Config::default()).unwrap();
+    lps22df::Lps22df::new_spi(SimSpi::new(baro.clone())).init(lps22df::Config::default()).unwrap();
+    assert_eq!(imu.borrow().peek(0x13), 0x04, "LSM6DSO CTRL4_C: I2C_disable");
+    assert_eq!(mag.borrow().peek(0x22), 0x80, "LIS3MDL CTRL_REG3: I2C_DISABLE, continuous");
+    assert_eq!(baro.borrow().peek(0x0E), 0x40, "LPS22DF IF_CTRL: I2C_I3C_DIS");
+
+    let (imu, mag, baro) =
+        (shared(Lsm6dsoModel::new()), shared(Lis3mdlModel::new()), shared(Lps22dfModel::new()));
+    let on = |address: u8, device: Shared<dyn RegisterDevice>| {
+        let mut bus = SimI2c::new();
+        bus.attach(address, device);
+        bus
+    };
+    Lsm6dso::new_i2c(on(ADDR, imu.clone()), Address::Sa0Low).init(Config::default()).unwrap();
+    lis3mdl::Lis3mdl::new_i2c(on(0x1E, mag.clone()), lis3mdl::Address::Sa1High)
+        .init(lis3mdl::Config::default())
+        .unwrap();
+    lps22df::Lps22df::new_i2c(on(0x5C, baro.clone()), lps22df::Address::Sa0Low)
+        .init(lps22df::Config::default())
+        .unwrap();
+    assert_eq!(
+        (imu.borrow().peek(0x13), mag.borrow().peek(0x22), baro.borrow().peek(0x0E)),
+        (0, 0, 0)
+    );
+}

@@ -223,9 +223,9 @@ mod tests {
     fn the_driver_configures_the_model_over_spi_and_reads_the_field_in_microtesla() {
         let (dev, mut mag) = spi_rig();
         mag.init(Config::default()).unwrap();
-        // 80 Hz, UHP on x/y/z, temperature on, continuous, BDU.
+        // 80 Hz, UHP on x/y/z, temperature on, continuous, BDU; on SPI, I2C off.
         assert_eq!(dev.borrow().peek(CTRL_REG1), 0x80 | 0x60 | 7 << 2);
-        assert_eq!(dev.borrow().peek(CTRL_REG3), 0);
+        assert_eq!(dev.borrow().peek(CTRL_REG3), r2p_drivers::lis3mdl::CTRL3_I2C_DISABLE);
         assert_eq!(dev.borrow().peek(0x23), 0b1100);
         assert_eq!(mag.read().unwrap(), None, "no sample before the first period");
         dev.borrow_mut().advance_with(13 * MS, input);
