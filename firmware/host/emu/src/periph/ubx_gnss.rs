@@ -1002,24 +1002,24 @@ mod tests {
         let a = answer(&mut m8, &mut uart, &mut t, &ubx_frame(6, ID_CFG_RATE, &[]));
         assert!(contains(&a, &nak(ID_CFG_RATE)));
         // CFG-PRT for UART1 with baud 0, or with no input protocol (the port would go deaf).
-        let prt = |baud: u32, in_mask: u8| {
+        let prt = |baud: u32, in_mask: u8, out_mask: u8| {
             let mut p = [0u8; 20];
             p[0] = 1;
             p[4] = 0xD0;
             p[5] = 0x08;
             p[8..12].copy_from_slice(&baud.to_le_bytes());
             p[12] = in_mask;
-            p[14] = 1;
+            p[14] = out_mask;
             ubx_frame(6, ID_CFG_PRT, &p)
         };
         for (baud, in_mask) in [(0, 3), (38_400, 0), (38_400, 4)] {
-            let a = answer(&mut m8, &mut uart, &mut t, &prt(baud, in_mask));
+            let a = answer(&mut m8, &mut uart, &mut t, &prt(baud, in_mask, 1));
             assert!(contains(&a, &nak(ID_CFG_PRT)), "{baud} {in_mask}");
         }
         assert_eq!((m8.baud(), m8.output()), (Some(9_600), (true, false)));
         assert_eq!(m8.acks_naks(), (0, 5));
         // UBX input only is enough.
-        let a = answer(&mut m8, &mut uart, &mut t, &prt(9_600, 1));
+        let a = answer(&mut m8, &mut uart, &mut t, &prt(9_600, 1, 1));
         assert!(contains(&a, &ubx_frame(CLASS_ACK, 1, &[CLASS_CFG, ID_CFG_PRT])));
         assert_eq!(m8.output(), (false, false), "NMEA output off, no UBX message on");
         // The shortest measurement period, 25 ms, aligned to Galileo time (timeRef 4), is taken.
@@ -1027,6 +1027,11 @@ mod tests {
             answer(&mut m8, &mut uart, &mut t, &ubx_frame(6, ID_CFG_RATE, &[25, 0, 1, 0, 4, 0]));
         assert!(contains(&a, &ubx_frame(CLASS_ACK, 1, &[CLASS_CFG, ID_CFG_RATE])));
         assert_eq!(m8.rate_hz(), 40.0);
+        // NAV-PVT on: sent while UBX is an output protocol, not once CFG-PRT leaves NMEA only.
+        answer(&mut m8, &mut uart, &mut t, &ubx_frame(6, ID_CFG_MSG, &[1, 7, 1]));
+        assert_eq!(m8.output(), (false, true));
+        answer(&mut m8, &mut uart, &mut t, &prt(9_600, 1, 2));
+        assert_eq!(m8.output(), (true, false));
     }
 
     #[test]
