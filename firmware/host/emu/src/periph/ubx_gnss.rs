@@ -415,10 +415,8 @@ impl UbxGnssModel {
                     return;
                 }
             }
-            if self.rx.len() < 6 {
-                return;
-            }
-            let len = usize::from(u16::from_le_bytes([self.rx[4], self.rx[5]]));
+            let Some(&[l0, l1]) = self.rx.get(4..6) else { return };
+            let len = usize::from(u16::from_le_bytes([l0, l1]));
             if len > MAX_RX_PAYLOAD {
                 self.rx.drain(..2);
                 continue;
@@ -963,6 +961,77 @@ mod tests {
         let a = answer(&mut m10, &mut uart, &mut t, &baud);
         assert!(contains(&a, &ack(0x8A)));
         assert_eq!((m10.baud(), uart.device_baud()), (Some(115_200), 115_200));
+    }
+
+    #[test]
+    fn the_receive_side_skips_oversize_lengths_and_takes_the_longest_valset() {
+        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 1, 0);
+        let mut m10 = UbxGnssModel::factory(rx, Generation::M10, NOON, 0);
+        let mut uart = SimUart::new(38_400, 1 << 16);
+        let mut t = 0;
+        let nak = ubx_frame(CLASS_ACK, 0, &[CLASS_CFG, ID_CFG_VALSET]);
+        // A header whose length is over the largest payload, then a frame: the header is
+        // dropped and the frame answered.
+        let mut s = vec![0x00, 0xB5, 0x62, 0x06, 0x8A, 0xFF, 0xFF];
+        s.extend(ubx_frame(6, 0x8A, &[0, 1, 0, 0, 0x01, 0x00, 0x21, 0x30, 100, 0]));
+        let a = answer(&mut m10, &mut uart, &mut t, &s);
+        assert!(contains(&a, &ubx_frame(CLASS_ACK, 1, &[CLASS_CFG, ID_CFG_VALSET])));
+        // The longest CFG-VALSET: 64 eight-byte values, a 772-byte payload (unknown keys: NAK).
+        let mut p = vec![0u8, 1, 0, 0];
+        for _ in 0..64 {
+            p.extend(0x5099_0001u32.to_le_bytes());
+            p.extend([0u8; 8]);
+        }
+        assert_eq!(p.len(), MAX_RX_PAYLOAD);
+        // 780 bytes take 203 ms at 38400 baud: two rounds of answer().
+        let mut a = answer(&mut m10, &mut uart, &mut t, &ubx_frame(6, 0x8A, &p));
+        a.extend(answer(&mut m10, &mut uart, &mut t, &[]));
+        assert!(contains(&a, &nak));
+    }
+
+    #[test]
+    fn m8_refuses_polls_and_ports_it_cannot_set() {
+        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 1, 0);
+        let mut m8 = UbxGnssModel::factory(rx, Generation::M8, NOON, 0);
+        let mut uart = SimUart::new(9_600, 1 << 16);
+        let mut t = 0;
+        let nak = |id| ubx_frame(CLASS_ACK, 0, &[CLASS_CFG, id]);
+        // Polls (CFG-MSG with class and id only, CFG-RATE empty) are not modelled: NAK.
+        let a = answer(&mut m8, &mut uart, &mut t, &ubx_frame(6, ID_CFG_MSG, &[1, 7]));
+        assert!(contains(&a, &nak(ID_CFG_MSG)));
+        let a = answer(&mut m8, &mut uart, &mut t, &ubx_frame(6, ID_CFG_RATE, &[]));
+        assert!(contains(&a, &nak(ID_CFG_RATE)));
+        // CFG-PRT for UART1 with baud 0, or with no input protocol (the port would go deaf).
+        let prt = |baud: u32, in_mask: u8, out_mask: u8| {
+            let mut p = [0u8; 20];
+            p[0] = 1;
+            p[4] = 0xD0;
+            p[5] = 0x08;
+            p[8..12].copy_from_slice(&baud.to_le_bytes());
+            p[12] = in_mask;
+            p[14] = out_mask;
+            ubx_frame(6, ID_CFG_PRT, &p)
+        };
+        for (baud, in_mask) in [(0, 3), (38_400, 0), (38_400, 4)] {
+            let a = answer(&mut m8, &mut uart, &mut t, &prt(baud, in_mask, 1));
+            assert!(contains(&a, &nak(ID_CFG_PRT)), "{baud} {in_mask}");
+        }
+        assert_eq!((m8.baud(), m8.output()), (Some(9_600), (true, false)));
+        assert_eq!(m8.acks_naks(), (0, 5));
+        // UBX input only is enough.
+        let a = answer(&mut m8, &mut uart, &mut t, &prt(9_600, 1, 1));
+        assert!(contains(&a, &ubx_frame(CLASS_ACK, 1, &[CLASS_CFG, ID_CFG_PRT])));
+        assert_eq!(m8.output(), (false, false), "NMEA output off, no UBX message on");
+        // The shortest measurement period, 25 ms, aligned to Galileo time (timeRef 4), is taken.
+        let a =
+            answer(&mut m8, &mut uart, &mut t, &ubx_frame(6, ID_CFG_RATE, &[25, 0, 1, 0, 4, 0]));
+        assert!(contains(&a, &ubx_frame(CLASS_ACK, 1, &[CLASS_CFG, ID_CFG_RATE])));
+        assert_eq!(m8.rate_hz(), 40.0);
+        // NAV-PVT on: sent while UBX is an output protocol, not once CFG-PRT leaves NMEA only.
+        answer(&mut m8, &mut uart, &mut t, &ubx_frame(6, ID_CFG_MSG, &[1, 7, 1]));
+        assert_eq!(m8.output(), (false, true));
+        answer(&mut m8, &mut uart, &mut t, &prt(9_600, 1, 2));
+        assert_eq!(m8.output(), (true, false));
     }
 
     #[test]
