@@ -1,7 +1,7 @@
 //! ST LPS22DF barometer over I2C or 4-wire SPI (issue 21: the IMU module's altitude).
 //!
 //! Register map as ST's LPS22DF driver header (STMicroelectronics/lps22df-pid, lps22df_reg.h)
-//! and ArduPilot's AP_Baro_LPS22DF give it, from the LPS22DF datasheet (DS13940): WHO_AM_I
+//! and ArduPilot's AP_Baro_LPS22DF give it, from the LPS22DF datasheet (DS13316): WHO_AM_I
 //! (0x0F) reads 0xB4; CTRL_REG1 (0x10) holds the data rate ODR \[6:3\] (0 one-shot/power-down,
 //! 1, 4, 10, 25, 50, 75, 100, 200 Hz) and the averaging AVG \[2:0\]; CTRL_REG2 (0x11) BOOT \[7\],
 //! EN_LPFP \[5\], LFPF_CFG \[4\], BDU \[3\], SWRESET \[2\], ONESHOT \[0\]; CTRL_REG3 (0x12)

@@ -15,9 +15,10 @@
 //! altitude is the site's plus the sensor's height.
 //!
 //! **Sensor errors**: a per-device offset (absolute accuracy) drawn once within its bound, and
-//! white Gaussian noise per sample. The LPS22DF's figures used here, ±50 Pa absolute accuracy
-//! and 0.34 Pa RMS noise with its averaging, are NOT VERIFIED against its datasheet (DS13940's
-//! tables were not readable here). Not modelled: temperature drift, the airflow of a moving
+//! white Gaussian noise per sample. The LPS22DF's figures, from its datasheet (DS13316 Rev 3,
+//! Table 2): absolute accuracy ±0.2 hPa (±20 Pa) over 660–1260 hPa and −20…+65 °C (±0.45 hPa
+//! over its whole range), RMS noise 0.0034 hPa (0.34 Pa) with its embedded filter; the ±0.15 hPa
+//! soldering drift is not added (it is part of what a board's offset is). Not modelled: temperature drift, the airflow of a moving
 //! base, weather changing during a run, the board's heat around the port.
 
 use crate::noise::Noise;
@@ -58,9 +59,9 @@ pub struct BaroParams {
 }
 
 impl BaroParams {
-    /// ST LPS22DF (NOT VERIFIED: see the module's doc).
+    /// ST LPS22DF (DS13316 Rev 3, Table 2: see the module's doc).
     pub const LPS22DF: BaroParams =
-        BaroParams { offset_pa: 50.0, noise_pa: 0.34, temperature_c: 30.0 };
+        BaroParams { offset_pa: 20.0, noise_pa: 0.34, temperature_c: 30.0 };
     /// An ideal sensor.
     pub const IDEAL: BaroParams = BaroParams { offset_pa: 0.0, noise_pa: 0.0, temperature_c: 25.0 };
 }
