@@ -11,9 +11,11 @@
 //!
 //! **Vertical speed**: an α-β filter (a steady-state Kalman filter of a constant-velocity
 //! model) on the altitude: predict with the speed, correct by fractions α (altitude) and β/dt
-//! (speed) of the residual. Its error obeys z² + (α + β − 2)z + (1 − α) = 0, critically damped
-//! at β = 2 − α − 2√(1 − α) ≈ α²/4, with the double pole at 1 − α/2: α = 2dt/τ and β = α²/4
-//! give one time constant τ for both, a single parameter to reason about. The LPS22DF's noise (0.34 Pa RMS, ≈ 3 cm; NOT
+//! (speed) of the residual. Its poles are the roots of z² + (α + β − 2)z + (1 − α) = 0, a double
+//! one at 1 − α/2 for β = 2 − α − 2√(1 − α) ≈ α²/4: α = 2dt/τ and β = α²/4 give one time
+//! constant τ, a single parameter to reason about. The filter follows a constant vertical speed
+//! without lag (what the speed state is for); its zero makes it reach an altitude step in about
+//! τ and overshoot it by 13 % before it settles (tested). The LPS22DF's noise (0.34 Pa RMS, ≈ 3 cm; NOT
 //! VERIFIED, see the emulator's model) differentiated at 25 Hz would be metres per second
 //! of noise: the filter is what makes the speed usable.
 
@@ -91,6 +93,26 @@ mod tests {
         assert!((v.speed - 0.5).abs() < 1e-3, "{}", v.speed);
         let h = v.altitude.unwrap();
         assert!((h - 0.5 * 999.0 * dt).abs() < 0.01, "{h}");
+    }
+
+    #[test]
+    fn a_step_is_reached_in_the_time_constant_with_the_filters_overshoot() {
+        // At rest at 0 m, then 1 m: the double pole is at 1 − α/2 (τ), and the filter's zero
+        // (what lets it follow a constant climb without lag) makes the estimate reach the step
+        // in about τ and overshoot it by 13 %, then settle.
+        let (dt, tau) = (0.01, 1.0);
+        let mut v = Vertical::default();
+        v.update(0.0, dt, tau);
+        let mut path = std::vec::Vec::new();
+        for _ in 0..1000 {
+            v.update(1.0, dt, tau);
+            path.push(v.altitude.unwrap());
+        }
+        assert!(path[49] > 0.6 && path[49] < 0.8, "{}", path[49]);
+        assert!((path[99] - 1.0).abs() < 0.01, "{}", path[99]);
+        let peak = path.iter().cloned().fold(0.0, f32::max);
+        assert!((peak - 1.133).abs() < 0.005, "overshoot {peak}");
+        assert!((path[999] - 1.0).abs() < 1e-3);
     }
 
     #[test]

@@ -279,6 +279,7 @@ mod tests {
         let mut l = Link::new(5);
         assert_eq!(l.poll(0), Some(Action::Send { baud: 38_400 }));
         assert_eq!(l.poll(1000), None, "86 bytes at 38 400 baud take 22 ms");
+        assert_eq!(l.poll(27_000), None, "and 5 ms more");
         assert_eq!(l.poll(27_400), Some(Action::Send { baud: 9_600 }));
         assert_eq!(l.poll(100_000), None);
         assert_eq!(l.poll(122_000), Some(Action::Listen { baud: 38_400 }));
@@ -292,6 +293,10 @@ mod tests {
         let p = [0u8; ubx::NAV_PVT_LEN];
         let n = ubx::encode(ubx::CLASS_NAV, ubx::ID_NAV_PVT, &p, &mut frame).unwrap();
         assert!(l.receive(2_500_000, &frame[..n]).is_some());
+        // A frame with a flipped bit is counted and dropped.
+        frame[10] ^= 1;
+        assert!(l.receive(2_600_000, &frame[..n]).is_none());
+        assert_eq!((l.stats().frames, l.stats().checksum_errors), (1, 1));
         assert_eq!(l.poll(5_499_000), None);
         assert_eq!(l.poll(5_500_000), Some(Action::Send { baud: 38_400 }));
     }
