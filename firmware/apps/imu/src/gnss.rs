@@ -261,6 +261,35 @@ mod tests {
     }
 
     #[test]
+    fn the_edge_is_named_by_the_epoch_after_it_and_only_a_recent_one() {
+        // The first epoch after the edge is 12:00:05.4, arriving 430 ms after it: the edge is
+        // 12:00:05 (5.4 − 0.43 = 4.97 rounds to 5), not 12:00:06.
+        let mut g = Gnss::default();
+        g.take_pps(10_000_000);
+        g.take_epoch(10_430_000, &pvt(5, 400_000_000));
+        assert_eq!(g.fix(10_500_000, true).utc_us as i64, NOON_US + 5_500_000);
+        // An epoch 1.6 s after the last edge does not name it (the edge is no longer the top of
+        // the second the epoch is in): UTC from the epoch, not disciplined.
+        let mut g = Gnss::default();
+        g.take_pps(10_000_000);
+        g.take_epoch(11_600_000, &pvt(6, 600_000_000));
+        let f = g.fix(11_700_000, true);
+        assert_eq!((f.pps, f.utc_us as i64), (false, NOON_US + 6_700_000));
+        // Edges missing for 2 s: the next one is not named from the old one; the next epoch
+        // names it.
+        let mut g = Gnss::default();
+        g.take_pps(10_000_000);
+        g.take_epoch(10_040_000, &pvt(5, 0));
+        g.take_pps(13_000_000);
+        assert!(!g.fix(13_100_000, true).pps);
+        g.take_epoch(13_040_000, &pvt(8, 0));
+        assert_eq!(g.fix(13_100_000, true).utc_us as i64, NOON_US + 8_100_000);
+        // An edge a second on is named from the last: no epoch needed.
+        g.take_pps(14_000_002);
+        assert_eq!(g.fix(14_000_002, true).utc_us as i64, NOON_US + 9_000_000);
+    }
+
+    #[test]
     fn without_valid_time_or_a_fix_it_says_so() {
         let mut g = Gnss::default();
         assert_eq!(g.fix(0, false).status, crate::STATUS_NO_DATA);
