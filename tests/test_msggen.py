@@ -159,7 +159,7 @@ def test_types_over_one_frame_are_refused_for_dbc(tmp_path):
     ("x=Obstacle@0x2000", "is node 0x20's management stream (index 0)"),
     ("x=Obstacle@0x0042", "has node 0: node IDs are 1-254"),
     ("x=Obstacle@0xFF01", "has node 255: node IDs are 1-254"),
-    ("x=Pose@0x2001", "no message type 'Pose': known types are Battery"),
+    ("x=Pose@0x2001", "no message type 'Pose': known types are Barometer, Battery"),
     ("x=Obstacle", "write TOPIC=TYPE@MESSAGE_ID[:nrt|:hrt]"),
     ("x-y=Obstacle@0x2001", "topic 'x-y' must be 1-32 characters of A-Za-z0-9_/"),
 ])
