@@ -9,7 +9,7 @@
 
 use r2p_drivers::lis3mdl::{self, Lis3mdl};
 use r2p_drivers::lps22df::{self, Lps22df};
-use r2p_drivers::lsm6dso::{Lsm6dso, RegisterBus};
+use r2p_drivers::lsm6dso::{Lsm6dso, RawSample, RegisterBus};
 use r2p_module::leds;
 
 use crate::app::{Reading, Sample};
@@ -17,32 +17,39 @@ use crate::app::{Reading, Sample};
 /// Reads the data-ready flags and, when the gyro has a new sample, the 14-byte burst of
 /// temperature, gyro and accel. `initialised` is whether [`Lsm6dso::init`] succeeded at boot
 /// (with [`crate::App::sensor_config`]); a bus error on the way marks the step's sample
-/// `sensor_ok = false`.
+/// `sensor_ok = false`. (A board with the LSM6DSO alone; the IMU board's three parts:
+/// [`Sensors`].)
 pub fn poll<B: RegisterBus>(
     imu: &mut Lsm6dso<B>,
     initialised: bool,
     status: leds::Status,
 ) -> Sample {
-    let mut s = Sample { status, ..Sample::default() };
-    if !initialised {
-        return s;
-    }
+    let r = if initialised { read_lsm6dso(imu) } else { Reading::Failed };
+    sample_of(r, status)
+}
+
+/// The LSM6DSO's data-ready flags, then its burst when the gyro has a new sample.
+fn read_lsm6dso<B: RegisterBus>(imu: &mut Lsm6dso<B>) -> Reading<RawSample> {
     match imu.data_ready() {
-        Ok(d) if d.gyro => match imu.read_raw() {
-            Ok(raw) => (s.fresh, s.raw, s.sensor_ok) = (true, raw, true),
-            Err(_) => s.sensor_ok = false,
-        },
-        Ok(_) => s.sensor_ok = true,
-        Err(_) => s.sensor_ok = false,
+        Ok(d) if d.gyro => imu.read_raw().map_or(Reading::Failed, Reading::Fresh),
+        Ok(_) => Reading::Idle,
+        Err(_) => Reading::Failed,
+    }
+}
+
+/// The step's sample with the LSM6DSO's read `r` (the other parts not read yet).
+fn sample_of(r: Reading<RawSample>, status: leds::Status) -> Sample {
+    let mut s = Sample { status, ..Sample::default() };
+    s.sensor_ok = !matches!(r, Reading::Failed);
+    if let Reading::Fresh(raw) = r {
+        (s.fresh, s.raw) = (true, raw);
     }
     s
 }
 
-fn reading<T, E>(initialised: bool, read: impl FnOnce() -> Result<Option<T>, E>) -> Reading<T> {
-    if !initialised {
-        return Reading::Failed;
-    }
-    match read() {
+/// A driver's `Ok(Some)` / `Ok(None)` / `Err` as a [`Reading`].
+fn reading<T, E>(read: Result<Option<T>, E>) -> Reading<T> {
+    match read {
         Ok(Some(s)) => Reading::Fresh(s),
         Ok(None) => Reading::Idle,
         Err(_) => Reading::Failed,
@@ -135,36 +142,21 @@ impl<I: RegisterBus, M: RegisterBus, B: RegisterBus> Sensors<I, M, B> {
         let [si, sm, sb] = &mut self.setup;
         let period = |hz: f32| (1e6 / hz) as u64;
         let lost = crate::app::LOST_AFTER_PERIODS;
-        let mut raw = None;
         let r = si.poll(
             &mut self.imu,
             now_us,
             lost * period(config.gyro_odr.hz()),
             |imu| imu.init(config).is_ok(),
-            |imu| match imu.data_ready() {
-                Ok(d) if d.gyro => match imu.read_raw() {
-                    Ok(x) => {
-                        raw = Some(x);
-                        Reading::Fresh(())
-                    }
-                    Err(_) => Reading::Failed,
-                },
-                Ok(_) => Reading::Idle,
-                Err(_) => Reading::Failed,
-            },
+            read_lsm6dso,
         );
-        let mut s = Sample { status, ..Sample::default() };
-        s.sensor_ok = !matches!(r, Reading::Failed);
-        if let Some(x) = raw {
-            (s.fresh, s.raw) = (true, x);
-        }
+        let mut s = sample_of(r, status);
         let mag = lis3mdl::Config::default();
         s.mag = sm.poll(
             &mut self.mag,
             now_us,
             lost * period(mag.odr.hz()),
             |m| m.init(mag).is_ok(),
-            |m| reading(true, || m.read()),
+            |m| reading(m.read()),
         );
         let baro = lps22df::Config::default();
         s.baro = sb.poll(
@@ -172,7 +164,7 @@ impl<I: RegisterBus, M: RegisterBus, B: RegisterBus> Sensors<I, M, B> {
             now_us,
             lost * period(baro.odr.hz()),
             |b| b.init(baro).is_ok(),
-            |b| reading(true, || b.read()),
+            |b| reading(b.read()),
         );
         s
     }

@@ -47,3 +47,50 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
         writeln!(o, "\ntest result: FAILED. {} passed; 1 failed", PASSED.load(Ordering::Relaxed));
     exit(debug::EXIT_FAILURE)
 }
+
+/// Counting instructions under QEMU's `-icount`, for the benchmark images (`bench`, `fusion`,
+/// `slot-path`): virtual time advances a fixed amount per instruction, so SysTick (driven by
+/// virtual time, counting down from [`icount::RELOAD`]) counts instructions in a fixed ratio,
+/// which [`icount::ten_thousand_nops`] calibrates. The result does not depend on QEMU's clock
+/// settings and repeats to the instruction.
+pub mod icount {
+    use cortex_m::peripheral::syst::SystClkSource;
+    use cortex_m::peripheral::SYST;
+
+    /// SysTick's reload: its whole 24-bit range.
+    pub const RELOAD: u32 = 0x00FF_FFFF;
+
+    /// Starts SysTick on the core clock, counting down from [`RELOAD`].
+    pub fn start(syst: &mut SYST) {
+        syst.set_clock_source(SystClkSource::Core);
+        syst.set_reload(RELOAD);
+        syst.clear_current();
+        syst.enable_counter();
+    }
+
+    /// SysTick's count now.
+    pub fn now() -> u32 {
+        SYST::get_current()
+    }
+
+    /// Ticks `f` takes (less than one SysTick period).
+    pub fn ticks(f: impl FnOnce()) -> u32 {
+        let start = now();
+        f();
+        start.wrapping_sub(now()) & RELOAD
+    }
+
+    /// Exactly 10 000 instructions, for the calibration.
+    #[inline(never)]
+    pub fn ten_thousand_nops() {
+        // SAFETY: only `nop`s.
+        unsafe {
+            core::arch::asm!(
+                ".rept 10000",
+                "nop",
+                ".endr",
+                options(nomem, nostack, preserves_flags)
+            );
+        }
+    }
+}

@@ -10,49 +10,27 @@
 #![no_main]
 
 use core::fmt::Write;
-use cortex_m::peripheral::syst::SystClkSource;
-use cortex_m::peripheral::SYST;
 use cortex_m_semihosting::{debug, hio};
 use r2p_bench::{embassy_round, expected_checksum, r2p_round, SUBSCRIBERS};
-use r2p_qemu_tests as _;
+use r2p_qemu_tests::icount::{self, ten_thousand_nops, ticks};
 
 const MESSAGES: u32 = 2_000;
-const RELOAD: u32 = 0x00FF_FFFF;
-
-fn ticks(syst: &SYST, f: impl FnOnce()) -> u32 {
-    let start = SYST::get_current();
-    f();
-    let end = SYST::get_current();
-    let _ = syst;
-    start.wrapping_sub(end) & RELOAD
-}
-
-#[inline(never)]
-fn ten_thousand_nops() {
-    // SAFETY: only `nop`s.
-    unsafe {
-        core::arch::asm!(".rept 10000", "nop", ".endr", options(nomem, nostack, preserves_flags));
-    }
-}
 
 #[cortex_m_rt::entry]
 fn main() -> ! {
     let mut p = cortex_m::Peripherals::take().unwrap();
-    p.SYST.set_clock_source(SystClkSource::Core);
-    p.SYST.set_reload(RELOAD);
-    p.SYST.clear_current();
-    p.SYST.enable_counter();
+    icount::start(&mut p.SYST);
     let mut out = hio::hstdout().unwrap();
 
     // Ticks per instruction: 10 nop blocks minus the cost of calling an empty block.
-    let nops = ticks(&p.SYST, || (0..10).for_each(|_| ten_thousand_nops()));
+    let nops = ticks(|| (0..10).for_each(|_| ten_thousand_nops()));
     let insn_per_tick = 100_000.0f64 / nops as f64;
     let _ = writeln!(out, "{{\"bench\":\"calibration\",\"ticks_per_100k_insn\":{}}}", nops);
 
     for n in SUBSCRIBERS {
         let mut sums = [0u32; 2];
-        let r = ticks(&p.SYST, || sums[0] = r2p_round(n, MESSAGES));
-        let e = ticks(&p.SYST, || sums[1] = embassy_round(n, MESSAGES));
+        let r = ticks(|| sums[0] = r2p_round(n, MESSAGES));
+        let e = ticks(|| sums[1] = embassy_round(n, MESSAGES));
         if sums != [expected_checksum(n, MESSAGES); 2] {
             let _ = writeln!(out, "bench: wrong checksum with {} subscribers", n);
             debug::exit(debug::EXIT_FAILURE);

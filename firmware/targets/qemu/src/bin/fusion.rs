@@ -12,33 +12,16 @@
 use core::fmt::Write;
 use core::hint::black_box;
 
-use cortex_m::peripheral::syst::SystClkSource;
-use cortex_m::peripheral::SYST;
 use cortex_m_semihosting::{debug, hio};
 use r2p_app_imu::ahrs::{Ahrs, Gains};
 use r2p_app_imu::altitude::{isa_altitude, Vertical};
 use r2p_app_imu::attitude::Attitude;
-use r2p_qemu_tests as _;
+use r2p_qemu_tests::icount::{self, ten_thousand_nops, ticks};
 
 const STEPS: u32 = 1_000;
-const RELOAD: u32 = 0x00FF_FFFF;
 const G: f32 = 9.806_65;
 const GAINS: Gains =
     Gains { tilt_tau_s: 2.0, heading_tau_s: 5.0, bias_tau_s: 100.0, accel_gate: 0.1 };
-
-fn ticks(f: impl FnOnce()) -> u32 {
-    let start = SYST::get_current();
-    f();
-    start.wrapping_sub(SYST::get_current()) & RELOAD
-}
-
-#[inline(never)]
-fn ten_thousand_nops() {
-    // SAFETY: only `nop`s.
-    unsafe {
-        core::arch::asm!(".rept 10000", "nop", ".endr", options(nomem, nostack, preserves_flags));
-    }
-}
 
 /// The i-th sample: a body turning at 0.3 rad/s with a small wobble, gravity a little off z.
 fn sample(i: u32) -> ([f32; 3], [f32; 3], [f32; 3]) {
@@ -53,10 +36,7 @@ fn sample(i: u32) -> ([f32; 3], [f32; 3], [f32; 3]) {
 #[cortex_m_rt::entry]
 fn main() -> ! {
     let mut p = cortex_m::Peripherals::take().unwrap();
-    p.SYST.set_clock_source(SystClkSource::Core);
-    p.SYST.set_reload(RELOAD);
-    p.SYST.clear_current();
-    p.SYST.enable_counter();
+    icount::start(&mut p.SYST);
     let mut out = hio::hstdout().unwrap();
 
     let nops = ticks(|| (0..10).for_each(|_| ten_thousand_nops()));

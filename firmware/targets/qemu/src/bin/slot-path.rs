@@ -20,8 +20,7 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use core::task::Poll;
 
 use cortex_m::interrupt::InterruptNumber;
-use cortex_m::peripheral::syst::SystClkSource;
-use cortex_m::peripheral::{NVIC, SYST};
+use cortex_m::peripheral::NVIC;
 use cortex_m_rt::exception;
 use cortex_m_semihosting::{debug, hio};
 use embassy_executor::InterruptExecutor;
@@ -29,24 +28,11 @@ use embassy_sync::waitqueue::AtomicWaker;
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use r2p_node::testbus::{run_slots, uid, Bus, TestNode};
 use r2p_node::{HrtState, NoParams, NodeConfig, RemotePublisher, RemoteSubscriber};
-use r2p_qemu_tests as _;
+use r2p_qemu_tests::icount::{self, ten_thousand_nops, RELOAD};
 use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxResult};
 use rtcan::{CanController, CycleConfig, Frame, Laxity, Micros};
 
-const RELOAD: u32 = 0x00FF_FFFF;
 const CYCLE: CycleConfig = CycleConfig { bit_rate: 1_000_000, cycle_us: 4_000, slots: 16 };
-
-fn now_ticks() -> u32 {
-    SYST::get_current()
-}
-
-#[inline(never)]
-fn ten_thousand_nops() {
-    // SAFETY: only `nop`s.
-    unsafe {
-        core::arch::asm!(".rept 10000", "nop", ".endr", options(nomem, nostack, preserves_flags));
-    }
-}
 
 /// The executor the node's task runs on, in the "compare" interrupt (IRQ 0 of the lm3s6965).
 static EXECUTOR: InterruptExecutor = InterruptExecutor::new();
@@ -133,7 +119,7 @@ struct Timed<C> {
 impl<C: CanController> CanController for Timed<C> {
     fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
         if frame.id().laxity == Laxity::HRT && frame.id().message.0 >= 0x100 {
-            self.hrt_at.set(Some(now_ticks()));
+            self.hrt_at.set(Some(icount::now()));
         }
         self.inner.try_transmit(frame)
     }
@@ -174,14 +160,11 @@ fn config(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
 #[cortex_m_rt::entry]
 fn main() -> ! {
     let mut p = cortex_m::Peripherals::take().unwrap();
-    p.SYST.set_clock_source(SystClkSource::Core);
-    p.SYST.set_reload(RELOAD);
-    p.SYST.clear_current();
-    p.SYST.enable_counter();
+    icount::start(&mut p.SYST);
     let mut out = hio::hstdout().unwrap();
-    let t0 = now_ticks();
+    let t0 = icount::now();
     (0..10).for_each(|_| ten_thousand_nops());
-    let nops = t0.wrapping_sub(now_ticks()) & RELOAD;
+    let nops = t0.wrapping_sub(icount::now()) & RELOAD;
     let insn_per_tick = 100_000.0f64 / nops as f64;
 
     A_T.advertise(&A_PUB).unwrap();
@@ -212,9 +195,9 @@ fn main() -> ! {
         }
         m.slot_tick(now, &mut bus.port(0));
         let mut can = Timed { inner: bus.port(1), hrt_at: Cell::new(None) };
-        let start = now_ticks();
+        let start = icount::now();
         a.slot_tick(now, &mut can);
-        let stop = now_ticks();
+        let stop = icount::now();
         whole_max = whole_max.max(start.wrapping_sub(stop) & RELOAD);
         if let Some(at) = can.hrt_at.get() {
             let t = start.wrapping_sub(at) & RELOAD;
@@ -237,7 +220,7 @@ fn main() -> ! {
     for _ in 0..400 * u32::from(CYCLE.slots) {
         REQUESTED_AT.store(u32::MAX, Ordering::Relaxed);
         COMPARE.store(true, Ordering::Relaxed);
-        let start = now_ticks();
+        let start = icount::now();
         NVIC::pend(CompareIrq);
         let at = REQUESTED_AT.load(Ordering::Relaxed);
         if at != u32::MAX {
