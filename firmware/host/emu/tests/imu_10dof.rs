@@ -1,8 +1,8 @@
 //! Issue 21 on the Diffbot (robots/diffbot.toml): the IMU module's default firmware with its
 //! three sensors on the emulated board's rig — the magnetometer's heading through turns, after
-//! a calibration, against the gyro's; the barometer's altitude; a sensor unplugged and plugged
-//! back mid-run. A tool node receives `imu`, `imu/mag` and `imu/baro` over the bus, as
-//! `r2p echo` would, and drives the wheels.
+//! the calibration `r2p imu calibrate` fits to the robot's own spin, against the gyro's; the
+//! barometer's altitude; a sensor unplugged and plugged back mid-run. A tool node receives `imu`,
+//! `imu/mag`, `imu/baro` and `imu/gnss` over the bus, as `r2p echo` would, and drives the wheels.
 
 use r2p_emu::robot::{BoardNode, EmuRobot};
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
@@ -15,10 +15,6 @@ use rtcan::CycleConfig;
 const MS: u64 = 1_000_000;
 /// Wheel speed of a turn, rad/s: ±6 rad/s on 50 mm wheels 0.30 m apart is 2 rad/s.
 const WHEEL: f32 = 6.0;
-
-/// The robot's own iron at the module (base frame): a magnet and steel near it.
-const HARD_IRON_UT: [f64; 3] = [18.0, -11.0, 25.0];
-const SOFT_IRON: [[f64; 3]; 3] = [[1.15, 0.06, 0.0], [0.06, 0.88, 0.0], [0.0, 0.0, 1.0]];
 
 fn diffbot_text() -> String {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../robots/diffbot.toml");
@@ -136,28 +132,45 @@ fn wrap(a: f64) -> f64 {
     a - tau * (a / tau).round()
 }
 
-/// The calibration a perfect `r2p imu calibrate` finds for this robot's module (its iron and
-/// the LIS3MDL's own zero-gauss offset, from the world): h and S = (soft iron)⁻¹, as robot-file
-/// parameters, with the site's declination and the magnetometer's heading on.
-fn calibration(r: &EmuRobot) -> String {
-    let w = r.world.borrow();
-    let m = &w.imu_module("imu").unwrap().magnetometer;
-    let off = m.offset_ut();
-    let h: Vec<f64> = (0..3).map(|i| HARD_IRON_UT[i] + off[i]).collect();
-    let s = SOFT_IRON;
-    // The inverse of the symmetric block [[a, b], [b, c]] (z is untouched).
-    let det = s[0][0] * s[1][1] - s[0][1] * s[1][0];
-    let (xx, xy, yy) = (s[1][1] / det, -s[0][1] / det, s[0][0] / det);
+/// What `r2p imu calibrate` writes after the robot spun on the spot (its library path: the
+/// coverage check, planar or full chosen from the samples, the fit, the z terms kept): from the
+/// raw field the module published over `log`, as robot-file parameters with the site's
+/// declination (the user's to set) and the magnetometer's heading on, as the command turns it.
+fn calibration(r: &EmuRobot, log: &Log) -> String {
+    use r2p_magcal::ellipsoid::{fit, Kind};
+    use r2p_magcal::rules::{check, choose, coverage, keep_z, values};
+    let samples: Vec<[f64; 3]> =
+        log.mag.iter().filter(|m| m.1.status == 0).map(|m| m.1.raw.map(f64::from)).collect();
+    let (kind, _, _) = choose(&samples, false, false);
+    assert_eq!(kind, Kind::Planar, "a robot on the floor gives a planar fit");
+    let mut f = fit(&samples, kind).unwrap_or_else(|e| panic!("{e}"));
+    let cov = coverage(&samples, |m| {
+        let c = f.apply(m);
+        [c[0], c[1], 0.0]
+    });
+    check(&f, &cov).unwrap_or_else(|e| panic!("the command would refuse it: {e}"));
+    let mean_z = samples.iter().map(|m| m[2]).sum::<f64>() / samples.len() as f64;
+    keep_z(&mut f, mean_z, 0.0, 0.0, 0.0);
+    let fields: Vec<String> = values(&f).iter().map(|(n, v)| format!("{n} = {v}")).collect();
     format!(
-        "params = {{ mag_heading = 1, declination_deg = {}, mag_offset_x = {}, mag_offset_y = {}, \
-         mag_offset_z = {}, mag_soft_xx = {xx}, mag_soft_xy = {xy}, mag_soft_yy = {yy} }}",
-        w.site().field.declination_deg,
-        h[0],
-        h[1],
-        h[2]
+        "params = {{ mag_heading = 1, declination_deg = {}, {} }}",
+        r.world.borrow().site().field.declination_deg,
+        fields.join(", ")
     )
 }
 
+/// Spinning on the spot for 8 s (two and a half turns) after standing 1 s, as a user does for
+/// `r2p imu calibrate`: the log of what the module published.
+fn spin(r: &mut EmuRobot) -> Log {
+    let t = tool(r);
+    let mut log = Log::default();
+    run(r, &t, 1000, (0.0, 0.0), &mut log);
+    log.mag.clear();
+    run(r, &t, 8000, (-WHEEL, WHEEL), &mut log);
+    log
+}
+
+/// The robot's own iron at the module (base frame): a magnet and steel near it.
 const IRON: &str = "hard_iron_ut = [18.0, -11.0, 25.0]\n\
                     soft_iron = [[1.15, 0.06, 0.0], [0.06, 0.88, 0.0], [0.0, 0.0, 1.0]]";
 
@@ -184,11 +197,14 @@ fn turns(r: &mut EmuRobot) -> (Vec<f64>, Log) {
 
 #[test]
 fn a_calibrated_magnetometer_holds_the_heading_through_turns_where_the_gyro_drifts() {
-    // Calibrated: the module's heading is the world's (REP 103: from east), within 0.5°, after
-    // 18 s of turning (36 rad) — from the first message on, not from 0. (Measured: 0.14°; the
-    // gyro alone 0.98° on average, uncalibrated 68°.)
-    let probe = EmuRobot::build(robot(IRON)).unwrap();
-    let cal = calibration(&probe);
+    // Calibrated by the robot's own spin (the fit `r2p imu calibrate` makes of the distorted
+    // field the module published): the module's heading is the world's (REP 103: from east),
+    // within 0.5°, after 18 s of turning (36 rad) — from the first message on, not from 0.
+    // (Measured: 0.09°; the gyro alone 0.98° on average, uncalibrated 68°.)
+    let mut probe = EmuRobot::build(robot(IRON)).unwrap();
+    let spun = spin(&mut probe);
+    let cal = calibration(&probe, &spun);
+    eprintln!("{cal}");
     drop(probe);
     let mut r = EmuRobot::build(robot(&format!("{IRON}\n{cal}"))).unwrap();
     let (err, log) = turns(&mut r);
@@ -303,7 +319,9 @@ fn the_gnss_receiver_is_configured_from_its_factory_settings_and_gives_position_
     // alone; its first fix comes after its time to first fix (26 s, NOT VERIFIED), then the
     // position is the antenna's within the receiver's noise (σ 1 m horizontal, 2 m vertical)
     // and UTC follows the time pulse to the microsecond.
-    let mut r = EmuRobot::build(robot("")).unwrap();
+    // A site whose geoid is not Milan's 47 m: the receiver's heights above sea level use it.
+    let text = format!("{}\n[site]\ngeoid_separation_m = 52.5\n", diffbot_text());
+    let mut r = EmuRobot::build(Robot::parse(&text, "diffbot-site.toml").unwrap()).unwrap();
     let t = tool(&mut r);
     let mut log = Log::default();
     run(&mut r, &t, 20_000, (0.0, 0.0), &mut log);
@@ -313,6 +331,8 @@ fn the_gnss_receiver_is_configured_from_its_factory_settings_and_gives_position_
     let before: Vec<_> = log.gnss.iter().filter(|g| g.0 < 25_000).collect();
     assert!(before.iter().all(|g| g.1.fix_type == 0), "no fix before the TTFF");
     assert!(before.iter().filter(|g| g.0 > 3_000).all(|g| g.1.status == 0), "configured and heard");
+    // No time pulse before the fix: UTC is the epochs' (once valid), not disciplined.
+    assert!(before.iter().all(|g| !g.1.pps), "no pulse to discipline UTC before the fix");
     let fixed: Vec<_> = log.gnss.iter().filter(|g| g.0 > 28_000).collect();
     assert!(fixed.len() >= 10);
     for (_, f, utc, truth) in &fixed {
@@ -332,8 +352,8 @@ fn the_gnss_receiver_is_configured_from_its_factory_settings_and_gives_position_
         let late = utc - f.utc_us as i64;
         assert!(late % 1000 == 0 && (0..=10_000).contains(&late), "UTC {late} µs behind");
     }
-    // The altitude above sea level is the ellipsoid height less the geoid's (47 m here).
+    // The altitude above sea level is the ellipsoid height less the site's geoid separation.
     let f = fixed.last().unwrap().1;
-    assert!((f.altitude - f.altitude_msl - 47.0).abs() < 0.01);
+    assert!((f.altitude - f.altitude_msl - 52.5).abs() < 0.01, "{f:?}");
     assert!(log.imu.last().unwrap().1.sensors & 0b1000 != 0);
 }

@@ -43,7 +43,7 @@ impl Rig {
     }
 
     fn factory(generation: Generation, seed: u64) -> Self {
-        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, seed, 0);
+        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 47.0, seed, 0);
         Rig::new(UbxGnssModel::factory(rx, generation, NOON, TOW_MS), ubx::OPERATING_BAUD)
     }
 
@@ -256,7 +256,7 @@ fn an_m8_configured_before_a_module_reset_answers_at_38400() {
 
 #[test]
 fn corrupted_bytes_are_counted_and_never_decoded_as_a_wrong_frame() {
-    let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 4, 0);
+    let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 47.0, 4, 0);
     let mut rig = Rig::new(UbxGnssModel::new(rx, 10, NOON, TOW_MS), ubx::OPERATING_BAUD);
     rig.uart.corrupt_rx(0.002, 9, 1);
     rig.run(60_000);

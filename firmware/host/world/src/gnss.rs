@@ -118,6 +118,9 @@ pub struct GnssFix {
     pub v_acc_m: f64,
     /// Satellites used.
     pub satellites: u8,
+    /// The geoid's height above the ellipsoid the receiver takes for the height above mean sea
+    /// level (its geoid model's, here the site's), m.
+    pub geoid_separation_m: f64,
 }
 
 /// A receiver on the base.
@@ -127,6 +130,9 @@ pub struct GnssReceiver {
     pub params: GnssParams,
     /// The world's origin (the robot file's).
     pub origin: Geodetic,
+    /// The geoid's separation there (the robot file's `[site]`), m: the receiver's geoid model
+    /// agrees with the world's.
+    pub geoid_separation_m: f64,
     /// Error state (east, north, up), m.
     error: [f64; 3],
     /// Time of the last solution, s since power-up.
@@ -135,10 +141,23 @@ pub struct GnssReceiver {
 }
 
 impl GnssReceiver {
-    /// A receiver powered up at time 0 around `origin`, its error from stream `stream` of
-    /// `seed`.
-    pub fn new(params: GnssParams, origin: Geodetic, seed: u64, stream: u64) -> Self {
-        Self { params, origin, error: [0.0; 3], last_s: None, noise: Noise::new(seed, stream) }
+    /// A receiver powered up at time 0 around `origin`, where the geoid is
+    /// `geoid_separation_m` above the ellipsoid, its error from stream `stream` of `seed`.
+    pub fn new(
+        params: GnssParams,
+        origin: Geodetic,
+        geoid_separation_m: f64,
+        seed: u64,
+        stream: u64,
+    ) -> Self {
+        Self {
+            params,
+            origin,
+            geoid_separation_m,
+            error: [0.0; 3],
+            last_s: None,
+            noise: Noise::new(seed, stream),
+        }
     }
 
     /// The solution at `t_s` seconds since power-up for the antenna `enu` metres from the
@@ -166,6 +185,7 @@ impl GnssReceiver {
             h_acc_m: if fixed { p.sigma_h_m } else { f64::INFINITY },
             v_acc_m: if fixed { p.sigma_v_m } else { f64::INFINITY },
             satellites: if fixed { p.satellites } else { 0 },
+            geoid_separation_m: self.geoid_separation_m,
         }
     }
 }
@@ -201,7 +221,7 @@ mod tests {
 
     #[test]
     fn no_fix_before_the_ttff_then_a_fix_within_its_accuracy() {
-        let mut r = GnssReceiver::new(GnssParams::UBLOX_M8, MILAN, 7, 0);
+        let mut r = GnssReceiver::new(GnssParams::UBLOX_M8, MILAN, 47.0, 7, 0);
         let early = r.solve(10.0, [5.0, 5.0, 0.0]);
         assert_eq!((early.fix, early.satellites), (FixType::None, 0));
         let mut errs = Vec::new();
@@ -223,7 +243,7 @@ mod tests {
     #[test]
     fn at_ten_hertz_the_error_moves_by_the_shorter_steps_share() {
         // 0.1 s steps: σ·√(1 − e^(−0.2/τ)) = 0.058 m RMS (1 s steps: 0.18 m).
-        let mut r = GnssReceiver::new(GnssParams::UBLOX_M8, MILAN, 11, 0);
+        let mut r = GnssReceiver::new(GnssParams::UBLOX_M8, MILAN, 47.0, 11, 0);
         let east: Vec<f64> = (0..20_000)
             .map(|k| MILAN.enu_to(&r.solve(30.0 + 0.1 * f64::from(k), [0.0; 3]).position)[0])
             .collect();
@@ -236,7 +256,7 @@ mod tests {
     #[test]
     fn the_same_seed_gives_the_same_fixes() {
         let run = |seed| {
-            let mut r = GnssReceiver::new(GnssParams::UBLOX_M8, MILAN, seed, 0);
+            let mut r = GnssReceiver::new(GnssParams::UBLOX_M8, MILAN, 47.0, seed, 0);
             (0..40)
                 .map(|k| r.solve(f64::from(k), [1.0, 2.0, 0.0]).position.lat_deg)
                 .collect::<Vec<_>>()

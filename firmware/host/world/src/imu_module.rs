@@ -150,7 +150,13 @@ impl ImuModule {
                 seed,
                 STREAM_BARO + 2 * i,
             ),
-            gnss: GnssReceiver::new(GnssParams::UBLOX_M8, site.origin(), seed, STREAM_GNSS + i),
+            gnss: GnssReceiver::new(
+                GnssParams::UBLOX_M8,
+                site.origin(),
+                site.geoid_separation_m,
+                seed,
+                STREAM_GNSS + i,
+            ),
             altitude_m: site.altitude_m,
             connected,
         }

@@ -26,18 +26,17 @@
 //! it): the three parts start from their power-up registers, their clocks at the boot instant
 //! (no sample before the firmware configures them), and the receiver from its power-up
 //! settings. The receiver model takes its copy of the world's receiver (`ImuModule::gnss`:
-//! the same device and error stream) and runs through the epochs before the boot without
-//! sending them: `UbxGnssModel` counts its power-up from time 0, so a receiver powered up
-//! later has its fix at once (its time to first fix counts from the world's start: a cold
-//! start needs a power-up time in that model, not modelled yet).
+//! the same device and error stream) and starts cold at the boot (`UbxGnssModel::powered_at`:
+//! no backup supply on the port): its time to first fix counts from then, and its time pulse
+//! starts with its fix.
 //!
 //! **Unplugging** (`World::set_imu_sensor_connected`, or `unplugged = [...]` in the robot
 //! file): an SPI part off its bus reads 0xFF on every byte (MISO floats high) and takes no
 //! writes; plugged again, it restarts from its power-up registers and the firmware must
 //! configure it again. The receiver unplugged sends nothing, hears nothing and its PPS stops;
-//! plugged again, it powers up as at boot (factory settings, or its stored ones) and its next
-//! epoch is on the line (a frame already on the wire when the cable comes off is not cut
-//! short).
+//! plugged again, it powers up as at boot (factory settings, or its stored ones), cold: its
+//! epochs come from the next second, its fix and pulse a time to first fix later (a frame
+//! already on the wire when the cable comes off is not cut short).
 
 use std::collections::VecDeque;
 
@@ -132,23 +131,15 @@ pub struct ImuSensors {
     pps_seen_ns: u64,
 }
 
-/// The receiver of IMU board `name` powered up (at time 0, as `UbxGnssModel` counts) as `link`
-/// says, brought to `now_ns` with what it sent before going nowhere: a line it was not on.
+/// The receiver of IMU board `name` powered up at `now_ns` as `link` says: cold.
 fn power_up_receiver(world: &World, name: &str, link: &GnssLink, now_ns: u64) -> UbxGnssModel {
     let receiver = world.imu_module(name).unwrap_or_else(|e| bug(e)).gnss.clone();
     let (start, tow) = (link.start_unix_s, link.start_tow_ms());
-    let mut gnss = match link.receiver {
+    let gnss = match link.receiver {
         GnssSetup::Factory(generation) => UbxGnssModel::factory(receiver, generation, start, tow),
         GnssSetup::Configured { rate_hz } => UbxGnssModel::new(receiver, rate_hz, start, tow),
     };
-    let a = world.gnss_antenna(name).unwrap_or_else(|e| bug(e));
-    // 100 ms at a time on a line that drains, so that its transmit buffer never fills.
-    let mut nowhere = SimUart::new(link.mcu_baud, 1);
-    for t in (100_000_000..=now_ns).step_by(100_000_000).chain([now_ns]) {
-        gnss.update(t, &mut nowhere, a.enu, a.velocity_enu);
-        nowhere.advance_to(t);
-    }
-    gnss
+    gnss.powered_at(now_ns)
 }
 
 /// A board that asks the world for what its own rig has: a bug of this layer.
@@ -507,8 +498,9 @@ mod tests {
             height_m: o.height_m,
         });
         assert!((fix[0] - 2.0).abs() < 5.0 && (fix[1] + 1.0).abs() < 5.0, "{fix:?}");
-        // An edge at each whole second of the world's time: 1 s … 30 s, µs since boot.
-        let want: Vec<Micros> = (1..=30).map(|s| s * 1_000_000 - 500_000).collect();
+        // An edge at each whole second of the world's time once the receiver, powered up cold
+        // at the boot, has its fix (26 s later): 27 s … 30 s, µs since boot.
+        let want: Vec<Micros> = (27..=30).map(|s| s * 1_000_000 - 500_000).collect();
         assert_eq!(pps, want);
         // Unplugged: the line goes quiet and the pulses stop; plugged again both come back.
         w.set_imu_sensor_connected("imu", ImuSensor::Gnss, false).unwrap();
@@ -525,7 +517,7 @@ mod tests {
             again += nav_pvts(&mut rig, &mut parser).len();
         }
         assert_eq!(again, 5, "5 Hz");
-        assert_eq!(rig.take_pps_us().len(), 1);
+        assert!(rig.take_pps_us().is_empty(), "cold again: no pulse before its fix");
         assert_eq!(rig.gnss_uart().stats().overruns, 0);
     }
 
@@ -533,13 +525,14 @@ mod tests {
     fn pps_edges_not_taken_are_kept_up_to_the_last_eight() {
         let mut w = diffbot("");
         let mut rig = ImuSensors::new(&w, "imu", 0, GnssLink::DEFAULT).unwrap();
-        run_for(&mut w, &mut rig, 3500 * MS);
-        assert_eq!(rig.take_pps_us(), [1_000_000, 2_000_000, 3_000_000]);
+        // The first edge with the fix, 26 s after power-up.
+        run_for(&mut w, &mut rig, 28_500 * MS);
+        assert_eq!(rig.take_pps_us(), [26_000_000, 27_000_000, 28_000_000]);
         assert!(rig.take_pps_us().is_empty(), "taken once");
         // A firmware that looks only every 12 s finds the last eight (a capture register would
         // hold the last one and its overcapture flag).
         run_for(&mut w, &mut rig, 12_000 * MS);
-        let want: Vec<Micros> = (8..=15).map(|s| s * 1_000_000).collect();
+        let want: Vec<Micros> = (33..=40).map(|s| s * 1_000_000).collect();
         assert_eq!(rig.take_pps_us(), want);
     }
 

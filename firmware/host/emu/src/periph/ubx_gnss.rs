@@ -14,7 +14,16 @@
 //!
 //! Timing: an epoch due at t is put on the wire at t (the UART paces its bytes: 100 bytes at
 //! 9600 baud take 104 ms), when [`UbxGnssModel::update`] runs before the line passes t. The
-//! receiver's time pulse (PPS) marks the top of each UTC second ([`UbxGnssModel::pps_at`]).
+//! receiver's time pulse (PPS) marks the top of each UTC second ([`UbxGnssModel::pps_at`])
+//! once the receiver has GNSS time, from its first fix: before it, no pulse (the receivers'
+//! default time pulse has length 0 until locked, CFG-TP-LEN_TP1 = 0 and LEN_LOCK_TP1 = 100 ms:
+//! NOT VERIFIED in the default tables) — a firmware that counted free-running edges as UTC
+//! seconds would be wrong, so the model gives none to count.
+//!
+//! **Power-up** ([`UbxGnssModel::powered_at`]): a receiver powered later than the world's
+//! start (a board booted or a cable plugged then) starts cold: no backup supply on the
+//! module's port, its time to first fix counts from its power-up, and its epochs follow on
+//! the whole periods of UTC after it.
 //!
 //! **Factory settings** ([`UbxGnssModel::factory`]): UART1 at the generation's default rate
 //! ([`Generation::default_baud`]: 9600 on M8, 38400 on M10; NOT VERIFIED in the PDFs' default
@@ -80,10 +89,6 @@ const NS_PER_S: u64 = 1_000_000_000;
 pub const NAV_PVT_LEN: usize = 92;
 /// A whole NAV-PVT frame: sync, class, id, length, payload, checksum.
 pub const NAV_PVT_FRAME_LEN: usize = NAV_PVT_LEN + 8;
-/// The geoid's height above the ellipsoid used for heights above mean sea level, m (the
-/// receiver's own model gives it; this one is a constant).
-const GEOID_SEPARATION_M: f64 = 47.0;
-
 /// A UTC date and time.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Utc {
@@ -179,7 +184,7 @@ pub fn nav_pvt(e: &PvtEpoch) -> [u8; NAV_PVT_FRAME_LEN] {
     put(&mut p, 24, &((e.fix.position.lon_deg * 1e7).round() as i32).to_le_bytes());
     put(&mut p, 28, &((e.fix.position.lat_deg * 1e7).round() as i32).to_le_bytes());
     put(&mut p, 32, &mm(e.fix.position.height_m).to_le_bytes());
-    put(&mut p, 36, &mm(e.fix.position.height_m - GEOID_SEPARATION_M).to_le_bytes());
+    put(&mut p, 36, &mm(e.fix.position.height_m - e.fix.geoid_separation_m).to_le_bytes());
     put(&mut p, 40, &acc(e.fix.h_acc_m).to_le_bytes());
     put(&mut p, 44, &acc(e.fix.v_acc_m).to_le_bytes());
     put(&mut p, 48, &mm(vn).to_le_bytes());
@@ -236,6 +241,8 @@ pub struct UbxGnssModel {
     meas_ms: u32,
     nav_rate: u32,
     next_ns: u64,
+    /// When it was powered up, ns of the world's time (its time to first fix counts from it).
+    powered_ns: u64,
     /// UTC at power-up (t = 0), s since 1970, and the GPS time of week then, ms.
     start_unix_s: u64,
     start_tow_ms: u32,
@@ -288,6 +295,7 @@ impl UbxGnssModel {
             meas_ms: 1000,
             nav_rate: 1,
             next_ns: NS_PER_S,
+            powered_ns: 0,
             start_unix_s,
             start_tow_ms,
             epochs: 0,
@@ -354,9 +362,22 @@ impl UbxGnssModel {
         )
     }
 
-    /// The time pulse's rising edge at or after `t_ns` (the top of each UTC second), ns.
+    /// This receiver powered up at `now_ns` instead of the world's time 0 (UTC still counted
+    /// from the world's start): cold, its first epoch on the next whole period, its first fix
+    /// its time to first fix later.
+    pub fn powered_at(mut self, now_ns: u64) -> Self {
+        let period = u64::from(self.period_ms) * 1_000_000;
+        self.powered_ns = now_ns;
+        self.next_ns = (now_ns / period + 1) * period;
+        self
+    }
+
+    /// The time pulse's rising edge at or after `t_ns`, ns: the top of each UTC second from
+    /// the first the receiver has its time (its first fix, `GnssParams::ttff_s` after its
+    /// power-up).
     pub fn pps_at(&self, t_ns: u64) -> u64 {
-        t_ns.div_ceil(NS_PER_S) * NS_PER_S
+        let locked = self.powered_ns + (self.receiver.params.ttff_s * NS_PER_S as f64) as u64;
+        t_ns.max(locked).div_ceil(NS_PER_S) * NS_PER_S
     }
 
     /// Takes the configuration the MCU sent, then sends the epochs due by `now_ns`, the antenna
@@ -375,7 +396,8 @@ impl UbxGnssModel {
         self.receive(now_ns, uart, &received);
         while self.next_ns <= now_ns {
             let t_ms = self.next_ns / 1_000_000;
-            let fix = self.receiver.solve(self.next_ns as f64 / NS_PER_S as f64, antenna_enu);
+            let since_power_up = (self.next_ns - self.powered_ns) as f64 / NS_PER_S as f64;
+            let fix = self.receiver.solve(since_power_up, antenna_enu);
             let epoch = PvtEpoch {
                 itow_ms: ((u64::from(self.start_tow_ms) + t_ms) % 604_800_000) as u32,
                 utc: Utc::from_unix(self.start_unix_s + t_ms / 1000),
@@ -612,7 +634,8 @@ pub fn nmea(kind: &str, e: &PvtEpoch, ms: u32) -> Vec<String> {
     let speed = ve.hypot(vn);
     let cog = ve.atan2(vn).to_degrees().rem_euclid(360.0);
     let (status, mode) = if fixed { ("A", "A") } else { ("V", "N") };
-    let msl = e.fix.position.height_m - GEOID_SEPARATION_M;
+    let (geoid, msl) =
+        (e.fix.geoid_separation_m, e.fix.position.height_m - e.fix.geoid_separation_m);
     match kind {
         "RMC" => vec![sentence(format!(
             "GNRMC,{time},{status},{lat},{lon},{},{},{date},,,{mode},V",
@@ -626,7 +649,7 @@ pub fn nmea(kind: &str, e: &PvtEpoch, ms: u32) -> Vec<String> {
         })],
         "GGA" => vec![sentence(if fixed {
             format!(
-                "GNGGA,{time},{lat},{lon},1,{:02},0.94,{msl:.1},M,{GEOID_SEPARATION_M:.1},M,,",
+                "GNGGA,{time},{lat},{lon},1,{:02},0.94,{msl:.1},M,{geoid:.1},M,,",
                 e.fix.satellites
             )
         } else {
@@ -680,6 +703,8 @@ mod tests {
     use ublox::{GnssFixType, Parser, UbxPacket};
 
     const ORIGIN: Geodetic = Geodetic { lat_deg: 45.478, lon_deg: 9.227, height_m: 170.0 };
+    /// The geoid's separation at the origin: not Milan's 47 m, so that a constant shows.
+    const GEOID_M: f64 = 48.3;
     /// 2026-11-27 12:00:00 UTC.
     const NOON: u64 = 1_795_780_800;
 
@@ -715,7 +740,7 @@ mod tests {
 
     #[test]
     fn the_ublox_crate_decodes_our_nav_pvt_over_the_uart() {
-        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 5, 0);
+        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, GEOID_M, 5, 0);
         let mut gnss = UbxGnssModel::new(rx, 5, NOON, 475_218_000);
         let mut uart = SimUart::new(115_200, 4096);
         let mut parser = Parser::<_, Proto23>::new(Vec::new());
@@ -768,7 +793,8 @@ mod tests {
         let e = PvtEpoch {
             itow_ms: 1,
             utc: Utc::from_unix(NOON),
-            fix: GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 1, 0).solve(0.0, [0.0; 3]),
+            fix: GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, GEOID_M, 1, 0)
+                .solve(0.0, [0.0; 3]),
             velocity_enu: [0.0; 3],
         };
         let mut f = nav_pvt(&e);
@@ -810,7 +836,7 @@ mod tests {
 
     #[test]
     fn factory_m8_sends_nmea_at_9600_from_the_same_fix_and_no_ubx() {
-        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 7, 0);
+        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, GEOID_M, 7, 0);
         let mut gnss = UbxGnssModel::factory(rx, Generation::M8, NOON, 475_218_000);
         let mut uart = SimUart::new(9_600, 1 << 16);
         let mut bytes = Vec::new();
@@ -837,7 +863,7 @@ mod tests {
         assert!(rmc.ends_with(",0.972,36.87,271126,,,A,V"), "{rmc}"); // 0.5 m/s in knots
         assert_eq!(vtg, "GNVTG,36.87,T,,M,0.972,N,1.800,K,A");
         assert!(gga.starts_with("GNGGA,120039.00,45") && gga.contains(",1,12,0.94,"), "{gga}");
-        assert!(gga.ends_with(",M,47.0,M,,"), "{gga}");
+        assert!(gga.ends_with(",M,48.3,M,,"), "{gga}");
         assert!(gsa.starts_with("GNGSA,A,3,01,08,15,") && gsa.ends_with(",1.20,0.94,0.75,1"));
         assert!(gsv1.starts_with("GPGSV,3,1,12,01,15,000,30,"), "{gsv1}");
         assert!(gsv3.starts_with("GPGSV,3,3,12,") && gsv3.ends_with(",1"), "{gsv3}");
@@ -849,7 +875,7 @@ mod tests {
         let back = ORIGIN.enu_to(&Geodetic { lat_deg: lat, lon_deg: lon, height_m: 170.0 });
         assert!((back[0] - 12.0).abs() < 5.0 && (back[1] + 3.0).abs() < 5.0, "{back:?}");
         let msl: f64 = f[9].parse().unwrap();
-        assert!((msl - (170.5 - 47.0)).abs() < 10.0, "{msl}");
+        assert!((msl - (170.5 - 48.3)).abs() < 10.0, "{msl}");
     }
 
     /// Sends `frame` to a receiver, returns what it answered.
@@ -880,7 +906,7 @@ mod tests {
     fn configuration_is_acked_applied_or_nakked() {
         let ack = |id| ubx_frame(CLASS_ACK, 1, &[CLASS_CFG, id]);
         let nak = |id| ubx_frame(CLASS_ACK, 0, &[CLASS_CFG, id]);
-        let rx = || GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 1, 0);
+        let rx = || GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, GEOID_M, 1, 0);
         let mut t = 0;
         // M8: CFG-RATE 250 ms × 2, CFG-MSG NAV-PVT (8-byte form: UART1 is the second rate),
         // CFG-MSG NMEA off; CFG-RATE under 25 ms, navRate 0 or timeRef 5 refused; VALSET too.
@@ -965,7 +991,7 @@ mod tests {
 
     #[test]
     fn the_receive_side_skips_oversize_lengths_and_takes_the_longest_valset() {
-        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 1, 0);
+        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, GEOID_M, 1, 0);
         let mut m10 = UbxGnssModel::factory(rx, Generation::M10, NOON, 0);
         let mut uart = SimUart::new(38_400, 1 << 16);
         let mut t = 0;
@@ -991,7 +1017,7 @@ mod tests {
 
     #[test]
     fn m8_refuses_polls_and_ports_it_cannot_set() {
-        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 1, 0);
+        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, GEOID_M, 1, 0);
         let mut m8 = UbxGnssModel::factory(rx, Generation::M8, NOON, 0);
         let mut uart = SimUart::new(9_600, 1 << 16);
         let mut t = 0;
@@ -1037,7 +1063,7 @@ mod tests {
     #[test]
     fn a_full_transmit_buffer_drops_messages() {
         // NMEA at 10 Hz at 9600 baud: ~1 KB a tenth of a second, far beyond the line's 960 B/s.
-        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 1, 0);
+        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, GEOID_M, 1, 0);
         let mut m8 = UbxGnssModel::factory(rx, Generation::M8, NOON, 0);
         let mut uart = SimUart::new(9_600, 1 << 20);
         let mut t = 0;
@@ -1052,10 +1078,44 @@ mod tests {
     }
 
     #[test]
-    fn the_time_pulse_marks_each_second() {
-        let gnss =
-            UbxGnssModel::new(GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, 1, 0), 1, NOON, 0);
-        assert_eq!(gnss.pps_at(1), NS_PER_S);
-        assert_eq!(gnss.pps_at(2 * NS_PER_S), 2 * NS_PER_S);
+    fn the_time_pulse_marks_each_second_from_the_first_fix() {
+        // TTFF 26 s from power-up: no edge before 26 s, then one each whole second.
+        let rx = || GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, GEOID_M, 1, 0);
+        let gnss = UbxGnssModel::new(rx(), 1, NOON, 0);
+        assert_eq!(gnss.pps_at(1), 26 * NS_PER_S);
+        assert_eq!(gnss.pps_at(26 * NS_PER_S + 1), 27 * NS_PER_S);
+        assert_eq!(gnss.pps_at(40 * NS_PER_S), 40 * NS_PER_S);
+        // Powered up at 100.3 s: its first edge at 127 s (126.3 s rounded up to a second).
+        let late = UbxGnssModel::new(rx(), 1, NOON, 0).powered_at(100_300_000_000);
+        assert_eq!(late.pps_at(0), 127 * NS_PER_S);
+    }
+
+    #[test]
+    fn a_receiver_powered_later_starts_cold() {
+        // Powered up at 100.3 s at 1 Hz: the first epoch at 101 s, no fix until 126.3 s.
+        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, GEOID_M, 1, 0);
+        let mut gnss = UbxGnssModel::new(rx, 1, NOON, 0).powered_at(100_300_000_000);
+        let mut uart = SimUart::new(115_200, 4096);
+        let mut parser = Parser::<_, Proto23>::new(Vec::new());
+        let mut seen = Vec::new();
+        for ms in (100_300..140_000u64).step_by(10) {
+            let t = ms * 1_000_000;
+            gnss.update(t, &mut uart, [0.0; 3], [0.0; 3]);
+            uart.advance_to(t);
+            let mut buf = [0u8; 256];
+            let n = uart.read(&mut buf).unwrap_or(0);
+            let mut it = parser.consume_ubx(&buf[..n]);
+            while let Some(p) = it.next() {
+                if let Ok(UbxPacket::Proto23(PacketRef::NavPvt(pvt))) = p {
+                    seen.push((pvt.sec(), pvt.fix_type()));
+                }
+            }
+        }
+        // UTC seconds of the world (NOON + t): 101 s after noon is 12:01:41.
+        assert_eq!(seen[0], (41, GnssFixType::NoFix));
+        let first_fix = seen.iter().position(|s| s.1 == GnssFixType::Fix3D).unwrap();
+        // Epochs at 101..=126 s have no fix (126 s is 25.7 s after power-up); 127 s has one.
+        assert_eq!(first_fix, 26, "{seen:?}");
+        assert_eq!(seen.len(), 39);
     }
 }
