@@ -105,6 +105,9 @@ pub struct App<'a> {
     ep: Endpoints<'a>,
     params: &'a dyn ParamStore,
     sensor: SensorConfig,
+    /// The run-time parameters as last read, and when they are read again.
+    cfg: Config,
+    next_config_us: u64,
     bias: BiasEstimator,
     ahrs: Ahrs,
     /// Time of the last fresh sample, µs.
@@ -132,6 +135,10 @@ pub struct App<'a> {
 pub const MAG_PERIOD_US: u64 = 12_500;
 /// The barometer's sample period, µs (the driver's default set-up, 25 Hz).
 pub const BARO_PERIOD_US: u64 = 40_000;
+/// How often the run-time parameters are read again, µs: a value set over the bus takes
+/// effect within this. Reading all of them costs 1 610 instructions (`make bench`): every 1 ms
+/// step that was ≥ 2.2 % of the F103, more than the fusion itself; every 20 ms it is 0.1 %.
+pub const CONFIG_PERIOD_US: u64 = 20_000;
 
 impl<'a> App<'a> {
     /// The application on its endpoints ([`crate::Storage::build`]) and parameter store. The
@@ -142,6 +149,8 @@ impl<'a> App<'a> {
             ep: endpoints,
             params,
             sensor: SensorConfig::read(params),
+            cfg: Config::read(params),
+            next_config_us: 0,
             bias: BiasEstimator::default(),
             ahrs: Ahrs::default(),
             last_fresh_us: None,
@@ -215,7 +224,11 @@ impl<'a> App<'a> {
     /// One step at `now_us`: scale a fresh reading, estimate the bias or integrate the
     /// attitude, publish `imu` when due; returns the LEDs to show.
     pub fn step(&mut self, now_us: u64, sample: &Sample) -> Command {
-        let cfg = Config::read(self.params);
+        if now_us >= self.next_config_us {
+            self.cfg = Config::read(self.params);
+            self.next_config_us = now_us + CONFIG_PERIOD_US;
+        }
+        let cfg = self.cfg;
         let period_us = (1e6 / self.sensor.odr_hz()) as u64;
         self.mag_live.see(now_us, &sample.mag);
         if let Reading::Fresh(m) = sample.mag {

@@ -150,7 +150,8 @@ pub const DOCS: [ParamDoc; COUNT] = [
     boot("Hz", "GNSS receiver's navigation rate and the `gnss` topic's rate"),
 ];
 
-/// The parameters the application runs with, read from the store every step.
+/// The parameters the application runs with, read from the store every
+/// [`crate::app::CONFIG_PERIOD_US`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Config {
     /// Time between two `imu` messages, µs.

@@ -453,3 +453,20 @@ fn the_barometer_gives_the_altitude_under_the_qnh_and_its_topics_their_rates() {
     r.run(200, raw([0.0; 3], UP), true);
     assert!((r.app.baro().altitude - 1080.9).abs() < 0.1, "{}", r.app.baro().altitude);
 }
+
+#[test]
+fn a_parameter_set_while_running_takes_effect_within_the_config_period() {
+    // `imu` at 10 Hz, then at 200 Hz from a PARAM_SET at 500 ms: the first message at the new
+    // rate comes within CONFIG_PERIOD_US (20 ms) plus its own 5 ms period.
+    let mut r = Rig::new(&[(params::RATE_HZ, Value::U32(10)), (params::BIAS_MS, Value::U32(0))]);
+    r.run(500, raw([0.0; 3], UP), true);
+    let before = r.published.len();
+    assert!((4..=6).contains(&before), "{before} messages at 10 Hz in 0.5 s");
+    r.params.set(params::RATE_HZ, Value::U32(200)).unwrap();
+    r.run(100, raw([0.0; 3], UP), true);
+    let after: Vec<u64> = r.published[before..].iter().map(|m| m.0).collect();
+    let within = crate::app::CONFIG_PERIOD_US + 5_000;
+    assert!(after.iter().any(|&t| t > 500_000 && t <= 500_000 + within), "{after:?}");
+    // From then on every 5 ms: 100 ms less the wait gives at least 15.
+    assert!(after.len() >= 15, "{} messages in 100 ms after the change", after.len());
+}

@@ -1,7 +1,9 @@
 //! Cortex-M3 benchmark under QEMU (run by `scripts/bench`, not by the test suite): instructions
 //! per step of the IMU module's estimators (`r2p-app-imu`), in soft float as on the F103:
-//! the quaternion filter with and without a magnetometer sample, the barometric altitude, and
-//! as the baseline the Euler-angle complementary filter the module ran before issue 21.
+//! the quaternion filter with and without a magnetometer sample, the barometric altitude, the
+//! run-time parameters' read (`Config::read`: 27 values from the RAM copy `FlashParams`
+//! serves), and as the baseline the Euler-angle complementary filter the module ran before
+//! issue 21.
 //!
 //! Counted as `bench` counts (SysTick under `-icount`, calibrated on 10 000 `nop`s). Inputs
 //! vary from step to step (a turning, slightly tilted body) so that no branch is always taken
@@ -16,6 +18,8 @@ use cortex_m_semihosting::{debug, hio};
 use r2p_app_imu::ahrs::{Ahrs, Gains};
 use r2p_app_imu::altitude::{isa_altitude, Vertical};
 use r2p_app_imu::attitude::Attitude;
+use r2p_app_imu::params::{Config, DEFAULTS};
+use r2p_node::RamParams;
 use r2p_qemu_tests::icount::{self, ten_thousand_nops, ticks};
 
 const STEPS: u32 = 1_000;
@@ -83,6 +87,14 @@ fn main() -> ! {
         }
     });
     sum += v.altitude.unwrap_or(0.0);
+    // The parameters as the step reads them: FlashParams' `get` is its RamParams'.
+    let store = RamParams::new(DEFAULTS);
+    let config = ticks(|| {
+        for _ in 0..STEPS {
+            let c = Config::read(black_box(&store));
+            sum += black_box(c).qnh_pa;
+        }
+    });
     // The loop overhead alone (the inputs made, nothing estimated).
     let overhead = ticks(|| {
         for i in 0..STEPS {
@@ -98,12 +110,14 @@ fn main() -> ! {
     let _ = writeln!(
         out,
         "{{\"bench\":\"cortex_m3_imu_fusion\",\"euler_filter_insn\":{:.0},\"ahrs_insn\":{:.0},\
-         \"ahrs_mag_insn\":{:.0},\"ahrs_euler_out_insn\":{:.0},\"baro_insn\":{:.0}}}",
+         \"ahrs_mag_insn\":{:.0},\"ahrs_euler_out_insn\":{:.0},\"baro_insn\":{:.0},\
+         \"config_read_insn\":{:.0}}}",
         net(baseline),
         net(gyro_only),
         net(with_mag),
         insn(euler_out),
-        insn(altitude)
+        insn(altitude),
+        insn(config)
     );
     debug::exit(debug::EXIT_SUCCESS);
     loop {
