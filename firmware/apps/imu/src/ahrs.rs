@@ -375,7 +375,7 @@ mod tests {
         let (truth, bias) = (FRAC_PI_2, [0.01, -0.02, 0.015]);
         let mut a = Ahrs::levelled(UP, truth, [0.0; 3]);
         let k = Gains { bias_tau_s: 20.0, ..GAINS };
-        let mut covered = |a: &mut Ahrs, steps| {
+        let covered = |a: &mut Ahrs, steps| {
             for _ in 0..steps {
                 a.update(bias, UP, Some(field(truth, 0.0)), 0.0, 0.01, &k);
             }
