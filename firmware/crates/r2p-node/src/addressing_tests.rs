@@ -3,7 +3,7 @@
 //! answer meant for one module must change nothing on the others, and answers a node did not
 //! ask for are bus traffic, not events of its application.
 
-use r2p_management::message::{BusClass, Message, SubscribeResult, Value};
+use r2p_management::message::{BusClass, Message, ModuleState, SubscribeResult, Value};
 use r2p_management::NodeId;
 use r2p_middleware::{pool_size, Class, Publisher, Topic};
 use rtcan::controller::CanController;
@@ -196,4 +196,65 @@ fn a_node_that_never_asked_leaves_the_replies_to_the_tools() {
     run(&bus, &mut [&mut module], 60_000);
     assert_eq!(events(&mut module), [Event::ParamValue { from: other, index: 0, value }]);
     assert_eq!(module.stats().malformed, 0);
+}
+
+#[test]
+fn frames_queued_under_a_node_id_the_module_gave_up_are_dropped_and_counted() {
+    static T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("speed", 0);
+    static P: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
+    static OUT: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&P);
+    T.subscribe(&OUT).unwrap();
+    // Port 0: the module, cut off for 35 ms (its controller refuses every frame, so its
+    // heartbeats and advertisement wait in its queue); port 1 listens.
+    let bus = Bus::<2>::new();
+    let mine = uid(0x0700);
+    let mut module = TestNode::new(config(0x0700, "motor"), &NoParams).unwrap();
+    module.export(&OUT).unwrap();
+    bus.unplug(0, true);
+    run(&bus, &mut [&mut module], 35_000);
+    let held = module.tx_pending();
+    assert!(held >= 4, "heartbeats and the advertisement wait: {held}");
+    let contested = module.node_id();
+
+    // A module with a smaller unique ID claims the same node ID; the cable is back.
+    let other = uid(0x0001);
+    let state = ModuleState::Running;
+    let name = heapless::String::try_from("motor").unwrap();
+    let hb = Message::Heartbeat {
+        uid: other,
+        name,
+        state,
+        uptime_s: 9,
+        tx_errors: 0,
+        rx_errors: 0,
+        dropped: 0,
+    };
+    inject(&bus, contested.get(), &hb);
+    bus.unplug(0, false);
+    run(&bus, &mut [&mut module], 60_000);
+    assert_ne!(module.node_id(), contested, "the smaller unique ID keeps it");
+    assert!(events(&mut module).contains(&Event::NodeIdChanged(module.node_id())));
+    assert_eq!(module.stats().dropped_on_move, held as u32);
+
+    // Nothing of this module went out on the streams of the node ID it gave up; its heartbeat
+    // and advertisement did on the new ones.
+    let mut r: Reassembler<4, 64> = Reassembler::new(1_000_000);
+    let mut port = bus.port(1);
+    let (mut on_contested, mut on_new) = (0, 0);
+    while let Some(rx) = port.try_receive() {
+        let Some(m) = r.accept(&rx.frame, rx.at, Expect::Any) else { continue };
+        let Some((from, _)) = NodeId::of(rx.frame.id().message) else { continue };
+        match Message::decode(m.data) {
+            Ok(Message::Heartbeat { uid, .. }) if from == contested => assert_eq!(uid, other),
+            Ok(_) if from == contested => on_contested += 1,
+            Ok(Message::Heartbeat { uid, .. }) if from == module.node_id() => {
+                assert_eq!(uid, mine);
+                on_new += 1;
+            }
+            Ok(Message::Advertise { .. }) if from == module.node_id() => on_new += 1,
+            _ => {}
+        }
+    }
+    assert_eq!(on_contested, 0, "nothing but the other module's heartbeat on {contested:?}");
+    assert!(on_new >= 2, "heartbeat and advertisement on the new node ID: {on_new}");
 }

@@ -287,6 +287,24 @@ impl<const N: usize> TxQueue<N> {
         removed
     }
 
+    /// Removes every queued frame whose message ID `drop` selects, whatever its deadline (a
+    /// node that moved to another node ID drops what it queued under the old one: those
+    /// message IDs are another node's now); returns the number of frames removed.
+    pub fn remove_messages(&mut self, mut drop: impl FnMut(MessageId) -> bool) -> usize {
+        let mut removed = 0;
+        let (mut prev, mut cur) = (NIL, self.head);
+        while let Some(e) = self.entries.get(usize::from(cur)).copied() {
+            if drop(e.frame.id().message) {
+                self.unlink(prev, cur);
+                removed += 1;
+            } else {
+                prev = cur;
+            }
+            cur = e.next;
+        }
+        removed
+    }
+
     fn take_group(&mut self) -> u32 {
         let g = self.next_group;
         self.next_group = g.wrapping_add(1);
@@ -431,6 +449,29 @@ pub(crate) mod tests {
             assert_eq!(drain(&mut q, 0, &mut out), 4);
             assert_eq!(&out[..4], &[(0x102, 2), (0x104, 4), (0x103, 3), (0x101, 1)]);
             assert!(q.is_empty());
+        }
+
+        fn removing_a_nodes_messages_keeps_the_rest_in_order_and_frees_their_entries() {
+            // Node 0x12's frames (two single frames and a three-fragment message) between node
+            // 0x34's, SRT and NRT: removed wherever they are, the others left in their order.
+            let mut q: TxQueue<8> = TxQueue::new(LIN);
+            q.push_frame(one(0x1201, 1), srt(1_000)).unwrap();
+            q.push_frame(one(0x3401, 2), srt(2_000)).unwrap();
+            q.push_message(MessageId(0x1200), &[7; 20], Urgency::Nrt).unwrap();
+            q.push_frame(one(0x3400, 3), Urgency::Nrt).unwrap();
+            q.push_frame(one(0x1202, 4), srt(500)).unwrap();
+            assert_eq!(q.len(), 7);
+            let removed = q.remove_messages(|m| m.0 >> 8 == 0x12);
+            assert_eq!((removed, q.len(), q.free()), (5, 2, 6));
+            let mut out = [(0, 0); 8];
+            assert_eq!(drain(&mut q, 0, &mut out), 2);
+            assert_eq!(&out[..2], &[(0x3401, 2), (0x3400, 3)]);
+            // The freed entries are reused: the queue holds eight again.
+            for k in 0..8 {
+                q.push_frame(one(0x5600 + k, k as u8), Urgency::Nrt).unwrap();
+            }
+            assert_eq!(q.remove_messages(|_| false), 0);
+            assert_eq!(q.len(), 8);
         }
 
         fn equal_deadlines_keep_push_order() {

@@ -207,6 +207,13 @@ impl<
                     return; // our own heartbeat echoed back
                 }
                 if let Some(new) = self.ids.on_heartbeat(from, &uid) {
+                    // What was queued under the old node ID would go out on streams that are
+                    // the other module's now: dropped and counted (advertisements and the
+                    // heartbeat are sent again on the new streams; data at its next publish).
+                    let moved = |m| NodeId::of(m).is_some_and(|(node, _)| node == me);
+                    let n = self.tx.remove_messages(moved);
+                    self.stats.dropped_on_move =
+                        self.stats.dropped_on_move.saturating_add(n as u32);
                     self.readvertise();
                     self.re_register(); // the streams' message IDs changed
                     self.next_heartbeat = now; // claim the new ID at once

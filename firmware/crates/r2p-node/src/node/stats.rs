@@ -56,6 +56,9 @@ pub struct NodeStats {
     pub tx_overflow: u32,
     /// Frames handed to the controller.
     pub frames_sent: u32,
+    /// Frames queued under a node ID the node then had to give up (a conflict moved it):
+    /// dropped, never sent on the streams of the module that keeps that ID.
+    pub dropped_on_move: u32,
     /// Events dropped because the application did not take them.
     pub events_lost: u32,
 }
