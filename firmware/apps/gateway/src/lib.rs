@@ -46,5 +46,5 @@ pub const NAME: &str = "gateway";
 /// The node configuration: the standby sync master (rank 1, after the PSU's 0), with the slot
 /// lead of the MCU it runs on (the F407's: `r2p_node::CORTEX_M4_SLOT_PATH.lead_us(SYSCLK_HZ)`).
 pub fn node_config(uid: [u8; 12], slot_lead_us: u32) -> NodeConfig {
-    NodeConfig { rank: Some(1), slot_lead_us, ..NodeConfig::new(uid, NAME) }
+    NodeConfig { rank: Some(1), slot_lead_us, ..NodeConfig::module(uid, NAME) }
 }

@@ -48,6 +48,6 @@ use r2p_node::{NodeConfig, ParamStore};
 pub fn node_config(uid: [u8; 12], params: &dyn ParamStore) -> NodeConfig {
     NodeConfig {
         slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
-        ..NodeConfig::new(uid, names(params).node)
+        ..NodeConfig::module(uid, names(params).node)
     }
 }

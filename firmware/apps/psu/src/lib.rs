@@ -42,6 +42,6 @@ pub fn node_config(uid: [u8; 12], params: &dyn ParamStore) -> NodeConfig {
     NodeConfig {
         rank: Some(0),
         slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
-        ..NodeConfig::new(uid, names(params).node)
+        ..NodeConfig::module(uid, names(params).node)
     }
 }

@@ -3,7 +3,7 @@
 //! moves once, straight to an ID nobody was heard using.
 
 use r2p_management::message::UID_LEN;
-use r2p_management::node_id::{fnv1a, initial_node_id, NodeIdAllocator};
+use r2p_management::node_id::{fnv1a, initial_node_id, NodeIdAllocator, TOOL_UID_PREFIX};
 use r2p_management::NodeId;
 
 fn uid(n: u32) -> [u8; UID_LEN] {
@@ -47,18 +47,22 @@ fn the_loser_of_a_conflict_skips_every_id_heard_in_use() {
     let (mut a, start) = module_1000();
     assert_eq!(start, id(11));
     for (n, other) in [(12u8, 77u32), (13, 78), (15, 79)] {
-        assert_eq!(a.on_heartbeat(id(n), &uid(other)), None, "no conflict on {n}");
+        assert_eq!(a.on_heartbeat(id(n), &uid(other), false, false), None, "no conflict on {n}");
     }
     assert_eq!(a.moves(), 0);
-    assert_eq!(a.on_heartbeat(id(11), &uid(0)), Some(id(14)), "first ID not heard in use");
+    assert_eq!(
+        a.on_heartbeat(id(11), &uid(0), false, false),
+        Some(id(14)),
+        "first ID not heard in use"
+    );
     assert_eq!((a.node_id(), a.moves()), (id(14), 1));
     // The winner of a conflict stays and does not count a move.
     let mut w = NodeIdAllocator::new(uid(0));
     let at = w.node_id();
-    assert_eq!(w.on_heartbeat(at, &uid(5)), None);
+    assert_eq!(w.on_heartbeat(at, &uid(5), false, false), None);
     assert_eq!((w.node_id(), w.moves()), (at, 0));
     // A second conflict: a second move.
-    assert_eq!(a.on_heartbeat(id(14), &uid(1)), Some(id(16)));
+    assert_eq!(a.on_heartbeat(id(14), &uid(1), false, false), Some(id(16)));
     assert_eq!(a.moves(), 2);
 }
 
@@ -67,11 +71,11 @@ fn moving_past_the_highest_id_wraps_to_the_lowest() {
     // Find a unique ID whose first choice is 253; 254 and 1 are in use: it moves to 2.
     let n = (0u32..).find(|&n| initial_node_id(&uid(n)) == id(253)).unwrap();
     let mut a = NodeIdAllocator::new(uid(n));
-    a.on_heartbeat(id(NodeId::MAX), &uid(n + 1));
-    a.on_heartbeat(id(NodeId::MIN), &uid(n + 2));
+    a.on_heartbeat(id(NodeId::MAX), &uid(n + 1), false, false);
+    a.on_heartbeat(id(NodeId::MIN), &uid(n + 2), false, false);
     let smaller = uid(0);
     assert!(smaller < uid(n));
-    assert_eq!(a.on_heartbeat(id(253), &smaller), Some(id(2)));
+    assert_eq!(a.on_heartbeat(id(253), &smaller, false, false), Some(id(2)));
 }
 
 #[test]
@@ -81,10 +85,10 @@ fn with_one_id_left_the_loser_finds_it_wherever_it_is() {
     let (mut a, start) = module_1000();
     for n in NodeId::MIN..=NodeId::MAX {
         if n != 10 && n != start.get() {
-            a.on_heartbeat(id(n), &uid(100_000 + u32::from(n)));
+            a.on_heartbeat(id(n), &uid(100_000 + u32::from(n)), false, false);
         }
     }
-    assert_eq!(a.on_heartbeat(start, &uid(0)), Some(id(10)));
+    assert_eq!(a.on_heartbeat(start, &uid(0), false, false), Some(id(10)));
 }
 
 #[test]
@@ -94,9 +98,52 @@ fn with_no_id_left_the_loser_stays_where_it_is() {
     let (mut a, start) = module_1000();
     for n in NodeId::MIN..=NodeId::MAX {
         if n != start.get() {
-            a.on_heartbeat(id(n), &uid(100_000 + u32::from(n)));
+            a.on_heartbeat(id(n), &uid(100_000 + u32::from(n)), false, false);
         }
     }
-    assert_eq!(a.on_heartbeat(start, &uid(0)), Some(start));
+    assert_eq!(a.on_heartbeat(start, &uid(0), false, false), Some(start));
     assert_eq!(a.moves(), 1);
+}
+
+#[test]
+fn a_running_module_keeps_its_id_against_a_starting_one_whatever_their_unique_ids() {
+    // uid(1000) runs on 11; uid(0) (smaller), plugged in later, claims 11 while starting.
+    let (mut running, at) = module_1000();
+    assert_eq!(running.on_heartbeat(at, &uid(0), true, false), None, "the running one keeps it");
+    let mut newcomer = NodeIdAllocator::new(uid(0));
+    let mine = newcomer.node_id();
+    assert_eq!(newcomer.on_heartbeat(mine, &uid(1000), false, true), Some(id(mine.get() + 1)));
+    // Both starting (a power-up), or both running: the smaller unique ID keeps it, as before.
+    for (starting, me_starting) in [(true, true), (false, false)] {
+        let (mut a, at) = module_1000();
+        assert_eq!(a.on_heartbeat(at, &uid(0), starting, me_starting), Some(id(12)));
+        let (mut b, at) = module_1000();
+        assert_eq!(b.on_heartbeat(at, &uid(5000), starting, me_starting), None);
+    }
+}
+
+#[test]
+fn a_tool_yields_to_a_module_even_one_that_is_starting() {
+    let mut tool_uid = uid(1);
+    tool_uid[..2].copy_from_slice(&TOOL_UID_PREFIX);
+    // A module rebooting (starting) onto the node ID a running tool holds: the tool moves.
+    let mut tool = NodeIdAllocator::new(tool_uid);
+    let at = tool.node_id();
+    assert!(tool.on_heartbeat(at, &uid(1000), true, false).is_some(), "the tool moves");
+    let (mut module, at) = module_1000();
+    assert_eq!(module.on_heartbeat(at, &tool_uid, false, true), None, "the module keeps it");
+}
+
+#[test]
+fn a_claim_after_listening_skips_the_ids_heard_in_use() {
+    let (mut a, start) = module_1000();
+    assert_eq!(a.claim(), None, "nothing heard: the first ID");
+    for (n, other) in [(11u8, 77u32), (12, 78), (14, 79)] {
+        a.heard(id(n), &uid(other));
+    }
+    a.heard(id(13), &uid(1000)); // its own heartbeat echoed: not a use
+    assert_eq!(a.node_id(), start, "listening moves nothing");
+    assert_eq!(a.claim(), Some(id(13)));
+    assert_eq!((a.node_id(), a.moves()), (id(13), 0), "a claim is not a conflict's move");
+    assert_eq!(a.claim(), None);
 }

@@ -205,6 +205,59 @@ fn same_name_modules_get_unique_ids_and_subscriptions_follow_a_move() {
     assert_eq!(*C_SUB.try_recv().unwrap(), 42);
 }
 
+/// Two unique IDs whose first node ID is the same: the smaller, the larger.
+fn contending_uids() -> ([u8; 12], [u8; 12]) {
+    let n = (2..).find(|&n| initial_node_id(&uid(n)) == initial_node_id(&uid(1))).unwrap();
+    (uid(1), uid(n))
+}
+
+/// `config` as a module's: it listens one heartbeat period before it claims its node ID.
+fn module(u: [u8; 12], name: &'static str) -> NodeConfig {
+    NodeConfig { listen_first: true, ..config(u, name) }
+}
+
+#[test]
+fn a_module_plugged_into_a_running_robot_never_moves_a_running_one() {
+    // The running module has the larger unique ID: by unique IDs alone it would lose the
+    // contested node ID to the newcomer.
+    let (small, large) = contending_uids();
+    for newcomer_listens in [true, false] {
+        let mut bus = VecBus::new(2);
+        let mut running = HostNode::new(module(large, "motor"), &NoParams).unwrap();
+        let plugged =
+            if newcomer_listens { module(small, "motor") } else { config(small, "motor") };
+        let mut newcomer = HostNode::new(plugged, &NoParams).unwrap();
+        bus.run(&mut [&mut running, &mut newcomer], 1, 500_000);
+        let contested = running.node_id();
+        assert_eq!(contested, initial_node_id(&large));
+        let _ = core::iter::from_fn(|| running.next_event()).count();
+        bus.run(&mut [&mut running, &mut newcomer], 2, 800_000);
+        // Listening, the newcomer hears the ID in use and claims another; not listening (a
+        // heartbeat missed), it claims the contested ID while `Starting` and loses it.
+        assert_eq!(running.node_id(), contested, "listening: {newcomer_listens}");
+        assert_ne!(newcomer.node_id(), contested);
+        assert!(core::iter::from_fn(|| running.next_event())
+            .all(|e| !matches!(e, Event::NodeIdChanged(_))));
+    }
+}
+
+#[test]
+fn modules_powered_up_together_listen_in_silence_and_end_unique() {
+    // Both listen for a heartbeat period, hear nobody, and claim: the first claim's heartbeat
+    // reaches the other while it still listens (here they end listening in the same
+    // millisecond, polled in order), so it takes the next free ID without any conflict.
+    let (small, large) = contending_uids();
+    let mut bus = VecBus::new(2);
+    let mut a = HostNode::new(module(large, "motor"), &NoParams).unwrap();
+    let mut b = HostNode::new(module(small, "motor"), &NoParams).unwrap();
+    bus.run(&mut [&mut a, &mut b], 2, 10_000);
+    assert_eq!(bus.wires.borrow().frames, 0, "silent while listening");
+    bus.run(&mut [&mut a, &mut b], 2, 200_000);
+    assert_eq!(a.node_id(), initial_node_id(&large), "the first to claim keeps its ID");
+    assert_ne!(a.node_id(), b.node_id());
+    assert_eq!(b.stats().dropped_on_move, 0, "no conflict to settle");
+}
+
 #[test]
 fn a_late_joiner_learns_the_topics_advertised_before_it_arrived() {
     static T: Topic<'static, u16, { pool_size(&[2], 1) }, 1> = Topic::new("battery/voltage", 0);

@@ -100,6 +100,9 @@ pub struct Node<
     boot: Option<Micros>,
     next_heartbeat: Micros,
     heartbeats: u32,
+    /// Whether the node ID is claimed: until then the node listens, silent
+    /// ([`NodeConfig::listen_first`]).
+    claimed: bool,
     state: ModuleState,
     errors: ErrorCounters,
     /// Nodes heard from.
@@ -174,6 +177,7 @@ impl<
             boot: None,
             next_heartbeat: 0,
             heartbeats: 0,
+            claimed: !config.listen_first,
             state: ModuleState::Running,
             errors: ErrorCounters::default(),
             peers: NodeSet::default(),
@@ -310,6 +314,15 @@ impl<
     pub fn tick(&mut self, now: Micros) {
         let boot = self.start(now);
         self.rx.expire(now);
+        if !self.claimed {
+            if now < boot.saturating_add(Micros::from(self.config.heartbeat_period_us)) {
+                return; // listening: nothing is sent before the node ID is claimed
+            }
+            // The claim: the first node ID this node uses, so no `NodeIdChanged` (what
+            // `node_id` said before it was only the candidate).
+            self.claimed = true;
+            self.ids.claim();
+        }
 
         if now >= self.next_heartbeat {
             let state = if self.heartbeats < STARTING_HEARTBEATS {

@@ -43,10 +43,7 @@ pub const NODE_NAME: &str = "r2p-cli";
 /// Messages an import keeps for the CLI (and the queue length it asks publishers for).
 pub const QUEUE: usize = 64;
 
-/// The first bytes of every tool's unique ID. A node-ID conflict is won by the smaller unique
-/// ID, and no MCU's starts with `FF FF` (an STM32's begins with its die's X coordinate on the
-/// wafer, little-endian), so a tool always yields a node ID to a module.
-pub const TOOL_UID_PREFIX: [u8; 2] = [0xFF, 0xFF];
+pub use r2p_management::node_id::TOOL_UID_PREFIX;
 
 /// A unique ID for this run: [`TOOL_UID_PREFIX`], `r2`, the process ID and the clock's
 /// nanoseconds, so that two tools started together claim different node IDs.
@@ -576,15 +573,21 @@ pub(crate) mod tests {
     fn a_tool_yields_a_contested_node_id_to_any_module() {
         use r2p_management::node_id::NodeIdAllocator;
         // The largest unique ID an MCU could have (its first bytes are not FF FF), against
-        // this run's tool ID: both claim one node ID at once, and the module keeps it.
+        // this run's tool ID: both claim one node ID at once, and the module keeps it, even
+        // while it is starting and the tool is running (a module rebooting under a tool).
         let module_uid = [0xFF, 0xFE, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF];
         let tool = run_uid();
-        let mut module = NodeIdAllocator::new(module_uid);
-        let mut t = NodeIdAllocator::new(tool);
-        assert_eq!(module.on_heartbeat(module.node_id(), &tool), None, "the module stays");
-        let before = t.node_id();
-        assert!(t.on_heartbeat(before, &module_uid).is_some(), "the tool moves");
-        assert_ne!(t.node_id(), before);
+        for (module_starting, tool_starting) in [(false, false), (true, false), (true, true)] {
+            let mut module = NodeIdAllocator::new(module_uid);
+            let mut t = NodeIdAllocator::new(tool);
+            let at = module.node_id();
+            let kept = module.on_heartbeat(at, &tool, tool_starting, module_starting);
+            assert_eq!(kept, None, "the module stays");
+            let before = t.node_id();
+            let moved = t.on_heartbeat(before, &module_uid, module_starting, tool_starting);
+            assert!(moved.is_some(), "the tool moves");
+            assert_ne!(t.node_id(), before);
+        }
     }
 
     #[test]

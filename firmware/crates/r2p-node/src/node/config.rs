@@ -43,6 +43,12 @@ pub struct NodeConfig {
     /// that late (a worst-case frame, 160 µs, plus a 29 µs path would not fit a 166 µs slot).
     /// 0 on the host; [`MODULE_SLOT_LEAD_US`] on the modules.
     pub slot_lead_us: u32,
+    /// Whether the node listens for one heartbeat period after boot, silent, before it claims
+    /// a node ID: the IDs it hears in use are skipped, so a module plugged into a running robot
+    /// takes a free one (docs/middleware.md, "Claiming a node ID"). On for modules
+    /// ([`NodeConfig::module`]); off in [`NodeConfig::new`] (tests that start on a quiet bus,
+    /// tools that listen before they start their node).
+    pub listen_first: bool,
 }
 
 /// The slot path's length in instructions, from the slot timer's compare interrupt to the HRT
@@ -89,7 +95,7 @@ impl NodeConfig {
     /// Defaults: heartbeat every 100 ms, subscription retried after 300 ms, reassembly timeout
     /// 20 ms, logarithmic laxity with 100 µs ticks, the default cycle (10 ms, 60 slots), no
     /// rank, 30 HRT slots (in runs of two: slots 1, 2, 4, 5, …, 44), free slots merged into
-    /// windows.
+    /// windows, the node ID claimed at once.
     pub const fn new(uid: [u8; UID_LEN], name: &'static str) -> Self {
         Self {
             uid,
@@ -103,7 +109,15 @@ impl NodeConfig {
             hrt_slots: 30,
             free_slots: FreeSlots::Merged,
             slot_lead_us: 0,
+            listen_first: false,
         }
+    }
+
+    /// [`NodeConfig::new`] for a module: it listens for one heartbeat period before it claims
+    /// its node ID ([`NodeConfig::listen_first`]), as every module image and emulated module
+    /// board does.
+    pub const fn module(uid: [u8; UID_LEN], name: &'static str) -> Self {
+        Self { listen_first: true, ..Self::new(uid, name) }
     }
 }
 

@@ -201,12 +201,24 @@ impl<
     pub(super) fn on_management(&mut self, from: NodeId, msg: Message, now: Micros) {
         let me = self.ids.node_id();
         let for_me = |target: u8| target == me.get();
+        if !self.claimed {
+            // Listening before the claim: only which node IDs are in use matters (everyone
+            // re-advertises when this node's first heartbeat says `Starting`).
+            if let Message::Heartbeat { uid, .. } = msg {
+                self.ids.heard(from, &uid);
+            }
+            return;
+        }
         match msg {
             Message::Heartbeat { uid, state, .. } => {
                 if uid == self.config.uid {
                     return; // our own heartbeat echoed back
                 }
-                if let Some(new) = self.ids.on_heartbeat(from, &uid) {
+                // The conflict rule compares what the two modules' heartbeats say: ours have
+                // said `Starting` until the first STARTING_HEARTBEATS are sent.
+                let starting = state == ModuleState::Starting;
+                let me_starting = self.heartbeats <= STARTING_HEARTBEATS;
+                if let Some(new) = self.ids.on_heartbeat(from, &uid, starting, me_starting) {
                     // What was queued under the old node ID would go out on streams that are
                     // the other module's now: dropped and counted (advertisements and the
                     // heartbeat are sent again on the new streams; data at its next publish).

@@ -11,7 +11,7 @@ pub fn motor(ctx: Ctx<'_>) -> Result<Booted, String> {
     let params = load_params(app::params::DEFAULTS, ctx.flash)?;
     let names = app::Names::from_params(params);
     let mut a = app::App::new(app::Endpoints::leak(names), params);
-    let config = r2p_node::NodeConfig::new(ctx.module.uid.0, names.node);
+    let config = r2p_node::NodeConfig::module(ctx.module.uid.0, names.node);
     let mut n = node(config, &ctx, params)?;
     a.register(&mut n).map_err(|e| format!("registering topics: {e:?}"))?;
     let mut leds = Leds::new(&ctx, config.heartbeat_period_us);

@@ -120,7 +120,7 @@ async fn main(_spawner: Spawner) {
     let ep = ENDPOINTS.build(names);
     let config = NodeConfig {
         slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
-        ..NodeConfig::new(embassy_stm32::uid::uid(), names.node)
+        ..NodeConfig::module(embassy_stm32::uid::uid(), names.node)
     };
     module_core::start_bus(config, &PARAMS, |node| ep.register(node), can, p.TIM2);
 
