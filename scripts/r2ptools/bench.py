@@ -176,7 +176,7 @@ def report_gateway(gw: dict, bus_frames_hz: float | None = None) -> None:
     flash, flash_budget, ram, ram_budget, heap = gateway_image()
     print(f"gateway image: flash {flash:,} B of {flash_budget:,} ({flash / flash_budget:.0%}), "
           f"static RAM {ram:,} B of {ram_budget:,} ({ram / ram_budget:.0%}), heap "
-          + (f"{heap:,} B" if heap else "none (no allocator: every buffer static or on a task's stack)"))
+          + (f"{heap:,} B" if heap else "none (no allocator: topics in static cells, buffers in the tasks' static futures)"))
 
 
 def host() -> list[dict]:

@@ -25,7 +25,7 @@
 //! calibrated on 10 000 `nop`s), each event on its own and summed, less the empty count's
 //! overhead; the node's own work on the frames (decoding, reassembly) is outside the counts.
 //! No heap here, as none in the gateway's image (it sets no global allocator): its topics in
-//! static cells, its buffers on its tasks' stacks.
+//! static cells, its buffers in its tasks' futures (static in embassy-executor).
 #![no_std]
 #![no_main]
 
