@@ -3,7 +3,9 @@ measured in the same run (never pass/fail on timing: that is what tests are not 
 
 1. Cortex-M3 instructions per publish → deliver → release round trip, 1–8 subscribers, R2P
    middleware vs embassy-sync's PubSubChannel, under QEMU with -icount (deterministic: the same
-   binary gives the same counts). Plotted to docs/img/bench-pubsub-cortex-m3.png.
+   binary gives the same counts). Plotted to docs/img/bench-pubsub-cortex-m3.png. Also under
+   QEMU: the slot path, the IMU's estimators per step, and the gateway's work per event on the
+   F407's Cortex-M4 with its CPU share at the default rates and its image's size.
 2. The same round trip on the host, messages per second (varies with the machine).
 3. Footprint of the core images (flash and static RAM) against their budgets.
 4. RTCAN under load (the paper's Fig. 8, extended): the same seeded traffic offered at 10–95 %
@@ -74,6 +76,107 @@ def imu_image() -> tuple[int, int, int, int]:
     img = next(i for i in firmware.manifest() if i.name == "imu")
     size = firmware.size_of(ROOT / "firmware" / "images" / "imu.elf")
     return size.flash, img.budget_flash, size.ram, img.budget_ram
+
+
+def gateway_cpu() -> dict:
+    """Instructions per event of the gateway's work, built for the F407's Cortex-M4 (QEMU,
+    -icount, firmware/targets/qemu/src/bin/gateway.rs): the base controller's and the gateway's
+    1 ms steps, the ROS 2 bridge's polls, an `/odom` sample and a `/cmd_vel` put, a bus frame to
+    a socketcand client; and the Euler filter on the same core, the same run's baseline."""
+    outdir = qemu.build(profile="release", cpu="cortex-m4", image="gateway")
+    rc, out = qemu.run_image(outdir / "gateway", "cortex-m4")
+    if rc != 0:
+        raise RuntimeError(f"QEMU gateway image on cortex-m4 failed (exit {rc}):\n{out}")
+    return next(r for r in json_lines(out) if r["bench"] == "cortex_m4_gateway")
+
+
+GATEWAY_HZ = slotlead.MCUS["STM32F407 (gateway)"][2]
+"""The gateway's core clock (its board file's sysclk_hz, as the slot lead takes it)."""
+GATEWAY_STEP_HZ = 1_000
+"""The image's `run` task: the gateway's step and the base controller's, every millisecond."""
+CMD_VEL_HZ = 20
+"""`/cmd_vel` as a ROS controller or teleop node sends it: an assumed rate, not a default of ours."""
+FULL_BUS_FRAMES_HZ = 1_000_000 / 131
+"""A 1 Mbit/s bus full of 8-byte extended data frames: 128 bits each and 3 of intermission,
+without stuff bits (an upper bound)."""
+
+
+def gateway_src() -> Path:
+    """The gateway image's sources (its package in modules.toml)."""
+    img = next(i for i in firmware.manifest() if i.name == "gateway")
+    return ROOT / "firmware" / img.workspace / img.package / "src"
+
+
+def gateway_heap(src: Path | None = None) -> int:
+    """The gateway image's heap, bytes: none unless its sources (`src`) set a global allocator,
+    whose size this does not know yet: then a RuntimeError says so."""
+    src = src or gateway_src()
+    if any("#[global_allocator]" in f.read_text() for f in sorted(src.rglob("*.rs"))):
+        raise RuntimeError(f"{src} sets a global allocator: bench.gateway_heap() must learn "
+                           "its heap's size before make bench can state it")
+    return 0
+
+
+def gateway_image() -> tuple[int, int, int, int, int]:
+    """The committed gateway image's flash and static RAM, their budgets (modules.toml), and its
+    heap."""
+    img = next(i for i in firmware.manifest() if i.name == "gateway")
+    size = firmware.size_of(ROOT / "firmware" / "images" / "gateway.elf")
+    return size.flash, img.budget_flash, size.ram, img.budget_ram, gateway_heap()
+
+
+def gateway_load(gw: dict, bus_frames_hz: float) -> list[tuple[str, float]]:
+    """Instructions per second of each of the gateway's tasks at the default rates, one
+    socketcand client, `bus_frames_hz` frames on the bus."""
+    return [
+        ("application task: the gateway's and the base's steps, the handover, 1 kHz",
+         GATEWAY_STEP_HZ * (gw["gateway_step_insn"] + gw["base_step_insn"] + gw["handover_insn"])),
+        (f"ROS 2 task: {gw['ros_per_second_polls']} polls and {gw['ros_per_second_samples']} samples "
+         f"a second, /cmd_vel at {CMD_VEL_HZ} Hz",
+         gw["ros_per_second_insn"] + CMD_VEL_HZ * gw["ros_cmd_vel_insn"]),
+        (f"socketcand: {bus_frames_hz:,.0f} bus frames/s to one client",
+         bus_frames_hz * gw["can_frame_to_client_insn"]),
+    ]
+
+
+def report_gateway(gw: dict, bus_frames_hz: float | None = None) -> None:
+    """The gateway's section of `make bench`; `bus_frames_hz`: the emulated Triskar2's traffic."""
+    mhz = GATEWAY_HZ / 1e6
+    print(f"\n=== Cortex-M4 (QEMU, -icount): the gateway's work per event (r2p-app-gateway, "
+          f"r2p-app-base), STM32F407 at {mhz:.0f} MHz; baseline: the IMU's Euler filter on this "
+          "core (hard float)")
+    base = gw["euler_filter_insn"]
+    for key, what in (
+            ("base_step_insn", "base controller, one 1 ms step (IK 100 Hz, odometry 20 Hz)"),
+            ("base_ik_step_insn", "  a step with the IK (the three setpoints)"),
+            ("gateway_step_insn", "gateway's own 1 ms step (imports, LEDs, status)"),
+            ("handover_insn", "  the latest values handed to the ROS 2 task"),
+            ("ros_poll_idle_insn", "ROS 2: a poll with nothing due"),
+            ("ros_odom_insn", "ROS 2: one /odom sample (CDR, attachment, frame)"),
+            ("ros_cmd_vel_insn", "ROS 2: one /cmd_vel put, decoded, to the base"),
+            ("can_frame_to_client_insn", "socketcand: one bus frame to a client's line")):
+        print(f"{what:<56} {gw[key]:>6,} instructions  ({gw[key] / base:5.2f}× the Euler filter's {base})")
+    print(f"longest: a base step {gw['base_step_max_insn']:,}, a gateway step "
+          f"{gw['gateway_step_max_insn']:,}, a frame to a client {gw['can_frame_to_client_max_insn']:,}")
+    hz = bus_frames_hz or FULL_BUS_FRAMES_HZ
+    traffic = "the emulated Triskar2's bus" if bus_frames_hz else "a full bus"
+    rows = gateway_load(gw, hz)
+    print(f"at the default rates, {traffic} (≥: one cycle per instruction is a lower bound; "
+          f"flash wait states add):")
+    for what, v in rows:
+        print(f"  {what:<72} {v:>12,.0f} insn/s  ≥ {v / GATEWAY_HZ:.2%}")
+    total = sum(v for _, v in rows)
+    full = sum(v for _, v in gateway_load(gw, FULL_BUS_FRAMES_HZ))
+    print(f"  in all ≥ {total / GATEWAY_HZ:.1%} of {mhz:.0f} MHz"
+          + ("" if not bus_frames_hz else f"; on a full bus ({FULL_BUS_FRAMES_HZ:,.0f} frames/s) "
+             f"≥ {full / GATEWAY_HZ:.1%}")
+          + "; each further socketcand client adds its line per frame")
+    print("  not counted: the node's own work on the frames, embassy-net (TCP, Ethernet), the "
+          "executors, interrupts, the ROS task's copy of the latest values at each poll")
+    flash, flash_budget, ram, ram_budget, heap = gateway_image()
+    print(f"gateway image: flash {flash:,} B of {flash_budget:,} ({flash / flash_budget:.0%}), "
+          f"static RAM {ram:,} B of {ram_budget:,} ({ram / ram_budget:.0%}), heap "
+          + (f"{heap:,} B" if heap else "none (no allocator: topics in static cells, buffers in the tasks' static futures)"))
 
 
 def host() -> list[dict]:
@@ -402,6 +505,7 @@ def main() -> int:
         m3 = cortex_m3()
         sp = slot_path()
         fu = imu_fusion()
+        gw = gateway_cpu()
         hs = host()
         load_points, load_sim = rtcan_load()
         load_seeds = rtcan_seeds()
@@ -455,6 +559,9 @@ def main() -> int:
     print(f"IMU image: flash {flash:,} B of {flash_budget:,} ({flash / flash_budget:.0%}), "
           f"static RAM {ram:,} B of {ram_budget:,} ({ram / ram_budget:.0%}); a 55 KiB update slot "
           f"holds 56,192 B: {'fits' if flash <= 56_192 else f'{flash - 56_192:,} B over (docs/flashing.md)'}")
+
+    sim = sorted(sim_rows, key=lambda r: r["cpu_ratio"])[len(sim_rows) // 2]
+    report_gateway(gw, sim["frames"] / sim["virtual_s"])
 
     print("\n=== the slot lead per MCU (QEMU, -icount: the path built for each core; r2ptools.slotlead)")
     if slotlead.main() != 0:

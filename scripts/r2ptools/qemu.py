@@ -22,13 +22,13 @@ TARGET = "thumbv7m-none-eabi"
 # Exists to prove that a failure fails the run (tests/test_qemu_runner.py); not part of the suite.
 DELIBERATE_FAILURE = "deliberate-failure"
 # Images that are not test suites: run only when named (the benchmarks are run by scripts/bench).
-NOT_SUITES = {DELIBERATE_FAILURE, "bench", "slot-path", "fusion"}
+NOT_SUITES = {DELIBERATE_FAILURE, "bench", "slot-path", "fusion", "gateway"}
 TIMEOUT_S = 60
 
 
 CORES = {"cortex-m3": TARGET, "cortex-m4": "thumbv7em-none-eabihf"}
 """The cores an image is built for (Rust target): the F103's, and the F407's with its FPU. QEMU's
-lm3s6965evb takes either CPU (`-cpu`); only benchmarks run on the second (the slot path)."""
+lm3s6965evb takes either CPU (`-cpu`); only benchmarks run on the second (the slot path, the gateway)."""
 
 
 def qemu_command(image: Path, cpu: str = "cortex-m3") -> list[str]:
