@@ -68,12 +68,11 @@ FET_RDS_MAX = 2.4e-3          # the same, max (§4.1, read)
 FET_RDS_TC = 0.007            # 1/K: normalised R_DS(on) 1.7 at 125 °C (TI NexFET curves): estimate
 FET_QG, FET_QGD, FET_QGS = 118e-9, 17e-9, 37e-9         # at 10 V, V_DS 50 V, typ (§4.1, read);
                               # Q_gs2 (plateau part of Q_gs) taken as half of Q_gs
-FET_QRR = 600e-9              # body diode: NOT VERIFIED (estimate: 435 nC read for the smaller
-                              # CSD19535KTT in another project's table, scaled up for the die)
+FET_QRR = 548e-9              # body diode Q_rr typ at V_DS 50 V, I_F 100 A, 300 A/µs (SLPS540B
+                              # §5.1, the revision read): at this board's 20 A it is lower, so high
 FET_VSD = 0.9                 # body diode at 20 A, hot: estimate
-FET_RTH_JC = 0.5              # °C/W max: NOT VERIFIED for this part (CSD19535KTT's 0.5, read;
-                              # the larger die of the CSD19536KTT should not be worse)
-FET_ID_PULSE = 400.0          # I_DM, abs max (the KTT family's, read for CSD19535KTT)
+FET_RTH_JC = 0.4              # °C/W max (SLPS540B §5.2 Thermal Information)
+FET_ID_PULSE = 400.0          # I_DM, abs max, pulse ≤ 100 µs (SLPS540B Absolute Maximum Ratings)
 
 # --- gate driver: Renesas HIP4082 (FN3676): four independent inputs, bootstrap high sides ------
 DRV = "HIP4082IBZT"
@@ -101,7 +100,7 @@ DRV_RTH_JA = 115.0            # °C/W, SOIC (FN3676 Rev 5.00, Thermal Informatio
 DRV_PROP = 0.1e-6             # s: upper turn-off propagation delay T_HPHL, max over T_J -55 to 150 °C
                               # (Switching Specifications; 55 typ, 80 max at 25 °C)
 FET_VPLATEAU = 4.5            # V: CSD19536KTT Miller plateau at 20 A: estimate (from V_th and g_fs)
-FET_RG_INT = 1.4              # Ω: CSD19536KTT internal gate resistance: NOT VERIFIED
+FET_RG_INT = 1.4              # Ω: CSD19536KTT series gate resistance R_G, typ (SLPS540B §5.1; 2.8 max)
 BOOT_DIODE_VF = 0.9           # V: 1N4148W at the refresh current (its 1 V at 50 mA ... 1.25 V at 150 mA)
 BOOT_DIODE_R = 3.0            # Ω: the refresh loop (diode's dynamic resistance, tracks): estimate
 BOOT_DROOP_MAX = 1.0          # V: allowed gate-supply droop over one on-time (gate ≥ 10 V at 12 V VDD)
