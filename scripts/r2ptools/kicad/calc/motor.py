@@ -14,8 +14,8 @@ HIP4082 FN3676 (gate driver: Rev 5.00's Absolute Maximum Ratings, Thermal Inform
 Conditions and Electrical Specifications read; the pin table is KiCad 9's Driver_FET:HIP4082xB
 symbol),
 NXP/Nexperia BCP56_BCX56_BC56PA Rev. 9 (Q106: Table 2 V_CEO, Table 3 SOT89 pinning 1 E 2 C 3 B,
-Table 8 h_FE), TI LMV331 (over-current comparators: summary, NOT VERIFIED), Allegro ACS725
-(1.2 mΩ, 120 kHz read),
+Table 8 h_FE), TI LMV331 (over-current comparators: summary, NOT VERIFIED), Allegro ACS725 ACS725-DS Rev. 8
+(sensitivity, errors, supply current, 1.2 mΩ, 120 kHz read),
 TI TLV3011 SBOS300C (comparator with 1.242 V reference), Littelfuse SMCJ series (TVS), Amass XT60
 (30 A), IPC-2221B §6.2 (conductor sizing equation), docs/bus.md §6 (200 mA per module, ground),
 firmware/targets/f103/motor/src/bridge.rs (PWM, dead time, sign-magnitude drive),
@@ -114,12 +114,15 @@ Q106_RTH_JA = 150.0           # °C/W, SOT-89 on a small collector pad: NOT VERI
 Q106_VCEO = 80.0              # V: BCX56 V_CEO, open base (NXP BCP56_BCX56_BC56PA Rev. 9, Table 2)
 T_CORE_BAND = 60.0            # °C: board temperature at the core band at 20 A, 40 °C ambient: estimate
 # over-current: U105/U106 LMV331 on the ACS725's output, window from +3V3 (ratiometric like it)
-OC_SENS_TOL = 0.02            # ACS725 sensitivity error: NOT VERIFIED
-OC_OFFSET_V = 0.010           # ACS725 zero-current output error: NOT VERIFIED
+OC_SENS_TOL = 0.015           # ACS725-30AB sensitivity error, T_A 25-150 °C (ACS725-DS Rev. 8, xLLCTR-30AB
+                              # performance characteristics; ±5.5 % from -40 to 25 °C: README findings)
+OC_OFFSET_V = 0.010           # its offset voltage V_OE, T_A 25-150 °C (the same table; ±30 mV cold)
 CMP_VOS = 0.007               # LMV331 input offset, max: NOT VERIFIED
 CMP_TPD = 0.5e-6              # LMV331 propagation delay: twice the 260 ns typical a summary gives; the
                               # datasheet's maximum at this overdrive NOT VERIFIED
-HALL_T_RESPONSE = 2.9e-6      # ACS725 step response ≈ 0.35 / 120 kHz: from the bandwidth (read)
+HALL_T_RESPONSE = 2.9e-6      # ACS725 step response ≈ 0.35 / 120 kHz: from the bandwidth (read); an
+                              # estimate NOT APPLIED from ACS725-DS Rev. 8: its response time is 4 µs
+                              # typ (C_L 1 nF), with which a short reaches 461 A > I_DM (README findings)
 TIM1_BREAK_S = 0.1e-6         # TIM1 break input to outputs inactive (a few 72 MHz clocks, no filter)
 L_SHORT = 0.5e-6              # H: a short across the motor leads at the end of ~1 m of cable: estimate
 # The comparators' input filter and hysteresis: NOT ON THE REVISION A BOARD (its U105/U106 take
@@ -163,11 +166,13 @@ def high_side_drive() -> float:
 # --- current sensor: Allegro ACS725LLCTR-30AB-T, 3.3 V, ratiometric ------------------------------
 HALL = "ACS725LLCTR-30AB-T"
 HALL_RANGE = 30.0             # ± A, optimised range
-HALL_MV_PER_A = 44.0          # at VCC = 3.3 V: NOT VERIFIED (memory of the ACS725 selection table)
+HALL_MV_PER_A = 44.0          # at VCC = 3.3 V (ACS725-DS Rev. 8, selection guide and xLLCTR-30AB table)
 HALL_BW_HZ = 120e3            # read (ACS725 features)
 HALL_R = 1.2e-3               # primary conductor resistance, read
-HALL_ICC_MAX = 14e-3          # NOT VERIFIED (10 mA typ)
-HALL_SWING = (0.2, 3.1)       # output range into the ADC at 3.3 V: estimate (rail-to-rail minus ~0.2 V)
+HALL_ICC_MAX = 14e-3          # ACS725-DS Rev. 8, common electrical characteristics (10 mA typ)
+HALL_SWING = (0.2, 3.1)       # output range into the ADC at 3.3 V: estimate (rail-to-rail minus ~0.2 V);
+                              # ACS725-DS Rev. 8 gives V_OL 0.3 V and V_OH V_CC - 0.3 V typ at its 4.7 kΩ
+                              # minimum load (this board's is lighter): NOT APPLIED, README findings
 
 # --- input protection ------------------------------------------------------------------------
 TVS = "SMCJ45A"               # 1500 W (10/1000 µs)
@@ -570,8 +575,9 @@ def rows() -> list[Row]:
             oc_lo_a > I_PEAK + ripple_half and oc_hi_a < swing_a,
             f"±{oc_nom:.2f} A nominal: {v['R_OC_OUTER'] / 1e3:.0f} k / {v['R_OC_MID'] / 1e3:.0f} k / "
             f"{v['R_OC_OUTER'] / 1e3:.0f} k from 3.3 V, {oc_window()[1]:.3f} V and {oc_window()[0]:.3f} V "
-            f"(ratiometric like the sensor); sensitivity ±{OC_SENS_TOL:.0%}, offsets "
-            f"{OC_OFFSET_V * 1e3:.0f} + {CMP_VOS * 1e3:.0f} mV, 1 % resistors (NOT VERIFIED)"))
+            f"(ratiometric like the sensor); sensitivity ±{OC_SENS_TOL:.1%}, offsets "
+            f"{OC_OFFSET_V * 1e3:.0f} + {CMP_VOS * 1e3:.0f} mV (ACS725 at 25-150 °C; LMV331's NOT VERIFIED), "
+            "1 % resistors; below 25 °C the ACS725's ±5.5 % and ±30 mV widen it to ±28.6-33.9 A (README)"))
     delay = HALL_T_RESPONSE + CMP_TPD + TIM1_BREAK_S + DRV_PROP + t_off
     i_short = oc_hi_a + VIN_MAX / L_SHORT * delay
     add(Row("current at switch-off, motor leads shorted", f"{i_short:.0f} A", f"≤ I_DM {FET_ID_PULSE:.0f} A",
@@ -721,7 +727,7 @@ def rows() -> list[Row]:
     lo, hi = ADC_FS / 2 - span, ADC_FS / 2 + span
     add(Row(f"{HALL} ±{HALL_RANGE:.0f} A into the ADC", f"{lo:.2f}–{hi:.2f} V",
             f"within the output swing {HALL_SWING[0]}–{HALL_SWING[1]} V", HALL_SWING[0] <= lo and hi <= HALL_SWING[1],
-            f"{HALL_MV_PER_A:.0f} mV/A at 3.3 V (NOT VERIFIED); 0 A = VDDA/2 (ratiometric)"))
+            f"{HALL_MV_PER_A:.0f} mV/A at 3.3 V (ACS725-DS Rev. 8); 0 A = VDDA/2 (ratiometric)"))
     lsb = ADC_FS / ADC_COUNTS / (HALL_MV_PER_A / 1e3)
     add(Row("current resolution", f"{lsb * 1e3:.1f} mA/count", f"range ≥ ±{SENSE_RANGE_REQUIRED:.0f} A (issue 19)",
             HALL_RANGE >= SENSE_RANGE_REQUIRED, f"clips at ±{(ADC_FS / 2) / (HALL_MV_PER_A / 1e3):.1f} A"))
