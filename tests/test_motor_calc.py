@@ -46,8 +46,8 @@ def test_junction_meets_the_issue_limit_at_20_a_and_40_c():
     ("R_OC_MID", 150e3, "over-current trip"),
     # a 1 µF VDD reservoir cannot refill the bootstrap capacitors
     ("C_VDD", 1e-6, "C_VDD vs the bootstrap"),
-    # a 100 k zener feed: at 13 V in, Q106's base current drops VDD below the driver's minimum
-    ("R_VDD_BIAS", 100e3, "driver VDD at the 13 V minimum input"),
+    # a 100 k zener feed: at the minimum input, Q106's base current drops VDD below the driver's minimum
+    ("R_VDD_BIAS", 100e3, f"driver VDD at the {calc.VIN_MIN:.0f} V minimum input"),
 ])
 def test_a_changed_board_value_fails_its_row(monkeypatch, name, value, guarded):
     assert row(guarded).ok
@@ -66,7 +66,7 @@ def test_a_changed_board_value_fails_its_row(monkeypatch, name, value, guarded):
     ("ELCAP_T_LOCAL", 85.0, "electrolytic life"),                       # capacitors by the FETs
     ("HALL_RANGE", 15.5, "current resolution"),                         # below ±30 A (issue 19)
     ("ZENER_V", (15.3, 16.0, 17.1), "driver VDD (zener − V_BE)"),    # a 16 V zener: VDD over 15 V
-    ("Q106_HFE_MIN", 20.0, "driver VDD at the 13 V minimum input"),     # a low-gain pass transistor
+    ("Q106_HFE_MIN", 20.0, f"driver VDD at the {calc.VIN_MIN:.0f} V minimum input"),     # a low-gain pass transistor
     ("HALL_T_RESPONSE", 10e-6, "current at switch-off"),                # a filtered sensor: 1 kA shorts
     ("OC_SENS_TOL", 0.06, "over-current trip"),                         # a sloppier sensor: trips at 28 A
     ("DRV_I_PEAK", 0.1, "dead time vs turn-off"),                       # a weak driver: ~1 µs turn-off

@@ -12,7 +12,7 @@ split termination, 3.3 V regulator, 8 MHz crystal, reset and boot straps, SWD, t
 its own MCU; the Ethernet parts are numbered from 101. Pins and signals are
 firmware/boards/gateway.toml's (scripts/check-pins).
 
-The LAN8742A (Microchip DS00001989A; NOT VERIFIED where marked in calc/gateway.py): straps
+The LAN8742A (Microchip DS00001989A, SMSC revision 1.1; its figures in calc/gateway.py): straps
 latched at nRST's rising edge — MODE[2:0] = 111 (all capable, auto-negotiation) from the internal
 pull-ups of RXD0/MODE0, RXD1/MODE1 and CRS_DV/MODE2 (the MCU's RMII pins are inputs in reset);
 PHYAD0 = 0 from RXER/PHYAD0's internal pull-down (SMI address 0); REGOFF = 0 (the internal 1.2 V

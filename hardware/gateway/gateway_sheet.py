@@ -76,7 +76,7 @@ BLOCKS = [
                  "the ROM bootloader.\nBOOT1 (PB2) low.")]),
     Block("Clock: 8 MHz crystal", 4, 84, 40, 125, notes=[
         (5, 122, f"C1 = C2 = 30 pF C0G (calc/core.py).\nF407: gm_crit {_h['gm_crit_ma_per_v']:.2f} mA/V\n"
-                 f"< Gm_crit_max {calc.F407_GM_CRIT_MAX_MA_PER_V:g} mA/V\n(AN2867; the DS8626\nvalue NOT VERIFIED).")]),
+                 f"< Gm_crit_max {calc.F407_GM_CRIT_MAX_MA_PER_V:g} mA/V\n(AN2867; DS8626\nRev 12, Table 32).")]),
     Block("MCU STM32F407VGT6 and decoupling", 42, 52, 122, 125, notes=[
         (90, 100, "100 nF at each VDD and VBAT;\nVDDA = VREF+: 100 nF + 1 uF\n(AN4488); VCAP_1, VCAP_2\n"
                  f"{calc.VCAP_F * 1e6:g} uF (ESR < 2 ohm)."),

@@ -7,8 +7,8 @@
 //! (0x23) the Z operating mode OMZ \[3:2\]; CTRL_REG5 (0x24) BDU \[6\]; STATUS_REG (0x27) ZYXDA
 //! \[3\] and ZYXOR \[7\]; OUT_X/Y/Z (0x28..0x2D) and TEMP_OUT (0x2E..0x2F) are 16-bit
 //! little-endian two's complement, so one 9-byte burst from STATUS_REG reads a whole sample.
-//! Sensitivity 6842 / 3421 / 2281 / 1711 LSB/gauss at ±4 / 8 / 12 / 16 gauss (datasheet
-//! table 3); 1 gauss = 100 µT. Temperature 8 LSB/°C (table 4), 0 at 25 °C (NOT VERIFIED).
+//! Sensitivity 6842 / 3421 / 2281 / 1711 LSB/gauss at ±4 / 8 / 12 / 16 gauss (DS9463 Rev 7,
+//! Table 2); 1 gauss = 100 µT. Temperature 8 LSB/°C (Table 3); 0 at 25 °C NOT VERIFIED (unstated).
 //!
 //! Multi-byte access (unlike the LSM6DSO's IF_INC): on SPI the command byte is RW \[7\], MS
 //! \[6\] (1: the address increments) and the address \[5:0\]; on I2C the sub-address's MSB

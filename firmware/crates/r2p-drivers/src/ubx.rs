@@ -23,9 +23,9 @@
 //!   (pyubx2's database, several receiver drivers); the PDF's table itself was NOT read here.
 //!
 //! # Baud rate: what the module does, and why
-//! Factory defaults of UART1: **9600 baud on u-blox M8**, **38400 baud on M9 and M10** (NOT
-//! VERIFIED in the PDFs' default tables here; stated by the M8 description's default
-//! configuration and the M9/M10 CFG-UART1-BAUDRATE default as drivers and users report them).
+//! Factory defaults of UART1: **9600 baud on u-blox M8** (NEO-M8 data sheet UBX-13003366 R07,
+//! Table 12), **38400 baud on M9 and M10** (NOT VERIFIED: no M9/M10 document was readable here;
+//! their CFG-UART1-BAUDRATE default as drivers and users report it).
 //! The module runs the link at [`OPERATING_BAUD`] = 38400: NAV-PVT is 100 bytes on the wire,
 //! 1000 B/s at 10 Hz, more than 9600 baud carries (960 B/s), and 38400 (3840 B/s) is the
 //! generation-9+ default, so an M9/M10 never changes its baud (no acknowledgement lost across a

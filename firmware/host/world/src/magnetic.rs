@@ -24,12 +24,13 @@
 //! per device within its bound: the datasheet gives a typical spread, not a distribution) and
 //! white Gaussian noise of σ per axis at the sensor's output:
 //! B_sensor = Rz(−ψ) · B_base + o + noise. The offset adds to the robot's hard iron: a
-//! calibration finds their sum. ST's LIS3MDL datasheet (DocID024204, table 3) gives the RMS
-//! noise in ultra-high-performance mode and the zero-gauss level offset accuracy (TyOff) at
-//! ±4 gauss; the values used here, σ 0.32 µT (3.2 mgauss) and ±100 µT (±1 gauss), are NOT
-//! VERIFIED against that table (it was not readable here). Not modelled: sensitivity and
-//! cross-axis errors of the die, temperature drift, the floor's steel, motors' fields that
-//! change with their current, tilt.
+//! calibration finds their sum. ST's LIS3MDL datasheet (DS9463 Rev 7, DocID024204 in its older
+//! revisions, Table 2 "Magnetic characteristics") gives the zero-gauss level at ±4 gauss full
+//! scale as ±1 gauss (±100 µT) typical, and the RMS noise in ultrahigh-performance mode at
+//! ±12 gauss as 3.2 mgauss on X and Y and 4.1 mgauss on Z (σ 0.32, 0.32 and 0.41 µT): typical
+//! figures, "not guaranteed" (its note 1), and none given at the ±4 gauss the firmware uses.
+//! Not modelled: sensitivity and cross-axis errors of the die, temperature drift, the floor's
+//! steel, motors' fields that change with their current, tilt.
 
 use crate::geometry::Pose;
 use crate::noise::Noise;
@@ -86,8 +87,8 @@ impl Iron {
 /// A magnetometer's error figures.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MagParams {
-    /// White noise σ per axis at the output, µT.
-    pub noise_ut: f64,
+    /// White noise σ of each axis (x, y, z) at the output, µT.
+    pub noise_ut: [f64; 3],
     /// Bound of the per-axis zero-gauss offset, µT.
     pub offset_ut: f64,
     /// Die temperature, °C.
@@ -95,12 +96,12 @@ pub struct MagParams {
 }
 
 impl MagParams {
-    /// ST LIS3MDL in ultra-high-performance mode (σ and offset NOT VERIFIED: see the module's
-    /// doc).
+    /// ST LIS3MDL in ultrahigh-performance mode (DS9463 Rev 7 Table 2: see the module's doc).
     pub const LIS3MDL: MagParams =
-        MagParams { noise_ut: 0.32, offset_ut: 100.0, temperature_c: 30.0 };
+        MagParams { noise_ut: [0.32, 0.32, 0.41], offset_ut: 100.0, temperature_c: 30.0 };
     /// An ideal sensor: for tests of the geometry.
-    pub const IDEAL: MagParams = MagParams { noise_ut: 0.0, offset_ut: 0.0, temperature_c: 25.0 };
+    pub const IDEAL: MagParams =
+        MagParams { noise_ut: [0.0; 3], offset_ut: 0.0, temperature_c: 25.0 };
 }
 
 /// One sample as the sensor's outputs carry it.
@@ -159,8 +160,8 @@ impl Magnetometer {
 
     /// One sample with the base at heading `heading_rad`.
     pub fn measure(&mut self, heading_rad: f64) -> [f64; 3] {
-        let sigma = self.params.noise_ut;
-        self.expected(heading_rad).map(|b| b + self.noise.gaussian(sigma))
+        let (e, sigma) = (self.expected(heading_rad), self.params.noise_ut);
+        [0, 1, 2].map(|i| e[i] + self.noise.gaussian(sigma[i]))
     }
 
     /// One sample with the base at heading `heading_rad`, with the die's temperature.
@@ -272,8 +273,10 @@ mod tests {
         assert_eq!(xa, xb);
         assert_ne!(xa[0], c.measure(0.0));
         let mean = a.expected(0.0);
-        let var = xa.iter().map(|s| (s[0] - mean[0]).powi(2)).sum::<f64>() / xa.len() as f64;
-        assert!((var.sqrt() - 0.32).abs() < 0.02, "σ {}", var.sqrt());
+        for (i, want) in [0.32, 0.32, 0.41].into_iter().enumerate() {
+            let var = xa.iter().map(|s| (s[i] - mean[i]).powi(2)).sum::<f64>() / xa.len() as f64;
+            assert!((var.sqrt() - want).abs() < 0.02, "axis {i}: σ {}", var.sqrt());
+        }
     }
 
     #[test]

@@ -5,41 +5,57 @@ values this file assumes (reference → value, SI units); tests/test_hardware.py
 the gateway's KiCad schematic.
 
 The supply decision (docs/bus.md §6): the gateway runs an STM32F407 at 168 MHz with its Ethernet
-MAC and a LAN8742A PHY from the core's 3.3 V LDO on the fused bus tap. Worst case that is more
-than the 200 mA a module may draw, so the gateway is a stated exception, like the proximity
-module: count it as 250 mA in docs/bus.md §5 (the chain is planned with the gateway at one end,
-next to the computer). Typically it draws about 150 mA.
+MAC and a LAN8742A PHY from the core's 3.3 V LDO on the fused bus tap. Even typically that is more
+than the 200 mA a module may draw (about 217 mA; 273 mA worst case, the PHY's 100BASE-TX current
+through the magnetics alone being about 100 mA), so the gateway is a stated exception, like the
+proximity module: count it as 300 mA in docs/bus.md §5 (the chain is planned with the gateway at
+one end, next to the computer).
 
-Sources and their status:
-- STM32F407 run current at 168 MHz, code from flash with the ART accelerator on, every peripheral
-  clock enabled: 93 mA typical, 109 mA max at 85 °C (ST DS8626, table "Typical and maximum
-  current consumption in Run mode ... from Flash memory"). NOT VERIFIED: figures recalled, the
-  table was not re-read for this board; the firmware enables a handful of peripherals, so this
-  bounds it from above.
-- LAN8742A at 100BASE-TX with traffic, all supplies (VDD1A, VDD2A, VDDIO and the transmit
-  current through the magnetics' centre tap): 55 mA max assumed (Microchip DS00001989A,
-  "Power consumption"). NOT VERIFIED: recalled, to be measured.
+Sources (each figure read from the document named; the datasheets' own table numbers):
+- STM32F407 run current at 168 MHz, every peripheral clock enabled, code from flash with the ART
+  accelerator disabled (embassy-stm32's RCC setup writes FLASH_ACR with the wait states only, so
+  prefetch and both caches stay off, and the gateway firmware does not turn them on): 93 mA
+  typical (25 °C, 3.3 V), 109 mA max (85 °C, 3.6 V) (ST DS8626 Rev 12, Table 21 "Typical and
+  maximum current consumption in Run mode, code with data processing running from flash memory
+  (ART accelerator disabled)"). With the ART on it would be 87 / 102 mA (Table 20). The firmware
+  enables a handful of peripherals, so this bounds it from above.
+- LAN8742A in REF_CLK Out mode (nINTSEL = 0) with its 1.2 V regulator on (REGOFF = 0), 100BASE-TX
+  with traffic: 102 mA typical at 3.3 V including the transmit current through the magnetics'
+  centre taps (Microchip DS00001989A, Table 5-5 "Current consumption and power dissipation
+  (REF_CLK OUT, reg. enabled)": device 59 mA, device with magnetics 102 mA, 195 mW). The datasheet
+  publishes typical values only: the worst case carries the same 102 mA (NOT VERIFIED as a bound:
+  measure it on the first boards).
 - SN65HVD230 driving dominant into 60 ohm, LEDs, pull-ups: the core's share in docs/bus.md §6
   (transceiver ≤ 50 mA, regulator and pull-ups ≈ 5 mA); the LEDs from their resistors below.
+- AP2112K-3.3 in SOT-25: θJA 184 °C/W with no heatsink, junction 150 °C absolute maximum, thermal
+  shutdown 160 °C typical (Diodes DS39724 Rev 2-2, "Absolute Maximum Ratings" and the electrical
+  characteristics table). The GND pour lowers θJA by an amount not measured; the check uses the
+  datasheet's figure at 40 °C ambient (the motor board's convention, issue 19).
 - 8 MHz HSE on the F407: AN2867's criterion for parts whose datasheet gives Gm_crit_max is
-  gm_crit < Gm_crit_max; DS8626's HSE table gives 1 mA/V for the STM32F407 (NOT VERIFIED:
-  recalled). The crystal is the core's X32258MSB4SI (calc/core.py).
-- 25 MHz PHY crystal: YXC X322525MOB4SI, CL 12 pF (LCSC C9006, as public JLC BOMs list it);
-  the LAN8742A wants 25 MHz ± 50 ppm in total (DS00001989A, crystal specification; NOT VERIFIED).
+  gm_crit < Gm_crit_max; 1 mA/V for the STM32F405/407 (DS8626 Rev 12, Table 32 "HSE 4-26 MHz
+  oscillator characteristics": Gmcritmax 1 mA/V max, oscillator Gm 5 mA/V min at startup). The
+  crystal is the core's X32258MSB4SI (calc/core.py).
+- 25 MHz PHY crystal: YXC X322525MOB4SI, CL 12 pF (LCSC C9006, as public JLC BOMs list it); the
+  LAN8742A allows ±50 ppm in all (tolerance, temperature and ageing: DS00001989A Tables 5-16 and
+  5-17, "Total allowable PPM budget"). A 12 pF crystal is the datasheet's 100 µW case (Table 5-17:
+  CL 8-12 pF, ESR ≤ 80 ohm, C0 ≤ 5 pF), whose circuit (Figure 5-8) puts RS = 500 ohm in series
+  with XTAL2; this board has no RS (hardware/gateway/README.md, design notes).
 """
 from __future__ import annotations
 
 import sys
 
 from . import core
+from .proximity import FIRST_HOP_MOHM, HOP_MOHM   # docs/bus.md §5.2, loop resistance per hop
 
 V_BUS_MAX = 5.25            # docs/bus.md §6: a module must accept 4.00-5.25 V
 V_3V3 = 3.3
 MODULE_LIMIT_MA = 200.0     # docs/bus.md §6
-COUNTED_AS_MA = 250.0       # what docs/bus.md §5 counts for the gateway
+COUNTED_AS_MA = 300.0       # what docs/bus.md §5 counts for the gateway (as the proximity module)
 
-MCU_TYP_MA, MCU_MAX_MA = 93.0, 109.0       # STM32F407 at 168 MHz, all peripherals (NOT VERIFIED)
-PHY_TYP_MA, PHY_MAX_MA = 45.0, 55.0        # LAN8742A 100BASE-TX with traffic (NOT VERIFIED)
+MCU_TYP_MA, MCU_MAX_MA = 93.0, 109.0       # STM32F407, 168 MHz, all peripherals, ART off: DS8626 Table 21
+PHY_TYP_MA = 102.0                         # LAN8742A 100BASE-TX, traffic, with magnetics: DS00001989A Table 5-5
+PHY_MAX_MA = PHY_TYP_MA                    # no maximum published (NOT VERIFIED as a bound)
 CAN_TYP_MA, CAN_MAX_MA = 10.0, 50.0        # docs/bus.md §6, the core's transceiver share
 MISC_MA = 5.0                              # regulator, pull-ups (docs/bus.md §6)
 LED_R_OHM = 1000.0
@@ -47,7 +63,9 @@ LED_VF = {"green": 2.0, "yellow": 2.0, "red": 2.0, "blue": 2.8,      # board LED
           "jack green": 2.0, "jack yellow": 2.0}                      # the Ethernet jack's LEDs
 """Forward voltages at about 1 mA (KENTO KT-0603 series; the HR911105A's LEDs): approximate."""
 
-LDO_THETA_JA = 150.0        # AP2112K SOT-23-5 on a GND pour, °C/W: assumed (NOT VERIFIED)
+LDO_THETA_JA = 184.0        # AP2112K SOT-25, no heatsink, °C/W: DS39724 Absolute Maximum Ratings
+LDO_TJ_MAX = 150.0          # °C, the same table (thermal shutdown at 160 °C typical)
+T_AMB = 40.0                # °C ambient for the junction check (calc/motor.py's, issue 19)
 
 # the PHY's clock (C101, C102) and bias (R101): values per LAN8742A DS00001989A
 XTAL25_CL_PF = 12.0
@@ -55,7 +73,7 @@ XTAL25_LOAD_PF = 15.0
 RBIAS_OHM = 12.1e3          # DS00001989A: 12.1 kohm 1 % from RBIAS to GND
 MDI_TERM_OHM = 49.9         # each of TXP, TXN, RXP, RXN to the 3.3 V centre-tap supply
 VCAP_F = 2.2e-6             # STM32F407 VCAP_1, VCAP_2 (DS8626: 2.2 uF, ESR < 2 ohm)
-F407_GM_CRIT_MAX_MA_PER_V = 1.0
+F407_GM_CRIT_MAX_MA_PER_V = 1.0   # DS8626 Rev 12, Table 32
 
 
 def leds_ma() -> float:
@@ -69,7 +87,22 @@ def budget() -> dict[str, float]:
     worst = MCU_MAX_MA + PHY_MAX_MA + CAN_MAX_MA + led + MISC_MA
     return {"leds_ma": led, "typ_ma": typ, "worst_ma": worst,
             "ldo_w_typ": (V_BUS_MAX - V_3V3) * typ / 1e3,
-            "ldo_w_worst": (V_BUS_MAX - V_3V3) * worst / 1e3}
+            "ldo_w_worst": (V_BUS_MAX - V_3V3) * worst / 1e3,
+            "tj_typ": T_AMB + (V_BUS_MAX - V_3V3) * typ / 1e3 * LDO_THETA_JA,
+            "tj_worst": T_AMB + (V_BUS_MAX - V_3V3) * worst / 1e3 * LDO_THETA_JA}
+
+
+def chain_drop() -> list[tuple[str, float, float, float]]:
+    """The worst case's current above a module's 200 mA crosses every hop between the PSU and the
+    gateway (worst when the gateway is the last module): docs/bus.md §5.4's two allowed
+    configurations, (where, extra drop mV, lowest module V before, after)."""
+    extra_a = (budget()["worst_ma"] - MODULE_LIMIT_MA) / 1000
+    rows = []
+    for n, where, lowest_v in ((10, "PSU in the middle, 10 modules per side", 4.45),
+                               (14, "PSU at one end, 14 modules", 4.03)):
+        dv_mv = extra_a * (FIRST_HOP_MOHM + (n - 1) * HOP_MOHM)     # A x mohm = mV
+        rows.append((where, dv_mv, lowest_v, lowest_v - dv_mv / 1000))
+    return rows
 
 
 def phy_crystal() -> dict[str, float]:
@@ -94,9 +127,13 @@ def report() -> str:
         f"  docs/bus.md §6 allows {MODULE_LIMIT_MA:g} mA: worst case exceeds it by"
         f" {b['worst_ma'] - MODULE_LIMIT_MA:.0f} mA -> stated exception, counted as"
         f" {COUNTED_AS_MA:g} mA in §5 ({COUNTED_AS_MA - b['worst_ma']:.0f} mA margin)",
+        *[f"  extra drop with the gateway last ({where}): +{dv:.0f} mV, lowest module {v0:.2f} ->"
+          f" {v1:.2f} V ({'>=' if v1 >= 4.0 else '< '} 4.00 V)" for where, dv, v0, v1 in chain_drop()],
         f"LDO (AP2112K-3.3) at {V_BUS_MAX:g} V in: {b['ldo_w_typ']:.2f} W typical,"
         f" {b['ldo_w_worst']:.2f} W worst; rise at {LDO_THETA_JA:g} C/W:"
         f" {b['ldo_w_typ'] * LDO_THETA_JA:.0f} / {b['ldo_w_worst'] * LDO_THETA_JA:.0f} C",
+        f"  junction at {T_AMB:g} C ambient: {b['tj_typ']:.0f} / {b['tj_worst']:.0f} C (max {LDO_TJ_MAX:g} C);"
+        f" worst case reaches it at {LDO_TJ_MAX - (b['tj_worst'] - T_AMB):.0f} C ambient",
         f"PHY crystal 25 MHz: C = 2 (CL - Cstray) = 2 ({XTAL25_CL_PF:g} - {core.STRAY_PF:g}) pF"
         f" = {p['ideal_pf']:.0f} pF; chosen {XTAL25_LOAD_PF:g} pF C0G: effective CL"
         f" {p['cl_min_pf']:.1f}-{p['cl_max_pf']:.1f} pF",
@@ -120,7 +157,7 @@ BOARD_VALUES = {
 def main() -> int:
     print(report())
     b, p, h = budget(), phy_crystal(), hse()
-    ok = (b["worst_ma"] <= COUNTED_AS_MA and p["cl_min_pf"] < XTAL25_CL_PF < p["cl_max_pf"]
+    ok = (b["worst_ma"] <= COUNTED_AS_MA and b["tj_worst"] <= LDO_TJ_MAX and p["cl_min_pf"] < XTAL25_CL_PF < p["cl_max_pf"]
           and h["ratio"] > 1)
     return 0 if ok else 1
 

@@ -11,9 +11,10 @@ Sources: docs/bus.md §6 (200 mA per module, the core's ≤ 115 mA); LSM6DSO DS1
 0.55 mA in combo high-performance mode); u-blox SAM-M8Q data sheet UBX-16012619 R04, Table 8
 (indicative currents of a u-blox M8 receiver at 3.0 V: 67 mA maximum, 32 mA average in GPS +
 GLONASS acquisition, 29 mA tracking); STM32F103xB datasheet DS5319, Table 7 (injected current
-±5 mA on a pin that is not five-volt tolerant: PB1). The LIS3MDL's and LPS22DF's supply currents
-are NOT VERIFIED (DocID024204 and DS13940 not read here): the allowance below is ten times their
-published low-power figures, and still under 1 mA.
+±5 mA on a pin that is not five-volt tolerant: PB1). The LIS3MDL draws 270 µA typical in its
+ultrahigh-resolution mode at 20 Hz (DS9463 Rev 7, Table 4); the firmware's 80 Hz is not
+tabulated, so its 0.3 mA allowance stays NOT VERIFIED, as does the LPS22DF's (DS13940 not read
+here): allowances, and still under 1 mA together.
 """
 from __future__ import annotations
 

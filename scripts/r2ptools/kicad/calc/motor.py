@@ -10,11 +10,12 @@ says NOT VERIFIED (and where it came from); estimates (thermal coefficients, boa
 the MOSFET's recovery charge) say so: they are what the first board must measure.
 
 Sources: TI CSD19536KTT SLPS540C (MOSFET; electrical characteristics read on ti.com), Renesas
-HIP4082 FN3676 Rev 6.00 (gate driver: its front page read, the pin table is KiCad 9's
-Driver_FET:HIP4082xB symbol; the electrical tables were NOT read here and their figures say so),
+HIP4082 FN3676 (gate driver: Rev 5.00's Absolute Maximum Ratings, Thermal Information, Operating
+Conditions and Electrical Specifications read; the pin table is KiCad 9's Driver_FET:HIP4082xB
+symbol),
 NXP/Nexperia BCP56_BCX56_BC56PA Rev. 9 (Q106: Table 2 V_CEO, Table 3 SOT89 pinning 1 E 2 C 3 B,
-Table 8 h_FE), TI LMV331 (over-current comparators: summary, NOT VERIFIED), Allegro ACS725
-(1.2 mΩ, 120 kHz read),
+Table 8 h_FE), TI LMV331 (over-current comparators: summary, NOT VERIFIED), Allegro ACS725 ACS725-DS Rev. 8
+(sensitivity, errors, supply current, 1.2 mΩ, 120 kHz read),
 TI TLV3011 SBOS300C (comparator with 1.242 V reference), Littelfuse SMCJ series (TVS), Amass XT60
 (30 A), IPC-2221B §6.2 (conductor sizing equation), docs/bus.md §6 (200 mA per module, ground),
 firmware/targets/f103/motor/src/bridge.rs (PWM, dead time, sign-magnitude drive),
@@ -32,9 +33,10 @@ VIN_NOM = 36.0                # the paper: "DC motors up to 36 V"
 LIION_MAX = 4.20 * 10 * 1.01  # 10S Li-ion on a charger at +1 % (as calc/psu.py): 42.42 V
 LEAD_ACID_MAX = 3 * 14.7      # 3 × 12 V lead-acid at absorption charge (14.7 V per block, cold)
 VIN_MAX = max(LIION_MAX, LEAD_ACID_MAX)                  # 44.1 V: highest steady input
-VIN_MIN = 13.0                # below: the HIP4082's VDD (from VMOT through Q106) falls under its
+VIN_MIN = 15.0                # below: the HIP4082's VDD (from VMOT through Q106) falls under its
                               # 8.5 V recommended minimum (row "driver VDD at the minimum input");
-                              # 12 V until Q106's h_FE was read: 63, not 100, at ~10 mA (below)
+                              # 12 V until Q106's h_FE was read (63, not 100, at ~10 mA), 13 V
+                              # until the HIP4082's own currents were read (FN3676, below)
 I_CONT = 20.0                 # the paper: "a continuous 20 A current"
 I_PEAK = 28.0                 # peak: below the hardware over-current trip less the ripple (below)
 SENSE_RANGE_REQUIRED = 30.0   # issue 19: current sensor range ≥ ±30 A
@@ -66,12 +68,11 @@ FET_RDS_MAX = 2.4e-3          # the same, max (§4.1, read)
 FET_RDS_TC = 0.007            # 1/K: normalised R_DS(on) 1.7 at 125 °C (TI NexFET curves): estimate
 FET_QG, FET_QGD, FET_QGS = 118e-9, 17e-9, 37e-9         # at 10 V, V_DS 50 V, typ (§4.1, read);
                               # Q_gs2 (plateau part of Q_gs) taken as half of Q_gs
-FET_QRR = 600e-9              # body diode: NOT VERIFIED (estimate: 435 nC read for the smaller
-                              # CSD19535KTT in another project's table, scaled up for the die)
+FET_QRR = 548e-9              # body diode Q_rr typ at V_DS 50 V, I_F 100 A, 300 A/µs (SLPS540B
+                              # §5.1, the revision read): at this board's 20 A it is lower, so high
 FET_VSD = 0.9                 # body diode at 20 A, hot: estimate
-FET_RTH_JC = 0.5              # °C/W max: NOT VERIFIED for this part (CSD19535KTT's 0.5, read;
-                              # the larger die of the CSD19536KTT should not be worse)
-FET_ID_PULSE = 400.0          # I_DM, abs max (the KTT family's, read for CSD19535KTT)
+FET_RTH_JC = 0.4              # °C/W max (SLPS540B §5.2 Thermal Information)
+FET_ID_PULSE = 400.0          # I_DM, abs max, pulse ≤ 100 µs (SLPS540B Absolute Maximum Ratings)
 
 # --- gate driver: Renesas HIP4082 (FN3676): four independent inputs, bootstrap high sides ------
 DRV = "HIP4082IBZT"
@@ -79,16 +80,27 @@ DRV_VHS_ABS = 80.0            # V: "operation up to 80 V" (AHS/BHS), FN3676 fron
 DRV_VHB_ABS = 95.0            # V: "bootstrap supply max voltage to 95 VDC" (read)
 DRV_I_PEAK = 1.25             # A: peak output current (the title, read); source and sink taken alike
 DRV_DEAD_RANGE = (0.1e-6, 4.5e-6)   # s: programmable dead time by R_DEL (read)
-DRV_DEL_S = (0.1e-6, 0.5e-6)  # s: the turn-on delay with R105 = 10 kΩ: FN3676's dead-time curve
-                              # NOT READ (estimate at the short end of the range); it adds to TIM1's
-DRV_VDD_RANGE = (8.5, 15.0)   # V: recommended VDD: NOT VERIFIED (FN3676 operating conditions)
-DRV_VDD_UV = 7.6              # V: VDD under-voltage rising threshold, max: NOT VERIFIED
-DRV_IDD = 3.0e-3              # A: VDD current without gate charge at 20 kHz: NOT VERIFIED (estimate)
-DRV_IHB = 0.5e-3              # A: each high side's bootstrap (xHB) current: NOT VERIFIED (estimate)
-DRV_RTH_JA = 100.0            # °C/W, SOIC-16 on the board: NOT VERIFIED (typical SOIC-16)
-DRV_PROP = 0.1e-6             # s: input to output turn-off: NOT VERIFIED (estimate)
+DRV_DEL_S = (0.1e-6, 0.5e-6)  # s: the turn-on delay with R105 = 10 kΩ, an estimate NOT APPLIED
+                              # from FN3676: its Electrical Specifications give T_DEAD 0.27-0.75 µs
+                              # at 25 °C (0.2-0.85 µs, -55 to 150 °C) for R_DEL = 10 k, with which
+                              # the bootstrap refresh at the firmware's 0.95 duty has no time left
+                              # (hardware/motor/README.md, open findings): a decision, not a figure;
+                              # it adds to TIM1's
+DRV_VDD_RANGE = (8.5, 15.0)   # V: supply voltage VDD (FN3676 Rev 5.00, Operating Conditions)
+DRV_VDD_UV = 8.5              # V: VDD rising under-voltage threshold V_DDUV+, max over T_J -55 to
+                              # 150 °C (Electrical Specifications; 7.6 typ, 8.25 max at 25 °C)
+DRV_IDD = 6.4e-3              # A: VDD operating current I_DDO, max at 25 °C, 50 kHz, no load,
+                              # R_DEL = 10 k (Electrical Specifications; 4.0 typ, 6.6 max over T_J);
+                              # at 20 kHz it lies between this and the quiescent 5.5 mA max
+DRV_IHB = 1.5e-3              # A: each bootstrap (xHB) supply while its high side is off, I_AHBL
+                              # max at 25 °C (1.0 typ): drawn from VDD through the bootstrap diode
+DRV_IHB_ON = 0.24e-3          # A: the same while the high side is on, I_AHBH max at 25 °C (0.145
+                              # typ): what discharges C_BS over an on-time
+DRV_RTH_JA = 115.0            # °C/W, SOIC (FN3676 Rev 5.00, Thermal Information)
+DRV_PROP = 0.1e-6             # s: upper turn-off propagation delay T_HPHL, max over T_J -55 to 150 °C
+                              # (Switching Specifications; 55 typ, 80 max at 25 °C)
 FET_VPLATEAU = 4.5            # V: CSD19536KTT Miller plateau at 20 A: estimate (from V_th and g_fs)
-FET_RG_INT = 1.4              # Ω: CSD19536KTT internal gate resistance: NOT VERIFIED
+FET_RG_INT = 1.4              # Ω: CSD19536KTT series gate resistance R_G, typ (SLPS540B §5.1; 2.8 max)
 BOOT_DIODE_VF = 0.9           # V: 1N4148W at the refresh current (its 1 V at 50 mA ... 1.25 V at 150 mA)
 BOOT_DIODE_R = 3.0            # Ω: the refresh loop (diode's dynamic resistance, tracks): estimate
 BOOT_DROOP_MAX = 1.0          # V: allowed gate-supply droop over one on-time (gate ≥ 10 V at 12 V VDD)
@@ -102,12 +114,15 @@ Q106_RTH_JA = 150.0           # °C/W, SOT-89 on a small collector pad: NOT VERI
 Q106_VCEO = 80.0              # V: BCX56 V_CEO, open base (NXP BCP56_BCX56_BC56PA Rev. 9, Table 2)
 T_CORE_BAND = 60.0            # °C: board temperature at the core band at 20 A, 40 °C ambient: estimate
 # over-current: U105/U106 LMV331 on the ACS725's output, window from +3V3 (ratiometric like it)
-OC_SENS_TOL = 0.02            # ACS725 sensitivity error: NOT VERIFIED
-OC_OFFSET_V = 0.010           # ACS725 zero-current output error: NOT VERIFIED
+OC_SENS_TOL = 0.015           # ACS725-30AB sensitivity error, T_A 25-150 °C (ACS725-DS Rev. 8, xLLCTR-30AB
+                              # performance characteristics; ±5.5 % from -40 to 25 °C: README findings)
+OC_OFFSET_V = 0.010           # its offset voltage V_OE, T_A 25-150 °C (the same table; ±30 mV cold)
 CMP_VOS = 0.007               # LMV331 input offset, max: NOT VERIFIED
 CMP_TPD = 0.5e-6              # LMV331 propagation delay: twice the 260 ns typical a summary gives; the
                               # datasheet's maximum at this overdrive NOT VERIFIED
-HALL_T_RESPONSE = 2.9e-6      # ACS725 step response ≈ 0.35 / 120 kHz: from the bandwidth (read)
+HALL_T_RESPONSE = 2.9e-6      # ACS725 step response ≈ 0.35 / 120 kHz: from the bandwidth (read); an
+                              # estimate NOT APPLIED from ACS725-DS Rev. 8: its response time is 4 µs
+                              # typ (C_L 1 nF), with which a short reaches 461 A > I_DM (README findings)
 TIM1_BREAK_S = 0.1e-6         # TIM1 break input to outputs inactive (a few 72 MHz clocks, no filter)
 L_SHORT = 0.5e-6              # H: a short across the motor leads at the end of ~1 m of cable: estimate
 # The comparators' input filter and hysteresis: NOT ON THE REVISION A BOARD (its U105/U106 take
@@ -151,11 +166,13 @@ def high_side_drive() -> float:
 # --- current sensor: Allegro ACS725LLCTR-30AB-T, 3.3 V, ratiometric ------------------------------
 HALL = "ACS725LLCTR-30AB-T"
 HALL_RANGE = 30.0             # ± A, optimised range
-HALL_MV_PER_A = 44.0          # at VCC = 3.3 V: NOT VERIFIED (memory of the ACS725 selection table)
+HALL_MV_PER_A = 44.0          # at VCC = 3.3 V (ACS725-DS Rev. 8, selection guide and xLLCTR-30AB table)
 HALL_BW_HZ = 120e3            # read (ACS725 features)
 HALL_R = 1.2e-3               # primary conductor resistance, read
-HALL_ICC_MAX = 14e-3          # NOT VERIFIED (10 mA typ)
-HALL_SWING = (0.2, 3.1)       # output range into the ADC at 3.3 V: estimate (rail-to-rail minus ~0.2 V)
+HALL_ICC_MAX = 14e-3          # ACS725-DS Rev. 8, common electrical characteristics (10 mA typ)
+HALL_SWING = (0.2, 3.1)       # output range into the ADC at 3.3 V: estimate (rail-to-rail minus ~0.2 V);
+                              # ACS725-DS Rev. 8 gives V_OL 0.3 V and V_OH V_CC - 0.3 V typ at its 4.7 kΩ
+                              # minimum load (this board's is lighter): NOT APPLIED, README findings
 
 # --- input protection ------------------------------------------------------------------------
 TVS = "SMCJ45A"               # 1500 W (10/1000 µs)
@@ -530,7 +547,7 @@ def rows() -> list[Row]:
     add(Row("dead time vs turn-off + driver skew (50 ns)", f"{dt_min * 1e9:.0f}–{dt_max * 1e9:.0f} ns",
             f"≥ {dead_need * 1e9:.0f} ns", dt_min >= dead_need,
             f"TIM1 {DEAD_TIME_S * 1e9:.0f} ns + HIP4082 DEL {DRV_DEL_S[0] * 1e9:.0f}–{DRV_DEL_S[1] * 1e9:.0f} ns "
-            f"(R105 {v['R_DEL'] / 1e3:.0f} k, curve NOT READ); "
+            f"(R105 {v['R_DEL'] / 1e3:.0f} k, an estimate: FN3676 gives 200–850 ns, README open findings); "
             f"body diode conducts the rest: {leg_switching_loss(VIN_MAX, I_CONT)['dead time']:.2f} W per leg"
             f" at 20 A; 300 ns in all would leave {FET_VSD * I_CONT * 2 * 300e-9 * PWM_HZ:.2f} W"))
     for k, x in p.items():
@@ -558,8 +575,9 @@ def rows() -> list[Row]:
             oc_lo_a > I_PEAK + ripple_half and oc_hi_a < swing_a,
             f"±{oc_nom:.2f} A nominal: {v['R_OC_OUTER'] / 1e3:.0f} k / {v['R_OC_MID'] / 1e3:.0f} k / "
             f"{v['R_OC_OUTER'] / 1e3:.0f} k from 3.3 V, {oc_window()[1]:.3f} V and {oc_window()[0]:.3f} V "
-            f"(ratiometric like the sensor); sensitivity ±{OC_SENS_TOL:.0%}, offsets "
-            f"{OC_OFFSET_V * 1e3:.0f} + {CMP_VOS * 1e3:.0f} mV, 1 % resistors (NOT VERIFIED)"))
+            f"(ratiometric like the sensor); sensitivity ±{OC_SENS_TOL:.1%}, offsets "
+            f"{OC_OFFSET_V * 1e3:.0f} + {CMP_VOS * 1e3:.0f} mV (ACS725 at 25-150 °C; LMV331's NOT VERIFIED), "
+            "1 % resistors; below 25 °C the ACS725's ±5.5 % and ±30 mV widen it to ±28.6-33.9 A (README)"))
     delay = HALL_T_RESPONSE + CMP_TPD + TIM1_BREAK_S + DRV_PROP + t_off
     i_short = oc_hi_a + VIN_MAX / L_SHORT * delay
     add(Row("current at switch-off, motor leads shorted", f"{i_short:.0f} A", f"≤ I_DM {FET_ID_PULSE:.0f} A",
@@ -603,13 +621,13 @@ def rows() -> list[Row]:
     load = vdd_load()
     v_lo = vdd(VIN_MIN, load, "min")
     add(Row(f"driver VDD at the {VIN_MIN:.0f} V minimum input", f"{v_lo:.1f} V",
-            f"≥ {DRV_VDD_RANGE[0]} V (HIP4082, NOT VERIFIED), > UV {DRV_VDD_UV} V", v_lo >= DRV_VDD_RANGE[0],
+            f"≥ {DRV_VDD_RANGE[0]} V (HIP4082), ≥ UV {DRV_VDD_UV} V max", v_lo >= max(DRV_VDD_RANGE[0], DRV_VDD_UV),
             f"VMOT − I_B R120 − V_BE with {load * 1e3:.1f} mA at h_FE {Q106_HFE_MIN:.0f}; the high-side "
             f"gate then {v_lo - BOOT_DIODE_VF:.1f} V (R_DS(on) specified at 10 V: below ~14 V input the "
             "losses above are optimistic)"))
     v_hi = max(vdd(x, load, "max") for x in (VIN_MAX, TVS_VC))
     add(Row("driver VDD (zener − V_BE), worst high", f"{vdd(VIN_MAX, load, 'min'):.1f}–{v_hi:.1f} V",
-            f"≤ {DRV_VDD_RANGE[1]} V (HIP4082, NOT VERIFIED)", v_hi <= DRV_VDD_RANGE[1],
+            f"≤ {DRV_VDD_RANGE[1]} V (HIP4082)", v_hi <= DRV_VDD_RANGE[1],
             f"D105 BZT52C13 {ZENER_V[0]}–{ZENER_V[2]} V, V_BE {VBE[0]}–{VBE[2]} V; the gates see ≤ {v_hi:.1f} V (±20 V rated)"))
     p_q = (ov_hi - vdd(ov_hi, load, "min")) * load
     t_q = T_CORE_BAND + p_q * Q106_RTH_JA
@@ -622,10 +640,10 @@ def rows() -> list[Row]:
     q_bs = FET_QG * high_side_drive() / 10.0
     d_max = max_duty()
     t_hi = d_max / PWM_HZ
-    droop = (q_bs + DRV_IHB * t_hi) / (v["C_BS"] * C_BS_DC_BIAS)
+    droop = (q_bs + DRV_IHB_ON * t_hi) / (v["C_BS"] * C_BS_DC_BIAS)
     add(Row("bootstrap droop over the longest on-time", f"{droop:.2f} V", f"≤ {BOOT_DROOP_MAX} V",
             droop <= BOOT_DROOP_MAX,
-            f"(Q_g {q_bs * 1e9:.0f} nC + I_HB {DRV_IHB * 1e3:.1f} mA × {t_hi * 1e6:.1f} µs) / "
+            f"(Q_g {q_bs * 1e9:.0f} nC + I_HB {DRV_IHB_ON * 1e3:.2f} mA × {t_hi * 1e6:.1f} µs) / "
             f"({v['C_BS'] * 1e9:.0f} nF × {C_BS_DC_BIAS:.0%} at 12 V)"))
     t_ref = refresh_time()
     g_min = high_side_drive() - droop - boot_deficit()
@@ -646,7 +664,7 @@ def rows() -> list[Row]:
     t_drv = T_CORE_BAND + 20 + p_drv * DRV_RTH_JA
     add(Row("HIP4082 dissipation", f"{p_drv * 1e3:.0f} mW, T_J {t_drv:.0f} °C", "T_J ≤ 125 °C", t_drv <= 125,
             f"VDD × (I_DD + 2 I_HB) + the gate charge's share in its output stage "
-            f"(R_out / (R_out + R_gate + R_G)); θ_JA {DRV_RTH_JA:.0f} °C/W (NOT VERIFIED), among the FETs at "
+            f"(R_out / (R_out + R_gate + R_G)); θ_JA {DRV_RTH_JA:.0f} °C/W (FN3676, SOIC), among the FETs at "
             f"{T_CORE_BAND + 20:.0f} °C (estimate)"))
     add(Row("driver supply", f"VDD from VMOT, {load * 1e3:.1f} mA", "not from the bus", True,
             "Q106 + D105 + R120: 12.4 V nominal"))
@@ -709,7 +727,7 @@ def rows() -> list[Row]:
     lo, hi = ADC_FS / 2 - span, ADC_FS / 2 + span
     add(Row(f"{HALL} ±{HALL_RANGE:.0f} A into the ADC", f"{lo:.2f}–{hi:.2f} V",
             f"within the output swing {HALL_SWING[0]}–{HALL_SWING[1]} V", HALL_SWING[0] <= lo and hi <= HALL_SWING[1],
-            f"{HALL_MV_PER_A:.0f} mV/A at 3.3 V (NOT VERIFIED); 0 A = VDDA/2 (ratiometric)"))
+            f"{HALL_MV_PER_A:.0f} mV/A at 3.3 V (ACS725-DS Rev. 8); 0 A = VDDA/2 (ratiometric)"))
     lsb = ADC_FS / ADC_COUNTS / (HALL_MV_PER_A / 1e3)
     add(Row("current resolution", f"{lsb * 1e3:.1f} mA/count", f"range ≥ ±{SENSE_RANGE_REQUIRED:.0f} A (issue 19)",
             HALL_RANGE >= SENSE_RANGE_REQUIRED, f"clips at ±{(ADC_FS / 2) / (HALL_MV_PER_A / 1e3):.1f} A"))
@@ -785,7 +803,7 @@ def boot_deficit() -> float:
     tau = BOOT_DIODE_R * v["C_BS"] * C_BS_DC_BIAS
     t = max(refresh_time(), 0.0)
     k = math.exp(-t / tau)
-    droop = (FET_QG * high_side_drive() / 10.0 + DRV_IHB * max_duty() / PWM_HZ) / (v["C_BS"] * C_BS_DC_BIAS)
+    droop = (FET_QG * high_side_drive() / 10.0 + DRV_IHB_ON * max_duty() / PWM_HZ) / (v["C_BS"] * C_BS_DC_BIAS)
     return droop * k / (1 - k) if k < 1 else float("inf")
 
 

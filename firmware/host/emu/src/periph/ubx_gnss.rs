@@ -15,10 +15,11 @@
 //! Timing: an epoch due at t is put on the wire at t (the UART paces its bytes: 100 bytes at
 //! 9600 baud take 104 ms), when [`UbxGnssModel::update`] runs before the line passes t. The
 //! receiver's time pulse (PPS) marks the top of each UTC second ([`UbxGnssModel::pps_at`])
-//! once the receiver has GNSS time, from its first fix: before it, no pulse (the receivers'
-//! default time pulse has length 0 until locked, CFG-TP-LEN_TP1 = 0 and LEN_LOCK_TP1 = 100 ms:
-//! NOT VERIFIED in the default tables) — a firmware that counted free-running edges as UTC
-//! seconds would be wrong, so the model gives none to count.
+//! once the receiver has GNSS time, from its first fix: before it, no pulse. One pulse per
+//! second is the default (NEO-M8 data sheet UBX-13003366 R07 §1.11); that it has length 0
+//! until locked (CFG-TP-LEN_TP1 = 0, LEN_LOCK_TP1 = 100 ms) is NOT VERIFIED: the protocol
+//! descriptions' default tables were not readable here — a firmware that counted free-running
+//! edges as UTC seconds would be wrong, so the model gives none to count.
 //!
 //! **Power-up** ([`UbxGnssModel::powered_at`]): a receiver powered later than the world's
 //! start (a board booted or a cable plugged then) starts cold: no backup supply on the
@@ -26,15 +27,15 @@
 //! the whole periods of UTC after it.
 //!
 //! **Factory settings** ([`UbxGnssModel::factory`]): UART1 at the generation's default rate
-//! ([`Generation::default_baud`]: 9600 on M8, 38400 on M10; NOT VERIFIED in the PDFs' default
-//! tables, see `r2p_drivers::ubx`), UBX and NMEA in, NMEA out, 1 Hz, no UBX message enabled;
-//! the NMEA set each epoch is RMC, VTG, GGA, GSA, GSV, GLL (NMEA 4.10 fields, talker GN, GSV
-//! as GP), the receivers' default set as their descriptions list it (UBX-13003221 "NMEA
-//! protocol"; M8 also sends TXT lines at start-up, not modelled). Each sentence is
-//! `$…*hh\r\n` with the XOR checksum of the characters between `$` and `*`, from the same
-//! solution as the NAV-PVT of that epoch (position in ddmm.mmmmm, speed in knots and km/h,
-//! DOPs 1.20/0.94/0.75 with a fix). Satellites in GSV have made-up PRNs, elevations,
-//! azimuths and C/N0: the world model gives their number only.
+//! ([`Generation::default_baud`]: 9600 on M8, UBX-13003366 R07 Table 12 "Default messages";
+//! 38400 on M10, NOT VERIFIED, see `r2p_drivers::ubx`), UBX and NMEA in, NMEA out, 1 Hz, no
+//! UBX message enabled; the NMEA set each epoch is RMC, VTG, GGA, GSA, GSV, GLL (NMEA 4.10
+//! fields, talker GN, GSV as GP), the receivers' default set (the M8's Table 12 lists GGA, GLL,
+//! GSA, GSV, RMC, VTG and TXT; UBX-13003221 "NMEA protocol"; the TXT lines at start-up are not
+//! modelled). Each sentence is `$…*hh\r\n` with the XOR checksum of the characters between
+//! `$` and `*`, from the same solution as the NAV-PVT of that epoch (position in ddmm.mmmmm,
+//! speed in knots and km/h, DOPs 1.20/0.94/0.75 with a fix). Satellites in GSV have made-up
+//! PRNs, elevations, azimuths and C/N0: the world model gives their number only.
 //!
 //! **Configuration** arrives on the receiver's RX side ([`SimUart::device_receive`]), as
 //! bytes at the receiver's baud (a frame sent at another rate arrives as other bytes and is
@@ -777,12 +778,14 @@ mod tests {
         let last = *seen.last().unwrap();
         assert_eq!((last.1, last.2), (GnssFixType::Fix3D, 12));
         let back = ORIGIN.enu_to(&Geodetic { lat_deg: last.3, lon_deg: last.4, height_m: last.5 });
-        assert!((back[0] - 12.0).abs() < 5.0 && (back[1] + 3.0).abs() < 5.0, "{back:?}");
+        let tol = 5.0 * GnssParams::UBLOX_M8.sigma_h_m; // 5 σ of the receiver's error
+        assert!((back[0] - 12.0).abs() < tol && (back[1] + 3.0).abs() < tol, "{back:?}");
         assert!((last.6 - 0.5).abs() < 1e-3 && (last.7 - 36.8699).abs() < 1e-3, "{last:?}");
         assert_eq!(last.8, 29, "UTC second of the epoch at 29.8 s");
         // Accuracy: unknown (u32::MAX mm) before the fix, the receiver's σ after it.
         assert_eq!((early.9, early.10), (f64::from(u32::MAX) / 1e3, f64::from(u32::MAX) / 1e3));
-        assert_eq!((last.9, last.10), (1.0, 2.0));
+        let p = GnssParams::UBLOX_M8;
+        assert_eq!((last.9, last.10), (p.sigma_h_m, p.sigma_v_m));
         // One epoch each 0.2 s up to 29.8 s: 149 sent (the parser saw them all but any still
         // on the wire).
         assert_eq!(gnss.epochs(), 149);
@@ -873,7 +876,8 @@ mod tests {
         let lat = f[2][..2].parse::<f64>().unwrap() + f[2][2..].parse::<f64>().unwrap() / 60.0;
         let lon = f[4][..3].parse::<f64>().unwrap() + f[4][3..].parse::<f64>().unwrap() / 60.0;
         let back = ORIGIN.enu_to(&Geodetic { lat_deg: lat, lon_deg: lon, height_m: 170.0 });
-        assert!((back[0] - 12.0).abs() < 5.0 && (back[1] + 3.0).abs() < 5.0, "{back:?}");
+        let tol = 5.0 * GnssParams::UBLOX_M8.sigma_h_m; // 5 σ of the receiver's error
+        assert!((back[0] - 12.0).abs() < tol && (back[1] + 3.0).abs() < tol, "{back:?}");
         let msl: f64 = f[9].parse().unwrap();
         assert!((msl - (170.5 - 48.3)).abs() < 10.0, "{msl}");
     }
