@@ -29,10 +29,10 @@ pub const WHO_AM_I_VALUE: u8 = 0x3D;
 pub const CTRL_REG1: u8 = 0x20;
 /// FS \[6:5\], REBOOT \[3\], SOFT_RST \[2\].
 pub const CTRL_REG2: u8 = 0x21;
-/// I2C_DISABLE \[7\], LP \[5\], SIM \[2\], MD \[1:0\]; reset 0x03 (power-down).
+/// LP \[5\], SIM \[2\], MD \[1:0\], the others 0 (DS9463 Rev 7, Table 25: unlike the LSM6DSO
+/// and the LPS22DF, the LIS3MDL has no bit that turns its I2C interface off); reset 0x03
+/// (power-down).
 pub const CTRL_REG3: u8 = 0x22;
-/// CTRL_REG3: the I2C interface off (bit 7, I2C_DISABLE).
-pub const CTRL3_I2C_DISABLE: u8 = 1 << 7;
 /// OMZ \[3:2\], BLE \[1\].
 pub const CTRL_REG4: u8 = 0x23;
 /// FAST_READ \[7\], BDU \[6\].
@@ -254,8 +254,8 @@ impl<B: RegisterBus> Lis3mdl<B> {
         let ctrl = [
             CTRL1_TEMP_EN | MODE_ULTRA_HIGH_PERFORMANCE << 5 | (config.odr as u8) << 2,
             (config.scale as u8) << 5,
-            // MD = 00: continuous conversion; on SPI, I2C_DISABLE (bit 7).
-            if B::SPI { CTRL3_I2C_DISABLE } else { 0 },
+            // MD = 00: continuous conversion, 4-wire SPI (SIM = 0), low power off.
+            0,
             MODE_ULTRA_HIGH_PERFORMANCE << 2,
             CTRL5_BDU,
         ];

@@ -407,9 +407,9 @@ mod tests {
         let e = mag.probe().unwrap_err();
         assert_eq!(e, lis3mdl::Error::WrongDevice { part: "LIS3MDL", found: 0xFF, expected: 0x3D });
         assert_eq!(rig.models().1.borrow().samples(), samples, "no sample while unplugged");
-        // Writes reach nothing: the model keeps its configuration (continuous, I2C off).
+        // Writes reach nothing: the model keeps its configuration (continuous).
         spi.transaction(&mut [Operation::Write(&[0x22, 0x03])]).unwrap();
-        assert_eq!(rig.models().1.borrow().peek(0x22), 0x80);
+        assert_eq!(rig.models().1.borrow().peek(0x22), 0x00);
         // The barometer carries on.
         assert!(baro.read().unwrap().is_some());
         w.set_imu_sensor_connected("imu", ImuSensor::Magnetometer, true).unwrap();

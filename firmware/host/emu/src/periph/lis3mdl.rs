@@ -5,6 +5,10 @@
 //! CTRL_REG3 = 0x03 (power-down), the others 0. The control registers (0x20–0x24) and the
 //! interrupt configuration (0x30, 0x32–0x33) take writes; everything else is read-only.
 //! CTRL_REG2's SOFT_RST restores the control registers' reset values (the bit clears itself).
+//! Bits DS9463 (Rev 7, Tables 22–27) says must be 0 are not stored: CTRL_REG2 keeps 0x6C,
+//! CTRL_REG3 0x27 (LP, SIM, MD; no I2C switch: ST's own register header has none either),
+//! CTRL_REG4 0x0E, CTRL_REG5 0xC0. On the part a 1 there is undefined; here a driver that
+//! writes one fails its read-back check.
 //! A multi-byte access moves to the next register only when the command asked for it: SPI's
 //! MS bit (6 of the command byte), I2C's sub-address MSB ([`RegisterDevice::spi_address`],
 //! [`RegisterDevice::i2c_pointer`]); without it, it reads the same register again.
@@ -172,8 +176,15 @@ impl RegisterDevice for Lis3mdlModel {
             self.reset_control();
             return;
         }
+        let writable = match reg {
+            CTRL_REG2 => 0x6C,
+            CTRL_REG3 => 0x27,
+            0x23 => 0x0E,
+            CTRL_REG5 => 0xC0,
+            _ => 0xFF,
+        };
         let before = (self.peek(CTRL_REG1) & 0x1C, self.mode());
-        self.regs[usize::from(reg)] = value;
+        self.regs[usize::from(reg)] = value & writable;
         if (self.peek(CTRL_REG1) & 0x1C, self.mode()) != before {
             self.reschedule();
         }
@@ -223,9 +234,9 @@ mod tests {
     fn the_driver_configures_the_model_over_spi_and_reads_the_field_in_microtesla() {
         let (dev, mut mag) = spi_rig();
         mag.init(Config::default()).unwrap();
-        // 80 Hz, UHP on x/y/z, temperature on, continuous, BDU; on SPI, I2C off.
+        // 80 Hz, UHP on x/y/z, temperature on, continuous, BDU.
         assert_eq!(dev.borrow().peek(CTRL_REG1), 0x80 | 0x60 | 7 << 2);
-        assert_eq!(dev.borrow().peek(CTRL_REG3), r2p_drivers::lis3mdl::CTRL3_I2C_DISABLE);
+        assert_eq!(dev.borrow().peek(CTRL_REG3), 0, "continuous, 4-wire SPI");
         assert_eq!(dev.borrow().peek(0x23), 0b1100);
         assert_eq!(mag.read().unwrap(), None, "no sample before the first period");
         dev.borrow_mut().advance_with(13 * MS, input);
