@@ -7,7 +7,9 @@ use clap::{Parser, Subcommand};
 use crate::args::{open_link, BusArgs};
 use crate::error::CliError;
 use crate::session::Session;
-use crate::{echo, flash, keys, listing, magcal, monitor, param, publish, sim, traces, update};
+use crate::{
+    echo, flash, keys, listing, magcal, monitor, param, publish, record, sim, traces, update,
+};
 
 const ABOUT: &str = "R2P host tool: watch and talk to an R2P robot's CAN bus";
 
@@ -53,6 +55,9 @@ pub enum Command {
     /// Print every frame, decoded: class and laxity, message ID, fragment, sender, topic,
     /// management messages and topic values (one line per frame)
     Monitor(monitor::MonitorArgs),
+    /// Record the topics on the bus, decoded, into an MCAP file (Foxglove, the mcap
+    /// libraries): one channel per topic, JSON with each type's JSON Schema
+    Record(record::RecordArgs),
     /// List the nodes on the bus from their heartbeats (listens for --timeout)
     Nodes,
     /// List the advertised topics: name, type, publisher, class (joins the bus so that every
@@ -97,6 +102,7 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Convert(args) => traces::convert(&args, bus, out),
         Command::Replay(args) => traces::replay(&args, bus, out),
         Command::Monitor(args) => monitor::run(&args, bus, Session::new(open_link(bus)?), out),
+        Command::Record(args) => record::run(&args, bus, Session::new(open_link(bus)?), out),
         Command::Nodes => listing::nodes(bus, Session::new(open_link(bus)?), out),
         Command::Topics => listing::topics(bus, Session::new(open_link(bus)?), out),
         Command::Echo(args) => echo::run(&args, bus, Session::new(open_link(bus)?), out),

@@ -26,7 +26,9 @@ pub struct SimArgs {
     /// required without --realtime
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub seconds: Option<Duration>,
-    /// Write the bus's frames to FILE: pcap (Wireshark) if it ends in .pcap, else a candump log
+    /// Write the bus's frames to FILE: pcap (Wireshark) if it ends in .pcap, the decoded topics
+    /// as MCAP (Foxglove, the mcap library) if it ends in .mcap (without --realtime: for a live
+    /// bus, `r2p record`), else a candump log
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
     /// Override the robot file's seed (sensor noise and bus faults)
@@ -67,6 +69,12 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
     let name = robot.name.clone();
     let mut r = EmuRobot::build(robot).map_err(CliError::new)?;
     let log = args.log.as_ref().map(|p| p.display().to_string());
+    if args.realtime && log.as_deref().is_some_and(|p| p.ends_with(".mcap")) {
+        return Err(CliError::new(
+            "--realtime --log writes the served bus's frames (pcap or candump): record its topics \
+             as MCAP with `r2p record FILE.mcap` while it runs, or drop --realtime",
+        ));
+    }
     if !args.realtime {
         if let Some(a) = args.gateway {
             return Err(CliError::new(format!(
@@ -86,8 +94,12 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
         if let Some(csv) = &args.trajectory {
             write_trajectory(&mut r, seconds, csv)?;
         }
-        let wall = serve::run_virtual(&mut r.sim, seconds.as_secs_f64(), path, &bus.channel)
-            .map_err(CliError::new)?;
+        let wall = if path.ends_with(".mcap") {
+            record_virtual(&mut r, seconds, path)?
+        } else {
+            serve::run_virtual(&mut r.sim, seconds.as_secs_f64(), path, &bus.channel)
+                .map_err(CliError::new)?
+        };
         let p = r.world.borrow().pose();
         let (virt, wall_s) = (seconds.as_secs_f64(), wall.as_secs_f64().max(1e-9));
         if bus.json {
@@ -107,11 +119,12 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
         emit(
             out,
             &format!(
-                "r2p sim: {name}: {:.1} s of virtual time in {:.2} s ({:.0}x real time), {} frames written to {path}; base at x {:.3} m, y {:.3} m, heading {:.1}°",
+                "r2p sim: {name}: {:.1} s of virtual time in {:.2} s ({:.0}x real time), {} frames {} {path}; base at x {:.3} m, y {:.3} m, heading {:.1}°",
                 seconds.as_secs_f64(),
                 wall.as_secs_f64(),
                 seconds.as_secs_f64() / wall.as_secs_f64().max(1e-9),
                 r.sim.bus().frames().count(),
+                if path.ends_with(".mcap") { "on the bus, their topics decoded into" } else { "written to" },
                 p.x,
                 p.y,
                 p.theta.to_degrees()
@@ -165,6 +178,27 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
         z.shutdown();
     }
     emit(out, &summary.replacen("r2p-emu:", "r2p sim:", 1))
+}
+
+/// Runs `r` for `seconds` and writes what went over its bus as an MCAP recording (decoded
+/// topics, `crate::mcap_log`), stamped as `serve::run_virtual` stamps its traces. Returns the
+/// wall-clock time of the run.
+fn record_virtual(r: &mut EmuRobot, seconds: Duration, path: &str) -> Result<Duration, CliError> {
+    let wall = std::time::Instant::now();
+    r.sim.run_until(seconds.as_nanos() as u64);
+    let took = wall.elapsed();
+    let epoch = Duration::from_secs(serve::EPOCH_S);
+    let frames: Vec<r2p_canlink::Stamped> = r2p_emu::bus_frames(r.sim.bus())
+        .into_iter()
+        .map(|(t, _, frame)| r2p_canlink::Stamped { time: epoch + Duration::from_nanos(t), frame })
+        .collect();
+    let stats = crate::mcap_log::write_file(path, &frames)?;
+    eprintln!(
+        "r2p sim: {path}: {} messages on {} channels ({} of streams not advertised in the run or \
+         of unknown types, {} that did not decode)",
+        stats.messages, stats.channels, stats.unknown, stats.undecodable
+    );
+    Ok(took)
 }
 
 /// `tcp/HOST:PORT` (Zenoh's locator syntax; only TCP) as an address.

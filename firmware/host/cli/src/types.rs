@@ -520,6 +520,54 @@ impl MsgType {
         }
     }
 
+    /// A JSON Schema (draft 2020-12) of [`Self::record_json`]'s objects, for recordings
+    /// (`crate::mcap_log`): a generated type's fields, or `data` for a primitive topic. Floats
+    /// may be the strings "nan", "inf", "-inf" ([`Scalar::to_json`]).
+    pub fn json_schema(&self) -> serde_json::Value {
+        use serde_json::json;
+        let field = |f: &Field| {
+            let one = match f.prim {
+                Prim::Bool => json!({"type": "boolean"}),
+                Prim::F32 | Prim::F64 => json!({"type": ["number", "string"]}),
+                _ => json!({"type": "integer"}),
+            };
+            match f.len {
+                None => one,
+                Some(n) => json!({"type": "array", "items": one, "minItems": n, "maxItems": n}),
+            }
+        };
+        let (properties, required): (serde_json::Map<String, serde_json::Value>, Vec<String>) =
+            match &self.shape {
+                Shape::Empty => (serde_json::Map::new(), vec![]),
+                Shape::Plain(f) => (
+                    [("data".to_string(), field(f))].into_iter().collect(),
+                    vec!["data".to_string()],
+                ),
+                Shape::Struct(fields) => (
+                    fields.iter().map(|f| (f.name.clone(), field(f))).collect(),
+                    fields.iter().map(|f| f.name.clone()).collect(),
+                ),
+            };
+        json!({
+            "$schema": "https://json-schema.org/draft/2020-12/schema",
+            "title": self.name,
+            "type": "object",
+            "properties": properties,
+            "required": required,
+            "additionalProperties": false,
+        })
+    }
+
+    /// `decoded` as a JSON object (what recordings hold: readers such as Foxglove want one):
+    /// a generated type's fields, `{"data": value}` for a primitive topic, `{}` when empty.
+    pub fn record_json(&self, decoded: &Decoded) -> serde_json::Value {
+        match decoded {
+            Decoded::Empty => serde_json::json!({}),
+            Decoded::Plain(v) => serde_json::json!({ "data": v.to_json() }),
+            Decoded::Struct(_) => decoded.to_json(),
+        }
+    }
+
     /// Decodes a payload of this type; errors say what is wrong with the bytes.
     pub fn decode(&self, bytes: &[u8]) -> Result<Decoded, String> {
         if bytes.len() != self.size {
