@@ -444,15 +444,19 @@ def triskar2(runs: int = 3) -> list[dict]:
 TRAJECTORY_PLOT = ROOT / "docs" / "img" / "triskar2-trajectory.png"
 
 
-def plot_trajectory(seconds: int = 10) -> Path:
-    """The Triskar2's teleop script on emulated boards: true path, odometry, obstacles."""
+def plot_trajectory(seconds: int = 10, out: Path = TRAJECTORY_PLOT,
+                    r2p: Path = ROOT / "firmware" / "target" / "release" / "r2p") -> Path:
+    """The Triskar2's teleop script on emulated boards: true path, odometry, obstacles.
+
+    Reproducible byte for byte (tests/test_pictures.py): the run is deterministic (debug and
+    release builds of `r2p` give the same trajectory), the CSV rounds it, matplotlib is pinned
+    and brings its own FreeType and DejaVu fonts, and the PNG carries no software or date."""
     import csv
     import math
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.patches as mp
     import matplotlib.pyplot as plt
-    r2p = ROOT / "firmware" / "target" / "release" / "r2p"
     with tempfile.TemporaryDirectory() as tmp:
         subprocess.run([str(r2p), "sim", str(ROOT / "robots" / "triskar2.toml"), "--seconds", str(seconds),
                         "--log", f"{tmp}/run.log", "--trajectory", f"{tmp}/t.csv"],
@@ -479,9 +483,9 @@ def plot_trajectory(seconds: int = 10) -> Path:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="lower left")
     fig.tight_layout()
-    fig.savefig(TRAJECTORY_PLOT, metadata={"Software": None})
+    fig.savefig(out, metadata={"Software": None})
     plt.close(fig)
-    return TRAJECTORY_PLOT
+    return out
 
 
 def report_triskar2(rows: list[dict]) -> None:
