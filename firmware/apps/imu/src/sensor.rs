@@ -169,3 +169,104 @@ impl<I: RegisterBus, M: RegisterBus, B: RegisterBus> Sensors<I, M, B> {
         s
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A part as `Setup` sees it: whether its set-up succeeds, what its reads give, and how
+    /// often each was tried.
+    #[derive(Default)]
+    struct Part {
+        answers: bool,
+        inits: u32,
+        reads: u32,
+        next: Option<Reading<u8>>,
+    }
+
+    fn step(s: &mut Setup, p: &mut Part, now_us: u64) -> Reading<u8> {
+        s.poll(
+            p,
+            now_us,
+            50_000,
+            |p| {
+                p.inits += 1;
+                p.answers
+            },
+            |p| {
+                p.reads += 1;
+                p.next.take().unwrap_or(Reading::Idle)
+            },
+        )
+    }
+
+    #[test]
+    fn a_part_that_does_not_answer_is_tried_again_once_a_retry_period_later() {
+        let (mut s, mut p) = (Setup::default(), Part::default());
+        assert_eq!(step(&mut s, &mut p, 0), Reading::Failed);
+        assert_eq!((p.inits, p.reads), (1, 0), "set up at the first poll, not read");
+        for t in (1_000..RETRY_US).step_by(1_000) {
+            assert_eq!(step(&mut s, &mut p, t), Reading::Failed);
+        }
+        assert_eq!(p.inits, 1, "not before RETRY_US");
+        p.answers = true;
+        p.next = Some(Reading::Fresh(7));
+        assert_eq!(step(&mut s, &mut p, RETRY_US), Reading::Fresh(7));
+        assert_eq!((p.inits, p.reads), (2, 1));
+    }
+
+    #[test]
+    fn a_configured_part_silent_past_its_stale_time_is_set_up_again() {
+        let (mut s, mut p) = (Setup::default(), Part { answers: true, ..Part::default() });
+        p.next = Some(Reading::Fresh(1));
+        assert_eq!(step(&mut s, &mut p, 0), Reading::Fresh(1));
+        // Idle up to the stale time (50 ms) is a part between samples.
+        for t in (1_000..=50_000).step_by(1_000) {
+            assert_eq!(step(&mut s, &mut p, t), Reading::Idle);
+        }
+        assert_eq!(p.inits, 1);
+        // One more millisecond without a sample: lost (this read still reported as it was).
+        assert_eq!(step(&mut s, &mut p, 51_000), Reading::Idle);
+        assert_eq!(step(&mut s, &mut p, 52_000), Reading::Failed, "lost: not read");
+        let reads = p.reads;
+        assert_eq!(step(&mut s, &mut p, 51_000 + RETRY_US - 1), Reading::Failed);
+        assert_eq!((p.inits, p.reads), (1, reads));
+        p.next = Some(Reading::Fresh(2));
+        assert_eq!(step(&mut s, &mut p, 51_000 + RETRY_US), Reading::Fresh(2));
+        assert_eq!(p.inits, 2, "set up again a retry period after it was lost");
+    }
+
+    #[test]
+    fn a_failed_read_loses_the_part_until_the_retry() {
+        let (mut s, mut p) = (Setup::default(), Part { answers: true, ..Part::default() });
+        p.next = Some(Reading::Fresh(1));
+        assert_eq!(step(&mut s, &mut p, 0), Reading::Fresh(1));
+        // The set-up's retry time (RETRY_US after it) has passed: the retry is a full period
+        // after the failure, not at the earlier time.
+        p.next = Some(Reading::Failed);
+        assert_eq!(step(&mut s, &mut p, 2 * RETRY_US), Reading::Failed);
+        assert_eq!(step(&mut s, &mut p, 3 * RETRY_US - 1), Reading::Failed);
+        assert_eq!(p.inits, 1);
+        assert_eq!(step(&mut s, &mut p, 3 * RETRY_US), Reading::Idle);
+        assert_eq!(p.inits, 2);
+    }
+
+    #[test]
+    fn the_steps_sample_carries_the_lsm6dsos_read_and_the_node_status() {
+        let status = leds::Status { running: true, synced: true, ..leds::Status::default() };
+        let raw = RawSample { temp: 1, gyro: [2, 3, 4], accel: [5, 6, 7] };
+        let s = sample_of(Reading::Fresh(raw), status);
+        assert_eq!((s.fresh, s.raw, s.sensor_ok, s.status), (true, raw, true, status));
+        let s = sample_of(Reading::Idle, status);
+        assert_eq!((s.fresh, s.sensor_ok), (false, true));
+        let s = sample_of(Reading::Failed, leds::Status::default());
+        assert_eq!((s.fresh, s.sensor_ok, s.status), (false, false, leds::Status::default()));
+    }
+
+    #[test]
+    fn a_reading_is_fresh_idle_or_failed_as_the_driver_says() {
+        assert_eq!(reading::<u8, ()>(Ok(Some(3))), Reading::Fresh(3));
+        assert_eq!(reading::<u8, ()>(Ok(None)), Reading::Idle);
+        assert_eq!(reading::<u8, ()>(Err(())), Reading::Failed);
+    }
+}
