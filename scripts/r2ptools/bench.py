@@ -504,6 +504,26 @@ def report_triskar2(rows: list[dict]) -> None:
           "(frames, slot ticks, application and world steps)")
 
 
+def rtcan_failover(runs: int = 1000) -> dict:
+    """Master failover on the virtual bus (firmware/host/failoverbench): takeover time and HRT
+    cycles lost over `runs` random master deaths, deterministic."""
+    p = subprocess.run(["cargo", "run", "-q", "--release", "--locked", "-p", "r2p-failoverbench",
+                        "--", str(runs)], cwd=ROOT / "firmware", capture_output=True, text=True,
+                       check=True)
+    return next(r for r in json_lines(p.stdout) if r["bench"] == "rtcan_failover")
+
+
+def report_failover(f: dict) -> None:
+    print(f"\n=== RTCAN master failover (virtual bus, {f['runs']} master deaths spread over two "
+          "cycles; rank-1 standby; firmware/host/failoverbench)")
+    for key, what in (("takeover_cycles", "last sync of the old master to the new one's first"),
+                      ("hrt_cycles_lost", "HRT cycles a subscriber goes without")):
+        q = f[key]
+        print(f"{what:<52} min {q['min']:.2f}  median {q['median']:.2f}  p99 {q['p99']:.2f}  "
+              f"max {q['max']:.2f} cycles")
+    print("issue 22's goal: at most one HRT cycle lost (TTCAN's recovery within the basic cycle)")
+
+
 def main() -> int:
     try:
         m3 = cortex_m3()
@@ -513,6 +533,7 @@ def main() -> int:
         hs = host()
         load_points, load_sim = rtcan_load()
         load_seeds = rtcan_seeds()
+        failover = rtcan_failover()
         sim_rows = triskar2()
     except (RuntimeError, subprocess.CalledProcessError) as e:
         print(f"bench: {e}", file=sys.stderr)
@@ -594,6 +615,7 @@ def main() -> int:
     print(seeds_table(load_seeds))
     for path in plot_load(load_points):
         print(f"plot: {path.relative_to(ROOT)}")
+    report_failover(failover)
     report_triskar2(sim_rows)
     print(f"plot: {plot_trajectory().relative_to(ROOT)}")
     try:
