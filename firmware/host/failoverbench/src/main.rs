@@ -55,7 +55,7 @@ fn run(seed: u64, death_ns: u64) -> (f64, f64) {
     b.import(b_in).unwrap();
     let mut k = 0u32;
     let app_a = move |now: Micros, _: &mut DemoNode| {
-        if now >= 200_000 && now % PERIOD_US == 0 {
+        if now >= 200_000 && now.is_multiple_of(PERIOD_US) {
             let _ = a_pub.publish_with(|v| *v = k);
             k += 1;
         }
