@@ -258,3 +258,79 @@ def test_topic_payloads_decoded_by_type(pcap):
     assert checked > 2000
     # The base controller drives: setpoints leave 0 rad/s once it runs.
     assert len(setpoints) > 400 and any(abs(v) > 1.0 for v in setpoints)
+
+
+def write_pcap(path, frames: list[tuple[int, bytes]]) -> None:
+    """A pcap as firmware/host/canlink/src/pcap.rs writes it: LINKTYPE_CAN_SOCKETCAN, ID big-endian
+    with the EFF flag, length, 3 reserved bytes, data padded to 8."""
+    out = bytearray(struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 227))
+    for k, (raw, data) in enumerate(frames):
+        pkt = struct.pack(">I", raw | 0x8000_0000) + bytes([len(data), 0, 0, 0]) + data.ljust(8, b"\0")
+        out += struct.pack("<IIII", 1_700_000_000, k * 100, len(pkt), len(pkt)) + pkt
+    path.write_bytes(out)
+
+
+NRT = 63
+
+
+def mgmt_frames(node: int, payload: bytes) -> list[tuple[int, bytes]]:
+    return rtcan_fragment.fragments(NRT, node << 8, payload)
+
+
+# docs/middleware.md "Messages": every type the emulated robot does not send in 2 s, and two
+# malformed ones. (the message's bytes, field -> expected text)
+UID = bytes(range(1, 13))
+CRAFTED = [
+    (b"\x11" + UID + b"\x05motor\x01" + struct.pack("<IBBH", 3600, 2, 0, 7),        # the doc's example
+     {"r2p.mgmt.name": "motor", "r2p.mgmt.state": "1", "r2p.mgmt.uptime_s": "3600",
+      "r2p.mgmt.tx_errors": "2", "r2p.mgmt.dropped": "7", "r2p.message.length": "28",
+      "r2p.message.frames": "4"}),
+    (bytes.fromhex("13 12"), {"r2p.mgmt.type": "0x13", "r2p.mgmt.target": "18"}),
+    (bytes.fromhex("14 0B 61 2E 72 73 3A 37 3A 31 3A 20 78"), {"r2p.mgmt.panic": "a.rs:7:1: x"}),
+    (b"\x15" + struct.pack("<I", 0x01020103) + bytes(range(8)) + b"\x03psu\x01",
+     {"r2p.mgmt.version_text": "1.2.259", "r2p.mgmt.kind": "psu", "r2p.mgmt.on_trial": "1"}),
+    (b"\x51\x22\x03abc", {"r2p.mgmt.target": "34", "r2p.mgmt.update_len": "3",
+                          "r2p.mgmt.update_data": "616263"}),
+    (bytes.fromhex("24 01 7f 04 00 01"), {"r2p.mgmt.message_id": "0x7f01", "r2p.mgmt.hrt_period_cycles": "4",
+                                          "r2p.mgmt.frames": "1"}),
+    (bytes.fromhex("25 01 7f 04 00 00 00 01"), {"r2p.mgmt.hrt_result": "1", "r2p.mgmt.slot": "0"}),
+    (bytes.fromhex("41 05 0300"), {"r2p.mgmt.target": "5", "r2p.mgmt.param": "3"}),
+    (bytes.fromhex("42 05 0300 03") + struct.pack("<f", 2.5), {"r2p.mgmt.value_type": "3",
+                                                                "r2p.mgmt.value_f32": "2.5"}),
+    (bytes.fromhex("43 0300 02") + struct.pack("<i", -7), {"r2p.mgmt.value_i32": "-7"}),
+    (bytes.fromhex("43 0400 00 01000000"), {"r2p.mgmt.value_bool": "1"}),
+    (bytes.fromhex("44 0300 01"), {"r2p.mgmt.fault": "1"}),
+    (b"\x22\x07\x0bmotor1/spx\x00" + struct.pack("<IB", 0x06AD21EE, 4),
+     {"r2p.mgmt.target": "7", "_expert": "bad string"}),                             # NUL in a topic
+    (bytes.fromhex("13 12 00"), {"r2p.mgmt.target": "18", "_expert": "trailing bytes"}),
+]
+
+
+def test_every_management_type_and_malformed_ones(tmp_path):
+    frames = [(0x45 << 7, bytes.fromhex("07 00 00 00 00 00 00 00"))]           # sync, slots 1-2, epoch 1
+    ends = []
+    for payload, _ in CRAFTED:
+        frames += mgmt_frames(0x2A, payload)
+        ends.append(len(frames))
+    bad = bytearray(b"".join(d for _, d in rtcan_fragment.fragments(NRT, 0x2A00, CRAFTED[0][0])))
+    frames += mgmt_frames(0x2A, CRAFTED[0][0])[:-1] + [(rtcan_fragment.identifier(NRT, 0x2A00, 1),
+                                                        bytes(bad[24:27]) + b"\x00")]  # CRC broken
+    path = tmp_path / "crafted.pcap"
+    write_pcap(path, frames)
+    wanted = sorted({k for _, w in CRAFTED for k in w if not k.startswith("_")})
+    rows = tshark_fields(path, ["r2p.sync.cycle", "r2p.sync.epoch", "r2p.sync.slot", "r2p.sync.reservations",
+                                "r2p.mgmt.type", "_ws.expert.message"] + wanted)
+    assert (rows[1]["r2p.sync.cycle"], rows[1]["r2p.sync.epoch"], rows[1]["r2p.sync.slot"],
+            rows[1]["r2p.sync.reservations"]) == ("69", "1", "1,2", "0x0000000000000007")
+    for (payload, want), n in zip(CRAFTED, ends):
+        row = rows[n]
+        assert number(row["r2p.mgmt.type"]) == payload[0], (n, row)
+        for k, v in want.items():
+            if k == "_expert":
+                assert v in row["_ws.expert.message"], row
+            else:
+                assert row[k] == v, (payload.hex(), k, row[k], v)
+        if "_expert" not in want:
+            assert "Malformed" not in row["_ws.expert.message"], row
+    assert "does not match" in rows[len(frames)]["_ws.expert.message"]
+    assert rows[len(frames)]["r2p.mgmt.type"] == ""                              # never decoded
