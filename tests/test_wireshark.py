@@ -334,3 +334,21 @@ def test_every_management_type_and_malformed_ones(tmp_path):
             assert "Malformed" not in row["_ws.expert.message"], row
     assert "does not match" in rows[len(frames)]["_ws.expert.message"]
     assert rows[len(frames)]["r2p.mgmt.type"] == ""                              # never decoded
+
+
+def test_install_command_puts_the_dissector_where_wireshark_loads_it(pcap, tmp_path):
+    """scripts/wireshark/install, as docs/wireshark.md gives it, with HOME in a temporary folder:
+    tshark then decodes R2P with no -X option; --uninstall takes it away again."""
+    env = {"HOME": str(tmp_path)}
+    install = ROOT / "scripts" / "wireshark" / "install"
+    p = run([str(install)], env=env)
+    assert p.returncode == 0, p.stdout
+    plugin = tmp_path / ".local" / "lib" / "wireshark" / "plugins" / "r2p"
+    assert (plugin / "r2p.lua").resolve() == DISSECTOR and (plugin / "r2p_types.lua").is_file()
+    p = run(["tshark", "-r", str(pcap), "-T", "fields", "-e", "r2p.mgmt.name", "-Y", "r2p.mgmt.type == 0x11"],
+            env=env, timeout=300)
+    assert p.returncode == 0 and "psu" in p.stdout.split(), p.stdout[:500]
+    assert run([str(install), "--uninstall"], env=env).returncode == 0
+    assert not plugin.exists()
+    p = run(["tshark", "-G", "protocols"], env=env)
+    assert "\tr2p\n" not in p.stdout
