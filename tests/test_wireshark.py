@@ -62,9 +62,10 @@ def read_pcap(path) -> list[tuple[float, int, bytes]]:
     return out
 
 
-def tshark_fields(pcap, fields: list[str], display_filter: str | None = None) -> dict[int, dict[str, str]]:
+def tshark_fields(pcap, fields: list[str], display_filter: str | None = None,
+                  two_pass: bool = False) -> dict[int, dict[str, str]]:
     """frame number -> {field: tshark's text} (every occurrence, comma-separated)."""
-    cmd = ["tshark", "-r", str(pcap), "-X", f"lua_script:{DISSECTOR}", "-T", "fields",
+    cmd = ["tshark", *(["-2"] if two_pass else []), "-r", str(pcap), "-X", f"lua_script:{DISSECTOR}", "-T", "fields",
            "-E", "separator=\t", "-E", "occurrence=a", "-E", "aggregator=,", "-e", "frame.number"]
     for f in fields:
         cmd += ["-e", f]
@@ -230,6 +231,23 @@ def test_messages_reassembled_and_management_decoded(pcap):
     later = [int.from_bytes(d, "little") for k, (_, raw, d) in enumerate(frames, 1)
              if k > last + 200 and raw < 0x100 << 7 and raw & 0x7F == 0]
     assert later and all(w >> g[3] & 1 for w in later for _, g in grants)
+
+
+def test_two_passes_link_each_frame_to_its_message(pcap):
+    """As in the GUI (tshark -2): a message's earlier frames say where it was reassembled."""
+    frames = read_pcap(pcap)
+    rows = tshark_fields(pcap, ["r2p.message.frame", "r2p.reassembled_in", "r2p.mgmt.type"], "r2p", two_pass=True)
+    messages = 0
+    for n, row in rows.items():
+        if not row["r2p.message.frame"]:
+            continue
+        members = [int(k) for k in row["r2p.message.frame"].split(",")]
+        first = frames[members[0] - 1][1]
+        assert members[-1] == n and len(members) == first & 0x7F          # counters F … 1
+        assert {frames[k - 1][1] >> 7 & 0xFFFF for k in members} == {first >> 7 & 0xFFFF}
+        assert all(rows[k]["r2p.reassembled_in"] == str(n) for k in members[:-1])
+        messages += 1
+    assert messages > 300
 
 
 def test_topic_payloads_decoded_by_type(pcap):

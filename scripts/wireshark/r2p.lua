@@ -341,7 +341,7 @@ function Reader:value()
     else self.tree:add_le(M.value_f32, r); return string.format("%g", r:le_float()) end
 end
 
-local function dissect_management(tvb, tree, node, msg_id, number, first_pass)
+local function dissect_management(tvb, tree, node, first_pass)
     local t = tree:add(r2p, tvb(), "R2P management message")
     local r = reader(tvb, t)
     local summary
@@ -516,7 +516,11 @@ local function dissect(tvb, pinfo, tree)
     local cls = laxity == HRT_LAXITY and 0 or (laxity == NRT_LAXITY and 2 or 1)
     local node, index = bit32.rshift(msg_id, 8), bit32.band(msg_id, 0xFF)
     local number = pinfo.number
-    local first_pass = not pinfo.visited
+    -- A frame is reassembled once, in the first in-order pass that reaches it after init;
+    -- later visits (a click in the GUI, tshark -2's second pass) reuse what it found, and see
+    -- "reassembled in" on a message's earlier frames. (Not pinfo.visited: tshark -2 without a
+    -- filter skips dissection in its first pass, so frames arrive visited but never seen.)
+    local first_pass = frames[number] == nil
 
     pinfo.cols.protocol = "R2P"
     local t = tree:add(r2p, tvb(), "R2P (RTCAN)")
@@ -594,7 +598,7 @@ local function dissect(tvb, pinfo, tree)
     local msg_tvb
     if #r.frames > 1 then
         msg_tvb = r.message:tvb("R2P message")
-        local mt = t:add(F.msg_len, r.message:len()):set_generated()
+        t:add(F.msg_len, r.message:len()):set_generated()
         t:add(F.msg_frame_count, #r.frames):set_generated()
         for _, f in ipairs(r.frames) do t:add(F.msg_frames, f):set_generated() end
         t:add(F.msg_crc, r.crc):set_generated()
@@ -605,7 +609,7 @@ local function dissect(tvb, pinfo, tree)
 
     local info
     if index == 0 and node >= 1 then
-        info = dissect_management(msg_tvb, tree, node, msg_id, number, first_pass)
+        info = dissect_management(msg_tvb, tree, node, first_pass)
     elseif r.topic then
         info = dissect_topic(msg_tvb, tree, r.topic)
     else
