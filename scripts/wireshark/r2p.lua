@@ -585,13 +585,14 @@ local function dissect(tvb, pinfo, tree)
     if r.dropped then t:add_proto_expert_info(E.frag, r.status) end
     if r.reassembled_in then t:add(F.frag_in, r.reassembled_in):set_generated() end
     local where = string.format("0x%04X", msg_id)
+    local class_text = cls == 1 and string.format("SRT(%d)", laxity) or CLASS_NAMES[cls]
     if r.bad_crc then
         t:add_proto_expert_info(E.crc, r.status)
         pinfo.cols.info = where .. " [bad transfer CRC]"
         return tvb:len()
     end
     if not r.message then
-        pinfo.cols.info = string.format("%s %s %s", where, CLASS_NAMES[cls], r.status)
+        pinfo.cols.info = string.format("%s %s %s", where, class_text, r.status)
         return tvb:len()
     end
 
@@ -616,7 +617,7 @@ local function dissect(tvb, pinfo, tree)
         tree:add(F.msg_data, msg_tvb())
         info = string.format("%d B (no ADVERTISE seen for this stream)", msg_tvb:len())
     end
-    pinfo.cols.info = string.format("%s %s %s", where, CLASS_NAMES[cls], info)
+    pinfo.cols.info = string.format("%s %s %s", where, class_text, info)
     return tvb:len()
 end
 
