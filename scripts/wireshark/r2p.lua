@@ -151,7 +151,7 @@ local E = {
 -- ------------------------------------------------------------------ topic payload fields
 -- One display-filter field per schema field: r2p.<Type>.<field>, e.g. r2p.WheelSetpoint.value.
 local PRIMITIVE = {
-    bool = { 1, function(a, d) return ProtoField.bool(a, d) end },
+    bool = { 1, ProtoField.bool },   -- no bit mask: a nonzero byte is true
     int8 = { 1, ProtoField.int8 }, uint8 = { 1, ProtoField.uint8 },
     int16 = { 2, ProtoField.int16 }, uint16 = { 2, ProtoField.uint16 },
     int32 = { 4, ProtoField.int32 }, uint32 = { 4, ProtoField.uint32 },
@@ -166,12 +166,7 @@ for _, t in ipairs(TYPES) do
     for _, f in ipairs(t.fields) do
         local p = PRIMITIVE[f.type]
         local label = f.name .. (f.doc ~= "" and (" (" .. f.doc .. ")") or "")
-        local pf
-        if f.type == "bool" then
-            pf = ProtoField.bool("r2p." .. t.name .. "." .. f.name, label)
-        else
-            pf = p[2]("r2p." .. t.name .. "." .. f.name, label)
-        end
+        local pf = p[2]("r2p." .. t.name .. "." .. f.name, label)
         list[#list + 1] = { field = pf, width = p[1], count = f.count, name = f.name, type = f.type }
         F["t_" .. t.name .. "_" .. f.name] = pf
     end
