@@ -52,6 +52,8 @@ mod hrt_stream_tests;
 #[cfg(test)]
 mod import_request_tests;
 #[cfg(test)]
+mod liveness_tests;
+#[cfg(test)]
 mod master_side_tests;
 #[cfg(test)]
 mod master_timing_tests;

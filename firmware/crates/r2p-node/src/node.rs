@@ -36,6 +36,7 @@ mod config;
 mod error;
 mod events;
 mod hrt;
+mod liveness;
 mod management;
 mod stats;
 mod tdma;
@@ -47,6 +48,7 @@ pub use config::{
 pub use error::NodeError;
 pub use events::{Event, EVENT_QUEUE};
 pub use hrt::{HrtState, MASTER_STREAMS};
+pub use liveness::PEER_TIMEOUT_HEARTBEATS;
 pub use management::{PANIC_REPORT_EVERY, STARTING_HEARTBEATS};
 pub use stats::NodeStats;
 pub use topics::{nrt_reserve, ImportState};
@@ -125,6 +127,8 @@ pub struct Node<
     clock: SlotClock,
     failover: Failover,
     scheduler: Scheduler<MASTER_STREAMS>,
+    /// The nodes holding reservations in `scheduler`, followed by their heartbeats (master).
+    owners: Vec<liveness::Owner, { liveness::OWNERS }>,
     master: Option<MasterCycle>,
     /// What is loaded in the controller in slotted mode (HRT exports by index).
     slot_tx: SlotTx<usize>,
@@ -192,6 +196,7 @@ impl<
             clock: SlotClock::new(config.cycle),
             failover: Failover::new(rank, config.cycle.cycle_us, 0),
             scheduler: Scheduler::new(config.hrt_slots, config.cycle.slots),
+            owners: Vec::new(),
             master: None,
             slot_tx: SlotTx::new(&config.cycle, config.free_slots),
             filters_for: None,
@@ -278,7 +283,7 @@ impl<
             match decoded {
                 Ok(msg @ (Message::HrtRequest { .. } | Message::HrtGrant { .. })) => {
                     if CYCLE {
-                        self.on_hrt_management(from, msg);
+                        self.on_hrt_management(from, msg, r.at);
                     }
                 }
                 Ok(msg) => self.on_management(from, msg, r.at),
@@ -325,6 +330,8 @@ impl<
         }
 
         if now >= self.next_heartbeat {
+            // Once a heartbeat period, not every slot: off the slot path's usual length.
+            self.expire_owners(now);
             let state = if self.heartbeats < STARTING_HEARTBEATS {
                 ModuleState::Starting
             } else {

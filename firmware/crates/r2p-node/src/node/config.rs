@@ -67,10 +67,10 @@ pub struct SlotPath {
 
 /// The slot path built for the F103's Cortex-M3 (thumbv7m).
 pub const CORTEX_M3_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_979, max_instructions: 2_084 };
+    SlotPath { min_instructions: 1_974, max_instructions: 2_079 };
 /// The slot path built for the F407's Cortex-M4F (thumbv7em, hard float).
 pub const CORTEX_M4_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_984, max_instructions: 2_089 };
+    SlotPath { min_instructions: 1_979, max_instructions: 2_084 };
 
 impl SlotPath {
     /// The slot lead for a core clocked at `sysclk_hz` (µs): the shortest path at one cycle per
@@ -127,7 +127,7 @@ mod tests {
 
     #[test]
     fn each_mcu_leads_by_its_shortest_slot_path_rounded_down() {
-        // 1 979 / 72 = 27.5 µs; 1 984 / 168 = 11.8 µs.
+        // 1 974 / 72 = 27.4 µs; 1 979 / 168 = 11.8 µs.
         assert_eq!(MODULE_SLOT_LEAD_US, 27);
         assert_eq!(CORTEX_M4_SLOT_PATH.lead_us(168_000_000), 11);
         // Exactly on a microsecond: not rounded.
@@ -138,7 +138,7 @@ mod tests {
 
     #[test]
     fn the_emulated_path_is_the_longest_rounded_up() {
-        // 2 084 / 72 = 28.9 µs; 2 089 / 168 = 12.4 µs.
+        // 2 079 / 72 = 28.9 µs; 2 084 / 168 = 12.4 µs.
         assert_eq!(CORTEX_M3_SLOT_PATH.longest_us(72_000_000), 29);
         assert_eq!(CORTEX_M4_SLOT_PATH.longest_us(168_000_000), 13);
         let p = SlotPath { min_instructions: 145, max_instructions: 145 };

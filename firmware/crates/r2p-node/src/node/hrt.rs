@@ -65,7 +65,7 @@ impl<
     }
 
     /// HRT_REQUEST (answered as master) and HRT_GRANT (for this node's streams).
-    pub(super) fn on_hrt_management(&mut self, from: NodeId, msg: Message) {
+    pub(super) fn on_hrt_management(&mut self, from: NodeId, msg: Message, now: Micros) {
         let me = self.ids.node_id();
         match msg {
             Message::HrtRequest { message_id, period_cycles, frames }
@@ -84,6 +84,9 @@ impl<
                     }
                     _ => Err(HrtResult::Conflict),
                 };
+                if granted.is_ok() {
+                    self.owner_granted(from, now);
+                }
                 let (offset, slot, result) = match granted {
                     Ok(p) => (p.offset, p.slot, HrtResult::Ok),
                     Err(r) => (0, 0, r),

@@ -210,10 +210,11 @@ impl<
             return;
         }
         match msg {
-            Message::Heartbeat { uid, state, .. } => {
+            Message::Heartbeat { uid, state, uptime_s, .. } => {
                 if uid == self.config.uid {
                     return; // our own heartbeat echoed back
                 }
+                self.owner_heard(from, state, uptime_s, now);
                 // The conflict rule compares what the two modules' heartbeats say: ours have
                 // said `Starting` until the first STARTING_HEARTBEATS are sent.
                 let starting = state == ModuleState::Starting;

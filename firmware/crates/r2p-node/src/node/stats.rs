@@ -31,6 +31,9 @@ pub struct NodeStats {
     pub late_withdrawals: u32,
     /// HRT reservations the master refused to this node.
     pub hrt_refused: u32,
+    /// As master: reservations released because their node went silent or rebooted
+    /// (`node::liveness`).
+    pub hrt_released: u32,
     /// Frames that are neither on a management stream nor on a subscribed stream: other
     /// modules' traffic, or garbage. Dropped.
     pub unknown_frames: u32,

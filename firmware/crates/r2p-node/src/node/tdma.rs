@@ -236,6 +236,7 @@ impl<
         if let Some(s) = a.start_syncing.filter(|_| MASTER) {
             self.master = Some(MasterCycle { cycle: s.cycle, next_sync: s.at, epoch: s.epoch });
             self.scheduler.clear();
+            self.owners.clear();
             self.clock.reset();
         }
         if a.stop_syncing {
