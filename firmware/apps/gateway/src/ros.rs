@@ -173,6 +173,22 @@ pub struct Latest {
     pub mirrored: [crate::Mirrored; MIRRORED.len()],
 }
 
+impl Latest {
+    /// Nothing received yet: the initial value of a `static` (`Default` is not `const`).
+    pub const NONE: Latest = Latest {
+        odom: None,
+        battery: None,
+        proximity: None,
+        imu: None,
+        mag: None,
+        baro: None,
+        gnss: None,
+        status: None,
+        mirrored: [crate::Mirrored { bytes: [0; crate::app::MIRROR_MAX], len: 0, count: 0 };
+            MIRRORED.len()],
+    };
+}
+
 /// The gateway's ROS 2 node on a Zenoh session.
 pub struct RosBridge {
     session: Session,

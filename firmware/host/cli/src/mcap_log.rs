@@ -117,11 +117,6 @@ impl<W: Write + Seek> McapLog<W> {
         Ok(())
     }
 
-    /// What was written so far.
-    pub fn stats(&self) -> McapStats {
-        self.stats
-    }
-
     /// Writes the summary and the footer.
     pub fn finish(mut self) -> Result<McapStats, CliError> {
         self.writer.finish().map_err(mcap_error)?;

@@ -187,12 +187,7 @@ fn record_virtual(r: &mut EmuRobot, seconds: Duration, path: &str) -> Result<Dur
     let wall = std::time::Instant::now();
     r.sim.run_until(seconds.as_nanos() as u64);
     let took = wall.elapsed();
-    let epoch = Duration::from_secs(serve::EPOCH_S);
-    let frames: Vec<r2p_canlink::Stamped> = r2p_emu::bus_frames(r.sim.bus())
-        .into_iter()
-        .map(|(t, _, frame)| r2p_canlink::Stamped { time: epoch + Duration::from_nanos(t), frame })
-        .collect();
-    let stats = crate::mcap_log::write_file(path, &frames)?;
+    let stats = crate::mcap_log::write_file(path, &serve::stamped_frames(r.sim.bus()))?;
     eprintln!(
         "r2p sim: {path}: {} messages on {} channels ({} of streams not advertised in the run or \
          of unknown types, {} that did not decode)",

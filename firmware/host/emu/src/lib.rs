@@ -475,6 +475,21 @@ pub fn bus_frames(bus: &Bus) -> Vec<(u64, usize, CanFrame)> {
         .collect()
 }
 
+/// The syncs that went out on `bus`: (start of frame ns, sender port), in order.
+pub fn sync_starts(bus: &Bus) -> Vec<(u64, usize)> {
+    bus.trace()
+        .into_iter()
+        .filter_map(|e| match e.kind {
+            r2p_vbus::EventKind::Sent { start_ns, frame, .. }
+                if rtcan::SyncFrame::from_frame(&frame).is_ok() =>
+            {
+                Some((start_ns, e.port))
+            }
+            _ => None,
+        })
+        .collect()
+}
+
 /// Writes `bus`'s frames as a candump log (see [`Sim::write_candump`]).
 pub fn write_candump<W: Write>(bus: &Bus, out: W, channel: &str, epoch: Duration) -> io::Result<W> {
     let mut w = LogWriter::new(out, channel);

@@ -50,19 +50,25 @@ pub fn run_virtual<N: Runtime>(
     sim.run_until((seconds * 1e9) as u64);
     let took = wall.elapsed();
     if path.ends_with(".pcap") {
-        let frames: Vec<Stamped> = crate::bus_frames(sim.bus())
-            .into_iter()
-            .map(|(t, _, frame)| Stamped {
-                time: Duration::from_secs(EPOCH_S) + Duration::from_nanos(t),
-                frame,
-            })
-            .collect();
-        write_pcap(BufWriter::new(file), &frames).map_err(|e| format!("writing {path}: {e}"))?;
+        write_pcap(BufWriter::new(file), &stamped_frames(sim.bus()))
+            .map_err(|e| format!("writing {path}: {e}"))?;
     } else {
         sim.write_candump(BufWriter::new(file), channel, Duration::from_secs(EPOCH_S))
             .map_err(|e| format!("writing the log: {e}"))?;
     }
     Ok(took)
+}
+
+/// The frames `bus` carried, stamped as virtual-time traces are: [`EPOCH_S`] plus their end of
+/// frame.
+pub fn stamped_frames(bus: &r2p_vbus::Bus) -> Vec<Stamped> {
+    crate::bus_frames(bus)
+        .into_iter()
+        .map(|(t, _, frame)| Stamped {
+            time: Duration::from_secs(EPOCH_S) + Duration::from_nanos(t),
+            frame,
+        })
+        .collect()
 }
 
 /// Runs `sim` against the wall clock with a socketcand server on `opts.addr`; tools' frames

@@ -125,16 +125,7 @@ fn hrt_frames(sim: &Sim<'static, EmuNode>) -> Vec<(u64, u64, Frame)> {
 
 /// Start of frame of every sync on the bus, with its sender port.
 fn syncs(sim: &Sim<'static, EmuNode>) -> Vec<(u64, usize)> {
-    sim.bus()
-        .trace()
-        .into_iter()
-        .filter_map(|e| match e.kind {
-            EventKind::Sent { start_ns, frame, .. } if SyncFrame::from_frame(&frame).is_ok() => {
-                Some((start_ns, e.port))
-            }
-            _ => None,
-        })
-        .collect()
+    r2p_emu::sync_starts(sim.bus())
 }
 
 /// Checks every HRT frame starting at or after `from_ns`: each starts in slot `slot` of its

@@ -19,9 +19,9 @@ use r2p_emu::demo::{tdma, DemoNode};
 use r2p_emu::{Mode, Sim};
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use r2p_node::{NoParams, RemotePublisher, RemoteSubscriber};
-use r2p_vbus::{Config, EventKind};
+use r2p_vbus::Config;
 use rtcan::failover::Role;
-use rtcan::{Micros, SyncFrame};
+use rtcan::Micros;
 
 const MS: u64 = 1_000_000;
 const CYCLE_NS: u64 = 10_000_000;
@@ -75,17 +75,7 @@ fn run(seed: u64, death_ns: u64) -> (f64, f64) {
     sim.run_until(death_ns + 1_500 * MS);
     assert_eq!(sim.node(2).role(), Role::Master, "the standby took over");
 
-    let syncs: Vec<(u64, usize)> = sim
-        .bus()
-        .trace()
-        .into_iter()
-        .filter_map(|e| match e.kind {
-            EventKind::Sent { start_ns, frame, .. } if SyncFrame::from_frame(&frame).is_ok() => {
-                Some((start_ns, e.port))
-            }
-            _ => None,
-        })
-        .collect();
+    let syncs = r2p_emu::sync_starts(sim.bus());
     let last_old = syncs.iter().filter(|s| s.1 == 0).map(|s| s.0).max().unwrap();
     let first_new = syncs.iter().filter(|s| s.1 == 2).map(|s| s.0).min().unwrap();
     let takeover = (first_new - last_old) as f64 / CYCLE_NS as f64;

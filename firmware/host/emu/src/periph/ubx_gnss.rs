@@ -739,38 +739,53 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_ublox_crate_decodes_our_nav_pvt_over_the_uart() {
-        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, GEOID_M, 5, 0);
-        let mut gnss = UbxGnssModel::new(rx, 5, NOON, 475_218_000);
+    /// Runs `gnss` every 10 ms over `ms` with the antenna still at `enu` moving at `velocity`, on
+    /// a 115 200 baud line, and maps each NAV-PVT the `ublox` crate decodes off it.
+    fn nav_pvts<T>(
+        gnss: &mut UbxGnssModel,
+        ms: core::ops::Range<u64>,
+        enu: [f64; 3],
+        velocity: [f64; 3],
+        take: impl Fn(&ublox::packets::nav_pvt::proto23::NavPvtRef<'_>) -> T,
+    ) -> Vec<T> {
         let mut uart = SimUart::new(115_200, 4096);
         let mut parser = Parser::<_, Proto23>::new(Vec::new());
         let mut seen = Vec::new();
-        for ms in (0..30_000u64).step_by(10) {
+        for ms in ms.step_by(10) {
             let t = ms * 1_000_000;
-            gnss.update(t, &mut uart, [12.0, -3.0, 0.5], [0.3, 0.4, 0.0]);
+            gnss.update(t, &mut uart, enu, velocity);
             uart.advance_to(t);
             let mut buf = [0u8; 256];
             let n = uart.read(&mut buf).unwrap_or(0);
             let mut it = parser.consume_ubx(&buf[..n]);
             while let Some(p) = it.next() {
                 if let Ok(UbxPacket::Proto23(PacketRef::NavPvt(pvt))) = p {
-                    seen.push((
-                        pvt.itow(),
-                        pvt.fix_type(),
-                        pvt.num_satellites(),
-                        pvt.latitude(),
-                        pvt.longitude(),
-                        pvt.height_above_ellipsoid(),
-                        pvt.ground_speed_2d(),
-                        pvt.heading_motion(),
-                        pvt.sec(),
-                        pvt.horizontal_accuracy(),
-                        pvt.vertical_accuracy(),
-                    ));
+                    seen.push(take(&pvt));
                 }
             }
         }
+        seen
+    }
+
+    #[test]
+    fn the_ublox_crate_decodes_our_nav_pvt_over_the_uart() {
+        let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, GEOID_M, 5, 0);
+        let mut gnss = UbxGnssModel::new(rx, 5, NOON, 475_218_000);
+        let seen = nav_pvts(&mut gnss, 0..30_000, [12.0, -3.0, 0.5], [0.3, 0.4, 0.0], |pvt| {
+            (
+                pvt.itow(),
+                pvt.fix_type(),
+                pvt.num_satellites(),
+                pvt.latitude(),
+                pvt.longitude(),
+                pvt.height_above_ellipsoid(),
+                pvt.ground_speed_2d(),
+                pvt.heading_motion(),
+                pvt.sec(),
+                pvt.horizontal_accuracy(),
+                pvt.vertical_accuracy(),
+            )
+        });
         // 5 Hz for 30 s, the last epoch's bytes still on the wire.
         assert!((148..=150).contains(&seen.len()), "{} epochs", seen.len());
         let early = seen[0];
@@ -1099,22 +1114,8 @@ mod tests {
         // Powered up at 100.3 s at 1 Hz: the first epoch at 101 s, no fix until 126.3 s.
         let rx = GnssReceiver::new(GnssParams::UBLOX_M8, ORIGIN, GEOID_M, 1, 0);
         let mut gnss = UbxGnssModel::new(rx, 1, NOON, 0).powered_at(100_300_000_000);
-        let mut uart = SimUart::new(115_200, 4096);
-        let mut parser = Parser::<_, Proto23>::new(Vec::new());
-        let mut seen = Vec::new();
-        for ms in (100_300..140_000u64).step_by(10) {
-            let t = ms * 1_000_000;
-            gnss.update(t, &mut uart, [0.0; 3], [0.0; 3]);
-            uart.advance_to(t);
-            let mut buf = [0u8; 256];
-            let n = uart.read(&mut buf).unwrap_or(0);
-            let mut it = parser.consume_ubx(&buf[..n]);
-            while let Some(p) = it.next() {
-                if let Ok(UbxPacket::Proto23(PacketRef::NavPvt(pvt))) = p {
-                    seen.push((pvt.sec(), pvt.fix_type()));
-                }
-            }
-        }
+        let seen =
+            nav_pvts(&mut gnss, 100_300..140_000, [0.0; 3], [0.0; 3], |p| (p.sec(), p.fix_type()));
         // UTC seconds of the world (NOON + t): 101 s after noon is 12:01:41.
         assert_eq!(seen[0], (41, GnssFixType::NoFix));
         let first_fix = seen.iter().position(|s| s.1 == GnssFixType::Fix3D).unwrap();

@@ -145,17 +145,7 @@ static ENDPOINTS: Storage = Storage::new();
 static CMD_VEL: OutboundCell<Twist2D, { pool_size(&[2], 1) }, 1, 2> = OutboundCell::new();
 /// The latest values the ROS 2 side publishes (the application's step writes them).
 static LATEST: cortex_m::interrupt::Mutex<Cell<Latest>> =
-    cortex_m::interrupt::Mutex::new(Cell::new(Latest {
-        odom: None,
-        battery: None,
-        proximity: None,
-        imu: None,
-        mag: None,
-        baro: None,
-        gnss: None,
-        status: None,
-        mirrored: [r2p_app_gateway::Mirrored { bytes: [0; 16], len: 0, count: 0 }; 5],
-    }));
+    cortex_m::interrupt::Mutex::new(Cell::new(Latest::NONE));
 static LINK: BusLink = BusLink::new();
 static NODE: StaticCell<GatewayNode> = StaticCell::new();
 

@@ -42,7 +42,7 @@ use r2p_app_base as base;
 use r2p_app_gateway::params::{followed_by, Offset};
 use r2p_app_gateway::ros::{zid_of, Latest, RosBridge, RosConfig};
 use r2p_app_gateway::server::{self, serve};
-use r2p_app_gateway::{App, BusLink, BusTap, Mirrored, NetState, Sample, Storage};
+use r2p_app_gateway::{App, BusLink, BusTap, NetState, Sample, Storage};
 use r2p_app_imu::attitude::Attitude;
 use r2p_module::leds;
 use r2p_msgs::{
@@ -66,17 +66,7 @@ static ENDPOINTS: Storage = Storage::new();
 static LINK: BusLink = BusLink::new();
 /// The latest values for the ROS 2 task, as the image keeps them.
 static LATEST: cortex_m::interrupt::Mutex<Cell<Latest>> =
-    cortex_m::interrupt::Mutex::new(Cell::new(Latest {
-        odom: None,
-        battery: None,
-        proximity: None,
-        imu: None,
-        mag: None,
-        baro: None,
-        gnss: None,
-        status: None,
-        mirrored: [Mirrored { bytes: [0; 16], len: 0, count: 0 }; 5],
-    }));
+    cortex_m::interrupt::Mutex::new(Cell::new(Latest::NONE));
 /// The base controller's topics for the `/cmd_vel` count (its `cmd_vel` the bridge feeds).
 static BASE_CMD: base::Storage = base::Storage::new();
 
@@ -363,7 +353,7 @@ fn ros_events() -> Ros {
         baro: Some(Barometer::default()),
         gnss: Some(GnssFix::default()),
         status: Some(r2p_msgs::GatewayStatus::default()),
-        mirrored: [Mirrored::default(); 5],
+        ..Latest::NONE
     };
     // Two seconds; the second is counted (the first poll publishes every topic at once).
     let mut start = 0;
