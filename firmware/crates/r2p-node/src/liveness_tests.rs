@@ -121,3 +121,27 @@ fn a_rebooted_node_registers_again_even_with_another_period() {
     assert!(granted(&a, 0), "{:?}", a.hrt_state(0));
     assert_eq!(bus.violations(), 0);
 }
+
+#[test]
+fn a_live_node_keeps_its_slot_as_its_uptime_grows() {
+    // Heartbeats every 20 ms for 3.5 s: the uptime they carry goes 0, 1, 2, 3 — a node that
+    // keeps running is never taken for one that rebooted.
+    static T: Topic<'static, u8, { pool_size(&[1], 1) }, 1> = Topic::new("left", 0);
+    static P: Publisher<'static, u8> = Publisher::new(&T, EVERY_CYCLE);
+    static O: RemoteSubscriber<'static, u8, 1> = RemoteSubscriber::new(&P);
+    static L: Topic<'static, u8, { pool_size(&[4], 1) }, 1> = Topic::new("left", 0);
+    static LP: Publisher<'static, u8> = Publisher::new(&L, Class::NonRealTime);
+    static I: RemotePublisher<'static, u8> = RemotePublisher::new(&LP, &L);
+    static S: Subscriber<'static, u8, 4> = Subscriber::new();
+    T.subscribe(&O).unwrap();
+    L.subscribe(&S).unwrap();
+    let bus = Bus::<3>::slotted(CYCLE);
+    let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
+    let mut a = TestNode::new(tdma(2, "a", None), &NoParams).unwrap();
+    let mut b = TestNode::new(tdma(3, "b", None), &NoParams).unwrap();
+    a.export(&O).unwrap();
+    b.import(&I).unwrap();
+    run_slots(&bus, &mut [&mut m, &mut a, &mut b], 3_500_000);
+    assert!(granted(&a, 0));
+    assert_eq!(m.stats().hrt_released, 0);
+}
