@@ -393,7 +393,7 @@ def build(core: Sheet) -> Module:
     # over-current: the Hall sensor's raw output against a window from the same 3.3 V (ratiometric
     # like the sensor): U105 pulls DRV_FAULT low above OC_HI, U106 below OC_LO (calc/motor.py)
     s.part("R121", "R_10k", {"1": "+3V3", "2": "OC_HI"})
-    s.part("R122", "R_100k", {"1": "OC_HI", "2": "OC_LO"})
+    s.part("R122", "R_56k", {"1": "OC_HI", "2": "OC_LO"})
     s.part("R123", "R_10k", {"1": "OC_LO", "2": "GND"})
     s.part("U105", "LMV331", {"1": "OC_HI", "3": "HALL_OUT", "4": "DRV_FAULT", "5": "+3V3", "2": "GND"})
     s.part("U106", "LMV331", {"1": "HALL_OUT", "3": "OC_LO", "4": "DRV_FAULT", "5": "+3V3", "2": "GND"})

@@ -24,6 +24,7 @@ def _v(what: str) -> str:
     return _ROWS[what].value
 
 
+_SHORT = f"current at switch-off, motor leads shorted, {calc.MOTOR_V_RATED:.0f} V supply"
 _REFRESH = f"bootstrap refresh at the firmware's maximum duty {calc.max_duty():.2f}"
 
 DRAWING = {
@@ -92,7 +93,7 @@ BLOCKS = [
                 f"{_v(f'driver VDD at the {calc.VIN_MIN:.0f} V minimum input')} at {calc.VIN_MIN:.0f} V in. "
                 f"Q106 {_v('Q106 dissipation at the over-voltage trip')}.\n"
                 f"Dead time {_v('dead time vs turn-off + driver skew (50 ns)')}:\n"
-                "TIM1's 500 ns + R105's DEL delay.\n"
+                f"TIM1's {calc.DEAD_TIME_S * 1e9:.0f} ns + R105's DEL delay.\n"
                 f"Switching {_v('switching times (Q_gs/2 + Q_gd) / I_gate')}.\n"
                 f"C114/C115 470 nF: droop {_v('bootstrap droop over the longest on-time')};\n"
                 f"at duty {calc.max_duty():.2f}: {_v(_REFRESH)}.\n"
@@ -101,8 +102,8 @@ BLOCKS = [
     Block("Over-current window", 4, 87, 56, 113, notes=[
         (38, 112.3, "U105/U106 on the ACS725's HALL_OUT,\nopen drain into DRV_FAULT (TIM1_BKIN).\n"
                     f"Trip {_v('over-current trip (U105/U106 → DRV_FAULT → TIM1_BKIN)')}:\n"
-                    "10 k / 100 k / 10 k from 3.3 V\n(ratiometric, like the sensor).\n"
-                    f"Shorted leads: {_v('current at switch-off, motor leads shorted')}\nat switch-off (≤ 400 A I_DM)."),
+                    "10 k / 56 k / 10 k from 3.3 V\n(ratiometric, like the sensor).\n"
+                    f"Shorted leads: {_v(_SHORT)}\nat switch-off at {calc.MOTOR_V_RATED:.0f} V (≤ 400 A I_DM)."),
     ]),
     Block("Supply sense and over-voltage trip", 72, 82, 117, 113, notes=[
         (73, 112.3, f"VMOT_SENSE = VMOT × 10 k / 160 k: full scale {_v('VMOT_SENSE full scale')}.\n"

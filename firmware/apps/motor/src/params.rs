@@ -82,9 +82,9 @@ params! {
         "Position loop (200 Hz) gain: speed setpoint per rad of error.";
     9 MAX_SPEED max_speed: f32 = 50.0, 0.1, 1_000.0, "rad/s",
         "Output-shaft speed limit of the speed and position modes.";
-    10 CURRENT_LIMIT current_limit: f32 = 10.0, 0.1, 28.0, "A",
-        "Clamps the current setpoint in every mode (the board's 28 A peak for 10 s; 20 A continuous on its heatsink).";
-    11 TRIP_CURRENT trip_current: f32 = 14.0, 1.0, 28.5, "A",
+    10 CURRENT_LIMIT current_limit: f32 = 10.0, 0.1, 23.0, "A",
+        "Clamps the current setpoint in every mode (the board's 23 A peak for 10 s; 20 A continuous on its heatsink).";
+    11 TRIP_CURRENT trip_current: f32 = 14.0, 1.0, 24.5, "A",
         "Over-current trip threshold on the measured current (keep above `current_limit`).";
     12 TRIP_MS trip_ms: u32 = 5, 1, 100, "ms",
         "How long the current must stay above `trip_current` to trip (fault bit 0).";

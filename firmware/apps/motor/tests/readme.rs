@@ -33,5 +33,5 @@ fn the_section_lists_every_parameter_and_topic() {
     for t in ["setpoint", "clear_faults", "state", "fault"] {
         assert!(s.contains(&format!("`<name>/{t}`")), "{t}");
     }
-    assert!(s.contains("| 10 | `current_limit` | 10 | 0.1 … 28 | A |"), "{s}");
+    assert!(s.contains("| 10 | `current_limit` | 10 | 0.1 … 23 | A |"), "{s}");
 }

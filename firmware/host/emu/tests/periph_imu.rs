@@ -67,7 +67,7 @@ impl Rig {
     }
 }
 
-/// Spins the Triskar2 in place (3 s to steady state at 4.157 rad/s), then reads the IMU for
+/// Spins the Triskar2 in place (3 s to steady state at 4.107 rad/s), then reads the IMU for
 /// 1 s whenever it flags new gyro data. Returns (samples, expected noise-free reading, ω).
 fn spin_and_read<B: RegisterBus>(
     rig: &mut Rig,
@@ -114,9 +114,9 @@ fn check_spin(samples: &[[f32; 6]], e: &ImuReading, wz: f64) {
             e.accel[k]
         );
     }
-    // And the truth within the datasheet's offset and sensitivity bounds: ω = 4.157 rad/s,
-    // centripetal −ω²·0.1 m = −1.73 m/s² on x, +1 g on z.
-    assert!((wz - 4.157).abs() < 0.001, "{wz}");
+    // And the truth within the datasheet's offset and sensitivity bounds: ω = 4.107 rad/s,
+    // centripetal −ω²·0.1 m = −1.69 m/s² on x, +1 g on z.
+    assert!((wz - 4.107).abs() < 0.001, "{wz}");
     assert!((mean(2) - wz).abs() < 0.01 * wz + 1f64.to_radians() + g_tol, "{} vs {wz}", mean(2));
     let ax = -wz * wz * 0.1;
     assert!((mean(3) - ax).abs() < 0.01 * ax.abs() + 0.020 * 9.81 + a_tol, "{} vs {ax}", mean(3));

@@ -43,12 +43,12 @@ pub struct HBridgeParams {
 }
 
 impl HBridgeParams {
-    /// 20 kHz PWM (above hearing), 500 ns dead time, 10 mΩ MOSFETs, 0.7 V diodes, 50 mA
-    /// reversal band: a discrete 40 V MOSFET bridge of the 70 W class (assumed values; the
-    /// robot file sets the first three).
+    /// 20 kHz PWM (above hearing), 610 ns dead time (hardware/motor's: TIM1's 100 ns plus the
+    /// HIP4082's turn-on delay, 270-750 ns at 25 °C, taken in the middle), 10 mΩ MOSFETs,
+    /// 0.7 V diodes, 50 mA reversal band (the robot file sets the first three).
     pub const DEFAULT: HBridgeParams = HBridgeParams {
         pwm_hz: 20_000.0,
-        dead_time_s: 500e-9,
+        dead_time_s: 610e-9,
         switch_resistance_ohm: 0.010,
         diode_drop_v: 0.7,
         dead_time_band_a: 0.05,
@@ -196,20 +196,20 @@ mod tests {
 
     #[test]
     fn locked_antiphase_average_with_dead_time() {
-        // td·f = 0.5 µs · 20 kHz = 1 % of the period per leg, two legs: 2 % of 24 V = 0.48 V
-        // against the current.
+        // td·f = 0.61 µs · 20 kHz = 1.22 % of the period per leg, two legs: 2.44 % of 24 V =
+        // 0.59 V against the current.
         let b = bridge(HBridgeInput::signed(0.5));
-        assert!((volts(b.terminal(24.0, 3.0)) - (0.5 - 0.02) * 24.0).abs() < 1e-12);
-        assert!((volts(b.terminal(24.0, -3.0)) - (0.5 + 0.02) * 24.0).abs() < 1e-12);
+        assert!((volts(b.terminal(24.0, 3.0)) - (0.5 - 0.0244) * 24.0).abs() < 1e-12);
+        assert!((volts(b.terminal(24.0, -3.0)) - (0.5 + 0.0244) * 24.0).abs() < 1e-12);
         // Inside the reversal band the error scales with the current: none at 0 A.
         assert!((volts(b.terminal(24.0, 0.0)) - 12.0).abs() < 1e-12);
-        assert!((volts(b.terminal(24.0, 0.025)) - (0.5 - 0.01) * 24.0).abs() < 1e-12);
+        assert!((volts(b.terminal(24.0, 0.025)) - (0.5 - 0.0122) * 24.0).abs() < 1e-12);
     }
 
     #[test]
     fn sign_magnitude_has_one_leg_of_dead_time_and_full_duty_none() {
         let b = bridge(HBridgeInput { duty_a: 0.3, duty_b: 0.0, enabled: true });
-        assert!((volts(b.terminal(24.0, 2.0)) - (0.3 - 0.01) * 24.0).abs() < 1e-12);
+        assert!((volts(b.terminal(24.0, 2.0)) - (0.3 - 0.0122) * 24.0).abs() < 1e-12);
         let b = bridge(HBridgeInput::signed(1.0));
         assert_eq!(volts(b.terminal(24.0, 5.0)), 24.0);
         let b = bridge(HBridgeInput::signed(-1.0));

@@ -35,13 +35,13 @@ fn twist_rate_is_the_derivative_of_the_twist() {
 
 #[test]
 fn spinning_base_gives_yaw_rate_and_centripetal_acceleration() {
-    // 3 s at duty 0.4: steady spin at 4.157 rad/s (tests/world.rs solves it by hand).
+    // 3 s at duty 0.4: steady spin at 4.107 rad/s (tests/world.rs solves it by hand).
     let mut w = common::triskar_world();
     spin(&mut w, 0.4);
     w.step(3.0);
     let wz = w.twist().wz;
-    assert!((wz - 4.157).abs() < 0.001, "{wz}");
-    // An ideal IMU 0.1 m ahead of the centre: gyro z = ω, accel x = −ω²·0.1 (≈ −1.73 m/s²).
+    assert!((wz - 4.107).abs() < 0.001, "{wz}");
+    // An ideal IMU 0.1 m ahead of the centre: gyro z = ω, accel x = −ω²·0.1 (≈ −1.69 m/s²).
     let mount = Pose::new(0.1, 0.0, 0.0);
     let (g, a) = ideal_reading(&mount, &w.twist(), &w.twist_rate());
     assert_eq!(g[2], wz);

@@ -109,7 +109,7 @@ fn spin_in_place_reaches_the_hand_solved_steady_state() {
     // constants (52 ms) the transient is gone to e^-58, and the battery's OCV drifts by
     // < 1e-4 V over the run, moving the steady state by < 1e-6.
     assert!((t.wz - wz).abs() < 1e-6 * wz, "ωz {} vs hand-solved {wz}", t.wz);
-    assert!((wz - 4.157).abs() < 0.001, "{wz}"); // about 40 rpm
+    assert!((wz - 4.107).abs() < 0.001, "{wz}"); // about 39 rpm
                                                  // By symmetry the centre does not move.
     let p = w.pose();
     assert!(
@@ -142,7 +142,7 @@ fn two_wheels_translate_the_base_straight() {
     assert!(t.vy.abs() < 1e-9 && t.wz.abs() < 1e-9, "{t:?}");
     assert!(w.pose().theta.abs() < 1e-9 && w.pose().y.abs() < 1e-9);
     assert!(w.wheel(1).wheel_speed.abs() < 1e-9, "braked wheel stays still");
-    assert!((vx - 1.507).abs() < 0.001, "{vx}");
+    assert!((vx - 1.492).abs() < 0.001, "{vx}");
 }
 
 #[test]

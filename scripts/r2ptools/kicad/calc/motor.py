@@ -38,7 +38,8 @@ VIN_MIN = 15.0                # below: the HIP4082's VDD (from VMOT through Q106
                               # 12 V until Q106's h_FE was read (63, not 100, at ~10 mA), 13 V
                               # until the HIP4082's own currents were read (FN3676, below)
 I_CONT = 20.0                 # the paper: "a continuous 20 A current"
-I_PEAK = 28.0                 # peak: below the hardware over-current trip less the ripple (below)
+I_PEAK = 23.0                 # peak: below the hardware over-current trip's lowest point (a cold
+                              # sensor) less the ripple (below)
 SENSE_RANGE_REQUIRED = 30.0   # issue 19: current sensor range ≥ ±30 A
 PEAK_S = 10.0                 # how long the peak may last (heatsink heat capacity, below)
 T_AMB = 40.0                  # issue 19: junction limit checked at 40 °C ambient
@@ -48,7 +49,8 @@ MOTOR_L = 0.2e-3              # armature inductance, H (assumption: 70 W brushed
 
 # --- firmware (targets/f103/motor/src/bridge.rs, host/world/src/hbridge.rs, apps/motor frontend.rs)
 PWM_HZ = 20_000.0             # TIM1 PWM frequency (above hearing), centre-aligned
-DEAD_TIME_S = 500e-9          # TIM1 dead time at each edge
+DEAD_TIME_S = 100e-9          # TIM1 dead time at each edge: a guard under the HIP4082's own DEL
+                              # delay, which sets the dead time the FETs see (DRV_DEL_S)
 ADC_FS = 3.3                  # VDDA = VREF+ = the 3.3 V rail
 ADC_COUNTS = 4096
 # The drive (firmware/targets/f103/motor/src/bridge.rs): sign-magnitude, centre-aligned. For a
@@ -80,12 +82,9 @@ DRV_VHS_ABS = 80.0            # V: "operation up to 80 V" (AHS/BHS), FN3676 fron
 DRV_VHB_ABS = 95.0            # V: "bootstrap supply max voltage to 95 VDC" (read)
 DRV_I_PEAK = 1.25             # A: peak output current (the title, read); source and sink taken alike
 DRV_DEAD_RANGE = (0.1e-6, 4.5e-6)   # s: programmable dead time by R_DEL (read)
-DRV_DEL_S = (0.1e-6, 0.5e-6)  # s: the turn-on delay with R105 = 10 kΩ, an estimate NOT APPLIED
-                              # from FN3676: its Electrical Specifications give T_DEAD 0.27-0.75 µs
-                              # at 25 °C (0.2-0.85 µs, -55 to 150 °C) for R_DEL = 10 k, with which
-                              # the bootstrap refresh at the firmware's 0.95 duty has no time left
-                              # (hardware/motor/README.md, open findings): a decision, not a figure;
-                              # it adds to TIM1's
+DRV_DEL_S = (0.2e-6, 0.85e-6) # s: the turn-on delay T_DEAD with R105 = 10 kΩ, -55 to 150 °C (FN3676
+                              # Rev 5.00, Switching Specifications); it adds to TIM1's
+DRV_DEL_25C = (0.27e-6, 0.75e-6)  # s: the same at 25 °C; the world model takes the middle
 DRV_VDD_RANGE = (8.5, 15.0)   # V: supply voltage VDD (FN3676 Rev 5.00, Operating Conditions)
 DRV_VDD_UV = 8.5              # V: VDD rising under-voltage threshold V_DDUV+, max over T_J -55 to
                               # 150 °C (Electrical Specifications; 7.6 typ, 8.25 max at 25 °C)
@@ -114,15 +113,14 @@ Q106_RTH_JA = 150.0           # °C/W, SOT-89 on a small collector pad: NOT VERI
 Q106_VCEO = 80.0              # V: BCX56 V_CEO, open base (NXP BCP56_BCX56_BC56PA Rev. 9, Table 2)
 T_CORE_BAND = 60.0            # °C: board temperature at the core band at 20 A, 40 °C ambient: estimate
 # over-current: U105/U106 LMV331 on the ACS725's output, window from +3V3 (ratiometric like it)
-OC_SENS_TOL = 0.015           # ACS725-30AB sensitivity error, T_A 25-150 °C (ACS725-DS Rev. 8, xLLCTR-30AB
-                              # performance characteristics; ±5.5 % from -40 to 25 °C: README findings)
-OC_OFFSET_V = 0.010           # its offset voltage V_OE, T_A 25-150 °C (the same table; ±30 mV cold)
+OC_SENS_TOL = 0.055           # ACS725-30AB sensitivity error over -40 to 150 °C: ±5.5 % from -40 to 25 °C
+                              # (±1.5 % from 25 to 150 °C), ACS725-DS Rev. 8, xLLCTR-30AB performance
+                              # characteristics: the trip must hold for a cold sensor too
+OC_OFFSET_V = 0.030           # its offset voltage V_OE over -40 to 150 °C (the same table; ±10 mV warm)
 CMP_VOS = 0.007               # LMV331 input offset, max: NOT VERIFIED
 CMP_TPD = 0.5e-6              # LMV331 propagation delay: twice the 260 ns typical a summary gives; the
                               # datasheet's maximum at this overdrive NOT VERIFIED
-HALL_T_RESPONSE = 2.9e-6      # ACS725 step response ≈ 0.35 / 120 kHz: from the bandwidth (read); an
-                              # estimate NOT APPLIED from ACS725-DS Rev. 8: its response time is 4 µs
-                              # typ (C_L 1 nF), with which a short reaches 461 A > I_DM (README findings)
+HALL_T_RESPONSE = 4e-6        # ACS725 response time t_RESPONSE, typ, C_L 1 nF (ACS725-DS Rev. 8)
 TIM1_BREAK_S = 0.1e-6         # TIM1 break input to outputs inactive (a few 72 MHz clocks, no filter)
 L_SHORT = 0.5e-6              # H: a short across the motor leads at the end of ~1 m of cable: estimate
 # The comparators' input filter and hysteresis: NOT ON THE REVISION A BOARD (its U105/U106 take
@@ -170,9 +168,8 @@ HALL_MV_PER_A = 44.0          # at VCC = 3.3 V (ACS725-DS Rev. 8, selection guid
 HALL_BW_HZ = 120e3            # read (ACS725 features)
 HALL_R = 1.2e-3               # primary conductor resistance, read
 HALL_ICC_MAX = 14e-3          # ACS725-DS Rev. 8, common electrical characteristics (10 mA typ)
-HALL_SWING = (0.2, 3.1)       # output range into the ADC at 3.3 V: estimate (rail-to-rail minus ~0.2 V);
-                              # ACS725-DS Rev. 8 gives V_OL 0.3 V and V_OH V_CC - 0.3 V typ at its 4.7 kΩ
-                              # minimum load (this board's is lighter): NOT APPLIED, README findings
+HALL_SWING = (0.3, 3.0)       # output range at 3.3 V: V_OL 0.3 V and V_OH V_CC - 0.3 V typ at its 4.7 kΩ
+                              # minimum load (ACS725-DS Rev. 8); this board's load is lighter, so wider
 
 # --- input protection ------------------------------------------------------------------------
 TVS = "SMCJ45A"               # 1500 W (10/1000 µs)
@@ -269,7 +266,7 @@ DESIGN_VALUES = {
     "C_CER_EACH": 2.2e-6, "N_CER": 8,
     "C_BS": 470e-9, "C_VDD": 10e-6,                     # bootstrap capacitors, VDD reservoir
     "R_GATE": 10.0, "R_DEL": 10e3, "R_VDD_BIAS": 24.9e3,
-    "R_OC_OUTER": 10e3, "R_OC_MID": 100e3,             # OC window ladder: 10 k / 100 k / 10 k from +3V3
+    "R_OC_OUTER": 10e3, "R_OC_MID": 56e3,              # OC window ladder: 10 k / 56 k / 10 k from +3V3
     "R_ENC_SERIES": 1e3, "C_ENC": 100e-12, "R_ENC_PULLUP": 2.2e3,
     "R_FAULT_PULLUP": 10e3,
 }
@@ -301,6 +298,11 @@ def switching_times() -> tuple[float, float]:
     q = FET_QGS / 2 + FET_QGD
     i_on, i_off = gate_currents(high_side_drive())
     return q / i_on, q / i_off
+
+
+def world_dead_time() -> float:
+    """The one dead time the world model takes: TIM1's plus the middle of the driver's at 25 °C."""
+    return DEAD_TIME_S + sum(DRV_DEL_25C) / 2
 
 
 def dead_time() -> tuple[float, float]:
@@ -472,7 +474,7 @@ def firmware_changes(fw: dict[str, float] | None = None) -> list[str]:
         "VMOT_DIVIDER_TOP_OHM": v["R_VMOT_TOP"],
         "VMOT_DIVIDER_BOTTOM_OHM": v["R_VMOT_BOT"],
         "pwm_hz": PWM_HZ,
-        "dead_time_s": DEAD_TIME_S,
+        "dead_time_s": world_dead_time(),
         "current_limit max": I_PEAK,
         "bridge.rs PWM_HZ": PWM_HZ,
         "bridge.rs DEAD_TIME_NS": DEAD_TIME_S,
@@ -547,7 +549,7 @@ def rows() -> list[Row]:
     add(Row("dead time vs turn-off + driver skew (50 ns)", f"{dt_min * 1e9:.0f}–{dt_max * 1e9:.0f} ns",
             f"≥ {dead_need * 1e9:.0f} ns", dt_min >= dead_need,
             f"TIM1 {DEAD_TIME_S * 1e9:.0f} ns + HIP4082 DEL {DRV_DEL_S[0] * 1e9:.0f}–{DRV_DEL_S[1] * 1e9:.0f} ns "
-            f"(R105 {v['R_DEL'] / 1e3:.0f} k, an estimate: FN3676 gives 200–850 ns, README open findings); "
+            f"(R105 {v['R_DEL'] / 1e3:.0f} k, FN3676 over -55 to 150 °C); "
             f"body diode conducts the rest: {leg_switching_loss(VIN_MAX, I_CONT)['dead time']:.2f} W per leg"
             f" at 20 A; 300 ns in all would leave {FET_VSD * I_CONT * 2 * 300e-9 * PWM_HZ:.2f} W"))
     for k, x in p.items():
@@ -576,26 +578,31 @@ def rows() -> list[Row]:
             f"±{oc_nom:.2f} A nominal: {v['R_OC_OUTER'] / 1e3:.0f} k / {v['R_OC_MID'] / 1e3:.0f} k / "
             f"{v['R_OC_OUTER'] / 1e3:.0f} k from 3.3 V, {oc_window()[1]:.3f} V and {oc_window()[0]:.3f} V "
             f"(ratiometric like the sensor); sensitivity ±{OC_SENS_TOL:.1%}, offsets "
-            f"{OC_OFFSET_V * 1e3:.0f} + {CMP_VOS * 1e3:.0f} mV (ACS725 at 25-150 °C; LMV331's NOT VERIFIED), "
-            "1 % resistors; below 25 °C the ACS725's ±5.5 % and ±30 mV widen it to ±28.6-33.9 A (README)"))
+            f"{OC_OFFSET_V * 1e3:.0f} + {CMP_VOS * 1e3:.0f} mV (ACS725 over -40 to 150 °C; LMV331's NOT "
+            "VERIFIED), 1 % resistors"))
     delay = HALL_T_RESPONSE + CMP_TPD + TIM1_BREAK_S + DRV_PROP + t_off
-    i_short = oc_hi_a + VIN_MAX / L_SHORT * delay
-    add(Row("current at switch-off, motor leads shorted", f"{i_short:.0f} A", f"≤ I_DM {FET_ID_PULSE:.0f} A",
-            i_short <= FET_ID_PULSE,
-            f"{VIN_MAX / L_SHORT / 1e6:.0f} A/µs ({L_SHORT * 1e6:.1f} µH of cable, estimate) for "
+    # Shorted leads are survived up to the rated motor voltage; above it (a full 10S Li-ion pack, a
+    # lead-acid battery on charge) the current at switch-off passes I_DM: stated, revision B's
+    # desaturation sensing (hardware/motor/README.md, decisions)
+    i_short = oc_hi_a + MOTOR_V_RATED / L_SHORT * delay
+    i_short_max = oc_hi_a + VIN_MAX / L_SHORT * delay
+    add(Row(f"current at switch-off, motor leads shorted, {MOTOR_V_RATED:.0f} V supply", f"{i_short:.0f} A",
+            f"≤ I_DM {FET_ID_PULSE:.0f} A", i_short <= FET_ID_PULSE,
+            f"at {VIN_MAX:.1f} V {i_short_max:.0f} A: not covered (README). "
+            f"{MOTOR_V_RATED / L_SHORT / 1e6:.0f} A/µs ({L_SHORT * 1e6:.1f} µH of cable, estimate) for "
             f"{delay * 1e6:.1f} µs: sensor {HALL_T_RESPONSE * 1e6:.1f} + comparator {CMP_TPD * 1e6:.1f} + "
             f"break {TIM1_BREAK_S * 1e6:.1f} + driver {DRV_PROP * 1e6:.1f} + turn-off {t_off * 1e6:.2f} µs. "
             "Leg B's own shorts (MOT_B to a rail) bypass the sensor: the fuse"))
     # the comparators' input filter: every ns it adds lets a short's current rise further (a ramp
     # lags a one-pole filter by τ), so τ is bounded by what the switch-off current leaves to I_DM
     tau = OC_FILTER_R * OC_FILTER_C
-    budget = (FET_ID_PULSE - i_short) / (VIN_MAX / L_SHORT)
+    budget = (FET_ID_PULSE - i_short) / (MOTOR_V_RATED / L_SHORT)
     ring_gain = 1 / math.sqrt(1 + (RING_HZ * 2 * math.pi * tau) ** 2)
     add(Row("over-current input filter (revision B: R_f + C_f before U105/U106)",
             f"{OC_FILTER_R / 1e3:g} k + {OC_FILTER_C * 1e12:.0f} pF: τ {tau * 1e9:.0f} ns, "
             f"{1 / (2 * math.pi * tau) / 1e6:.1f} MHz", f"τ ≤ {budget * 1e9:.0f} ns (short-circuit budget to I_DM)",
             tau <= budget,
-            f"a short then reaches {i_short + VIN_MAX / L_SHORT * tau:.0f} A at switch-off; a "
+            f"a short then reaches {i_short + MOTOR_V_RATED / L_SHORT * tau:.0f} A at switch-off; a "
             f"{RING_HZ / 1e6:.0f} MHz ring (estimate) passes at {ring_gain:.0%}. NOT ON THE REVISION A "
             "BOARD: its comparators see HALL_OUT as the sensor drives it (120 kHz), with no filter for "
             "what the layout picks up after it"))

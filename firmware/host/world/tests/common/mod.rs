@@ -47,7 +47,7 @@ gear_ratio = 15.0
 gear_efficiency = 0.81
 encoder_cpr = 500
 pwm_hz = 20_000
-dead_time_ns = 500
+dead_time_ns = 610
 switch_resistance_ohm = 0.010
 
 [battery]

@@ -21,12 +21,14 @@ use r2p_app_motor::Command;
 
 /// PWM frequency: above hearing, low enough for the gate driver's switching losses.
 pub const PWM_HZ: u32 = 20_000;
-/// Dead time between one switch of a leg opening and the other closing, ns: covers the
-/// MOSFETs' turn-off delay and fall time behind the gate driver (hardware/motor).
-pub const DEAD_TIME_NS: u32 = 500;
+/// Dead time TIM1 inserts between one switch of a leg opening and the other closing, ns: a
+/// guard only. The gate driver (HIP4082) delays every turn-on by its own 200-850 ns (R_DEL
+/// 10 k), which covers the MOSFETs' turn-off; more here would starve the bootstrap refresh at
+/// the 0.95 duty limit (hardware/motor/README.md, r2ptools/kicad/calc/motor.py).
+pub const DEAD_TIME_NS: u32 = 100;
 /// TIM1's clock (APB2 at 72 MHz, timer clock = PCLK2), Hz.
 const TIM1_CLOCK_HZ: u32 = crate::board::SYSCLK_HZ;
-/// The dead time in TIM1 clock ticks (36 at 72 MHz).
+/// The dead time in TIM1 clock ticks (7 at 72 MHz: 97 ns).
 const DEAD_TIME_TICKS: u16 = (DEAD_TIME_NS as u64 * TIM1_CLOCK_HZ as u64 / 1_000_000_000) as u16;
 
 /// TIM1's pins as the board file gives them (no remap: TIM1_REMAP = 0).
