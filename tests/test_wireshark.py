@@ -121,8 +121,8 @@ def reference(frames):
     done = {}
     for n, (t, raw, data) in enumerate(frames, 1):
         lax, mid, frag = rtcan_fragment.split(raw)
-        if lax == 0 and frag == 0 and mid < 0x100:
-            continue                       # sync frames are not messages
+        if lax == 0 and frag <= 15 and mid < 0x100:
+            continue                       # sync frames (the sender's rank in `frag`) are not messages
         msg = r.accept(raw, data, int(t * 1e6), None)
         if msg is not None:
             done[n] = (mid, msg)
@@ -134,7 +134,7 @@ def test_identifier_fields_and_sync_frames(pcap):
     frames = read_pcap(pcap)
     rows = tshark_fields(pcap, ["r2p.id", "r2p.laxity", "r2p.class", "r2p.message_id", "r2p.node",
                                 "r2p.stream", "r2p.fragment", "r2p.sync.cycle", "r2p.sync.epoch",
-                                "r2p.sync.reservations", "r2p.sync.slot"])
+                                "r2p.sync.reservations", "r2p.sync.slot", "r2p.sync.sender"])
     assert len(rows) == len(frames) > 1000
     syncs = []
     for n, (t, raw, data) in enumerate(frames, 1):
@@ -144,9 +144,10 @@ def test_identifier_fields_and_sync_frames(pcap):
         assert int(row["r2p.laxity"]) == lax
         assert int(row["r2p.class"]) == (0 if lax == 0 else 2 if lax == 63 else 1), (n, row)
         assert number(row["r2p.message_id"]) == mid
-        if lax == 0 and frag == 0 and mid < 0x100:
+        if lax == 0 and frag <= 15 and mid < 0x100:
             syncs.append((t, n))
             assert int(row["r2p.sync.cycle"]) == mid
+            assert int(row["r2p.sync.sender"]) == frag
             word = int.from_bytes(data, "little")
             assert int(row["r2p.sync.epoch"]) == word & 1
             assert number(row["r2p.sync.reservations"]) == word | 1    # bit 0 reported set
@@ -225,9 +226,13 @@ def test_messages_reassembled_and_management_decoded(pcap):
     assert {"psu", "proximity", "gateway", "motor1", "motor2", "motor3"} <= names, names
     assert {0x11, 0x15, 0x21, 0x22, 0x23, 0x24, 0x25} <= set(seen), seen
     assert advertised["motor1/setpoint"] == "WheelSetpoint" and advertised["psu/battery"] == "Battery"
-    # Each granted slot is then reserved in the sync frames (the master's calendar).
-    assert len(grants) == 3 and all(g[4] == 0 for _, g in grants)
-    last = max(n for n, _ in grants)
+    # Each granted slot is then reserved in the sync frames (the master's calendar). The three
+    # answers come first; the master's calendar beacon repeats them later, unchanged (one table
+    # entry per heartbeat, docs/rtcan.md "Master failover").
+    assert len({g for _, g in grants}) == 3 and all(g[4] == 0 for _, g in grants), grants
+    answers = grants[:3]
+    assert all(g in {a for _, a in answers} for _, g in grants[3:]), grants
+    last = max(n for n, _ in answers)
     later = [int.from_bytes(d, "little") for k, (_, raw, d) in enumerate(frames, 1)
              if k > last + 200 and raw < 0x100 << 7 and raw & 0x7F == 0]
     assert later and all(w >> g[3] & 1 for w in later for _, g in grants)
@@ -325,7 +330,7 @@ CRAFTED = [
 
 
 def test_every_management_type_and_malformed_ones(tmp_path):
-    frames = [(0x45 << 7, bytes.fromhex("07 00 00 00 00 00 00 00"))]           # sync, slots 1-2, epoch 1
+    frames = [(0x45 << 7 | 3, bytes.fromhex("07 00 00 00 00 00 00 00"))]       # sync from rank 3, slots 1-2, epoch 1
     ends = []
     for payload, _ in CRAFTED:
         frames += mgmt_frames(0x2A, payload)
@@ -337,9 +342,9 @@ def test_every_management_type_and_malformed_ones(tmp_path):
     write_pcap(path, frames)
     wanted = sorted({k for _, w in CRAFTED for k in w if not k.startswith("_")})
     rows = tshark_fields(path, ["r2p.sync.cycle", "r2p.sync.epoch", "r2p.sync.slot", "r2p.sync.reservations",
-                                "r2p.mgmt.type", "_ws.expert.message"] + wanted)
+                                "r2p.sync.sender", "r2p.mgmt.type", "_ws.expert.message"] + wanted)
     assert (rows[1]["r2p.sync.cycle"], rows[1]["r2p.sync.epoch"], rows[1]["r2p.sync.slot"],
-            rows[1]["r2p.sync.reservations"]) == ("69", "1", "1,2", "0x0000000000000007")
+            rows[1]["r2p.sync.reservations"], rows[1]["r2p.sync.sender"]) == ("69", "1", "1,2", "0x0000000000000007", "3")
     for (payload, want), n in zip(CRAFTED, ends):
         row = rows[n]
         assert number(row["r2p.mgmt.type"]) == payload[0], (n, row)

@@ -33,6 +33,7 @@ local r2p = Proto("r2p", "R2P (RTCAN)")
 local LAXITY_SHIFT, MESSAGE_ID_SHIFT = 23, 7
 local HRT_LAXITY, NRT_LAXITY = 0, 63
 local SYNC_MESSAGE_IDS = 0x100
+local MAX_SYNC_SENDER = 15
 local MAX_PAYLOAD, CRC_LEN = 8, 2
 local MIN_MULTI_WIRE = MAX_PAYLOAD + 1 + CRC_LEN
 
@@ -52,6 +53,8 @@ local F = {
 
     -- sync frames, docs/rtcan.md "Sync frame"
     sync_cycle = ProtoField.uint8("r2p.sync.cycle", "Cycle counter (low byte)", base.DEC),
+    sync_sender = ProtoField.uint8("r2p.sync.sender", "Sender's master rank", base.DEC, nil, nil,
+        "the fragment field of a sync: the best rank wins when standbys start a cycle at once"),
     sync_epoch = ProtoField.bool("r2p.sync.epoch", "Epoch bit"),
     sync_mask = ProtoField.uint64("r2p.sync.reservations", "Reservations (next cycle)", base.HEX,
         nil, nil, "bit k = slot k reserved for HRT; bit 0, the sync slot's, reported set"),
@@ -524,10 +527,12 @@ local function dissect(tvb, pinfo, tree)
     t:add(F.class, cls)
     t:add(F.message_id, msg_id)
 
-    -- Sync frame: laxity 0, fragment 0, message ID below 0x100 (the cycle's low byte).
-    if laxity == HRT_LAXITY and frag == 0 and msg_id < SYNC_MESSAGE_IDS then
+    -- Sync frame: laxity 0, message ID below 0x100 (the cycle's low byte), the sender's rank
+    -- (0-15) in the fragment field.
+    if laxity == HRT_LAXITY and frag <= MAX_SYNC_SENDER and msg_id < SYNC_MESSAGE_IDS then
         t:add(F.sync_cycle, msg_id)
-        t:set_text(string.format("R2P sync, cycle %d", msg_id))
+        t:add(F.sync_sender, frag)
+        t:set_text(string.format("R2P sync, cycle %d, rank %d", msg_id, frag))
         if tvb:len() ~= 8 then
             t:add_proto_expert_info(E.sync, string.format("%d bytes", tvb:len()))
             pinfo.cols.info = string.format("Sync cycle %d [bad length %d]", msg_id, tvb:len())
@@ -552,8 +557,8 @@ local function dissect(tvb, pinfo, tree)
         end
         st:append_text(string.format(": %d", n))
         t:add(F.sync_slots, n):set_generated()
-        pinfo.cols.info = string.format("Sync cycle %d, epoch %d, HRT slots %s", msg_id,
-            bit32.band(tvb(0, 1):uint(), 1), n > 0 and table.concat(slots, " ") or "none")
+        pinfo.cols.info = string.format("Sync cycle %d from rank %d, epoch %d, HRT slots %s", msg_id,
+            frag, bit32.band(tvb(0, 1):uint(), 1), n > 0 and table.concat(slots, " ") or "none")
         return tvb:len()
     end
 

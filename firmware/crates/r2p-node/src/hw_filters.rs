@@ -8,14 +8,15 @@
 use r2p_management::MANAGEMENT_INDEX;
 use rtcan::controller::Filter;
 use rtcan::filter_banks::{fit_one, Fit, ID_BITS};
-use rtcan::id::FRAGMENT_BITS;
+use rtcan::id::{FRAGMENT_BITS, MAX_SYNC_SENDER};
 use rtcan::MessageId;
 
 /// Filter banks a node uses: all 14 of the F103's bxCAN (CAN1's share on the F407).
 pub const BANKS: usize = 14;
 
-/// Sync frames: laxity 0, message IDs 0x00–0xFF, fragment 0.
-pub const SYNCS: Filter = Filter { value: 0, mask: ID_BITS & !(0xFF << FRAGMENT_BITS) };
+/// Sync frames: laxity 0, message IDs 0x00–0xFF, fragment 0–15 (the sender's master rank).
+pub const SYNCS: Filter =
+    Filter { value: 0, mask: ID_BITS & !(0xFF << FRAGMENT_BITS) & !(MAX_SYNC_SENDER as u32) };
 
 /// Every node's management stream (message ID low byte = `MANAGEMENT_INDEX`).
 pub const MANAGEMENT: Filter = Filter::message_low_bits(MANAGEMENT_INDEX as u16, 8);
@@ -54,11 +55,11 @@ pub(crate) mod tests {
             let (b, fit) = banks([MessageId(0x4303), MessageId(0x4501)].into_iter());
             assert_eq!(fit, Fit { used: 4, widened: false });
             let pass = |id| b[..fit.used].iter().any(|f| f.accepts(id));
-            assert!(pass(raw(0, 0x0045, 0)), "sync");
+            assert!(pass(raw(0, 0x0045, 0)) && pass(raw(0, 0x0045, 15)), "syncs of every rank");
             assert!(pass(raw(63, 0x4400, 3)) && pass(raw(63, 0x0100, 0)), "management");
             assert!(pass(raw(9, 0x4303, 2)) && pass(raw(0, 0x4501, 0)), "subscribed");
             assert!(!pass(raw(9, 0x4302, 2)) && !pass(raw(0, 0x4502, 0)), "other streams");
-            assert!(!pass(raw(0, 0x0045, 1)) && !pass(raw(5, 0x0045, 0)), "not syncs");
+            assert!(!pass(raw(0, 0x0045, 16)) && !pass(raw(5, 0x0045, 0)), "not syncs");
         }
 
         fn more_streams_than_banks_widen_never_lose() {

@@ -30,8 +30,11 @@
 //! - `management.rs`: the management protocol (heartbeats, advertisements, subscriptions,
 //!   reboot, parameters);
 //! - `tdma.rs`: the slot timer's path through the TDMA cycle, as slave or master;
-//! - `hrt.rs`: HRT streams, their reservations with the master and their frames.
+//! - `hrt.rs`: HRT streams, their reservations with the master and their frames;
+//! - `liveness.rs` and `calendar.rs`: the master's reservations following their nodes, and a
+//!   standby's copy of them.
 
+mod calendar;
 mod config;
 mod error;
 mod events;
@@ -129,6 +132,11 @@ pub struct Node<
     scheduler: Scheduler<MASTER_STREAMS>,
     /// The nodes holding reservations in `scheduler`, followed by their heartbeats (master).
     owners: Vec<liveness::Owner, { liveness::OWNERS }>,
+    /// As standby: syncs in a row whose masks `scheduler` (its copy of the master's calendar)
+    /// predicted, up to a hyperperiod (`calendar.rs`).
+    calendar_agree: u16,
+    /// As master: the reservation the next calendar beacon repeats (`hrt.rs`).
+    beacon: u8,
     master: Option<MasterCycle>,
     /// What is loaded in the controller in slotted mode (HRT exports by index).
     slot_tx: SlotTx<usize>,
@@ -197,6 +205,8 @@ impl<
             failover: Failover::new(rank, config.cycle.cycle_us, 0),
             scheduler: Scheduler::new(config.hrt_slots, config.cycle.slots),
             owners: Vec::new(),
+            calendar_agree: 0,
+            beacon: 0,
             master: None,
             slot_tx: SlotTx::new(&config.cycle, config.free_slots),
             filters_for: None,
@@ -332,6 +342,7 @@ impl<
         if now >= self.next_heartbeat {
             // Once a heartbeat period, not every slot: off the slot path's usual length.
             self.expire_owners(now);
+            self.calendar_beacon();
             let state = if self.heartbeats < STARTING_HEARTBEATS {
                 ModuleState::Starting
             } else {

@@ -175,7 +175,8 @@ pub enum SyncError {
 
 /// The content of a sync frame.
 ///
-/// Identifier: [`FrameId::sync`] of the cycle counter (its low byte). Payload: 8 bytes, the
+/// Identifier: [`FrameId::sync_from`] the cycle counter (its low byte) and the sender's master
+/// rank. Payload: 8 bytes, the
 /// 64-bit word `(reservations & !EPOCH_BIT) | epoch` in **little-endian** order, so byte j bit b
 /// is slot 8·j + b: byte 0 bit 1 = slot 1, byte 7 bit 7 = slot 63. Bit 0 would be the sync
 /// slot's reservation, which is implicit; it carries the master's epoch bit instead.
@@ -185,14 +186,22 @@ pub struct SyncFrame {
     pub cycle: u8,
     /// Reservations of the next cycle; bit 0 (the sync slot) always reads as reserved.
     pub reservations: u64,
-    /// The master's epoch bit: it flips when a new master takes over.
+    /// The master's epoch bit: it flips when a new master starts a new calendar (a takeover
+    /// that continues the cycle and the calendar keeps it).
     pub epoch: bool,
+    /// The sender's master rank (the identifier's fragment field).
+    pub sender: u8,
 }
 
 impl SyncFrame {
     /// The sync of cycle `cycle` (only the low byte is sent) announcing `reservations`.
     pub const fn new(cycle: u32, reservations: u64, epoch: bool) -> Self {
-        Self { cycle: cycle as u8, reservations: reservations | EPOCH_BIT, epoch }
+        Self { cycle: cycle as u8, reservations: reservations | EPOCH_BIT, epoch, sender: 0 }
+    }
+
+    /// The same sync sent by the master of rank `sender`.
+    pub const fn from_rank(self, sender: u8) -> Self {
+        Self { sender, ..self }
     }
 
     /// The 8-byte payload.
@@ -202,7 +211,7 @@ impl SyncFrame {
 
     /// The frame the master sends.
     pub fn to_frame(&self) -> Frame {
-        match Frame::new(FrameId::sync(self.cycle as u32), &self.payload()) {
+        match Frame::new(FrameId::sync_from(self.cycle as u32, self.sender), &self.payload()) {
             Ok(f) => f,
             Err(_) => unreachable!(),
         }
@@ -220,7 +229,8 @@ impl SyncFrame {
         let mut b = [0u8; SYNC_PAYLOAD_LEN];
         b.copy_from_slice(p);
         let word = u64::from_le_bytes(b);
-        Ok(Self { cycle, reservations: word | EPOCH_BIT, epoch: word & EPOCH_BIT != 0 })
+        let (reservations, epoch) = (word | EPOCH_BIT, word & EPOCH_BIT != 0);
+        Ok(Self { cycle, reservations, epoch, sender: frame.id().fragment })
     }
 }
 

@@ -1,6 +1,21 @@
 //! Master failover: any node with a rank can stand by for the master and take over when syncs
 //! stop (docs/rtcan.md, "Master failover").
 //!
+//! Two ways to take over:
+//!
+//! * **Continuing the cycle** (TTCAN's way: ISO 11898-4 potential time masters): a standby that
+//!   keeps the master's calendar (it follows the grants and the syncs' masks, `r2p-node`) and
+//!   hears no sync at the start of a cycle sends the next cycle's sync itself, at the instant
+//!   its clock says the cycle starts, with the counter, the epoch and the calendar continued
+//!   ([`Failover::continue_cycle`]). Every standby that missed the sync does the same at the
+//!   same instant; the sync carries the sender's rank in its identifier, so CAN arbitration
+//!   lets the best one through, and a sync that could not start in its slot is withdrawn.
+//!   A sync that did not go out makes its sender a slave again at once. Nodes see a continuous
+//!   cycle (one sync missing, which their clocks free-run through): no re-registration, and
+//!   HRT frames keep their slots.
+//! * **Starting a new calendar**, when no standby could continue (none keeps the calendar, or
+//!   syncs were missing for longer than the clocks free-run), by the rank-ordered delays below.
+//!
 //! States: **Slave** (a master is heard), **Candidate** (a standby that has heard no sync for
 //! [`sync_timeout_us`] and waits for its takeover time), **Master** (sends the syncs).
 //!
@@ -87,6 +102,9 @@ pub struct StartSyncing {
     pub cycle: u32,
     /// The epoch bit of every sync of this mastership.
     pub epoch: bool,
+    /// True if the takeover continues the previous master's cycle and calendar (keep them);
+    /// false for a new calendar (clear it, every node registers again).
+    pub continuing: bool,
 }
 
 /// What the node must do after an input.
@@ -98,6 +116,9 @@ pub struct Actions {
     pub stop_syncing: bool,
     /// Register every HRT stream of this node again (the calendar that held them is gone).
     pub re_register: bool,
+    /// The sync heard starts a new calendar (its epoch bit flipped while this node followed
+    /// the previous one): a standby's copy of the calendar starts empty and complete.
+    pub new_calendar: bool,
 }
 
 impl Actions {
@@ -119,6 +140,9 @@ pub struct Failover {
     epoch: Option<bool>,
     synced: bool,
     tx_failures: u32,
+    /// As master: no sync of this mastership has gone out yet after continuing a cycle (the
+    /// first failure means another node's sync won: step down at once).
+    tentative: bool,
 }
 
 impl Failover {
@@ -133,6 +157,7 @@ impl Failover {
             epoch: None,
             synced: false,
             tx_failures: 0,
+            tentative: false,
         }
     }
 
@@ -185,28 +210,49 @@ impl Failover {
                 self.last = now;
                 self.last_cycle = 0;
                 self.tx_failures = 0;
-                a.start_syncing = Some(StartSyncing { at: now, cycle: 0, epoch });
+                self.tentative = false;
+                a.start_syncing =
+                    Some(StartSyncing { at: now, cycle: 0, epoch, continuing: false });
                 a.re_register = true;
             }
         }
         a
     }
 
+    /// A standby that heard no sync at the start of the cycle before `cycle` continues the
+    /// cycle: it sends the sync of `cycle` at `at` (that cycle's start on its clock) with the
+    /// epoch it follows, keeping the calendar. Nothing happens unless this node has a rank, is
+    /// not master and follows a master's cycle.
+    pub fn continue_cycle(&mut self, at: Micros, cycle: u32) -> Actions {
+        let mut a = Actions::default();
+        let Some(epoch) = self.epoch else { return a };
+        if self.rank.is_none() || self.role == Role::Master || !self.synced {
+            return a;
+        }
+        self.role = Role::Master;
+        self.tentative = true;
+        self.tx_failures = 0;
+        a.start_syncing = Some(StartSyncing { at, cycle, epoch, continuing: true });
+        a
+    }
+
     /// A sync frame from another node was received at `now`.
     pub fn on_sync(&mut self, now: Micros, sync: &SyncFrame) -> Actions {
         let mut a = Actions::default();
-        if self.role == Role::Master {
-            a.stop_syncing = true;
-            a.re_register = true;
-        } else {
-            // Continuity: the counter advanced by the number of elapsed cycles (1..=L+1).
-            let t = self.cycle_us as Micros;
-            let n = (now.saturating_sub(self.last) + t / 2) / t;
-            let continuous = (1..=MAX_SYNC_LOSS as Micros + 1).contains(&n)
-                && self.last_cycle.wrapping_add(n as u8) == sync.cycle;
-            a.re_register = !self.synced || self.epoch != Some(sync.epoch) || !continuous;
-        }
+        // Continuity: the counter advanced by the number of elapsed cycles (1..=L+1) since
+        // the last sync heard (or, as master, sent).
+        let t = self.cycle_us as Micros;
+        let n = (now.saturating_sub(self.last) + t / 2) / t;
+        let continuous = (1..=MAX_SYNC_LOSS as Micros + 1).contains(&n)
+            && self.last_cycle.wrapping_add(n as u8) == sync.cycle;
+        let flipped = self.epoch.is_some_and(|e| e != sync.epoch);
+        // A master steps down on any other master's sync; one that continues this cycle and
+        // calendar (a standby that took over when a sync was missing) costs nothing.
+        a.stop_syncing = self.role == Role::Master;
+        a.re_register = !self.synced || flipped || !continuous;
+        a.new_calendar = self.synced && flipped;
         self.role = Role::Slave;
+        self.tentative = false;
         self.synced = true;
         self.last = now;
         self.last_cycle = sync.cycle;
@@ -222,8 +268,17 @@ impl Failover {
         }
         if ok {
             self.tx_failures = 0;
+            self.tentative = false;
             self.last = now;
             self.last_cycle = sync.cycle;
+            return a;
+        }
+        if self.tentative {
+            // Another standby's sync of the same cycle went out first (or won arbitration):
+            // follow it. The last sync heard stays the one before, so it reads as continuous.
+            self.tentative = false;
+            self.role = Role::Slave;
+            a.stop_syncing = true;
             return a;
         }
         self.tx_failures += 1;
@@ -267,10 +322,73 @@ pub(crate) mod tests {
             assert!(f.poll(50_000).is_empty());
             assert_eq!(f.role(), Role::Candidate);
             let a = f.poll(90_000);
-            assert_eq!(a.start_syncing, Some(StartSyncing { at: 90_000, cycle: 0, epoch: false }));
+            assert_eq!(
+                a.start_syncing,
+                Some(StartSyncing { at: 90_000, cycle: 0, epoch: false, continuing: false })
+            );
             assert!(a.re_register);
             assert_eq!(f.role(), Role::Master);
             assert!(f.poll(10_000_000).is_empty());
+        }
+
+        fn a_standby_continues_the_cycle_and_nobody_registers_again() {
+            // The master M (rank 0) syncs cycles 7 and 8 and dies; the sync of 9 is missing.
+            let mut m = Failover::new(rank(0), T, 0);
+            let mut s = Failover::new(rank(1), T, 0); // the standby
+            let mut n = Failover::new(None, T, 0); // a plain node
+            for f in [&mut m, &mut s, &mut n] {
+                f.on_sync(0, &SyncFrame::new(7, 0, true));
+                f.on_sync(10_000, &SyncFrame::new(8, 0, true));
+            }
+            // No sync at 20 000: the standby starts cycle 10 at 30 000 with the same epoch.
+            assert!(n.continue_cycle(30_000, 10).is_empty(), "no rank");
+            let a = s.continue_cycle(30_000, 10);
+            let start = StartSyncing { at: 30_000, cycle: 10, epoch: true, continuing: true };
+            assert_eq!((a.start_syncing, a.re_register), (Some(start), false));
+            assert_eq!(s.role(), Role::Master);
+            let sync = SyncFrame::new(10, 0, true).from_rank(1);
+            assert!(s.on_sync_sent(30_000, &sync, true).is_empty());
+            // The plain node sees a continuous cycle (one sync missing).
+            let r = n.on_sync(30_000, &sync);
+            assert!(!r.re_register && !r.new_calendar, "{r:?}");
+            // A master whose sync of 9 went out (the standby missed it) steps down on the
+            // standby's sync of 10 and keeps its streams.
+            assert!(m.continue_cycle(20_000, 9).start_syncing.is_some());
+            assert!(m.on_sync_sent(20_000, &SyncFrame::new(9, 0, true), true).is_empty());
+            let r = m.on_sync(30_000, &sync);
+            assert!(r.stop_syncing && !r.re_register, "{r:?}");
+            assert_eq!(m.role(), Role::Slave);
+            // The new master keeps going and steps down only on another master's sync.
+            assert!(s.poll(1_000_000).is_empty());
+            assert_eq!(s.role(), Role::Master);
+        }
+
+        fn a_continuing_standby_whose_sync_lost_follows_the_winner() {
+            let mut s = Failover::new(rank(2), T, 0);
+            s.on_sync(10_000, &SyncFrame::new(8, 0, false));
+            assert!(s.continue_cycle(30_000, 10).start_syncing.is_some());
+            let sync = SyncFrame::new(10, 0, false).from_rank(2);
+            // Withdrawn (another started first) or lost arbitration: a slave at once.
+            let a = s.on_sync_sent(30_000, &sync, false);
+            assert!(a.stop_syncing && !a.re_register, "{a:?}");
+            assert_eq!(s.role(), Role::Slave);
+            // The winner's sync of cycle 10 continues the one heard before.
+            let r = s.on_sync(30_000, &SyncFrame::new(10, 0, false).from_rank(1));
+            assert!(r.is_empty(), "{r:?}");
+            // Unsynced (lost for longer than the timeout) or never synced: no continuation.
+            s.poll(66_000);
+            assert!(!s.synced());
+            assert!(s.continue_cycle(70_000, 14).is_empty());
+            assert!(Failover::new(rank(0), T, 0).continue_cycle(10_000, 1).is_empty());
+        }
+
+        fn a_flipped_epoch_starts_a_new_calendar() {
+            let mut f = Failover::new(rank(1), T, 0);
+            let first = f.on_sync(0, &SyncFrame::new(3, 0, true));
+            assert!(first.re_register && !first.new_calendar, "first sync: unknown calendar");
+            let r = f.on_sync(10_000, &SyncFrame::new(0, 0, false));
+            assert!(r.re_register && r.new_calendar);
+            assert!(!f.on_sync(20_000, &SyncFrame::new(1, 0, false)).new_calendar);
         }
 
         fn nodes_without_rank_never_take_over() {
@@ -640,6 +758,136 @@ mod proptests {
             let standbys = specs.iter().filter(|s| s.0.is_some()).count();
             let kills: Vec<Micros> = (1..standbys).map(|_| d).collect();
             simulate(&specs, true, loss, seed, &kills);
+        }
+    }
+
+    /// The continuing takeover, cycle by cycle: `ranks` standbys that trust their copies of the
+    /// calendar and a master of the best rank; the master dies in cycle `death`; each sync is
+    /// lost by all (`global`) or by each receiver on its own with probability `loss_pct`, at
+    /// most `max_loss` in a row per node. Each cycle the live master sends its sync at the
+    /// cycle's start; every standby that heard the previous cycle's sync but not this one's
+    /// continues at the next start; the syncs of one cycle start together and arbitrate on the
+    /// sender's rank (`r2p-node`'s continuing standbys, docs/rtcan.md "Master failover").
+    fn simulate_continuing(
+        ranks: &[u8],
+        death: u32,
+        global: bool,
+        loss_pct: u64,
+        max_loss: u32,
+        seed: u64,
+    ) {
+        let mut rng = seed | 1;
+        let mut rand = move || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            rng
+        };
+        let t = T as Micros;
+        let mut nodes: Vec<Failover> =
+            ranks.iter().map(|&r| Failover::new(Rank::new(r), T, 0)).collect();
+        let best = (0..nodes.len()).min_by_key(|&i| ranks[i]).unwrap();
+        // Cycle 0: the first master's new calendar, heard by all.
+        let first = nodes[best].continue_cycle(0, 0); // not synced yet: nothing
+        assert!(first.is_empty());
+        let sync0 = SyncFrame::new(0, 0, true).from_rank(ranks[best]);
+        for (i, n) in nodes.iter_mut().enumerate() {
+            if i != best {
+                n.on_sync(0, &sync0);
+            }
+        }
+        nodes[best].role = Role::Master;
+        nodes[best].synced = true;
+        nodes[best].epoch = Some(true);
+        let mut alive: Vec<bool> = std::vec![true; nodes.len()];
+        let mut misses = std::vec![0u32; nodes.len()];
+        let mut global_misses = 0;
+        // Per node: the cycle number of the last sync heard or sent.
+        let mut heard: Vec<Option<u32>> = std::vec![Some(0); nodes.len()];
+        let mut last_sync_cycle = 0u32;
+        for c in 1..200u32 {
+            let at = c as Micros * t;
+            if c == death {
+                alive[best] = false;
+            }
+            // Who sends this cycle's sync: live masters (their cycle), and standbys that
+            // decided in the previous cycle to continue (tentative masters for `c`).
+            let senders: Vec<usize> =
+                (0..nodes.len()).filter(|&i| alive[i] && nodes[i].role() == Role::Master).collect();
+            let winner = senders.iter().copied().min_by_key(|&i| ranks[i]);
+            if let Some(w) = winner {
+                let sync = SyncFrame::new(c, 0, true).from_rank(ranks[w]);
+                for &i in &senders {
+                    let a = nodes[i].on_sync_sent(at, &sync, i == w);
+                    assert!(!a.re_register, "cycle {c}: a continuing sender registers again");
+                }
+                heard[w] = Some(c);
+                last_sync_cycle = c;
+                let lost_by_all = global_misses < max_loss && rand() % 100 < loss_pct;
+                global_misses = if lost_by_all { global_misses + 1 } else { 0 };
+                for i in 0..nodes.len() {
+                    // A sender that lost the arbitration receives the winner's frame too.
+                    if i == w || !alive[i] {
+                        continue;
+                    }
+                    let lost = if global {
+                        lost_by_all
+                    } else {
+                        misses[i] < max_loss && rand() % 100 < loss_pct
+                    };
+                    if lost {
+                        misses[i] += 1;
+                        continue;
+                    }
+                    misses[i] = 0;
+                    let a = nodes[i].on_sync(at, &sync);
+                    assert!(
+                        !a.re_register && !a.new_calendar,
+                        "cycle {c}: node {i} registers again: {a:?}"
+                    );
+                    heard[i] = Some(c);
+                }
+            }
+            let masters =
+                (0..nodes.len()).filter(|&i| alive[i] && nodes[i].role() == Role::Master).count();
+            assert!(masters <= 1, "cycle {c}: {masters} masters after the arbitration");
+            // Slot 2 of cycle c: a standby that heard c − 1 but not c continues at c + 1.
+            for i in 0..nodes.len() {
+                if alive[i] && nodes[i].role() != Role::Master && heard[i] == Some(c - 1) {
+                    let a = nodes[i].continue_cycle(at + t, c + 1);
+                    assert_eq!(
+                        a.start_syncing.map(|s| (s.cycle, s.continuing)),
+                        Some((c + 1, true))
+                    );
+                }
+            }
+            for (i, n) in nodes.iter_mut().enumerate() {
+                if alive[i] {
+                    // Nobody starts a new calendar while the standbys continue.
+                    assert!(n.poll(at + t / 2).start_syncing.is_none(), "cycle {c}: node {i}");
+                }
+            }
+            if c > death + 3 {
+                assert!(c - last_sync_cycle <= 2, "cycle {c}: no sync since {last_sync_cycle}");
+            }
+        }
+        assert!(last_sync_cycle >= 198, "the bus kept a master to the end");
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+        #[test]
+        fn a_continuing_standby_takes_over_without_registrations(
+            ranks in proptest::sample::subsequence((0u8..=MAX_RANK).collect::<Vec<u8>>(), 2..=6)
+                .prop_shuffle(),
+            death in 5u32..150,
+            global in any::<bool>(),
+            loss in 0u64..=40,
+            seed in any::<u64>(),
+        ) {
+            // One sync lost in a row at most: the continuation covers exactly one missing sync
+            // (a node's clock free-runs two; a second loss in a row is the new-calendar path's).
+            simulate_continuing(&ranks, death, global, loss, 1, seed);
         }
     }
 }

@@ -9,8 +9,10 @@
 //! CAN arbitration favours dominant (0) bits, so the laxity field decides first: 0 is HRT
 //! (all dominant), 1..=62 is SRT (smaller = closer to its deadline), 63 is NRT (all
 //! recessive). The fragment counter counts down to 0 on a message's last frame.
-//! A sync frame is laxity 0, fragment 0 and a message ID below [`SYNC_MESSAGE_IDS`]: the
-//! message ID's low byte carries the cycle counter.
+//! A sync frame is laxity 0 and a message ID below [`SYNC_MESSAGE_IDS`]: the message ID's low
+//! byte carries the cycle counter, the fragment field the sender's master rank (0 to
+//! [`MAX_SYNC_SENDER`]), so that standbys starting the same cycle's sync at once are told
+//! apart by arbitration (the best rank wins) instead of colliding.
 
 use crate::laxity::{FrameClass, Laxity};
 
@@ -30,6 +32,8 @@ pub const MAX_FRAGMENT: u8 = (1 << FRAGMENT_BITS) - 1;
 pub const EXTENDED_ID_MAX: u32 = (1 << 29) - 1;
 /// Message IDs `0..SYNC_MESSAGE_IDS` are reserved for sync frames (cycle counter in the low byte).
 pub const SYNC_MESSAGE_IDS: u16 = 0x100;
+/// The largest master rank a sync frame's fragment field carries (`failover::MAX_RANK`).
+pub const MAX_SYNC_SENDER: u8 = 15;
 
 /// A message identifier: names one topic's stream on the bus (assigned by the management protocol).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -71,9 +75,16 @@ impl FrameId {
         Ok(Self { laxity, message, fragment })
     }
 
-    /// The sync frame of cycle `cycle` (only its low byte is sent).
+    /// The sync frame of cycle `cycle` (only its low byte is sent) from the rank-0 master.
     pub const fn sync(cycle: u32) -> Self {
-        Self { laxity: Laxity::HRT, message: MessageId((cycle & 0xFF) as u16), fragment: 0 }
+        Self::sync_from(cycle, 0)
+    }
+
+    /// The sync frame of cycle `cycle` sent by the master of rank `sender` (at most
+    /// [`MAX_SYNC_SENDER`]; larger values are cut to it).
+    pub const fn sync_from(cycle: u32, sender: u8) -> Self {
+        let sender = if sender > MAX_SYNC_SENDER { MAX_SYNC_SENDER } else { sender };
+        Self { laxity: Laxity::HRT, message: MessageId((cycle & 0xFF) as u16), fragment: sender }
     }
 
     /// The 29-bit CAN identifier.
@@ -102,7 +113,10 @@ impl FrameId {
 
     /// The cycle counter's low byte if this is a sync frame.
     pub const fn sync_cycle(self) -> Option<u8> {
-        if self.laxity.code() == 0 && self.fragment == 0 && self.message.is_reserved_for_sync() {
+        if self.laxity.code() == 0
+            && self.fragment <= MAX_SYNC_SENDER
+            && self.message.is_reserved_for_sync()
+        {
             Some(self.message.0 as u8)
         } else {
             None
@@ -163,10 +177,16 @@ pub(crate) mod tests {
             let sync = FrameId::sync(0x1_2345);
             assert_eq!(sync.to_raw(), 0x45 << 7);
             assert_eq!(FrameId::from_raw(sync.to_raw()).unwrap().sync_cycle(), Some(0x45));
-            // Not sync: a data message ID, an SRT laxity, or a fragment.
+            // The sender's rank in the fragment field: a better rank wins arbitration.
+            let from_3 = FrameId::sync_from(0x45, 3);
+            assert_eq!(from_3.to_raw(), (0x45 << 7) | 3);
+            assert_eq!(FrameId::from_raw(from_3.to_raw()).unwrap().sync_cycle(), Some(0x45));
+            assert!(sync.to_raw() < from_3.to_raw());
+            assert_eq!(FrameId::sync_from(0, 200).fragment, MAX_SYNC_SENDER);
+            // Not sync: a data message ID, an SRT laxity, or a fragment beyond the ranks.
             assert_eq!(FrameId::from_raw(0x100 << 7).unwrap().sync_cycle(), None);
             assert_eq!(FrameId::from_raw((1 << 23) | (3 << 7)).unwrap().sync_cycle(), None);
-            assert_eq!(FrameId::from_raw((3 << 7) | 1).unwrap().sync_cycle(), None);
+            assert_eq!(FrameId::from_raw((3 << 7) | 16).unwrap().sync_cycle(), None);
         }
     }
 }

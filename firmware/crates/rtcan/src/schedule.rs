@@ -52,7 +52,7 @@
 //! stayed (3 871 and 3 926); spreading the second-to-last run too multiplied them by 2.4 at
 //! 95 % (seeds 1–8; docs/rtcan.md, "Under load").
 
-use crate::cycle::{EPOCH_BIT, MAX_SLOTS};
+use crate::cycle::{EPOCH_BIT, MAX_SLOTS, SYNC_SLOT};
 use crate::id::MessageId;
 
 /// Longest period in cycles: the cycle counter's modulus and the calendar's hyperperiod.
@@ -133,6 +133,14 @@ pub const fn next_reserved(period: Period, phase: Phase, from: u32) -> (u32, u8)
     let p = period.cycles();
     let wait = (phase.offset as u32).wrapping_sub(from) & (p - 1);
     (from.wrapping_add(wait), phase.slot)
+}
+
+/// True if `a` and `b` reserve the same slot of some cycle: with power-of-two periods, when
+/// their offsets agree modulo the shorter period.
+fn collide(a: &Reservation, b: &Reservation) -> bool {
+    let p = a.period.cycles().min(b.period.cycles());
+    a.phase.slot == b.phase.slot
+        && (u32::from(a.phase.offset) ^ u32::from(b.phase.offset)) & (p - 1) == 0
 }
 
 /// `k`-bit reversal of `j`.
@@ -246,6 +254,12 @@ impl<const N: usize> Scheduler<N> {
         self.table.iter().flatten()
     }
 
+    /// The reservation in the table's entry `k` (modulo its size), if any: for walking the
+    /// calendar one entry at a time.
+    pub fn entry(&self, k: usize) -> Option<Reservation> {
+        self.table.get(k % N).copied().flatten()
+    }
+
     /// Number of admitted streams.
     pub fn len(&self) -> usize {
         self.iter().count()
@@ -326,6 +340,33 @@ impl<const N: usize> Scheduler<N> {
         occ
     }
 
+    /// Takes in a reservation the master's calendar made (a standby following the grants it
+    /// hears, docs/rtcan.md "Master failover"): it replaces the stream's own entry and every
+    /// entry it shares a (cycle, slot) with, which the master's calendar can no longer hold.
+    /// `Err(Full)` if the table has no room, `Err(ReservedId)` for a sync ID, `Err(Conflict)`
+    /// for a phase the calendar could not have made (offset beyond the period, the sync slot).
+    pub fn admit(&mut self, r: Reservation) -> Result<(), Reject> {
+        if r.stream.is_reserved_for_sync() {
+            return Err(Reject::ReservedId);
+        }
+        if u32::from(r.phase.offset) >= r.period.cycles() || r.phase.slot == SYNC_SLOT {
+            return Err(Reject::Conflict);
+        }
+        self.retain(|x| x.stream != r.stream && !collide(x, &r));
+        let free = self.table.iter_mut().find(|e| e.is_none()).ok_or(Reject::Full)?;
+        *free = Some(r);
+        Ok(())
+    }
+
+    /// Keeps only the reservations for which `keep` is true.
+    pub fn retain(&mut self, mut keep: impl FnMut(&Reservation) -> bool) {
+        for e in self.table.iter_mut() {
+            if e.is_some_and(|r| !keep(&r)) {
+                *e = None;
+            }
+        }
+    }
+
     /// Removes `stream`; returns its reservation if it was admitted.
     pub fn remove(&mut self, stream: MessageId) -> Option<Reservation> {
         let e = self.table.iter_mut().find(|e| e.is_some_and(|r| r.stream == stream))?;
@@ -368,6 +409,52 @@ pub(crate) mod tests {
     }
 
     r2p_testkit::suite! {
+        fn a_standby_admitting_the_grants_holds_the_masters_calendar() {
+            let mut master: Scheduler<16> = Scheduler::new(8, 60);
+            let mut standby: Scheduler<16> = Scheduler::new(8, 60);
+            for (k, period) in [1u32, 2, 4, 2, 8, 1, 16, 4].into_iter().enumerate() {
+                let stream = MessageId(0x4201 + k as u16);
+                let phase = master.register(stream, period).unwrap();
+                standby.admit(Reservation { stream, period: p(period), phase }).unwrap();
+            }
+            master.remove(MessageId(0x4202));
+            standby.remove(MessageId(0x4202));
+            for c in 0..MAX_PERIOD_CYCLES {
+                assert_eq!(standby.mask(c), master.mask(c), "cycle {c}");
+            }
+            // Placement continues from the same table: the next grant is the same on both.
+            let next = master.register(MessageId(0x4301), 2).unwrap();
+            assert_eq!(standby.register(MessageId(0x4301), 2), Ok(next));
+        }
+
+        fn admitting_evicts_what_the_master_can_no_longer_hold() {
+            let mut s: Scheduler<4> = Scheduler::new(8, 60);
+            let a = Reservation { stream: MessageId(0x4201), period: p(2), phase: Phase { offset: 1, slot: 3 } };
+            s.admit(a).unwrap();
+            // Period 4 at offset 3 meets period 2 at offset 1 (cycle 3): the old one goes.
+            let b = Reservation { stream: MessageId(0x4301), period: p(4), phase: Phase { offset: 3, slot: 3 } };
+            s.admit(b).unwrap();
+            assert_eq!((s.get(a.stream), s.get(b.stream)), (None, Some(&b)));
+            // Offset 1 of period 4 does not meet offset 3: both stay. The same stream moves.
+            let c = Reservation { stream: MessageId(0x4401), period: p(4), phase: Phase { offset: 1, slot: 3 } };
+            s.admit(c).unwrap();
+            assert_eq!(s.len(), 2);
+            let c2 = Reservation { phase: Phase { offset: 1, slot: 4 }, ..c };
+            s.admit(c2).unwrap();
+            assert_eq!((s.len(), s.get(c.stream)), (2, Some(&c2)));
+            // A phase the calendar cannot make, a sync ID, a full table.
+            let bad = Reservation { phase: Phase { offset: 4, slot: 3 }, ..c };
+            assert_eq!(s.admit(bad), Err(Reject::Conflict));
+            assert_eq!(s.admit(Reservation { phase: Phase { offset: 0, slot: 0 }, ..c }), Err(Reject::Conflict));
+            assert_eq!(s.admit(Reservation { stream: MessageId(0x45), ..c }), Err(Reject::ReservedId));
+            for k in 0..2u16 {
+                let r = Reservation { stream: MessageId(0x4501 + k), period: p(1), phase: Phase { offset: 0, slot: 10 + k as u8 } };
+                s.admit(r).unwrap();
+            }
+            let r = Reservation { stream: MessageId(0x4601), period: p(1), phase: Phase { offset: 0, slot: 20 } };
+            assert_eq!(s.admit(r), Err(Reject::Full));
+        }
+
         fn periods_are_powers_of_two_up_to_256() {
             for k in 0..=8 {
                 assert_eq!(p(1 << k).cycles(), 1 << k);

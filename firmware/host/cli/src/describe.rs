@@ -353,7 +353,7 @@ pub fn report_json(r: &Report, w: &Watcher, laxity: LaxityEncoding) -> Json {
                         (1..64).filter(|b| s.reservations & (1u64 << b) != 0).collect();
                     o.insert(
                         "sync".into(),
-                        json!({"cycle": s.cycle, "reserved_slots": slots, "epoch": s.epoch}),
+                        json!({"cycle": s.cycle, "reserved_slots": slots, "epoch": s.epoch, "sender_rank": s.sender}),
                     );
                 }
                 Err(n) => {
@@ -453,6 +453,7 @@ mod tests {
         );
         let j = report_json(&w.feed(&s), &w, LOG);
         assert_eq!(j["sync"]["reserved_slots"], json!([1, 2]));
+        assert_eq!(j["sync"]["sender_rank"], json!(0));
 
         let ty = MsgType::by_name("Obstacle").unwrap();
         for f in management(

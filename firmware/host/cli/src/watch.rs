@@ -435,11 +435,15 @@ pub(crate) mod tests {
         assert_eq!(r.what, What::Sync(Err(2)));
         let r = w.feed(&s(CanFrame::standard(0x123, &[]).unwrap()));
         assert_eq!((r.id, r.what), (None, What::Standard));
-        // Message 0x0045 with a fragment counter: not a sync, not a node.
-        assert_eq!(w.feed(&s(CanFrame::extended(0x2281, &[]).unwrap())).what, What::Reserved);
+        // The sender's rank in the fragment field (a standby continuing the cycle)...
+        let from_1 = SyncFrame::new(0x46, 0, true).from_rank(1).to_frame();
+        let r = w.feed(&s(CanFrame::extended(0x2301, from_1.payload()).unwrap()));
+        assert!(matches!(r.what, What::Sync(Ok(SyncFrame { cycle: 0x46, sender: 1, .. }))));
+        // ...up to rank 15; message 0x0045 with a larger fragment field: not a sync, not a node.
+        assert_eq!(w.feed(&s(CanFrame::extended(0x2290, &[]).unwrap())).what, What::Reserved);
         // Node 255 is "every node", never a sender.
         assert_eq!(w.feed(&s(CanFrame::extended(0xFF00 << 7, &[]).unwrap())).what, What::Reserved);
-        assert_eq!(w.frames(), 5);
+        assert_eq!(w.frames(), 6);
     }
 
     #[test]

@@ -91,24 +91,27 @@ impl<
                     Ok(p) => (p.offset, p.slot, HrtResult::Ok),
                     Err(r) => (0, 0, r),
                 };
-                let _ = self.send(&Message::HrtGrant {
-                    message_id,
-                    period_cycles,
-                    offset,
-                    slot,
-                    result,
-                });
+                self.send_grant(message_id, period_cycles, Phase { offset, slot }, result);
             }
             Message::HrtGrant { message_id, period_cycles, offset, slot, result } => {
                 let Some((owner, index)) = NodeId::of(MessageId(message_id)) else {
                     bump(&mut self.stats.unexpected);
                     return;
                 };
+                if result == HrtResult::Ok {
+                    let phase = Phase { offset, slot };
+                    self.follow_grant(owner, MessageId(message_id), period_cycles, phase, now);
+                }
                 if owner != me {
                     return; // another node's grant
                 }
                 let i = usize::from(index).wrapping_sub(1);
-                let asked = self.exports.get(i).and_then(|e| e.hrt).is_some_and(|h| {
+                let hrt = self.exports.get(i).and_then(|e| e.hrt);
+                let held = Phase { offset, slot };
+                if hrt.is_some_and(|h| h.state == HrtState::Granted { phase: held }) {
+                    return; // the master's calendar beacon repeating this node's grant
+                }
+                let asked = hrt.is_some_and(|h| {
                     matches!(h.state, HrtState::Requested { .. })
                         && h.period.cycles() == u32::from(period_cycles)
                 });
@@ -125,6 +128,34 @@ impl<
             }
             _ => {}
         }
+    }
+
+    /// As master, once a heartbeat period: repeats the grant of the calendar's next table
+    /// entry, so that a standby that missed a grant (it booted later, or dropped the frame)
+    /// completes its copy within [`MASTER_STREAMS`] heartbeat periods (`calendar.rs`).
+    pub(super) fn calendar_beacon(&mut self) {
+        if !MASTER || self.master.is_none() {
+            return;
+        }
+        let k = usize::from(self.beacon);
+        self.beacon = self.beacon.wrapping_add(1) % MASTER_STREAMS as u8;
+        if let Some(r) = self.scheduler.entry(k) {
+            let period = r.period.cycles() as u16;
+            self.send_grant(r.stream.0, period, r.phase, HrtResult::Ok);
+        }
+    }
+
+    /// Sends an HRT_GRANT (an answer, or the beacon's repetition); true if it was queued.
+    fn send_grant(
+        &mut self,
+        message_id: u16,
+        period_cycles: u16,
+        at: Phase,
+        result: HrtResult,
+    ) -> bool {
+        let (offset, slot) = (at.offset, at.slot);
+        let grant = Message::HrtGrant { message_id, period_cycles, offset, slot, result };
+        self.send(&grant).is_ok()
     }
 
     /// The calendar holding this node's reservations is gone (new master, new epoch) or their

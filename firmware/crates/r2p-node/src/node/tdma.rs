@@ -15,6 +15,11 @@ use crate::slot_tx::{Done, Slotted};
 #[cfg(doc)]
 use crate::{FreeSlots, NodeConfig};
 
+/// The slot of a cycle from which a standby counts the cycle's sync as missing: the sync
+/// starts the cycle and takes at most 160 bit times, so it has arrived by the second slot's end
+/// whatever the node's slot lead.
+pub const CONTINUE_AFTER_SLOT: u8 = 2;
+
 /// The cycle this node runs as master.
 #[derive(Clone, Copy)]
 pub(super) struct MasterCycle {
@@ -87,8 +92,9 @@ impl<
 
         if let Some(mut m) = self.master.filter(|_| MASTER) {
             if now >= m.next_sync {
-                let sync =
-                    SyncFrame::new(m.cycle, self.scheduler.mask(m.cycle.wrapping_add(1)), m.epoch);
+                let rank = self.failover.rank().map_or(0, |r| r.get());
+                let next = self.scheduler.mask(m.cycle.wrapping_add(1));
+                let sync = SyncFrame::new(m.cycle, next, m.epoch).from_rank(rank);
                 let ok = self.slot_tx.load_slotted(can, Slotted::Sync, &sync.to_frame());
                 if ok {
                     self.clock.on_sync(now, &sync);
@@ -113,7 +119,9 @@ impl<
             }
         }
 
-        match self.clock.state(now) {
+        let state = self.clock.state(now);
+        self.continue_cycle(state);
+        match state {
             ClockState::Running(p) if p.slot == SYNC_SLOT => {}
             ClockState::Running(p) if self.clock.mask(p.cycle) & (1 << p.slot) != 0 => {
                 let mine = self.exports.iter().position(|e| {
@@ -226,21 +234,46 @@ impl<
     }
 
     pub(super) fn on_sync(&mut self, at: Micros, sync: &SyncFrame) {
-        self.clock.on_sync(at, sync);
+        let info = self.clock.on_sync(at, sync);
         self.last_sync = at;
         let a = self.failover.on_sync(at, sync);
         self.apply(a);
+        self.follow_sync(sync, info, a.new_calendar);
+    }
+
+    /// A standby that knows the calendar and heard no sync at the start of this cycle sends
+    /// the next cycle's sync itself, at the instant its clock gives (docs/rtcan.md, "Master
+    /// failover"): by slot [`CONTINUE_AFTER_SLOT`] the master's sync would have arrived.
+    fn continue_cycle(&mut self, state: ClockState) {
+        if !MASTER || self.master.is_some() || !self.knows_calendar() {
+            return;
+        }
+        let ClockState::Running(p) = state else { return };
+        if p.free_run != 1 || p.slot < CONTINUE_AFTER_SLOT {
+            return;
+        }
+        let next = p.cycle.wrapping_add(1);
+        if let Some(at) = self.clock.slot_start(next, SYNC_SLOT) {
+            let a = self.failover.continue_cycle(at, next);
+            self.apply(a);
+        }
     }
 
     fn apply(&mut self, a: Actions) {
         if let Some(s) = a.start_syncing.filter(|_| MASTER) {
             self.master = Some(MasterCycle { cycle: s.cycle, next_sync: s.at, epoch: s.epoch });
-            self.scheduler.clear();
-            self.owners.clear();
-            self.clock.reset();
+            if !s.continuing {
+                self.scheduler.clear();
+                self.owners.clear();
+                self.clock.reset();
+            }
         }
         if a.stop_syncing {
             self.master = None;
+            if !a.re_register {
+                // Another master continues this calendar: the one this node holds.
+                self.calendar_agree = rtcan::schedule::MAX_PERIOD_CYCLES as u16;
+            }
         }
         if a.re_register {
             self.re_register();
