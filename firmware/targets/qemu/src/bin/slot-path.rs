@@ -26,6 +26,7 @@ use cortex_m_semihosting::{debug, hio};
 use embassy_executor::InterruptExecutor;
 use embassy_sync::waitqueue::AtomicWaker;
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
+use r2p_module as _; // the memory routines the module images link (a copy runs on the slot path)
 use r2p_node::testbus::{run_slots, uid, Bus, TestNode};
 use r2p_node::{HrtState, NoParams, NodeConfig, RemotePublisher, RemoteSubscriber};
 use r2p_qemu_tests::icount::{self, ten_thousand_nops, RELOAD};
