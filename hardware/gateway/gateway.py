@@ -85,7 +85,8 @@ PLACES = {
     **{r: P(34.3 + 1.85 * i, 22.6, 90) for i, r in enumerate(("R8", "R6", "R5", "R4"))},
     # PHY, turned 270°: RMII on its left, MDI on its right towards the jack, the crystal above
     "U101": P(62.0, 35.0, 270),
-    "Y101": P(62.0, 28.0, 0), "C101": P(58.6, 28.0, 90), "C102": P(65.4, 28.0, 90),
+    # (the crystal and its capacitors 1 mm higher than first placed, for R112 below them)
+    "Y101": P(62.0, 27.0, 0), "C101": P(58.6, 27.0, 90), "C102": P(65.4, 27.0, 90),
     "R101": P(66.4, 30.8, 0), "C103": P(58.0, 31.4, 90), "C104": P(56.3, 31.4, 90),
     "C105": P(66.4, 39.2, 0), "C106": P(66.4, 41.0, 0), "C107": P(58.0, 40.0, 90),
     "R102": P(69.4, 31.0, 90), "R103": P(71.0, 31.0, 90), "R104": P(72.6, 31.0, 90),
@@ -97,7 +98,7 @@ PLACES = {
     # revision A fix (issue 20), placed in the routed board by hand: the PHY's regulator in the
     # free corner above the jack (its heat away from U2's), RS between XTAL2 and the crystal
     "U102": P(70.0, 20.0, 0), "C111": P(66.2, 20.0, 90), "C112": P(73.8, 20.0, 90),
-    "R112": P(63.0, 30.6, 0),
+    "R112": P(63.0, 29.6, 0),
 }
 
 
