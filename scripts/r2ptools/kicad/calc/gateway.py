@@ -212,7 +212,7 @@ def report() -> str:
         f" ({d['worst_uw']:.0f} uW at {d['c_min_pf']:.2f} pF; measure it)",
         f"HSE 8 MHz on the F407: gm_crit {h['gm_crit_ma_per_v']:.2f} mA/V <"
         f" Gm_crit_max {F407_GM_CRIT_MAX_MA_PER_V:g} mA/V (ratio {h['ratio']:.2f})",
-        f"PHY: RBIAS {RBIAS_OHM / 1e3:g} k 1 %, MDI terminations 4 x {MDI_TERM_OHM:g} ohm to 3.3 V;"
+        f"PHY: RBIAS {RBIAS_OHM / 1e3:g} k 1 %, MDI terminations 4 x {MDI_TERM_OHM:g} ohm to +3V3_PHY;"
         f" F407 VCAP_1/VCAP_2 {VCAP_F * 1e6:g} uF",
     ])
 
