@@ -2,9 +2,10 @@
 
     bus jacks J1/J2/J3 ─ CAN transceiver U3 (PB8/PB9) ─┐
     fused bus tap F101 ─► +5V_MOD ─► LDO U2 ─► +3V3    │
+                             └─────► LDO U102 ─► +3V3_PHY (the PHY, its terminations, centre taps)
                                                        U1 STM32F407VGT6 ── SWD J4, NRST, BOOT0,
     J101 HR911105A (magnetics, LEDs) ◄─ MDI ─ U101 LAN8742A ◄─ RMII ─┘   LEDs PD12-PD15
-                                         25 MHz Y101; REFCLKO ─► PA1 (50 MHz)
+                                         25 MHz Y101 (RS R112); REFCLKO ─► PA1 (50 MHz)
 
 Not the F103 core: the gateway draws the core's blocks (bus jacks, CAN transceiver with ESD and
 split termination, 3.3 V regulator, 8 MHz crystal, reset and boot straps, SWD, test pads) from
@@ -20,7 +21,15 @@ regulator on, VDDCR decoupled with 1 uF + 470 pF) and nINTSEL = 0 (pin 14 is REF
 reference into PA1) by 10 k pull-downs on LED1/REGOFF and LED2/nINTSEL, whose LEDs are therefore
 lit high (anode on the pin side); 12.1 k RBIAS; 49.9 ohm from each MDI line to the 3.3 V that
 also feeds the magnetics' centre taps. PHY_NRST (PE2) is held low by R111 until the firmware
-releases it. MDIO has its 1.5 k pull-up.
+releases it. MDIO has its 1.5 k pull-up. The 25 MHz crystal is the datasheet's 100 uW case
+(Figure 5-8): RS (R112, 510 ohm, calc/gateway.py's drive level) between XTAL2 and the crystal.
+
+Supply (issue 20, revision A fix): the PHY side — the LAN8742A's VDDIO, VDD1A and VDD2A, the MDI
+terminations, the magnetics' centre taps and the MDIO pull-up, about 105 mA — has its own
+AP2112K-3.3 (U102, 10 uF in and out, as U2) on +3V3_PHY, so neither SOT-23-5 carries the whole
+217-273 mA (calc/gateway.py: each regulator's dissipation and junction temperature). Both run
+from +5V_MOD with EN tied to VIN, so the rails rise together; the RMII, MDIO and reset lines
+cross between two 3.3 V rails that agree within the regulators' output tolerance.
 
 Board: 112 x 50 mm (the bus grid's 60 x 50 mm plus one 52 mm pitch, six holes on the grid: the
 LQFP-100, the PHY and the 16 x 22 mm magnetics jack do not fit one pitch beside the bus jacks),
@@ -76,7 +85,8 @@ PLACES = {
     **{r: P(34.3 + 1.85 * i, 22.6, 90) for i, r in enumerate(("R8", "R6", "R5", "R4"))},
     # PHY, turned 270°: RMII on its left, MDI on its right towards the jack, the crystal above
     "U101": P(62.0, 35.0, 270),
-    "Y101": P(62.0, 28.0, 0), "C101": P(58.6, 28.0, 90), "C102": P(65.4, 28.0, 90),
+    # (the crystal and its capacitors 1 mm higher than first placed, for R112 below them)
+    "Y101": P(62.0, 27.0, 0), "C101": P(58.6, 27.0, 90), "C102": P(65.4, 27.0, 90),
     "R101": P(66.4, 30.8, 0), "C103": P(58.0, 31.4, 90), "C104": P(56.3, 31.4, 90),
     "C105": P(66.4, 39.2, 0), "C106": P(66.4, 41.0, 0), "C107": P(58.0, 40.0, 90),
     "R102": P(69.4, 31.0, 90), "R103": P(71.0, 31.0, 90), "R104": P(72.6, 31.0, 90),
@@ -85,6 +95,10 @@ PLACES = {
     "R109": P(66.4, 44.6, 0),
     "R110": P(52.6, 36.6, 90), "R111": P(52.6, 40.4, 90),
     "J101": P(80.0, 33.2, 0),
+    # revision A fix (issue 20), placed in the routed board by hand: the PHY's regulator in the
+    # free corner above the jack (its heat away from U2's), RS between XTAL2 and the crystal
+    "U102": P(70.0, 20.0, 0), "C111": P(66.2, 20.0, 90), "C112": P(73.8, 20.0, 90),
+    "R112": P(63.0, 29.6, 0),
 }
 
 
@@ -119,13 +133,20 @@ def build(core: Sheet) -> Module:
         s.part(res, "R_1k", {"1": sig, "2": f"{sig}_A"})
         s.part(led, key, {"A": f"{sig}_A", "K": "GND"})
 
+    # the PHY's own 3.3 V regulator (issue 20): the LAN8742A, its MDI terminations and the
+    # magnetics' centre taps on +3V3_PHY, the rest of the board on U2's +3V3
+    s.part("U102", "AP2112K-3.3", {"VIN": "+5V_MOD", "EN": "+5V_MOD", "GND": "GND",
+                                   "VOUT": "+3V3_PHY"})
+    s.part("C111", "C_10u", {"1": "+5V_MOD", "2": "GND"})
+    s.part("C112", "C_10u", {"1": "+3V3_PHY", "2": "GND"})
+
     # the PHY (LAN8742A, DS00001989A), straps in the module docstring
     s.part("U101", "LAN8742A", {
         "TXD0": "ETH_TXD0", "TXD1": "ETH_TXD1", "TXEN": "ETH_TX_EN",
         "RXD0/MODE0": "ETH_RXD0", "RXD1/MODE1": "ETH_RXD1", "CRS_DV/MODE2": "ETH_CRS_DV",
         "MDIO": "ETH_MDIO", "MDC": "ETH_MDC", "~{RST}": "PHY_NRST", "~{INT}/REFCLKO": "ETH_REF_CLK",
-        "XTAL1/CLKIN": "PHY_XI", "XTAL2": "PHY_XO", "VDDIO": "+3V3", "VDDCR": "PHY_VDDCR",
-        "VDD1A": "+3V3", "VDD2A": "+3V3", "VSS": "GND",
+        "XTAL1/CLKIN": "PHY_XI", "XTAL2": "PHY_XTAL2", "VDDIO": "+3V3_PHY",
+        "VDDCR": "PHY_VDDCR", "VDD1A": "+3V3_PHY", "VDD2A": "+3V3_PHY", "VSS": "GND",
         "TXP": "ETH_TXP", "TXN": "ETH_TXN", "RXP": "ETH_RXP", "RXN": "ETH_RXN",
         "RBIAS": "PHY_RBIAS", "LED1/REGOFF": "PHY_LED1", "LED2/~{INTSEL}": "PHY_LED2"},
         nc=("RXER/PHYAD0",))
@@ -133,27 +154,29 @@ def build(core: Sheet) -> Module:
     s.part("Y101", "XTAL_25M", {"1": "PHY_XI", "3": "PHY_XO", "G": "GND"})
     s.part("C101", "C_15p", {"1": "PHY_XI", "2": "GND"})
     s.part("C102", "C_15p", {"1": "PHY_XO", "2": "GND"})
+    # RS: DS00001989A Figure 5-8's series resistor for a 100 uW crystal (calc/gateway.py)
+    s.part("R112", "R_510", {"1": "PHY_XTAL2", "2": "PHY_XO"})
     s.part("R101", "R_12k1", {"1": "PHY_RBIAS", "2": "GND"})
     s.part("C103", "C_1u", {"1": "PHY_VDDCR", "2": "GND"})
     s.part("C104", "C_470p", {"1": "PHY_VDDCR", "2": "GND"})
-    s.part("C105", "C_100n", {"1": "+3V3", "2": "GND"})        # VDD1A
-    s.part("C106", "C_100n", {"1": "+3V3", "2": "GND"})        # VDD2A
-    s.part("C107", "C_100n", {"1": "+3V3", "2": "GND"})        # VDDIO
-    s.part("R110", "R_1k5", {"1": "+3V3", "2": "ETH_MDIO"})
+    s.part("C105", "C_100n", {"1": "+3V3_PHY", "2": "GND"})    # VDD1A
+    s.part("C106", "C_100n", {"1": "+3V3_PHY", "2": "GND"})    # VDD2A
+    s.part("C107", "C_100n", {"1": "+3V3_PHY", "2": "GND"})    # VDDIO
+    s.part("R110", "R_1k5", {"1": "+3V3_PHY", "2": "ETH_MDIO"})
     s.part("R111", "R_10k", {"1": "PHY_NRST", "2": "GND"})
     s.part("R108", "R_10k", {"1": "PHY_LED1", "2": "GND"})     # REGOFF = 0
     s.part("R109", "R_10k", {"1": "PHY_LED2", "2": "GND"})     # nINTSEL = 0: REFCLKO
     # MDI: 49.9 ohm to the centre-tap supply on each line, 22 nF at the terminations and the taps
     for ref, net in (("R102", "ETH_TXP"), ("R103", "ETH_TXN"), ("R104", "ETH_RXP"),
                      ("R105", "ETH_RXN")):
-        s.part(ref, "R_49R9", {"1": "+3V3", "2": net})
-    s.part("C110", "C_22n", {"1": "+3V3", "2": "GND"})
-    s.part("C109", "C_22n", {"1": "+3V3", "2": "GND"})
-    # the jack: TD± from TXP/TXN, RD± to RXP/RXN, centre taps on 3.3 V, pin 8 (the Bob Smith
+        s.part(ref, "R_49R9", {"1": "+3V3_PHY", "2": net})
+    s.part("C110", "C_22n", {"1": "+3V3_PHY", "2": "GND"})
+    s.part("C109", "C_22n", {"1": "+3V3_PHY", "2": "GND"})
+    # the jack: TD± from TXP/TXN, RD± to RXP/RXN, centre taps on the PHY's 3.3 V, pin 8 (the Bob Smith
     # termination's capacitor) and the shield to GND; green LED (9 A, 10 K) = LED1 link/activity,
     # yellow (12 A, 11 K) = LED2 speed, both lit high through 1 k
     s.part("J101", "RJ45_MAG", {"1": "ETH_TXP", "2": "ETH_TXN", "3": "ETH_RXP", "6": "ETH_RXN",
-                                "4": "+3V3", "5": "+3V3", "8": "GND", "SH": "GND",
+                                "4": "+3V3_PHY", "5": "+3V3_PHY", "8": "GND", "SH": "GND",
                                 "9": "ETH_LED_G", "10": "GND", "12": "ETH_LED_Y", "11": "GND"})
     s.part("R106", "R_1k", {"1": "PHY_LED1", "2": "ETH_LED_G"})
     s.part("R107", "R_1k", {"1": "PHY_LED2", "2": "ETH_LED_Y"})

@@ -191,6 +191,7 @@ _ITEMS = [
     ("C_470p", C, C0603, "470pF", "0603B471K500NT"),
     ("R_49R9", R, R0603, "49.9", "0603WAF499JT5E"),
     ("R_1k5", R, R0603, "1.5k", "0603WAF1501T5E"),
+    ("R_510", R, R0603, "510", "0603WAF5100T5E"),        # the PHY crystal's RS (calc/gateway.py)
     ("R_12k1", R, R0805, "12.1k", "0805W8F1212T5E"),     # 0805: the 1 % value public JLC BOMs confirm
     ("LED_B", "Device:LED", "LED_SMD:LED_0603_1608Metric", "blue", "KT-0603B"),
     # --- imu (hardware/imu/imu.py; design numbers in calc/imu.py)
