@@ -2,10 +2,12 @@
 //! silent loses its slots and another node gets them; a node that reboots registers again,
 //! even with another period.
 
+use heapless::Vec;
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use rtcan::Micros;
 
-use crate::node::{HrtState, NodeConfig, PEER_TIMEOUT_HEARTBEATS};
+use crate::node::{Event, HrtState, NodeConfig, PEER_TIMEOUT_HEARTBEATS};
+use crate::remote::Export;
 use crate::tdma_tests::{tdma, CYCLE, CYCLE_US};
 use crate::testbus::{run_slots, Bus, TestNode};
 use crate::{NoParams, RemotePublisher, RemoteSubscriber};
@@ -104,9 +106,8 @@ fn a_rebooted_node_registers_again_even_with_another_period() {
     assert!(granted(&a, 0));
 
     // A reboots into its new image (same unique ID, same node ID and stream), and so does its
-    // subscriber B (a subscriber that stayed up keeps its old subscription: a rebooted
-    // publisher losing its subscribers is another item of issue 22): A's old reservation
-    // (every cycle) would make its new request (every other cycle) a conflict.
+    // subscriber B (one that stays up: the next tests): A's old reservation (every cycle)
+    // would make its new request (every other cycle) a conflict.
     bus.power(1, false);
     bus.power(2, false);
     let mut a = TestNode::new(tdma(2, "a", None), &NoParams).unwrap();
@@ -144,4 +145,120 @@ fn a_live_node_keeps_its_slot_as_its_uptime_grows() {
     run_slots(&bus, &mut [&mut m, &mut a, &mut b], 3_500_000);
     assert!(granted(&a, 0));
     assert_eq!(m.stats().hrt_released, 0);
+}
+
+#[test]
+fn a_subscriber_that_stays_up_gets_a_rebooted_publishers_messages_again() {
+    // The publisher's export before and after its reboot: a fresh one has no subscribers.
+    static T: Topic<'static, u8, { pool_size(&[2, 2], 1) }, 2> = Topic::new("state", 0);
+    static P: Publisher<'static, u8> = Publisher::new(&T, Class::NonRealTime);
+    static O1: RemoteSubscriber<'static, u8, 2> = RemoteSubscriber::new(&P);
+    static O2: RemoteSubscriber<'static, u8, 2> = RemoteSubscriber::new(&P);
+    static L: Topic<'static, u8, { pool_size(&[4], 1) }, 1> = Topic::new("state", 0);
+    static LP: Publisher<'static, u8> = Publisher::new(&L, Class::NonRealTime);
+    static I: RemotePublisher<'static, u8> = RemotePublisher::new(&LP, &L);
+    static S: Subscriber<'static, u8, 4> = Subscriber::new();
+    T.subscribe(&O1).unwrap();
+    T.subscribe(&O2).unwrap();
+    L.subscribe(&S).unwrap();
+
+    let bus = Bus::<3>::slotted(CYCLE);
+    let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
+    let mut a = TestNode::new(tdma(2, "a", None), &NoParams).unwrap();
+    let mut b = TestNode::new(tdma(3, "b", None), &NoParams).unwrap();
+    a.export(&O1).unwrap();
+    b.import(&I).unwrap();
+    run_slots(&bus, &mut [&mut m, &mut a, &mut b], 300_000);
+    P.publish_with(|v| *v = 1).unwrap();
+    run_slots(&bus, &mut [&mut m, &mut a, &mut b], 320_000);
+    assert_eq!(S.try_recv().map(|v| *v), Some(1));
+
+    // A reboots (same image, same node ID); B stays up, subscribed as far as it knows.
+    bus.power(1, false);
+    let mut a = TestNode::new(tdma(2, "a", None), &NoParams).unwrap();
+    a.export(&O2).unwrap();
+    bus.power(1, true);
+    let until = bus.now.get() + 200_000;
+    run_slots(&bus, &mut [&mut m, &mut a, &mut b], until);
+    assert!(O2.active_len() > 0, "B subscribed again when A advertised while starting");
+    P.publish_with(|v| *v = 2).unwrap();
+    let until = bus.now.get() + 20_000;
+    run_slots(&bus, &mut [&mut m, &mut a, &mut b], until);
+    assert_eq!(S.try_recv().map(|v| *v), Some(2));
+    assert_eq!(bus.violations(), 0);
+}
+
+/// Every `PublisherSilent` event `n` had queued.
+fn silences(n: &mut TestNode<'_>) -> Vec<usize, 8> {
+    let mut v = Vec::new();
+    while let Some(e) = n.next_event() {
+        if let Event::PublisherSilent { import, .. } = e {
+            let _ = v.push(import);
+        }
+    }
+    v
+}
+
+#[test]
+fn a_subscriber_learns_that_its_publisher_went_silent() {
+    // An HRT stream every cycle, and a plain (NRT) one from another module.
+    static TH: Topic<'static, u8, { pool_size(&[1], 1) }, 1> = Topic::new("setpoint", 0);
+    static PH: Publisher<'static, u8> = Publisher::new(&TH, EVERY_CYCLE);
+    static OH: RemoteSubscriber<'static, u8, 1> = RemoteSubscriber::new(&PH);
+    static TN: Topic<'static, u8, { pool_size(&[2], 1) }, 1> = Topic::new("status", 0);
+    static PN: Publisher<'static, u8> = Publisher::new(&TN, Class::NonRealTime);
+    static ON: RemoteSubscriber<'static, u8, 2> = RemoteSubscriber::new(&PN);
+    static LH: Topic<'static, u8, { pool_size(&[4], 1) }, 1> = Topic::new("setpoint", 0);
+    static LPH: Publisher<'static, u8> = Publisher::new(&LH, Class::NonRealTime);
+    static IH: RemotePublisher<'static, u8> = RemotePublisher::new(&LPH, &LH);
+    static SH: Subscriber<'static, u8, 4> = Subscriber::new();
+    static LN: Topic<'static, u8, { pool_size(&[4], 1) }, 1> = Topic::new("status", 0);
+    static LPN: Publisher<'static, u8> = Publisher::new(&LN, Class::NonRealTime);
+    static IN: RemotePublisher<'static, u8> = RemotePublisher::new(&LPN, &LN);
+    static SN: Subscriber<'static, u8, 4> = Subscriber::new();
+    TH.subscribe(&OH).unwrap();
+    TN.subscribe(&ON).unwrap();
+    LH.subscribe(&SH).unwrap();
+    LN.subscribe(&SN).unwrap();
+
+    let bus = Bus::<4>::slotted(CYCLE);
+    let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();
+    let mut a = TestNode::new(tdma(2, "a", None), &NoParams).unwrap();
+    let mut b = TestNode::new(tdma(3, "b", None), &NoParams).unwrap();
+    let mut c = TestNode::new(tdma(4, "c", None), &NoParams).unwrap();
+    a.export(&OH).unwrap();
+    c.export(&ON).unwrap();
+    b.import(&IH).unwrap();
+    b.import(&IN).unwrap();
+    let nodes = &mut [&mut m, &mut a, &mut b, &mut c];
+    // A publishes every cycle for a while: no silence.
+    for _ in 0..100 {
+        PH.publish_with(|v| *v = 1).unwrap();
+        let until = bus.now.get() + CYCLE_US;
+        run_slots(&bus, nodes, until);
+    }
+    assert!(SH.try_recv().is_some());
+    assert_eq!(silences(nodes[2]), Vec::<usize, 8>::new());
+    // A stops publishing (alive, heartbeats go on): two periods plus a heartbeat period later
+    // B knows, once.
+    let until = bus.now.get() + 2 * CYCLE_US + 2 * HEARTBEAT_US;
+    run_slots(&bus, nodes, until);
+    assert_eq!(silences(nodes[2]), [0]);
+    let until = bus.now.get() + 5 * HEARTBEAT_US;
+    run_slots(&bus, nodes, until);
+    assert_eq!(silences(nodes[2]), Vec::<usize, 8>::new(), "raised once");
+    // C's module leaves (its cable pulled): after the peer timeout B knows.
+    bus.power(3, false);
+    let until = bus.now.get() + (PEER_TIMEOUT_HEARTBEATS + 2) * HEARTBEAT_US;
+    run_slots(&bus, nodes, until);
+    assert_eq!(silences(nodes[2]), [1]);
+    // C comes back: B hears it, asks again, and C's messages arrive.
+    bus.power(3, true);
+    let until = bus.now.get() + 200_000;
+    run_slots(&bus, nodes, until);
+    PN.publish_with(|v| *v = 9).unwrap();
+    let until = bus.now.get() + 20_000;
+    run_slots(&bus, nodes, until);
+    assert_eq!(SN.try_recv().map(|v| *v), Some(9));
+    assert_eq!(bus.violations(), 0);
 }

@@ -41,6 +41,7 @@ mod events;
 mod hrt;
 mod liveness;
 mod management;
+mod publishers;
 mod stats;
 mod tdma;
 mod topics;
@@ -112,6 +113,8 @@ pub struct Node<
     errors: ErrorCounters,
     /// Nodes heard from.
     peers: NodeSet,
+    /// Nodes whose last heartbeat said `Starting` (a publisher among them lost its subscribers).
+    starting: NodeSet,
     /// Nodes this module sent parameter requests to (their answers become events).
     asked: NodeSet,
     /// How management messages are read: without the replies only a tool reads until this node
@@ -193,6 +196,7 @@ impl<
             state: ModuleState::Running,
             errors: ErrorCounters::default(),
             peers: NodeSet::default(),
+            starting: NodeSet::default(),
             asked: NodeSet::default(),
             decode: Message::decode_requests,
             reboot: false,
@@ -302,10 +306,10 @@ impl<
             }
             return;
         }
-        let subscribed = self.imports.iter().find(
+        let subscribed = self.imports.iter().position(
             |s| matches!(s.state, ImportState::Subscribed { message, .. } if message == id.message),
         );
-        let Some(import) = subscribed.map(|s| s.import) else {
+        let Some((k, import)) = subscribed.map(|k| (k, self.imports[k].import)) else {
             // A stream this node asked for runs already for other subscribers, and its frames
             // pass the filters (programmed at the request) before the publisher's answer
             // arrives: not unknown, only early.
@@ -317,7 +321,10 @@ impl<
         };
         if let Some(m) = self.rx.accept(&r.frame, r.at, Expect::Exactly(import.size())) {
             match import.publish_bytes(m.data) {
-                Ok(_) => bump(&mut self.stats.published),
+                Ok(_) => {
+                    bump(&mut self.stats.published);
+                    self.publisher_heard(k, r.at);
+                }
                 Err(ImportError::Decode(_)) => bump(&mut self.stats.bad_payloads),
                 Err(ImportError::PoolEmpty) => bump(&mut self.stats.remote_pool_empty),
             }
@@ -343,6 +350,7 @@ impl<
             // Once a heartbeat period, not every slot: off the slot path's usual length.
             self.expire_owners(now);
             self.calendar_beacon();
+            self.check_publishers(now);
             let state = if self.heartbeats < STARTING_HEARTBEATS {
                 ModuleState::Starting
             } else {

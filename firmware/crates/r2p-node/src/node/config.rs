@@ -67,10 +67,10 @@ pub struct SlotPath {
 
 /// The slot path built for the F103's Cortex-M3 (thumbv7m).
 pub const CORTEX_M3_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_964, max_instructions: 2_069 };
+    SlotPath { min_instructions: 1_954, max_instructions: 2_059 };
 /// The slot path built for the F407's Cortex-M4F (thumbv7em, hard float).
 pub const CORTEX_M4_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_974, max_instructions: 2_074 };
+    SlotPath { min_instructions: 1_964, max_instructions: 2_064 };
 
 impl SlotPath {
     /// The slot lead for a core clocked at `sysclk_hz` (µs): the shortest path at one cycle per
@@ -87,7 +87,7 @@ impl SlotPath {
     }
 }
 
-/// The F103 modules' slot lead: [`CORTEX_M3_SLOT_PATH`] at 72 MHz, 27.3–28.7 µs, so 27 µs. The
+/// The F103 modules' slot lead: [`CORTEX_M3_SLOT_PATH`] at 72 MHz, 27.1–28.6 µs, so 27 µs. The
 /// F407 gateway's is [`CORTEX_M4_SLOT_PATH`] at 168 MHz, 11 µs (`SlotPath::lead_us`).
 pub const MODULE_SLOT_LEAD_US: u32 = CORTEX_M3_SLOT_PATH.lead_us(72_000_000);
 

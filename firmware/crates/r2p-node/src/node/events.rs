@@ -51,6 +51,16 @@ pub enum Event {
         /// Why.
         result: SubscribeResult,
     },
+    /// The publisher of import `import` went silent (`publishers.rs`): no message for two of
+    /// the stream's periods (HRT: the stream stopped, or its slot was refused after a
+    /// failover), or no heartbeat for the peer timeout (the module left; when its heartbeats
+    /// return it is asked again). Raised once; messages arriving again end it.
+    PublisherSilent {
+        /// Index of the import.
+        import: usize,
+        /// The publisher's node.
+        from: NodeId,
+    },
     /// A PARAM_SET changed a local parameter (persist it if the module keeps parameters).
     ParamChanged {
         /// Parameter index.

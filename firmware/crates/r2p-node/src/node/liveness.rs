@@ -23,8 +23,7 @@ pub const PEER_TIMEOUT_HEARTBEATS: u64 = 10;
 
 /// Nodes holding reservations the master follows: 8 (a robot's HRT publishers: Triskar2 has
 /// two), 96 bytes in every node. A ninth is granted its slots but not followed: they stay until
-/// the next master change, as before. (16 made the QEMU slot-path image, whose stack is within
-/// about 100 bytes of its limit, overflow: a harness to give more room.)
+/// the next master change, as before.
 pub(super) const OWNERS: usize = 8;
 
 /// A node holding reservations in the master's calendar, as its heartbeats say (12 bytes: the

@@ -30,10 +30,14 @@ impl NodeSet {
     pub(super) fn contains(&self, n: NodeId) -> bool {
         self.0[usize::from(n.get() / 32)] & (1 << (n.get() % 32)) != 0
     }
-    /// Nodes are never removed: a peer that leaves stays known (its return in `Starting`
+    /// Known peers are never removed: a peer that leaves stays known (its return in `Starting`
     /// state is what triggers advertisements), and an asked node may still answer.
     pub(super) fn insert(&mut self, n: NodeId) {
         self.0[usize::from(n.get() / 32)] |= 1 << (n.get() % 32);
+    }
+    /// For the set of peers whose last heartbeat said `Starting`.
+    pub(super) fn remove(&mut self, n: NodeId) {
+        self.0[usize::from(n.get() / 32)] &= !(1 << (n.get() % 32));
     }
     pub(super) fn len(&self) -> usize {
         self.0.iter().map(|w| w.count_ones() as usize).sum()
@@ -240,12 +244,18 @@ impl<
                     self.readvertise();
                 }
                 self.peers.insert(from);
+                self.publisher_alive(from, now);
+                if starting {
+                    self.starting.insert(from);
+                } else {
+                    self.starting.remove(from);
+                }
             }
             Message::Reboot { target } if for_me(target) || target == NodeId::BROADCAST => {
                 self.reboot = true;
                 self.event(Event::RebootRequested { from });
             }
-            Message::Advertise { topic, type_hash, size, index, .. } => {
+            Message::Advertise { topic, type_hash, size, index, class } => {
                 if from == me {
                     return; // a module with our node ID: the conflict is being settled
                 }
@@ -272,7 +282,15 @@ impl<
                         ImportState::Requested { from: f, index: x, .. } => f == from && x == index,
                         _ => false,
                     };
-                    if !already {
+                    // A publisher that is starting (again: it rebooted) has no subscribers
+                    // whatever this node believes: ask again (it answers with the same stream).
+                    if !already || self.starting.contains(from) {
+                        self.imports[i].period_us = match class {
+                            BusClass::Hrt { period_cycles } => {
+                                u32::from(period_cycles) * self.config.cycle.cycle_us
+                            }
+                            _ => 0,
+                        };
                         self.request(i, from, index, now);
                     }
                 }
@@ -332,6 +350,7 @@ impl<
                 match NodeId::of(message) {
                     Some((owner, index)) if owner == from && index != MANAGEMENT_INDEX => {
                         self.imports[i].state = ImportState::Subscribed { from, message };
+                        self.publisher_heard(i, now);
                         self.event(Event::Subscribed { import: i, from, message });
                     }
                     _ => bump(&mut self.stats.unexpected), // not a stream of the publisher

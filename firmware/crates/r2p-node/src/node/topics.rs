@@ -68,6 +68,13 @@ pub(super) struct ExportSlot<'a> {
 pub(super) struct ImportSlot<'a> {
     pub(super) import: &'a dyn Import,
     pub(super) state: ImportState,
+    /// When the publisher was last heard for this import (`publishers.rs`): a message of the
+    /// stream, or (no period) one of its heartbeats; the low 32 bits of the µs clock.
+    pub(super) heard: u32,
+    /// The stream's period as advertised (HRT), µs; 0: the publisher's heartbeats tell.
+    pub(super) period_us: u32,
+    /// [`Event::PublisherSilent`](super::Event::PublisherSilent) was raised and nothing came since.
+    pub(super) silent: bool,
 }
 
 impl<
@@ -133,7 +140,13 @@ impl<
             return Err(NodeError::DuplicateTopic);
         }
         self.imports
-            .push(ImportSlot { import, state: ImportState::Waiting })
+            .push(ImportSlot {
+                import,
+                state: ImportState::Waiting,
+                heard: 0,
+                period_us: 0,
+                silent: false,
+            })
             .map_err(|_| NodeError::TooMany)?;
         Ok(self.imports.len() - 1)
     }

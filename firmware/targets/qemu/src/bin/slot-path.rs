@@ -73,7 +73,11 @@ unsafe fn DefaultHandler(irqn: i16) {
 /// The bus task: every slot, waits for the compare, then ticks the module (timed) and the
 /// master, as a module's `bus` task waits for its `SlotTimer`.
 #[embassy_executor::task]
-async fn bus_task(bus: Bus<2>, mut m: TestNode<'static>, mut a: TestNode<'static>) {
+async fn bus_task(
+    bus: &'static mut Bus<2>,
+    m: &'static mut TestNode<'static>,
+    a: &'static mut TestNode<'static>,
+) {
     let step = Micros::from(CYCLE.slot_us());
     let mut seen = EVENTS.load(Ordering::Relaxed);
     loop {
@@ -147,6 +151,10 @@ impl<C: CanController> CanController for Timed<C> {
     }
 }
 
+fn node(n: u32, name: &'static str, rank: Option<u8>) -> TestNode<'static> {
+    TestNode::new(config(n, name, rank), &NoParams).unwrap()
+}
+
 fn config(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
     NodeConfig {
         heartbeat_period_us: 20_000,
@@ -173,12 +181,17 @@ fn main() -> ! {
     M_T.advertise(&M_PUB).unwrap();
     M_T.subscribe(&M_SUB).unwrap();
 
-    let bus = Bus::<2>::slotted(CYCLE);
-    let mut m = TestNode::new(config(1, "psu", Some(0)), &NoParams).unwrap();
-    let mut a = TestNode::new(config(2, "motor", None), &NoParams).unwrap();
+    // The bus and the nodes in statics, not on main's stack, which the compare interrupt's
+    // executor shares (by value, main's frame held them and their copies for the bus task:
+    // within ~100 bytes of the stack's limit, and over it as the node grew).
+    let bus: &'static mut Bus<2> = cortex_m::singleton!(: Bus<2> = Bus::slotted(CYCLE)).unwrap();
+    let m: &'static mut TestNode<'static> =
+        cortex_m::singleton!(: TestNode<'static> = node(1, "psu", Some(0))).unwrap();
+    let a: &'static mut TestNode<'static> =
+        cortex_m::singleton!(: TestNode<'static> = node(2, "motor", None)).unwrap();
     a.export(&A_OUT).unwrap();
     m.import(&M_IN).unwrap();
-    run_slots(&bus, &mut [&mut m, &mut a], 150_000);
+    run_slots(bus, &mut [&mut *m, &mut *a], 150_000);
     if !matches!(a.hrt_state(0), Some(HrtState::Granted { .. })) {
         let _ = writeln!(out, "slot-path: the HRT stream was not granted");
         debug::exit(debug::EXIT_FAILURE);
