@@ -1,0 +1,241 @@
+//! `r2p ui`: a web page for the live bus, served by `r2p` itself on loopback (nothing is fetched
+//! from the internet: the page, its script and the vendored charting library, uPlot, are built
+//! into the binary). The page gets the bus as a stream of snapshots (server-sent events, which
+//! the browser reconnects by itself) and asks for parameters and publications with small JSON
+//! requests, which run the CLI's own commands ([`crate::ui_actions`]).
+//!
+//! The server is tiny_http (synchronous, one thread per request): the bus loop
+//! ([`crate::ui_bus`]) is a plain thread, as in every other command.
+
+use std::io::Write;
+use std::net::{IpAddr, SocketAddr};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+use std::time::Duration;
+
+use clap::Args;
+use serde_json::{json, Value as Json};
+use tiny_http::{Header, Method, Request, Response, Server};
+
+use crate::args::{parse_seconds, BusArgs};
+use crate::error::CliError;
+use crate::ui_actions::{self, body, text_field};
+use crate::ui_bus::{self, Snapshots};
+
+/// `r2p ui` options.
+#[derive(Args, Debug)]
+pub struct UiArgs {
+    /// The TCP port to serve the page on
+    #[arg(long, value_name = "N", default_value_t = 8023)]
+    pub port: u16,
+    /// The address to serve on; loopback by default (the page can set parameters and publish:
+    /// serve another address only on a network you trust)
+    #[arg(long, value_name = "ADDR", default_value = "127.0.0.1")]
+    pub bind: IpAddr,
+    /// Show a module as lost after this long without a heartbeat (10 of its default 100 ms
+    /// periods, as the bus master drops its reservations)
+    #[arg(long, value_name = "SECONDS", default_value = "1", value_parser = parse_seconds)]
+    pub lost_after: Duration,
+}
+
+/// The page's files, built in: (path, content type, bytes).
+const ASSETS: &[(&str, &str, &[u8])] = &[
+    ("/", "text/html; charset=utf-8", include_bytes!("../ui/index.html")),
+    ("/app.js", "text/javascript; charset=utf-8", include_bytes!("../ui/app.js")),
+    ("/style.css", "text/css; charset=utf-8", include_bytes!("../ui/style.css")),
+    (
+        "/vendor/uPlot.iife.min.js",
+        "text/javascript; charset=utf-8",
+        include_bytes!("../ui/vendor/uPlot.iife.min.js"),
+    ),
+    (
+        "/vendor/uPlot.min.css",
+        "text/css; charset=utf-8",
+        include_bytes!("../ui/vendor/uPlot.min.css"),
+    ),
+];
+
+/// The built-in file at `path` (a query string ignored): its content type and bytes.
+pub fn asset(path: &str) -> Option<(&'static str, &'static [u8])> {
+    let path = path.split('?').next().unwrap_or(path);
+    ASSETS.iter().find(|(p, _, _)| *p == path).map(|(_, t, b)| (*t, *b))
+}
+
+fn header(name: &str, value: &str) -> Header {
+    Header::from_bytes(name.as_bytes(), value.as_bytes()).expect("a valid header")
+}
+
+/// A JSON answer: 200 with `Ok`, 400 with `{"error": …}` (the page shows the text).
+fn answer(r: Result<Json, CliError>) -> Response<std::io::Cursor<Vec<u8>>> {
+    let (code, j) = match r {
+        Ok(j) => (200, j),
+        Err(e) => (400, json!({"error": e.to_string()})),
+    };
+    Response::from_string(j.to_string())
+        .with_status_code(code)
+        .with_header(header("Content-Type", "application/json"))
+}
+
+/// Query parameter `key` of `url`, percent-decoded.
+pub fn query(url: &str, key: &str) -> Option<String> {
+    let q = url.split_once('?')?.1;
+    q.split('&').filter_map(|kv| kv.split_once('=')).find(|(k, _)| *k == key).map(|(_, v)| {
+        let mut out = Vec::new();
+        let b = v.as_bytes();
+        let mut i = 0;
+        while i < b.len() {
+            match b[i] {
+                b'%' if i + 2 < b.len() => {
+                    let hex = std::str::from_utf8(&b[i + 1..i + 3]).ok();
+                    match hex.and_then(|h| u8::from_str_radix(h, 16).ok()) {
+                        Some(x) => {
+                            out.push(x);
+                            i += 3;
+                            continue;
+                        }
+                        None => out.push(b'%'),
+                    }
+                }
+                b'+' => out.push(b' '),
+                c => out.push(c),
+            }
+            i += 1;
+        }
+        String::from_utf8_lossy(&out).into_owned()
+    })
+}
+
+/// Streams snapshots to the page as server-sent events until it goes away.
+fn events(req: Request, snaps: &Snapshots) {
+    let mut w = req.into_writer();
+    let head = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-cache\r\n\
+                Connection: close\r\n\r\nretry: 1000\n\n";
+    if w.write_all(head.as_bytes()).and_then(|()| w.flush()).is_err() {
+        return;
+    }
+    let mut seen = 0;
+    loop {
+        // A comment every few seconds when nothing changes notices a page that left.
+        let msg = match snaps.next_after(seen, Duration::from_secs(5)) {
+            Some((n, text)) => {
+                seen = n;
+                format!("data: {text}\n\n")
+            }
+            None => ": idle\n\n".to_string(),
+        };
+        if w.write_all(msg.as_bytes()).and_then(|()| w.flush()).is_err() {
+            return;
+        }
+    }
+}
+
+/// Answers one request.
+fn handle(mut req: Request, bus: &BusArgs, snaps: &Snapshots) {
+    let url = req.url().to_string();
+    let path = url.split('?').next().unwrap_or("").to_string();
+    let mut text = String::new();
+    if *req.method() == Method::Post && req.as_reader().read_to_string(&mut text).is_err() {
+        let _ = req.respond(answer(Err(CliError::new("the request body is not UTF-8"))));
+        return;
+    }
+    let r = match (req.method(), path.as_str()) {
+        (Method::Get, "/events") => return events(req, snaps),
+        (Method::Get, "/api/params") => match query(&url, "node") {
+            Some(node) => ui_actions::read_params(bus, &node),
+            None => Err(CliError::new("/api/params?node=NODE: which module?")),
+        },
+        (Method::Post, "/api/param") => body(&text).and_then(|j| {
+            let index = j["index"]
+                .as_u64()
+                .and_then(|i| u16::try_from(i).ok())
+                .ok_or_else(|| CliError::new("the request has no parameter \"index\""))?;
+            ui_actions::set_param(
+                bus,
+                text_field(&j, "node")?,
+                index,
+                j["type"].as_str(),
+                text_field(&j, "value")?,
+            )
+        }),
+        (Method::Post, "/api/publish") => body(&text).and_then(|j| {
+            let values: Vec<String> =
+                text_field(&j, "values")?.split_whitespace().map(String::from).collect();
+            let deadline = match j["deadline_us"].as_u64() {
+                None => None,
+                Some(d) => Some(u32::try_from(d).map_err(|_| CliError::new("deadline too long"))?),
+            };
+            ui_actions::publish(
+                bus,
+                text_field(&j, "topic")?,
+                values,
+                j["type"].as_str().map(String::from),
+                deadline,
+            )
+        }),
+        (Method::Get, p) => match asset(p) {
+            Some((ty, bytes)) => {
+                let r = Response::from_data(bytes).with_header(header("Content-Type", ty));
+                let _ = req.respond(r);
+                return;
+            }
+            None => {
+                let r = Response::from_string("not found").with_status_code(404);
+                let _ = req.respond(r);
+                return;
+            }
+        },
+        _ => Err(CliError::new(format!("{} {path}: not something r2p ui answers", req.method()))),
+    };
+    let _ = req.respond(answer(r));
+}
+
+/// Runs `r2p ui`: serves the page until interrupted.
+pub fn run(args: &UiArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let addr = SocketAddr::new(args.bind, args.port);
+    let server = Server::http(addr).map_err(|e| {
+        CliError::new(format!("--bind {} --port {}: cannot serve there: {e}", args.bind, args.port))
+    })?;
+    let snaps = Arc::new(Snapshots::default());
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let (bus, snaps, stop, lost) = (bus.clone(), snaps.clone(), stop.clone(), args.lost_after);
+        std::thread::spawn(move || ui_bus::run(&bus, lost, &snaps, &stop));
+    }
+    crate::args::emit(out, &format!("r2p ui: open http://{addr}/"))?;
+    out.flush().map_err(|e| CliError::new(format!("writing the output: {e}")))?;
+    for req in server.incoming_requests() {
+        let (bus, snaps) = (bus.clone(), snaps.clone());
+        std::thread::spawn(move || handle(req, &bus, &snaps));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_page_file_is_built_in_and_nothing_else_is_served() {
+        let (ty, html) = asset("/").unwrap();
+        assert!(ty.starts_with("text/html"));
+        let html = std::str::from_utf8(html).unwrap();
+        for (p, _, _) in &ASSETS[1..] {
+            assert!(html.contains(&format!("\"{}\"", &p[1..])), "index.html loads {p}");
+        }
+        assert!(asset("/app.js?v=1").is_some());
+        assert!(asset("/../Cargo.toml").is_none() && asset("/vendor/").is_none());
+        assert!(
+            !html.contains("http://") && !html.contains("https://"),
+            "nothing from the internet"
+        );
+    }
+
+    #[test]
+    fn query_parameters_are_decoded() {
+        assert_eq!(query("/api/params?node=motor", "node").as_deref(), Some("motor"));
+        assert_eq!(query("/p?a=1&node=left%20wheel+x", "node").as_deref(), Some("left wheel x"));
+        assert_eq!(query("/p?node=%zz%4", "node").as_deref(), Some("%zz%4"));
+        assert_eq!(query("/p?a=1", "node"), None);
+        assert_eq!(query("/p", "node"), None);
+    }
+}
