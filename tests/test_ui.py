@@ -15,6 +15,7 @@ Without /usr/bin/chromium (scripts/setup installs it) or Playwright the test is 
 reason; Playwright never downloads a browser here."""
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -54,9 +55,13 @@ def _browser_or_skip():
 
 
 @pytest.fixture(scope="module")
-def robot():
+def built():
     p = run(["cargo", "build", "-q", "-p", "r2p-cli"], cwd=FIRMWARE, timeout=900)
     assert p.returncode == 0, p.stdout
+
+
+@pytest.fixture(scope="module")
+def robot(built):
     sim = SocketcandProcess([str(R2P), "sim", str(TRISKAR2), "--realtime", "--power-off", POWER_OFF], "r2p sim")
     try:
         yield sim
@@ -64,10 +69,11 @@ def robot():
         sim.kill()
 
 
-@pytest.fixture(scope="module")
-def ui(robot):
+@contextlib.contextmanager
+def serve_ui(socketcand_port: int):
+    """`r2p ui` on the bus at `socketcand_port`; yields the page's address."""
     port = free_port()
-    proc = subprocess.Popen([str(R2P), "--socketcand", f"127.0.0.1:{robot.port}", "--timeout", "3", "ui",
+    proc = subprocess.Popen([str(R2P), "--socketcand", f"127.0.0.1:{socketcand_port}", "--timeout", "3", "ui",
                              "--port", str(port)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         line = proc.stdout.readline()
@@ -78,6 +84,30 @@ def ui(robot):
         proc.wait(timeout=10)
         for pipe in (proc.stdout, proc.stderr):
             pipe.close()
+
+
+@pytest.fixture(scope="module")
+def ui(robot):
+    with serve_ui(robot.port) as url:
+        yield url
+
+
+@contextlib.contextmanager
+def browser():
+    """A page in Debian's chromium, headless, with a fresh profile (or the test is skipped)."""
+    sync_playwright = _browser_or_skip()
+    profile = tempfile.mkdtemp(prefix="r2p-ui-chromium-")
+    try:
+        with sync_playwright() as pw:
+            ctx = pw.chromium.launch_persistent_context(
+                profile, executable_path=str(CHROMIUM), args=CHROMIUM_ARGS, headless=True,
+                viewport={"width": 1280, "height": 900})
+            try:
+                yield ctx.new_page(), Path(profile)
+            finally:
+                ctx.close()
+    finally:
+        shutil.rmtree(profile, ignore_errors=True)
 
 
 def r2p(robot, *args) -> subprocess.CompletedProcess[str]:
@@ -105,90 +135,120 @@ SHOWN_JS = """() => {
 
 
 def test_the_page_shows_the_robot_plots_edits_parameters_and_sees_a_module_lost(robot, ui):
-    sync_playwright = _browser_or_skip()
-    profile = tempfile.mkdtemp(prefix="r2p-ui-chromium-")
+    with browser() as (page, profile):
+        page.goto(ui)
+
+        # The modules, from their heartbeats.
+        for name in MODULES:
+            page.wait_for_selector(f'#modules tr[data-name="{name}"]', timeout=20_000)
+        gateway_id = page.get_attribute('#modules tr[data-name="gateway"]', "data-node")
+        assert page.text_content('#modules tr[data-name="motor1"] td.state') == "running"
+        assert "HRT every 1 cycles" in page.text_content('#topics tr[data-topic="motor1/setpoint"]')
+
+        # A topic's plot receives values.
+        page.click('#topics tr[data-topic="motor1/state"]')
+        page.wait_for_function("Number(document.getElementById('plot').dataset.points) >= 5", timeout=20_000)
+        assert page.query_selector("#plot canvas") is not None
+        assert "speed" in page.text_content("#value")
+
+        # A parameter edited in the page is read back by `r2p param get`: the gateway's
+        # parameter 12 (f32).
+        page.select_option("#param-node", gateway_id)
+        page.click("#param-read")
+        row = '#params tr[data-index="12"]'
+        page.wait_for_selector(row, timeout=30_000)
+        assert page.text_content(f"{row} td:nth-child(2)") == "f32"
+        page.fill(f"{row} input", "45")
+        page.click(f"{row} button.set")
+        page.wait_for_selector("#param-msg.ok:has-text('is now f32:45')", timeout=20_000)
+        assert r2p(robot, "param", "get", "gateway", "12").stdout.strip() == "f32:45.0"
+
+        # The screenshot, with every module running, no tool (r2p-cli) on the list and a
+        # plot of a few seconds.
+        page.wait_for_function("!document.querySelector('#modules tr[data-name=\"r2p-cli\"]')", timeout=10_000)
+        page.wait_for_function("document.querySelectorAll('#slots .slot.reserved').length > 1", timeout=10_000)
+        page.wait_for_function("Number(document.getElementById('plot').dataset.points) >= 25", timeout=20_000)
+        assert page.query_selector('#modules tr.lost') is None, \
+            f"a module was lost before the screenshot (the machine too slow for {POWER_OFF}?)"
+        shown = page.evaluate(SHOWN_JS)
+        assert sorted(m.split()[0] for m in shown["modules"]) == sorted(MODULES)
+        shot = profile / "r2p-ui.png"
+        page.screenshot(path=str(shot), full_page=True)
+        if os.environ.get("R2P_WRITE_SCREENSHOT") == "1":
+            shutil.copy(shot, SCREENSHOT)
+            SHOWN.write_text(json.dumps(shown, indent=1) + "\n")
+        assert SCREENSHOT.is_file(), "docs/img/r2p-ui.png: regenerate it (R2P_WRITE_SCREENSHOT=1)"
+        assert json.loads(SHOWN.read_text()) == shown, (
+            "the page no longer shows what docs/img/r2p-ui.png does: regenerate both with "
+            "R2P_WRITE_SCREENSHOT=1 scripts/py -m pytest tests/test_ui.py")
+
+        # A value that does not parse, then one out of the parameter's range: a clear
+        # message, and the parameter keeps its value.
+        page.fill(f"{row} input", "fast")
+        page.click(f"{row} button.set")
+        page.wait_for_selector("#param-msg.error", timeout=20_000)
+        assert "\"fast\" is not a number" in page.text_content("#param-msg")
+        assert "nothing was sent" in page.text_content("#param-msg")
+        page.fill(f"{row} input", "-1e9")
+        page.click(f"{row} button.set")
+        page.wait_for_selector("#param-msg.error:has-text('out of range')", timeout=20_000)
+        assert r2p(robot, "param", "get", "gateway", "12").stdout.strip() == "f32:45.0", "nothing changed"
+
+        # A message published from the page, as `r2p pub` would (the motor imports the
+        # topic, so it subscribes to the page's publisher); a bad field is refused.
+        page.select_option("#pub-topic", "motor1/setpoint")
+        page.fill("#pub-values", "mode=1 value=0")
+        page.click("#pub-send")
+        page.wait_for_selector("#pub-msg.ok:has-text('published on motor1/setpoint')", timeout=20_000)
+        page.fill("#pub-values", "mode=1 value=fast")
+        page.click("#pub-send")
+        page.wait_for_selector("#pub-msg.error", timeout=20_000)
+        assert "fast" in page.text_content("#pub-msg")
+
+        # The proximity module powered off in the emulator: shown as lost.
+        page.wait_for_selector('#modules tr.lost[data-name="proximity"]', timeout=60_000)
+        assert page.text_content('#modules tr[data-name="proximity"] td.state').startswith("LOST")
+        assert page.text_content('#modules tr[data-name="psu"] td.state') == "running"
+
+
+def _listening(port: int) -> None:
+    import socket
+    deadline = time.monotonic() + 15
+    while True:
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=1).close()
+            return
+        except OSError:
+            assert time.monotonic() < deadline, "r2p sim did not start listening"
+            time.sleep(0.05)
+
+
+def test_the_page_follows_a_robot_that_restarts(built):
+    """The robot (its socketcand server) stops: the page says the bus is down and shows the
+    modules lost; it starts again on the same address: the page shows it running, unreloaded."""
+    port = free_port()
+    cmd = [str(R2P), "sim", str(TRISKAR2), "--realtime", "--no-stdin", "--socketcand", f"127.0.0.1:{port}"]
+    sims = []
     try:
-        with sync_playwright() as pw:
-            ctx = pw.chromium.launch_persistent_context(
-                profile, executable_path=str(CHROMIUM), args=CHROMIUM_ARGS, headless=True,
-                viewport={"width": 1280, "height": 900})
-            page = ctx.new_page()
-            page.goto(ui)
-
-            # The modules, from their heartbeats.
-            for name in MODULES:
-                page.wait_for_selector(f'#modules tr[data-name="{name}"]', timeout=20_000)
-            gateway_id = page.get_attribute('#modules tr[data-name="gateway"]', "data-node")
-            assert page.text_content('#modules tr[data-name="motor1"] td.state') == "running"
-            assert "HRT every 1 cycles" in page.text_content('#topics tr[data-topic="motor1/setpoint"]')
-
-            # A topic's plot receives values.
-            page.click('#topics tr[data-topic="motor1/state"]')
-            page.wait_for_function("Number(document.getElementById('plot').dataset.points) >= 5", timeout=20_000)
-            assert page.query_selector("#plot canvas") is not None
-            assert "speed" in page.text_content("#value")
-
-            # A parameter edited in the page is read back by `r2p param get`: the gateway's
-            # parameter 12 (f32).
-            page.select_option("#param-node", gateway_id)
-            page.click("#param-read")
-            row = '#params tr[data-index="12"]'
-            page.wait_for_selector(row, timeout=30_000)
-            assert page.text_content(f"{row} td:nth-child(2)") == "f32"
-            page.fill(f"{row} input", "45")
-            page.click(f"{row} button.set")
-            page.wait_for_selector("#param-msg.ok:has-text('is now f32:45')", timeout=20_000)
-            assert r2p(robot, "param", "get", "gateway", "12").stdout.strip() == "f32:45.0"
-
-            # The screenshot, with every module running, no tool (r2p-cli) on the list and a
-            # plot of a few seconds.
-            page.wait_for_function("!document.querySelector('#modules tr[data-name=\"r2p-cli\"]')", timeout=10_000)
-            page.wait_for_function("document.querySelectorAll('#slots .slot.reserved').length > 1", timeout=10_000)
-            page.wait_for_function("Number(document.getElementById('plot').dataset.points) >= 25", timeout=20_000)
-            assert page.query_selector('#modules tr.lost') is None, \
-                f"a module was lost before the screenshot (the machine too slow for {POWER_OFF}?)"
-            shown = page.evaluate(SHOWN_JS)
-            assert sorted(m.split()[0] for m in shown["modules"]) == sorted(MODULES)
-            shot = Path(profile) / "r2p-ui.png"
-            page.screenshot(path=str(shot), full_page=True)
-            if os.environ.get("R2P_WRITE_SCREENSHOT") == "1":
-                shutil.copy(shot, SCREENSHOT)
-                SHOWN.write_text(json.dumps(shown, indent=1) + "\n")
-            assert SCREENSHOT.is_file(), "docs/img/r2p-ui.png: regenerate it (R2P_WRITE_SCREENSHOT=1)"
-            assert json.loads(SHOWN.read_text()) == shown, (
-                "the page no longer shows what docs/img/r2p-ui.png does: regenerate both with "
-                "R2P_WRITE_SCREENSHOT=1 scripts/py -m pytest tests/test_ui.py")
-
-            # A value that does not parse, then one out of the parameter's range: a clear
-            # message, and the parameter keeps its value.
-            page.fill(f"{row} input", "fast")
-            page.click(f"{row} button.set")
-            page.wait_for_selector("#param-msg.error", timeout=20_000)
-            assert "\"fast\" is not a number" in page.text_content("#param-msg")
-            assert "nothing was sent" in page.text_content("#param-msg")
-            page.fill(f"{row} input", "-1e9")
-            page.click(f"{row} button.set")
-            page.wait_for_selector("#param-msg.error:has-text('out of range')", timeout=20_000)
-            assert r2p(robot, "param", "get", "gateway", "12").stdout.strip() == "f32:45.0", "nothing changed"
-
-            # A message published from the page, as `r2p pub` would (the motor imports the
-            # topic, so it subscribes to the page's publisher); a bad field is refused.
-            page.select_option("#pub-topic", "motor1/setpoint")
-            page.fill("#pub-values", "mode=1 value=0")
-            page.click("#pub-send")
-            page.wait_for_selector("#pub-msg.ok:has-text('published on motor1/setpoint')", timeout=20_000)
-            page.fill("#pub-values", "mode=1 value=fast")
-            page.click("#pub-send")
-            page.wait_for_selector("#pub-msg.error", timeout=20_000)
-            assert "fast" in page.text_content("#pub-msg")
-
-            # The proximity module powered off in the emulator: shown as lost.
-            page.wait_for_selector('#modules tr.lost[data-name="proximity"]', timeout=60_000)
-            assert page.text_content('#modules tr[data-name="proximity"] td.state').startswith("LOST")
+        sims.append(subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        _listening(port)
+        with serve_ui(port) as url, browser() as (page, _):
+            page.goto(url)
+            page.wait_for_selector('#modules tr[data-name="psu"]:not(.lost)', timeout=20_000)
+            sims[0].terminate()
+            sims[0].wait(timeout=20)
+            page.wait_for_selector("body[data-connected=no]", timeout=20_000)
+            assert "bus down" in page.text_content("#bus")
+            assert page.query_selector('#modules tr[data-name="psu"].lost') is not None
+            sims.append(subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+            page.wait_for_selector("body[data-connected=yes]", timeout=20_000)
+            page.wait_for_selector('#modules tr[data-name="psu"]:not(.lost)', timeout=20_000)
             assert page.text_content('#modules tr[data-name="psu"] td.state') == "running"
-            ctx.close()
     finally:
-        shutil.rmtree(profile, ignore_errors=True)
+        for p in sims:
+            if p.poll() is None:
+                p.kill()
+                p.wait(timeout=10)
 
 
 def test_the_vendored_chart_library_is_the_locked_package():

@@ -105,6 +105,36 @@ pub fn query(url: &str, key: &str) -> Option<String> {
     })
 }
 
+/// True if a request's `Host` header names the server by address or as `localhost`. A page of
+/// another site that makes its name resolve to 127.0.0.1 (DNS rebinding) sends its own name,
+/// and is refused: it could otherwise read the bus and set parameters.
+pub fn host_ok(host: Option<&str>) -> bool {
+    let Some(host) = host else { return false };
+    let name = match host.rsplit_once(':') {
+        Some((n, port)) if !port.contains(']') => n,
+        _ => host,
+    };
+    let name = name.trim_start_matches('[').trim_end_matches(']');
+    name.eq_ignore_ascii_case("localhost") || name.parse::<IpAddr>().is_ok()
+}
+
+/// True if a POST comes from the page itself: JSON (a form of another site cannot send that
+/// without the browser asking first, and r2p ui never allows it), and no `Origin` but the
+/// page's own.
+pub fn post_ok(content_type: Option<&str>, origin: Option<&str>, host: Option<&str>) -> bool {
+    let json = content_type.is_some_and(|t| t.starts_with("application/json"));
+    let same = match (origin, host) {
+        (None, _) => true,
+        (Some(o), Some(h)) => o == format!("http://{h}"),
+        (Some(_), None) => false,
+    };
+    json && same
+}
+
+fn header_value<'a>(req: &'a Request, name: &'static str) -> Option<&'a str> {
+    req.headers().iter().find(|h| h.field.equiv(name)).map(|h| h.value.as_str())
+}
+
 /// Streams snapshots to the page as server-sent events until it goes away.
 fn events(req: Request, snaps: &Snapshots) {
     let mut w = req.into_writer();
@@ -133,6 +163,20 @@ fn events(req: Request, snaps: &Snapshots) {
 fn handle(mut req: Request, bus: &BusArgs, snaps: &Snapshots) {
     let url = req.url().to_string();
     let path = url.split('?').next().unwrap_or("").to_string();
+    let host = header_value(&req, "Host");
+    if !host_ok(host) {
+        let r = Response::from_string("r2p ui answers only to its address or localhost")
+            .with_status_code(403);
+        let _ = req.respond(r);
+        return;
+    }
+    if *req.method() == Method::Post
+        && !post_ok(header_value(&req, "Content-Type"), header_value(&req, "Origin"), host)
+    {
+        let e = CliError::new("a POST must be JSON from r2p ui's own page");
+        let _ = req.respond(answer(Err(e)).with_status_code(403));
+        return;
+    }
     let mut text = String::new();
     if *req.method() == Method::Post && req.as_reader().read_to_string(&mut text).is_err() {
         let _ = req.respond(answer(Err(CliError::new("the request body is not UTF-8"))));
@@ -228,6 +272,26 @@ mod tests {
             !html.contains("http://") && !html.contains("https://"),
             "nothing from the internet"
         );
+    }
+
+    #[test]
+    fn only_the_page_itself_is_answered() {
+        for ok in
+            ["127.0.0.1:8023", "localhost:8023", "LOCALHOST", "[::1]:8023", "10.0.0.2:80", "[::1]"]
+        {
+            assert!(host_ok(Some(ok)), "{ok}");
+        }
+        for bad in ["evil.example:8023", "evil.example", "127.0.0.1.evil.example:8023", ""] {
+            assert!(!host_ok(Some(bad)), "{bad}");
+        }
+        assert!(!host_ok(None));
+        let h = Some("127.0.0.1:8023");
+        assert!(post_ok(Some("application/json"), None, h));
+        assert!(post_ok(Some("application/json"), Some("http://127.0.0.1:8023"), h));
+        assert!(!post_ok(Some("text/plain"), None, h), "a cross-site form's type");
+        assert!(!post_ok(None, None, h));
+        assert!(!post_ok(Some("application/json"), Some("http://evil.example"), h));
+        assert!(!post_ok(Some("application/json"), Some("http://127.0.0.1:8023"), None));
     }
 
     #[test]
