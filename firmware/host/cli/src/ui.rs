@@ -17,9 +17,10 @@ use clap::Args;
 use serde_json::{json, Value as Json};
 use tiny_http::{Header, Method, Request, Response, Server};
 
-use crate::args::{parse_seconds, BusArgs};
+use crate::args::{open_link, parse_seconds, BusArgs};
 use crate::error::CliError;
-use crate::ui_actions::{self, body, text_field};
+use crate::session::Session;
+use crate::ui_actions::{self, body, text_field, Open};
 use crate::ui_bus::{self, Snapshots};
 
 /// `r2p ui` options.
@@ -159,8 +160,8 @@ fn events(req: Request, snaps: &Snapshots) {
     }
 }
 
-/// Answers one request.
-fn handle(mut req: Request, bus: &BusArgs, snaps: &Snapshots) {
+/// Answers one request; `open` opens a session for an action.
+fn handle(mut req: Request, bus: &BusArgs, open: &Open, snaps: &Snapshots) {
     let url = req.url().to_string();
     let path = url.split('?').next().unwrap_or("").to_string();
     let host = header_value(&req, "Host");
@@ -185,7 +186,7 @@ fn handle(mut req: Request, bus: &BusArgs, snaps: &Snapshots) {
     let r = match (req.method(), path.as_str()) {
         (Method::Get, "/events") => return events(req, snaps),
         (Method::Get, "/api/params") => match query(&url, "node") {
-            Some(node) => ui_actions::read_params(bus, &node),
+            Some(node) => ui_actions::read_params(bus, open, &node),
             None => Err(CliError::new("/api/params?node=NODE: which module?")),
         },
         (Method::Post, "/api/param") => body(&text).and_then(|j| {
@@ -195,6 +196,7 @@ fn handle(mut req: Request, bus: &BusArgs, snaps: &Snapshots) {
                 .ok_or_else(|| CliError::new("the request has no parameter \"index\""))?;
             ui_actions::set_param(
                 bus,
+                open,
                 text_field(&j, "node")?,
                 index,
                 j["type"].as_str(),
@@ -210,6 +212,7 @@ fn handle(mut req: Request, bus: &BusArgs, snaps: &Snapshots) {
             };
             ui_actions::publish(
                 bus,
+                open,
                 text_field(&j, "topic")?,
                 values,
                 j["type"].as_str().map(String::from),
@@ -241,15 +244,18 @@ pub fn run(args: &UiArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), CliE
     })?;
     let snaps = Arc::new(Snapshots::default());
     let stop = Arc::new(AtomicBool::new(false));
+    let b = bus.clone();
+    let open: Arc<Open> = Arc::new(move || Ok(Session::new(open_link(&b)?)));
     {
-        let (bus, snaps, stop, lost) = (bus.clone(), snaps.clone(), stop.clone(), args.lost_after);
-        std::thread::spawn(move || ui_bus::run(&bus, lost, &snaps, &stop));
+        let (open, snaps, stop, lost) =
+            (open.clone(), snaps.clone(), stop.clone(), args.lost_after);
+        std::thread::spawn(move || ui_bus::run(&*open, lost, &snaps, &stop));
     }
     crate::args::emit(out, &format!("r2p ui: open http://{addr}/"))?;
     out.flush().map_err(|e| CliError::new(format!("writing the output: {e}")))?;
     for req in server.incoming_requests() {
-        let (bus, snaps) = (bus.clone(), snaps.clone());
-        std::thread::spawn(move || handle(req, &bus, &snaps));
+        let (bus, snaps, open) = (bus.clone(), snaps.clone(), open.clone());
+        std::thread::spawn(move || handle(req, &bus, &*open, &snaps));
     }
     Ok(())
 }

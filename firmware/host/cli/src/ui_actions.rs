@@ -1,20 +1,22 @@
 //! What the page asks `r2p ui` to send: reading a module's parameters, setting one, publishing
 //! a message. Each runs the CLI's own command code (`r2p param`, `r2p pub`) on a session of
 //! its own, as if typed at the command line: the page can send nothing the CLI would refuse,
-//! and a value that does not parse is refused before the bus is even opened.
-
-use std::time::Duration;
+//! and a value that does not parse is refused before the bus is even opened. `open` opens that
+//! session (on the bus the command line names; tests give an in-process bus).
 
 use r2p_management::message::ParamFault;
 use serde_json::{json, Value as Json};
 
-use crate::args::{open_link, BusArgs};
+use crate::args::BusArgs;
 use crate::describe::{fault_name, value_json};
 use crate::error::CliError;
 use crate::param::{self, ParamCommand};
 use crate::publish::{self, PubArgs};
 use crate::session::Session;
 use crate::types::MsgType;
+
+/// Opens a session on the bus.
+pub type Open = dyn Fn() -> Result<Session, CliError> + Send + Sync;
 
 /// Parameter indices read at most (a module's parameters are numbered from 0 without gaps:
 /// the first unknown index ends the list).
@@ -27,8 +29,8 @@ fn as_json(bus: &BusArgs) -> BusArgs {
 
 /// Reads parameters 0, 1, … of `node` until it answers "unknown parameter index": one
 /// session, the same requests (and retries) as `r2p param get`.
-pub fn read_params(bus: &BusArgs, node: &str) -> Result<Json, CliError> {
-    let mut s = Session::new(open_link(bus)?);
+pub fn read_params(bus: &BusArgs, open: &Open, node: &str) -> Result<Json, CliError> {
+    let mut s = open()?;
     s.join()?;
     let target = param::resolve(node, bus, &mut s)?;
     let mut params = Vec::new();
@@ -61,6 +63,7 @@ pub fn typed_value(ty: Option<&str>, value: &str) -> String {
 /// as "value out of range", or why the value does not parse).
 pub fn set_param(
     bus: &BusArgs,
+    open: &Open,
     node: &str,
     index: u16,
     ty: Option<&str>,
@@ -75,7 +78,7 @@ pub fn set_param(
     }
     let cmd = ParamCommand::Set { node: node.to_string(), index, value };
     let mut out = Vec::new();
-    param::run(&cmd, &as_json(bus), Session::new(open_link(bus)?), &mut out)?;
+    param::run(&cmd, &as_json(bus), open()?, &mut out)?;
     serde_json::from_slice(&out)
         .map_err(|e| CliError::new(format!("r2p param's answer did not parse: {e}")))
 }
@@ -84,6 +87,7 @@ pub fn set_param(
 /// (waiting for a subscriber up to the bus timeout).
 pub fn publish(
     bus: &BusArgs,
+    open: &Open,
     topic: &str,
     values: Vec<String>,
     ty: Option<String>,
@@ -95,7 +99,7 @@ pub fn publish(
     }
     let args =
         PubArgs { topic: topic.to_string(), values, ty, rate: None, count: None, deadline_us };
-    publish::run(&args, bus, Session::new(open_link(bus)?), &mut Vec::new())?;
+    publish::run(&args, bus, open()?, &mut Vec::new())?;
     Ok(json!({"published": topic}))
 }
 
@@ -109,24 +113,33 @@ pub fn text_field<'a>(j: &'a Json, key: &str) -> Result<&'a str, CliError> {
     j[key].as_str().ok_or_else(|| CliError::new(format!("the request has no {key:?} (text)")))
 }
 
-/// How long the page may wait for an action: the bus timeout for each of its steps.
-pub fn action_limit(bus: &BusArgs) -> Duration {
-    bus.timeout * 3 + Duration::from_secs(2)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::args::open_link;
+    use crate::link::HubLink;
+    use r2p_canlink::{BroadcastHub, Hub};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    use std::time::Duration;
 
-    fn nowhere() -> BusArgs {
+    fn bus_at(addr: &str) -> BusArgs {
         BusArgs {
-            socketcand: Some("127.0.0.1:9".into()),
+            socketcand: Some(addr.into()),
             socketcan: None,
             trace: None,
             channel: "vcan0".into(),
-            timeout: Duration::from_secs(1),
+            timeout: Duration::from_secs(2),
             json: false,
         }
+    }
+
+    /// Port 9 on loopback, where nothing listens: an error that names the value (not the bus)
+    /// shows it was refused before the bus was opened.
+    fn nowhere() -> (BusArgs, Box<Open>) {
+        let bus = bus_at("127.0.0.1:9");
+        let b = bus.clone();
+        (bus, Box::new(move || Ok(Session::new(open_link(&b)?))))
     }
 
     #[test]
@@ -135,27 +148,59 @@ mod tests {
         assert_eq!(typed_value(Some("bool"), "true"), "bool:true");
         assert_eq!(typed_value(None, "7"), "7");
         assert_eq!(typed_value(Some("u8"), "7"), "7", "not a parameter type: bare");
-        // Nothing listens on port 9: an error naming the value (not the bus) shows it was
-        // refused before the bus was opened.
-        let e = set_param(&nowhere(), "motor", 0, Some("u32"), "-1").unwrap_err().to_string();
+        let (bus, open) = nowhere();
+        let e = set_param(&bus, &*open, "motor", 0, Some("u32"), "-1").unwrap_err().to_string();
         assert!(e.contains("does not fit uint32") && e.ends_with("; nothing was sent"), "{e}");
         assert!(e.starts_with("parameter 0 of node motor: "), "{e}");
-        let e = set_param(&nowhere(), "motor", 0, Some("f32"), "fast").unwrap_err().to_string();
+        let e = set_param(&bus, &*open, "motor", 0, Some("f32"), "fast").unwrap_err().to_string();
         assert!(e.contains("fast"), "{e}");
-        let e = set_param(&nowhere(), "motor", 0, Some("f32"), "2").unwrap_err().to_string();
+        let e = set_param(&bus, &*open, "motor", 0, Some("f32"), "2").unwrap_err().to_string();
         assert!(e.contains("127.0.0.1:9"), "a good value goes to the bus: {e}");
     }
 
     #[test]
     fn a_publication_the_cli_refuses_is_refused_before_the_bus_is_opened() {
-        let e = publish(&nowhere(), "speed", vec!["x".into()], Some("float32".into()), None)
-            .unwrap_err()
-            .to_string();
-        assert!(!e.contains("127.0.0.1:9"), "{e}");
-        let e = publish(&nowhere(), "speed", vec!["1".into()], Some("nosuchtype".into()), None)
-            .unwrap_err()
-            .to_string();
-        assert!(!e.contains("127.0.0.1:9"), "{e}");
+        let (bus, open) = nowhere();
+        let pubs = |values: &[&str], ty: &str| {
+            let values = values.iter().map(|v| v.to_string()).collect();
+            publish(&bus, &*open, "speed", values, Some(ty.into()), None).unwrap_err().to_string()
+        };
+        assert!(pubs(&["x"], "float32").contains("\"x\""), "{}", pubs(&["x"], "float32"));
+        assert!(!pubs(&["1"], "nosuchtype").contains("127.0.0.1:9"));
+        assert!(pubs(&["1"], "float32").contains("127.0.0.1:9"), "a good one goes to the bus");
+    }
+
+    #[test]
+    fn parameters_are_read_set_and_refused_as_r2p_param_does() {
+        let hub = Arc::new(BroadcastHub::new());
+        let stop = Arc::new(AtomicBool::new(false));
+        let module = crate::host::tests::spawn_module(hub.clone(), stop.clone());
+        let h = hub.clone();
+        let open = move || -> Result<Session, CliError> {
+            Ok(Session::new(Box::new(HubLink::join(h.clone() as Arc<dyn Hub>, 4096))))
+        };
+        let bus = bus_at("unused:1");
+        let read = read_params(&bus, &open, "sensor").unwrap();
+        let id = read["node"].clone();
+        assert_eq!(
+            read["params"],
+            serde_json::json!([
+                {"index": 0, "type": "u32", "value": 100},
+                {"index": 1, "type": "f32", "value": 0.5},
+            ])
+        );
+        let set = set_param(&bus, &open, "sensor", 1, Some("f32"), "1.5").unwrap();
+        assert_eq!((set["value"].clone(), set["node"].clone()), (serde_json::json!(1.5), id));
+        let e = set_param(&bus, &open, "sensor", 1, Some("f32"), "5").unwrap_err().to_string();
+        assert!(e.contains("refused PARAM_SET of parameter 1: value out of range"), "{e}");
+        let e = set_param(&bus, &open, "sensor", 0, Some("f32"), "5").unwrap_err().to_string();
+        assert!(e.contains("refused PARAM_SET of parameter 0"), "a u32 set as f32: {e}");
+        let read = read_params(&bus, &open, "sensor").unwrap();
+        assert_eq!(read["params"][1]["value"], 1.5, "the refused values changed nothing");
+        let e = read_params(&bus, &open, "nobody").unwrap_err().to_string();
+        assert!(e.contains("unknown node \"nobody\""), "{e}");
+        stop.store(true, Ordering::SeqCst);
+        module.join().unwrap();
     }
 
     #[test]

@@ -10,9 +10,9 @@ use std::time::{Duration, Instant};
 
 use serde_json::json;
 
-use crate::args::{open_link, BusArgs};
 use crate::error::CliError;
 use crate::session::Session;
+use crate::ui_actions::Open;
 use crate::ui_view::BusView;
 
 /// How often the page gets a new snapshot.
@@ -48,12 +48,13 @@ impl Snapshots {
 
 /// Runs the bus loop until `stop`: publishes a snapshot every [`PUBLISH_EVERY`], with the
 /// bus's state (`connected`, or the error that closed it while it is opened again).
-pub fn run(bus: &BusArgs, lost_after: Duration, out: &Snapshots, stop: &AtomicBool) {
+/// `open` opens the bus (the command line's, or an in-process one in tests).
+pub fn run(open: &Open, lost_after: Duration, out: &Snapshots, stop: &AtomicBool) {
     let start = Instant::now();
     let mut last_error: Option<String> = None;
     while !stop.load(Ordering::Relaxed) {
-        let error = match open_link(bus) {
-            Ok(link) => match watch(Session::new(link), lost_after, out, stop, start) {
+        let error = match open() {
+            Ok(s) => match watch(s, lost_after, out, stop, start) {
                 Ok(()) => return,
                 Err(e) => e,
             },
@@ -90,6 +91,8 @@ fn watch(
     eprintln!("r2p ui: watching {describe}");
     let mut view = BusView::new(lost_after);
     let mut published = Instant::now() - PUBLISH_EVERY;
+    // A trace is read as fast as it goes: its own clock says how long a module was silent.
+    let mut trace_now = Duration::ZERO;
     while !stop.load(Ordering::Relaxed) {
         let reports = if s.ended() {
             std::thread::sleep(Duration::from_millis(20));
@@ -97,8 +100,17 @@ fn watch(
         } else {
             s.step(Duration::from_millis(10))?
         };
-        let now = start.elapsed();
-        view.feed(s.watcher(), &reports, now);
+        let now = if s.is_trace() {
+            for r in &reports {
+                view.feed(std::slice::from_ref(r), r.time);
+            }
+            trace_now = reports.last().map_or(trace_now, |r| r.time);
+            trace_now
+        } else {
+            let now = start.elapsed();
+            view.feed(&reports, now);
+            now
+        };
         if published.elapsed() >= PUBLISH_EVERY {
             let own = s.host().map(|h| h.node_id().get());
             let mut j = view.snapshot(s.watcher(), now, own);
@@ -133,27 +145,43 @@ mod tests {
     }
 
     #[test]
-    fn a_bus_that_cannot_be_opened_is_reported_and_tried_again() {
-        // Port 9 on loopback: nothing listens.
-        let bus = BusArgs {
-            socketcand: Some("127.0.0.1:9".into()),
-            socketcan: None,
-            trace: None,
-            channel: "vcan0".into(),
-            timeout: Duration::from_secs(1),
-            json: false,
+    fn a_bus_that_cannot_be_opened_is_reported_and_tried_again_and_a_trace_is_shown() {
+        use crate::link::TraceLink;
+        use crate::watch::tests::{heartbeat, management};
+        let tries = Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        let t = tries.clone();
+        // Fails once, then opens a trace of two heartbeats of psu 1.5 s apart, then motor's.
+        let open = move || -> Result<Session, CliError> {
+            if t.fetch_add(1, Ordering::SeqCst) == 0 {
+                return Err(CliError::new("no bus yet"));
+            }
+            let mut frames = management(1, &heartbeat("psu", 1), 0);
+            frames.extend(management(2, &heartbeat("motor", 2), 1_000));
+            frames.extend(management(2, &heartbeat("motor", 2), 1_500_000));
+            Ok(Session::new(Box::new(TraceLink::new("t.log".into(), frames))))
         };
         let snaps = Arc::new(Snapshots::default());
         let stop = Arc::new(AtomicBool::new(false));
         let (s2, st2) = (snaps.clone(), stop.clone());
-        let t = std::thread::spawn(move || run(&bus, Duration::from_secs(1), &s2, &st2));
+        let th = std::thread::spawn(move || run(&open, Duration::from_secs(1), &s2, &st2));
         let (n, text) = snaps.next_after(0, Duration::from_secs(10)).unwrap();
         let j: serde_json::Value = serde_json::from_str(&text).unwrap();
-        assert_eq!(j["bus"]["connected"], false);
-        assert!(j["bus"]["error"].as_str().unwrap().contains("127.0.0.1:9"), "{j}");
-        let again = snaps.next_after(n, Duration::from_secs(10));
-        assert!(again.is_some(), "tried again after a second");
+        assert_eq!(
+            (j["bus"]["connected"].clone(), j["bus"]["error"].clone()),
+            (json!(false), json!("no bus yet"))
+        );
+        let (_, text) = snaps.next_after(n, Duration::from_secs(10)).unwrap();
+        let j: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(j["bus"]["connected"], true, "tried again after a second: {j}");
+        assert_eq!(j["bus"]["trace"], true);
+        // The trace's own clock: psu silent for 1.5 s at its end is lost, motor is not.
+        let state = |name: &str| {
+            j["nodes"].as_array().unwrap().iter().find(|n| n["name"] == name).unwrap()["state"]
+                .clone()
+        };
+        assert_eq!((state("psu"), state("motor")), (json!("LOST"), json!("running")));
         stop.store(true, Ordering::Relaxed);
-        t.join().unwrap();
+        th.join().unwrap();
+        assert_eq!(tries.load(Ordering::SeqCst), 2);
     }
 }

@@ -44,8 +44,8 @@ struct TopicSeen {
 pub struct BusView {
     /// Silence after which a module is shown as lost.
     lost_after: Duration,
-    /// Per node: heartbeats counted, and when (view time) that count last grew.
-    heard: BTreeMap<u8, (u64, Duration)>,
+    /// Per node: when (view time) its latest heartbeat came.
+    heard: BTreeMap<u8, Duration>,
     /// Per (publisher node, topic).
     topics: BTreeMap<(u8, String), TopicSeen>,
     /// Per class (HRT, SRT, NRT): (view time, bits) of recent frames.
@@ -84,8 +84,8 @@ impl BusView {
         }
     }
 
-    /// Takes the frames `reports` the watcher `w` decoded, received at view time `now`.
-    pub fn feed(&mut self, w: &Watcher, reports: &[Report], now: Duration) {
+    /// Takes the frames `reports` the watcher decoded, received at view time `now`.
+    pub fn feed(&mut self, reports: &[Report], now: Duration) {
         for r in reports {
             if let Some(id) = r.id {
                 let q = &mut self.bits[class_index(id.class())];
@@ -106,6 +106,9 @@ impl BusView {
                         None => json!({ "payload": crate::describe::hex(bytes) }),
                     });
                 }
+                What::Management { node, done: Some(Ok(Message::Heartbeat { .. })) } => {
+                    self.heard.insert(*node, now);
+                }
                 What::Management {
                     node,
                     done: Some(Ok(Message::SubscribeResponse { target, topic, result, .. })),
@@ -114,12 +117,6 @@ impl BusView {
                     seen.subscribers.insert(*target);
                 }
                 _ => {}
-            }
-        }
-        for n in w.nodes() {
-            let e = self.heard.entry(n.id).or_insert((0, now));
-            if e.0 != n.heartbeats {
-                *e = (n.heartbeats, now);
             }
         }
         for seen in self.topics.values_mut() {
@@ -132,7 +129,7 @@ impl BusView {
 
     /// True if node `id` has sent no heartbeat for longer than the lost time at `now`.
     pub fn is_lost(&self, id: u8, now: Duration) -> bool {
-        self.heard.get(&id).is_some_and(|(_, at)| now.saturating_sub(*at) > self.lost_after)
+        self.heard.get(&id).is_some_and(|at| now.saturating_sub(*at) > self.lost_after)
     }
 
     /// The view as the page's JSON at view time `now`. Tools (nodes named `r2p-cli`, such as
@@ -150,7 +147,7 @@ impl BusView {
                     "kind": n.firmware.as_ref().map_or_else(|| n.name.clone(), |f| f.kind.clone()),
                     "state": if lost { "LOST" } else { state_name(n.state) },
                     "lost": lost,
-                    "silent_s": self.heard.get(&n.id).map(|(_, at)| now.saturating_sub(*at).as_secs_f64()),
+                    "silent_s": self.heard.get(&n.id).map(|at| now.saturating_sub(*at).as_secs_f64()),
                     "uptime_s": n.uptime_s, "tx_errors": n.tx_errors, "rx_errors": n.rx_errors,
                     "dropped": n.dropped, "panic": n.panic,
                     "firmware": n.firmware.as_ref().map(|f| {
@@ -207,7 +204,7 @@ mod tests {
 
     fn feed(v: &mut BusView, w: &mut Watcher, frames: Vec<r2p_canlink::Stamped>, now: Duration) {
         let reports: Vec<Report> = frames.iter().map(|f| w.feed(f)).collect();
-        v.feed(w, &reports, now);
+        v.feed(&reports, now);
     }
 
     #[test]
