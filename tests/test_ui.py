@@ -119,7 +119,7 @@ SHOWN_JS = """() => {
   const rows = Array.from(document.querySelectorAll('#modules tbody tr'))
     .map((tr) => tr.dataset.name + ' ' + tr.children[2].textContent).sort();
   return {
-    panels: texts('section h2'),
+    panels: texts('section h2, section h3'),
     module_columns: texts('#modules th'), modules: rows,
     topic_columns: texts('#topics th'),
     topics: Array.from(document.querySelectorAll('#topics tbody tr'), (tr) => tr.dataset.topic).sort(),
@@ -127,6 +127,7 @@ SHOWN_JS = """() => {
     selected: document.getElementById('selected').textContent,
     load_classes: Array.from(document.querySelectorAll('#load span'), (s) => s.dataset.class),
     slots: document.querySelectorAll('#slots .slot').length,
+    latency_plot: document.querySelectorAll('#latency canvas').length,
     param_columns: texts('#params th'),
     params: document.querySelectorAll('#params tbody tr').length,
     param_message: document.getElementById('param-msg').className,
@@ -167,6 +168,7 @@ def test_the_page_shows_the_robot_plots_edits_parameters_and_sees_a_module_lost(
         # plot of a few seconds.
         page.wait_for_function("!document.querySelector('#modules tr[data-name=\"r2p-cli\"]')", timeout=10_000)
         page.wait_for_function("document.querySelectorAll('#slots .slot.reserved').length > 1", timeout=10_000)
+        page.wait_for_function("Number(document.getElementById('latency').dataset.total) > 100", timeout=10_000)
         page.wait_for_function("Number(document.getElementById('plot').dataset.points) >= 25", timeout=20_000)
         assert page.query_selector('#modules tr.lost') is None, \
             f"a module was lost before the screenshot (the machine too slow for {POWER_OFF}?)"

@@ -14,14 +14,16 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use clap::Args;
+use rtcan::LaxityEncoding;
 use serde_json::{json, Value as Json};
 use tiny_http::{Header, Method, Request, Response, Server};
 
-use crate::args::{open_link, parse_seconds, BusArgs};
+use crate::args::{open_link, parse_laxity, parse_seconds, BusArgs};
 use crate::error::CliError;
 use crate::session::Session;
 use crate::ui_actions::{self, body, text_field, Open};
 use crate::ui_bus::{self, Snapshots};
+use crate::ui_view::BusView;
 
 /// `r2p ui` options.
 #[derive(Args, Debug)]
@@ -37,6 +39,10 @@ pub struct UiArgs {
     /// periods, as the bus master drops its reservations)
     #[arg(long, value_name = "SECONDS", default_value = "1", value_parser = parse_seconds)]
     pub lost_after: Duration,
+    /// How the bus encodes SRT laxity (log:TICK_US or linear:TICK_US), for the SRT latency
+    /// histogram (as `r2p monitor --laxity`)
+    #[arg(long, value_name = "ENCODING", default_value = "log:100", value_parser = parse_laxity)]
+    pub laxity: LaxityEncoding,
 }
 
 /// The page's files, built in: (path, content type, bytes).
@@ -247,9 +253,10 @@ pub fn run(args: &UiArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), CliE
     let b = bus.clone();
     let open: Arc<Open> = Arc::new(move || Ok(Session::new(open_link(&b)?)));
     {
-        let (open, snaps, stop, lost) =
-            (open.clone(), snaps.clone(), stop.clone(), args.lost_after);
-        std::thread::spawn(move || ui_bus::run(&*open, lost, &snaps, &stop));
+        let (open, snaps, stop) = (open.clone(), snaps.clone(), stop.clone());
+        let (lost, laxity) = (args.lost_after, args.laxity);
+        let view = move || BusView::new(lost, laxity);
+        std::thread::spawn(move || ui_bus::run(&*open, view, &snaps, &stop));
     }
     crate::args::emit(out, &format!("r2p ui: open http://{addr}/"))?;
     out.flush().map_err(|e| CliError::new(format!("writing the output: {e}")))?;

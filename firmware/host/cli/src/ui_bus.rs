@@ -48,13 +48,14 @@ impl Snapshots {
 
 /// Runs the bus loop until `stop`: publishes a snapshot every [`PUBLISH_EVERY`], with the
 /// bus's state (`connected`, or the error that closed it while it is opened again).
-/// `open` opens the bus (the command line's, or an in-process one in tests).
-pub fn run(open: &Open, lost_after: Duration, out: &Snapshots, stop: &AtomicBool) {
+/// `open` opens the bus (the command line's, or an in-process one in tests); `view` makes a
+/// fresh view for each session.
+pub fn run(open: &Open, view: impl Fn() -> BusView, out: &Snapshots, stop: &AtomicBool) {
     let start = Instant::now();
     let mut last_error: Option<String> = None;
     while !stop.load(Ordering::Relaxed) {
         let error = match open() {
-            Ok(s) => match watch(s, lost_after, out, stop, start) {
+            Ok(s) => match watch(s, view(), out, stop, start) {
                 Ok(()) => return,
                 Err(e) => e,
             },
@@ -79,7 +80,7 @@ pub fn run(open: &Open, lost_after: Duration, out: &Snapshots, stop: &AtomicBool
 /// Watches one session until `stop` (Ok) or until the bus fails (the error).
 fn watch(
     mut s: Session,
-    lost_after: Duration,
+    mut view: BusView,
     out: &Snapshots,
     stop: &AtomicBool,
     start: Instant,
@@ -89,7 +90,6 @@ fn watch(
         s.join()?;
     }
     eprintln!("r2p ui: watching {describe}");
-    let mut view = BusView::new(lost_after);
     let mut published = Instant::now() - PUBLISH_EVERY;
     // A trace is read as fast as it goes: its own clock says how long a module was silent.
     let mut trace_now = Duration::ZERO;
@@ -163,7 +163,13 @@ mod tests {
         let snaps = Arc::new(Snapshots::default());
         let stop = Arc::new(AtomicBool::new(false));
         let (s2, st2) = (snaps.clone(), stop.clone());
-        let th = std::thread::spawn(move || run(&open, Duration::from_secs(1), &s2, &st2));
+        let view = || {
+            BusView::new(
+                Duration::from_secs(1),
+                rtcan::LaxityEncoding::Logarithmic { tick_us: 100 },
+            )
+        };
+        let th = std::thread::spawn(move || run(&open, view, &s2, &st2));
         let (n, text) = snaps.next_after(0, Duration::from_secs(10)).unwrap();
         let j: serde_json::Value = serde_json::from_str(&text).unwrap();
         assert_eq!(

@@ -1,14 +1,15 @@
 //! What `r2p ui` shows, built from the frames on the bus: the [`Watcher`]'s nodes and topics
 //! plus what the page needs over time — which modules went silent (lost), who subscribed to
-//! what, each topic's rate and latest decoded value, the RTCAN cycle's reservation mask and the
-//! bus load by class. Kept apart from the HTTP server and the bus thread so it is tested with
+//! what, each topic's rate and latest decoded value, the RTCAN cycle's reservation mask, the
+//! bus load by class and a histogram of SRT latencies. Kept apart from the HTTP server and the bus thread so it is tested with
 //! frames alone, and sends nothing.
 
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::time::Duration;
 
+use r2p_management::message::BusClass;
 use r2p_management::message::Message;
-use rtcan::FrameClass;
+use rtcan::{FrameClass, LaxityEncoding};
 use serde_json::{json, Value as Json};
 
 use crate::describe::{class_json, state_name};
@@ -25,6 +26,21 @@ pub const BITRATE: f64 = 1_000_000.0;
 /// 3-bit intermission): 67 + 8·len. Stuffing adds up to ~20 %, so the load shown is a floor.
 pub fn frame_bits(len: usize) -> u64 {
     67 + 8 * len as u64
+}
+
+/// Upper edges (µs) of the SRT latency histogram's buckets; the last bucket takes the rest.
+pub const LATENCY_EDGES_US: [u32; 8] = [250, 500, 1_000, 2_000, 3_000, 5_000, 10_000, 20_000];
+
+/// The latency, at most, of an SRT message from its publication to its last frame on the bus:
+/// the topic's deadline less the least time to the deadline that frame's laxity code says was
+/// left (the code is computed when the frame is sent; it encodes a lower bound).
+pub fn srt_latency_us(deadline_us: u32, laxity: LaxityEncoding, code: rtcan::Laxity) -> u32 {
+    deadline_us.saturating_sub(laxity.lower_bound_us(code))
+}
+
+/// The histogram bucket of a latency.
+pub fn latency_bucket(us: u32) -> usize {
+    LATENCY_EDGES_US.iter().position(|e| us < *e).unwrap_or(LATENCY_EDGES_US.len())
 }
 
 /// A topic's traffic as seen since the view started.
@@ -54,6 +70,10 @@ pub struct BusView {
     sync: Option<(u8, u64, bool)>,
     /// Syncs seen in all.
     syncs: u64,
+    /// How the bus encodes SRT laxity.
+    laxity: LaxityEncoding,
+    /// SRT messages per latency bucket ([`LATENCY_EDGES_US`]).
+    latency: [u64; LATENCY_EDGES_US.len() + 1],
 }
 
 fn class_index(c: FrameClass) -> usize {
@@ -72,8 +92,9 @@ fn trim<T>(q: &mut VecDeque<T>, now: Duration, at: impl Fn(&T) -> Duration) {
 }
 
 impl BusView {
-    /// A view that shows a module as lost after `lost_after` without a heartbeat.
-    pub fn new(lost_after: Duration) -> Self {
+    /// A view that shows a module as lost after `lost_after` without a heartbeat, on a bus
+    /// that encodes SRT laxity as `laxity`.
+    pub fn new(lost_after: Duration, laxity: LaxityEncoding) -> Self {
         Self {
             lost_after,
             heard: BTreeMap::new(),
@@ -81,6 +102,8 @@ impl BusView {
             bits: Default::default(),
             sync: None,
             syncs: 0,
+            laxity,
+            latency: [0; LATENCY_EDGES_US.len() + 1],
         }
     }
 
@@ -97,6 +120,12 @@ impl BusView {
                     self.syncs += 1;
                 }
                 What::Topic { topic: Some(t), done: Some(bytes), .. } => {
+                    if let (BusClass::Srt { deadline_us }, Some(id)) = (t.class, r.id) {
+                        if id.class() == FrameClass::Srt {
+                            let us = srt_latency_us(deadline_us, self.laxity, id.laxity);
+                            self.latency[latency_bucket(us)] += 1;
+                        }
+                    }
                     let seen = self.topics.entry((t.node, t.topic.clone())).or_default();
                     seen.times.push_back(now);
                     seen.count += 1;
@@ -187,6 +216,7 @@ impl BusView {
                 "epoch": self.sync.map(|s| s.2),
                 "load": {"HRT": load[0], "SRT": load[1], "NRT": load[2]},
             },
+            "srt_latency": {"edges_us": LATENCY_EDGES_US, "counts": self.latency},
             "frames": w.frames(),
         })
     }
@@ -201,6 +231,7 @@ mod tests {
     use rtcan::{Laxity, SyncFrame};
 
     const S: Duration = Duration::from_secs(1);
+    const LOG: LaxityEncoding = LaxityEncoding::Logarithmic { tick_us: 100 };
 
     fn feed(v: &mut BusView, w: &mut Watcher, frames: Vec<r2p_canlink::Stamped>, now: Duration) {
         let reports: Vec<Report> = frames.iter().map(|f| w.feed(f)).collect();
@@ -209,7 +240,7 @@ mod tests {
 
     #[test]
     fn a_module_silent_longer_than_the_lost_time_is_lost_until_it_heartbeats_again() {
-        let (mut v, mut w) = (BusView::new(S), Watcher::new());
+        let (mut v, mut w) = (BusView::new(S, LOG), Watcher::new());
         feed(&mut v, &mut w, management(2, &heartbeat("motor", 2), 1_000), Duration::ZERO);
         feed(&mut v, &mut w, management(3, &heartbeat("imu", 3), 2_000), Duration::ZERO);
         let at = |ms| Duration::from_millis(ms);
@@ -229,7 +260,7 @@ mod tests {
 
     #[test]
     fn tools_that_left_and_the_ui_itself_are_left_out() {
-        let (mut v, mut w) = (BusView::new(S), Watcher::new());
+        let (mut v, mut w) = (BusView::new(S, LOG), Watcher::new());
         feed(&mut v, &mut w, management(4, &heartbeat(NODE_NAME, 4), 0), Duration::ZERO);
         feed(&mut v, &mut w, management(5, &heartbeat(NODE_NAME, 5), 0), Duration::ZERO);
         feed(&mut v, &mut w, management(6, &heartbeat("psu", 6), 0), Duration::ZERO);
@@ -252,7 +283,7 @@ mod tests {
 
     #[test]
     fn topics_carry_their_class_subscribers_rate_and_latest_value() {
-        let (mut v, mut w) = (BusView::new(S), Watcher::new());
+        let (mut v, mut w) = (BusView::new(S, LOG), Watcher::new());
         let ty = MsgType::by_name("uint32").unwrap();
         let srt = BusClass::Srt { deadline_us: 20_000 };
         feed(&mut v, &mut w, management(2, &heartbeat("motor", 2), 0), Duration::ZERO);
@@ -284,6 +315,12 @@ mod tests {
             );
         }
         let j = v.snapshot(&w, Duration::from_millis(900), None);
+        // Laxity code 21 leaves at least LOG_THRESHOLDS[21] ticks of the 20 ms deadline.
+        let us = srt_latency_us(20_000, LOG, Laxity::from_code(21));
+        assert_eq!(us, 20_000 - LOG.lower_bound_us(Laxity::from_code(21)));
+        let mut counts = [0u64; 9];
+        counts[latency_bucket(us)] = 10;
+        assert_eq!(j["srt_latency"]["counts"], json!(counts));
         let t = &j["topics"][0];
         assert_eq!(t["topic"], "speed");
         assert_eq!(t["class"]["class"], "SRT");
@@ -301,8 +338,40 @@ mod tests {
     }
 
     #[test]
+    fn srt_latencies_fall_in_their_buckets() {
+        assert_eq!(latency_bucket(0), 0);
+        assert_eq!(latency_bucket(249), 0);
+        assert_eq!(latency_bucket(250), 1);
+        assert_eq!(latency_bucket(19_999), 7);
+        assert_eq!(latency_bucket(20_000), 8);
+        assert_eq!(latency_bucket(u32::MAX), 8);
+        let lin = LaxityEncoding::Linear { tick_us: 100 };
+        assert_eq!(
+            srt_latency_us(5_000, lin, Laxity::from_code(11)),
+            4_000,
+            "code 11: ≥ 1 ms left"
+        );
+        assert_eq!(srt_latency_us(500, lin, Laxity::from_code(11)), 0, "never below zero");
+        // An HRT frame of an SRT-advertised stream (a mismatch) is not counted.
+        let (mut v, mut w) = (BusView::new(S, lin), Watcher::new());
+        let ty = MsgType::by_name("uint32").unwrap();
+        let srt = BusClass::Srt { deadline_us: 5_000 };
+        feed(&mut v, &mut w, management(2, &advertise("speed", &ty, 1, srt), 0), Duration::ZERO);
+        feed(&mut v, &mut w, topic(2, 1, Laxity::HRT, &[1, 0, 0, 0], 1_000), Duration::ZERO);
+        feed(
+            &mut v,
+            &mut w,
+            topic(2, 1, Laxity::from_code(11), &[1, 0, 0, 0], 2_000),
+            Duration::ZERO,
+        );
+        let j = v.snapshot(&w, Duration::ZERO, None);
+        assert_eq!(j["srt_latency"]["counts"], json!([0, 0, 0, 0, 0, 1, 0, 0, 0]));
+        assert_eq!(j["topics"][0]["messages"], 2);
+    }
+
+    #[test]
     fn the_cycle_shows_the_latest_reservations_and_the_load_by_class() {
-        let (mut v, mut w) = (BusView::new(S), Watcher::new());
+        let (mut v, mut w) = (BusView::new(S, LOG), Watcher::new());
         let sync = SyncFrame::new(0x1234, 0b1010_0110, true).to_frame();
         let f = r2p_canlink::CanFrame::extended(sync.id().to_raw(), sync.payload()).unwrap();
         let stamped = r2p_canlink::Stamped { time: Duration::ZERO, frame: f };

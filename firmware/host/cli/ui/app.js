@@ -184,6 +184,36 @@ function renderCycle(c) {
   el.appendChild(load);
 }
 
+let latencyPlot = null;     // uPlot instance of the SRT latency histogram
+
+// A bucket's label in milliseconds: "<0.25", …, "≥20".
+function bucketLabel(edges, i) {
+  return i < edges.length ? `<${edges[i] / 1000}` : `≥${edges[edges.length - 1] / 1000}`;
+}
+
+// The SRT latency histogram: uPlot's bar paths, one bar per bucket of r2p ui's edges.
+function renderLatency(h) {
+  if (!h) return;
+  const xs = h.counts.map((_, i) => i);
+  if (!latencyPlot) {
+    latencyPlot = new uPlot({
+      width: $("latency").clientWidth || 560, height: 170,
+      legend: { show: false },
+      scales: { x: { time: false, range: [-0.5, h.counts.length - 0.5] } },
+      axes: [
+        { values: (u, splits) => splits.map((i) => (Number.isInteger(i) ? bucketLabel(h.edges_us, i) : "")),
+          splits: () => xs, size: 40, label: "ms", labelSize: 14 },
+        { label: "messages", size: 60 },
+      ],
+      series: [{}, { label: "SRT messages", fill: "#4d7cfe88", stroke: "#4d7cfe",
+        paths: uPlot.paths.bars({ size: [0.7] }), points: { show: false } }],
+    }, [xs, h.counts], $("latency"));
+  } else {
+    latencyPlot.setData([xs, h.counts]);
+  }
+  $("latency").dataset.total = String(h.counts.reduce((a, b) => a + b, 0));
+}
+
 function render(s) {
   latest = s;
   renderBus(s.bus);
@@ -195,6 +225,7 @@ function render(s) {
   renderTopics(s.topics || []);
   renderPlot(s);
   renderCycle(s.cycle);
+  renderLatency(s.srt_latency);
 }
 
 function message(id, text, ok) {
