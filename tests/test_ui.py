@@ -62,6 +62,7 @@ def built():
 
 @pytest.fixture(scope="module")
 def robot(built):
+    _browser_or_skip()  # before the robot starts: nothing to drive it with
     sim = SocketcandProcess([str(R2P), "sim", str(TRISKAR2), "--realtime", "--power-off", POWER_OFF], "r2p sim")
     try:
         yield sim
