@@ -312,6 +312,8 @@ mod tests {
         assert_eq!(query("/api/params?node=motor", "node").as_deref(), Some("motor"));
         assert_eq!(query("/p?a=1&node=left%20wheel+x", "node").as_deref(), Some("left wheel x"));
         assert_eq!(query("/p?node=%zz%4", "node").as_deref(), Some("%zz%4"));
+        assert_eq!(query("/p?node=x%2", "node").as_deref(), Some("x%2"), "cut short at the end");
+        assert_eq!(query("/p?node=abcd%41", "node").as_deref(), Some("abcdA"));
         assert_eq!(query("/p?a=1", "node"), None);
         assert_eq!(query("/p", "node"), None);
     }
