@@ -248,23 +248,34 @@ pub fn run(args: &UiArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), CliE
     let server = Server::http(addr).map_err(|e| {
         CliError::new(format!("--bind {} --port {}: cannot serve there: {e}", args.bind, args.port))
     })?;
-    let snaps = Arc::new(Snapshots::default());
-    let stop = Arc::new(AtomicBool::new(false));
     let b = bus.clone();
     let open: Arc<Open> = Arc::new(move || Ok(Session::new(open_link(&b)?)));
-    {
-        let (open, snaps, stop) = (open.clone(), snaps.clone(), stop.clone());
-        let (lost, laxity) = (args.lost_after, args.laxity);
-        let view = move || BusView::new(lost, laxity);
-        std::thread::spawn(move || ui_bus::run(&*open, view, &snaps, &stop));
-    }
+    let (lost, laxity) = (args.lost_after, args.laxity);
     crate::args::emit(out, &format!("r2p ui: open http://{addr}/"))?;
     out.flush().map_err(|e| CliError::new(format!("writing the output: {e}")))?;
+    serve(&server, bus, open, move || BusView::new(lost, laxity));
+    Ok(())
+}
+
+/// Serves the page on `server` until it stops: the bus loop on its own thread (sessions opened
+/// by `open`, each watched into a fresh `view()`), and a thread per request.
+pub fn serve(
+    server: &Server,
+    bus: &BusArgs,
+    open: Arc<Open>,
+    view: impl Fn() -> BusView + Send + 'static,
+) {
+    let snaps = Arc::new(Snapshots::default());
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let (open, snaps, stop) = (open.clone(), snaps.clone(), stop.clone());
+        std::thread::spawn(move || ui_bus::run(&*open, view, &snaps, &stop));
+    }
     for req in server.incoming_requests() {
         let (bus, snaps, open) = (bus.clone(), snaps.clone(), open.clone());
         std::thread::spawn(move || handle(req, &bus, &*open, &snaps));
     }
-    Ok(())
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
 }
 
 #[cfg(test)]
@@ -305,6 +316,98 @@ mod tests {
         assert!(!post_ok(None, None, h));
         assert!(!post_ok(Some("application/json"), Some("http://evil.example"), h));
         assert!(!post_ok(Some("application/json"), Some("http://127.0.0.1:8023"), None));
+    }
+
+    /// Sends `request` to `addr` and returns the answer, up to its end or (for the event
+    /// stream) its first event.
+    fn http(addr: SocketAddr, request: &str) -> String {
+        use std::io::Read;
+        let mut c = std::net::TcpStream::connect(addr).unwrap();
+        c.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+        c.write_all(request.as_bytes()).unwrap();
+        let (mut got, mut buf) = (Vec::new(), [0u8; 4096]);
+        loop {
+            let n = c.read(&mut buf).unwrap_or(0);
+            got.extend_from_slice(&buf[..n]);
+            let text = String::from_utf8_lossy(&got);
+            if n == 0 || text.contains("data: {") && text.ends_with("\n\n") {
+                return text.into_owned();
+            }
+        }
+    }
+
+    fn get(addr: SocketAddr, path: &str, host: &str) -> String {
+        http(addr, &format!("GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n"))
+    }
+
+    fn post(addr: SocketAddr, path: &str, ty: &str, body: &str) -> String {
+        http(
+            addr,
+            &format!(
+                "POST {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: {ty}\r\n\
+                 Content-Length: {}\r\nConnection: close\r\n\r\n{body}",
+                body.len()
+            ),
+        )
+    }
+
+    #[test]
+    fn the_server_answers_the_page_its_events_and_its_requests() {
+        use crate::link::TraceLink;
+        use crate::watch::tests::{heartbeat, management};
+        let server = Server::http("127.0.0.1:0").unwrap();
+        let addr = server.server_addr().to_ip().unwrap();
+        let open: Arc<Open> = Arc::new(|| {
+            let frames = management(1, &heartbeat("psu", 1), 0);
+            Ok(Session::new(Box::new(TraceLink::new("t.log".into(), frames))))
+        });
+        let bus = BusArgs {
+            socketcand: None,
+            socketcan: None,
+            trace: Some("t.log".into()),
+            channel: "vcan0".into(),
+            timeout: Duration::from_secs(1),
+            json: false,
+        };
+        let lax = rtcan::LaxityEncoding::Logarithmic { tick_us: 100 };
+        let server = Arc::new(server);
+        let s2 = server.clone();
+        let t = std::thread::spawn(move || {
+            serve(&s2, &bus, open, move || BusView::new(Duration::from_secs(1), lax));
+        });
+        let page = get(addr, "/", "127.0.0.1");
+        assert!(
+            page.starts_with("HTTP/1.1 200") && page.contains("<title>r2p ui</title>"),
+            "{page}"
+        );
+        assert!(get(addr, "/vendor/uPlot.min.css", "localhost").contains("text/css"));
+        assert!(get(addr, "/nothing", "127.0.0.1").starts_with("HTTP/1.1 404"));
+        assert!(get(addr, "/", "evil.example").starts_with("HTTP/1.1 403"), "DNS rebinding");
+        let events = get(addr, "/events", "127.0.0.1");
+        assert!(
+            events.contains("text/event-stream") && events.contains("\"name\":\"psu\""),
+            "{events}"
+        );
+        let e = get(addr, "/api/params", "127.0.0.1");
+        assert!(e.starts_with("HTTP/1.1 400") && e.contains("which module?"), "{e}");
+        let e = get(addr, "/api/params?node=psu", "127.0.0.1");
+        assert!(e.contains("needs a live bus, not the trace t.log"), "{e}");
+        let set = r#"{"node": "psu", "index": 0, "type": "u32", "value": "-1"}"#;
+        assert!(post(addr, "/api/param", "text/plain", set).starts_with("HTTP/1.1 403"));
+        let e = post(addr, "/api/param", "application/json", set);
+        assert!(e.starts_with("HTTP/1.1 400") && e.contains("does not fit uint32"), "{e}");
+        let e = post(addr, "/api/param", "application/json", r#"{"node": "psu", "value": "1"}"#);
+        assert!(e.contains("no parameter \\\"index\\\""), "{e}");
+        let p = r#"{"topic": "speed", "type": "float32", "values": "fast"}"#;
+        let e = post(addr, "/api/publish", "application/json", p);
+        assert!(e.starts_with("HTTP/1.1 400") && e.contains("fast"), "{e}");
+        let p = r#"{"topic": "speed", "type": "float32", "values": "1.5"}"#;
+        let e = post(addr, "/api/publish", "application/json", p);
+        assert!(e.contains("needs a live bus, not the trace"), "a good message goes on: {e}");
+        let e = http(addr, "PUT / HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
+        assert!(e.contains("not something r2p ui answers"), "{e}");
+        server.unblock();
+        t.join().unwrap();
     }
 
     #[test]
