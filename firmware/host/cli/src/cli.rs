@@ -8,7 +8,7 @@ use crate::args::{open_link, BusArgs};
 use crate::error::CliError;
 use crate::session::Session;
 use crate::{
-    echo, flash, keys, listing, magcal, monitor, param, publish, record, sim, traces, update,
+    echo, flash, keys, listing, magcal, monitor, param, publish, record, sim, traces, ui, update,
 };
 
 const ABOUT: &str = "R2P host tool: watch and talk to an R2P robot's CAN bus";
@@ -35,7 +35,8 @@ Examples:
   r2p imu calibrate --seconds 60     # turn the robot; writes the magnetometer's calibration
   r2p --trace bus.log monitor        # offline, from a candump log or pcap
   r2p convert bus.log bus.pcap       # for Wireshark
-  r2p flash motor                    # firmware/images/motor.elf through an SWD probe";
+  r2p flash motor                    # firmware/images/motor.elf through an SWD probe
+  r2p ui                             # the bus in the browser: http://127.0.0.1:8023/";
 
 /// `r2p`: see `--help`.
 #[derive(Parser, Debug)]
@@ -93,6 +94,9 @@ pub enum Command {
     /// Send a signed image to a module (or --all of its kind) over the bus, reboot it into the
     /// image and wait until it has confirmed itself (docs/flashing.md)
     Update(update::UpdateArgs),
+    /// Serve a web page for the live bus on --bind:--port (127.0.0.1:8023): modules, topics,
+    /// values plotted, the RTCAN cycle, parameters and publishing (docs in README.md)
+    Ui(ui::UiArgs),
 }
 
 /// Runs a parsed command line, printing results to `out`.
@@ -113,6 +117,7 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Flash(args) => flash::run(&args, out),
         Command::Keygen(args) => keys::keygen(&args, out),
         Command::Sign(args) => keys::sign_image(&args, out),
+        Command::Ui(args) => ui::run(&args, bus, out),
         Command::Update(args) => update::run(&args, bus, || Ok(Session::new(open_link(bus)?)), out),
     }
 }

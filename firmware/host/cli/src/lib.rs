@@ -10,7 +10,8 @@
 //! - [`types`]: the message types, found by type hash, decoded and encoded;
 //! - the commands: [`monitor`], [`listing`] (`nodes`, `topics`), [`echo`], [`publish`]
 //!   (`pub`), [`param`], [`magcal`] (`imu calibrate`, its fit in the `r2p-magcal` crate),
-//!   [`traces`] (`replay`, `convert`), [`sim`], [`flash`]; [`args`]: the bus options
+//!   [`traces`] (`replay`, `convert`), [`sim`], [`flash`], [`ui`] (the web page: [`ui_view`],
+//!   [`ui_bus`], [`ui_actions`]); [`args`]: the bus options
 //!   and output they share; [`cli`] parses the command line and runs them.
 
 pub mod args;
@@ -34,6 +35,10 @@ pub mod sim;
 pub mod socketcand_client;
 pub mod traces;
 pub mod types;
+pub mod ui;
+pub mod ui_actions;
+pub mod ui_bus;
+pub mod ui_view;
 pub mod update;
 pub mod watch;
 

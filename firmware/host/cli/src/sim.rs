@@ -53,6 +53,11 @@ pub struct SimArgs {
     /// With --zenoh: the ROS namespace of the gateway's node and topics (none by default)
     #[arg(long, value_name = "NS", default_value = "")]
     pub ros_namespace: String,
+    /// With --realtime: power MODULE off at SECONDS (of virtual time, from the start), as if its
+    /// supply were cut: it stops sending at once, a frame on the wire cut short (repeatable;
+    /// fault injection for tools, e.g. `r2p ui` showing it lost)
+    #[arg(long, value_name = "MODULE@SECONDS", value_parser = parse_power_off)]
+    pub power_off: Vec<(String, Duration)>,
     /// Without --realtime: also write the base's true pose, its odometry and the command every
     /// 50 ms to FILE (CSV), for plots
     #[arg(long, value_name = "FILE")]
@@ -76,6 +81,11 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
         ));
     }
     if !args.realtime {
+        if let Some((m, _)) = args.power_off.first() {
+            return Err(CliError::new(format!(
+                "--power-off {m}@…: powers a module off while tools watch: add --realtime"
+            )));
+        }
         if let Some(a) = args.gateway {
             return Err(CliError::new(format!(
                 "--gateway {a} serves the bus in real time: add --realtime"
@@ -136,6 +146,18 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
     let addr: SocketAddr = addr.parse().map_err(|_| {
         CliError::new(format!("--socketcand {addr}: expected IP:PORT, e.g. 127.0.0.1:29536"))
     })?;
+    let mut power_off = Vec::new();
+    for (m, t) in &args.power_off {
+        let i = r.board(m).ok_or_else(|| {
+            let names: Vec<&str> = r.boards.iter().map(|b| b.name.as_str()).collect();
+            CliError::new(format!(
+                "--power-off {m}@…: {name} has no module {m:?} (its modules: {})",
+                names.join(", ")
+            ))
+        })?;
+        eprintln!("r2p sim: {m} will be powered off at {:.3} s", t.as_secs_f64());
+        power_off.push((*t, i));
+    }
     let opts = Serve {
         addr,
         channel: bus.channel.clone(),
@@ -143,6 +165,7 @@ pub fn run(args: &SimArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), Cli
         seconds: args.seconds.map(|d| d.as_secs_f64()),
         watch_stdin: !args.no_stdin,
         socketcan: bus.socketcan.clone(),
+        power_off,
     };
     let gateway = match args.gateway {
         Some(a) => {
@@ -196,6 +219,17 @@ fn record_virtual(r: &mut EmuRobot, seconds: Duration, path: &str) -> Result<Dur
     Ok(took)
 }
 
+/// Parses `MODULE@SECONDS` (`--power-off`).
+fn parse_power_off(s: &str) -> Result<(String, Duration), String> {
+    let bad = || format!("{s:?}: expected MODULE@SECONDS, e.g. imu@5");
+    let (m, t) = s.rsplit_once('@').ok_or_else(bad)?;
+    let t: f64 = t.parse().map_err(|_| bad())?;
+    if m.is_empty() || !t.is_finite() || !(0.0..1e6).contains(&t) {
+        return Err(bad());
+    }
+    Ok((m.to_string(), Duration::from_secs_f64(t)))
+}
+
 /// `tcp/HOST:PORT` (Zenoh's locator syntax; only TCP) as an address.
 fn parse_zenoh_endpoint(e: &str) -> Result<SocketAddr, CliError> {
     let bad = || {
@@ -238,4 +272,18 @@ fn write_trajectory(r: &mut EmuRobot, seconds: Duration, csv: &PathBuf) -> Resul
     }
     std::fs::write(csv, text)
         .map_err(|e| CliError::new(format!("cannot write {}: {e}", csv.display())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn power_off_names_a_module_and_a_time() {
+        assert_eq!(parse_power_off("imu@5"), Ok(("imu".into(), Duration::from_secs(5))));
+        assert_eq!(parse_power_off("a@b@0.5"), Ok(("a@b".into(), Duration::from_millis(500))));
+        for bad in ["imu", "@5", "imu@", "imu@-1", "imu@x", "imu@inf"] {
+            assert!(parse_power_off(bad).unwrap_err().contains("MODULE@SECONDS"), "{bad}");
+        }
+    }
 }

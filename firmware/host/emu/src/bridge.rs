@@ -181,13 +181,38 @@ impl Bridge {
         sim: &mut Sim<'_, N>,
         start: Instant,
         limit: Option<Duration>,
+        stop: impl FnMut() -> bool,
+    ) {
+        self.run_realtime_with(sim, start, limit, &[], stop);
+    }
+
+    /// [`Bridge::run_realtime`], powering board `i` off at virtual time `t` for each `(t, i)`
+    /// of `power_off` (fault injection while tools watch: a module that dies on the bus).
+    pub fn run_realtime_with<N: Runtime>(
+        &mut self,
+        sim: &mut Sim<'_, N>,
+        start: Instant,
+        limit: Option<Duration>,
+        power_off: &[(Duration, usize)],
         mut stop: impl FnMut() -> bool,
     ) {
         let limit_ns = limit.map_or(u64::MAX, |l| l.as_nanos() as u64);
+        let mut offs: Vec<(u64, usize)> =
+            power_off.iter().map(|(t, i)| (t.as_nanos() as u64, *i)).collect();
+        offs.sort_unstable();
+        let mut offs = offs.into_iter().peekable();
         loop {
             let target = (start.elapsed().as_nanos() as u64).min(limit_ns);
             if target > sim.now_ns() {
-                self.run_until(sim, target);
+                while let Some((t, i)) = offs.next_if(|(t, _)| *t <= target) {
+                    if t > sim.now_ns() {
+                        self.run_until(sim, t);
+                    }
+                    sim.power(i, false);
+                }
+                if target > sim.now_ns() {
+                    self.run_until(sim, target);
+                }
             }
             let lag =
                 (start.elapsed().as_nanos() as u64).min(limit_ns).saturating_sub(sim.now_ns());
@@ -298,5 +323,23 @@ mod tests {
         assert_eq!(sim.now_ns(), 100_000_000);
         assert!(wall >= Duration::from_millis(100), "{wall:?}");
         assert_eq!(bridge.stats().to_hub, 100);
+    }
+
+    #[test]
+    fn a_board_powered_off_at_a_time_says_nothing_after_it() {
+        let mut sim = Sim::new(2, Config::default(), Mode::Poll { period_us: 1_000 });
+        sim.add_board(Talker { sent: 0, got: Vec::new() }, 0, None);
+        let mut bridge = Bridge::new(&sim, 1, Arc::new(BroadcastHub::new()), 64);
+        let off = [(Duration::from_millis(30), 0)];
+        bridge.run_realtime_with(
+            &mut sim,
+            Instant::now(),
+            Some(Duration::from_millis(60)),
+            &off,
+            || false,
+        );
+        assert_eq!(sim.now_ns(), 60_000_000);
+        let sent = bridge.stats().to_hub;
+        assert!((29..=31).contains(&sent), "one frame a millisecond for 30 ms: {sent}");
     }
 }

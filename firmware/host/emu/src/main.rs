@@ -105,6 +105,7 @@ fn realtime(opts: &Options) -> Result<(), String> {
         seconds: opts.seconds,
         watch_stdin: opts.service.watch_stdin,
         socketcan: None,
+        power_off: Vec::new(),
     };
     let summary = serve::run_realtime(&mut sim, demo::SPARE_PORT, "demo robot", &serve)?;
     eprintln!(

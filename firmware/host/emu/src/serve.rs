@@ -34,6 +34,8 @@ pub struct Serve {
     pub watch_stdin: bool,
     /// Also bridge the bus to this kernel CAN interface (SocketCAN, Linux).
     pub socketcan: Option<String>,
+    /// Power board `i` off at virtual time `t`, for each `(t, i)` (fault injection).
+    pub power_off: Vec<(Duration, usize)>,
 }
 
 /// Runs `seconds` of virtual time as fast as possible and writes the bus's frames to `path`:
@@ -101,12 +103,14 @@ pub fn run_realtime<N: Runtime>(
     let mut bridge = Bridge::new(sim, spare_port, hub.clone(), DEFAULT_QUEUE);
     let limit = opts.seconds.map(Duration::from_secs_f64);
     let mut why = "--seconds";
-    bridge.run_realtime(sim, Instant::now(), limit, || match stop_when.reason() {
-        Some(reason) => {
-            why = reason;
-            true
+    bridge.run_realtime_with(sim, Instant::now(), limit, &opts.power_off, || {
+        match stop_when.reason() {
+            Some(reason) => {
+                why = reason;
+                true
+            }
+            None => false,
         }
-        None => false,
     });
 
     service.stopping();
