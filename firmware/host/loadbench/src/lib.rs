@@ -45,6 +45,11 @@ pub struct Point {
     /// Share of the bus time RTCAN reserves: the sync slot of every cycle and the slot of every
     /// HRT occurrence, whatever the frames in them occupy.
     pub reserved_share: f64,
+    /// The most RTCAN can carry with this calendar on its fixed slot grid: every bit time but
+    /// the reserved slots' idle remainder (a slot of 166 µs holds one sync or HRT frame of
+    /// 100–160 bits, and nothing else may start in it without delaying the next slot's owner).
+    /// At 95 % offered load this ceiling is below issue 22's 92 % (docs/rtcan.md, "Capacity").
+    pub grid_ceiling: f64,
     /// Streams per class: HRT, SRT, NRT.
     pub streams: [usize; 3],
     /// Messages released.
@@ -73,6 +78,25 @@ pub fn point(setup: &Setup, policies: &[Policy]) -> Result<Point, SetupError> {
         .filter(|m| is_hrt(&traffic.streams[usize::from(m.stream)].kind))
         .count();
     let cycles = setup.duration_us as f64 / f64::from(setup.cycle.cycle_us);
+    // What the reserved slots carry, with RTCAN's own identifiers: one sync per cycle (its
+    // length varies a little with the cycle counter: the first one stands for all) and each
+    // HRT message in its slot.
+    let sync = rtcan::SyncFrame::new(0, 0, false).to_frame();
+    let slotted_bits = cycles * f64::from(r2p_vbus::FrameBits::of(&sync).total())
+        + traffic
+            .messages
+            .iter()
+            .filter(|m| is_hrt(&traffic.streams[usize::from(m.stream)].kind))
+            .map(|m| {
+                let id = rtcan::FrameId {
+                    laxity: rtcan::Laxity::HRT,
+                    message: traffic.streams[usize::from(m.stream)].message,
+                    fragment: 0,
+                };
+                let frame = rtcan::Frame::new(id, &m.payload).expect("HRT payloads fit one frame");
+                f64::from(r2p_vbus::FrameBits::of(&frame).total())
+            })
+            .sum::<f64>();
     let slot_us = f64::from(setup.cycle.cycle_us) / f64::from(setup.cycle.slots);
     Ok(Point {
         load: setup.load,
@@ -81,6 +105,10 @@ pub fn point(setup: &Setup, policies: &[Policy]) -> Result<Point, SetupError> {
         offered_srt: share(is_srt),
         offered_nrt: share(is_nrt),
         reserved_share: (hrt_occurrences as f64 + cycles) * slot_us / setup.duration_us as f64,
+        grid_ceiling: 1.0
+            - ((hrt_occurrences as f64 + cycles) * slot_us * f64::from(setup.cycle.bit_rate) / 1e6
+                - slotted_bits)
+                / cap,
         streams: [count(is_hrt), count(is_srt), count(is_nrt)],
         messages: traffic.messages.len(),
         reports,

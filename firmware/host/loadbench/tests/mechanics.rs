@@ -259,3 +259,24 @@ fn a_bad_setup_is_refused_with_the_reason() {
     let e = Traffic::generate(&Setup { srt_deadline_us: (5_000, 1_000), ..Setup::new(0.5, 0) });
     assert_eq!(e.unwrap_err(), SetupError::Deadlines((5_000, 1_000)));
 }
+
+#[test]
+fn rtcan_never_carries_more_than_its_slot_grid_leaves() {
+    // The grid's ceiling (docs/rtcan.md, "Capacity"): every bit time but the idle remainder of
+    // the reserved slots. What RTCAN carries stays under it, and it is the reserved time's
+    // complement plus the sync and HRT frames' own bits (a sync is at most 160 bits, 200 a
+    // second: 3.2 % of the bus).
+    let p = point(&short(0.95, 6, 500_000), &RTCAN).unwrap();
+    assert!(p.grid_ceiling < 1.0, "{}", p.grid_ceiling);
+    let frames = p.grid_ceiling - (1.0 - p.reserved_share);
+    assert!(frames > p.offered_hrt && frames < p.offered_hrt + 0.032, "{frames} {}", p.offered_hrt);
+    for r in &p.reports {
+        assert!(
+            r.utilisation <= p.grid_ceiling,
+            "{:?}: {} > {}",
+            r.policy,
+            r.utilisation,
+            p.grid_ceiling
+        );
+    }
+}
