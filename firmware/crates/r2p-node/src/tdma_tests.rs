@@ -222,6 +222,19 @@ r2p_testkit::suite! {
         let hrt = [a.hrt_state(0), a.hrt_state(1)];
         assert!(hrt.contains(&Some(HrtState::Refused(HrtResult::Full))), "{:?}", hrt);
         assert_eq!(a.stats().hrt_refused, 1);
+        // The publisher is told which stream and why (issue 22: a refused stream no longer
+        // stops silently on the publisher's side).
+        let refused = (0..2).find(|&i| a.hrt_state(i) == Some(HrtState::Refused(HrtResult::Full)));
+        let mut told = heapless::Vec::<crate::Event, 8>::new();
+        while let Some(e) = a.next_event() {
+            if let crate::Event::StreamRefused { .. } = e {
+                told.push(e).unwrap();
+            }
+        }
+        assert_eq!(
+            told[..],
+            [crate::Event::StreamRefused { export: refused.unwrap(), result: HrtResult::Full }]
+        );
         assert_eq!(bus.violations(), 0);
     }
 }

@@ -3,7 +3,7 @@
 //! the application takes them when it is ready. The management protocol (`management.rs`)
 //! queues them.
 
-use r2p_management::message::{ParamFault, SubscribeResult, Value};
+use r2p_management::message::{HrtResult, ParamFault, SubscribeResult, Value};
 use r2p_management::NodeId;
 use rtcan::MessageId;
 
@@ -60,6 +60,16 @@ pub enum Event {
         import: usize,
         /// The publisher's node.
         from: NodeId,
+    },
+    /// The master refused HRT export `export`'s reservation (at its first registration, or when
+    /// the node registered again for a new calendar after a failover): the stream sends
+    /// nothing until a subscriber asks again, and its subscribers are answered `NoSlot` (one
+    /// already subscribed learns it from `PublisherSilent`).
+    StreamRefused {
+        /// Index of the export.
+        export: usize,
+        /// The master's reason.
+        result: HrtResult,
     },
     /// A PARAM_SET changed a local parameter (persist it if the module keeps parameters).
     ParamChanged {

@@ -221,6 +221,7 @@ impl<
             }
             Err(res) => {
                 bump(&mut self.stats.hrt_refused);
+                self.event(Event::StreamRefused { export: i, result: res });
                 (HrtState::Refused(res), SubscribeResult::NoSlot, 0)
             }
         };
