@@ -312,7 +312,7 @@ def ipc2221b_rules() -> str:
 
 
 def build(core: Sheet) -> Module:
-    s = Sheet(NAME, f"{TITLE}: 13-44 V, 20 A continuous H-bridge, encoder, Hall current sense")
+    s = Sheet(NAME, f"{TITLE}: 15-44 V, 20 A continuous H-bridge, encoder, Hall current sense")
     bus_tap(s, "+5V_MOD", at=BUS_TAP_PLACE)
     pins = {p: "" for p in core_mod.FREE_GPIO}
     pins.update(PINS)
@@ -321,7 +321,7 @@ def build(core: Sheet) -> Module:
     s.flags += ["VMOT", "DRV_VDD"]
 
     # input: XT60 male (pin 1 −, pin 2 +), fuse, TVS, bulk and the commutation-loop ceramics
-    s.part("J101", "XT60_M", {"1": "GND", "2": "VBAT"}, value="BATTERY 13-44V")
+    s.part("J101", "XT60_M", {"1": "GND", "2": "VBAT"}, value="BATTERY 15-44V")
     s.part("F102", "FUSE_30A", {"1": "VBAT", "2": "VMOT"})
     s.part("D101", "SMCJ45A", {"1": "VMOT", "2": "GND"})          # D_SMC pad 1 = cathode
     for i in range(4):
@@ -433,7 +433,7 @@ def build(core: Sheet) -> Module:
                            "Q101", "Q102", "Q103", "Q104", "U102"))
     m.fiducials = list(FIDUCIALS)
     m.texts = frame_texts(NAME, REVISION) + [
-        Text("MOTOR SUPPLY 13-44V", 130.0, 19.3, 1.2, "B.SilkS"),
+        Text("MOTOR SUPPLY 15-44V", 130.0, 19.3, 1.2, "B.SilkS"),
         Text("+", 152.0, 20.2, 1.5, "B.SilkS"), Text("-", 152.0, 13.0, 1.5, "B.SilkS"),
         Text("BATTERY", 152.5, 30.0, 1.0, "B.SilkS"), Text("MOTOR", 80.5, 44.0, 1.0, "B.SilkS")]
     return m

@@ -67,7 +67,7 @@ DRAWING = {
 }
 
 BLOCKS = [
-    Block("Battery input: 13-44 V, fuse, TVS, bulk", 4, 4, 63, 46, notes=[
+    Block("Battery input: 15-44 V, fuse, TVS, bulk", 4, 4, 63, 46, notes=[
         (5, 45.3, f"F102 30 A (NANO2 456): {_v('fuse Littelfuse 0456030.ER (NANO2 456, 30 A)')}, "
                 f"{_ROWS['fuse Littelfuse 0456030.ER (NANO2 456, 30 A)'].limit}.\n"
                 f"D101 SMCJ45A: V_BR {_v('TVS SMCJ45A min breakdown at -20 °C')} at -20 °C, above the "
