@@ -59,6 +59,9 @@ JLC_ZERO = [
     Zero(r"(V|W)?(DFN|SON)-\d+", 225, "DFN/SON/WSON: rows horizontal, pin 1 lower left"),
     Zero(r"(T?SOT-23(-[5-8])?|SOT-223(-3_TabPin2)?)$", 315,
          "SOT-23 family, SOT-223: pin 1 lower right, away from the tape's holes"),
+    Zero(r"SOT-89-3$", 320,
+         "SOT-89: the three leads on the right, pin 1 lower right, the tab left (KiCad's turned 180°: "
+         "the field's tools' ^SOT-89 180, the SOT-23 family's rule)"),
     Zero(r"TO-252-2", 135, "DPAK: leads to the left, pin 1 the upper lead (IPC-7351, no correction)"),
     Zero(r"D_(SOD-123F?|SOD-323F?|SMA|SMB|SMC|MiniMELF)$", 180,
          "diode: cathode left (IPC-7351; JLC's diodes likewise)"),

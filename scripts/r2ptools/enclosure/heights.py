@@ -69,6 +69,7 @@ TABLE: list[tuple[str, float, str]] = [
     (r"^Inductor_SMD:L_(0402|0603|0805|1008|1206|1210)", 2.0, "chip inductors and beads"),
     (r"^Inductor_SMD:", 10.0, "shielded power inductors up to 12.5 mm square"),
     (r"^Fuse:Fuse_(0402|0603|0805|1206|1210|1812|2010|2512)", 1.5, "chip fuses and PTCs"),
+    (r"^R2P:Fuse_Littelfuse-NANO2-456", 3.35, "NANO2 456: 3.05 mm square body (456 datasheet), +0.3"),
     (r"^Fuse:", 10.0, "fuse holders"),
     (r"^Crystal:Crystal_SMD_(2016|2520|3225|5032|2012)", 1.2, "ceramic SMD crystals"),
     (r"^Crystal:Crystal_SMD_HC49", 4.5, "HC49-SD"),

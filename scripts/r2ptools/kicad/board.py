@@ -45,11 +45,17 @@ def pt(x: float, y: float) -> pcbnew.VECTOR2I:
     return pcbnew.VECTOR2I(mm(ORIGIN[0] + x), mm(ORIGIN[1] + y))
 
 
+PROJECT_FP_DIR = Path(__file__).resolve().parents[3] / "hardware" / "core"
+"""Where the project's own library (`R2P.pretty`, r2ptools.kicad.fplib) lives."""
+
+
 def load_footprint(lib_id: str) -> pcbnew.FOOTPRINT:
+    """A footprint by lib id: KiCad's library, or the project's own (`R2P:`, fplib.LIB)."""
     lib, name = lib_id.split(":", 1)
-    fp = pcbnew.FootprintLoad(str(FP_DIR / f"{lib}.pretty"), name)
+    where = PROJECT_FP_DIR if (PROJECT_FP_DIR / f"{lib}.pretty").is_dir() else FP_DIR
+    fp = pcbnew.FootprintLoad(str(where / f"{lib}.pretty"), name)
     if fp is None:
-        raise FileNotFoundError(f"footprint {lib_id} not found under {FP_DIR}")
+        raise FileNotFoundError(f"footprint {lib_id} not found under {where}")
     fp.SetFPID(pcbnew.LIB_ID(lib, name))
     return fp
 

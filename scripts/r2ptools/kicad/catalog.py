@@ -147,7 +147,7 @@ _ITEMS = [
     ("R_10R", R, R0603, "10", "0603WAF100JT5E"),
     ("C_100p", C, C0603, "100pF C0G", "0603CG101J500NT"),
     ("C_1000u_63V", "Device:C_Polarized", "Capacitor_THT:CP_Radial_D16.0mm_P7.50mm", "1000uF 63V",
-     "63ZLH1000MEFC16X25"),
+     "EEU-FS1J102"),
     ("CSD19536KTT", "Transistor_FET:Q_NMOS_GDS", "Package_TO_SOT_SMD:TO-263-2", "CSD19536KTT",
      "CSD19536KTT"),
     # the gate driver: KiCad 9's own symbol and pin table (Renesas FN3676's SOIC-16 pinout)
@@ -165,9 +165,9 @@ _ITEMS = [
      "ACS725 30AB", "ACS725LLCTR-30AB-T"),
     ("TLV3011", "R2P:TLV3011", "Package_TO_SOT_SMD:SOT-23-6", "TLV3011", "TLV3011AIDBVR"),
     ("74LVC2G17", "R2P:74LVC2G17", "Package_TO_SOT_SMD:SOT-23-6", "74LVC2G17", "SN74LVC2G17DBVR"),
-    ("SMCJ45A", "Device:D_TVS", "Diode_SMD:D_SMC", "SMCJ45A", "SMCJ45A"),
-    # 30 A NANO2 456: KiCad has no 456 land pattern; the 462's is used until one is drawn (errata)
-    ("FUSE_30A", "Device:Fuse", "Fuse:Fuse_Littelfuse-NANO2-462", "30A", "0456030.ER"),
+    ("SMCJ45A", "Device:D_TVS", "Diode_SMD:D_SMC", "SMCJ45A", "SMCJ45A-E3/57T"),
+    # 30 A NANO2 456: KiCad has no 456 land pattern; R2P's is the datasheet's recommended one
+    ("FUSE_30A", "Device:Fuse", "R2P:Fuse_Littelfuse-NANO2-456", "30A", "0456030.ER"),
     ("XT60_M", "Connector_Generic:Conn_01x02", "R2P:AMASS_XT60PW-M_1x02_P7.20mm_Horizontal",
      "XT60 IN", "XT60PW-M"),
     ("XT60_F", "Connector_Generic:Conn_01x02", "R2P:AMASS_XT60PW-F_1x02_P7.20mm_Horizontal",

@@ -9,6 +9,10 @@ board edge, 0.15 mm of another part's pad or silk, on any board that places it (
 in every module description, so one variant serves them all). Pin-1 marks (small separate
 figures) and non-line graphics are kept as drawn; DRC checks the result.
 
+The library also holds footprints KiCad does not have at all (`DRAWN`: the motor's NANO2 456
+fuse), drawn from the maker's recommended land pattern; the generator routes them as they are and
+never rewrites them.
+
 The catalogue names a variant as `R2P:<KiCad footprint name>`, so the schematic's Footprint
 field and the board agree (schematic parity) and DRC compares the board's footprint with the
 variant in R2P.pretty (no lib_footprint_mismatch). Routing uses the **source** footprint
@@ -44,6 +48,12 @@ VARIANTS = {
     "JST_PH_S3B-PH-K_1x03_P2.00mm_Horizontal": "Connector_JST",
     "HTSSOP-20-1EP_4.4x6.5mm_P0.65mm_EP3.4x6.5mm": "Package_SO",
 }
+DRAWN = (
+    # Footprints KiCad's library does not have, drawn for the project from the maker's land
+    # pattern (its description cites the drawing) and edited in KiCad: kept as drawn, routed as
+    # themselves, never cut or rewritten by the generator.
+    "Fuse_Littelfuse-NANO2-456",
+)
 STEP = 0.05
 """Resolution of a cut along a silk line, mm."""
 MIN_PIECE = 0.2
@@ -60,11 +70,12 @@ class TrimError(ValueError):
 def source(lib_id: str) -> str:
     """The KiCad footprint a lib id is routed with: a variant's source, anything else itself."""
     lib, _, name = lib_id.partition(":")
-    if lib != LIB:
+    if lib != LIB or name in DRAWN:
         return lib_id
     if name not in VARIANTS:
-        raise TrimError(f"{lib_id}: no such variant; known: {', '.join(sorted(VARIANTS))} "
-                        "(r2ptools/kicad/fplib.py VARIANTS)")
+        raise TrimError(f"{lib_id}: no such variant or drawn footprint; known: "
+                        f"{', '.join(sorted(VARIANTS) + list(DRAWN))} (r2ptools/kicad/fplib.py "
+                        "VARIANTS, DRAWN)")
     return f"{VARIANTS[name]}:{name}"
 
 
@@ -183,7 +194,8 @@ def variants(modules) -> dict[str, pcbnew.FOOTPRINT]:
     used = set()
     for m in modules:
         refs = sorted((p.ref, p.item.footprint.split(":", 1)[1]) for _, p in m.all_parts()
-                      if p.item.footprint.startswith(LIB + ":"))
+                      if p.item.footprint.startswith(LIB + ":")
+                      and p.item.footprint.split(":", 1)[1] not in DRAWN)
         if not refs:
             continue
         b = _module_board(m)
@@ -247,6 +259,8 @@ def apply(board: pcbnew.BOARD, footprints: dict[str, str], lib: dict[str, pcbnew
         if not lib_id.startswith(LIB + ":"):
             continue
         name = lib_id.split(":", 1)[1]
+        if name in DRAWN:
+            continue          # placed and routed as drawn: nothing to swap in
         placed = pcbnew.FOOTPRINT(lib[name])
         placed.SetPosition(fp.GetPosition())
         placed.SetOrientation(fp.GetOrientation())

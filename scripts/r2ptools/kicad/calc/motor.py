@@ -16,7 +16,8 @@ symbol),
 NXP/Nexperia BCP56_BCX56_BC56PA Rev. 9 (Q106: Table 2 V_CEO, Table 3 SOT89 pinning 1 E 2 C 3 B,
 Table 8 h_FE), TI LMV331 (over-current comparators: summary, NOT VERIFIED), Allegro ACS725 ACS725-DS Rev. 8
 (sensitivity, errors, supply current, 1.2 mΩ, 120 kHz read),
-TI TLV3011 SBOS300C (comparator with 1.242 V reference), Littelfuse SMCJ series (TVS), Amass XT60
+TI TLV3011 SBOS300C (comparator with 1.242 V reference), Littelfuse SMCJ series (TVS), Littelfuse 456
+Series (F102: Electrical Specifications, 30 A row, read), Amass XT60
 (30 A), IPC-2221B §6.2 (conductor sizing equation), docs/bus.md §6 (200 mA per module, ground),
 firmware/targets/f103/motor/src/bridge.rs (PWM, dead time, sign-magnitude drive),
 firmware/apps/motor/src/frontend.rs and firmware/host/world/src/hbridge.rs (ADC, current scaling).
@@ -172,7 +173,8 @@ HALL_SWING = (0.3, 3.0)       # output range at 3.3 V: V_OL 0.3 V and V_OH V_CC 
                               # minimum load (ACS725-DS Rev. 8); this board's load is lighter, so wider
 
 # --- input protection ------------------------------------------------------------------------
-TVS = "SMCJ45A"               # 1500 W (10/1000 µs)
+TVS = "SMCJ45A"               # the JEDEC type whose figures follow, 1500 W (10/1000 µs)
+TVS_MPN = "SMCJ45A-E3/57T"    # the part ordered (Vishay, C1973367)
 TVS_VRWM, TVS_VBR_MIN, TVS_VBR_MAX = 45.0, 50.0, 55.3
 TVS_VC, TVS_IPP = 72.7, 20.6  # clamp at the rated pulse; these four from the JEDEC SMCJ table as
                               # remembered: NOT VERIFIED (no SMCJ datasheet was read)
@@ -185,12 +187,14 @@ RES_0603_VMAX = 75.0          # UNI-ROYAL 0603WAF working voltage (bom/parts.csv
 LOOP_L = 10e-9                # commutation loop inductance, H: layout target (ceramics at the legs)
 
 # --- input capacitors --------------------------------------------------------------------------
-ELCAP = "63 V 1000 µF 16 × 25 mm low-ESR aluminium electrolytic, 105 °C"
+ELCAP = "Panasonic EEU-FS1J102, 63 V 1000 µF 16 × 25 mm, 105 °C"
 ELCAP_V, ELCAP_SURGE = 63.0, 79.0       # rated / surge (IEC 60384-4: 1.25 × for ≤ 315 V)
-ELCAP_RIPPLE = 2.7            # A rms at 100 kHz, 105 °C: the part MUST meet it (candidates NOT VERIFIED)
+# LCSC's fields for C407979 (JLC catalogue snapshot 2026-05-21, hardware/motor/parts-2026-11-28.md);
+# Panasonic's FS-series table NOT VERIFIED (read it, and its impedance, before ordering)
+ELCAP_RIPPLE = 2.988          # A rms at 100 kHz, 105 °C
 ELCAP_FREQ_K = 0.95           # ripple multiplier at 40 kHz vs 100 kHz (typical tables): estimate
-ELCAP_ESR = 0.022             # Ω at 100 kHz, 20 °C: requirement (candidates' tables NOT VERIFIED)
-ELCAP_LIFE_H = 5000.0         # at 105 °C and rated ripple
+ELCAP_ESR = 0.024             # Ω at 100 kHz, 20 °C
+ELCAP_LIFE_H = 10000.0        # at 105 °C and rated ripple
 ELCAP_T_LOCAL = 65.0          # °C: board temperature at the capacitors at 20 A, 40 °C (estimate)
 ELCAP_RIPPLE_RISE = 5.0       # °C core rise at rated ripple (usual maker rule)
 CER = "CL32B225KCJSNNE"       # 2.2 µF 100 V X7R 1210 (Samsung, LCSC C55151, the PSU's)
@@ -201,10 +205,11 @@ LIFE_REQUIRED_H = 20_000.0    # at the worst continuous point (20 A, d = 0.5, 40
 
 # --- fuse --------------------------------------------------------------------------------------
 FUSE = "Littelfuse 0456030.ER (NANO2 456, 30 A)"
+# Littelfuse 456 Series datasheet (Revised 12/14/17), Electrical Specifications, the 30 A row
 FUSE_RATED = 30.0
-FUSE_VDC = 60.0               # DC voltage rating: NOT VERIFIED (the part MUST be rated ≥ VIN_MAX)
-FUSE_R = 1.6e-3               # cold resistance: NOT VERIFIED
-FUSE_I2T = 400.0              # melting I²t, A²s: NOT VERIFIED
+FUSE_VDC = 72.0               # the highest DC voltage with an interrupting rating: 500 A at 72 VDC
+FUSE_R = 1.32e-3              # nominal cold resistance
+FUSE_I2T = 81.0               # nominal melting I²t, A²s (at 1 ms opening time)
 FUSE_DERATE = 0.75 * 0.90     # Littelfuse: ≤ 75 % of rating; ×0.9 at 60 °C (as calc/psu.py)
 FUSE_PULSE_FRACTION = 0.22
 R_HOTPLUG = 0.05              # Ω: cable, connector, ESR: a low bound (as calc/psu.py)
@@ -699,12 +704,14 @@ def rows() -> list[Row]:
 
     # --- fuse and hot-plug
     add(Row(f"fuse {FUSE}", f"{I_CONT:.0f} A continuous", f"≤ {FUSE_RATED * FUSE_DERATE:.2f} A (75 %, 60 °C)",
-            I_CONT <= FUSE_RATED * FUSE_DERATE, f"DC rating {FUSE_VDC:.0f} V vs {VIN_MAX:.1f} V (NOT VERIFIED)"))
+            I_CONT <= FUSE_RATED * FUSE_DERATE and FUSE_VDC >= VIN_MAX,
+            f"DC interrupting rating at {FUSE_VDC:.0f} V (500 A) vs {VIN_MAX:.1f} V"))
     i2t = c_bulk / 0.8 * VIN_MAX ** 2 / (2 * R_HOTPLUG)
     lim = FUSE_I2T * FUSE_PULSE_FRACTION
     add(Row("hot-plug inrush I²t into the bulk", f"{i2t:.0f} A²s", f"≤ {lim:.0f} A²s (22 % of melting)",
-            i2t <= lim, f"melting I²t {FUSE_I2T:.0f} A²s NOT VERIFIED" if i2t <= lim else "traded: plug the module in with the robot's main switch off (README errata)"
-            if i2t > lim else ""))
+            i2t <= lim, "" if i2t <= lim else
+            f"traded: a hot plug can open the fuse (melting I²t {FUSE_I2T:.0f} A²s): plug the module in "
+            "with the robot's main switch off (README errata)"))
     add(Row("XT60 (battery male, motor female)", f"{I_CONT:.0f} A", f"≤ {XT60_RATED:.0f} A continuous",
             I_CONT <= XT60_RATED, f"peak {I_PEAK:.0f} A at the rating"))
     add(Row("ACS725 primary at 20 A", f"{I_CONT ** 2 * HALL_R:.2f} W", "≤ 0.5 W in SOIC-8 on 2 oz pours",

@@ -81,7 +81,7 @@ def problems(path: Path = DRAFT) -> list[str]:
     for ln in lines:
         by_mpn[ln.mpn] = by_mpn.get(ln.mpn, 0) + ln.qty
     v = motor.DESIGN_VALUES
-    for mpn, want in ((motor.FET, 4), (motor.DRV, 1), (motor.HALL, 1), (motor.TVS, 1),
+    for mpn, want in ((motor.FET, 4), (motor.DRV, 1), (motor.HALL, 1), (motor.TVS_MPN, 1),
                       (motor.CER, v["N_CER"])):
         if by_mpn.get(mpn, 0) != want:
             out.append(f"calc/motor.py designs with {want} × {mpn}; the draft has {by_mpn.get(mpn, 0)}")
