@@ -5,10 +5,11 @@
 //! run-time ABI's `__aeabi_uldivmod` (`i64`: `__aeabi_ldivmod`): the dividend in r1:r0, the
 //! divisor in r3:r2, the quotient returned in r1:r0 and the remainder in r3:r2. compiler-builtins'
 //! is a wrapper, `__udivmoddi4`, and a general `u64_div_rem` (934 B together), with shift-subtract
-//! loops for a divisor of 2¹⁶ or more. Here both helpers are 236 B of assembly, and the cases the
-//! slot path takes are shorter (rtcan's slot clock: both operands below 2³²):
+//! loops for a divisor of 2¹⁶ or more. Here the unsigned helper is 210 B of assembly (the signed one
+//! 48 B more), and every case but one is shorter (docs/flashing.md, the sixth diet: the slot
+//! path, whose divisions are rtcan's slot clock's, both operands below 2³², lost 265 instructions):
 //!
-//! - dividend and divisor below 2³²: the core's `UDIV`, 6 instructions;
+//! - dividend and divisor below 2³²: one `UDIV`, 6 instructions;
 //! - divisor below 2³², dividend not: the high word's quotient by `UDIV`, then the 64-by-32-bit
 //!   division of what is left (its high word below the divisor) by the core below;
 //! - divisor of 2³² or more (the quotient fits 32 bits): 0 when the dividend's high word is
@@ -19,11 +20,11 @@
 //! The core divides a 64-bit number by a 32-bit one whose quotient fits 32 bits: Knuth's
 //! algorithm D (TAOCP vol. 2, §4.3.1) in two 16-bit digits, the divisor normalised (its top bit
 //! set), each digit estimated by `UDIV` from the divisor's top half and corrected at most twice
-//! (Hacker's Delight, §9-4, `divlu`). No step loops over bits: the longest division is about
-//! 90 instructions.
+//! (Hacker's Delight, §9-4, `divlu`). No step loops over bits: a division takes at most ~80
+//! instructions.
 //!
-//! Division by zero: the quotient is 0 and the remainder the dividend, as the Cortex-M's `UDIV`
-//! (quotient 0) and one of the behaviours the run-time ABI allows (IHI 0043, §4.3.2: a divmod
+//! Division by zero: the quotient is 0 and the remainder the dividend, as with the Cortex-M's
+//! `UDIV` (quotient 0), one of the behaviours the run-time ABI allows (IHI 0043, §4.3.2: a divmod
 //! helper's quotient is what `__aeabi_ldiv0` returns, which may be a fixed value, and its
 //! remainder 0 or the dividend). Rust checks the divisor before it divides, so no Rust code
 //! reaches it (compiler-builtins leaves the case undefined). `i64::MIN / -1`, which Rust also
@@ -31,7 +32,7 @@
 //!
 //! compiler-builtins defines its helpers weak; these strong ones replace them at link time, on
 //! bare metal only. `firmware/targets/qemu/src/bin/division.rs` checks them on a Cortex-M3
-//! against a shift-subtract reference: edge cases and a million pseudo-random pairs of each
+//! against a shift-subtract reference: edge cases and some 800 000 pseudo-random pairs of every
 //! width, and the registers the ABI says a call keeps.
 
 // In assembly: a Rust function cannot return the quotient and the remainder in r0–r3.
