@@ -11,6 +11,7 @@
 //!   [`Inbound`] (imported and subscribed), built at boot in a `StaticCell`;
 //! - [`filters`]: median and first-order low-pass filters for sensor channels;
 //! - [`leds`]: the status LED patterns every module shows the same way;
+//! - [`long_division`]: a smaller 64-bit division than compiler-builtins' (the ABI's helpers);
 //! - [`mem_routines`]: smaller 8-byte aligned copy/clear than compiler-builtins';
 //! - [`param_doc`]: what each parameter means, for the README;
 //! - [`trig`]: sine, cosine and tangent in `f32` only (libm's pull in `f64` soft float);
@@ -31,6 +32,7 @@ pub mod filters;
 pub mod flash_params;
 pub mod float_compare;
 pub mod leds;
+pub mod long_division;
 pub mod mem_routines;
 pub mod param_doc;
 pub mod ram_flash;

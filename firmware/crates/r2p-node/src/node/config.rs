@@ -67,10 +67,10 @@ pub struct SlotPath {
 
 /// The slot path built for the F103's Cortex-M3 (thumbv7m).
 pub const CORTEX_M3_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_954, max_instructions: 2_059 };
+    SlotPath { min_instructions: 1_689, max_instructions: 1_789 };
 /// The slot path built for the F407's Cortex-M4F (thumbv7em, hard float).
 pub const CORTEX_M4_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_964, max_instructions: 2_064 };
+    SlotPath { min_instructions: 1_699, max_instructions: 1_799 };
 
 impl SlotPath {
     /// The slot lead for a core clocked at `sysclk_hz` (µs): the shortest path at one cycle per
@@ -87,8 +87,8 @@ impl SlotPath {
     }
 }
 
-/// The F103 modules' slot lead: [`CORTEX_M3_SLOT_PATH`] at 72 MHz, 27.1–28.6 µs, so 27 µs. The
-/// F407 gateway's is [`CORTEX_M4_SLOT_PATH`] at 168 MHz, 11 µs (`SlotPath::lead_us`).
+/// The F103 modules' slot lead: [`CORTEX_M3_SLOT_PATH`] at 72 MHz, 23.5–24.8 µs, so 23 µs. The
+/// F407 gateway's is [`CORTEX_M4_SLOT_PATH`] at 168 MHz, 10 µs (`SlotPath::lead_us`).
 pub const MODULE_SLOT_LEAD_US: u32 = CORTEX_M3_SLOT_PATH.lead_us(72_000_000);
 
 impl NodeConfig {
@@ -127,9 +127,9 @@ mod tests {
 
     #[test]
     fn each_mcu_leads_by_its_shortest_slot_path_rounded_down() {
-        // 1 974 / 72 = 27.4 µs; 1 979 / 168 = 11.8 µs.
-        assert_eq!(MODULE_SLOT_LEAD_US, 27);
-        assert_eq!(CORTEX_M4_SLOT_PATH.lead_us(168_000_000), 11);
+        // 1 689 / 72 = 23.5 µs; 1 699 / 168 = 10.1 µs.
+        assert_eq!(MODULE_SLOT_LEAD_US, 23);
+        assert_eq!(CORTEX_M4_SLOT_PATH.lead_us(168_000_000), 10);
         // Exactly on a microsecond: not rounded.
         let p = SlotPath { min_instructions: 144, max_instructions: 144 };
         assert_eq!(p.lead_us(72_000_000), 2);
@@ -138,9 +138,9 @@ mod tests {
 
     #[test]
     fn the_emulated_path_is_the_longest_rounded_up() {
-        // 2 079 / 72 = 28.9 µs; 2 084 / 168 = 12.4 µs.
-        assert_eq!(CORTEX_M3_SLOT_PATH.longest_us(72_000_000), 29);
-        assert_eq!(CORTEX_M4_SLOT_PATH.longest_us(168_000_000), 13);
+        // 1 789 / 72 = 24.8 µs; 1 799 / 168 = 10.7 µs.
+        assert_eq!(CORTEX_M3_SLOT_PATH.longest_us(72_000_000), 25);
+        assert_eq!(CORTEX_M4_SLOT_PATH.longest_us(168_000_000), 11);
         let p = SlotPath { min_instructions: 145, max_instructions: 145 };
         assert_eq!(p.longest_us(72_000_000), 3);
     }
