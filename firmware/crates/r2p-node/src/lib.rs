@@ -63,6 +63,8 @@ mod master_timing_tests;
 mod panic_report_tests;
 #[cfg(test)]
 mod registration_bounds_tests;
+#[cfg(test)]
+mod subscriber_liveness_tests;
 #[cfg(any(test, feature = "selftest"))]
 mod tdma_tests;
 /// The suite's loopback bus, public for the QEMU benchmark of the slot path (not an API).

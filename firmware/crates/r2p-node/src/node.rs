@@ -43,6 +43,7 @@ mod liveness;
 mod management;
 mod publishers;
 mod stats;
+mod subscribers;
 mod tdma;
 mod topics;
 
@@ -351,6 +352,7 @@ impl<
             self.expire_owners(now);
             self.calendar_beacon();
             self.check_publishers(now);
+            self.check_subscribers(now);
             let state = if self.heartbeats < STARTING_HEARTBEATS {
                 ModuleState::Starting
             } else {

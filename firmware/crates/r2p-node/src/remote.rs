@@ -33,6 +33,9 @@ pub trait Export: Sync {
     /// A remote module subscribed asking for a queue of `queue_len`: the queue becomes the
     /// longest length asked for (at least 1, at most the sink's capacity).
     fn activate(&self, queue_len: u8);
+    /// Its last remote subscriber left (the node's liveness check): nothing more is queued until
+    /// someone subscribes again (what is queued already may still go out).
+    fn deactivate(&self);
     /// The queue length remote subscribers asked for (0: nobody subscribed, messages are not
     /// queued).
     fn active_len(&self) -> usize;
@@ -181,6 +184,11 @@ impl<'a, T: Wire + Copy + Send + Sync, const Q: usize> Export for RemoteSubscrib
             let mut q = q.borrow_mut();
             q.active = q.active.max(want);
         });
+    }
+    fn deactivate(&self) {
+        // What is queued already still goes out (at most Q messages): clearing it here would
+        // link the queue's drop loop into every image for nothing the bus would notice.
+        self.queue.lock(|q| q.borrow_mut().active = 0);
     }
     fn active_len(&self) -> usize {
         self.queue.lock(|q| q.borrow().active)

@@ -138,6 +138,10 @@ impl Export for DynExport {
         let asked = usize::from(queue_len).clamp(1, QUEUE);
         self.active.fetch_max(asked, Relaxed);
     }
+    fn deactivate(&self) {
+        self.active.store(0, Relaxed);
+        locked(&self.queue).clear();
+    }
     fn active_len(&self) -> usize {
         self.active.load(Relaxed)
     }

@@ -78,6 +78,10 @@ impl Export for LoadPublisher {
     fn activate(&self, queue_len: u8) {
         self.active.store(usize::from(queue_len.max(1)), Relaxed);
     }
+    fn deactivate(&self) {
+        self.active.store(0, Relaxed);
+        self.due.store(0, Relaxed);
+    }
     fn active_len(&self) -> usize {
         self.active.load(Relaxed)
     }

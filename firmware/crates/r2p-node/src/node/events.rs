@@ -61,6 +61,13 @@ pub enum Event {
         /// The publisher's node.
         from: NodeId,
     },
+    /// None of export `export`'s remote subscribers was heard for the peer timeout (their
+    /// modules left; `subscribers.rs`): the export stopped — nothing more is queued for the
+    /// bus, and an HRT export gave its slot back — until someone subscribes again.
+    SubscribersLeft {
+        /// Index of the export.
+        export: usize,
+    },
     /// The master refused HRT export `export`'s reservation (at its first registration, or when
     /// the node registered again for a new calendar after a failover): the stream sends
     /// nothing until a subscriber asks again, and its subscribers are answered `NoSlot` (one

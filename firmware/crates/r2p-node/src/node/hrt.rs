@@ -72,6 +72,14 @@ impl<
                 if MASTER && self.master.is_some() =>
             {
                 let message = MessageId(message_id);
+                let owned = NodeId::of(message).is_some_and(|(owner, _)| owner == from);
+                if period_cycles == 0 {
+                    // A release (`subscribers.rs`): the stream's last subscriber left.
+                    if owned && self.scheduler.remove(message).is_some() {
+                        bump(&mut self.stats.hrt_released);
+                    }
+                    return;
+                }
                 let granted = match NodeId::of(message) {
                     Some((owner, index)) if owner == from && index != MANAGEMENT_INDEX => {
                         if frames != 1 {
@@ -124,7 +132,7 @@ impl<
                 }
                 let r =
                     if result == HrtResult::Ok { Ok(Phase { offset, slot }) } else { Err(result) };
-                self.on_grant(i, r);
+                self.on_grant(i, r, now);
             }
             _ => {}
         }
@@ -193,7 +201,7 @@ impl<
             if MASTER && self.master.is_some() {
                 // The master answers itself at once: `on_grant` sets the state.
                 let r = self.scheduler.register(message, cycles).map_err(hrt_result);
-                self.on_grant(i, r);
+                self.on_grant(i, r, now);
             } else {
                 let msg = Message::HrtRequest {
                     message_id: message.0,
@@ -210,7 +218,7 @@ impl<
     }
 
     /// The master answered HRT export `i`'s request; answers the subscriber waiting for it.
-    fn on_grant(&mut self, i: usize, r: Result<Phase, HrtResult>) {
+    fn on_grant(&mut self, i: usize, r: Result<Phase, HrtResult>, now: Micros) {
         let Some(mut h) = self.exports[i].hrt else { return };
         let waiting = h.waiting.take();
         let e = self.exports[i].export;
@@ -230,6 +238,7 @@ impl<
         let Some((from, queue_len)) = waiting else { return };
         if result == SubscribeResult::Ok {
             e.activate(queue_len);
+            self.subscriber_added(i, from, now);
             self.event(Event::RemoteSubscriber { export: i, from, queue_len });
         }
         let _ = self.send(&Message::SubscribeResponse {

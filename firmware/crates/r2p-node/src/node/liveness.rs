@@ -48,6 +48,13 @@ impl<
         const MASTER: bool,
     > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF, MASTER>
 {
+    /// [`PEER_TIMEOUT_HEARTBEATS`] of this node's heartbeat periods, µs: a peer silent that long
+    /// left (at most 2³¹ µs, so the wrapping 32-bit times compare).
+    pub(super) fn peer_timeout_us(&self) -> u32 {
+        (PEER_TIMEOUT_HEARTBEATS * Micros::from(self.config.heartbeat_period_us))
+            .min(Micros::from(u32::MAX / 2)) as u32
+    }
+
     /// The master granted `node` a reservation at `now`: it is followed from then on.
     pub(super) fn owner_granted(&mut self, node: NodeId, now: Micros) {
         if !MASTER || self.owners.iter().any(|o| o.node == node) {
@@ -83,8 +90,7 @@ impl<
         if !MASTER || self.master.is_none() {
             return;
         }
-        let timeout = (PEER_TIMEOUT_HEARTBEATS * Micros::from(self.config.heartbeat_period_us))
-            .min(Micros::from(u32::MAX / 2)) as u32;
+        let timeout = self.peer_timeout_us();
         let now = now as u32;
         while let Some(o) = self.owners.iter().find(|o| now.wrapping_sub(o.heard) > timeout) {
             let node = o.node;

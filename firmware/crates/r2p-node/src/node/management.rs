@@ -42,6 +42,9 @@ impl NodeSet {
     pub(super) fn len(&self) -> usize {
         self.0.iter().map(|w| w.count_ones() as usize).sum()
     }
+    pub(super) fn is_empty(&self) -> bool {
+        self.0 == [0; 8]
+    }
 }
 
 impl<
@@ -245,6 +248,7 @@ impl<
                 }
                 self.peers.insert(from);
                 self.publisher_alive(from, now);
+                self.subscriber_alive(from, now);
                 if starting {
                     self.starting.insert(from);
                 } else {
@@ -318,6 +322,7 @@ impl<
                             }
                         }
                         self.exports[i].export.activate(queue_len);
+                        self.subscriber_added(i, from, now);
                         self.event(Event::RemoteSubscriber { export: i, from, queue_len });
                         (SubscribeResult::Ok, me.message_id(i as u8 + 1).0)
                     }

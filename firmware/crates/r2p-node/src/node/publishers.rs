@@ -10,6 +10,7 @@
 use r2p_management::NodeId;
 use rtcan::Micros;
 
+#[cfg(doc)]
 use super::liveness::PEER_TIMEOUT_HEARTBEATS;
 use super::{Event, ImportState, Node};
 
@@ -27,20 +28,29 @@ impl<
     pub(super) fn publisher_heard(&mut self, i: usize, now: Micros) {
         if let Some(s) = self.imports.get_mut(i) {
             s.heard = now as u32;
+            s.seen = now as u32;
             s.silent = false;
         }
     }
 
-    /// A heartbeat of `node` at `now`: alive, for the imports whose streams have no period; one
-    /// it had left silent is asked again (it may have lost the subscription).
+    /// A heartbeat of `node` at `now`: alive, for the imports whose streams have no period. One
+    /// not heard for the peer timeout is asked again: its module or this one was away, and the
+    /// publisher may have dropped this subscriber (`subscribers.rs`; an HRT stream then gave
+    /// its slot back) or rebooted.
     pub(super) fn publisher_alive(&mut self, node: NodeId, now: Micros) {
+        let timeout = self.peer_timeout_us();
         for s in self.imports.iter_mut() {
             let ImportState::Subscribed { from, message } = s.state else { continue };
-            if from != node || s.period_us != 0 {
+            if from != node {
                 continue;
             }
-            s.heard = now as u32;
-            if core::mem::take(&mut s.silent) {
+            let away = (now as u32).wrapping_sub(s.seen) > timeout;
+            s.seen = now as u32;
+            if s.period_us == 0 {
+                s.heard = now as u32;
+                s.silent = false;
+            }
+            if away {
                 // Asked at the next tick (its retry is due at once).
                 s.state = ImportState::Requested { from, index: message.0 as u8, since: 0 };
             }
@@ -50,8 +60,7 @@ impl<
     /// Once a heartbeat period: raises [`Event::PublisherSilent`] for each import whose
     /// publisher has been silent too long.
     pub(super) fn check_publishers(&mut self, now: Micros) {
-        let timeout = (PEER_TIMEOUT_HEARTBEATS * Micros::from(self.config.heartbeat_period_us))
-            .min(Micros::from(u32::MAX / 2)) as u32;
+        let timeout = self.peer_timeout_us();
         for i in 0..self.imports.len() {
             let s = &mut self.imports[i];
             let ImportState::Subscribed { from, .. } = s.state else { continue };

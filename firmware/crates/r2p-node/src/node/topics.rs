@@ -11,6 +11,7 @@ use rtcan::{MessageId, Micros, Period, Urgency};
 
 use super::hrt::HrtStream;
 use super::stats::bump;
+use super::subscribers::Subscribers;
 use super::{HrtState, Node, NodeError};
 use crate::remote::{Export, Import};
 
@@ -63,6 +64,8 @@ pub(super) struct ExportSlot<'a> {
     pub(super) export: &'a dyn Export,
     pub(super) advertise: bool,
     pub(super) hrt: Option<HrtStream>,
+    /// Its remote subscribers, followed by their heartbeats (`subscribers.rs`).
+    pub(super) subscribers: Subscribers,
 }
 
 pub(super) struct ImportSlot<'a> {
@@ -75,6 +78,9 @@ pub(super) struct ImportSlot<'a> {
     pub(super) period_us: u32,
     /// [`Event::PublisherSilent`](super::Event::PublisherSilent) was raised and nothing came since.
     pub(super) silent: bool,
+    /// When the publisher was last heard at all (a message, an answer, a heartbeat): a gap of
+    /// the peer timeout means one side was away and the publisher may have dropped us.
+    pub(super) seen: u32,
 }
 
 impl<
@@ -123,7 +129,7 @@ impl<
             return Err(NodeError::TooMany);
         }
         self.exports
-            .push(ExportSlot { export, advertise: true, hrt })
+            .push(ExportSlot { export, advertise: true, hrt, subscribers: Subscribers::default() })
             .map_err(|_| NodeError::TooMany)?;
         Ok(self.exports.len() as u8)
     }
@@ -144,6 +150,7 @@ impl<
                 import,
                 state: ImportState::Waiting,
                 heard: 0,
+                seen: 0,
                 period_us: 0,
                 silent: false,
             })
