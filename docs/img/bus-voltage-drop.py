@@ -7,16 +7,16 @@ The model is DC and resistive: each hop between two neighbours is one patch cord
 per rail in parallel), two mated RJ45 contacts per conductor (one at each end of the cord) and,
 after the first hop, the pass-through copper of the module it crosses; both rails (+5V and GND)
 drop. Every module draws its current at its jack. The PNG is byte-for-byte reproducible
-(no timestamp or software tag in its metadata).
+(r2ptools.pictures: matplotlib's default style and own fonts, no timestamp or software tag);
+tests/test_pictures.py draws it again and compares the bytes.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+from r2ptools import pictures
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+PNG = Path(__file__).with_suffix(".png")
 
 # Worst-case values (docs/bus.md, "Power budget").
 CONDUCTOR_OHM_PER_M = 0.0938   # 24 AWG, TIA-568 maximum DC resistance 9.38 ohm / 100 m
@@ -61,27 +61,28 @@ def scenarios() -> list[tuple[str, list[float], list[float], float]]:
     return out
 
 
-def main() -> None:
-    plt.rcParams.update({"font.family": "DejaVu Sans", "font.size": 9, "svg.hashsalt": "r2p"})
-    fig, ax = plt.subplots(figsize=(7.0, 3.6), dpi=120)
-    styles = ["-o", "-s", "-^", "--"]
-    print("| configuration | lowest module voltage | drop | largest current per conductor |")
-    print("|---|---:|---:|---:|")
-    for (label, xs, vs, amps), style in zip(scenarios(), styles):
-        ax.plot(xs, vs, style, markersize=3, linewidth=1.2, label=label)
-        low = min(vs)
-        print(f"| {label} | {low:.2f} V | {V_PSU - low:.2f} V | {amps:.2f} A |")
-    ax.axhline(V_MIN, color="black", linewidth=0.8, linestyle=":")
-    ax.text(1.55, V_MIN + 0.03, "module minimum: 4.00 V", fontsize=8)
-    ax.set_xlabel("position along the chain (m of patch cord, 0.1 m between neighbours)")
-    ax.set_ylabel("+5V − GND at the module (V)")
-    ax.set_title("R2P bus voltage, worst case (PSU 4.90 V, 24 AWG, 20 mΩ contacts)")
-    ax.set_xlim(0, 2.0)
-    ax.set_ylim(2.9, 5.0)
-    ax.grid(True, linewidth=0.3)
-    ax.legend(loc="lower left", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(Path(__file__).with_suffix(".png"), metadata={"Software": None})
+def main(out: Path = PNG) -> Path:
+    """Prints the scenario table and draws the plot to `out`."""
+    with pictures.style(**{"font.family": "DejaVu Sans", "font.size": 9}) as plt:
+        fig, ax = plt.subplots(figsize=(7.0, 3.6), dpi=120)
+        styles = ["-o", "-s", "-^", "--"]
+        print("| configuration | lowest module voltage | drop | largest current per conductor |")
+        print("|---|---:|---:|---:|")
+        for (label, xs, vs, amps), style in zip(scenarios(), styles):
+            ax.plot(xs, vs, style, markersize=3, linewidth=1.2, label=label)
+            low = min(vs)
+            print(f"| {label} | {low:.2f} V | {V_PSU - low:.2f} V | {amps:.2f} A |")
+        ax.axhline(V_MIN, color="black", linewidth=0.8, linestyle=":")
+        ax.text(1.55, V_MIN + 0.03, "module minimum: 4.00 V", fontsize=8)
+        ax.set_xlabel("position along the chain (m of patch cord, 0.1 m between neighbours)")
+        ax.set_ylabel("+5V − GND at the module (V)")
+        ax.set_title("R2P bus voltage, worst case (PSU 4.90 V, 24 AWG, 20 mΩ contacts)")
+        ax.set_xlim(0, 2.0)
+        ax.set_ylim(2.9, 5.0)
+        ax.grid(True, linewidth=0.3)
+        ax.legend(loc="lower left", fontsize=8)
+        fig.tight_layout()
+        return pictures.save(fig, out)
 
 
 if __name__ == "__main__":

@@ -29,7 +29,7 @@ import sys
 
 from pathlib import Path
 
-from . import ROOT, bench_ros2, bench_update, firmware, qemu, slotlead
+from . import ROOT, bench_ros2, bench_update, firmware, pictures, qemu, slotlead
 
 PLOT = ROOT / "docs" / "img" / "bench-pubsub-cortex-m3.png"
 # The paper's figure for the original middleware on a 72 MHz Cortex-M3, one subscriber:
@@ -185,26 +185,38 @@ def host() -> list[dict]:
     return json_lines(p.stdout)
 
 
-def plot(rows: list[dict]) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    plt.rcParams["svg.hashsalt"] = "r2p"
-    n = [r["subscribers"] for r in rows]
-    fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=100)
-    ax.plot(n, [r["r2p_insn_per_msg"] for r in rows], "o-", label="R2P middleware (zero copy)")
-    ax.plot(n, [r["embassy_sync_insn_per_msg"] for r in rows], "s-", label="embassy-sync PubSubChannel")
-    ax.axhline(PAPER_CYCLES_1_SUB, color="grey", ls=":", label="original R2P, 1 subscriber (cycles)")
-    ax.axhline(TARGET_INSN_1_SUB, color="red", ls="--", lw=0.8, label="target, 1 subscriber")
-    ax.set_xlabel("subscribers")
-    ax.set_ylabel("instructions per message")
-    ax.set_title("publish → deliver → release on a Cortex-M3 (QEMU -icount)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    PLOT.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(PLOT, metadata={"Software": None})
-    plt.close(fig)
+PLOT_DATA = PLOT.with_suffix(".json")
+"""The numbers PLOT is drawn from (pictures.py): instructions per message, 1–8 subscribers."""
+PUBSUB_KEYS = ("subscribers", "r2p_insn_per_msg", "embassy_sync_insn_per_msg")
+
+
+def write_pubsub(rows: list[dict], path: Path = PLOT_DATA) -> Path:
+    """Writes the Cortex-M3 counts PLOT shows to its data file."""
+    return pictures.write_data(
+        path, "make bench (scripts/r2ptools/bench.py: the bench image under QEMU -icount), do not edit",
+        {"rows": [{k: r[k] for k in PUBSUB_KEYS} for r in rows]})
+
+
+def redraw_pubsub(data: Path = PLOT_DATA, out: Path = PLOT) -> Path:
+    """Draws PLOT from its committed data file."""
+    return plot(pictures.read_data(data)["rows"], out)
+
+
+def plot(rows: list[dict], out: Path = PLOT) -> Path:
+    with pictures.style() as plt:
+        n = [r["subscribers"] for r in rows]
+        fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=100)
+        ax.plot(n, [r["r2p_insn_per_msg"] for r in rows], "o-", label="R2P middleware (zero copy)")
+        ax.plot(n, [r["embassy_sync_insn_per_msg"] for r in rows], "s-", label="embassy-sync PubSubChannel")
+        ax.axhline(PAPER_CYCLES_1_SUB, color="grey", ls=":", label="original R2P, 1 subscriber (cycles)")
+        ax.axhline(TARGET_INSN_1_SUB, color="red", ls="--", lw=0.8, label="target, 1 subscriber")
+        ax.set_xlabel("subscribers")
+        ax.set_ylabel("instructions per message")
+        ax.set_title("publish → deliver → release on a Cortex-M3 (QEMU -icount)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        return pictures.save(fig, out)
 
 
 # --- 4. RTCAN under load -------------------------------------------------------------------
@@ -336,11 +348,36 @@ def load_goals(points: list[dict]) -> list[tuple[str, bool, str]]:
     return goals
 
 
+LOAD_DATA = LOAD_IMG / "rtcan-load.json"
+"""The numbers the rtcan-load-*.png plots are drawn from (pictures.py): seed 1's sweep, every
+policy's report at every load, virtual time only (no wall clock)."""
+
+
+WALL_CLOCK = ("bench", "wall_s", "events_per_s", "realtime_ratio")
+"""Keys of a load point left out of the data file: its row tag, and the simulation's speed on
+the machine that ran it (the rest is virtual time, the same on any machine)."""
+
+
+def write_load(points: list[dict], path: Path = LOAD_DATA) -> Path:
+    """Writes the sweep's load points (as `rtcan_load` returns them) to the plots' data file."""
+    kept = [{k: v for k, v in pt.items() if k not in WALL_CLOCK} for pt in points]
+    return pictures.write_data(
+        path, "make bench (scripts/r2ptools/bench.py: r2p-loadbench, virtual time), do not edit",
+        {"points": kept})
+
+
+def redraw_load(data: Path = LOAD_DATA, outdir: Path = LOAD_IMG) -> list[Path]:
+    """Draws the rtcan-load-*.png plots from their committed data file."""
+    return plot_load(pictures.read_data(data)["points"], outdir)
+
+
 def plot_load(points: list[dict], outdir: Path = LOAD_IMG) -> list[Path]:
     """The three figures of docs/rtcan.md; same points, same bytes."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    with pictures.style() as plt:
+        return _draw_load(plt, points, outdir)
+
+
+def _draw_load(plt, points: list[dict], outdir: Path) -> list[Path]:
     pols = [p for p in POLICIES if p in by_policy(points[0])]
     x = [100 * pt["load"] for pt in points]
     col = lambda p, key: [by_policy(pt)[p][key] for pt in points]  # noqa: E731
@@ -359,8 +396,7 @@ def plot_load(points: list[dict], outdir: Path = LOAD_IMG) -> list[Path]:
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(paths[0], metadata={"Software": None})
-    plt.close(fig)
+    pictures.save(fig, paths[0])
 
     fig, axes = plt.subplots(1, 3, figsize=(10.5, 3.6), dpi=100, sharey=True)
     for ax, (key, title) in zip(axes, (("srt_p50_us", "median"), ("srt_p95_us", "95th percentile"),
@@ -375,8 +411,7 @@ def plot_load(points: list[dict], outdir: Path = LOAD_IMG) -> list[Path]:
     axes[0].set_ylabel("release → end of last frame (ms)")
     axes[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(paths[1], metadata={"Software": None})
-    plt.close(fig)
+    pictures.save(fig, paths[1])
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9.6, 3.6), dpi=100)
     for p in pols:
@@ -394,8 +429,7 @@ def plot_load(points: list[dict], outdir: Path = LOAD_IMG) -> list[Path]:
         ax.grid(alpha=0.3, which="both")
     ax1.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(paths[2], metadata={"Software": None})
-    plt.close(fig)
+    pictures.save(fig, paths[2])
     return paths
 
 
@@ -449,14 +483,10 @@ def plot_trajectory(seconds: int = 10, out: Path = TRAJECTORY_PLOT,
     """The Triskar2's teleop script on emulated boards: true path, odometry, obstacles.
 
     Reproducible byte for byte (tests/test_pictures.py): the run is deterministic (debug and
-    release builds of `r2p` give the same trajectory), the CSV rounds it, matplotlib is pinned
-    and brings its own FreeType and DejaVu fonts, and the PNG carries no software or date."""
+    release builds of `r2p` give the same trajectory), the CSV rounds it, and pictures.py draws
+    it the same on any machine."""
     import csv
     import math
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.patches as mp
-    import matplotlib.pyplot as plt
     with tempfile.TemporaryDirectory() as tmp:
         subprocess.run([str(r2p), "sim", str(ROOT / "robots" / "triskar2.toml"), "--seconds", str(seconds),
                         "--log", f"{tmp}/run.log", "--trajectory", f"{tmp}/t.csv"],
@@ -464,28 +494,28 @@ def plot_trajectory(seconds: int = 10, out: Path = TRAJECTORY_PLOT,
         rows = list(csv.DictReader(open(f"{tmp}/t.csv")))
     x = [float(r["x_m"]) for r in rows]
     y = [float(r["y_m"]) for r in rows]
-    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=100)
-    ax.add_patch(mp.Rectangle((1.0, -0.3), 0.4, 0.6, color="0.6", label="obstacles"))
-    ax.add_patch(mp.Circle((-0.9, 0.0), 0.1, color="0.6"))
-    ax.plot(x, y, "-", lw=2, label="base (world model)")
-    ax.plot([float(r["odom_x_m"]) for r in rows], [float(r["odom_y_m"]) for r in rows], "--",
-            lw=1.2, label="odometry (gateway, from the motors' states)")
-    for r in rows[::10]:
-        th = float(r["theta_rad"])
-        ax.arrow(float(r["x_m"]), float(r["y_m"]), 0.12 * math.cos(th), 0.12 * math.sin(th),
-                 head_width=0.03, color="C3", alpha=0.6)
-    ax.set_aspect("equal")
-    ax.set_xlim(-1.2, 1.6)
-    ax.set_ylim(-0.6, 0.6)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_title(f"Triskar2, {seconds} s of robots/triskar2.toml's teleop script on emulated boards", fontsize=9)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="lower left")
-    fig.tight_layout()
-    fig.savefig(out, metadata={"Software": None})
-    plt.close(fig)
-    return out
+    with pictures.style() as plt:
+        import matplotlib.patches as mp
+        fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=100)
+        ax.add_patch(mp.Rectangle((1.0, -0.3), 0.4, 0.6, color="0.6", label="obstacles"))
+        ax.add_patch(mp.Circle((-0.9, 0.0), 0.1, color="0.6"))
+        ax.plot(x, y, "-", lw=2, label="base (world model)")
+        ax.plot([float(r["odom_x_m"]) for r in rows], [float(r["odom_y_m"]) for r in rows], "--",
+                lw=1.2, label="odometry (gateway, from the motors' states)")
+        for r in rows[::10]:
+            th = float(r["theta_rad"])
+            ax.arrow(float(r["x_m"]), float(r["y_m"]), 0.12 * math.cos(th), 0.12 * math.sin(th),
+                     head_width=0.03, color="C3", alpha=0.6)
+        ax.set_aspect("equal")
+        ax.set_xlim(-1.2, 1.6)
+        ax.set_ylim(-0.6, 0.6)
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_title(f"Triskar2, {seconds} s of robots/triskar2.toml's teleop script on emulated boards", fontsize=9)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="lower left")
+        fig.tight_layout()
+        return pictures.save(fig, out)
 
 
 def report_triskar2(rows: list[dict]) -> None:
@@ -613,13 +643,14 @@ def main() -> int:
     print(firmware.table(rows))
     print(f"goal for the F103 core: ≤ {FOOTPRINT_GOAL[0] // 1024} KiB flash, ≤ {FOOTPRINT_GOAL[1] // 1024} KiB static RAM")
 
-    plot(m3)
-    print(f"\nplot: {PLOT.relative_to(ROOT)}")
+    print(f"\ndata: {write_pubsub(m3).relative_to(ROOT)}")
+    print(f"plot: {redraw_pubsub().relative_to(ROOT)}")
 
     report_load(load_points, load_sim)
     print(f"\nthe same at other traffic seeds ({SEEDS.start}–{SEEDS.stop - 1}), SRT messages summed:")
     print(seeds_table(load_seeds))
-    for path in plot_load(load_points):
+    print(f"data: {write_load(load_points).relative_to(ROOT)}")
+    for path in redraw_load():
         print(f"plot: {path.relative_to(ROOT)}")
     report_failover(failover)
     report_triskar2(sim_rows)

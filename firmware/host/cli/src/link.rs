@@ -142,8 +142,19 @@ pub struct TraceLink {
 impl TraceLink {
     /// Reads `path` (a candump log or a pcap file).
     pub fn open(path: &Path) -> Result<Self, CliError> {
-        let (_, frames) = read_trace(path).map_err(|e| CliError::new(format!("--trace: {e}")))?;
-        Ok(Self::new(path.display().to_string(), frames))
+        Ok(Self::new(path.display().to_string(), Self::read(path)?))
+    }
+
+    /// The frames of the trace at `path` (a candump log or a pcap file); the error names the
+    /// option, the file and what is wrong with it, and says what a trace is.
+    pub fn read(path: &Path) -> Result<Vec<Stamped>, CliError> {
+        let (_, frames) = read_trace(path).map_err(|e| {
+            CliError::new(format!(
+                "--trace: {e}: give a candump log or a pcap file (r2p monitor --write and r2p \
+                 sim --log record them), or a live bus (--socketcand or --socketcan)"
+            ))
+        })?;
+        Ok(frames)
     }
 
     /// A trace of `frames`, called `name`.

@@ -20,6 +20,7 @@ use tiny_http::{Header, Method, Request, Response, Server};
 
 use crate::args::{open_link, parse_laxity, parse_seconds, BusArgs};
 use crate::error::CliError;
+use crate::link::TraceLink;
 use crate::session::Session;
 use crate::ui_actions::{self, body, text_field, Open};
 use crate::ui_bus::{self, Snapshots};
@@ -242,14 +243,30 @@ fn handle(mut req: Request, bus: &BusArgs, open: &Open, snaps: &Snapshots) {
     let _ = req.respond(answer(r));
 }
 
+/// How the page's sessions open the bus. A trace is read once, here, before anything is
+/// served: a file that is missing or not a trace is refused at once (it will not appear later,
+/// as a robot that is not up yet will), and every session reads the same frames. A live bus is
+/// opened for each session, and opened again while it is away (the robot or socketcand may
+/// start after `r2p ui`).
+pub fn opener(bus: &BusArgs) -> Result<Arc<Open>, CliError> {
+    if let Some(path) = &bus.trace {
+        let frames = TraceLink::read(path)?;
+        let name = path.display().to_string();
+        return Ok(Arc::new(move || {
+            Ok(Session::new(Box::new(TraceLink::new(name.clone(), frames.clone()))))
+        }));
+    }
+    let b = bus.clone();
+    Ok(Arc::new(move || Ok(Session::new(open_link(&b)?))))
+}
+
 /// Runs `r2p ui`: serves the page until interrupted.
 pub fn run(args: &UiArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let open = opener(bus)?;
     let addr = SocketAddr::new(args.bind, args.port);
     let server = Server::http(addr).map_err(|e| {
         CliError::new(format!("--bind {} --port {}: cannot serve there: {e}", args.bind, args.port))
     })?;
-    let b = bus.clone();
-    let open: Arc<Open> = Arc::new(move || Ok(Session::new(open_link(&b)?)));
     let (lost, laxity) = (args.lost_after, args.laxity);
     crate::args::emit(out, &format!("r2p ui: open http://{addr}/"))?;
     out.flush().map_err(|e| CliError::new(format!("writing the output: {e}")))?;
@@ -353,7 +370,6 @@ mod tests {
 
     #[test]
     fn the_server_answers_the_page_its_events_and_its_requests() {
-        use crate::link::TraceLink;
         use crate::watch::tests::{heartbeat, management};
         let server = Server::http("127.0.0.1:0").unwrap();
         let addr = server.server_addr().to_ip().unwrap();
@@ -408,6 +424,65 @@ mod tests {
         assert!(e.contains("not something r2p ui answers"), "{e}");
         server.unblock();
         t.join().unwrap();
+    }
+
+    fn trace_bus(path: &str) -> BusArgs {
+        BusArgs {
+            socketcand: None,
+            socketcan: None,
+            trace: Some(path.into()),
+            channel: "vcan0".into(),
+            timeout: Duration::from_secs(1),
+            json: false,
+        }
+    }
+
+    #[test]
+    fn a_trace_that_cannot_be_read_is_refused_before_anything_is_served() {
+        // The port is taken: had r2p ui tried to serve first, it would fail on the port.
+        let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let port = taken.local_addr().unwrap().port().to_string();
+        let cli = |trace: &str| {
+            use clap::Parser;
+            crate::cli::Cli::try_parse_from(["r2p", "ui", "--trace", trace, "--port", &port])
+                .unwrap()
+        };
+        let mut out = Vec::new();
+        let e = crate::cli::run(cli("/nonexistent.pcap"), &mut out).unwrap_err().to_string();
+        assert!(e.starts_with("--trace: /nonexistent.pcap: "), "what and where: {e}");
+        assert!(e.contains("No such file"), "{e}");
+        assert!(e.contains("give a candump log or a pcap file"), "what to do: {e}");
+        let junk =
+            std::env::temp_dir().join(format!("r2p-ui-not-a-trace-{}.log", std::process::id()));
+        std::fs::write(&junk, "this is not a candump log\n").unwrap();
+        let e = crate::cli::run(cli(junk.to_str().unwrap()), &mut out).unwrap_err().to_string();
+        std::fs::remove_file(&junk).unwrap();
+        assert!(e.starts_with(&format!("--trace: {}: ", junk.display())), "{e}");
+        assert!(out.is_empty(), "nothing was served: {}", String::from_utf8_lossy(&out));
+        // A trace that reads is served: then the taken port is the error.
+        let good = std::env::temp_dir().join(format!("r2p-ui-trace-{}.log", std::process::id()));
+        std::fs::write(&good, "(1.000000) vcan0 1FFFFF00#C0FFEE\n").unwrap();
+        let e = crate::cli::run(cli(good.to_str().unwrap()), &mut out).unwrap_err().to_string();
+        std::fs::remove_file(&good).unwrap();
+        assert!(e.contains(&format!("--port {port}: cannot serve there")), "{e}");
+    }
+
+    #[test]
+    fn every_session_on_a_trace_reads_it_from_its_start() {
+        let path = std::env::temp_dir().join(format!("r2p-ui-twice-{}.log", std::process::id()));
+        std::fs::write(&path, "(1.000000) vcan0 1FFFFF00#C0FFEE\n(1.001000) vcan0 1FFFFF01#\n")
+            .unwrap();
+        let open = opener(&trace_bus(path.to_str().unwrap())).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        for _ in 0..2 {
+            let mut s = open().unwrap();
+            assert!(s.is_trace() && s.describe().ends_with(".log"), "{}", s.describe());
+            let mut n = 0;
+            while !s.ended() {
+                n += s.step(Duration::ZERO).unwrap().len();
+            }
+            assert_eq!(n, 2, "the file was read once, before it went away");
+        }
     }
 
     #[test]
