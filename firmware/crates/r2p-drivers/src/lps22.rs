@@ -476,6 +476,7 @@ mod tests {
         assert_eq!([CTRL2_SWRESET, CTRL2_ONE_SHOT], [0x04, 0x01]);
         assert_eq!([STATUS_P_DA, STATUS_T_DA, STATUS_P_OR, STATUS_T_OR], [0x01, 0x02, 0x10, 0x20]);
         assert_eq!((LSB_PER_HPA, LSB_PER_DEG_C), (4096.0, 100.0));
+        assert_eq!((Chip::Hh.name(), Chip::Df.name()), ("LPS22HH", "LPS22DF"));
         assert_eq!(Chip::from_who_am_i(0xB3), Some(Chip::Hh));
         assert_eq!(Chip::from_who_am_i(0xB4), Some(Chip::Df));
         assert_eq!(Chip::from_who_am_i(0xB1), None, "the LPS22HB is another map");

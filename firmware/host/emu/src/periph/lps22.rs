@@ -379,16 +379,15 @@ mod tests {
 
     #[test]
     fn a_control_register_that_does_not_take_its_value_is_named() {
-        for (chip, reg, wrote, read) in [
-            (Chip::Hh, CTRL_REG1, 0x32, 0x00),
-            (Chip::Hh, CTRL_REG2, 0x12, 0x10),
-            (Chip::Hh, IF_CTRL, 0x03, 0x00),
-            (Chip::Df, CTRL_REG2, 0x08, 0x00),
-            (Chip::Df, IF_CTRL, 0x40, 0x00),
+        for (chip, part, reg, wrote, read) in [
+            (Chip::Hh, "LPS22HH", CTRL_REG1, 0x32, 0x00),
+            (Chip::Hh, "LPS22HH", CTRL_REG2, 0x12, 0x10),
+            (Chip::Hh, "LPS22HH", IF_CTRL, 0x03, 0x00),
+            (Chip::Df, "LPS22DF", CTRL_REG2, 0x08, 0x00),
+            (Chip::Df, "LPS22DF", IF_CTRL, 0x40, 0x00),
         ] {
             let dev = shared(Stuck(Lps22Model::new(chip), reg));
             let e = Lps22::new_spi(SimSpi::new(dev)).init(Config::default()).unwrap_err();
-            let part = chip.name();
             assert_eq!(e, Error::ConfigNotApplied { part, register: reg, wrote, read });
         }
     }
