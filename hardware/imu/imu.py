@@ -4,7 +4,7 @@ on the common core.
     SPI1 (PA5 SCK, PA6 MISO, PA7 MOSI; mode 3, 4-wire) shared by
       U101 LSM6DSO  accelerometer + gyroscope, CS PA4 (IMU_CS),  INT1 -> PB0 (IMU_INT1)
       U102 LIS3MDL  magnetometer,               CS PA3 (MAG_CS),  DRDY -> PA1 (MAG_DRDY)
-      U103 LPS22DF  barometer,                  CS PA2 (BARO_CS), INT_DRDY -> PA0 (BARO_INT)
+      U103 LPS22HH  barometer,                  CS PA2 (BARO_CS), INT_DRDY -> PA0 (BARO_INT)
     each chip select pulled up (R101-R103, 10 k): the three stay deselected (their I2C mode, idle)
     while the MCU is in reset and its pins float.
     GNSS receiver (u-blox class, UBX/NMEA) on USART1: PA9 GNSS_TX to the receiver's RX, PA10
@@ -63,7 +63,7 @@ PLACES = {
 
 
 def build(core: Sheet) -> Module:
-    s = Sheet(NAME, f"{TITLE}: LSM6DSO, LIS3MDL, LPS22DF on SPI1, GNSS port")
+    s = Sheet(NAME, f"{TITLE}: LSM6DSO, LIS3MDL, LPS22HH on SPI1, GNSS port")
     bus_tap(s, "+5V_MOD", at=BUS_TAP_PLACE)
     pins = {p: "" for p in core_mod.FREE_GPIO}
     pins.update(PINS)
@@ -89,8 +89,9 @@ def build(core: Sheet) -> Module:
     s.part("C104", "C_1u", {"1": "+3V3", "2": "GND"})
     s.part("R101", "R_10k", {"1": "+3V3", "2": "MAG_CS"})
 
-    # LPS22DF, 4-wire SPI: SDA = SDI, SA0 = SDO; CS low = SPI (high: I2C/I3C, idle here)
-    s.part("U103", "LPS22DF", {"~{CS}": "BARO_CS", "SCL": "IMU_SCK", "SDA": "IMU_MOSI",
+    # LPS22HH, 4-wire SPI: SDA = SDI, SA0 = SDO; CS low = SPI (high: I2C/I3C, idle here); drawn
+    # with the LPS22DF's symbol (catalog.py), whose pin 8 is named GND_IO
+    s.part("U103", "LPS22HH", {"~{CS}": "BARO_CS", "SCL": "IMU_SCK", "SDA": "IMU_MOSI",
                                "SA0": "IMU_MISO", "INT_DRDY": "BARO_INT", "VDD": "+3V3",
                                "Vdd_IO": "+3V3", "GND": "GND", "GND_IO": "GND"})
     s.part("C106", "C_100n", {"1": "+3V3", "2": "GND"})      # VDD

@@ -22,7 +22,7 @@ DRAWING = {
     "sheet:core": A(60, 8),
     # LSM6DSO turned a quarter: its SPI and strap pins along the bottom, INT1/INT2 on top
     "U101": A(104, 20, 90), "C101": A(118, 12), "C102": A(123, 12), "R103": A(90, 12),
-    # LPS22DF
+    # LPS22HH
     "U103": A(140, 22), "C106": A(150, 10), "C107": A(155, 10), "R102": A(157, 27),
     # LIS3MDL
     "U102": A(104, 62), "C103": A(116, 50), "C104": A(121, 50), "C105": A(120, 68),
@@ -40,7 +40,7 @@ BLOCKS = [
     Block("Accelerometer + gyroscope LSM6DSO (SPI1, CS PA4)", 84, 4, 128, 40, notes=[
         (85, 35, "Mode 1 (DS12140 Table 2): SPI 4-wire, SDx/SCx to GND,\nOCS_Aux and SDO_Aux open."
                  " 100 nF at VDD and VDDIO.\nR103 keeps CS high (deselected) while the MCU resets.")]),
-    Block("Barometer LPS22DF (SPI1, CS PA2)", 130, 4, 163, 40, notes=[
+    Block("Barometer LPS22HH (SPI1, CS PA2)", 130, 4, 163, 40, notes=[
         (131, 33, "CS low = SPI; CS high = I2C/I3C:\nR102 holds it high (idle) in reset.\n"
                   "SA0 is SDO in 4-wire SPI.")]),
     Block("Magnetometer LIS3MDL (SPI1, CS PA3)", 84, 42, 140, 82, notes=[

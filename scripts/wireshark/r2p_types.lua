@@ -9,7 +9,7 @@
 
 return {
   { name = "Barometer", hash = 0x2D66E029, size = 17,
-    doc = "Pressure, altitude and vertical speed from an IMU module's barometer (LPS22DF). Published at its `baro_rate_hz`.",
+    doc = "Pressure, altitude and vertical speed from an IMU module's barometer (LPS22HH). Published at its `baro_rate_hz`.",
     fields = {
       { name = "pressure", type = "float32", count = 0, doc = "Pa" },
       { name = "temperature", type = "float32", count = 0, doc = "degC, the sensor's die" },

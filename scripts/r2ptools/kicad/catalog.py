@@ -201,8 +201,13 @@ _ITEMS = [
     ("LSM6DSO", "Sensor_Motion:LSM6DSM", "Package_LGA:LGA-14_3x2.5mm_P0.5mm_LayoutBorder3x4y",
      "LSM6DSO", "LSM6DSOTR"),
     ("LIS3MDL", "Sensor_Magnetic:LIS3MDL", "Package_LGA:LGA-12_2x2mm_P0.5mm", "LIS3MDL", "LIS3MDLTR"),
-    ("LPS22DF", "Sensor_Pressure:LPS22DF", "Package_LGA:ST_HLGA-10_2x2mm_P0.5mm_LayoutBorder3x2y",
-     "LPS22DF", "LPS22DFTR"),
+    # the LPS22HH (LCSC stocks it; not the LPS22DF) drawn with KiCad's LPS22DF symbol: the same
+    # HLGA-10L pin table (1 Vdd_IO, 2 SCL, 3 reserved to GND, 4 SDA, 5 SA0, 6 CS, 7 INT_DRDY, 8-9
+    # GND, 10 VDD; the DF calls pin 8 GND_IO) and land pattern; KiCad's own LPS22HH symbol (an
+    # LPS25HB alias) stacks pins 3, 8 and 9 on one hidden pin, which would leave the drawn board's
+    # GND wire to pin 9 dangling. The firmware runs either part (r2p_drivers::lps22).
+    ("LPS22HH", "Sensor_Pressure:LPS22DF", "Package_LGA:ST_HLGA-10_2x2mm_P0.5mm_LayoutBorder3x2y",
+     "LPS22HH", "LPS22HHTR"),
     # the Pixhawk connector standard's (DS-009) basic GPS port: JST GH 6 pins, side entry
     ("JST_GH_6", "Connector_Generic_MountingPin:Conn_01x06_MountingPin",
      "Connector_JST:JST_GH_SM06B-GHS-TB_1x06-1MP_P1.25mm_Horizontal", "GPS (DS-009)",

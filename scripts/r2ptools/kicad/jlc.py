@@ -73,8 +73,8 @@ DISPUTED = {
         "upload report found either way (2026-11)"),
     r"(ST_H)?LGA-1[024]_.*": (
         "no table has a correction for ST's LGA/HLGA sensors (KiCad's IPC-7351 zero used: pin 1 "
-        "upper left); no upload report found (2026-11): check the LSM6DSO, LIS3MDL and LPS22DF "
-        "(pin-1 dot, and the LPS22DF's vent hole up) in the preview"),
+        "upper left); no upload report found (2026-11): check the LSM6DSO, LIS3MDL and LPS22HH "
+        "(pin-1 dot, and the LPS22HH's vent hole up) in the preview"),
 }
 """Footprints whose correction the field's tables disagree on: the CPL uses KiBot's, and the
 checklist asks for these to be looked at first in JLC's placement preview."""

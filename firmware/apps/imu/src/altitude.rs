@@ -15,9 +15,9 @@
 //! one at 1 − α/2 for β = 2 − α − 2√(1 − α) ≈ α²/4: α = 2dt/τ and β = α²/4 give one time
 //! constant τ, a single parameter to reason about. The filter follows a constant vertical speed
 //! without lag (what the speed state is for); its zero makes it reach an altitude step in about
-//! τ and overshoot it by 13 % before it settles (tested). The LPS22DF's noise (0.34 Pa RMS, ≈ 3 cm; NOT
-//! VERIFIED, see the emulator's model) differentiated at 25 Hz would be metres per second
-//! of noise: the filter is what makes the speed usable.
+//! τ and overshoot it by 13 % before it settles (tested). The LPS22HH's noise (0.65 Pa RMS,
+//! ≈ 5.4 cm; its conditions NOT VERIFIED, see the world's `pressure` model) differentiated at
+//! 25 Hz would be metres per second of noise: the filter is what makes the speed usable.
 
 /// ISA: the altitude, m, at pressure `p_pa` under sea-level pressure `p0_pa`.
 pub fn isa_altitude(p_pa: f32, p0_pa: f32) -> f32 {

@@ -2,7 +2,7 @@
 
 use r2p_drivers::lsm6dso::RawSample;
 use r2p_drivers::ubx::NavPvt;
-use r2p_drivers::{lis3mdl, lps22df};
+use r2p_drivers::{lis3mdl, lps22};
 use r2p_module::leds;
 use r2p_module::TopicNode;
 use r2p_msgs::{Barometer, GnssFix, Imu, MagneticField};
@@ -80,8 +80,8 @@ pub struct Sample {
     pub status: leds::Status,
     /// The LIS3MDL's read (field in µT, sensor axes aligned with the LSM6DSO's on the board).
     pub mag: Reading<lis3mdl::Sample>,
-    /// The LPS22DF's read.
-    pub baro: Reading<lps22df::Sample>,
+    /// The barometer's read.
+    pub baro: Reading<lps22::Sample>,
     /// A NAV-PVT the GNSS receiver's link decoded this step ([`crate::gnss::Link`]).
     pub gnss: Option<NavPvt>,
     /// The time pulse's last rising edge captured since the previous step, µs (the module's
@@ -365,7 +365,7 @@ impl<'a> App<'a> {
     }
 
     /// A fresh barometer sample: altitude under the QNH, the vertical filter.
-    fn take_baro(&mut self, b: &lps22df::Sample, cfg: &Config, dt: f32) {
+    fn take_baro(&mut self, b: &lps22::Sample, cfg: &Config, dt: f32) {
         let h = isa_altitude(b.pressure_pa, cfg.qnh_pa);
         self.vertical.update(h, dt, cfg.vertical_tau_s);
         self.baro = Barometer {

@@ -8,7 +8,7 @@
 //! only the firmware can notice and configure it again.
 
 use r2p_drivers::lis3mdl::{self, Lis3mdl};
-use r2p_drivers::lps22df::{self, Lps22df};
+use r2p_drivers::lps22::{self, Lps22};
 use r2p_drivers::lsm6dso::{Lsm6dso, RawSample, RegisterBus};
 use r2p_module::leds;
 
@@ -114,19 +114,19 @@ pub struct Sensors<I, M, B> {
     pub imu: Lsm6dso<I>,
     /// The LIS3MDL.
     pub mag: Lis3mdl<M>,
-    /// The LPS22DF.
-    pub baro: Lps22df<B>,
+    /// The barometer (the board's LPS22HH, or an LPS22DF: the driver tells them apart).
+    pub baro: Lps22<B>,
     setup: [Setup; 3],
 }
 
 impl<I: RegisterBus, M: RegisterBus, B: RegisterBus> Sensors<I, M, B> {
     /// The drivers, none set up yet (the first [`Self::poll`] does it: call it once the
     /// parts have booted, 10 ms after power-up).
-    pub fn new(imu: Lsm6dso<I>, mag: Lis3mdl<M>, baro: Lps22df<B>) -> Self {
+    pub fn new(imu: Lsm6dso<I>, mag: Lis3mdl<M>, baro: Lps22<B>) -> Self {
         Self { imu, mag, baro, setup: [Setup::default(); 3] }
     }
 
-    /// Whether each part is set up now: LSM6DSO, LIS3MDL, LPS22DF.
+    /// Whether each part is set up now: LSM6DSO, LIS3MDL, barometer.
     pub fn configured(&self) -> [bool; 3] {
         self.setup.map(|s| s.configured)
     }
@@ -158,7 +158,7 @@ impl<I: RegisterBus, M: RegisterBus, B: RegisterBus> Sensors<I, M, B> {
             |m| m.init(mag).is_ok(),
             |m| reading(m.read()),
         );
-        let baro = lps22df::Config::default();
+        let baro = lps22::Config::default();
         s.baro = sb.poll(
             &mut self.baro,
             now_us,

@@ -5,7 +5,7 @@ use std::boxed::Box;
 use std::vec::Vec;
 
 use r2p_drivers::lsm6dso::{AccelScale, GyroScale, RawSample, G};
-use r2p_drivers::{lis3mdl, lps22df};
+use r2p_drivers::{lis3mdl, lps22};
 use r2p_management::message::Value;
 use r2p_middleware::Subscriber;
 use r2p_msgs::Imu;
@@ -90,7 +90,7 @@ impl Rig {
             let baro = match self.pressure {
                 None => Reading::Failed,
                 Some(p) if self.now_us.is_multiple_of(40_000) => {
-                    Reading::Fresh(lps22df::Sample { pressure_pa: p, temp_c: 25.0, overrun: false })
+                    Reading::Fresh(lps22::Sample { pressure_pa: p, temp_c: 25.0, overrun: false })
                 }
                 Some(_) => Reading::Idle,
             };
@@ -230,7 +230,7 @@ fn a_silent_sensor_reads_no_data_and_lights_the_fault_led() {
         raw: raw([0.0; 3], UP),
         sensor_ok: true,
         mag: Reading::Fresh(lis3mdl::Sample { field_ut: EAST_FIELD, ..Default::default() }),
-        baro: Reading::Fresh(lps22df::Sample { pressure_pa: 101_325.0, ..Default::default() }),
+        baro: Reading::Fresh(lps22::Sample { pressure_pa: 101_325.0, ..Default::default() }),
         ..Sample::default()
     };
     let last = r.now_us;

@@ -9,8 +9,9 @@
 //! - [`lis3mdl`]: ST LIS3MDL 3-axis magnetometer over I2C or SPI (4-wire) — probe, configure
 //!   ultra-high-performance mode, rate and full scale, read field and temperature in one
 //!   burst, convert to µT with the datasheet sensitivities.
-//! - [`lps22df`]: ST LPS22DF barometer over I2C or SPI — probe, rate and averaging, read
-//!   pressure and temperature in one burst (24-bit pressure in Pa).
+//! - [`lps22`]: ST LPS22HH and LPS22DF barometers over I2C or SPI — probe (which of the two),
+//!   rate and noise reduction, read pressure and temperature in one burst (24-bit pressure in
+//!   Pa).
 //! - [`rangers`]: analog rangers (Sharp GP2Y0A21/GP2Y0A02 infrared, MaxBotix LV-MaxSonar-EZ):
 //!   their datasheet transfer curves, voltage to distance and back, shared by the proximity
 //!   firmware and the world model that emulates the sensors.
@@ -29,12 +30,13 @@
 //! driver that we test against a register-level model is the sounder choice.
 //!
 //! Issue 21's magnetometer and barometer: for the LIS3MDL crates.io has `lis3mdl` and
-//! `lis3mdl-driver` (0.1, 2019: embedded-hal 0.2, I2C only). For the LPS22DF ST publishes
-//! `lps22df-rs` (2.0, BSD-3: I2C and SPI over embedded-hal 1.0, blocking or async through
-//! `bisync` and ST's `st_mems_bus`); ours is kept for now because its errors name what was read
-//! (ST's say `UnexpectedValue`), it reads status, pressure and temperature in one burst, and it
-//! matches the other drivers' tests against register models. Its flash cost against
-//! `lps22df-rs`'s in the IMU image is NOT measured yet: measure both before the image takes one.
+//! `lis3mdl-driver` (0.1, 2019: embedded-hal 0.2, I2C only). For the LPS22HH and LPS22DF ST
+//! publishes `lps22hh-rs` and `lps22df-rs` (I2C and SPI over embedded-hal 1.0, through ST's
+//! `st_mems_bus`); ours is kept because one driver serves either part on the same footprint
+//! (the board's LPS22HH, or an LPS22DF), its errors name what was read (ST's say
+//! `UnexpectedValue`), it reads status, pressure and temperature in one burst, and it matches
+//! the other drivers' tests against register models. Its flash cost against ST's crates in the
+//! IMU image is NOT measured.
 //!
 //! The GNSS receiver's UBX: the `ublox` crate (0.10) decodes NAV-PVT correctly (the emulator's
 //! tests use it as the independent check) but costs ~6.9 KB of flash in the F103 IMU image,
@@ -47,7 +49,7 @@
 extern crate std;
 
 pub mod lis3mdl;
-pub mod lps22df;
+pub mod lps22;
 pub mod lsm6dso;
 pub mod rangers;
 pub mod register_bus;

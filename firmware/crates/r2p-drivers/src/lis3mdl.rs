@@ -30,7 +30,7 @@ pub const CTRL_REG1: u8 = 0x20;
 /// FS \[6:5\], REBOOT \[3\], SOFT_RST \[2\].
 pub const CTRL_REG2: u8 = 0x21;
 /// LP \[5\], SIM \[2\], MD \[1:0\], the others 0 (DS9463 Rev 7, Table 25: unlike the LSM6DSO
-/// and the LPS22DF, the LIS3MDL has no bit that turns its I2C interface off); reset 0x03
+/// and the LPS22HH/DF, the LIS3MDL has no bit that turns its I2C interface off); reset 0x03
 /// (power-down).
 pub const CTRL_REG3: u8 = 0x22;
 /// OMZ \[3:2\], BLE \[1\].

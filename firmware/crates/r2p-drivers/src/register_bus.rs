@@ -1,7 +1,7 @@
 //! What a register-mapped sensor's driver needs of its bus — write one register, read a run of
 //! consecutive ones — and what can go wrong: the same for every ST MEMS part the modules use
-//! (LSM6DSO, LIS3MDL, LPS22DF). Each driver implements the bus for I2C and SPI with its chip's
-//! own rule for multi-byte access (an auto-increment bit in a control register, or in the
+//! (LSM6DSO, LIS3MDL, LPS22HH/LPS22DF). Each driver implements the bus for I2C and SPI with its
+//! chip's own rule for multi-byte access (an auto-increment bit in a control register, or in the
 //! address byte).
 
 use core::fmt;

@@ -4,7 +4,7 @@
 
 //! The message types, one per schema in `firmware/msgs` (see the crate's documentation).
 
-/// Pressure, altitude and vertical speed from an IMU module's barometer (LPS22DF). Published at its `baro_rate_hz`.
+/// Pressure, altitude and vertical speed from an IMU module's barometer (LPS22HH). Published at its `baro_rate_hz`.
 ///
 /// 17 bytes on the bus, type hash `0x2D66E029`; schema `firmware/msgs/Barometer.msg`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

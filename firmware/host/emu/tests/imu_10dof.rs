@@ -259,8 +259,11 @@ fn the_barometer_gives_the_sites_altitude_within_its_noise_and_offset() {
     assert!(later.len() >= 60, "imu/baro at 10 Hz: {}", later.len());
     let mean = later.iter().map(|b| f64::from(b.1.altitude)).sum::<f64>() / later.len() as f64;
     assert!((mean - want).abs() < 0.1, "altitude {mean:.3} m, the part's reading gives {want:.3}");
-    // Stable: the 0.34 Pa RMS noise (≈ 3 cm) through the 1 s filter; a still robot's vertical
-    // speed is noise alone.
+    // Stable: the LPS22HH's 0.65 Pa RMS noise (≈ 5.4 cm a sample at 25 Hz) through the α-β
+    // filter of τ = 1 s (α = 2·dt/τ = 0.08, β = α²/4): its altitude keeps (2α² + 2β − 3αβ) /
+    // (α(4 − β − 2α)) = 0.051 of the variance, σ ≈ 1.2 cm, so 0.1 m is 8 σ; its speed σ is
+    // 5.4 cm · √(2β²/dt² / (α(4 − β − 2α))) ≈ 0.6 cm/s. A still robot's vertical speed is noise
+    // alone.
     let spread = later.iter().map(|b| (f64::from(b.1.altitude) - mean).abs()).fold(0.0, f64::max);
     eprintln!("altitude mean {mean:.3} want {want:.3} spread {spread:.3}");
     assert!(spread < 0.1, "altitude spread {spread:.3} m");

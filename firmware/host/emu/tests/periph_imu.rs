@@ -280,21 +280,28 @@ fn data_ready_flags_clear_on_read_and_outputs_saturate() {
 /// and the model does not store it); on I2C every interface stays on.
 #[test]
 fn on_spi_each_st_part_that_can_turns_its_i2c_interface_off() {
-    use r2p_drivers::{lis3mdl, lps22df};
+    use r2p_drivers::lps22::Chip;
+    use r2p_drivers::{lis3mdl, lps22};
     use r2p_emu::periph::lis3mdl::Lis3mdlModel;
-    use r2p_emu::periph::lps22df::Lps22dfModel;
+    use r2p_emu::periph::lps22::Lps22Model;
     let imu = shared(Lsm6dsoModel::new());
     let mag = shared(Lis3mdlModel::new());
-    let baro = shared(Lps22dfModel::new());
+    let (hh, df) = (shared(Lps22Model::new(Chip::Hh)), shared(Lps22Model::new(Chip::Df)));
     Lsm6dso::new_spi(SimSpi::new(imu.clone())).init(Config::default()).unwrap();
     lis3mdl::Lis3mdl::new_spi(SimSpi::new(mag.clone())).init(lis3mdl::Config::default()).unwrap();
-    lps22df::Lps22df::new_spi(SimSpi::new(baro.clone())).init(lps22df::Config::default()).unwrap();
+    for baro in [&hh, &df] {
+        lps22::Lps22::new_spi(SimSpi::new(baro.clone())).init(lps22::Config::default()).unwrap();
+    }
     assert_eq!(imu.borrow().peek(0x13), 0x04, "LSM6DSO CTRL4_C: I2C_disable");
     assert_eq!(mag.borrow().peek(0x22), 0x00, "LIS3MDL CTRL_REG3: continuous, nothing else");
-    assert_eq!(baro.borrow().peek(0x0E), 0x40, "LPS22DF IF_CTRL: I2C_I3C_DIS");
+    assert_eq!(hh.borrow().peek(0x0E), 0x03, "LPS22HH IF_CTRL: I2C_DISABLE, I3C_DISABLE");
+    assert_eq!(df.borrow().peek(0x0E), 0x40, "LPS22DF IF_CTRL: I2C_I3C_DIS");
 
-    let (imu, mag, baro) =
-        (shared(Lsm6dsoModel::new()), shared(Lis3mdlModel::new()), shared(Lps22dfModel::new()));
+    let (imu, mag, baro) = (
+        shared(Lsm6dsoModel::new()),
+        shared(Lis3mdlModel::new()),
+        shared(Lps22Model::new(Chip::Hh)),
+    );
     let on = |address: u8, device: Shared<dyn RegisterDevice>| {
         let mut bus = SimI2c::new();
         bus.attach(address, device);
@@ -304,8 +311,8 @@ fn on_spi_each_st_part_that_can_turns_its_i2c_interface_off() {
     lis3mdl::Lis3mdl::new_i2c(on(0x1E, mag.clone()), lis3mdl::Address::Sa1High)
         .init(lis3mdl::Config::default())
         .unwrap();
-    lps22df::Lps22df::new_i2c(on(0x5C, baro.clone()), lps22df::Address::Sa0Low)
-        .init(lps22df::Config::default())
+    lps22::Lps22::new_i2c(on(0x5C, baro.clone()), lps22::Address::Sa0Low)
+        .init(lps22::Config::default())
         .unwrap();
     assert_eq!(
         (imu.borrow().peek(0x13), mag.borrow().peek(0x22), baro.borrow().peek(0x0E)),

@@ -1,5 +1,5 @@
 //! What an IMU module is wired to in the world (issue 21): its LSM6DSO ([`crate::imu`]), its
-//! LIS3MDL magnetometer ([`crate::magnetic`]), its LPS22DF barometer ([`crate::pressure`]) and
+//! LIS3MDL magnetometer ([`crate::magnetic`]), its LPS22HH barometer ([`crate::pressure`]) and
 //! the external GNSS receiver on its serial port ([`crate::gnss`]), each a device of its own
 //! with its imperfections drawn once from the robot's seed, and whether each is plugged.
 //!
@@ -47,7 +47,7 @@ pub enum ImuSensor {
     AccelGyro,
     /// The LIS3MDL magnetometer.
     Magnetometer,
-    /// The LPS22DF barometer.
+    /// The LPS22HH barometer.
     Barometer,
     /// The external GNSS receiver (its UART and its PPS).
     Gnss,
@@ -78,7 +78,7 @@ impl ImuSensor {
         match self {
             ImuSensor::AccelGyro => "LSM6DSO",
             ImuSensor::Magnetometer => "LIS3MDL",
-            ImuSensor::Barometer => "LPS22DF",
+            ImuSensor::Barometer => "LPS22HH",
             ImuSensor::Gnss => "GNSS receiver",
         }
     }
@@ -107,7 +107,7 @@ pub struct ImuModule {
     pub imu: Imu,
     /// The LIS3MDL in the robot's field.
     pub magnetometer: Magnetometer,
-    /// The LPS22DF.
+    /// The LPS22HH.
     pub barometer: Barometer,
     /// The GNSS receiver (powered up with the world, at time 0).
     pub gnss: GnssReceiver,
@@ -145,7 +145,7 @@ impl ImuModule {
                 STREAM_MAG + 2 * i,
             ),
             barometer: Barometer::new(
-                BaroParams::LPS22DF,
+                BaroParams::LPS22HH,
                 site.sea_level_pa,
                 seed,
                 STREAM_BARO + 2 * i,
@@ -190,7 +190,7 @@ mod tests {
             assert_eq!(ImuSensor::from_name(s.name()), Some(s));
         }
         assert_eq!(ImuSensor::from_name("compass"), None);
-        assert_eq!(ImuSensor::Barometer.part(), "LPS22DF");
+        assert_eq!(ImuSensor::Barometer.part(), "LPS22HH");
         assert_eq!(ImuSensor::Gnss.part(), "GNSS receiver");
     }
 

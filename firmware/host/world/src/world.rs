@@ -857,7 +857,7 @@ impl World {
     }
 
     /// One sample of the barometer on board `board`: the atmosphere at the site's altitude
-    /// under its sea-level pressure, the device's offset and noise (what the board's LPS22DF
+    /// under its sea-level pressure, the device's offset and noise (what the board's LPS22HH
     /// latches when a sample falls due).
     pub fn sample_pressure(&mut self, board: &str) -> Result<BaroSample, IoError> {
         let i = self.plugged(board, ImuSensor::Barometer)?;

@@ -77,9 +77,9 @@ fn the_barometer_reads_the_sites_atmosphere_and_the_receiver_its_place() {
     let n = 2000;
     let mean =
         (0..n).map(|_| w.sample_pressure("imu").unwrap().pressure_pa).sum::<f64>() / n as f64;
-    let tol = 5.0 * BaroParams::LPS22DF.noise_pa / f64::from(n).sqrt();
+    let tol = 5.0 * BaroParams::LPS22HH.noise_pa / f64::from(n).sqrt();
     assert!((mean - (p + offset)).abs() < tol, "{mean} vs {}", p + offset);
-    assert!(offset.abs() <= BaroParams::LPS22DF.offset_pa);
+    assert!(offset.abs() <= BaroParams::LPS22HH.offset_pa);
     // The receiver has no fix before its time to first fix, then one near the antenna.
     w.set_pose(Pose::new(3.0, -4.0, 1.0));
     assert_eq!(w.gnss_antenna("imu").unwrap().enu, [3.0, -4.0, 0.0], "the module at the centre");

@@ -13,8 +13,8 @@ Sources: docs/bus.md §6 (200 mA per module, the core's ≤ 115 mA); LSM6DSO DS1
 GLONASS acquisition, 29 mA tracking); STM32F103xB datasheet DS5319, Table 7 (injected current
 ±5 mA on a pin that is not five-volt tolerant: PB1). The LIS3MDL draws 270 µA typical in its
 ultrahigh-resolution mode at 20 Hz (DS9463 Rev 7, Table 4); the firmware's 80 Hz is not
-tabulated, so its 0.3 mA allowance stays NOT VERIFIED, as does the LPS22DF's (DS13940 not read
-here): allowances, and still under 1 mA together.
+tabulated, so its 0.3 mA allowance stays NOT VERIFIED, as does the LPS22HH's (DocID030890's
+current table not read here): allowances, and still under 1 mA together.
 """
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ MODULE_LIMIT_MA = 200.0                  # docs/bus.md §6
 CORE_WORST_MA = 115.0                    # docs/bus.md §6, "The core's share"
 SENSORS_MA = {"LSM6DSO (DS12140: 0.55 mA, combo high-performance)": 0.55,
               "LIS3MDL (allowance, NOT VERIFIED)": 0.3,
-              "LPS22DF (allowance, NOT VERIFIED)": 0.1}
+              "LPS22HH (allowance, NOT VERIFIED)": 0.1}
 PULL_UP_MA = 3.3 / 10e3 * 1e3            # R105 holds GNSS_RX high: 0.33 mA while the line is low
 RECEIVER_MA = {"peak (UBX-16012619 Table 8, I_CCP max)": 67.0,
                "acquisition, GPS + GLONASS (Table 8, typ.)": 32.0,

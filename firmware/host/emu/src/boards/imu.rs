@@ -1,5 +1,5 @@
 //! The IMU board: the module's firmware on the board's sensor rig ([`ImuSensors`]: the
-//! LSM6DSO, LIS3MDL and LPS22DF register models on SPI1's chip selects, the GNSS receiver on
+//! LSM6DSO, LIS3MDL and LPS22HH register models on SPI1's chip selects, the GNSS receiver on
 //! USART1 and its PPS), fed from the world's devices on the board's mount. The firmware's side
 //! is the MCU's: the `r2p-drivers` drivers of the three parts, set up and polled every
 //! millisecond by `r2p_app_imu::sensor::Sensors` (set up again after a part stops answering).
@@ -12,7 +12,7 @@ use embedded_io::{Read, ReadReady, Write};
 use r2p_app_imu as app;
 use r2p_app_imu::gnss::{Action, Link};
 use r2p_drivers::lis3mdl::Lis3mdl;
-use r2p_drivers::lps22df::Lps22df;
+use r2p_drivers::lps22::Lps22;
 use r2p_drivers::lsm6dso::Lsm6dso;
 
 use super::imu_sensors::{GnssLink, ImuSensors};
@@ -32,7 +32,7 @@ pub fn imu(ctx: Ctx<'_>) -> Result<Booted, String> {
     let mut sensors = app::sensor::Sensors::new(
         Lsm6dso::new_spi(rig.lsm6dso_spi()),
         Lis3mdl::new_spi(rig.lis3mdl_spi()),
-        Lps22df::new_spi(rig.lps22df_spi()),
+        Lps22::new_spi(rig.lps22hh_spi()),
     );
     let config = a.sensor_config();
     let mut link = Link::new(a.gnss_rate_hz());

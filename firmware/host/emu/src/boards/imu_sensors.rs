@@ -3,7 +3,8 @@
 //! board ([`r2p_world::imu_module`]).
 //!
 //! - **SPI1**, three parts on their own chip selects: the LSM6DSO (`IMU_CS`, [`Lsm6dsoModel`]),
-//!   the LIS3MDL (`MAG_CS`, [`Lis3mdlModel`]) and the LPS22DF (`BARO_CS`, [`Lps22dfModel`]),
+//!   the LIS3MDL (`MAG_CS`, [`Lis3mdlModel`]) and the LPS22HH (`BARO_CS`, [`Lps22Model`]; the
+//!   board's barometer, [`BARO_CHIP`]),
 //!   each behind its own [`SimSpi`] handle ([`ImuSensors::lsm6dso_spi`] …) for the
 //!   `r2p-drivers` driver the firmware owns. The chip selects are separate, so a transaction
 //!   to one part never reaches another, as on the board.
@@ -45,19 +46,24 @@ use r2p_world::World;
 use rtcan::Micros;
 
 use crate::periph::lis3mdl::{Lis3mdlModel, MagInput};
-use crate::periph::lps22df::{BaroInput, Lps22dfModel};
+use crate::periph::lps22::{BaroInput, Lps22Model};
 use crate::periph::lsm6dso::Lsm6dsoModel;
 use crate::periph::spi::{Plug, SimSpi};
 use crate::periph::uart::SimUart;
 pub use crate::periph::ubx_gnss::Generation;
 use crate::periph::ubx_gnss::UbxGnssModel;
 use crate::periph::{shared, Shared};
+use r2p_drivers::lps22::Chip;
 
 /// Unix time of 1980-01-06 00:00:00 UTC, the start of GPS time.
 const GPS_EPOCH_UNIX_S: u64 = 315_964_800;
 /// GPS time ahead of UTC since 2017-01-01, s (IERS Bulletin C: no leap second since).
 const GPS_UTC_LEAP_S: u64 = 18;
 const SECONDS_PER_WEEK: u64 = 604_800;
+
+/// The board's barometer: the LPS22HH (hardware/imu, U103; the LPS22DF it was drawn for has no
+/// LCSC number). The firmware's driver runs either.
+pub const BARO_CHIP: Chip = Chip::Hh;
 /// PPS edges kept for the firmware: a timer capture holds one (older ones overwritten, its
 /// overcapture flag set); a few let a step that took several seconds lose none.
 const PPS_KEPT: usize = 8;
@@ -120,7 +126,7 @@ pub struct ImuSensors {
     boot_us: Micros,
     lsm6dso: Shared<Lsm6dsoModel>,
     lis3mdl: Shared<Lis3mdlModel>,
-    lps22df: Shared<Lps22dfModel>,
+    lps22hh: Shared<Lps22Model>,
     /// The SPI parts' plugs, in [`SPI_PARTS`]'s order.
     plugs: [Plug; 3],
     gnss: UbxGnssModel,
@@ -166,7 +172,7 @@ impl ImuSensors {
             boot_us,
             lsm6dso: shared(Lsm6dsoModel::new()),
             lis3mdl: shared(Lis3mdlModel::new()),
-            lps22df: shared(Lps22dfModel::new()),
+            lps22hh: shared(Lps22Model::new(BARO_CHIP)),
             plugs,
             gnss,
             gnss_plugged: module.connected(ImuSensor::Gnss),
@@ -196,8 +202,8 @@ impl ImuSensors {
                 m.advance_with(now_ns, || unreachable!("powered down at power-up"));
             }
             ImuSensor::Barometer => {
-                let mut m = self.lps22df.borrow_mut();
-                *m = Lps22dfModel::new();
+                let mut m = self.lps22hh.borrow_mut();
+                *m = Lps22Model::new(BARO_CHIP);
                 m.advance_with(now_ns, || unreachable!("powered down at power-up"));
             }
             ImuSensor::Gnss => {}
@@ -235,7 +241,7 @@ impl ImuSensors {
             });
         }
         if self.plugs[2].plugged() {
-            self.lps22df.borrow_mut().advance_with(now_ns, || {
+            self.lps22hh.borrow_mut().advance_with(now_ns, || {
                 let s = world.sample_pressure(name).unwrap_or_else(|e| bug(e));
                 BaroInput { pressure_pa: s.pressure_pa, temperature_c: s.temperature_c }
             });
@@ -271,9 +277,9 @@ impl ImuSensors {
         SimSpi::pluggable(self.lis3mdl.clone(), self.plugs[1].clone())
     }
 
-    /// The LPS22DF on `BARO_CS`: a handle for `r2p_drivers::lps22df::Lps22df::new_spi`.
-    pub fn lps22df_spi(&self) -> SimSpi {
-        SimSpi::pluggable(self.lps22df.clone(), self.plugs[2].clone())
+    /// The LPS22HH on `BARO_CS`: a handle for `r2p_drivers::lps22::Lps22::new_spi`.
+    pub fn lps22hh_spi(&self) -> SimSpi {
+        SimSpi::pluggable(self.lps22hh.clone(), self.plugs[2].clone())
     }
 
     /// USART1 as the MCU sees it: `embedded_io::{Read, ReadReady}` for the receiver's bytes as
@@ -291,8 +297,8 @@ impl ImuSensors {
     }
 
     /// The register models, for tests and inspection (`peek`, `samples`).
-    pub fn models(&self) -> (&Shared<Lsm6dsoModel>, &Shared<Lis3mdlModel>, &Shared<Lps22dfModel>) {
-        (&self.lsm6dso, &self.lis3mdl, &self.lps22df)
+    pub fn models(&self) -> (&Shared<Lsm6dsoModel>, &Shared<Lis3mdlModel>, &Shared<Lps22Model>) {
+        (&self.lsm6dso, &self.lis3mdl, &self.lps22hh)
     }
 
     /// The receiver model (`epochs`).
@@ -307,7 +313,7 @@ mod tests {
     use embedded_hal::spi::{Operation, SpiDevice};
     use embedded_io::Read;
     use embedded_io::Write;
-    use r2p_drivers::{lis3mdl, lps22df, lsm6dso, ubx};
+    use r2p_drivers::{lis3mdl, lps22, lsm6dso, ubx};
     use r2p_world::magnetic::MagParams;
     use r2p_world::pressure::BaroParams;
     use r2p_world::{Pose, Robot};
@@ -354,14 +360,14 @@ mod tests {
         let mut rig = ImuSensors::new(&w, "imu", 0, GnssLink::DEFAULT).unwrap();
         let mut imu = lsm6dso::Lsm6dso::new_spi(rig.lsm6dso_spi());
         let mut mag = lis3mdl::Lis3mdl::new_spi(rig.lis3mdl_spi());
-        let mut baro = lps22df::Lps22df::new_spi(rig.lps22df_spi());
+        let mut baro = lps22::Lps22::new_spi(rig.lps22hh_spi());
         mag.init(lis3mdl::Config::default()).unwrap();
         // Configuring the magnetometer left the others in their power-up state.
         let (acc, _, bar) = rig.models();
         assert_eq!(acc.borrow().peek(0x10), 0, "LSM6DSO CTRL1_XL untouched");
-        assert_eq!(bar.borrow().peek(0x10), 0, "LPS22DF CTRL_REG1 untouched");
+        assert_eq!(bar.borrow().peek(0x10), 0, "LPS22HH CTRL_REG1 untouched");
         imu.init(lsm6dso::Config::default()).unwrap();
-        baro.init(lps22df::Config::default()).unwrap();
+        assert_eq!(baro.init(lps22::Config::default()), Ok(Chip::Hh), "the board's part");
         let (mut fields, mut pressures) = (Vec::new(), Vec::new());
         for _ in 0..2000 {
             let t = w.time_ns() / 1000 + MS;
@@ -384,7 +390,7 @@ mod tests {
         let p = m.barometer.expected(m.altitude_m);
         let mean = pressures.iter().map(|&x| f64::from(x)).sum::<f64>() / pressures.len() as f64;
         // f32 near 1e5 Pa: 0.008 Pa steps.
-        let tol = 5.0 * BaroParams::LPS22DF.noise_pa / (pressures.len() as f64).sqrt() + 0.02;
+        let tol = 5.0 * BaroParams::LPS22HH.noise_pa / (pressures.len() as f64).sqrt() + 0.02;
         assert!((mean - p).abs() < tol, "{mean} vs {p}");
         assert!(imu.data_ready().unwrap().gyro, "the LSM6DSO samples as before");
     }
@@ -394,9 +400,9 @@ mod tests {
         let mut w = diffbot("");
         let mut rig = ImuSensors::new(&w, "imu", 0, GnssLink::DEFAULT).unwrap();
         let mut mag = lis3mdl::Lis3mdl::new_spi(rig.lis3mdl_spi());
-        let mut baro = lps22df::Lps22df::new_spi(rig.lps22df_spi());
+        let mut baro = lps22::Lps22::new_spi(rig.lps22hh_spi());
         mag.init(lis3mdl::Config::default()).unwrap();
-        baro.init(lps22df::Config::default()).unwrap();
+        baro.init(lps22::Config::default()).unwrap();
         run_to(&mut w, &mut rig, 100 * MS);
         assert!(mag.read().unwrap().is_some());
         let samples = rig.models().1.borrow().samples();
@@ -423,10 +429,10 @@ mod tests {
         // The LSM6DSO and the barometer the same way; a part unplugged in the robot file
         // reads 0xFF from the start.
         for (part, who, reg) in
-            [(ImuSensor::AccelGyro, 0x6C, 0x0F), (ImuSensor::Barometer, 0xB4, 0x0F)]
+            [(ImuSensor::AccelGyro, 0x6C, 0x0F), (ImuSensor::Barometer, 0xB3, 0x0F)]
         {
             let mut spi =
-                if part == ImuSensor::AccelGyro { rig.lsm6dso_spi() } else { rig.lps22df_spi() };
+                if part == ImuSensor::AccelGyro { rig.lsm6dso_spi() } else { rig.lps22hh_spi() };
             assert_eq!(read_reg(&mut spi, reg), who);
             w.set_imu_sensor_connected("imu", part, false).unwrap();
             run_for(&mut w, &mut rig, MS);
@@ -434,8 +440,11 @@ mod tests {
         }
         let w = diffbot("unplugged = [\"barometer\"]\n");
         let rig = ImuSensors::new(&w, "imu", 0, GnssLink::DEFAULT).unwrap();
-        let e = lps22df::Lps22df::new_spi(rig.lps22df_spi()).probe().unwrap_err();
-        assert_eq!(e, lps22df::Error::WrongDevice { part: "LPS22DF", found: 0xFF, expected: 0xB4 });
+        let e = lps22::Lps22::new_spi(rig.lps22hh_spi()).probe().unwrap_err();
+        assert_eq!(
+            e,
+            lps22::Error::WrongDevice { part: lps22::EITHER, found: 0xFF, expected: 0xB3 }
+        );
         assert!(lis3mdl::Lis3mdl::new_spi(rig.lis3mdl_spi()).probe().is_ok());
     }
 

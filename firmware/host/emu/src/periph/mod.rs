@@ -4,9 +4,9 @@
 //! `embedded_io::{Read, ReadReady, Write}`), so a sensor driver (`r2p-drivers`) runs
 //! unchanged against them. Devices on them are models of real parts fed by the world:
 //! [`lsm6dso::Lsm6dsoModel`] (IMU registers, samples from [`r2p_world::imu`]),
-//! [`lis3mdl::Lis3mdlModel`] (magnetometer registers), [`lps22df::Lps22dfModel`] (barometer
-//! registers), [`ubx_gnss::UbxGnssModel`] (a u-blox receiver: NMEA from its factory settings,
-//! UBX configuration and UBX-NAV-PVT, from [`r2p_world::gnss`]) and
+//! [`lis3mdl::Lis3mdlModel`] (magnetometer registers), [`lps22::Lps22Model`] (LPS22HH or
+//! LPS22DF barometer registers), [`ubx_gnss::UbxGnssModel`] (a u-blox receiver: NMEA from its
+//! factory settings, UBX configuration and UBX-NAV-PVT, from [`r2p_world::gnss`]) and
 //! [`tfmini::TfminiModel`] (LiDAR frames, from [`r2p_world::lidar`]).
 //!
 //! Register devices implement [`registers::RegisterDevice`]; the I2C and SPI models turn bus
@@ -17,7 +17,7 @@
 
 pub mod i2c;
 pub mod lis3mdl;
-pub mod lps22df;
+pub mod lps22;
 pub mod lsm6dso;
 pub mod registers;
 pub mod spi;

@@ -1,6 +1,6 @@
 //! Default firmware of the R2P IMU module (STM32F103CB): the application of `r2p-app-imu` on
 //! three ST sensors sharing SPI1 — the LSM6DSO (accelerometer and gyro), the LIS3MDL
-//! (magnetometer) and the LPS22DF (barometer), each with its chip select — through the
+//! (magnetometer) and the LPS22HH (barometer; or an LPS22DF), each with its chip select — through the
 //! `r2p-drivers` drivers (the same drivers and poll the emulated board runs over its simulated
 //! SPI bus); an external u-blox receiver on USART1 (interrupt-driven ring buffers, the link
 //! `r2p_app_imu::gnss::Link` sets up) with its time pulse captured by TIM3_CH4; the status LEDs,
@@ -30,7 +30,7 @@ use module_core::{EveryMs, Leds, ModuleFlash};
 use r2p_app_imu::gnss::{Action, Link};
 use r2p_app_imu::{params, sensor, App, Storage};
 use r2p_drivers::lis3mdl::{self, Lis3mdl};
-use r2p_drivers::lps22df::{self, Lps22df};
+use r2p_drivers::lps22::{self, Lps22};
 use r2p_drivers::lsm6dso::{Lsm6dso, SpiBus};
 use r2p_module::FlashParams;
 
@@ -53,7 +53,7 @@ static ENDPOINTS: Storage = Storage::new();
 /// two and embassy picks the fastest not above this, 4.5 MHz (a 15-byte burst in ~30 µs).
 const SPI_HZ: u32 = 5_000_000;
 /// The sensors' boot time after power-up before they answer (LSM6DSO datasheet DS12140:
-/// 10 ms; the LIS3MDL's and LPS22DF's are shorter, NOT VERIFIED).
+/// 10 ms; the LIS3MDL's and LPS22HH's are shorter, NOT VERIFIED).
 const SENSOR_BOOT_MS: u64 = 10;
 
 /// One sensor on the shared SPI1 with its chip select.
@@ -62,7 +62,7 @@ type Device<'a> =
 
 /// The three sensors on SPI1, each set up by the poll (and again after it stops answering).
 type Parts<'a> =
-    sensor::Sensors<SpiBus<Device<'a>>, lis3mdl::SpiBus<Device<'a>>, lps22df::SpiBus<Device<'a>>>;
+    sensor::Sensors<SpiBus<Device<'a>>, lis3mdl::SpiBus<Device<'a>>, lps22::SpiBus<Device<'a>>>;
 
 /// The GNSS receiver's port and its time pulse.
 struct Gnss<'a> {
@@ -120,7 +120,7 @@ struct Io<'a> {
 
 /// The application: one step per millisecond in thread mode (the LSM6DSO's 2-byte status
 /// read and its 15-byte burst when the gyro has a new sample; the LIS3MDL's 10-byte and the
-/// LPS22DF's 7-byte bursts, status first).
+/// LPS22HH's 7-byte bursts, status first).
 ///
 /// Awaited by `main` rather than spawned as a task of its own: a spawn can fail, and the
 /// drop glue of the arguments it would then drop (the board's I/O, never dropped otherwise)
@@ -166,7 +166,7 @@ async fn main(_spawner: Spawner) {
     let sensors = sensor::Sensors::new(
         Lsm6dso::new_spi(device(cs)),
         Lis3mdl::new_spi(device(mag_cs)),
-        Lps22df::new_spi(device(baro_cs)),
+        Lps22::new_spi(device(baro_cs)),
     );
 
     // The GNSS port at the link's first rate (it sets its own from then on); the pulse on
