@@ -72,21 +72,19 @@ pub fn point(setup: &Setup, policies: &[Policy]) -> Result<Point, SetupError> {
         .iter()
         .map(|&p| metrics::report(setup, &traffic, &run(setup, &traffic, p)))
         .collect();
-    let hrt_occurrences = traffic
+    let hrt_messages: Vec<_> = traffic
         .messages
         .iter()
         .filter(|m| is_hrt(&traffic.streams[usize::from(m.stream)].kind))
-        .count();
+        .collect();
     let cycles = setup.duration_us as f64 / f64::from(setup.cycle.cycle_us);
     // What the reserved slots carry, with RTCAN's own identifiers: one sync per cycle (its
     // length varies a little with the cycle counter: the first one stands for all) and each
     // HRT message in its slot.
     let sync = rtcan::SyncFrame::new(0, 0, false).to_frame();
     let slotted_bits = cycles * f64::from(r2p_vbus::FrameBits::of(&sync).total())
-        + traffic
-            .messages
+        + hrt_messages
             .iter()
-            .filter(|m| is_hrt(&traffic.streams[usize::from(m.stream)].kind))
             .map(|m| {
                 let id = rtcan::FrameId {
                     laxity: rtcan::Laxity::HRT,
@@ -98,17 +96,16 @@ pub fn point(setup: &Setup, policies: &[Policy]) -> Result<Point, SetupError> {
             })
             .sum::<f64>();
     let slot_us = f64::from(setup.cycle.cycle_us) / f64::from(setup.cycle.slots);
+    let reserved_us = (hrt_messages.len() as f64 + cycles) * slot_us;
     Ok(Point {
         load: setup.load,
         offered: traffic.offered_load(setup),
         offered_hrt: share(is_hrt),
         offered_srt: share(is_srt),
         offered_nrt: share(is_nrt),
-        reserved_share: (hrt_occurrences as f64 + cycles) * slot_us / setup.duration_us as f64,
+        reserved_share: reserved_us / setup.duration_us as f64,
         grid_ceiling: 1.0
-            - ((hrt_occurrences as f64 + cycles) * slot_us * f64::from(setup.cycle.bit_rate) / 1e6
-                - slotted_bits)
-                / cap,
+            - (reserved_us * f64::from(setup.cycle.bit_rate) / 1e6 - slotted_bits) / cap,
         streams: [count(is_hrt), count(is_srt), count(is_nrt)],
         messages: traffic.messages.len(),
         reports,
