@@ -23,15 +23,32 @@ impl ChargeCounter {
     /// Adds `amps` flowing for `dt_us` (clamped to [`MAX_STEP_US`]); negative amps (charging,
     /// or a calibration offset below zero) subtract.
     pub fn add(&mut self, amps: f32, dt_us: u64) {
-        let micro_amps = (amps * 1e6) as i64; // saturating: NaN → 0
-        let dt = dt_us.min(MAX_STEP_US) as i64;
-        self.pico_coulombs = self.pico_coulombs.saturating_add(micro_amps * dt);
+        // The magnitude as a `u32` (saturating at 4 294 A: the front end reads ±6.6 A; NaN → 0)
+        // and the sign apart: float-to-`i64` and float-to-`i32` conversions are 112 and 74 B
+        // of compiler-builtins the PSU's slot lacks, float-to-`u32` is linked already.
+        let micro_amps = (amps.abs() * 1e6) as u32;
+        let charge = i64::from(micro_amps) * dt_us.min(MAX_STEP_US) as i64;
+        self.pico_coulombs = if amps < 0.0 {
+            self.pico_coulombs.saturating_sub(charge)
+        } else {
+            self.pico_coulombs.saturating_add(charge)
+        };
     }
 
     /// Charge used, Ah (the count stays exact in the integer; only this reading is rounded,
     /// to f32's 24 bits: no f64 code on an FPU-less Cortex-M3).
+    ///
+    /// The count is converted in two 32-bit halves: `i64 as f32` links compiler-builtins'
+    /// `__aeabi_l2f` (120 B), and the halves' sum is within an f32 rounding of it.
     pub fn amp_hours(&self) -> f32 {
-        self.pico_coulombs as f32 / PC_PER_AH
+        let magnitude = self.pico_coulombs.unsigned_abs();
+        let high = (magnitude >> 32) as u32 as f32 * 4_294_967_296.0;
+        let ah = (high + magnitude as u32 as f32) / PC_PER_AH;
+        if self.pico_coulombs < 0 {
+            -ah
+        } else {
+            ah
+        }
     }
 }
 
@@ -73,6 +90,28 @@ mod tests {
         assert!((c.amp_hours() - 0.0015).abs() < 1e-9, "10 s counts as 1 s");
         c.add(-3.6, 1_000_000);
         assert!((c.amp_hours() - 0.0005).abs() < 1e-9, "charging subtracts");
+    }
+
+    #[test]
+    fn the_reading_taken_in_halves_is_the_count_within_an_f32_rounding() {
+        let counts = [
+            0i64,
+            1,
+            -1,
+            1 << 32,
+            -(1 << 32) - 5,
+            1_800_000_000_000,
+            (1 << 40) + 12_345,
+            3_600_000_000_000_000,
+            -3_600_000_000_000_000,
+            9_000_000_000_000_000_000,
+            i64::MIN,
+        ];
+        for pc in counts {
+            let exact = pc as f64 / 3.6e15;
+            let read = f64::from(ChargeCounter { pico_coulombs: pc }.amp_hours());
+            assert!((read - exact).abs() <= exact.abs() * 2.5e-7, "{pc}: {read} vs {exact}");
+        }
     }
 
     #[test]

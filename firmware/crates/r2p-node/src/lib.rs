@@ -75,6 +75,8 @@ pub mod testbus;
 mod tests;
 #[cfg(test)]
 mod unslotted_tests;
+#[cfg(all(test, feature = "unsubscribe"))]
+mod unsubscribe_tests;
 #[cfg(test)]
 mod update_tests;
 

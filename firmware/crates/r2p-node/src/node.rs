@@ -54,7 +54,7 @@ pub use error::NodeError;
 pub use events::{Event, EVENT_QUEUE};
 pub use hrt::{HrtState, MASTER_STREAMS};
 pub use liveness::PEER_TIMEOUT_HEARTBEATS;
-pub use management::{PANIC_REPORT_EVERY, STARTING_HEARTBEATS};
+pub use management::{PANIC_REPORT_EVERY, STARTING_HEARTBEATS, UNSUBSCRIBE};
 pub use stats::NodeStats;
 pub use topics::{nrt_reserve, ImportState};
 
@@ -387,10 +387,15 @@ impl<
 
         let timeout = Micros::from(self.config.request_timeout_us);
         for i in 0..self.imports.len() {
-            if let ImportState::Requested { from, index, since } = self.imports[i].state {
-                if now.saturating_sub(since) >= timeout {
-                    self.request(i, from, index, now);
+            let (from, index, since) = match self.imports[i].state {
+                ImportState::Requested { from, index, since } => (from, index, since),
+                ImportState::Leaving { from, index, since } if cfg!(feature = "unsubscribe") => {
+                    (from, index, since)
                 }
+                _ => continue,
+            };
+            if now.saturating_sub(since) >= timeout {
+                self.request(i, from, index, now);
             }
         }
 

@@ -38,4 +38,7 @@ pub enum NodeError {
     BadCycle(ConfigError),
     /// The transmit queue is full: the management message was not queued.
     TxFull,
+    /// No import has this index (indices are what [`Node::import`](crate::Node::import)
+    /// returned).
+    NoImport,
 }

@@ -62,7 +62,7 @@ pub enum Event {
         from: NodeId,
     },
     /// None of export `export`'s remote subscribers was heard for the peer timeout (their
-    /// modules left; `subscribers.rs`): the export stopped — nothing more is queued for the
+    /// modules left; `subscribers.rs`), or the last of them unsubscribed: the export stopped — nothing more is queued for the
     /// bus, and an HRT export gave its slot back — until someone subscribes again.
     SubscribersLeft {
         /// Index of the export.

@@ -14,6 +14,12 @@ use rtcan::{MessageId, Micros, Urgency};
 use super::stats::bump;
 use super::{Event, HrtState, ImportState, Node, NodeError};
 
+/// The queue length of a SUBSCRIBE_REQUEST that unsubscribes (issue 22): a subscription
+/// without a queue is none, so the message needs no type of its own (and the F103 images no
+/// second decoder); requests that subscribe ask for at least 1. The publisher answers it like
+/// a request, which ends the subscriber's retries.
+pub const UNSUBSCRIBE: u8 = 0;
+
 /// Heartbeats sent with state `Starting` after boot (peers re-advertise to a starting module).
 pub const STARTING_HEARTBEATS: u32 = 2;
 
@@ -37,7 +43,14 @@ impl NodeSet {
     }
     /// For the set of peers whose last heartbeat said `Starting`.
     pub(super) fn remove(&mut self, n: NodeId) {
-        self.0[usize::from(n.get() / 32)] &= !(1 << (n.get() % 32));
+        self.take(n);
+    }
+    /// Removes `n`; true if it was in the set.
+    pub(super) fn take(&mut self, n: NodeId) -> bool {
+        let (word, bit) = (&mut self.0[usize::from(n.get() / 32)], 1 << (n.get() % 32));
+        let had = *word & bit != 0;
+        *word &= !bit;
+        had
     }
     pub(super) fn len(&self) -> usize {
         self.0.iter().map(|w| w.count_ones() as usize).sum()
@@ -185,18 +198,29 @@ impl<
         }
     }
 
-    /// Asks `from` for import `i` (advertised on its stream `index`).
+    /// Asks `from` for import `i` (advertised on its stream `index`), or, while the import is
+    /// `Leaving`, tells it to stop: a request with queue length 0 ([`UNSUBSCRIBE`]).
     pub(super) fn request(&mut self, i: usize, from: NodeId, index: u8, now: Micros) {
         let import = self.imports[i].import;
+        let leaving = cfg!(feature = "unsubscribe")
+            && matches!(self.imports[i].state, ImportState::Leaving { .. });
         let msg = Message::SubscribeRequest {
             target: from.get(),
             topic: String::try_from(import.topic()).unwrap_or_default(),
             type_hash: import.type_hash(),
-            queue_len: import.queue_len().min(usize::from(u8::MAX)) as u8,
+            queue_len: if leaving {
+                UNSUBSCRIBE
+            } else {
+                import.queue_len().clamp(1, usize::from(u8::MAX)) as u8
+            },
         };
         // If the queue is full the request is retried after the timeout like a lost one.
         let _ = self.send(&msg);
-        self.imports[i].state = ImportState::Requested { from, index, since: now };
+        self.imports[i].state = if leaving {
+            ImportState::Leaving { from, index, since: now }
+        } else {
+            ImportState::Requested { from, index, since: now }
+        };
     }
 
     fn readvertise(&mut self) {
@@ -272,6 +296,16 @@ impl<
                         bump(&mut self.stats.unexpected);
                         continue;
                     }
+                    if cfg!(feature = "unsubscribe") {
+                        match &mut self.imports[i].state {
+                            ImportState::Unsubscribed { publisher } => {
+                                *publisher = Some((from, index)); // for `resubscribe`
+                                continue;
+                            }
+                            ImportState::Leaving { .. } => continue,
+                            _ => {}
+                        }
+                    }
                     if type_hash != import.type_hash() || usize::from(size) != import.size() {
                         bump(&mut self.stats.type_mismatches);
                         let result = SubscribeResult::TypeMismatch;
@@ -310,6 +344,10 @@ impl<
                         bump(&mut self.stats.type_mismatches);
                         (SubscribeResult::TypeMismatch, 0)
                     }
+                    Some(i) if queue_len == UNSUBSCRIBE => {
+                        self.subscriber_removed(i, from);
+                        (SubscribeResult::Ok, me.message_id(i as u8 + 1).0)
+                    }
                     Some(i) => {
                         if let Some(h) = self.exports[i].hrt.as_mut() {
                             if !matches!(h.state, HrtState::Granted { .. }) {
@@ -337,12 +375,26 @@ impl<
             Message::SubscribeResponse { target, topic, result, message_id } if for_me(target) => {
                 let asked = self.imports.iter().position(|s| {
                     s.import.topic() == topic.as_str()
-                        && matches!(s.state, ImportState::Requested { from: f, .. } if f == from)
+                        && match s.state {
+                            ImportState::Requested { from: f, .. } => f == from,
+                            ImportState::Leaving { from: f, .. } => {
+                                cfg!(feature = "unsubscribe") && f == from
+                            }
+                            _ => false,
+                        }
                 });
                 let Some(i) = asked else {
                     bump(&mut self.stats.unexpected);
                     return;
                 };
+                if let (true, ImportState::Leaving { index, .. }) =
+                    (cfg!(feature = "unsubscribe"), self.imports[i].state)
+                {
+                    // Whatever the answer: the publisher no longer counts this node.
+                    self.imports[i].state =
+                        ImportState::Unsubscribed { publisher: Some((from, index)) };
+                    return;
+                }
                 if result != SubscribeResult::Ok {
                     if result == SubscribeResult::TypeMismatch {
                         bump(&mut self.stats.type_mismatches);

@@ -5,7 +5,8 @@
 //! raises [`Event::SubscribersLeft`] and the export stops queueing messages
 //! ([`Export::deactivate`]), so its frames stop taking the bus, and an HRT export gives its
 //! slot back to the master (HRT_REQUEST with period 0). A subscriber that comes back asks again
-//! (its side of liveness, `publishers.rs`) and the stream starts again.
+//! (its side of liveness, `publishers.rs`) and the stream starts again. A subscriber that
+//! unsubscribes (`Node::unsubscribe`) is dropped at once, with the same effect if it was the last.
 //!
 //! One time per export, not one per subscriber: a stream goes to every subscriber at once (one
 //! CAN frame), so only the last one leaving changes what the bus carries — and it costs every
@@ -28,6 +29,9 @@ use crate::remote::Export;
 pub(super) struct Subscribers {
     nodes: NodeSet,
     heard: u32,
+    /// The last of them unsubscribed: the next check stops the export. A word, not a `bool`:
+    /// the struct then clears in whole words (a 37-byte clear links the byte-wise `memclr`).
+    left: u32,
 }
 
 impl<
@@ -48,6 +52,22 @@ impl<
         }
     }
 
+    /// `from` unsubscribed from export `i` (a request with queue length 0): forgotten at once.
+    /// If it was the last, the next check stops the export (at most a heartbeat period later;
+    /// the stop lives in one place, for the F103 images' flash).
+    pub(super) fn subscriber_removed(&mut self, i: usize, from: NodeId) {
+        let e = &mut self.exports[i];
+        let s = &mut e.subscribers;
+        let mut had = s.nodes.take(from);
+        if let Some(h) = e.hrt.as_mut() {
+            if h.waiting.is_some_and(|(w, _)| w == from) {
+                h.waiting = None; // it asked, then left before the master answered
+                had = true;
+            }
+        }
+        s.left |= u32::from(had && s.nodes.is_empty());
+    }
+
     /// A heartbeat of `node` at `now`: alive, for every export it subscribed to.
     pub(super) fn subscriber_alive(&mut self, node: NodeId, now: Micros) {
         for e in self.exports.iter_mut().filter(|e| e.subscribers.nodes.contains(node)) {
@@ -56,15 +76,21 @@ impl<
     }
 
     /// Once a heartbeat period: an export none of whose subscribers has been heard for the peer
-    /// timeout stops, and an HRT one gives its slot back.
+    /// timeout, or whose last subscriber unsubscribed, stops, and an HRT one gives its slot back.
     pub(super) fn check_subscribers(&mut self, now: Micros) {
         let timeout = self.peer_timeout_us();
         for i in 0..self.exports.len() {
             let s = &mut self.exports[i].subscribers;
-            if s.nodes.is_empty() || (now as u32).wrapping_sub(s.heard) <= timeout {
+            let stop = if s.nodes.is_empty() {
+                s.left != 0
+            } else {
+                (now as u32).wrapping_sub(s.heard) > timeout
+            };
+            if !stop {
                 continue;
             }
             s.nodes = NodeSet::default();
+            s.left = 0;
             self.event(Event::SubscribersLeft { export: i });
             self.stop_export(i);
         }

@@ -45,6 +45,23 @@ pub enum ImportState {
         /// Why.
         result: SubscribeResult,
     },
+    /// Unsubscribed by the application (`Node::unsubscribe`, feature `unsubscribe`): telling `from` (a request with
+    /// queue length 0), again every `request_timeout_us` until it answers. Its frames are no
+    /// longer taken in.
+    Leaving {
+        /// The publisher's node.
+        from: NodeId,
+        /// Its stream index.
+        index: u8,
+        /// When the unsubscription was (last) queued.
+        since: Micros,
+    },
+    /// Unsubscribed, and the publisher (if one was known) answered: advertisements of the topic
+    /// are only remembered, until `Node::resubscribe`.
+    Unsubscribed {
+        /// The last publisher that advertised the topic, and its stream index.
+        publisher: Option<(NodeId, u8)>,
+    },
 }
 
 impl ImportState {
@@ -162,6 +179,45 @@ impl<
     /// message, the transmit queue.
     fn max_export_size(&self) -> usize {
         BUF.min(TXQ * 8).min(MAX_MESSAGE_LEN)
+    }
+
+    /// Stops import `import` (a subscriber that stays up but no longer wants the topic): its
+    /// publisher is told, and drops this node from the stream's subscribers — the last one
+    /// leaving stops the stream and releases an HRT slot (`subscribers.rs`); its frames are no
+    /// longer let through the filters. Nothing is lost on a bad index: [`NodeError::NoImport`].
+    #[cfg(feature = "unsubscribe")]
+    pub fn unsubscribe(&mut self, import: usize) -> Result<(), NodeError> {
+        let s = self.imports.get_mut(import).ok_or(NodeError::NoImport)?;
+        s.state = match s.state {
+            // Told at the next tick (its retry is due at once).
+            ImportState::Subscribed { from, message } => {
+                ImportState::Leaving { from, index: message.0 as u8, since: 0 }
+            }
+            ImportState::Requested { from, index, .. } => {
+                ImportState::Leaving { from, index, since: 0 }
+            }
+            ImportState::Refused { .. } | ImportState::Waiting => {
+                ImportState::Unsubscribed { publisher: None }
+            }
+            left @ (ImportState::Leaving { .. } | ImportState::Unsubscribed { .. }) => left,
+        };
+        Ok(())
+    }
+
+    /// Undoes [`unsubscribe`](Self::unsubscribe): the publisher that advertised the topic last
+    /// is asked again at the next tick (else the next advertisement is waited for).
+    #[cfg(feature = "unsubscribe")]
+    pub fn resubscribe(&mut self, import: usize) -> Result<(), NodeError> {
+        let s = self.imports.get_mut(import).ok_or(NodeError::NoImport)?;
+        s.state = match s.state {
+            ImportState::Leaving { from, index, .. }
+            | ImportState::Unsubscribed { publisher: Some((from, index)) } => {
+                ImportState::Requested { from, index, since: 0 }
+            }
+            ImportState::Unsubscribed { publisher: None } => ImportState::Waiting,
+            other => other,
+        };
+        Ok(())
     }
 
     /// Where import `import` stands.
