@@ -194,3 +194,47 @@ fn an_unsubscription_sent_while_the_publisher_is_away_arrives_when_it_is_back() 
     );
     assert_eq!(bus.violations(), 0);
 }
+
+#[test]
+fn a_subscriber_that_leaves_before_the_master_answered_gets_no_stream() {
+    static T: Topic<'static, u8, { pool_size(&[1], 1) }, 1> = Topic::new("setpoint", 0);
+    static P: Publisher<'static, u8> =
+        Publisher::new(&T, Class::SyncRealTime { period_us: CYCLE_US as u32 });
+    static O: RemoteSubscriber<'static, u8, 1> = RemoteSubscriber::new(&P);
+    static L: Topic<'static, u8, { pool_size(&[4], 1) }, 1> = Topic::new("setpoint", 0);
+    static LP: Publisher<'static, u8> = Publisher::new(&L, Class::NonRealTime);
+    static I: RemotePublisher<'static, u8> = RemotePublisher::new(&LP, &L);
+    static S: Subscriber<'static, u8, 4> = Subscriber::new();
+    T.subscribe(&O).unwrap();
+    L.subscribe(&S).unwrap();
+
+    let bus = Bus::<3>::slotted(CYCLE);
+    let mut m =
+        TestNode::new(NodeConfig { hrt_slots: 1, ..tdma(1, "psu", Some(0)) }, &NoParams).unwrap();
+    let mut a = TestNode::new(tdma(2, "a", None), &NoParams).unwrap();
+    let mut b = TestNode::new(tdma(3, "b", None), &NoParams).unwrap();
+    a.export(&O).unwrap();
+    b.import(&I).unwrap();
+    // No master yet: B's request waits at A for a slot A cannot ask for.
+    bus.power(0, false);
+    let nodes = &mut [&mut m, &mut a, &mut b];
+    run_slots(&bus, nodes, 300_000);
+    assert_eq!(nodes[1].hrt_state(0), Some(HrtState::Wanted));
+    assert!(matches!(nodes[2].import_state(0), Some(ImportState::Requested { .. })));
+
+    // B gives up before any master answered: A stops wanting the slot.
+    nodes[2].unsubscribe(0).unwrap();
+    let until = bus.now.get() + 3 * HEARTBEAT_US;
+    run_slots(&bus, nodes, until);
+    assert!(matches!(nodes[2].import_state(0), Some(ImportState::Unsubscribed { .. })));
+    assert_eq!(nodes[1].hrt_state(0), Some(HrtState::Idle));
+
+    // The master arrives: nothing is asked of it, nothing runs.
+    bus.power(0, true);
+    let until = bus.now.get() + 300_000;
+    run_slots(&bus, nodes, until);
+    assert_eq!(nodes[1].hrt_state(0), Some(HrtState::Idle));
+    assert_eq!(O.active_len(), 0);
+    assert!(bus.hrt_log().is_empty(), "no HRT frame on the bus");
+    assert_eq!(bus.violations(), 0);
+}

@@ -485,6 +485,20 @@ mod tests {
         assert_eq!(whole_seconds(u64::MAX), u32::MAX);
     }
 
+    #[test]
+    fn taking_a_node_says_whether_it_was_in_the_set() {
+        // An unsubscription from a node not in the set must not look like the last one leaving
+        // (subscribers.rs): `take` tells the two apart.
+        let (a, b) = (NodeId::new(5).unwrap(), NodeId::new(37).unwrap());
+        let mut set = NodeSet::default();
+        set.insert(a);
+        assert!(!set.take(b), "never inserted");
+        assert!(set.contains(a));
+        assert!(set.take(a));
+        assert!(!set.take(a), "taken already");
+        assert!(set.is_empty());
+    }
+
     proptest! {
         #[test]
         fn matches_division(us in any::<u64>(), small in 0u64..(1 << 40)) {

@@ -29,7 +29,8 @@ use crate::remote::Export;
 pub(super) struct Subscribers {
     nodes: NodeSet,
     heard: u32,
-    /// The last of them unsubscribed: the next check stops the export. A word, not a `bool`:
+    /// One of them unsubscribed: once the set is empty the next check stops the export (nothing
+    /// else empties the set of a running stream but that check itself). A word, not a `bool`:
     /// the struct then clears in whole words (a 37-byte clear links the byte-wise `memclr`).
     left: u32,
 }
@@ -65,7 +66,7 @@ impl<
                 had = true;
             }
         }
-        s.left |= u32::from(had && s.nodes.is_empty());
+        s.left |= u32::from(had); // looked at once the set is empty
     }
 
     /// A heartbeat of `node` at `now`: alive, for every export it subscribed to.
