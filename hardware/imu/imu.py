@@ -1,10 +1,13 @@
-"""hardware/imu revision A: the IMU module, three ST sensors on SPI1 and an external GNSS port,
-on the common core.
+"""hardware/imu revision A: the IMU module, three ST sensors on SPI1 and SPI2 and an external
+GNSS port, on the common core.
 
     SPI1 (PA5 SCK, PA6 MISO, PA7 MOSI; mode 3, 4-wire) shared by
       U101 LSM6DSO  accelerometer + gyroscope, CS PA4 (IMU_CS),  INT1 -> PB0 (IMU_INT1)
-      U102 LIS3MDL  magnetometer,               CS PA3 (MAG_CS),  DRDY -> PA1 (MAG_DRDY)
       U103 LPS22HH  barometer,                  CS PA2 (BARO_CS), INT_DRDY -> PA0 (BARO_INT)
+    SPI2 (PB13 SCK, PB14 MISO, PB15 MOSI; mode 3, 4-wire) alone
+      U102 LIS3MDL  magnetometer,               CS PA3 (MAG_CS),  DRDY -> PA1 (MAG_DRDY)
+    (the LIS3MDL has no I2C-disable bit, DS9463 Rev 7 Table 25: deselected, it listens as an I2C
+    target on SCL/SDA, so it gets a bus no other part's traffic runs on);
     each chip select pulled up (R101-R103, 10 k): the three stay deselected (their I2C mode, idle)
     while the MCU is in reset and its pins float.
     GNSS receiver (u-blox class, UBX/NMEA) on USART1: PA9 GNSS_TX to the receiver's RX, PA10
@@ -38,7 +41,8 @@ TITLE = "R2P IMU module"
 REVISION = "A"
 
 PINS = {"PA5": "IMU_SCK", "PA6": "IMU_MISO", "PA7": "IMU_MOSI", "PA4": "IMU_CS", "PB0": "IMU_INT1",
-        "PA3": "MAG_CS", "PA1": "MAG_DRDY", "PA2": "BARO_CS", "PA0": "BARO_INT",
+        "PB13": "MAG_SCK", "PB14": "MAG_MISO", "PB15": "MAG_MOSI", "PA3": "MAG_CS",
+        "PA1": "MAG_DRDY", "PA2": "BARO_CS", "PA0": "BARO_INT",
         "PA9": "GNSS_TX", "PA10": "GNSS_RX", "PB1": "GNSS_PPS"}
 """MCU pins → firmware/boards/imu.toml's signals (scripts/check-pins)."""
 
@@ -63,7 +67,7 @@ PLACES = {
 
 
 def build(core: Sheet) -> Module:
-    s = Sheet(NAME, f"{TITLE}: LSM6DSO, LIS3MDL, LPS22HH on SPI1, GNSS port")
+    s = Sheet(NAME, f"{TITLE}: LSM6DSO, LPS22HH on SPI1, LIS3MDL on SPI2, GNSS port")
     bus_tap(s, "+5V_MOD", at=BUS_TAP_PLACE)
     pins = {p: "" for p in core_mod.FREE_GPIO}
     pins.update(PINS)
@@ -80,9 +84,10 @@ def build(core: Sheet) -> Module:
     s.part("C102", "C_100n", {"1": "+3V3", "2": "GND"})      # VDDIO
     s.part("R103", "R_10k", {"1": "+3V3", "2": "IMU_CS"})
 
-    # LIS3MDL, 4-wire SPI: SDA/SDI in, SDO/SA1 out; C1 its 100 nF; reserved pins to GND
-    s.part("U102", "LIS3MDL", {"~{CS}": "MAG_CS", "SCL/SPC": "IMU_SCK", "SDA/SDI/SDO": "IMU_MOSI",
-                               "SDO/SA1": "IMU_MISO", "DRDY": "MAG_DRDY", "C1": "MAG_C1",
+    # LIS3MDL alone on SPI2 (no I2C-disable bit), 4-wire SPI: SDA/SDI in, SDO/SA1 out; C1 its
+    # 100 nF; reserved pins to GND
+    s.part("U102", "LIS3MDL", {"~{CS}": "MAG_CS", "SCL/SPC": "MAG_SCK", "SDA/SDI/SDO": "MAG_MOSI",
+                               "SDO/SA1": "MAG_MISO", "DRDY": "MAG_DRDY", "C1": "MAG_C1",
                                "Vdd": "+3V3", "Vdd_IO": "+3V3", "GND": "GND"}, nc=("INT",))
     s.part("C105", "C_100n", {"1": "MAG_C1", "2": "GND"})
     s.part("C103", "C_100n", {"1": "+3V3", "2": "GND"})

@@ -1,7 +1,7 @@
 """How the IMU module's root sheet is drawn (hardware/imu/imu.kicad_sch): one block per function.
 
 Top left the fused bus tap (as the template's), the core sheet's box beside it; right of the box
-the three sensors on SPI1, each in its block with its decoupling and chip-select pull-up; bottom
+the three sensors (SPI1's two, SPI2's LIS3MDL), each in its block with its decoupling and chip-select pull-up; bottom
 left the GNSS port (supply jumper, the two connectors, the ESD clamp, the PPS protection); below
 them the placement notes (the magnetometer's distances, from calc/imu.py). The MCU's signals
 meet the blocks by label. Grid units of 2.54 mm (drawing.py).
@@ -43,9 +43,10 @@ BLOCKS = [
     Block("Barometer LPS22HH (SPI1, CS PA2)", 130, 4, 163, 40, notes=[
         (131, 33, "CS low = SPI; CS high = I2C/I3C:\nR102 holds it high (idle) in reset.\n"
                   "SA0 is SDO in 4-wire SPI.")]),
-    Block("Magnetometer LIS3MDL (SPI1, CS PA3)", 84, 42, 140, 82, notes=[
+    Block("Magnetometer LIS3MDL (SPI2, CS PA3)", 84, 42, 140, 82, notes=[
         (85, 76, "C1 100 nF (DocID024204 Table 2). Vdd 100 nF + 1 uF,\nVdd_IO 100 nF."
-                 " SDO/SA1 is SDO in 4-wire SPI.")]),
+                 " SDO/SA1 is SDO in 4-wire SPI.\nAlone on SPI2 (PB13-15): no I2C-disable bit"
+                 " (DS9463\nTable 25), deselected it listens as I2C on SCL/SDA.")]),
     Block("GNSS supply", 4, 42, 40, 58, notes=[
         (6, 55.5, "JP101 1-2 bridged: +5V_MOD (default);\ncut, bridge 2-3: +3V3.")]),
     Block("GNSS lines: ESD clamp, PPS into PB1", 42, 42, 82, 76, notes=[

@@ -1,6 +1,6 @@
 //! The IMU board: the module's firmware on the board's sensor rig ([`ImuSensors`]: the
-//! LSM6DSO, LIS3MDL and LPS22HH register models on SPI1's chip selects, the GNSS receiver on
-//! USART1 and its PPS), fed from the world's devices on the board's mount. The firmware's side
+//! LSM6DSO and LPS22HH register models on SPI1's chip selects, the LIS3MDL's alone on SPI2, the
+//! GNSS receiver on USART1 and its PPS), fed from the world's devices on the board's mount. The firmware's side
 //! is the MCU's: the `r2p-drivers` drivers of the three parts, set up and polled every
 //! millisecond by `r2p_app_imu::sensor::Sensors` (set up again after a part stops answering).
 //!

@@ -2,12 +2,16 @@
 //! (firmware/boards/imu.toml), register- and byte-exact, fed by the world's devices of the
 //! board ([`r2p_world::imu_module`]).
 //!
-//! - **SPI1**, three parts on their own chip selects: the LSM6DSO (`IMU_CS`, [`Lsm6dsoModel`]),
-//!   the LIS3MDL (`MAG_CS`, [`Lis3mdlModel`]) and the LPS22HH (`BARO_CS`, [`Lps22Model`]; the
-//!   board's barometer, [`BARO_CHIP`]),
-//!   each behind its own [`SimSpi`] handle ([`ImuSensors::lsm6dso_spi`] …) for the
-//!   `r2p-drivers` driver the firmware owns. The chip selects are separate, so a transaction
-//!   to one part never reaches another, as on the board.
+//! - **SPI1**, two parts on their own chip selects: the LSM6DSO (`IMU_CS`, [`Lsm6dsoModel`])
+//!   and the LPS22HH (`BARO_CS`, [`Lps22Model`]; the board's barometer, [`BARO_CHIP`]).
+//! - **SPI2**, the LIS3MDL alone (`MAG_CS`, [`Lis3mdlModel`]): it has no I2C-disable bit, so
+//!   the board gives it a bus of its own where no other part's traffic can reach its I2C
+//!   interface (hardware/imu/README.md).
+//!
+//! Each part is behind its own [`SimSpi`] handle ([`ImuSensors::lsm6dso_spi`] …) for the
+//! `r2p-drivers` driver the firmware owns. The chip selects are separate, so a transaction to
+//! one part never reaches another, as on the board (the I2C side a deselected part keeps
+//! listening with is not modelled: on the board no part that has it enabled shares a bus).
 //! - **USART1**, an external u-blox receiver ([`UbxGnssModel`]) on the paced UART
 //!   ([`ImuSensors::gnss_uart`]: the bytes the firmware reads at its USART's rate, and writes
 //!   to configure the receiver), and its time pulse on TIM3_CH4 ([`ImuSensors::take_pps_us`]:
@@ -153,7 +157,7 @@ fn bug(e: r2p_world::IoError) -> ! {
     panic!("{e}")
 }
 
-/// The parts on SPI1, in the order of [`ImuSensors`]' plugs.
+/// The SPI parts (SPI1's two and SPI2's LIS3MDL), in the order of [`ImuSensors`]' plugs.
 const SPI_PARTS: [ImuSensor; 3] =
     [ImuSensor::AccelGyro, ImuSensor::Magnetometer, ImuSensor::Barometer];
 
@@ -272,7 +276,7 @@ impl ImuSensors {
         SimSpi::pluggable(self.lsm6dso.clone(), self.plugs[0].clone())
     }
 
-    /// The LIS3MDL on `MAG_CS`: a handle for `r2p_drivers::lis3mdl::Lis3mdl::new_spi`.
+    /// The LIS3MDL on SPI2 and `MAG_CS`: a handle for `r2p_drivers::lis3mdl::Lis3mdl::new_spi`.
     pub fn lis3mdl_spi(&self) -> SimSpi {
         SimSpi::pluggable(self.lis3mdl.clone(), self.plugs[1].clone())
     }

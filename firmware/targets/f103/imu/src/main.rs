@@ -1,8 +1,9 @@
 //! Default firmware of the R2P IMU module (STM32F103CB): the application of `r2p-app-imu` on
-//! three ST sensors sharing SPI1 — the LSM6DSO (accelerometer and gyro), the LIS3MDL
-//! (magnetometer) and the LPS22HH (barometer; or an LPS22DF), each with its chip select — through the
-//! `r2p-drivers` drivers (the same drivers and poll the emulated board runs over its simulated
-//! SPI bus); an external u-blox receiver on USART1 (interrupt-driven ring buffers, the link
+//! three ST sensors — the LSM6DSO (accelerometer and gyro) and the LPS22HH (barometer; or an
+//! LPS22DF) sharing SPI1, each with its chip select, and the LIS3MDL (magnetometer) alone on
+//! SPI2 with its own (it has no I2C-disable bit: deselected on a shared bus it would listen to
+//! the others' traffic as I2C; hardware/imu/README.md) — through the `r2p-drivers` drivers (the
+//! same drivers and poll the emulated board runs over its simulated SPI buses); an external u-blox receiver on USART1 (interrupt-driven ring buffers, the link
 //! `r2p_app_imu::gnss::Link` sets up) with its time pulse captured by TIM3_CH4; the status LEDs,
 //! bxCAN and parameters in flash. Pins come only from the board file (firmware/boards/imu.toml) through the generated
 //! `board` module.
@@ -23,7 +24,7 @@ use embassy_stm32::timer::Channel;
 use embassy_stm32::usart::{self, BufferedUart};
 use embassy_time::Instant;
 use embassy_time::Timer;
-use embedded_hal_bus::spi::{NoDelay, RefCellDevice};
+use embedded_hal_bus::spi::{ExclusiveDevice, NoDelay, RefCellDevice};
 use embedded_io::{Read, Write};
 use embedded_io_async::ReadReady;
 use module_core::{EveryMs, Leds, ModuleFlash};
@@ -51,18 +52,25 @@ static ENDPOINTS: Storage = Storage::new();
 
 /// SPI clock: the LSM6DSO takes up to 10 MHz; SPI1 divides its 72 MHz APB2 clock by powers of
 /// two and embassy picks the fastest not above this, 4.5 MHz (a 15-byte burst in ~30 µs).
+/// SPI2, the LIS3MDL's (10 MHz at most: DS9463's SPI timing, tc(SPC) ≥ 100 ns; NOT VERIFIED
+/// here), divides the 36 MHz APB1 clock: 4.5 MHz as well (its 10-byte burst in ~20 µs).
 const SPI_HZ: u32 = 5_000_000;
 /// The sensors' boot time after power-up before they answer (LSM6DSO datasheet DS12140:
 /// 10 ms; the LIS3MDL's and LPS22HH's are shorter, NOT VERIFIED).
 const SENSOR_BOOT_MS: u64 = 10;
 
-/// One sensor on the shared SPI1 with its chip select.
-type Device<'a> =
-    RefCellDevice<'a, Spi<'static, BlockingMode, spi::mode::Master>, Output<'static>, NoDelay>;
+/// The MCU's SPI in master mode, blocking.
+type Bus = Spi<'static, BlockingMode, spi::mode::Master>;
 
-/// The three sensors on SPI1, each set up by the poll (and again after it stops answering).
+/// One sensor on the shared SPI1 with its chip select.
+type Device<'a> = RefCellDevice<'a, Bus, Output<'static>, NoDelay>;
+
+/// The LIS3MDL, alone on SPI2 with its chip select.
+type MagDevice = ExclusiveDevice<Bus, Output<'static>, NoDelay>;
+
+/// The three sensors, each set up by the poll (and again after it stops answering).
 type Parts<'a> =
-    sensor::Sensors<SpiBus<Device<'a>>, lis3mdl::SpiBus<Device<'a>>, lps22::SpiBus<Device<'a>>>;
+    sensor::Sensors<SpiBus<Device<'a>>, lis3mdl::SpiBus<MagDevice>, lps22::SpiBus<Device<'a>>>;
 
 /// The GNSS receiver's port and its time pulse.
 struct Gnss<'a> {
@@ -119,8 +127,8 @@ struct Io<'a> {
 }
 
 /// The application: one step per millisecond in thread mode (the LSM6DSO's 2-byte status
-/// read and its 15-byte burst when the gyro has a new sample; the LIS3MDL's 10-byte and the
-/// LPS22HH's 7-byte bursts, status first).
+/// read and its 15-byte burst when the gyro has a new sample; the LIS3MDL's 10-byte burst on
+/// SPI2 and the LPS22HH's 7-byte one, status first).
 ///
 /// Awaited by `main` rather than spawned as a task of its own: a spawn can fail, and the
 /// drop glue of the arguments it would then drop (the board's I/O, never dropped otherwise)
@@ -163,9 +171,14 @@ async fn main(_spawner: Spawner) {
         Ok(d) => d,
         Err(e) => match e {},
     };
+    let mag_bus = Spi::new_blocking(p.SPI2, pins.mag_sck, pins.mag_mosi, pins.mag_miso, config);
+    let mag = match ExclusiveDevice::new_no_delay(mag_bus, mag_cs) {
+        Ok(d) => d,
+        Err(e) => match e {},
+    };
     let sensors = sensor::Sensors::new(
         Lsm6dso::new_spi(device(cs)),
-        Lis3mdl::new_spi(device(mag_cs)),
+        Lis3mdl::new_spi(mag),
         Lps22::new_spi(device(baro_cs)),
     );
 
