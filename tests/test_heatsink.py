@@ -202,6 +202,7 @@ def test_main_prints_the_required_geometry_and_the_candidate(capsys):
     assert req.sink.describe() in out and f"R_th {req.r:.2f} °C/W" in out
     assert hs.CANDIDATE in out and "NOT VERIFIED" in out
     assert hs.main(["--bogus"]) == 2
+    assert hs.main(["--markdown"]) == 0 and hs.README_BEGIN in capsys.readouterr().out
 
 
 def test_the_constants_are_the_documented_ones():
@@ -209,3 +210,22 @@ def test_the_constants_are_the_documented_ones():
     the worked examples above too)."""
     assert hs.channel_nusselt(1.0) == pytest.approx((576 + 2.873) ** -0.5)
     assert math.isclose(hs.AIR_TABLE[1][1], 15.89e-6) and math.isclose(hs.AIR_TABLE[2][2], 30.0e-3)
+
+
+def test_the_readme_heatsink_block_is_the_scripts_output():
+    text = motor.README.read_text()
+    assert hs.readme_with_report(text) == text, \
+        "hardware/motor/README.md is stale: run scripts/py -m r2ptools.kicad.calc.heatsink --readme"
+    assert "```text\n" + "\n".join(hs.motor_report()) + "\n```" in text
+
+
+def test_a_stale_readme_heatsink_block_is_caught(monkeypatch):
+    text = motor.README.read_text()
+    hs.smallest.cache_clear()
+    monkeypatch.setattr(hs, "MARGIN", 0.1)
+    try:
+        assert hs.readme_with_report(text) != text
+    finally:
+        hs.smallest.cache_clear()
+    with pytest.raises(ValueError, match="markers"):
+        hs.readme_with_report("no markers here")

@@ -622,9 +622,10 @@ def rows() -> list[Row]:
                 f"channels, ε {heatsink.EMISSIVITY} radiation, calc/heatsink.py)"))
     cand = heatsink.best_in_envelope(*heatsink.CANDIDATE_MM, loss, T_AMB)
     margin_met = cand.r <= HEATSINK_RTH * (1 - heatsink.MARGIN)
+    tj_cand, _ = junction(I_CONT, VIN_MAX, modelled_sink(cand.sink))
     add(Row(f"heatsink candidate {heatsink.CANDIDATE} (model of its envelope)", f"{cand.r:.2f} °C/W",
             f"≤ {HEATSINK_RTH} °C/W", cand.r <= HEATSINK_RTH,
-            f"{1 - cand.r / HEATSINK_RTH:.0%} under the requirement ("
+            f"T_J {tj_cand:.0f} °C on it; {1 - cand.r / HEATSINK_RTH:.0%} under the requirement ("
             f"{'with' if margin_met else 'without'} the {heatsink.MARGIN:.0%} margin): the best plate-fin "
             f"profile of its {' × '.join(f'{x:g}' for x in heatsink.CANDIDATE_MM)} mm envelope "
             f"({cand.sink.fins} fins {cand.sink.fin_t * 1e3:g} mm); its own profile NOT VERIFIED; the "
