@@ -229,3 +229,22 @@ def test_a_stale_readme_heatsink_block_is_caught(monkeypatch):
         hs.smallest.cache_clear()
     with pytest.raises(ValueError, match="markers"):
         hs.readme_with_report("no markers here")
+
+
+def test_spreading_by_hand():
+    """Lee, Song, Au & Moran's ψ_max worked by hand for the case's window (40 × 34 mm) on a
+    100 × 100 × 6 mm base, k 200, h_eff 10 W/(m²·K): a = 20.806 mm, b = 56.419 mm, ε 0.36878,
+    τ 0.10635, Bi 0.0028209, λ = π + 1/(√π ε) = 4.67148, φ = (tanh λτ + λ/Bi)/(1 + λ/Bi tanh λτ)
+    = 2.17309, ψ = (ε τ + (1 − ε) φ)/√π = 0.79603, R = ψ / (√π k a) = 0.1079 K/W."""
+    r = hs.spreading_resistance(0.040 * 0.034, 0.1 * 0.1, 6e-3, 200.0, 10.0)
+    assert r == pytest.approx(0.1079, rel=1e-3)
+
+
+def test_radiation_by_hand():
+    """The envelope (tip face 0.1 × 0.1 m + two sides 0.1 × 0.05 m = 0.02 m²) at ε 0.8 and the
+    fins' mean excess η ΔT, to surroundings at the ambient."""
+    heat = hs.shed(SINK, 20.0)
+    ta = 313.15
+    want = 0.8 * 5.670374419e-8 * 0.02 * ((ta + heat.eta * 20.0) ** 4 - ta ** 4)
+    assert heat.radiation == pytest.approx(want, rel=1e-9)
+    assert 2.3 < heat.radiation < 2.5      # h_rad ≈ 4 ε σ T³ ≈ 6.1 W/(m²·K) × 0.02 m² × ~19.6 K
