@@ -21,7 +21,8 @@ The model (one concept: heat from the sink's mounting face to still air):
   its large-El limit an isolated plate, 0.59 El^¼; its optimum spacing 2.714 L Ra_L^-¼ with
   Nu 1.307 (Incropera & DeWitt, Fundamentals of Heat and Mass Transfer, §9.7, Eqs. 9.45-9.48;
   Çengel, Heat and Mass Transfer, §9-6). The channel coefficient also applies to the base
-  between the fins (the usual reading; the same in both books' heat sink examples).
+  between the fins (an assumption: it sees the same channel flow; Çengel's example counts the
+  fins alone).
 - The two outer faces of the end fins: an isolated vertical plate, Churchill & Chu's laminar
   correlation Nu_L = 0.68 + 0.670 Ra_L^¼ / [1 + (0.492/Pr)^(9/16)]^(4/9) (Incropera Eq. 9.27).
 - Fins: efficiency tanh(m L_c) / (m L_c), m = √(2 h / (k t)), corrected length L_c = H + t/2 for
@@ -83,8 +84,9 @@ FOOTPRINT_MAX_MM = (110.0, 100.0)   # largest base along the board's x and y: in
                               # end's M5 floor mounts (x ≤ 50 mm, enclosures/motor/motor.json) and the
                               # case's right wall (x 164 mm); in y the 55 mm case plus ~22 mm a side
 MARGIN = 0.20                 # the model must come 20 % under the requirement: the correlation's
-                              # scatter against Elenbaas's data (~10 %), the remembered property and
-                              # emissivity figures, a real profile's tapered fins and rough surface
+                              # scatter against the data it was fitted to (~10 %: an estimate), the
+                              # remembered property and emissivity figures, a real profile's tapered
+                              # fins and rough surface
 
 
 @dataclass(frozen=True)
