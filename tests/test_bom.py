@@ -81,7 +81,8 @@ def test_generate_writes_module_and_robot_boms_with_cost_and_the_summary(tmp_pat
     assert "| demo | 6 | 3 | 2.47 | [demo.csv](demo.csv) |" in readme
     assert "| future | | | not designed yet | |" in readme
     assert ("| [Duo](robots/duo.toml): two demo boards | demo ×2, future ×1 | 4.93 without future ×1 "
-            "(not designed yet) | [duo.csv](duo.csv) |") in readme
+            "(not designed yet) | — | [duo.csv](duo.csv) |") in readme    # no .kicad_pcb: not assembled
+    assert "### Off-board parts" not in readme
     assert readme.startswith("# Fixture bom/README.md") and readme.endswith(
         "<!-- END generated -->\nText after the summary stays.\n")
 

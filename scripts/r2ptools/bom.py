@@ -7,6 +7,9 @@
 - `bom/<module>.csv`: the module's BOM, one line per part with its cost at the quantity-10 price,
   and a TOTAL line. `bom/robots/<robot>.toml` lists module counts; `bom/<robot>.csv` multiplies the
   module BOMs into one order. `bom/README.md` carries the cost summary between markers.
+- `hardware/<module>/off-board.csv` (offboard.py): parts bought for a module but not on its board
+  (a heatsink, its pad and screws); `bom/<module>-off-board.csv` prices them, and they count in the
+  module's cost and in the robots' orders.
 
     scripts/bom generate    write the BOMs and the README summary (refuses while a check fails)
     scripts/bom check       every schematic part has a complete row; generated files are current
@@ -29,7 +32,7 @@ from dataclasses import dataclass, field
 from decimal import ROUND_HALF_UP, Decimal, InvalidOperation
 from pathlib import Path
 
-from . import ROOT, assembly_cost, is_shared_sheet
+from . import ROOT, assembly_cost, is_shared_sheet, offboard
 
 PARTS_COLUMNS = ("mpn", "manufacturer", "lcsc", "package", "unit_price_usd_qty10", "datasheet",
                  "description")
@@ -37,6 +40,8 @@ MODULE_COLUMNS = ("references", "quantity", "value", "footprint", "mpn", "manufa
                   "unit_price_usd_qty10", "line_cost_usd")
 ROBOT_COLUMNS = ("mpn", "manufacturer", "lcsc", "package", "description", "quantity", "used_in",
                  "unit_price_usd_qty10", "line_cost_usd")
+OFF_BOARD_COLUMNS = ("item", "quantity", "description", "mpn", "manufacturer", "distributor",
+                     "distributor_pn", "unit_price_usd_qty10", "line_cost_usd")
 SYMBOL_FIELDS = ("Reference", "Value", "Footprint", "MPN", "Manufacturer", "LCSC")
 LCSC = re.compile(r"^C\d+$")
 NOT_AT_LCSC = "-"  # the lcsc of a part LCSC does not stock: order it elsewhere, consign it
@@ -235,6 +240,32 @@ def module_csv(lines: list[Line]) -> str:
     return _csv(rows)
 
 
+def off_board_csv(parts: list[offboard.Part]) -> str:
+    """A module's off-board parts with their cost, in the table's order, and a TOTAL line."""
+    rows = [list(OFF_BOARD_COLUMNS)]
+    for p in parts:
+        rows.append([p.item, str(p.quantity), p.description, p.mpn, p.manufacturer, p.distributor,
+                     p.distributor_pn, str(p.price), money(p.cost)])
+    rows.append(["TOTAL", str(sum(p.quantity for p in parts)), "", "", "", "", "", "",
+                 money(off_board_cost(parts))])
+    return _csv(rows)
+
+
+def off_board_cost(parts: list[offboard.Part]) -> Decimal:
+    return sum((p.cost for p in parts), Decimal(0))
+
+
+def off_board_lines(parts: list[offboard.Part]) -> list[Line]:
+    """Off-board parts as BOM lines for a robot's order: not at LCSC, package `off-board`, the
+    item's name once per unit as its references (the quantity)."""
+    return [Line(p.mpn, [p.item] * p.quantity, p.description, offboard.PACKAGE,
+                 PartRow(p.line, {"mpn": p.mpn, "manufacturer": p.manufacturer,
+                                  "lcsc": offboard.NOT_AT_LCSC, "package": offboard.PACKAGE,
+                                  "unit_price_usd_qty10": str(p.price), "datasheet": "",
+                                  "description": p.description}, ()))
+            for p in parts]
+
+
 @dataclass
 class Robot:
     """A robot build: module counts from bom/robots/<name>.toml."""
@@ -268,12 +299,15 @@ def load_robot(path: Path, known: list[str], root: Path) -> Robot:
     return Robot(path.stem, robot["name"], robot["description"], dict(modules))
 
 
-def robot_csv(robot: Robot, boms: dict[str, list[Line]]) -> str:
-    """All designed modules' lines times their counts, merged by MPN; a TOTAL line that names the
-    modules it cannot include yet."""
+def robot_csv(robot: Robot, boms: dict[str, list[Line]],
+              offs: dict[str, list[offboard.Part]] | None = None) -> str:
+    """All designed modules' lines, their off-board parts included, times their counts, merged by
+    MPN; a TOTAL line that names the modules it cannot include yet."""
     merged: dict[str, tuple[PartRow, int, list[str]]] = {}
+    offs = offs or {}
     for module, count in sorted(robot.modules.items()):
-        for line in boms.get(module, []):
+        lines = boms.get(module, []) + (off_board_lines(offs.get(module, [])) if module in boms else [])
+        for line in lines:
             row, qty, used = merged.get(line.mpn, (line.row, 0, []))
             used.append(f"{module} {count}x{len(line.refs)}")
             merged[line.mpn] = (row, qty + count * len(line.refs), used)
@@ -293,7 +327,7 @@ def robot_csv(robot: Robot, boms: dict[str, list[Line]]) -> str:
 
 
 def assembled_summary(estimates: dict[str, list[assembly_cost.Estimate]], fees_file: str,
-                      checked: str) -> list[str]:
+                      checked: str, offs: dict[str, list[offboard.Part]] | None = None) -> list[str]:
     """The assembled-cost table: per board at each order quantity, with what makes it up."""
     q = assembly_cost.QUANTITIES
     out = ["", "### Assembled at JLCPCB", "",
@@ -316,11 +350,18 @@ def assembled_summary(estimates: dict[str, list[assembly_cost.Estimate]], fees_f
             f" + setup {money(e.setup, SUMMARY_STEP)} + stencil {money(e.stencil, SUMMARY_STEP)}"
             f" + loading {money(e.loading, SUMMARY_STEP)} + SMT {money(e.smt, SUMMARY_STEP)}"
             f" + THT {money(e.tht, SUMMARY_STEP)}" for e in est) + "."]
+    with_off = {m: off_board_cost(p) for m, p in (offs or {}).items() if m in estimates}
+    if with_off:
+        out += ["", "With their off-board parts (bought, not placed: above), per module: " + "; ".join(
+            f"{m} " + ", ".join(f"{money(e.per_board + c, SUMMARY_STEP)} at {e.boards} boards"
+                                for e in estimates[m]) for m, c in with_off.items()) + "."]
     return out
 
 
 def readme_summary(modules: list[str], boms: dict[str, list[Line]], robots: list[Robot],
-                   assembled: list[str] | None = None) -> str:
+                   assembled: list[str] | None = None,
+                   offs: dict[str, list[offboard.Part]] | None = None,
+                   estimates: dict[str, list[assembly_cost.Estimate]] | None = None) -> str:
     out = ["### Modules", "",
            "Parts cost of one board at the quantity-10 unit prices of `parts.csv` (PCB and assembly "
            "not included).", "",
@@ -340,20 +381,48 @@ def readme_summary(modules: list[str], boms: dict[str, list[Line]], robots: list
                 + ", ".join(f"`{mpn}`" for mpn in elsewhere)
                 + ". Order them from the manufacturer or a distributor and consign them for "
                   "assembly, or let JLCPCB's global sourcing buy them."]
+    offs = {m: p for m, p in (offs or {}).items() if m in boms}
+    if offs:
+        out += ["", "### Off-board parts", "",
+                "Bought for a module but not on its board, so not placed by JLCPCB (a heatsink, its "
+                "gap pad, screws): `hardware/<module>/off-board.csv`, with the source of every "
+                "figure. They count in the robots' costs and orders below.", "",
+                "| module | items | parts | cost (USD) | with the board's parts (USD) | BOM |",
+                "|---|---:|---:|---:|---:|---|"]
+        for m, parts in offs.items():
+            board = sum((l.cost for l in boms[m]), Decimal(0))
+            out.append(f"| {m} | {len(parts)} | {sum(p.quantity for p in parts)} | "
+                       f"{money(off_board_cost(parts), SUMMARY_STEP)} | "
+                       f"{money(board + off_board_cost(parts), SUMMARY_STEP)} | "
+                       f"[{m}-off-board.csv]({m}-off-board.csv) |")
     out += assembled or []
-    out += ["", "### Robots", "", "| robot | modules | cost (USD) | BOM |", "|---|---|---:|---|"]
+    estimates = estimates or {}
+    out += ["", "### Robots", "",
+            "Parts: every module's board parts and off-board parts times its count. Assembled: each "
+            f"module's board at its {assembly_cost.QUANTITIES[0]}-board assembled price per board "
+            "(above) times its count, plus the off-board parts; PCB fabrication and shipping not "
+            "included.", "",
+            "| robot | modules | parts (USD) | assembled (USD) | BOM |", "|---|---|---:|---:|---|"]
     for r in robots:
         designed = {m: c for m, c in r.modules.items() if m in boms}
-        cost = money(sum((l.cost * c for m, c in designed.items() for l in boms[m]), Decimal(0)),
-                     SUMMARY_STEP)
+        off = {m: off_board_cost(offs.get(m, [])) for m in designed}
+        cost = money(sum((l.cost * c for m, c in designed.items() for l in boms[m]), Decimal(0))
+                     + sum((off[m] * c for m, c in designed.items()), Decimal(0)), SUMMARY_STEP)
+        if designed and all(m in estimates for m in designed):
+            assembled_cost = money(sum(((estimates[m][0].per_board + off[m]) * c
+                                        for m, c in designed.items()), Decimal(0)), SUMMARY_STEP)
+        else:
+            assembled_cost = "—"
         missing = [f"{m} ×{c}" for m, c in sorted(r.modules.items()) if m not in boms]
         if not designed:
             cost = "not designed yet"
         elif missing:
             cost += f" without {', '.join(missing)} (not designed yet)"
+            if assembled_cost != "—":
+                assembled_cost += f" without {', '.join(missing)}"
         modules_text = ", ".join(f"{m} ×{c}" for m, c in sorted(r.modules.items()))
         out.append(f"| [{r.title}](robots/{r.name}.toml): {r.description} | {modules_text} | "
-                   f"{cost} | [{r.name}.csv]({r.name}.csv) |")
+                   f"{cost} | {assembled_cost} | [{r.name}.csv]({r.name}.csv) |")
     return "\n".join(out) + "\n"
 
 
@@ -375,14 +444,16 @@ def all_modules(root: Path) -> list[str]:
     return sorted(d.name for d in hardware.iterdir() if d.is_dir() and not is_shared_sheet(d))
 
 
-def assembled_costs(root: Path, boms: dict[str, list[Line]]) -> list[str] | str:
-    """The README's assembled-cost lines for every module with a board, or the error that stops
-    them (a malformed fee file, a BOM part missing from the board)."""
+def assembled_costs(root: Path, boms: dict[str, list[Line]],
+                    offs: dict[str, list[offboard.Part]] | None = None
+                    ) -> tuple[list[str], dict[str, list[assembly_cost.Estimate]]] | str:
+    """The README's assembled-cost lines and the estimates for every module with a board, or the
+    error that stops them (a malformed fee file, a BOM part missing from the board)."""
     fees_path = root / "bom" / "jlcpcb-fees.toml"
     boards = {m: root / "hardware" / m / f"{m}.kicad_pcb" for m in boms}
     boards = {m: p for m, p in boards.items() if p.is_file()}
     if not boards:
-        return []
+        return [], {}
     if not fees_path.is_file():
         return (f"{rel(fees_path, root)} does not exist: it holds JLCPCB's assembly fees the "
                 f"assembled cost needs (see bom/README.md)")
@@ -400,7 +471,7 @@ def assembled_costs(root: Path, boms: dict[str, list[Line]]) -> list[str] | str:
                             for n in assembly_cost.QUANTITIES]
         except KeyError as e:
             return f"{rel(pcb, root)}: {e.args[0]}"
-    return assembled_summary(estimates, rel(fees_path, root), fees.checked)
+    return assembled_summary(estimates, rel(fees_path, root), fees.checked, offs), estimates
 
 
 def build(root: Path) -> Build:
@@ -427,6 +498,15 @@ def build(root: Path) -> Build:
         if not errors:
             boms[module] = module_lines(symbols, parts)
             b.files[bom_dir / f"{module}.csv"] = module_csv(boms[module])
+    offs: dict[str, list[offboard.Part]] = {}
+    for module in designed:
+        table = offboard.path(root, module)
+        if table.is_file():
+            found, errors = offboard.load(table, rel(table, root), set(parts))
+            b.errors += errors
+            if not errors:
+                offs[module] = found
+                b.files[bom_dir / f"{module}-off-board.csv"] = off_board_csv(found)
     robots = []
     for path in sorted((bom_dir / "robots").glob("*.toml")):
         try:
@@ -439,11 +519,12 @@ def build(root: Path) -> Build:
         if robot.name in modules:
             b.errors.append(f"{rel(bom_dir / 'robots' / (robot.name + '.toml'), root)}: a robot may "
                             f"not share a module's name ({robot.name}.csv would be both)")
-        b.files[bom_dir / f"{robot.name}.csv"] = robot_csv(robot, boms)
-    assembled = assembled_costs(root, boms)
+        b.files[bom_dir / f"{robot.name}.csv"] = robot_csv(robot, boms, offs)
+    assembled = assembled_costs(root, boms, offs)
     if isinstance(assembled, str):
         b.errors.append(assembled)
         return b
+    assembled, estimates = assembled
     readme = bom_dir / "README.md"
     text = readme.read_text() if readme.is_file() else ""
     if BEGIN not in text or END not in text:
@@ -451,7 +532,8 @@ def build(root: Path) -> Build:
                         f"goes between")
     else:
         head, rest = text.split(BEGIN, 1)
-        b.files[readme] = head + BEGIN + "\n" + readme_summary(modules, boms, robots, assembled) + END + \
+        b.files[readme] = head + BEGIN + "\n" + readme_summary(modules, boms, robots, assembled, offs,
+                                                                estimates) + END + \
             rest.split(END, 1)[1]
     return b
 

@@ -28,6 +28,9 @@ import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
+
+from . import heatsink
 
 # --- what the module is for --------------------------------------------------------------------
 VIN_NOM = 36.0                # the paper: "DC motors up to 36 V"
@@ -223,9 +226,11 @@ H_CONV = 12.0                 # W/(m²·K): natural convection + radiation, hori
 VIA_DRILL, VIA_PLATING, BOARD_T = 0.3e-3, 25e-6, 1.6e-3
 VIAS_PER_FET = 40             # thermal vias under each D2PAK tab (8 × 5 at 1.2 mm pitch)
 PAD_T, PAD_K, PAD_MM2 = 0.5e-3, 3.0, 15.0 * 15.0        # gap pad under each tab, insulating
-HEATSINK_RTH = 2.0            # °C/W, sink to air: the heatsink MUST meet it (e.g. a 50 × 50 × 20 mm
-                              # finned extrusion, natural convection; catalogue value NOT VERIFIED)
-HEATSINK_J_PER_K = 90.0       # ~100 g of aluminium (0.9 J/(g·K))
+                              # (a requirement: the candidate, Honeywell TIP 3500, is 3.5 W/(m·K))
+HEATSINK_RTH = 2.0            # °C/W, sink to air at the board's ~10 W: the requirement a bought sink
+                              # MUST meet; calc/heatsink.py models the smallest extrusion that meets
+                              # it with a margin, and the junction row below runs on that model
+HEATSINK_J_PER_K = 90.0       # ~100 g of aluminium (0.9 J/(g·K)): the 10 s peak's heat capacity
 XT60_R = 0.5e-3               # Ω per contact pair: NOT VERIFIED (Amass lists ≤ 0.5 mΩ)
 XT60_RATED = 30.0             # A continuous (Amass)
 # High-current copper AS DRAWN in hardware/motor/motor.py (power_tracks, power_zones, power_vias,
@@ -432,16 +437,50 @@ def rth_board_to_air() -> float:
     return 1 / (H_CONV * 2 * w * h * eta)
 
 
-def junction(i: float, v: float, rth_sink: float) -> tuple[float, dict[str, float]]:
+def junction(i: float, v: float, rth_sink: float | Callable[[float], float],
+             pad: bool = True) -> tuple[float, dict[str, float]]:
     """Worst FET junction at ambient T_AMB, iterating R_DS(on)(T_J): every loss on the board goes
-    through `rth_sink` (heatsink or board copper) to air, the worst FET's own through its stack."""
-    stack = FET_RTH_JC + rth_vias() + (PAD_T / (PAD_K * PAD_MM2 * 1e-6) if rth_sink == HEATSINK_RTH else 0)
+    through `rth_sink` (heatsink or board copper; a function of the total loss for a modelled
+    sink, whose resistance falls as it warms) to air, the worst FET's own through its stack (with
+    the gap pad when `pad`: on a heatsink)."""
+    stack = FET_RTH_JC + rth_vias() + (PAD_T / (PAD_K * PAD_MM2 * 1e-6) if pad else 0)
     tj = 100.0
     for _ in range(50):
         p = losses(i, v, tj)
         total = sum(x for k, x in p.items() if k != "worst FET")
-        tj = T_AMB + total * rth_sink + p["worst FET"] * stack
+        r = rth_sink(total) if callable(rth_sink) else rth_sink
+        tj = T_AMB + total * r + p["worst FET"] * stack
     return tj, p
+
+
+def board_loss() -> float:
+    """The board's total loss at 20 A and the highest input, on a sink at the requirement: what
+    the heatsink sheds (calc/heatsink.py designs for it)."""
+    _, p = junction(I_CONT, VIN_MAX, HEATSINK_RTH)
+    return sum(x for k, x in p.items() if k != "worst FET")
+
+
+def required_heatsink() -> heatsink.Result:
+    """calc/heatsink.py's smallest extrusion meeting HEATSINK_RTH (with its margin) and
+    HEATSINK_J_PER_K at the board's loss."""
+    return heatsink.smallest(round(board_loss(), 6), HEATSINK_RTH, HEATSINK_J_PER_K, T_AMB)
+
+
+def modelled_sink(sink: heatsink.Sink) -> Callable[[float], float]:
+    """`sink`'s modelled resistance as a function of the power it sheds."""
+    return lambda total: heatsink.resistance(sink, total, T_AMB).r
+
+
+def largest_sink_rth() -> float:
+    """The sink-to-air resistance at which the worst junction reaches TJ_LIMIT at 20 A."""
+    lo, hi = 0.0, 20.0
+    for _ in range(20):           # ±20 µK/W
+        mid = (lo + hi) / 2
+        if junction(I_CONT, VIN_MAX, mid)[0] <= TJ_LIMIT:
+            lo = mid
+        else:
+            hi = mid
+    return lo
 
 
 def firmware_assumptions(root: Path | None = None) -> dict[str, float]:
@@ -538,7 +577,7 @@ def rows() -> list[Row]:
             "motor rated ≤ 36 V, at most at its no-load speed: coasting diodes then cannot charge the bus"))
 
     # --- MOSFETs and their heat
-    tj_cold, _ = junction(I_CONT, VIN_MAX, rth_board_to_air())
+    tj_cold, _ = junction(I_CONT, VIN_MAX, rth_board_to_air(), pad=False)
     tj, p = junction(I_CONT, VIN_MAX, HEATSINK_RTH)
     total = sum(x for k, x in p.items() if k != "worst FET")
     add(Row(f"R_DS(on) max, {FET}", f"{FET_RDS_MAX * 1e3:.1f} mΩ at 25 °C", "SLPS540C §4.1", True,
@@ -565,10 +604,49 @@ def rows() -> list[Row]:
             f"≤ {TJ_LIMIT:.0f} °C: needs the heatsink", True,
             f"board {BOARD_MM[0]:.0f} × {BOARD_MM[1]:.0f} mm as a fin, θ {rth_board_to_air():.1f} °C/W; "
             f"continuous on copper alone {copper_only_rating():.1f} A"))
+    loss = round(board_loss(), 6)
+    try:
+        req = required_heatsink()
+    except ValueError as e:      # no extrusion of the search meets the requirement: say so, go on
+        req = None
+        add(Row(f"heatsink: smallest extrusion for ≤ {HEATSINK_RTH} °C/W (model)", "none",
+                f"≤ {HEATSINK_RTH * (1 - heatsink.MARGIN):.2f} °C/W ({heatsink.MARGIN:.0%} under)", False, str(e)))
+    if req is not None:
+        add(Row(f"heatsink: smallest extrusion for ≤ {HEATSINK_RTH} °C/W (model)",
+                f"{req.r:.2f} °C/W, {req.sink.heat_capacity:.0f} J/K",
+                f"≤ {HEATSINK_RTH * (1 - heatsink.MARGIN):.2f} °C/W ({heatsink.MARGIN:.0%} under), "
+                f"≥ {HEATSINK_J_PER_K:.0f} J/K",
+                req.r <= HEATSINK_RTH * (1 - heatsink.MARGIN) and req.sink.heat_capacity >= HEATSINK_J_PER_K,
+                f"{req.sink.describe()}, {req.sink.mass * 1e3:.0f} g, fins vertical; at {req.power:.1f} W: "
+                f"fins to air {req.r_fins:.2f} + spreading {req.r_spread:.2f} °C/W (Bar-Cohen & Rohsenow "
+                f"channels, ε {heatsink.EMISSIVITY} radiation, calc/heatsink.py)"))
+    cand = heatsink.best_in_envelope(*heatsink.CANDIDATE_MM, loss, T_AMB)
+    margin_met = cand.r <= HEATSINK_RTH * (1 - heatsink.MARGIN)
+    tj_cand, _ = junction(I_CONT, VIN_MAX, modelled_sink(cand.sink))
+    add(Row(f"heatsink candidate {heatsink.CANDIDATE} (model of its envelope)", f"{cand.r:.2f} °C/W",
+            f"≤ {HEATSINK_RTH} °C/W", cand.r <= HEATSINK_RTH,
+            f"T_J {tj_cand:.0f} °C on it; {1 - cand.r / HEATSINK_RTH:.0%} under the requirement ("
+            f"{'with' if margin_met else 'without'} the {heatsink.MARGIN:.0%} margin): the best plate-fin "
+            f"profile of its {' × '.join(f'{x:g}' for x in heatsink.CANDIDATE_MM)} mm envelope "
+            f"({cand.sink.fins} fins {cand.sink.fin_t * 1e3:g} mm); its own profile NOT VERIFIED; the "
+            f"distributors' fields {heatsink.CANDIDATE_DISTRIBUTOR_RTH[0]} / "
+            f"{heatsink.CANDIDATE_DISTRIBUTOR_RTH[1]} °C/W (NOT VERIFIED) are at a rise not read"))
+    r_max = largest_sink_rth()
+    pad = PAD_T / (PAD_K * PAD_MM2 * 1e-6)
     add(Row(f"T_J worst FET at {I_CONT:.0f} A, {T_AMB:.0f} °C, heatsink {HEATSINK_RTH} °C/W", f"{tj:.0f} °C",
             f"≤ {TJ_LIMIT:.0f} °C", tj <= TJ_LIMIT,
-            f"{TJ_LIMIT - tj:.0f} °C margin; stack θ_JC {FET_RTH_JC} + vias {rth_vias():.1f} + pad "
-            f"{PAD_T / (PAD_K * PAD_MM2 * 1e-6):.1f} °C/W; sink at {T_AMB + total * HEATSINK_RTH:.0f} °C"))
+            f"{TJ_LIMIT - tj:.0f} °C margin on any sink that meets the requirement (the model's extrusion "
+            f"meets it {heatsink.MARGIN:.0%} under: rows above); {TJ_LIMIT:.0f} °C is reached at "
+            f"{r_max:.1f} °C/W; stack θ_JC {FET_RTH_JC} + vias {rth_vias():.1f} + pad {pad:.1f} °C/W; "
+            f"sink at {T_AMB + total * HEATSINK_RTH:.0f} °C"))
+    if req is None:
+        add(Row(f"T_J worst FET on the required extrusion at {I_CONT:.0f} A, {T_AMB:.0f} °C (model)", "none",
+                f"≤ {TJ_LIMIT:.0f} °C", False, "no extrusion of calc/heatsink.py's search meets the requirement"))
+    else:
+        tj_model, _ = junction(I_CONT, VIN_MAX, modelled_sink(req.sink))
+        add(Row(f"T_J worst FET on the required extrusion at {I_CONT:.0f} A, {T_AMB:.0f} °C (model)",
+                f"{tj_model:.0f} °C", f"≤ {TJ_LIMIT:.0f} °C", tj_model <= TJ_LIMIT,
+                f"{TJ_LIMIT - tj_model:.0f} °C margin; the sink's modelled {req.r:.2f} °C/W at this loss"))
     tj_pk, p_pk = peak_junction(tj, p)
     add(Row(f"T_J at the {I_PEAK:.0f} A peak for {PEAK_S:.0f} s", f"{tj_pk:.0f} °C", f"≤ {TJ_LIMIT:.0f} °C",
             tj_pk <= TJ_LIMIT, f"sink +{(sum(x for k, x in p_pk.items() if k != 'worst FET') - total) * PEAK_S / HEATSINK_J_PER_K:.1f} °C "
@@ -826,7 +904,7 @@ def copper_only_rating() -> float:
     lo, hi = 1.0, I_CONT
     for _ in range(40):
         mid = (lo + hi) / 2
-        if junction(mid, VIN_MAX, rth_board_to_air())[0] <= TJ_LIMIT:
+        if junction(mid, VIN_MAX, rth_board_to_air(), pad=False)[0] <= TJ_LIMIT:
             lo = mid
         else:
             hi = mid
