@@ -50,12 +50,31 @@ pub struct Point {
     /// 100–160 bits, and nothing else may start in it without delaying the next slot's owner).
     /// At 95 % offered load this ceiling is below issue 22's 92 % (docs/rtcan.md, "Capacity").
     pub grid_ceiling: f64,
+    /// The ceiling if every reservation lasted its own frame's worst case (its data length,
+    /// worst-case stuffing, intermission) plus [`RESERVATION_GUARD_BITS`] instead of a whole
+    /// slot: what the frame-sized reservations of docs/rtcan.md "Capacity" could reach with this
+    /// calendar — a bound computed from the run's frames, not a run of that protocol.
+    pub frame_sized_ceiling: f64,
     /// Streams per class: HRT, SRT, NRT.
     pub streams: [usize; 3],
     /// Messages released.
     pub messages: usize,
     /// One report per policy, in the order asked.
     pub reports: Vec<Report>,
+}
+
+/// Bit times a frame-sized reservation would add to its frame's worst case: the nodes' clocks
+/// agree within a few µs of the master's sync (docs/rtcan.md, "Slave clock"), so the next
+/// reservation's owner must not start earlier than that after this one's worst-case end.
+pub const RESERVATION_GUARD_BITS: u32 = 3;
+
+/// Bit times of an extended data frame with `len` data bytes in the worst case: its stuffable
+/// bits, ⌊(stuffable − 1)/4⌋ stuff bits (docs/rtcan.md, "Slot length"), the tail and the
+/// intermission. 160 for 8 bytes: `rtcan::cycle::WORST_CASE_FRAME_BITS`.
+pub const fn worst_case_frame_bits(len: usize) -> u32 {
+    use rtcan::cycle::{FRAME_TAIL_BITS, INTERFRAME_BITS, STUFFABLE_BITS};
+    let stuffable = STUFFABLE_BITS - 64 + 8 * len as u32;
+    stuffable + (stuffable - 1) / 4 + FRAME_TAIL_BITS + INTERFRAME_BITS
 }
 
 /// Generates the traffic of `setup` and runs it under each of `policies`.
@@ -82,6 +101,12 @@ pub fn point(setup: &Setup, policies: &[Policy]) -> Result<Point, SetupError> {
     // length varies a little with the cycle counter: the first one stands for all) and each
     // HRT message in its slot.
     let sync = rtcan::SyncFrame::new(0, 0, false).to_frame();
+    let reserved_worst_bits = cycles
+        * f64::from(worst_case_frame_bits(sync.payload().len()) + RESERVATION_GUARD_BITS)
+        + hrt_messages
+            .iter()
+            .map(|m| f64::from(worst_case_frame_bits(m.payload.len()) + RESERVATION_GUARD_BITS))
+            .sum::<f64>();
     let slotted_bits = cycles * f64::from(r2p_vbus::FrameBits::of(&sync).total())
         + hrt_messages
             .iter()
@@ -106,6 +131,7 @@ pub fn point(setup: &Setup, policies: &[Policy]) -> Result<Point, SetupError> {
         reserved_share: reserved_us / setup.duration_us as f64,
         grid_ceiling: 1.0
             - (reserved_us * f64::from(setup.cycle.bit_rate) / 1e6 - slotted_bits) / cap,
+        frame_sized_ceiling: 1.0 - (reserved_worst_bits - slotted_bits) / cap,
         streams: [count(is_hrt), count(is_srt), count(is_nrt)],
         messages: traffic.messages.len(),
         reports,

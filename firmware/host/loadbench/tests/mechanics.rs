@@ -3,7 +3,7 @@
 
 use r2p_loadbench::metrics::deliveries;
 use r2p_loadbench::traffic::Kind;
-use r2p_loadbench::{point, run, Policy, Setup, SetupError, Traffic};
+use r2p_loadbench::{point, run, worst_case_frame_bits, Policy, Setup, SetupError, Traffic};
 use r2p_node::FreeSlots;
 use r2p_vbus::bits::INTERMISSION_BITS;
 use r2p_vbus::{EventKind, FrameBits};
@@ -279,4 +279,23 @@ fn rtcan_never_carries_more_than_its_slot_grid_leaves() {
             p.grid_ceiling
         );
     }
+}
+
+#[test]
+fn frame_sized_reservations_would_leave_only_their_frames_worst_case_idle() {
+    // Worst-case lengths (docs/rtcan.md, "Slot length"): 8 bytes is the slot's 160 bits, an
+    // empty frame 80, a 4-byte HRT frame 120.
+    assert_eq!(worst_case_frame_bits(8), rtcan::cycle::WORST_CASE_FRAME_BITS);
+    assert_eq!(worst_case_frame_bits(0), 80);
+    assert_eq!(worst_case_frame_bits(4), 120);
+    // Sized to their frames, the reservations leave more of the bus than the grid, never all of
+    // it (each still idles its frame's stuffing slack and the guard).
+    let p = point(&short(0.95, 6, 500_000), &RTCAN).unwrap();
+    assert!(
+        p.frame_sized_ceiling > p.grid_ceiling + 0.03,
+        "{} {}",
+        p.frame_sized_ceiling,
+        p.grid_ceiling
+    );
+    assert!(p.frame_sized_ceiling < 1.0, "{}", p.frame_sized_ceiling);
 }
