@@ -40,7 +40,7 @@ pub struct NodeConfig {
     /// How long before a slot boundary the slot timer calls [`Node::slot_tick`] (µs), which
     /// then acts for the boundary: the time the MCU takes from the timer's interrupt to the
     /// mailbox request, so the slot's frame reaches the controller at the boundary rather than
-    /// that late (a worst-case frame, 160 µs, plus a 29 µs path would not fit a 166 µs slot).
+    /// that late (a worst-case frame, 160 µs, plus a 25 µs path would not fit a 166 µs slot).
     /// 0 on the host; [`MODULE_SLOT_LEAD_US`] on the modules.
     pub slot_lead_us: u32,
     /// Whether the node listens for one heartbeat period after boot, silent, before it claims
