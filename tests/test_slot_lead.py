@@ -26,7 +26,7 @@ def monkeypatch_module():
 def test_the_constants_give_the_measured_leads(measured, capsys):
     assert slotlead.main() == 0, capsys.readouterr().out
     out = capsys.readouterr().out
-    assert "STM32F103 (modules)" in out and " 72 MHz  23 µs     25 µs" in out
+    assert "STM32F103 (modules)" in out and " 72 MHz  23 µs     26 µs" in out
     assert "STM32F407 (gateway)" in out and "168 MHz  10 µs     11 µs" in out
 
 

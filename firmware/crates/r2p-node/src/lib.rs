@@ -40,6 +40,8 @@ mod addressing_tests;
 #[cfg(test)]
 mod advertising_tests;
 #[cfg(test)]
+mod babbler_tests;
+#[cfg(test)]
 mod failover_tests;
 #[cfg(test)]
 mod guard_tests;

@@ -23,8 +23,10 @@
 //!   r·`RANK_STEP_CYCLES`) cycles after the last sync it heard (rank 0 first). Its first sync
 //!   restarts the cycle counter at 0 and flips the epoch bit (bit 0 of the sync payload) relative
 //!   to the last sync it heard; its calendar starts empty.
-//! * A master that receives a sync steps down (sync frames carry no rank; both masters of a
-//!   start-up race step down and the rank-ordered delays then elect one). A master whose sync
+//! * A master that receives a sync steps down (both masters of a start-up race would, and the
+//!   rank-ordered delays then elect one). `r2p-node` gives it only the syncs that are not out of
+//!   turn (docs/rtcan.md, "Babblers"): a master hears a sync that comes before its own next one
+//!   only from a better rank, so of a race's two masters the better one stays. A master whose sync
 //!   failed to go out more than [`MAX_SYNC_LOSS`] times in a row steps down too, before anyone
 //!   could take over from it.
 //! * Every node re-registers its HRT streams on the first sync after losing sync, on a sync

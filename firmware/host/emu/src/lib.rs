@@ -119,7 +119,7 @@ pub type App<'a, N> = Box<dyn FnMut(Micros, &mut N) + 'a>;
 pub type SimPort = r2p_vbus::BxCanPort;
 
 /// µs from an F103 module's clock read to its frame's mailbox request: its slot path from the
-/// compare interrupt ([`r2p_node::CORTEX_M3_SLOT_PATH`], 1 689–1 789 instructions, 23.5–24.8 µs
+/// compare interrupt ([`r2p_node::CORTEX_M3_SLOT_PATH`], 1 724–1 824 instructions, 23.9–25.3 µs
 /// at 72 MHz and one cycle per instruction), the longest rounded up. Every emulated frame of a
 /// board added with [`Sim::add_board`] reaches its mailbox this much after the node's tick; the
 /// boards' firmware ticks [`r2p_node::MODULE_SLOT_LEAD_US`] (the shortest path) before each

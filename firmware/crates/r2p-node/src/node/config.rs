@@ -40,7 +40,7 @@ pub struct NodeConfig {
     /// How long before a slot boundary the slot timer calls [`Node::slot_tick`] (µs), which
     /// then acts for the boundary: the time the MCU takes from the timer's interrupt to the
     /// mailbox request, so the slot's frame reaches the controller at the boundary rather than
-    /// that late (a worst-case frame, 160 µs, plus a 25 µs path would not fit a 166 µs slot).
+    /// that late (a worst-case frame, 160 µs, plus a 26 µs path would not fit a 166 µs slot).
     /// 0 on the host; [`MODULE_SLOT_LEAD_US`] on the modules.
     pub slot_lead_us: u32,
     /// Whether the node listens for one heartbeat period after boot, silent, before it claims
@@ -67,10 +67,10 @@ pub struct SlotPath {
 
 /// The slot path built for the F103's Cortex-M3 (thumbv7m).
 pub const CORTEX_M3_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_689, max_instructions: 1_789 };
+    SlotPath { min_instructions: 1_724, max_instructions: 1_824 };
 /// The slot path built for the F407's Cortex-M4F (thumbv7em, hard float).
 pub const CORTEX_M4_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_699, max_instructions: 1_799 };
+    SlotPath { min_instructions: 1_729, max_instructions: 1_834 };
 
 impl SlotPath {
     /// The slot lead for a core clocked at `sysclk_hz` (µs): the shortest path at one cycle per
@@ -87,7 +87,7 @@ impl SlotPath {
     }
 }
 
-/// The F103 modules' slot lead: [`CORTEX_M3_SLOT_PATH`] at 72 MHz, 23.5–24.8 µs, so 23 µs. The
+/// The F103 modules' slot lead: [`CORTEX_M3_SLOT_PATH`] at 72 MHz, 23.9–25.3 µs, so 23 µs. The
 /// F407 gateway's is [`CORTEX_M4_SLOT_PATH`] at 168 MHz, 10 µs (`SlotPath::lead_us`).
 pub const MODULE_SLOT_LEAD_US: u32 = CORTEX_M3_SLOT_PATH.lead_us(72_000_000);
 
@@ -127,7 +127,7 @@ mod tests {
 
     #[test]
     fn each_mcu_leads_by_its_shortest_slot_path_rounded_down() {
-        // 1 689 / 72 = 23.5 µs; 1 699 / 168 = 10.1 µs.
+        // 1 724 / 72 = 23.9 µs; 1 729 / 168 = 10.3 µs.
         assert_eq!(MODULE_SLOT_LEAD_US, 23);
         assert_eq!(CORTEX_M4_SLOT_PATH.lead_us(168_000_000), 10);
         // Exactly on a microsecond: not rounded.
@@ -138,8 +138,8 @@ mod tests {
 
     #[test]
     fn the_emulated_path_is_the_longest_rounded_up() {
-        // 1 789 / 72 = 24.8 µs; 1 799 / 168 = 10.7 µs.
-        assert_eq!(CORTEX_M3_SLOT_PATH.longest_us(72_000_000), 25);
+        // 1 824 / 72 = 25.3 µs; 1 834 / 168 = 10.9 µs.
+        assert_eq!(CORTEX_M3_SLOT_PATH.longest_us(72_000_000), 26);
         assert_eq!(CORTEX_M4_SLOT_PATH.longest_us(168_000_000), 11);
         let p = SlotPath { min_instructions: 145, max_instructions: 145 };
         assert_eq!(p.longest_us(72_000_000), 3);

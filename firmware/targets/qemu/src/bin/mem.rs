@@ -1,7 +1,7 @@
 //! r2p-module's memory routines (`mem_routines.rs`: the copy every module image links instead
 //! of compiler-builtins') on a Cortex-M3: every alignment of source and destination, every
 //! length up to 72 bytes, through each entry point, against a byte-by-byte reference; bytes
-//! around the destination untouched; the fill.
+//! around the destination untouched; the fill; the aligned clear at every length.
 #![no_std]
 #![no_main]
 
@@ -14,6 +14,8 @@ extern "C" {
     fn __aeabi_memcpy4(dest: *mut u8, src: *const u8, n: usize);
     fn __aeabi_memcpy8(dest: *mut u8, src: *const u8, n: usize);
     fn __aeabi_memset(dest: *mut u8, n: usize, c: i32);
+    fn __aeabi_memclr4(dest: *mut u8, n: usize);
+    fn __aeabi_memclr8(dest: *mut u8, n: usize);
 }
 
 const LEN: usize = 72;
@@ -76,6 +78,29 @@ mod tests {
             for n in 0..=LEN {
                 check(__aeabi_memcpy8, 0, 0, n);
                 check(__aeabi_memcpy8, 8, 8, n);
+            }
+        }
+
+        fn memclr_clears_exactly_its_bytes() {
+            for d in [0, 4, 8] {
+                for n in 0..=LEN {
+                    let mut b = pattern();
+                    let before = pattern();
+                    // SAFETY: in bounds (d + n ≤ LEN + 8); `d` keeps the 4-byte alignment.
+                    unsafe {
+                        if d == 8 {
+                            __aeabi_memclr8(b.0.as_mut_ptr().add(d), n)
+                        } else {
+                            __aeabi_memclr4(b.0.as_mut_ptr().add(d), n)
+                        }
+                    };
+                    for i in 0..b.0.len() {
+                        // SAFETY: in bounds.
+                        let got = unsafe { core::ptr::read_volatile(b.0.as_ptr().add(i)) };
+                        let want = if i >= d && i < d + n { 0 } else { before.0[i] };
+                        assert_eq!(got, want, "byte {} of a {}-byte clear at {}", i, n, d);
+                    }
+                }
             }
         }
 
