@@ -138,3 +138,23 @@ def test_impossible_geometry_is_refused(doc):
     d["board"]["parts"].append(part)
     with pytest.raises(board_facts.BoardError, match="C999 stand.* under Q101's tab island"):
         _plan(d)
+
+
+def test_the_off_board_table_orders_the_stack_the_case_is_made_for(doc):
+    """hardware/motor/off-board.csv is written by hand: its blocks, pad and screws must be the
+    ones the case was generated for (a changed board or case changes the stack)."""
+    import csv
+    with open(ROOT / "hardware/motor/off-board.csv", newline="") as f:
+        rows = {r["item"]: r for r in csv.DictReader(f)}
+    hp = doc["case"]["heat_path"]
+    (w, l, h), = {(round(b["box"][3] - b["box"][0], 4), round(b["box"][4] - b["box"][1], 4),
+                   round(b["box"][5] - b["box"][2], 4)) for b in hp["blocks"]}
+    block = rows["HS104"]
+    assert int(block["quantity"]) == len(hp["blocks"])
+    assert f"{w:.2f} x {l:.2f} x {h:.2f} mm" in block["description"]
+    assert f"{hp['blocks'][0]['bar'][0]:g} x {hp['blocks'][0]['bar'][1]:g} mm flat bar" in block["description"]
+    screw = rows["HS103"]
+    assert int(screw["quantity"]) == len(hp["screws"])
+    assert screw["mpn"] == f"ISO 7045 M3x{hp['screw']['length']:g} A2"
+    assert f"tapped {hp['screw']['tapped_depth']:g} mm deep" in rows["HS101"]["description"]
+    assert f"{w:.1f} x {l:.1f} mm each" in rows["HS102"]["description"]
