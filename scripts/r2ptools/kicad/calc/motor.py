@@ -465,6 +465,25 @@ def stack_rth() -> dict[str, float]:
             "block": h / (BLOCK_K * share), "grease": GREASE_T / (GREASE_K * share)}
 
 
+def heat_path_row(st: dict[str, float]) -> Row:
+    """The case's stack under a tab against what it replaces: a pad as thick as the gap it
+    spans (no block), and a block 2 mm shorter (no floor under the power stage)."""
+    import json
+    hp = heat_path()
+    floor = json.loads(heatsink.CASE_JSON.read_text())["design"]["floor"]
+    added = st["block"] + st["grease"]
+    h = max(b["box"][5] - b["box"][2] for b in hp["blocks"])
+    thick_pad = st["pad"] * (h + hp["pad_compressed"]) / hp["pad_compressed"]
+    no_floor = st["block"] * (h - floor) / h
+    return Row("heat path under each tab (the case's: pad, block, grease)",
+               f"{st['pad'] + added:.2f} °C/W", f"< {thick_pad:.0f} °C/W (a pad filling the gap)", st["pad"] + added < thick_pad,
+               f"pad {st['pad']:.2f} + block {st['block']:.2f} + grease {st['grease']:.2f}: the block and its film add "
+               f"{added:.2f} °C/W to the pad's {st['pad']:.2f} ({added / st['pad']:.0%}); with no floor under the power "
+               f"stage the block would be {h - floor:.2f} mm: {no_floor:.2f} °C/W, {st['block'] - no_floor:.2f} less. "
+               "A flat sink base cannot reach: the board is "
+               f"{h + hp['pad_compressed']:.1f} mm above the case's underside and J102's leads stand between the legs")
+
+
 def junction(i: float, v: float, rth_sink: float | Callable[[float], float],
              pad: bool = True) -> tuple[float, dict[str, float]]:
     """Worst FET junction at ambient T_AMB, iterating R_DS(on)(T_J): every loss on the board goes
@@ -662,6 +681,7 @@ def rows() -> list[Row]:
             f"{heatsink.CANDIDATE_DISTRIBUTOR_RTH[1]} °C/W (NOT VERIFIED) are at a rise not read"))
     r_max = largest_sink_rth()
     st = stack_rth()
+    add(heat_path_row(st))
     add(Row(f"T_J worst FET at {I_CONT:.0f} A, {T_AMB:.0f} °C, heatsink {HEATSINK_RTH} °C/W", f"{tj:.0f} °C",
             f"≤ {TJ_LIMIT:.0f} °C", tj <= TJ_LIMIT,
             f"{TJ_LIMIT - tj:.0f} °C margin on any sink that meets the requirement (the model's extrusion "
