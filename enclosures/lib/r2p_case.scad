@@ -25,12 +25,20 @@
 //   leds: [[x,y]] led_hole_d   pins: [[x,y]] pin_hole_d (push buttons)
 //   led_windows vents: [[x0,y0,x1,y1]]   lid_screw_d lid_csk_d
 //   name: [text, x, y, size] name_relief font   standin_*: the board stand-in (preview only)
+//   only under a floor window (scripts/r2ptools/enclosure/heatpath.py): sink_screws [[x,y]] and
+//   sink_screw [hole_d, d, head_d, head_h, length] (holes in the floor); heat_blocks heat_pads
+//   heat_sink [x0,y0,z0,x1,y1,z1] heat_sink_base (preview only, dropped 25 mm: exploded)
 //   fn: facets per circle
 
 function r2p(P, k) =
     let (v = [for (kv = P) if (kv[0] == k) kv[1]])
     assert(len(v) == 1, str("r2p_case: parameter '", k, "' missing from board.scad"))
     v[0];
+
+// A parameter only some cases have (the heat path under a floor window), or `dflt`.
+function r2p_or(P, k, dflt) =
+    let (v = [for (kv = P) if (kv[0] == k) kv[1]])
+    len(v) == 1 ? v[0] : dflt;
 
 E = 0.01;          // overlap that keeps coplanar faces out of every boolean
 
@@ -104,6 +112,9 @@ module r2p_base(P) {
                 cylinder(d = r2p(P, "insert_m3_d"), h = r2p(P, "insert_m3_depth") + 1, $fn = fn);
         for (m = r2p(P, "mounts"))
             translate([m[0], m[1], -1]) cylinder(d = r2p(P, "m5_d"), h = r2p(P, "floor") + 2, $fn = fn);
+        for (s = r2p_or(P, "sink_screws", []))           // the heatsink's screws, down through the floor
+            translate([s[0], s[1], -1])
+                cylinder(d = r2p(P, "sink_screw")[0], h = r2p(P, "floor") + 2, $fn = fn);
     }
 }
 
@@ -159,6 +170,21 @@ module r2p_standoffs(P) {         // M3 M-F hex standoffs, board to lid (preview
         cylinder(d = r2p(P, "standoff_af") * 2 / sqrt(3), h = h, $fn = 6);
 }
 
+module r2p_heat_path(P, drop) {   // pads, blocks, heatsink and its screws (preview), `drop` below
+    if (len(r2p_or(P, "heat_blocks", [])) > 0) translate([0, 0, -drop]) {
+        for (b = r2p(P, "heat_pads")) color("pink") translate([b[0], b[1], b[2]]) cube([b[3] - b[0], b[4] - b[1], b[5] - b[2]]);
+        for (b = r2p(P, "heat_blocks")) color("silver") translate([b[0], b[1], b[2]]) cube([b[3] - b[0], b[4] - b[1], b[5] - b[2]]);
+        s = r2p(P, "heat_sink"); t = r2p(P, "heat_sink_base");
+        color("dimgray") translate([s[0], s[1], s[5] - t]) cube([s[3] - s[0], s[4] - s[1], t]);
+        color("darkslategray") translate([s[0], s[1], s[2]]) cube([s[3] - s[0], s[4] - s[1], s[5] - t - s[2]]);
+        sc = r2p(P, "sink_screw");
+        for (p = r2p(P, "sink_screws")) color("gold") translate([p[0], p[1], r2p(P, "floor") - sc[4]]) {
+            cylinder(d = sc[1], h = sc[4], $fn = 24);
+            translate([0, 0, sc[4]]) cylinder(d = sc[2], h = sc[3], $fn = 24);
+        }
+    }
+}
+
 module r2p_part(P, part) {
     if (part == "base") r2p_base(P);
     else if (part == "lid") translate([0, 0, -r2p(P, "z_rim")]) r2p_lid(P);
@@ -166,6 +192,7 @@ module r2p_part(P, part) {
         color("steelblue") r2p_base(P);
         r2p_standin(P);
         r2p_standoffs(P);
+        r2p_heat_path(P, 25);
         color("lightsteelblue") translate([0, 0, 25]) r2p_lid(P);
     } else assert(false, str("r2p_part: unknown part '", part, "' (base, lid or preview)"));
 }

@@ -40,6 +40,9 @@ _WARM = re.compile(
     r"^Inductor_(SMD|THT)[^:]*:(?!L_(0201|0402|0603|0805|1008|1206|1210)_)"
     r"|^Package_TO_SOT_SMD:(TO-252|TO-263|TO-268|DPAK|D2PAK)"
     r"|^Diode_SMD:D_(SMA|SMB|SMC|PowerDI)")
+# Power packages whose tab is soldered onto thermal vias: their heat leaves through the board's
+# bottom copper (a B.Cu island the size of the tab under it), into a gap pad and a heatsink.
+HEAT_DOWN = re.compile(r"^Package_TO_SOT_SMD:(TO-263|TO-268|D2PAK)")
 
 
 class BoardError(ValueError):
@@ -72,6 +75,18 @@ class Part:
 
 
 @dataclass(frozen=True)
+class Tab:
+    """A heat-down package's tab (its largest pad), board frame: where its thermal vias land on
+    the B.Cu island the gap pad presses on (hardware/motor/motor.py draws the island the tab's
+    size)."""
+    ref: str
+    x0: float
+    y0: float
+    x1: float
+    y1: float
+
+
+@dataclass(frozen=True)
 class Board:
     module: str
     source: str
@@ -82,9 +97,13 @@ class Board:
     outline: tuple[tuple[float, float], ...]   # closed polygon, arcs flattened by KiCad
     holes: tuple[Hole, ...]
     parts: tuple[Part, ...]
+    tabs: tuple[Tab, ...] = ()
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        d = asdict(self)
+        if not d["tabs"]:
+            del d["tabs"]           # boards without power packages: their files stay as they were
+        return d
 
     @staticmethod
     def from_dict(d: dict) -> "Board":
@@ -93,7 +112,8 @@ class Board:
                "outline": tuple(tuple(p) for p in d["outline"]),
                "holes": tuple(Hole(**h) for h in d["holes"]),
                "parts": tuple(Part(**{**p, "leads": tuple(p["leads"]) if p["leads"] else None})
-                              for p in d["parts"])})
+                              for p in d["parts"]),
+               "tabs": tuple(Tab(**t) for t in d.get("tabs", ()))})
 
 
 def _mm(v: int) -> float:
@@ -181,6 +201,7 @@ def read(path: Path, design) -> Board:
 
     holes: list[Hole] = []
     parts: list[Part] = []
+    tabs: list[Tab] = []
     nets: dict[str, set[str]] = {}       # net -> references of the footprints on it
     inductors: list[str] = []
     for fp in board.GetFootprints():
@@ -234,6 +255,10 @@ def read(path: Path, design) -> Board:
             else:
                 edge = _facing(ref, box, width, height, design.edge_near, where)
         parts.append(Part(ref, fpid, value, side, *box, h, h_src, kind, edge, leads))
+        if side == "top" and HEAT_DOWN.match(fpid) and pads:
+            big = max(pads, key=lambda p: p.GetSize().x * p.GetSize().y)
+            tb = _box(big.GetBoundingBox())
+            tabs.append(Tab(ref, *pt(tb[0], tb[1]), *pt(tb[2], tb[3])))
 
     # A power inductor's small nets are its converter's switch node and bootstrap: the IC and
     # diodes on them are the warm region too (the output rail is a big net and does not count).
@@ -248,7 +273,8 @@ def read(path: Path, design) -> Board:
     return Board(module=path.stem, source=path.name, width=width, height=height,
                  thickness=_mm(board.GetDesignSettings().GetBoardThickness()),
                  corner_r=max(radii) if radii else 0.0, outline=outline,
-                 holes=tuple(holes), parts=tuple(parts))
+                 holes=tuple(holes), parts=tuple(parts),
+                 tabs=tuple(sorted(tabs, key=lambda t: _refkey(t.ref))))
 
 
 def _refkey(ref: str) -> tuple:

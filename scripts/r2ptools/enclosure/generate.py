@@ -5,7 +5,7 @@
     enclosures/<m>/<m>.scad        top file: include the library and the numbers, pick a part
     enclosures/<m>/<m>-base.stl    printed parts, print orientation (OpenSCAD, facets sorted)
     enclosures/<m>/<m>-lid.stl
-    enclosures/<m>/<m>-assembly.step   base, lid, board stand-in, standoffs (cadquery)
+    enclosures/<m>/<m>-assembly.step   base, lid, board stand-in, standoffs, heat path (cadquery)
     enclosures/<m>/<m>.png         exploded preview (OpenSCAD)
     enclosures/<m>/README.md       sizes, clearances, hardware, print settings
 """
@@ -127,8 +127,10 @@ def readme(doc: dict, r: Result, source: str) -> str:
     ]
     for w in c.get("floor_windows", []):
         lines.append(f"| heatsink window | {w[2] - w[0]:.1f} × {w[3] - w[1]:.1f} mm open in the floor under the "
-                     "power packages (their tabs on thermal vias): a heatsink with an insulating gap pad "
-                     "presses against the board's bottom from outside |")
+                     "power packages (their tabs on thermal vias), min_clearance beyond them |")
+    hp = c.get("heat_path")
+    if hp:
+        lines += _heat_rows(hp, d, z)
     if r.fit:
         worst = sorted(r.fit.nearest.items(), key=lambda kv: kv[1][0])[:3]
         lines.append("| fit (cadquery, exact) | " + ("passes" if r.fit.ok else "**FAILS**") + "; closest: " +
@@ -137,10 +139,39 @@ def readme(doc: dict, r: Result, source: str) -> str:
     for part, (v_stl, _) in r.volumes.items():
         lines.append(f"| {part} | [{m}-{part}.stl]({m}-{part}.stl) | {v_stl / 1000:.1f} cm³ | "
                      f"{v_stl / 1000 * PLA_DENSITY:.0f} g |")
-    lines += ["", f"CAD: [{m}-assembly.step]({m}-assembly.step) (base, lid, board stand-in, standoffs, "
+    lines += ["", f"CAD: [{m}-assembly.step]({m}-assembly.step) (base, lid, board stand-in, standoffs"
+              f"{', pads, blocks, heatsink envelope and its screws' if c.get('heat_path') else ''}, "
               f"as mounted); parameters: [{m}.json]({m}.json), OpenSCAD: [{m}.scad]({m}.scad).", "",
               "Hardware:", ""]
     sp = dict(d["standard_parts"])
     sp["standoff"] = sp["standoff"].replace("hex standoff,", f"hex standoff, {c['standoff']:.0f} mm,")
     lines += [f"- {k}: {v}" for k, v in sp.items()]
+    if hp:
+        sc = hp["screw"]
+        lines += [f"- heatsink screw: M3 x {sc['length']:g} pan head ISO 7045, A2, {len(hp['screws'])} per case, "
+                  f"from inside the base (before the board) through the floor into M3 holes tapped "
+                  f"{sc['tapped_depth']:g} mm deep in the heatsink's base"]
+        for k, b in enumerate(hp["blocks"], 1):
+            x0, y0, z0, x1, y1, z1 = b["box"]
+            lines.append(f"- heat-path block {k}: EN AW-6060 flat bar {b['bar'][0]:g} × {b['bar'][1]:g} mm, "
+                         f"sawn and faced to {x1 - x0:.2f} × {y1 - y0:.2f} × {z1 - z0:.2f} mm (± 0.05 mm on the height)")
+        lines.append(f"- gap pad: {hp['pad_t']} mm, {len(hp['pads'])} pieces cut to the blocks' top faces")
     return "\n".join(lines) + "\n"
+
+
+def _heat_rows(hp: dict, d: dict, z: dict) -> list[str]:
+    """The heat path's rows (heatpath.py): what carries the tabs' heat to the heatsink."""
+    sc = hp["screw"]
+    x0, y0, _, x1, y1, _ = hp["sink"]
+    blocks = "; ".join(f"{'+'.join(b['tabs'])}: {b['box'][3] - b['box'][0]:.2f} × {b['box'][4] - b['box'][1]:.2f}"
+                       f" × {b['box'][5] - b['box'][2]:.2f} mm" for b in hp["blocks"])
+    return [
+        f"| heat path | board bottom {z['board_bot']} mm above the case's underside: heatsink base on the "
+        f"underside, greased aluminium block through the window ({blocks}), gap pad {hp['pad_t']} mm "
+        f"compressed {hp['compression']:.0%} to {hp['pad_compressed']} mm on the tabs' B.Cu islands; the pad "
+        "is the insulator, block, sink and screws are on its far side |",
+        f"| heatsink | {x1 - x0:g} × {y1 - y0:g} × {-hp['sink'][2]:g} mm envelope, base {hp['sink_base']:g} mm "
+        f"(assumed), at x {x0:g}..{x1:g} mm (clear of the bus end's mounts), y {y0:g}..{y1:g} mm; "
+        f"{len(hp['screws'])} × M3 × {sc['length']:g}: {sc['engagement']:g} mm of thread in its base "
+        f"(≥ {sc['min_engagement']:g} mm asked, {sc['tapped_depth']:g} mm tapped) |",
+    ]

@@ -14,7 +14,8 @@ cadquery model build from these numbers; they decide nothing the board does not 
   entry); notches closer than `min_pillar` merge; a notch on the dovetail's stretch of a side
   wall cuts the rail or groove pad too (recorded as the cut-out's `dovetail`);
 - the floor opens under power packages that shed their heat through the board's bottom (D2PAK
-  tabs on thermal vias): a window a heatsink reaches the board through;
+  tabs on thermal vias): a window the heat path (heatpath.py: pad, blocks, heatsink and its
+  screws) reaches the board through;
 - the M5 pattern (floor and stacking pads) is centred on the bus end (the standard 60 x 50 mm),
   the same place on every module;
 - the lid's holes, vents and name: lidplan.py.
@@ -24,9 +25,9 @@ from __future__ import annotations
 import math
 import re
 
-from .board_facts import Board, BoardError, Part
+from .board_facts import HEAT_DOWN, Board, BoardError, Part
 from .case_rules import Design
-from . import lidplan
+from . import heatpath, lidplan
 from .lidplan import r4, rects_overlap
 
 
@@ -76,7 +77,9 @@ def layout(b: Board, d: Design) -> dict:
                        [centre(p) for p in b.parts if p.kind == "led"],
                        [centre(p) for p in b.parts if p.kind == "button"],
                        [F.part(p) for p in b.parts if p.kind == "warm"], b.module.upper())
-    return {
+    windows = _floor_windows(b, d, F, holes, mounts)
+    heat = heatpath.plan(b, d, F, z, inner, windows, holes, mounts)
+    case = {
         "module": b.module,
         "interior": [r4(v) for v in inner],
         "inner_r": r4(b.corner_r + d.board_gap),
@@ -89,7 +92,7 @@ def layout(b: Board, d: Design) -> dict:
         "mounts": [[r4(x), r4(y)] for x, y in mounts],
         "dove_y": r4(cy),
         "cutouts": _notches(b, d, F, z_bot, z_top),
-        "floor_windows": _floor_windows(b, d, F, holes, mounts),
+        "floor_windows": windows,
         "leds": lid.leds,
         "led_windows": lid.windows,
         "pins": lid.pins,
@@ -97,6 +100,9 @@ def layout(b: Board, d: Design) -> dict:
         "name": lid.name,
         "standin": _standin(b, d, F, holes, z_bot, z_top),
     }
+    if heat is not None:                      # only under a floor window (the motor's)
+        case["heat_path"] = heat
+    return case
 
 
 def _heights(b: Board, d: Design, F: Frame, mounts) -> tuple[float, float]:
@@ -156,19 +162,21 @@ def _notches(b: Board, d: Design, F: Frame, z_bot: float, z_top: float) -> list[
     return cutouts
 
 
-# Power packages whose tab is soldered onto thermal vias: their heat leaves through the board's
-# bottom copper, into a gap pad and a heatsink pressed against it from below.
-_HEAT_DOWN = re.compile(r"^Package_TO_SOT_SMD:(TO-263|TO-268|D2PAK)")
+_HEAT_DOWN = HEAT_DOWN
 
 
 def _floor_windows(b: Board, d: Design, F: Frame, holes, mounts) -> list[list[float]]:
     """The floor opens under the power packages that shed their heat downwards (one window over
-    all of them), so a heatsink reaches the board's bottom from outside the case."""
+    all of them, min_clearance beyond them), so the heat path (heatpath.py: gap pad, aluminium
+    blocks, heatsink) reaches the board's bottom from outside the case."""
     boxes = [F.part(p) for p in b.parts if p.side == "top" and _HEAT_DOWN.match(p.fpid)]
     if not boxes:
         return []
-    w = [r4(min(x[0] for x in boxes)), r4(min(x[1] for x in boxes)),
-         r4(max(x[2] for x in boxes)), r4(max(x[3] for x in boxes))]
+    # min_clearance beyond the packages: the aluminium blocks under their tabs (heatpath.py) may
+    # be as large as the tabs and still keep that clearance from the window's edges.
+    g = d.min_clearance
+    w = [r4(min(x[0] for x in boxes) - g), r4(min(x[1] for x in boxes) - g),
+         r4(max(x[2] for x in boxes) + g), r4(max(x[3] for x in boxes) + g)]
     keep = [(hx, hy, d.boss_d / 2 + d.min_clearance) for hx, hy, _ in holes] + \
            [(mx, my, d.m5_head_d / 2 + d.min_clearance) for mx, my in mounts]
     for x, y, r in keep:

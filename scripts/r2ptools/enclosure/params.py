@@ -38,6 +38,13 @@ def scad_values(doc: dict) -> list[tuple[str, object]]:
     s = c["standin"]
     out += [("standin_outline", s["outline"]), ("standin_z0", s["z0"]), ("standin_z1", s["z1"]),
             ("standin_parts", [[*p["box"], p["kind"]] for p in s["parts"]])]
+    hp = c.get("heat_path")
+    if hp:        # only a case with a floor window has these (r2p_case.scad reads them optionally)
+        sc = hp["screw"]
+        out += [("sink_screws", hp["screws"]), ("sink_screw", [sc["hole_d"], sc["d"], sc["head_d"], sc["head_h"],
+                                                                sc["length"]]),
+                ("heat_blocks", [b["box"] for b in hp["blocks"]]), ("heat_pads", hp["pads"]),
+                ("heat_sink", hp["sink"]), ("heat_sink_base", hp["sink_base"])]
     return out
 
 

@@ -5,8 +5,8 @@ step for step (same order of unions and cuts, same overlaps), so the two agree; 
 their volumes. Circles are exact here and 96-gons in OpenSCAD.
 
 The STEP assembly places everything as mounted: base, lid, board stand-in (outline x thickness,
-every part a box of its body x height), the standoffs, for people placing a module in a
-robot's CAD. It is byte-stable: OpenCASCADE's header (time stamp, author, organisation,
+every part a box of its body x height), the standoffs and, under a floor window, the heat path
+(pads, blocks, heatsink, its screws), for people placing a module in a robot's CAD. It is byte-stable: OpenCASCADE's header (time stamp, author, organisation,
 originating system) is set to fixed values, and its per-process usage counter renumbered.
 """
 from __future__ import annotations
@@ -101,6 +101,9 @@ def base_pieces(P: Params) -> tuple[cq.Workplane, list[cq.Workplane], cq.Workpla
     bosses = [_cyl(h[0], h[1], P.floor / 2, P.boss_d, zb - P.floor / 2) for h in P.holes]
     holes = [_cyl(h[0], h[1], zb - P.insert_m3_depth, P.insert_m3_d, P.insert_m3_depth + 1) for h in P.holes]
     holes += [_cyl(m[0], m[1], -1, P.m5_d, P.floor + 2) for m in P.mounts]
+    hp = P.c.get("heat_path")
+    if hp:                                    # the heatsink's screws, down through the floor
+        holes += [_cyl(x, y, -1, hp["screw"]["hole_d"], P.floor + 2) for x, y in hp["screws"]]
     return shell, bosses, _union(holes)
 
 
@@ -164,6 +167,27 @@ def standoffs(P: Params, swept: bool = False) -> list[cq.Workplane]:
             for x, y, _ in P.holes]
 
 
+def heat_path(P: Params, hp: dict | None) -> dict[str, cq.Workplane]:
+    """The heat path under the floor window (layout's `heat_path`, heatpath.py), as mounted:
+    gap pads, aluminium blocks, the heatsink (its base, and the fins' envelope below it: the
+    profile is not known) and its screws (pan head on the floor, shank into the tapped base)."""
+    if not hp:
+        return {}
+    out: dict[str, cq.Workplane] = {}
+    for k, (bl, pad) in enumerate(zip(hp["blocks"], hp["pads"]), 1):
+        out[f"block{k}"] = _cube(*bl["box"])
+        out[f"gap pad{k}"] = _cube(*pad)
+    x0, y0, z0, x1, y1, z1 = hp["sink"]
+    out["heatsink base"] = _cube(x0, y0, z1 - hp["sink_base"], x1, y1, z1)
+    out["heatsink fins"] = _cube(x0, y0, z0, x1, y1, z1 - hp["sink_base"])
+    sc = hp["screw"]
+    for k, (x, y) in enumerate(hp["screws"], 1):
+        head = _cyl(x, y, P.floor, sc["head_d"], sc["head_h"])
+        shank = _cyl(x, y, P.floor - sc["length"], sc["d"], sc["length"])
+        out[f"sink screw{k}"] = _union([head, shank])
+    return out
+
+
 def m5_heads(P: Params) -> list[cq.Workplane]:
     return [_cyl(m[0], m[1], P.floor, P.m5_head_d, P.m5_head_h) for m in P.mounts]
 
@@ -187,15 +211,25 @@ class Case:
         return lid(self.P)
 
     @functools.cached_property
+    def heat_params(self) -> dict | None:
+        """The layout's `heat_path` this case's heat-path solids are built from."""
+        return self.P.c.get("heat_path")
+
+    @functools.cached_property
+    def heat_path(self) -> dict[str, cq.Workplane]:
+        return heat_path(self.P, self.heat_params)
+
+    @functools.cached_property
     def standin(self) -> Standin:
         return standin(self.P)
 
     def with_standin(self, doc: dict) -> "Case":
-        """This case, already built, around the stand-in of another parameter document (the
-        fit check's own tests change the board, not the case)."""
+        """This case, already built, around the stand-in and heat path of another parameter
+        document (the fit check's own tests change the board or the stack, not the case)."""
         k = Case(self.P)
         k.__dict__.update({n: v for n, v in self.__dict__.items() if n in ("pieces", "base", "lid")})
         k.__dict__["standin"] = standin(Params(doc))
+        k.__dict__["heat_params"] = doc["case"].get("heat_path")
         return k
 
     def assembly(self) -> cq.Assembly:
@@ -207,6 +241,8 @@ class Case:
             a.add(w, name=ref)
         for k, w in enumerate(standoffs(self.P), 1):
             a.add(w, name=f"standoff{k}")
+        for name, w in self.heat_path.items():
+            a.add(w, name=name)
         return a
 
 

@@ -31,7 +31,8 @@ The model (one concept: heat from the sink's mounting face to still air):
   black-anodised, emissivity `EMISSIVITY`, to surroundings at the ambient, at the fins' mean
   excess temperature η ΔT; the channels' ends and the back of the base (against the case) are
   left out: conservative.
-- The base: heat enters through the case's floor window (`SOURCE_MM`), not the whole base; the
+- The base: heat enters through the case's aluminium blocks (`SOURCE_MM`, their footprints from
+  enclosures/motor/motor.json), not the whole base; the
   spreading resistance is Lee, Song, Au & Moran's closed form for a source on a plate cooled by
   a uniform coefficient ("Constriction/spreading resistance model for electronics packaging",
   ASME/JSME Thermal Engineering Conference 1995), taken at the source's centre (ψ_max: the
@@ -47,9 +48,11 @@ enclosures that choke the channels' inflow, dust.
 """
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 G = 9.80665                   # m/s², standard gravity
 SIGMA = 5.670374419e-8        # W/(m²·K⁴), Stefan-Boltzmann (CODATA 2018)
@@ -76,8 +79,28 @@ EMISSIVITY = 0.80             # black anodised: anodised aluminium 0.82 at 300 K
 
 # --- what the motor module asks (calc/motor.py, the case and the board) -------------------------
 T_AMB = 40.0                  # °C, issue 19's ambient (calc/motor.py T_AMB)
-SOURCE_MM = (39.8, 34.2)      # the case's floor window under the four D2PAK tab islands
-                              # (enclosures/motor/README.md): where the heat enters the base
+CASE_JSON = Path(__file__).resolve().parents[4] / "enclosures/motor/motor.json"
+
+
+def case_heat_path() -> dict:
+    """The motor case's heat path (enclosures/motor/motor.json `heat_path`: made by
+    scripts/enclosures from the board, r2ptools/enclosure/heatpath.py)."""
+    try:
+        return json.loads(CASE_JSON.read_text())["case"]["heat_path"]
+    except (OSError, KeyError, ValueError) as e:
+        raise ValueError(f"{CASE_JSON}: no heat path ({e}): run scripts/enclosures generate motor") from None
+
+
+def case_source_mm() -> tuple[float, float]:
+    """Where the heat enters the sink's base: the case's aluminium blocks' footprints, as one
+    rectangle of their summed area and their length (the spreading model takes the area)."""
+    bl = case_heat_path()["blocks"]
+    length = max(b["box"][4] - b["box"][1] for b in bl)
+    area = sum((b["box"][3] - b["box"][0]) * (b["box"][4] - b["box"][1]) for b in bl)
+    return round(area / length, 4), round(length, 4)
+
+
+SOURCE_MM = case_source_mm()  # the blocks under the four D2PAK tab islands: where the heat enters the base
 MOUNT_MM = (60.0, 50.0)       # smallest base: the board's four M3 holes (52 × 42 mm) plus 4 mm of
                               # base beyond each hole's centre
 FOOTPRINT_MAX_MM = (110.0, 100.0)   # largest base along the board's x and y: in x between the bus

@@ -225,8 +225,16 @@ CU_K = 390.0                  # W/(m·K)
 H_CONV = 12.0                 # W/(m²·K): natural convection + radiation, horizontal board: estimate
 VIA_DRILL, VIA_PLATING, BOARD_T = 0.3e-3, 25e-6, 1.6e-3
 VIAS_PER_FET = 40             # thermal vias under each D2PAK tab (8 × 5 at 1.2 mm pitch)
-PAD_T, PAD_K, PAD_MM2 = 0.5e-3, 3.0, 15.0 * 15.0        # gap pad under each tab, insulating
-                              # (a requirement: the candidate, Honeywell TIP 3500, is 3.5 W/(m·K))
+PAD_K = 3.0                   # W/(m·K), the insulating gap pad under each tab: a requirement (the
+                              # candidate, Honeywell TIP 3500, is 3.5 by CAPLINQ's text: NOT VERIFIED)
+# The heat path under the tabs is the case's (enclosures/motor/motor.json `heat_path`, made by
+# scripts/enclosures from the board: r2ptools/enclosure/heatpath.py): the pad's compressed
+# thickness, the islands' and blocks' sizes come from there, never typed here.
+BLOCK_K = heatsink.AL_K       # W/(m·K), the EN AW-6060 blocks: ~200 (as remembered, NOT VERIFIED)
+GREASE_K = 1.0                # W/(m·K), block to sink: ARCTIC's "non-electrically conductive thermal
+                              # paste offers 1 to 4 W/mK" (arctic.de, thermal interface page): the low end
+GREASE_T = 50e-6              # m, its bond line: grease fills gaps under 0.05 mm (Assmann WSW's TIM
+                              # tutorial on Digi-Key): the thickest of that, an estimate
 HEATSINK_RTH = 2.0            # °C/W, sink to air at the board's ~10 W: the requirement a bought sink
                               # MUST meet; calc/heatsink.py models the smallest extrusion that meets
                               # it with a margin, and the junction row below runs on that model
@@ -437,13 +445,53 @@ def rth_board_to_air() -> float:
     return 1 / (H_CONV * 2 * w * h * eta)
 
 
+def heat_path() -> dict:
+    """The case's heat path (enclosures/motor/motor.json), as scripts/enclosures made it."""
+    return heatsink.case_heat_path()
+
+
+def stack_rth() -> dict[str, float]:
+    """The worst FET's junction-to-sink stack, °C/W, in series: its θ_JC, the thermal vias, the
+    gap pad over the smallest tab island (compressed, 1-D), its share of the block (the block's
+    footprint over the tabs it carries, 1-D through its height: the heat stays under its tab
+    more than this, so the figure is low by the block's spreading) and the grease film under
+    that share."""
+    hp = heat_path()
+    island = min((t[3] - t[1]) * (t[4] - t[2]) for t in hp["tabs"]) * 1e-6
+    share = min((b["box"][3] - b["box"][0]) * (b["box"][4] - b["box"][1]) / len(b["tabs"])
+                for b in hp["blocks"]) * 1e-6
+    h = max(b["box"][5] - b["box"][2] for b in hp["blocks"]) * 1e-3
+    return {"θ_JC": FET_RTH_JC, "vias": rth_vias(), "pad": hp["pad_compressed"] * 1e-3 / (PAD_K * island),
+            "block": h / (BLOCK_K * share), "grease": GREASE_T / (GREASE_K * share)}
+
+
+def heat_path_row(st: dict[str, float]) -> Row:
+    """The case's stack under a tab against what it replaces: a pad as thick as the gap it
+    spans (no block), and a block 2 mm shorter (no floor under the power stage)."""
+    import json
+    hp = heat_path()
+    floor = json.loads(heatsink.CASE_JSON.read_text())["design"]["floor"]
+    added = st["block"] + st["grease"]
+    h = max(b["box"][5] - b["box"][2] for b in hp["blocks"])
+    thick_pad = st["pad"] * (h + hp["pad_compressed"]) / hp["pad_compressed"]
+    no_floor = st["block"] * (h - floor) / h
+    return Row("heat path under each tab (the case's: pad, block, grease)",
+               f"{st['pad'] + added:.2f} °C/W", f"< {thick_pad:.0f} °C/W (a pad filling the gap)", st["pad"] + added < thick_pad,
+               f"pad {st['pad']:.2f} + block {st['block']:.2f} + grease {st['grease']:.2f}: the block and its film add "
+               f"{added:.2f} °C/W to the pad's {st['pad']:.2f} ({added / st['pad']:.0%}); with no floor under the power "
+               f"stage the block would be {h - floor:.2f} mm: {no_floor:.2f} °C/W, {st['block'] - no_floor:.2f} less. "
+               "A flat sink base cannot reach: the board is "
+               f"{h + hp['pad_compressed']:.1f} mm above the case's underside and J102's leads stand between the legs")
+
+
 def junction(i: float, v: float, rth_sink: float | Callable[[float], float],
              pad: bool = True) -> tuple[float, dict[str, float]]:
     """Worst FET junction at ambient T_AMB, iterating R_DS(on)(T_J): every loss on the board goes
     through `rth_sink` (heatsink or board copper; a function of the total loss for a modelled
     sink, whose resistance falls as it warms) to air, the worst FET's own through its stack (with
     the gap pad when `pad`: on a heatsink)."""
-    stack = FET_RTH_JC + rth_vias() + (PAD_T / (PAD_K * PAD_MM2 * 1e-6) if pad else 0)
+    st = stack_rth()
+    stack = st["θ_JC"] + st["vias"] + (st["pad"] + st["block"] + st["grease"] if pad else 0)
     tj = 100.0
     for _ in range(50):
         p = losses(i, v, tj)
@@ -632,12 +680,15 @@ def rows() -> list[Row]:
             f"distributors' fields {heatsink.CANDIDATE_DISTRIBUTOR_RTH[0]} / "
             f"{heatsink.CANDIDATE_DISTRIBUTOR_RTH[1]} °C/W (NOT VERIFIED) are at a rise not read"))
     r_max = largest_sink_rth()
-    pad = PAD_T / (PAD_K * PAD_MM2 * 1e-6)
+    st = stack_rth()
+    add(heat_path_row(st))
     add(Row(f"T_J worst FET at {I_CONT:.0f} A, {T_AMB:.0f} °C, heatsink {HEATSINK_RTH} °C/W", f"{tj:.0f} °C",
             f"≤ {TJ_LIMIT:.0f} °C", tj <= TJ_LIMIT,
             f"{TJ_LIMIT - tj:.0f} °C margin on any sink that meets the requirement (the model's extrusion "
             f"meets it {heatsink.MARGIN:.0%} under: rows above); {TJ_LIMIT:.0f} °C is reached at "
-            f"{r_max:.1f} °C/W; stack θ_JC {FET_RTH_JC} + vias {rth_vias():.1f} + pad {pad:.1f} °C/W; "
+            f"{r_max:.1f} °C/W; stack θ_JC {st['θ_JC']} + vias {st['vias']:.1f} + pad {st['pad']:.2f} + block "
+            f"{st['block']:.2f} + grease {st['grease']:.2f} °C/W (the case's heat path: hardware/motor/README.md "
+            f"\"Heatsink\"); "
             f"sink at {T_AMB + total * HEATSINK_RTH:.0f} °C"))
     if req is None:
         add(Row(f"T_J worst FET on the required extrusion at {I_CONT:.0f} A, {T_AMB:.0f} °C (model)", "none",
@@ -914,7 +965,7 @@ def copper_only_rating() -> float:
 def peak_junction(tj20: float, p20: dict[str, float]) -> tuple[float, dict[str, float]]:
     """T_J after PEAK_S at I_PEAK starting from the 20 A steady state: the heatsink warms by its
     heat capacity, the junction-to-sink stack is at its new steady state."""
-    stack = FET_RTH_JC + rth_vias() + PAD_T / (PAD_K * PAD_MM2 * 1e-6)
+    stack = sum(stack_rth().values())
     total20 = sum(x for k, x in p20.items() if k != "worst FET")
     t_sink = T_AMB + total20 * HEATSINK_RTH
     tj = tj20
