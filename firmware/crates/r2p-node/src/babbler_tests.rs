@@ -93,3 +93,20 @@ fn an_out_of_turn_sync_of_a_better_rank_is_followed() {
     // Its slave waits for the syncs it follows to stop (one cycle) before it follows another.
     assert_eq!(nodes[1].stats().syncs_out_of_turn, 1);
 }
+
+#[test]
+fn an_out_of_turn_sync_of_the_masters_own_rank_changes_nothing() {
+    // Ranks are unique on a bus: a second sender of the master's rank is misconfigured or
+    // babbling, and the master keeps the bus.
+    let bus = Bus::<2>::slotted(CYCLE);
+    let mut m = TestNode::new(tdma(1, "gateway", Some(1)), &NoParams).unwrap();
+    let mut a = TestNode::new(tdma(2, "motor", None), &NoParams).unwrap();
+    let nodes = &mut [&mut m, &mut a];
+    run_slots(&bus, nodes, 300_000);
+    let at: Micros = bus.now.get() + CYCLE_US / 2;
+    run_slots(&bus, nodes, at);
+    bus.inject(babble(1, 1));
+    run_slots(&bus, nodes, at + 3 * CYCLE_US);
+    assert_eq!(nodes[0].role(), Role::Master);
+    assert_eq!((nodes[0].stats().syncs_out_of_turn, nodes[1].stats().syncs_out_of_turn), (1, 1));
+}
