@@ -18,8 +18,8 @@ const HEARTBEAT_US: Micros = 20_000;
 /// From a subscriber's last heartbeat to its publisher's check that drops it, at most.
 const LEAVE_US: Micros = (PEER_TIMEOUT_HEARTBEATS + 2) * HEARTBEAT_US;
 
-/// The exports of every `SubscribersLeft` event `n` had queued.
-fn departures(n: &mut TestNode<'_>) -> Vec<usize, 8> {
+/// The exports of every `SubscribersLeft` event `n` had queued (also `unsubscribe_tests.rs`).
+pub(crate) fn departures(n: &mut TestNode<'_>) -> Vec<usize, 8> {
     let mut v = Vec::new();
     while let Some(e) = n.next_event() {
         if let Event::SubscribersLeft { export } = e {

@@ -7,8 +7,9 @@ use heapless::Vec;
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use rtcan::Micros;
 
-use crate::node::{Event, HrtState, ImportState};
+use crate::node::{HrtState, ImportState};
 use crate::remote::Export;
+use crate::subscriber_liveness_tests::departures;
 use crate::tdma_tests::{tdma, CYCLE, CYCLE_US};
 use crate::testbus::{run_slots, Bus, TestNode};
 use crate::{NoParams, NodeConfig, NodeError, RemotePublisher, RemoteSubscriber};
@@ -16,17 +17,6 @@ use crate::{NoParams, NodeConfig, NodeError, RemotePublisher, RemoteSubscriber};
 /// The test nodes' heartbeat period (tdma_tests::tdma): the publisher checks its subscribers
 /// once a period, so the last one unsubscribing stops its export within two.
 const HEARTBEAT_US: Micros = 20_000;
-
-/// The exports of every `SubscribersLeft` event `n` had queued.
-fn departures(n: &mut TestNode<'_>) -> Vec<usize, 8> {
-    let mut v = Vec::new();
-    while let Some(e) = n.next_event() {
-        if let Event::SubscribersLeft { export } = e {
-            let _ = v.push(export);
-        }
-    }
-    v
-}
 
 #[test]
 fn the_last_subscriber_unsubscribing_stops_the_stream_and_resubscribing_starts_it() {

@@ -61,9 +61,9 @@ pub enum Event {
         /// The publisher's node.
         from: NodeId,
     },
-    /// None of export `export`'s remote subscribers was heard for the peer timeout (their
-    /// modules left; `subscribers.rs`), or the last of them unsubscribed: the export stopped — nothing more is queued for the
-    /// bus, and an HRT export gave its slot back — until someone subscribes again.
+    /// None of export `export`'s remote subscribers was heard for the peer timeout (their modules
+    /// left; `subscribers.rs`), or the last of them unsubscribed: the export stopped — nothing
+    /// more is queued for the bus, an HRT export gave its slot back — until someone subscribes.
     SubscribersLeft {
         /// Index of the export.
         export: usize,

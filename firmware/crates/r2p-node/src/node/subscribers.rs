@@ -5,8 +5,8 @@
 //! raises [`Event::SubscribersLeft`] and the export stops queueing messages
 //! ([`Export::deactivate`]), so its frames stop taking the bus, and an HRT export gives its
 //! slot back to the master (HRT_REQUEST with period 0). A subscriber that comes back asks again
-//! (its side of liveness, `publishers.rs`) and the stream starts again. A subscriber that
-//! unsubscribes (`Node::unsubscribe`) is dropped at once, with the same effect if it was the last.
+//! (its side of liveness, `publishers.rs`) and the stream starts again. An unsubscribing node
+//! (`Node::unsubscribe`) leaves the set at once; if it was the last, the next check stops.
 //!
 //! One time per export, not one per subscriber: a stream goes to every subscriber at once (one
 //! CAN frame), so only the last one leaving changes what the bus carries — and it costs every

@@ -45,9 +45,9 @@ pub enum ImportState {
         /// Why.
         result: SubscribeResult,
     },
-    /// Unsubscribed by the application (`Node::unsubscribe`, feature `unsubscribe`): telling `from` (a request with
-    /// queue length 0), again every `request_timeout_us` until it answers. Its frames are no
-    /// longer taken in.
+    /// Unsubscribed by the application (`Node::unsubscribe`, feature `unsubscribe`): telling
+    /// `from` (a request with queue length 0), again every `request_timeout_us` until it
+    /// answers. Its frames are no longer taken in.
     Leaving {
         /// The publisher's node.
         from: NodeId,
