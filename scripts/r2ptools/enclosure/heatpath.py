@@ -15,10 +15,13 @@ window, so a flat sink base cannot reach the islands. The stack, bottom up:
                    sink and screws are on the sink's side of it, at no circuit's potential
     B.Cu islands   the tabs' thermal vias land on them
 
-The pad's compression is set by geometry: block height = gap - pad_t x (1 - compression); the
-printed case's tolerance (layer height) adds to or takes from it, the board bowing between its
-bosses takes up the rest. Every size is derived here; a board or case it cannot be made for gets
-a BoardError that says what to move.
+The pad's compression is set by geometry: block height = gap - pad_t x (1 - compression). The
+gap comes from printed parts (boss + floor), whose height is good to a layer, so the pad is a
+soft gap filler thick enough that the stack's worst-case tolerance keeps it inside the range a
+gap filler is used in (`compression_window`): never loose (a film compressed a few hundredths
+would open an air gap on a tall print), never crushed into the board. The thermal calculation
+takes its least-compressed thickness. Every size is derived here; a board or case it cannot be
+made for gets a BoardError that says what to move.
 """
 from __future__ import annotations
 
@@ -31,9 +34,16 @@ from .lidplan import r4, rects_overlap
 
 @dataclass(frozen=True)
 class Stack:
-    # --- gap pad (hardware/motor/off-board.csv HS102: Honeywell TIP 3500 0.50 mm) -----------
-    pad_t: float = 0.5
-    pad_compression: float = 0.10       # design value, of pad_t; Honeywell's compression curve NOT VERIFIED
+    # --- gap pad (hardware/motor/off-board.csv HS102: Honeywell TGP 8000HV, a soft gap filler) ---
+    # CAPLINQ lists it 0.5-5 mm thick; the 0.5 mm steps are NOT VERIFIED (Honeywell's TDS not read).
+    pad_thicknesses: tuple[float, ...] = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5, 5.0)
+    # "A gap filler should always be used under a compression of 20-45 %" (T-Global's TIM
+    # selection tutorial on Digi-Key, slide 13): the range every tolerance extreme must stay in.
+    compression_window: tuple[float, float] = (0.20, 0.45)
+    # --- what moves the board's bottom against the sink's face under a block (worst case, +/- mm) ---
+    print_z_tol: float = 0.2            # boss + floor, FDM: one 0.2 mm layer (estimate)
+    block_h_tol: float = 0.05           # the blocks are faced to it (HS104's drawing)
+    sink_flatness: float = 0.05         # the extrusion's base over a block's footprint: NOT VERIFIED
     # --- the blocks: EN AW-6060 flat bar, sawn to length and faced to size ---------------------
     bar_widths: tuple[float, ...] = (10.0, 12.0, 15.0, 20.0, 25.0, 30.0, 40.0, 50.0)
     bar_thicknesses: tuple[float, ...] = (4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0)
@@ -89,6 +99,20 @@ def _stock(s: Stack, across: float, height: float, where: str) -> list[float]:
     return [w, t]
 
 
+def pad_for(s: Stack) -> tuple[float, float, float]:
+    """The thinnest stocked pad whose compression stays inside the window at both extremes of the
+    stack's worst-case tolerance, compressed to the window's middle: (thickness, nominal squeeze,
+    tolerance), mm. Thinnest, because the pad is the stack's largest thermal resistance."""
+    tol = s.print_z_tol + s.block_h_tol + s.sink_flatness
+    lo, hi = s.compression_window
+    for t in sorted(s.pad_thicknesses):
+        squeeze = t * (lo + hi) / 2
+        if squeeze - tol >= lo * t - 1e-9 and squeeze + tol <= hi * t + 1e-9:
+            return t, squeeze, tol
+    raise BoardError(f"no gap pad of {max(s.pad_thicknesses)} mm or less keeps a +/-{tol:.2f} mm stack "
+                     f"within {lo:.0%}-{hi:.0%} compression: tighten the case's or the blocks' tolerance")
+
+
 def plan(b: Board, d, F, z: dict, interior: list[float], windows: list[list[float]], holes,
          mounts, s: Stack = STACK) -> dict | None:
     """The heat path's parts in the case frame (mm), or None when the floor has no window."""
@@ -124,11 +148,12 @@ def plan(b: Board, d, F, z: dict, interior: list[float], windows: list[list[floa
             if merged:
                 break
     gap = z["board_bot"]                 # case underside (Z = 0) to the board's bottom
-    pad_c = s.pad_t * (1 - s.pad_compression)
+    pad_t, squeeze, tol = pad_for(s)
+    pad_c = pad_t - squeeze
     h = gap - pad_c
     if h <= d.floor:
         raise BoardError(f"{where}: the board's bottom is {gap} mm above the case's underside: a "
-                         f"{s.pad_t} mm pad leaves a block of {h:.2f} mm, not through the {d.floor} mm floor")
+                         f"{pad_t} mm pad leaves a block of {h:.2f} mm, not through the {d.floor} mm floor")
     blocks, pads = [], []
     for refs, box in groups:
         if not _inside(box, win, d.min_clearance):
@@ -180,7 +205,9 @@ def plan(b: Board, d, F, z: dict, interior: list[float], windows: list[list[floa
     length = max(fits)
     return {
         "tabs": [[ref, *map(r4, box)] for ref, box in tabs],
-        "pad_t": s.pad_t, "pad_compressed": r4(pad_c), "compression": s.pad_compression,
+        "pad_t": pad_t, "pad_compressed": r4(pad_c), "compression": r4(squeeze / pad_t),
+        "stack_tolerance": r4(tol), "pad_thickest": r4(pad_c + tol),
+        "compression_range": [r4((squeeze - tol) / pad_t), r4((squeeze + tol) / pad_t)],
         "blocks": blocks, "pads": pads,
         "sink": sink, "sink_base": s.sink_base,
         "screws": screws,

@@ -225,11 +225,20 @@ CU_K = 390.0                  # W/(m·K)
 H_CONV = 12.0                 # W/(m²·K): natural convection + radiation, horizontal board: estimate
 VIA_DRILL, VIA_PLATING, BOARD_T = 0.3e-3, 25e-6, 1.6e-3
 VIAS_PER_FET = 40             # thermal vias under each D2PAK tab (8 × 5 at 1.2 mm pitch)
-PAD_K = 3.0                   # W/(m·K), the insulating gap pad under each tab: a requirement (the
-                              # candidate, Honeywell TIP 3500, is 3.5 by CAPLINQ's text: NOT VERIFIED)
+PAD_K = 7.0                   # W/(m·K), the insulating gap pad under each tab: a requirement (the
+                              # candidate, Honeywell TGP 8000HV, is 8.0 by CAPLINQ's text: NOT VERIFIED)
 # The heat path under the tabs is the case's (enclosures/motor/motor.json `heat_path`, made by
 # scripts/enclosures from the board: r2ptools/enclosure/heatpath.py): the pad's compressed
 # thickness, the islands' and blocks' sizes come from there, never typed here.
+# The pad pushes the board up between its standoffs; a firm pad bows it (and strains the tabs'
+# joints) instead of being compressed. Requirement on the pad, like PAD_K: its pressure at the
+# stack's most compression (Honeywell's pressure-deflection curve NOT VERIFIED: the candidate's
+# Shore 00 60 may exceed it; a Shore 00 ~30 grade of the same thickness then).
+PAD_PRESSURE_MAX = 15e3       # Pa at the top of the compression range
+BOW_LIMIT = 0.1e-3            # m: a third of the stack's ± 0.3 mm, so the pad stays in its window
+FR4_E = 20e9                  # Pa, FR-4's flexural modulus (as remembered, NOT VERIFIED); copper
+                              # ignored and the standoffs taken as simple supports: both make the
+                              # board softer than it is, so the bow is an upper bound
 BLOCK_K = heatsink.AL_K       # W/(m·K), the EN AW-6060 blocks: ~200 (as remembered, NOT VERIFIED)
 GREASE_K = 1.0                # W/(m·K), block to sink: ARCTIC's "non-electrically conductive thermal
                               # paste offers 1 to 4 W/mK" (arctic.de, thermal interface page): the low end
@@ -452,17 +461,42 @@ def heat_path() -> dict:
 
 def stack_rth() -> dict[str, float]:
     """The worst FET's junction-to-sink stack, °C/W, in series: its θ_JC, the thermal vias, the
-    gap pad over the smallest tab island (compressed, 1-D), its share of the block (the block's
-    footprint over the tabs it carries, 1-D through its height: the heat stays under its tab
-    more than this, so the figure is low by the block's spreading) and the grease film under
-    that share."""
+    gap pad over the smallest tab island (1-D, at its least compression: the stack's tolerance
+    all the other way), its share of the block (the block's footprint over the tabs it carries,
+    1-D through its height: the heat stays under its tab more than this, so the figure is low by
+    the block's spreading) and the grease film under that share."""
     hp = heat_path()
     island = min((t[3] - t[1]) * (t[4] - t[2]) for t in hp["tabs"]) * 1e-6
     share = min((b["box"][3] - b["box"][0]) * (b["box"][4] - b["box"][1]) / len(b["tabs"])
                 for b in hp["blocks"]) * 1e-6
     h = max(b["box"][5] - b["box"][2] for b in hp["blocks"]) * 1e-3
-    return {"θ_JC": FET_RTH_JC, "vias": rth_vias(), "pad": hp["pad_compressed"] * 1e-3 / (PAD_K * island),
+    return {"θ_JC": FET_RTH_JC, "vias": rth_vias(), "pad": hp["pad_thickest"] * 1e-3 / (PAD_K * island),
             "block": h / (BLOCK_K * share), "grease": GREASE_T / (GREASE_K * share)}
+
+
+def pad_force_row() -> Row:
+    """The pads' force at the stack's most compression bowing the board between the standoff
+    columns either side of the blocks: a beam of the board's width, simply supported, the force
+    at mid-span (48 E I / L^3)."""
+    import json
+    case = json.loads(heatsink.CASE_JSON.read_text())["case"]
+    hp = case["heat_path"]
+    x0, x1 = min(b["box"][0] for b in hp["blocks"]), max(b["box"][3] for b in hp["blocks"])
+    cols = sorted({h[0] for h in case["holes"]})
+    left, right = max(c for c in cols if c <= x0), min(c for c in cols if c >= x1)
+    span = (right - left) * 1e-3
+    width = BOARD_MM[1] * 1e-3
+    k = 48 * FR4_E * (width * BOARD_T ** 3 / 12) / span ** 3
+    area = sum((p[3] - p[0]) * (p[4] - p[1]) for p in hp["pads"]) * 1e-6
+    force = PAD_PRESSURE_MAX * area
+    bow = force / k
+    return Row(f"board bow under the gap pads at {hp['compression_range'][1]:.1%} compression",
+               f"{bow * 1e3:.2f} mm", f"≤ {BOW_LIMIT * 1e3:g} mm", bow <= BOW_LIMIT,
+               f"{force:.1f} N: the pad required to need ≤ {PAD_PRESSURE_MAX / 1e3:.0f} kPa there "
+               f"(PAD_PRESSURE_MAX) over {area * 1e6:.0f} mm²; the board {BOARD_MM[1]:g} × {BOARD_T * 1e3:g} mm "
+               f"across the {span * 1e3:.0f} mm between the standoffs at x {left:g} and {right:g} mm, "
+               f"{k / 1e3:.0f} N/mm (FR-4 {FR4_E / 1e9:.0f} GPa, NOT VERIFIED; copper ignored); a firm pad at "
+               f"100 kPa would bow it {100e3 * area / k * 1e3:.2f} mm")
 
 
 def heat_path_row(st: dict[str, float]) -> Row:
@@ -473,7 +507,7 @@ def heat_path_row(st: dict[str, float]) -> Row:
     floor = json.loads(heatsink.CASE_JSON.read_text())["design"]["floor"]
     added = st["block"] + st["grease"]
     h = max(b["box"][5] - b["box"][2] for b in hp["blocks"])
-    thick_pad = st["pad"] * (h + hp["pad_compressed"]) / hp["pad_compressed"]
+    thick_pad = st["pad"] * (h + hp["pad_compressed"]) / hp["pad_thickest"]
     no_floor = st["block"] * (h - floor) / h
     return Row("heat path under each tab (the case's: pad, block, grease)",
                f"{st['pad'] + added:.2f} °C/W", f"< {thick_pad:.0f} °C/W (a pad filling the gap)", st["pad"] + added < thick_pad,
@@ -682,6 +716,7 @@ def rows() -> list[Row]:
     r_max = largest_sink_rth()
     st = stack_rth()
     add(heat_path_row(st))
+    add(pad_force_row())
     add(Row(f"T_J worst FET at {I_CONT:.0f} A, {T_AMB:.0f} °C, heatsink {HEATSINK_RTH} °C/W", f"{tj:.0f} °C",
             f"≤ {TJ_LIMIT:.0f} °C", tj <= TJ_LIMIT,
             f"{TJ_LIMIT - tj:.0f} °C margin on any sink that meets the requirement (the model's extrusion "
