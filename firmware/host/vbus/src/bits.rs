@@ -30,30 +30,63 @@ pub fn crc15(bits: impl IntoIterator<Item = bool>) -> u16 {
     crc
 }
 
-fn push(bits: &mut Vec<bool>, value: u32, width: u32) {
-    for i in (0..width).rev() {
-        bits.push(value >> i & 1 == 1);
+/// Unstuffed bits of the longest frame from SOF to the end of the CRC sequence (8 data bytes).
+pub const MAX_UNSTUFFED_BITS: usize = 1 + 11 + 1 + 1 + 18 + 3 + 4 + 64 + 15;
+
+/// A frame's unstuffed bits, on the stack: the bus counts them for every frame it carries and
+/// twice for every lost arbitration, so a heap vector each time was a twentieth of a simulation.
+#[derive(Clone, Copy)]
+pub struct Bits {
+    buf: [bool; MAX_UNSTUFFED_BITS],
+    len: usize,
+}
+
+impl Bits {
+    fn push(&mut self, bit: bool) {
+        self.buf[self.len] = bit;
+        self.len += 1;
+    }
+
+    fn push_value(&mut self, value: u32, width: u32) {
+        for i in (0..width).rev() {
+            self.push(value >> i & 1 == 1);
+        }
+    }
+}
+
+impl core::ops::Deref for Bits {
+    type Target = [bool];
+    fn deref(&self) -> &[bool] {
+        &self.buf[..self.len]
     }
 }
 
 /// The unstuffed bits of an extended data frame from SOF to the end of the CRC sequence:
 /// SOF, base ID (11), SRR, IDE, extended ID (18), RTR, r1, r0, DLC (4), data, CRC (15).
-pub fn unstuffed_bits(raw_id: u32, data: &[u8]) -> Vec<bool> {
-    let mut bits = Vec::with_capacity(118);
+///
+/// # Panics
+/// If `data` is longer than a classic CAN frame's 8 bytes.
+pub fn unstuffed_bits(raw_id: u32, data: &[u8]) -> Bits {
+    assert!(
+        data.len() <= 8,
+        "a classic CAN frame carries at most 8 data bytes, not {}",
+        data.len()
+    );
+    let mut bits = Bits { buf: [false; MAX_UNSTUFFED_BITS], len: 0 };
     bits.push(false); // SOF
-    push(&mut bits, raw_id >> 18 & 0x7ff, 11);
+    bits.push_value(raw_id >> 18 & 0x7ff, 11);
     bits.push(true); // SRR (recessive)
     bits.push(true); // IDE (recessive: extended)
-    push(&mut bits, raw_id & 0x3ffff, 18);
+    bits.push_value(raw_id & 0x3ffff, 18);
     bits.push(false); // RTR (dominant: data frame)
     bits.push(false); // r1
     bits.push(false); // r0
-    push(&mut bits, data.len() as u32, 4);
+    bits.push_value(data.len() as u32, 4);
     for &byte in data {
-        push(&mut bits, u32::from(byte), 8);
+        bits.push_value(u32::from(byte), 8);
     }
     let crc = crc15(bits.iter().copied());
-    push(&mut bits, u32::from(crc), 15);
+    bits.push_value(u32::from(crc), 15);
     bits
 }
 

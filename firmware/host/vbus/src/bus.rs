@@ -27,6 +27,8 @@ pub enum TxOrder {
 
 /// Transmit mailboxes per port (bxCAN has three).
 pub const MAILBOXES: usize = 3;
+/// Buses of up to this many segments find their next start in one pass over the nodes.
+const FAST_SEGMENTS: usize = 16;
 
 /// Bus parameters.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -429,9 +431,24 @@ impl Inner {
         for (i, w) in self.withdrawals.iter().enumerate() {
             consider(w.at, 1, i, Due::Withdraw(i));
         }
+        // Each idle segment's earliest request, from one pass over the nodes (start_time's,
+        // which the simulation asks several times per event: per segment it was nodes × segments).
+        let mut first = [u64::MAX; FAST_SEGMENTS];
+        let fast = self.segments.len() <= FAST_SEGMENTS;
+        if fast {
+            for n in &self.nodes {
+                if let Some(t) = n.earliest_request() {
+                    first[n.segment] = first[n.segment].min(t);
+                }
+            }
+        }
         for (i, s) in self.segments.iter().enumerate() {
             if let Some(f) = &s.busy {
                 consider(f.end, 1, i, Due::End(i));
+            } else if fast {
+                if first[i] != u64::MAX {
+                    consider(first[i].max(s.idle_at).max(self.now), 2, i, Due::Start(i));
+                }
             } else if let Some(t) = self.start_time(i) {
                 consider(t, 2, i, Due::Start(i));
             }

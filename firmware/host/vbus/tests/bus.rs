@@ -408,6 +408,43 @@ fn power_off_mid_frame_truncates_it() {
         .any(|e| matches!(e.kind, EventKind::Error { cause: ErrorCause::SenderLost, .. })));
 }
 
+/// Sends three frames on a partitioned bus of `ports` ports: (start, port, id) of each.
+fn partitioned_run(ports: usize) -> Vec<(u64, usize, u32)> {
+    let bus = bus(ports);
+    let last = ports - 1;
+    bus.partition(&[last - 1, last]);
+    bus.port(0).try_transmit(&frame(0x30, &[3])).unwrap();
+    bus.port(1).try_transmit(&frame(0x20, &[2, 2])).unwrap();
+    bus.port(last).try_transmit(&frame(0x10, &[])).unwrap();
+    bus.run_until_idle(MS);
+    assert_eq!(drain(&mut bus.port(last - 1)), [frame(0x10, &[])]);
+    bus.trace()
+        .into_iter()
+        .filter_map(|e| match e.kind {
+            EventKind::Sent { start_ns, frame, .. } => {
+                Some((start_ns, e.port, frame.id().to_raw()))
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn a_bus_of_many_ports_schedules_as_a_small_one() {
+    // Up to 16 segments the next start comes from one pass over the ports; beyond, per segment.
+    let small = partitioned_run(4);
+    let many = partitioned_run(20);
+    let renumber = |v: &[(u64, usize, u32)], last: usize| -> Vec<(u64, usize, u32)> {
+        v.iter().map(|&(t, p, id)| (t, if p == last { 99 } else { p }, id)).collect()
+    };
+    assert_eq!(renumber(&small, 3), renumber(&many, 19));
+    let b = bus(4);
+    // Both segments start at once; on the big one the loser follows the winner.
+    let mut sorted = small.clone();
+    sorted.sort();
+    assert_eq!(sorted, [(0, 1, 0x20), (0, 3, 0x10), (b.frame_ns(&frame(0x20, &[2, 2])), 0, 0x30)]);
+}
+
 #[test]
 fn partitioned_segments_do_not_hear_each_other() {
     let bus = bus(4);
