@@ -133,9 +133,27 @@ pub struct Motor {
     angle: f64,
 }
 
+/// e^(−x) − 1, remembering the last argument: a robot's identical motors step by the same h
+/// with the same τ, and a world step's sub-steps share h, so most calls repeat the one before
+/// (the exponential was a twentieth of a simulation's time). A pure function: same results.
+fn decay_m1(x: f64) -> f64 {
+    thread_local! {
+        static LAST: core::cell::Cell<(f64, f64)> = const { core::cell::Cell::new((0.0, 0.0)) };
+    }
+    LAST.with(|last| {
+        let (lx, lv) = last.get();
+        if lx.to_bits() == x.to_bits() {
+            return lv;
+        }
+        let v = (-x).exp_m1();
+        last.set((x, v));
+        v
+    })
+}
+
 /// i(t) = a + c·e^(−t/τ): its integrals over [0, h] (∫i, ∫i²) and e^(−h/τ).
 fn exp_integrals(a: f64, c: f64, tau: f64, h: f64) -> (f64, f64, f64) {
-    let em1 = (-h / tau).exp_m1(); // e^(−h/τ) − 1, accurate for small h/τ
+    let em1 = decay_m1(h / tau); // e^(−h/τ) − 1, accurate for small h/τ
     let e1 = -em1; // 1 − e^(−h/τ)
     let e2 = -em1 * (2.0 + em1); // 1 − e^(−2h/τ) = (1 − e)(1 + e)
     (a * h + c * tau * e1, a * a * h + 2.0 * a * c * tau * e1 + c * c * tau / 2.0 * e2, 1.0 + em1)
