@@ -204,7 +204,8 @@ struct Node {
     epoch: u64,
     segment: usize,
     mailboxes: [Option<Mailbox>; MAILBOXES],
-    fifo: VecDeque<Received>,
+    /// Received frames with their bits from SOF to the end of EOF (counted once, at the start).
+    fifo: VecDeque<(Received, u32)>,
     filters: Vec<Filter>,
     tec: u16,
     rec: u16,
@@ -329,6 +330,8 @@ struct InFlight {
     start: u64,
     end: u64,
     idle: u64,
+    /// The frame's bits from SOF to the end of EOF, stuffing included.
+    eof_bits: u32,
     outcome: Outcome,
     aborted: bool,
 }
@@ -547,6 +550,7 @@ impl Inner {
             start: t,
             end: t + self.bits_ns(to_end.into()),
             idle: t + self.bits_ns(total.into()),
+            eof_bits: bits.to_eof_end(),
             outcome,
             aborted: false,
         });
@@ -597,7 +601,7 @@ impl Inner {
                     n.rec = if n.rec > 127 { 119 } else { n.rec.saturating_sub(1) };
                     if n.filters.iter().any(|flt| flt.accepts(f.frame.id().to_raw())) {
                         if n.fifo.len() < depth {
-                            n.fifo.push_back(Received { frame: f.frame, at });
+                            n.fifo.push_back((Received { frame: f.frame, at }, f.eof_bits));
                             n.received += 1;
                         } else {
                             n.overflows += 1;
@@ -875,6 +879,12 @@ impl Port {
         lock(&self.inner).now
     }
 
+    /// [`CanController::try_receive`] with the frame's bits from SOF to the end of EOF (what a
+    /// controller that stamps the start of frame counts back from the end).
+    pub fn try_receive_with_bits(&mut self) -> Option<(Received, u32)> {
+        lock(&self.inner).nodes[self.index].fifo.pop_front()
+    }
+
     /// Frames waiting in the receive FIFO.
     pub fn rx_len(&self) -> usize {
         lock(&self.inner).nodes[self.index].fifo.len()
@@ -931,7 +941,7 @@ impl CanController for Port {
     }
 
     fn try_receive(&mut self) -> Option<Received> {
-        lock(&self.inner).nodes[self.index].fifo.pop_front()
+        lock(&self.inner).nodes[self.index].fifo.pop_front().map(|(r, _)| r)
     }
 
     /// An empty list accepts nothing; the default (and after power-on) accepts everything.

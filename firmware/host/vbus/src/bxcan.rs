@@ -16,7 +16,6 @@ use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError, TxMo
 use rtcan::time_counter::{TimeCounter, TIME_COUNTER_MODULUS};
 use rtcan::{CanController, Frame, Micros};
 
-use crate::bits::FrameBits;
 use crate::Port;
 
 /// Longest receive-interrupt latency the model draws, µs: the message-pending interrupt
@@ -84,9 +83,8 @@ impl BxCanPort {
     /// counter captured at its start of frame and the node's time (µs) the receive interrupt
     /// stamped, never after `now_us` (the interrupt ran before the frame is read).
     pub fn receive_captured(&mut self, now_us: Micros) -> Option<(Frame, u16, Micros)> {
-        let r = self.port.try_receive()?;
+        let (r, bits) = self.port.try_receive_with_bits()?;
         let end_ns = r.at * 1_000;
-        let bits = FrameBits::of(&r.frame).to_eof_end();
         let capture = self.capture_at(end_ns - u64::from(bits) * self.bit_ns);
         let valid_us = (end_ns - self.bit_ns) / 1_000;
         let h = (r.at ^ (self.port.index() as u64) << 48).wrapping_mul(0x9E37_79B9_7F4A_7C15);
