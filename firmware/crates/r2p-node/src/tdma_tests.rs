@@ -29,7 +29,7 @@ pub fn tdma(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
 r2p_testkit::suite! {
     fn with_a_slot_lead_the_timer_fires_that_early_and_the_node_acts_for_the_boundary() {
         // A master alone, driven as its slot timer would: at the times `next_slot_at` asks for.
-        let lead: u32 = 27;
+        let lead: u32 = crate::MODULE_SLOT_LEAD_US; // the modules' own
         let bus = Bus::<1>::slotted(CYCLE);
         let config = NodeConfig { slot_lead_us: lead, ..tdma(1, "psu", Some(0)) };
         let mut m = TestNode::new(config, &NoParams).unwrap();
