@@ -29,8 +29,12 @@ use crate::ros::topic;
 /// reads costs at most 5 s of its frames. A figure chosen for that, not measured on a robot.
 pub const HOLD_OFF_US: u64 = 5_000_000;
 
-/// Most feeds one gateway follows (the gateway's 10 and a remote base's 2 fit).
-pub const MAX_FEEDS: usize = 16;
+/// Most feeds one gateway follows: the gateway's 10 and a remote base's 2 (the F407 image's
+/// static RAM is within ~300 B of its budget: no room kept for more).
+pub const MAX_FEEDS: usize = 12;
+
+/// A gateway's feeds, in the order of [`Demand::wanted`]'s bits.
+pub type Feeds<'a> = Vec<Feed<'a>, MAX_FEEDS>;
 
 /// An import only the ROS side wants, and the ROS topics it feeds (bits of
 /// [`crate::ros::topic`] indices).
@@ -70,22 +74,32 @@ pub struct DemandStats {
 }
 
 /// Which imports the ROS side wants, with the hold-off.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct Demand {
     /// Each feed's ROS topics.
     ros: Vec<u32, MAX_FEEDS>,
-    /// Since when each has had no subscriber (while still wanted).
-    idle_since: [Option<u64>; MAX_FEEDS],
+    /// Since when each has had no subscriber (while still wanted); [`NOT_IDLE`] if it has one.
+    idle_since: [u64; MAX_FEEDS],
     /// Bit `k`: feed `k` is wanted.
     wanted: u32,
     stats: DemandStats,
+}
+
+/// An `idle_since` that is no time (half the size of an `Option<u64>`).
+const NOT_IDLE: u64 = u64::MAX;
+
+impl Default for Demand {
+    fn default() -> Self {
+        Self::new(&[])
+    }
 }
 
 impl Demand {
     /// Following `feeds` (the first [`MAX_FEEDS`]), all wanted.
     pub fn new(feeds: &[Feed<'_>]) -> Self {
         let ros = feeds.iter().take(MAX_FEEDS).map(|f| f.ros).collect();
-        Self { ros, idle_since: [None; MAX_FEEDS], wanted: u32::MAX, stats: DemandStats::default() }
+        let idle_since = [NOT_IDLE; MAX_FEEDS];
+        Self { ros, idle_since, wanted: u32::MAX, stats: DemandStats::default() }
     }
 
     /// The state at `now_us`, given whether each ROS topic has a subscriber (`None`: not known).
@@ -104,18 +118,20 @@ impl Demand {
             let bit = 1 << k;
             let wanted = self.wanted & bit != 0;
             if any {
-                self.idle_since[k] = None;
+                self.idle_since[k] = NOT_IDLE;
                 if !wanted {
                     self.wanted |= bit;
                     self.stats.resubscribes = self.stats.resubscribes.wrapping_add(1);
                 }
             } else if unknown {
-                self.idle_since[k] = None;
+                self.idle_since[k] = NOT_IDLE;
             } else if wanted {
-                let since = *self.idle_since[k].get_or_insert(now_us);
-                if now_us.saturating_sub(since) >= HOLD_OFF_US {
+                if self.idle_since[k] == NOT_IDLE {
+                    self.idle_since[k] = now_us;
+                }
+                if now_us.saturating_sub(self.idle_since[k]) >= HOLD_OFF_US {
                     self.wanted &= !bit;
-                    self.idle_since[k] = None;
+                    self.idle_since[k] = NOT_IDLE;
                     self.stats.unsubscribes = self.stats.unsubscribes.wrapping_add(1);
                 }
             }
@@ -168,18 +184,23 @@ impl<
 /// The node's side: applies the wanted mask to the imports the feeds name.
 #[derive(Clone, Debug)]
 pub struct Follower {
-    /// Each feed's import on the node (`None`: the node does not import it).
-    index: [Option<usize>; MAX_FEEDS],
+    /// Each feed's import on the node ([`NO_IMPORT`]: the node does not import it; a node has
+    /// fewer than 255 imports).
+    index: [u8; MAX_FEEDS],
     /// Bit `k`: feed `k` is subscribed, as last applied.
     applied: u32,
 }
 
+/// A feed the node does not import.
+const NO_IMPORT: u8 = u8::MAX;
+
 impl Follower {
     /// The feeds' imports on `node` (registered before), all subscribed.
     pub fn bind(feeds: &[Feed<'_>], node: &impl Imports) -> Self {
-        let mut index = [None; MAX_FEEDS];
+        let mut index = [NO_IMPORT; MAX_FEEDS];
         for (slot, f) in index.iter_mut().zip(feeds) {
-            *slot = node.import_index(f.topic);
+            let i = node.import_index(f.topic).and_then(|i| u8::try_from(i).ok());
+            *slot = i.unwrap_or(NO_IMPORT);
         }
         Self { index, applied: u32::MAX }
     }
@@ -192,10 +213,10 @@ impl Follower {
         }
         for (k, import) in self.index.iter().enumerate() {
             let bit = 1 << k;
-            let Some(i) = *import else { continue };
-            if changed & bit == 0 {
+            if *import == NO_IMPORT || changed & bit == 0 {
                 continue;
             }
+            let i = usize::from(*import);
             // The index came from the node: neither call can fail.
             let _ = match wanted & bit {
                 0 => node.unsubscribe(i),

@@ -214,9 +214,10 @@ pub struct RosBridge {
     stats: RosStats,
 }
 
-/// Subscriber key expressions the bridge follows at once: one on each published key and a
-/// few wildcards; more make every key count as listened to (r2p-zenoh's `matching`).
-pub const REMOTE_SUBS: usize = 24;
+/// Subscriber key expressions the bridge follows at once: as many as it publishes (one on
+/// each key, or wildcards); more make every key count as listened to (r2p-zenoh's
+/// `matching`). Each costs 8 B of static RAM, which the F407 image has little of.
+pub const REMOTE_SUBS: usize = 16;
 
 /// Longest namespace.
 pub const MAX_NAMESPACE: usize = 48;

@@ -776,10 +776,10 @@ mod demand {
             let stream = self.psu.node_id().message_id(1);
             while self.bus.now.get() < until {
                 let now = self.bus.now.get();
-                if now % 10_000 == 0 {
+                if now.is_multiple_of(10_000) {
                     let _ = self.battery.publish_with(|b| b.voltage = 24.0);
                 }
-                if now % 1_000_000 == 0 {
+                if now.is_multiple_of(1_000_000) {
                     self.bridge.receive(now, &[0x04], &mut out).unwrap();
                 }
                 self.psu.poll(now, &mut self.bus.port(0));

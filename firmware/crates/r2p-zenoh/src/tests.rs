@@ -348,7 +348,7 @@ fn a_key_is_matched_while_a_subscriber_on_it_is_declared() {
     // Interest 2 (battery) complete with nothing; interest 1 (odom) gets a subscriber on the
     // own key 1 before its final; interest 3 stays open.
     let answer = push_frame(&[&[0x3E, 2, 0x1A], &[0x3E, 1, 0x02, 7, 1], &[0x3E, 1, 0x1A]]);
-    m = matching_after(&[answer.clone()]);
+    m = matching_after(core::slice::from_ref(&answer));
     assert_eq!(matched(&m), [Some(true), Some(false), None]);
     assert_eq!((m.count(0), m.count(1)), (1, 0));
     // A subscriber on `0/**` matches all three; declared again (for another interest) it
@@ -378,7 +378,7 @@ fn a_key_is_matched_while_a_subscriber_on_it_is_declared() {
 #[test]
 fn a_declaration_that_cannot_be_followed_counts_every_key_as_matched() {
     let finals = push_frame(&[&[0x3E, 1, 0x1A], &[0x3E, 2, 0x1A], &[0x3E, 3, 0x1A]]);
-    assert_eq!(matched(&matching_after(&[finals.clone()])), [Some(false); 3]);
+    assert_eq!(matched(&matching_after(core::slice::from_ref(&finals))), [Some(false); 3]);
     // A prefix the router declared but the session does not know; an own key id this client
     // never declared; more subscribers than the table holds (4).
     for bad in [
