@@ -745,6 +745,65 @@ mod demand {
         assert_eq!(update(&mut d, at + 9 * HOLD_OFF_US, [n; 6]), 0b10);
     }
 
+    #[test]
+    fn each_gateway_feed_names_the_ros_topic_its_import_becomes() {
+        let b =
+            RosBridge::new(&RosConfig { domain: 0, namespace: "", zid: zid_of([5; 12]) }).unwrap();
+        let ros_name = |topic: &'static str| match topic {
+            "psu/battery" => "battery_state",
+            "imu" => "imu/data",
+            "imu/baro" => "imu/pressure",
+            "imu/gnss" => "gnss/fix",
+            other => other, // imu/mag and the mirrored topics keep their names
+        };
+        for f in GATEWAY_FEEDS {
+            assert_eq!(f.ros.count_ones(), 1, "{}", f.topic);
+            let i = f.ros.trailing_zeros() as usize;
+            let want = std::format!("0/{}/", ros_name(f.topic));
+            assert!(b.key(i).starts_with(&want), "{} feeds {}", f.topic, b.key(i));
+        }
+        let r = crate::RemoteBase::leak("proximity/ranges");
+        let [odom, ranges] = r.feeds();
+        assert!(b.key(odom.ros.trailing_zeros() as usize).starts_with("0/odom/"));
+        assert_eq!(ranges.ros.count_ones(), 4);
+        for i in (0..32).filter(|i| ranges.ros & (1 << i) != 0) {
+            assert!(b.key(i).starts_with("0/range_"), "{}", b.key(i));
+        }
+    }
+
+    /// A node that records what it is told.
+    struct Told(Vec<(&'static str, usize)>);
+
+    impl crate::demand::Imports for Told {
+        fn import_index(&self, topic: &str) -> Option<usize> {
+            ["odom", "x", "ranges"].iter().position(|t| *t == topic)
+        }
+        fn unsubscribe(&mut self, import: usize) -> Result<(), r2p_node::NodeError> {
+            self.0.push(("unsubscribe", import));
+            Ok(())
+        }
+        fn resubscribe(&mut self, import: usize) -> Result<(), r2p_node::NodeError> {
+            self.0.push(("resubscribe", import));
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn the_node_is_told_of_changes_only_and_only_for_imports_it_has() {
+        let feeds = [FEEDS[0], Feed { topic: "not imported", ros: 2 }, FEEDS[1]];
+        let mut node = Told(Vec::new());
+        let mut f = Follower::bind(&feeds, &node);
+        f.apply(u32::MAX, &mut node);
+        assert!(node.0.is_empty(), "all wanted, all subscribed");
+        f.apply(!0b111, &mut node);
+        assert_eq!(node.0, [("unsubscribe", 0), ("unsubscribe", 2)], "not the one it lacks");
+        node.0.clear();
+        f.apply(!0b111, &mut node);
+        assert!(node.0.is_empty(), "told once");
+        f.apply(!0b011, &mut node);
+        assert_eq!(node.0, [("resubscribe", 2)]);
+    }
+
     /// FRAME (reliable) with network messages.
     fn frame(msgs: &[&[u8]]) -> Vec<u8> {
         let mut v = std::vec![0x25, 0x00];

@@ -91,8 +91,7 @@ impl<const SUBS: usize> Matching<SUBS> {
                 }
             }
             Event::InterestFinal { id } => {
-                let i = id.wrapping_sub(1) as usize;
-                if i < keys.len().min(MAX_KEYS) {
+                if let Some(i) = (0..keys.len().min(MAX_KEYS)).find(|&i| interest_id(i) == id) {
                     self.complete |= 1 << i;
                 }
             }

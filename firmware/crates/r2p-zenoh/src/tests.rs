@@ -1,7 +1,7 @@
 //! The session against a scripted router: the bytes a Zenoh 1.x router sends and expects.
 
 use crate::codec::Writer;
-use crate::matching::Matching;
+use crate::matching::{interest_id, Matching, MAX_KEYS};
 use crate::session::{Config, Declared, Event, Session, SessionError, State};
 use std::string::String;
 use std::vec;
@@ -299,11 +299,50 @@ fn the_routers_subscriber_declarations_and_undeclarations_are_events() {
 fn an_interest_from_the_router_is_read_past_and_the_frame_goes_on() {
     let mut s = opened();
     // INTEREST id 5, current + future, options S | R | N with the key "a", a QoS extension;
-    // a final INTEREST (no options); then a subscriber declaration.
-    let batch =
-        push_frame(&[&[0xF9, 5, 0x32, 0, 1, b'a', 0x01], &[0x19, 6], &[0x1E, 0x22, 3, 0, 1, b'a']]);
+    // a final INTEREST (no options); one for all key expressions (S only), one restricted to a
+    // key id without a suffix (S | R); then a subscriber declaration.
+    let batch = push_frame(&[
+        &[0xF9, 5, 0x32, 0, 1, b'a', 0x01],
+        &[0x19, 6],
+        &[0x79, 7, 0x02],
+        &[0x79, 8, 0x12, 5],
+        &[0x1E, 0x22, 3, 0, 1, b'a'],
+    ]);
     assert_eq!(events(&mut s, &batch), ["sub 3 a"]);
-    assert_eq!((s.stats().skipped, s.stats().malformed), (2, 0));
+    assert_eq!((s.stats().skipped, s.stats().malformed), (4, 0));
+    // Another node's token (named, with an extension) and its undeclaration, a key
+    // expression undeclared: read past, each with its extension; then a subscriber.
+    let batch = push_frame(&[
+        &[0x1E, 0xA6, 9, 0, 1, b't', 0x01],
+        &[0x1E, 0x87, 9, 0x01],
+        &[0x1E, 0x81, 3, 0x01],
+        &[0x1E, 0x02, 4, 1],
+    ]);
+    assert_eq!(events(&mut s, &batch), ["sub 4 own 1+"]);
+    assert_eq!((s.stats().skipped, s.stats().malformed), (6, 0));
+}
+
+#[test]
+fn declarations_without_a_suffix_or_extensions_are_read_exactly() {
+    let mut s = opened();
+    // The router declares key 9 = "0/"; key 5 = key 9 (no suffix, no extension); undeclares a
+    // key 3 it never declared; another node's token and its undeclaration, without a suffix or
+    // extensions; then subscribers by keys 9 and 5, and a push by this client's own id 9 (not
+    // the router's key 9: not for it).
+    let mut decl = vec![0x1E, 0x20, 9, 0, 2];
+    decl.extend_from_slice(b"0/");
+    let batch = push_frame(&[
+        &decl,
+        &[0x1E, 0x00, 5, 9],
+        &[0x1E, 0x01, 3],
+        &[0x1E, 0x06, 10, 1],
+        &[0x1E, 0x07, 10],
+        &[0x1E, 0x62, 11, 9, 1, b'x'],
+        &[0x1E, 0x42, 12, 5],
+        &[0x1D, 9, 0x01, 1, 0x55],
+    ]);
+    assert_eq!(events(&mut s, &batch), ["sub 11 0/x", "sub 12 0/"]);
+    assert_eq!((s.stats().samples, s.stats().malformed), (0, 0));
 }
 
 #[test]
@@ -362,6 +401,7 @@ fn a_key_is_matched_while_a_subscriber_on_it_is_declared() {
     m = matching_after(&[answer.clone(), wide.clone()]);
     assert_eq!(matched(&m), [Some(true), Some(true), Some(true)]);
     assert_eq!((m.count(0), m.count(1), m.count(2)), (2, 1, 1));
+    assert_eq!((m.count(3), m.count(MAX_KEYS)), (0, 0), "no such key");
     assert_eq!((m.stats().declared, m.stats().unmatched), (3, 1));
     // The wide one goes: the battery and the IMU have nobody; then the odom's goes too.
     m = matching_after(&[answer.clone(), wide.clone(), push_frame(&[&[0x1E, 0x03, 8]])]);
@@ -373,6 +413,21 @@ fn a_key_is_matched_while_a_subscriber_on_it_is_declared() {
     // A new session starts over.
     m.reset();
     assert_eq!(matched(&m), [None, None, None]);
+}
+
+#[test]
+fn each_keys_interest_completes_that_key_and_no_other() {
+    for i in 0..KEYS.len() {
+        let id = interest_id(i);
+        assert!(id > 0 && id < 0x80, "one-byte zint");
+        let m = matching_after(&[push_frame(&[&[0x3E, id as u8, 0x1A]])]);
+        let want: [Option<bool>; 3] = core::array::from_fn(|k| (k == i).then_some(false));
+        assert_eq!(matched(&m), want, "interest {id}");
+    }
+    // An interest of no key (one past the last), and keys past the table: nothing known.
+    let m = matching_after(&[push_frame(&[&[0x3E, interest_id(KEYS.len()) as u8, 0x1A]])]);
+    assert_eq!(matched(&m), [None, None, None]);
+    assert_eq!((m.matched(KEYS.len()), m.matched(MAX_KEYS), m.count(MAX_KEYS)), (None, None, 0));
 }
 
 #[test]
