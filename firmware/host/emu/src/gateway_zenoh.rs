@@ -67,8 +67,10 @@ impl ZenohClient {
                 return;
             };
             let start = Instant::now();
+            // The feeds the bridge follows, across sessions: a reconnection keeps its decisions.
+            let mut followed: Vec<Feed<'static>> = Vec::new();
             while !s.load(Ordering::SeqCst) {
-                if let Err(e) = session(&mut bridge, router, start, &s, &sl) {
+                if let Err(e) = session(&mut bridge, &mut followed, router, start, &s, &sl) {
                     eprintln!("r2p-emu: gateway: zenoh: {e}; reconnecting");
                 }
                 if let Some(sh) = sl.lock().unwrap_or_else(|e| e.into_inner()).as_mut() {
@@ -102,6 +104,7 @@ impl Drop for ZenohClient {
 
 fn session(
     bridge: &mut RosBridge,
+    followed: &mut Vec<Feed<'static>>,
     router: SocketAddr,
     start: Instant,
     stop: &AtomicBool,
@@ -117,7 +120,6 @@ fn session(
     tcp.write_all(&out[..n])?;
     let mut rx: Vec<u8> = Vec::new();
     let mut buf = [0u8; 4096];
-    let mut followed: Vec<Feed<'static>> = Vec::new();
     while !stop.load(Ordering::SeqCst) {
         match tcp.read(&mut buf) {
             Ok(0) => {
@@ -150,7 +152,7 @@ fn session(
             sh.driving = bridge.driving();
             sh.stats = bridge.stats();
             sh.open = bridge.state() == r2p_zenoh_state_open();
-            if sh.feeds != followed {
+            if sh.feeds != *followed {
                 bridge.follow(&sh.feeds);
                 followed.clone_from(&sh.feeds);
             }
