@@ -275,7 +275,7 @@ def echo(ros, topic: str) -> dict:
 def test_battery_state_and_ranges_carry_what_the_modules_publish_on_the_bus(ros):
     peer = ros["peer"]
     battery_key = f"0/battery_state/sensor_msgs::msg::dds_::BatteryState_/{TS.hash_rihs01('sensor_msgs/msg/BatteryState')}"
-    b = collect(peer, battery_key, "sensor_msgs/msg/BatteryState", 2, timeout=5)[-1]
+    b = collect(peer, battery_key, "sensor_msgs/msg/BatteryState", 2, timeout=10)[-1]
     bus = echo(ros, "psu/battery")
     assert b.voltage == pytest.approx(bus["voltage"], abs=0.05) and 20 < b.voltage < 30, (b, bus)
     assert b.current == pytest.approx(-bus["current"], abs=0.3)   # ROS: negative while discharging
@@ -341,6 +341,55 @@ def test_with_the_base_controller_on_the_host_ros_still_drives_the_robot_through
         moved = during[-1].pose.pose.position
         assert moved.x - start.x > 0.2 and abs(moved.y - start.y) < 0.05, (start, moved)
         assert during[-1].header.frame_id == "odom"
+    finally:
+        peer.close()
+        sim.kill()
+        router.close()
+
+
+def battery_frames(sim: SocketcandProcess, seconds: float) -> int:
+    """Frames of `psu/battery` on the bus for `seconds` (`r2p monitor`: it joins the bus to
+    name the streams, subscribing to nothing)."""
+    p = run([str(R2P), "--socketcand", f"127.0.0.1:{sim.port}", "monitor", "--announce", "--seconds",
+             str(seconds), "--json"], timeout=60)
+    assert p.returncode == 0, p.stdout
+    lines = [json.loads(line) for line in p.stdout.splitlines() if line.startswith("{")]
+    return sum(1 for f in lines if f.get("kind") == "topic" and f.get("topic") == "psu/battery")
+
+
+def test_the_gateway_imports_the_battery_only_while_a_zenoh_subscriber_listens(built, tmp_path):
+    """Issue 22: the gateway asks the router for the subscribers of each key it publishes (a
+    Zenoh INTEREST) and unsubscribes on the bus from an import whose ROS topics have had none for
+    its hold-off (5 s): the PSU's battery stream, which nothing else on Triskar2 imports, leaves
+    the bus; a plain Zenoh subscriber on /battery_state brings it back, the ROS samples with it."""
+    robot = tmp_path / "triskar2.toml"
+    robot.write_text(TRISKAR2.read_text().split("[[teleop]]")[0])
+    port = free_port()
+    router = Router(port)
+    sim = SocketcandProcess([str(R2P), "sim", str(robot), "--realtime", "--zenoh", f"tcp/127.0.0.1:{port}"],
+                            "r2p sim")
+    peer = Peer(port)  # subscribes to /odom only
+    battery_key = f"0/battery_state/sensor_msgs::msg::dds_::BatteryState_/{TS.hash_rihs01('sensor_msgs/msg/BatteryState')}"
+    try:
+        wait_for("the gateway's tokens", lambda: any("r2p_gateway" in t for t in peer.tokens()))
+        # Nobody listens to /battery_state: within the hold-off and the unsubscription, the PSU
+        # stops sending it.
+        wait_for("the battery stream to stop", lambda: battery_frames(sim, 1.5) == 0, timeout=30)
+        assert battery_frames(sim, 2.0) == 0
+        # A subscriber (zenoh-python, no ROS liveliness token): the stream and the samples are back.
+        got = []
+        sub = peer.session.declare_subscriber(battery_key, lambda s: got.append(bytes(s.payload.to_bytes())))
+        wait_for("/battery_state samples", lambda: len(got) >= 3, timeout=15)
+        assert battery_frames(sim, 1.5) > 5
+        b = TS.deserialize_cdr(got[-1], "sensor_msgs/msg/BatteryState")
+        assert 20 < b.voltage < 30
+        # It leaves: the stream runs on through the hold-off, then stops again.
+        sub.undeclare()
+        assert battery_frames(sim, 1.5) > 5, "still within the hold-off"
+        wait_for("the battery stream to stop again", lambda: battery_frames(sim, 1.5) == 0, timeout=30)
+        # /odom, which the peer still reads, never stopped.
+        t0 = time.monotonic()
+        wait_for("/odom", lambda: len(peer.samples_since(t0)) >= 5)
     finally:
         peer.close()
         sim.kill()

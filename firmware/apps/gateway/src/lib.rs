@@ -12,6 +12,9 @@
 //! - [`App`]: the 1 kHz step: the LEDs (node state, bus traffic, network link) and
 //!   `gateway/status` once a second (the node's heartbeat carries the bus side).
 //!
+//! - [`demand`]: the imports only ROS 2 wants follow its Zenoh subscribers (unsubscribed on the
+//!   bus when nobody listens).
+//!
 //! Where ROS 2 comes in (issue 20 item 3): a Zenoh client is one more user of [`link`]'s
 //! frames and of the middleware's topics, beside the socketcand server; nothing here changes.
 #![no_std]
@@ -21,6 +24,7 @@
 extern crate std;
 
 mod app;
+pub mod demand;
 pub mod endpoints;
 pub mod link;
 pub mod params;

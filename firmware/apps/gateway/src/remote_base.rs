@@ -9,7 +9,10 @@
 use r2p_middleware::{pool_size, Error};
 use r2p_module::{Inbound, InboundCell, TopicNode};
 use r2p_msgs::{Odometry, Proximity};
-use r2p_node::NodeError;
+use r2p_node::{Import, NodeError};
+
+use crate::demand::Feed;
+use crate::ros::topic;
 
 /// The base controller's odometry.
 pub const ODOM_TOPIC: &str = "odom";
@@ -68,6 +71,16 @@ impl<'a> RemoteBase<'a> {
         Ok(())
     }
 
+    /// Both imports as the ROS side follows them ([`crate::demand`]): `odom` feeds `/odom`, the
+    /// ranges `/range_0` … `/range_3`.
+    pub fn feeds(&self) -> [Feed<'a>; 2] {
+        let ranges = (0..4).fold(0, |m, ch| m | 1 << (topic::RANGE0 + ch));
+        [
+            Feed { topic: self.odom.remote.topic(), ros: 1 << topic::ODOM },
+            Feed { topic: self.ranges.remote.topic(), ros: ranges },
+        ]
+    }
+
     /// The latest odometry and ranges received so far (reading what came since the last call).
     pub fn latest(&mut self) -> (Option<Odometry>, Option<Proximity>) {
         while let Some(o) = self.odom.subscriber.try_recv() {
@@ -92,7 +105,6 @@ impl RemoteBase<'static> {
 mod tests {
     use super::*;
     use r2p_msgs::R2pMessage;
-    use r2p_node::Import;
 
     #[test]
     fn what_the_bus_brings_is_the_latest_until_something_newer_comes() {

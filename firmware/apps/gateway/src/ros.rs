@@ -17,15 +17,21 @@
 //! The board-support layer owns the link (a TCP connection to the router) and the clock; it
 //! hands this bridge each batch it reads and the latest value of each R2P topic, and sends what
 //! the bridge writes. A dropped link is [`RosBridge::connect`]ed again.
+//!
+//! Who listens: with each publisher's key expression the bridge declares an interest in its
+//! subscribers (r2p-zenoh's `matching`), and the imports that feed it follow
+//! ([`crate::demand`], [`RosBridge::follow`], [`RosBridge::wanted`]).
 
 use r2p_msgs::{
     Barometer, Battery, GnssFix, Imu, MagneticField, Odometry, Proximity, R2pMessage, Twist2D,
 };
 use r2p_zenoh::mapping::{self, RangerSpec, Stamp};
+use r2p_zenoh::matching::{interest_id, Matching, MatchingStats};
 use r2p_zenoh::ros::{self, Entity, KeyString, NodeInfo, RosType, DEFAULT_QOS, SENSOR_QOS};
 use r2p_zenoh::session::{Config, Event, Session, SessionError, State, Stats};
 use r2p_zenoh::types::{self, R2pRosType};
 
+use crate::demand::{Demand, DemandStats, Feed};
 use crate::endpoints::MIRRORED;
 
 /// The ROS node's name.
@@ -148,6 +154,10 @@ pub struct RosStats {
     pub bad_cmd_vel: u32,
     /// Watchdog stops.
     pub watchdog_stops: u32,
+    /// The router's subscribers of the published keys, as followed.
+    pub matching: MatchingStats,
+    /// The imports given up and wanted again.
+    pub demand: DemandStats,
 }
 
 /// The latest R2P values the bridge publishes (the board-support layer keeps them current).
@@ -199,8 +209,15 @@ pub struct RosBridge {
     cmd_key: KeyString,
     cmd: Option<(Twist2D, u64)>,
     cmd_pending: Option<Twist2D>,
+    matching: Matching<REMOTE_SUBS>,
+    demand: Demand,
     stats: RosStats,
 }
+
+/// Subscriber key expressions the bridge follows at once: as many as it publishes (one on
+/// each key, or wildcards); more make every key count as listened to (r2p-zenoh's
+/// `matching`). Each costs 8 B of static RAM, which the F407 image has little of.
+pub const REMOTE_SUBS: usize = 16;
 
 /// Longest namespace.
 pub const MAX_NAMESPACE: usize = 48;
@@ -242,6 +259,8 @@ impl RosBridge {
             cmd_key,
             cmd: None,
             cmd_pending: None,
+            matching: Matching::new(),
+            demand: Demand::new(&[]),
             stats: RosStats::default(),
         })
     }
@@ -253,7 +272,29 @@ impl RosBridge {
 
     /// The counters.
     pub fn stats(&self) -> RosStats {
-        RosStats { session: self.session.stats(), ..self.stats }
+        RosStats {
+            session: self.session.stats(),
+            matching: self.matching.stats(),
+            demand: self.demand.stats(),
+            ..self.stats
+        }
+    }
+
+    /// Follows `feeds` ([`crate::demand`]): the imports that feed the publishers, all wanted
+    /// until the router says nobody listens.
+    pub fn follow(&mut self, feeds: &[Feed<'_>]) {
+        self.demand = Demand::new(feeds);
+    }
+
+    /// Bit `k`: the import of `feeds[k]` is wanted (for [`crate::demand::Follower::apply`]).
+    pub fn wanted(&self) -> u32 {
+        self.demand.wanted()
+    }
+
+    /// Whether publisher `i` ([`topic`]) has a subscriber behind the router: `None` until the
+    /// router answered (and while the session is not open).
+    pub fn matched(&self, i: usize) -> Option<bool> {
+        matched(&self.session, &self.matching, i)
     }
 
     /// The key of publisher `i` ([`topic`]).
@@ -263,6 +304,7 @@ impl RosBridge {
 
     /// A new link to the router: the INIT to send.
     pub fn connect(&mut self, now_us: u64, out: &mut [u8]) -> Result<usize, SessionError> {
+        self.matching.reset();
         self.session.start(now_us, out)
     }
 
@@ -277,6 +319,8 @@ impl RosBridge {
         let mut cmd = None;
         let mut bad = 0;
         let cmd_key = &self.cmd_key;
+        let keys: [&str; topic::COUNT] = core::array::from_fn(|i| self.pubs[i].key.as_str());
+        let matching = &mut self.matching;
         let n = self.session.receive(now_us, batch, out, |e| match e {
             Event::Opened => opened = true,
             Event::Sample { key, payload, .. } if key.is(cmd_key) => {
@@ -286,6 +330,7 @@ impl RosBridge {
                 }
             }
             Event::Sample { .. } => {}
+            e => matching.on_event(&e, &keys),
         })?;
         self.stats.bad_cmd_vel += bad;
         if let Some(t) = cmd {
@@ -301,8 +346,8 @@ impl RosBridge {
     }
 
     /// The declarations, one frame each (the node and `/cmd_vel` first, then each publisher's
-    /// key expression and token: ~500 bytes a frame, ~4.3 KB in all). Tokens are rebuilt
-    /// here, not kept: they go out once a session.
+    /// key expression, the interest in its subscribers and its token: ~500 bytes a frame,
+    /// ~4.4 KB in all). Tokens are rebuilt here, not kept: they go out once a session.
     fn declare(&mut self, now_us: u64, out: &mut [u8]) -> Result<usize, SessionError> {
         let node = NodeInfo {
             domain: self.domain,
@@ -327,6 +372,7 @@ impl RosBridge {
             let token = pub_token(&node, i).ok_or(SessionError::Overflow)?;
             n += self.session.send(now_us, &mut out[n..], |net| {
                 net.declare_keyexpr(1 + i as u16, &p.key);
+                net.declare_interest(interest_id(i), 1 + i as u16);
                 net.declare_token(1 + i as u32, &token);
             })?;
         }
@@ -343,6 +389,8 @@ impl RosBridge {
         out: &mut [u8],
     ) -> Result<usize, SessionError> {
         let mut n = self.session.poll(now_us, out)?;
+        let (session, matching) = (&self.session, &self.matching);
+        self.demand.update(now_us, |i| matched(session, matching, i));
         if self.session.state() != State::Open {
             return Ok(n);
         }
@@ -425,6 +473,14 @@ impl RosBridge {
     /// teleop script stays quiet meanwhile.
     pub fn driving(&self) -> bool {
         self.cmd.is_some()
+    }
+}
+
+/// Whether publisher `i` has a subscriber, as far as an open session knows.
+fn matched(session: &Session, matching: &Matching<REMOTE_SUBS>, i: usize) -> Option<bool> {
+    match session.state() {
+        State::Open => matching.matched(i),
+        _ => None,
     }
 }
 

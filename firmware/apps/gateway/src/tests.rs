@@ -670,3 +670,308 @@ fn cmd_vel_drives_until_its_watchdog_sends_one_stop() {
     assert_eq!((b.stats().cmd_vel, b.stats().bad_cmd_vel), (1, 1));
     assert_eq!(b.take_cmd(3_000_000), None);
 }
+
+mod demand {
+    //! The imports follow the Zenoh subscribers (issue 22): [`Demand`]'s hold-off on its own,
+    //! then a gateway on a bus with a PSU whose battery stream stops when the last Zenoh
+    //! subscriber of `/battery_state` leaves and comes back when one declares.
+
+    use r2p_middleware::{pool_size, Class};
+    use r2p_module::OutboundCell;
+    use r2p_msgs::Battery;
+    use r2p_node::testbus::{uid, Bus};
+    use r2p_node::{Export, ImportState, NoParams, Node, NodeConfig};
+    use std::vec::Vec;
+
+    use crate::demand::{Demand, Feed, Follower, GATEWAY_FEEDS, HOLD_OFF_US};
+    use crate::ros::{topic, zid_of, Latest, RosBridge, RosConfig};
+    use crate::{App, BusLink, Endpoints};
+
+    use super::leak;
+
+    /// One feed of `/odom` (bit 0) and one of the four ranges (bits 2-5).
+    const FEEDS: [Feed<'static>; 2] =
+        [Feed { topic: "odom", ros: 1 << topic::ODOM }, Feed { topic: "ranges", ros: 0b11_1100 }];
+
+    fn update(d: &mut Demand, now: u64, m: [Option<bool>; 6]) -> u32 {
+        d.update(now, |i| m.get(i).copied().flatten());
+        d.wanted() & 0b11
+    }
+
+    #[test]
+    fn a_feed_is_given_up_after_the_hold_off_without_subscribers_and_wanted_again_at_once() {
+        let (t, f, n) = (Some(true), Some(false), None);
+        let mut d = Demand::new(&FEEDS);
+        assert_eq!(update(&mut d, 0, [n; 6]), 0b11, "all wanted while nothing is known");
+        // Nobody on /odom from t = 1 s: still wanted until the hold-off has passed.
+        assert_eq!(update(&mut d, 1_000_000, [f, n, t, f, f, f]), 0b11);
+        assert_eq!(update(&mut d, 1_000_000 + HOLD_OFF_US - 1, [f, n, t, f, f, f]), 0b11);
+        assert_eq!(update(&mut d, 1_000_000 + HOLD_OFF_US, [f, n, t, f, f, f]), 0b10);
+        assert_eq!(d.stats().unsubscribes, 1);
+        // A subscriber: wanted at once.
+        assert_eq!(update(&mut d, 9_000_000, [t, n, t, f, f, f]), 0b11);
+        assert_eq!(d.stats().resubscribes, 1);
+        // The ranges: wanted while any of the four has one; all four without for the hold-off.
+        assert_eq!(update(&mut d, 10_000_000, [t, n, f, f, f, t]), 0b11);
+        assert_eq!(update(&mut d, 11_000_000, [t, n, f, f, f, f]), 0b11);
+        assert_eq!(update(&mut d, 11_000_000 + HOLD_OFF_US, [t, n, f, f, f, f]), 0b01);
+        assert_eq!((d.stats().unsubscribes, d.stats().resubscribes), (2, 1));
+    }
+
+    #[test]
+    fn a_subscriber_back_within_the_hold_off_or_no_information_changes_nothing() {
+        let (t, f, n) = (Some(true), Some(false), None);
+        let mut d = Demand::new(&FEEDS);
+        // A ROS node restarting: gone for 4 s, back, gone again: the hold-off starts over.
+        update(&mut d, 0, [f, n, t, t, t, t]);
+        update(&mut d, HOLD_OFF_US - 1_000_000, [t, n, t, t, t, t]);
+        update(&mut d, HOLD_OFF_US, [f, n, t, t, t, t]);
+        assert_eq!(update(&mut d, 2 * HOLD_OFF_US - 1, [f, n, t, t, t, t]), 0b11);
+        // The session lost (nothing known) halfway: the count starts over when it is back.
+        let at = 3 * HOLD_OFF_US;
+        update(&mut d, at - 1, [t, n, t, t, t, t]);
+        update(&mut d, at, [f, n, t, t, t, t]);
+        update(&mut d, at + HOLD_OFF_US / 2, [n, n, n, n, n, n]);
+        assert_eq!(update(&mut d, at + HOLD_OFF_US, [f, n, t, t, t, t]), 0b11);
+        assert_eq!(update(&mut d, at + 2 * HOLD_OFF_US - 1, [f, n, t, t, t, t]), 0b11);
+        // One of the ranges not known and none matched: left as it is, however long.
+        let at = 10 * HOLD_OFF_US;
+        update(&mut d, at, [t, n, f, f, f, n]);
+        assert_eq!(update(&mut d, at + 3 * HOLD_OFF_US, [t, n, f, f, f, n]), 0b11);
+        assert_eq!(d.stats().unsubscribes, 0);
+        // And a feed given up stays so while nothing is known.
+        update(&mut d, at + 4 * HOLD_OFF_US, [f, n, t, t, t, t]);
+        assert_eq!(update(&mut d, at + 5 * HOLD_OFF_US, [f, n, t, t, t, t]), 0b10);
+        assert_eq!(update(&mut d, at + 9 * HOLD_OFF_US, [n; 6]), 0b10);
+    }
+
+    #[test]
+    fn each_gateway_feed_names_the_ros_topic_its_import_becomes() {
+        let b =
+            RosBridge::new(&RosConfig { domain: 0, namespace: "", zid: zid_of([5; 12]) }).unwrap();
+        let ros_name = |topic: &'static str| match topic {
+            "psu/battery" => "battery_state",
+            "imu" => "imu/data",
+            "imu/baro" => "imu/pressure",
+            "imu/gnss" => "gnss/fix",
+            other => other, // imu/mag and the mirrored topics keep their names
+        };
+        for f in GATEWAY_FEEDS {
+            assert_eq!(f.ros.count_ones(), 1, "{}", f.topic);
+            let i = f.ros.trailing_zeros() as usize;
+            let want = std::format!("0/{}/", ros_name(f.topic));
+            assert!(b.key(i).starts_with(&want), "{} feeds {}", f.topic, b.key(i));
+        }
+        let r = crate::RemoteBase::leak("proximity/ranges");
+        let [odom, ranges] = r.feeds();
+        assert!(b.key(odom.ros.trailing_zeros() as usize).starts_with("0/odom/"));
+        assert_eq!(ranges.ros.count_ones(), 4);
+        for i in (0..32).filter(|i| ranges.ros & (1 << i) != 0) {
+            assert!(b.key(i).starts_with("0/range_"), "{}", b.key(i));
+        }
+    }
+
+    /// A node that records what it is told.
+    struct Told(Vec<(&'static str, usize)>);
+
+    impl crate::demand::Imports for Told {
+        fn import_index(&self, topic: &str) -> Option<usize> {
+            ["odom", "x", "ranges"].iter().position(|t| *t == topic)
+        }
+        fn unsubscribe(&mut self, import: usize) -> Result<(), r2p_node::NodeError> {
+            self.0.push(("unsubscribe", import));
+            Ok(())
+        }
+        fn resubscribe(&mut self, import: usize) -> Result<(), r2p_node::NodeError> {
+            self.0.push(("resubscribe", import));
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn the_node_is_told_of_changes_only_and_only_for_imports_it_has() {
+        let feeds = [FEEDS[0], Feed { topic: "not imported", ros: 2 }, FEEDS[1]];
+        let mut node = Told(Vec::new());
+        let mut f = Follower::bind(&feeds, &node);
+        f.apply(u32::MAX, &mut node);
+        assert!(node.0.is_empty(), "all wanted, all subscribed");
+        f.apply(!0b111, &mut node);
+        assert_eq!(node.0, [("unsubscribe", 0), ("unsubscribe", 2)], "not the one it lacks");
+        node.0.clear();
+        f.apply(!0b111, &mut node);
+        assert!(node.0.is_empty(), "told once");
+        f.apply(!0b011, &mut node);
+        assert_eq!(node.0, [("resubscribe", 2)]);
+    }
+
+    /// FRAME (reliable) with network messages.
+    fn frame(msgs: &[&[u8]]) -> Vec<u8> {
+        let mut v = std::vec![0x25, 0x00];
+        msgs.iter().for_each(|m| v.extend_from_slice(m));
+        v
+    }
+
+    type Gateway = Node<'static, 2, 12, 32, 4, 64>;
+    type Psu = Node<'static, 2, 2, 24, 4, 64>;
+
+    struct Rig {
+        bus: &'static Bus<3>,
+        psu: Psu,
+        gw: Gateway,
+        app: App<'static>,
+        bridge: RosBridge,
+        follower: Follower,
+        battery: &'static r2p_middleware::Publisher<'static, Battery>,
+        remote: &'static dyn Export,
+        /// Frames of the battery's stream seen on the bus, by the ms they were seen at.
+        seen: Vec<u64>,
+    }
+
+    impl Rig {
+        /// Runs 1 ms steps until `until` µs: the PSU publishes its battery every 10 ms, the
+        /// router keeps the session alive once a second.
+        fn run(&mut self, until: u64) {
+            let mut out = [0u8; 8192];
+            let stream = self.psu.node_id().message_id(1);
+            while self.bus.now.get() < until {
+                let now = self.bus.now.get();
+                if now.is_multiple_of(10_000) {
+                    let _ = self.battery.publish_with(|b| b.voltage = 24.0);
+                }
+                if now.is_multiple_of(1_000_000) {
+                    self.bridge.receive(now, &[0x04], &mut out).unwrap();
+                }
+                self.psu.poll(now, &mut self.bus.port(0));
+                self.gw.poll(now, &mut self.bus.port(1));
+                self.app.step(now, &crate::Sample::default());
+                self.bridge.poll(now, 0, &Latest::default(), &mut out).unwrap();
+                self.follower.apply(self.bridge.wanted(), &mut self.gw);
+                while let Some(r) = rtcan::CanController::try_receive(&mut self.bus.port(2)) {
+                    if r.frame.id().message == stream {
+                        self.seen.push(now);
+                    }
+                }
+                self.bus.now.set(now + 1_000);
+            }
+        }
+
+        fn router(&mut self, batch: &[u8]) {
+            let mut out = [0u8; 8192];
+            self.bridge.receive(self.bus.now.get(), batch, &mut out).unwrap();
+        }
+
+        fn frames_between(&self, from: u64, to: u64) -> usize {
+            self.seen.iter().filter(|&&t| t >= from && t < to).count()
+        }
+    }
+
+    fn rig() -> Rig {
+        let bus: &'static Bus<3> = leak(Bus::new());
+        let config = |n, name| NodeConfig {
+            heartbeat_period_us: 20_000,
+            request_timeout_us: 30_000,
+            ..NodeConfig::new(uid(n), name)
+        };
+        let mut psu = Psu::new(config(1, "psu"), &NoParams).unwrap();
+        let cell: &'static OutboundCell<Battery, { pool_size(&[2], 1) }, 1, 2> =
+            leak(OutboundCell::new());
+        let out = cell.build("psu/battery", Battery::default(), Class::NonRealTime).unwrap();
+        psu.export(out.remote).unwrap();
+        let mut gw = Gateway::new(config(2, "gateway"), &NoParams).unwrap();
+        let app = App::new(Endpoints::leak(), leak(BusLink::new()));
+        app.register(&mut gw).unwrap();
+        let follower = Follower::bind(&GATEWAY_FEEDS, &gw);
+        let mut bridge =
+            RosBridge::new(&RosConfig { domain: 0, namespace: "", zid: zid_of([5; 12]) }).unwrap();
+        bridge.follow(&GATEWAY_FEEDS);
+        let mut rig = Rig {
+            bus,
+            psu,
+            gw,
+            app,
+            bridge,
+            follower,
+            battery: out.publisher,
+            remote: out.remote,
+            seen: Vec::new(),
+        };
+        // The session: INIT ack, OPEN ack (r2p-zenoh's tests have their bytes).
+        let mut buf = [0u8; 8192];
+        rig.bridge.connect(0, &mut buf).unwrap();
+        rig.router(&[0x21, 0x09, 0x00, 0xAA, 0x01, 0xCC]);
+        rig.router(&[0x62, 10, 0]);
+        rig
+    }
+
+    #[test]
+    fn the_battery_stream_stops_when_its_last_zenoh_subscriber_leaves_and_comes_back_with_one() {
+        let mut r = rig();
+        r.run(300_000);
+        let battery = r.gw.import_index("psu/battery").unwrap();
+        assert!(matches!(r.gw.import_state(battery), Some(ImportState::Subscribed { .. })));
+        // The router answers the interests: a subscriber on /battery_state's own key (id 2,
+        // interest 2), nobody on the rest.
+        let sub = [0x3E, 2, 0x02, 5, 2];
+        let finals: Vec<[u8; 3]> = (1..=topic::COUNT as u8).map(|i| [0x3E, i, 0x1A]).collect();
+        let mut msgs: Vec<&[u8]> = std::vec![&sub];
+        msgs.extend(finals.iter().map(|f| &f[..]));
+        r.router(&frame(&msgs));
+        assert_eq!(r.bridge.matched(topic::BATTERY), Some(true));
+        assert_eq!(r.bridge.matched(topic::IMU), Some(false));
+        // The IMU's imports (nobody publishes them here) are given up after the hold-off; the
+        // battery is not.
+        let t0 = r.bus.now.get();
+        r.run(t0 + HOLD_OFF_US + 100_000);
+        let imu = r.gw.import_index("imu").unwrap();
+        assert_eq!(r.gw.import_state(imu), Some(ImportState::Unsubscribed { publisher: None }));
+        assert!(matches!(r.gw.import_state(battery), Some(ImportState::Subscribed { .. })));
+        assert_eq!(r.bridge.stats().demand.unsubscribes, 9);
+
+        // The subscriber goes: the stream runs on through the hold-off, then stops.
+        let gone = r.bus.now.get();
+        r.router(&frame(&[&[0x1E, 0x03, 5]]));
+        assert_eq!(r.bridge.matched(topic::BATTERY), Some(false));
+        r.run(gone + HOLD_OFF_US + 200_000);
+        assert!(r.frames_between(gone + HOLD_OFF_US - 500_000, gone + HOLD_OFF_US) >= 40);
+        let stopped = gone + HOLD_OFF_US + 100_000;
+        assert_eq!(r.frames_between(stopped, r.bus.now.get()), 0, "no battery frame on the bus");
+        assert!(matches!(r.gw.import_state(battery), Some(ImportState::Unsubscribed { .. })));
+        assert_eq!(r.remote.active_len(), 0, "the PSU's export stopped");
+        assert_eq!(r.bridge.stats().demand.unsubscribes, 10);
+
+        // A plain Zenoh subscriber on `0/**` comes: the stream is back within 100 ms.
+        let back = r.bus.now.get();
+        r.router(&frame(&[&[0x1E, 0x22, 6, 0, 4, b'0', b'/', b'*', b'*']]));
+        r.run(back + 200_000);
+        assert!(r.frames_between(back, back + 100_000) > 0, "back within 100 ms");
+        assert!(r.frames_between(back + 100_000, back + 200_000) >= 8, "and flowing");
+        assert!(matches!(r.gw.import_state(battery), Some(ImportState::Subscribed { .. })));
+        assert_eq!(r.bridge.stats().demand.resubscribes, 10, "all ten, on a wildcard");
+        assert_eq!(r.bridge.stats().matching.declared, 2);
+    }
+
+    #[test]
+    fn a_subscriber_that_comes_back_within_the_hold_off_keeps_the_stream_running() {
+        let mut r = rig();
+        r.run(300_000);
+        let sub = [0x3E, 2, 0x02, 5, 2];
+        let finals: Vec<[u8; 3]> = (1..=topic::COUNT as u8).map(|i| [0x3E, i, 0x1A]).collect();
+        let mut msgs: Vec<&[u8]> = std::vec![&sub];
+        msgs.extend(finals.iter().map(|f| &f[..]));
+        r.router(&frame(&msgs));
+        // A ROS node restarting: its subscriber gone, back 3 s later, gone, back again.
+        let t0 = r.bus.now.get();
+        for k in 0..3 {
+            r.router(&frame(&[&[0x1E, 0x03, 5]]));
+            r.run(t0 + (2 * k + 1) * 3_000_000);
+            r.router(&frame(&[&[0x1E, 0x02, 5, 2]]));
+            r.run(t0 + (2 * k + 2) * 3_000_000);
+        }
+        let end = r.bus.now.get();
+        let per_second = (0..(end - t0) / 1_000_000)
+            .map(|s| r.frames_between(t0 + s * 1_000_000, t0 + (s + 1) * 1_000_000));
+        assert!(per_second.clone().all(|n| n >= 90), "{:?}", per_second.collect::<Vec<_>>());
+        let battery = r.gw.import_index("psu/battery").unwrap();
+        assert!(matches!(r.gw.import_state(battery), Some(ImportState::Subscribed { .. })));
+    }
+}

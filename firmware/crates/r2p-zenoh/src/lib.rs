@@ -5,7 +5,10 @@
 //! embassy-net) and on the emulated gateway (over host TCP):
 //!
 //! - [`codec`]: Zenoh's wire primitives (zints, byte strings, extensions);
-//! - [`session`]: the client session (handshake, keep-alive, lease, declarations, puts);
+//! - [`session`]: the client session (handshake, keep-alive, lease, declarations, interests,
+//!   puts);
+//! - [`matching`]: which of the client's published keys have subscribers behind the router;
+//! - [`keyexpr`]: key expressions with wildcards against a concrete key;
 //! - [`ros`]: rmw_zenoh's key expressions, liveliness tokens and attachment;
 //! - [`cdr`]: CDR, and any R2P message as its `r2p_msgs` CDR from its field layout;
 //! - [`mapping`]: the standard ROS 2 messages R2P messages stand for;
@@ -24,7 +27,9 @@ extern crate std;
 
 pub mod cdr;
 pub mod codec;
+pub mod keyexpr;
 pub mod mapping;
+pub mod matching;
 pub mod ros;
 pub mod session;
 pub mod types;

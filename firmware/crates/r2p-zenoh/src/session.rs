@@ -1,6 +1,7 @@
 //! A Zenoh 1.x client session, sans-IO: the transport's handshake (INIT, OPEN), keep-alives,
 //! the lease, CLOSE, and the network messages a gateway needs (declare a key expression, a
-//! subscriber, a liveliness token; push a put with an attachment; receive puts).
+//! subscriber, a liveliness token, an interest in the subscribers of a key expression; push a
+//! put with an attachment; receive puts and the router's subscriber declarations).
 //!
 //! On a stream link (TCP) every batch is prefixed with its length, 2 bytes little-endian: the
 //! caller reads the 2 bytes, then that many ([`Session::receive`] takes one batch); what the
@@ -8,9 +9,18 @@
 //!
 //! The wire format is Zenoh's protocol version 0x09 as zenoh-protocol 1.10 documents it
 //! (`transport/init.rs`, `open.rs`, `frame.rs`, `network/push.rs`, `declare.rs`,
-//! `zenoh/put.rs`): only what a client sends is encoded, and what a router sends is read far
-//! enough to use or skip it. Anything else in a frame (a request, an interest) ends that frame's
-//! reading: it is counted in [`Stats::skipped`], never a panic.
+//! `zenoh/put.rs`, `network/interest.rs`): only what a client sends is encoded, and what a
+//! router sends is read far enough to use or skip it. Interests from the router are read past;
+//! anything else in a frame (a request, a response, OAM) ends that frame's reading: it is
+//! counted in [`Stats::skipped`], never a panic.
+//!
+//! Subscribers, through an interest: in Zenoh 1.x a router tells a client of other nodes'
+//! subscribers only when the client asked (an INTEREST: current and future subscribers,
+//! restricted to a key expression); it answers with a DECLARE SUBSCRIBER (with the interest's
+//! id) for each that matches now, a DECLARE FINAL (with the id), then DECLARE / UNDECLARE
+//! SUBSCRIBER (without it) as they come and go — one per key expression, whoever holds it.
+//! zenoh-pico's write filter (`Z_FEATURE_INTEREST`) works this way; so does
+//! [`crate::matching`], which turns these [`Event`]s into "who listens to what I publish".
 
 use heapless::{String, Vec};
 
@@ -33,10 +43,12 @@ mod id {
     pub const FRAME: u8 = 0x05;
     pub const DECLARE: u8 = 0x1e;
     pub const PUSH: u8 = 0x1d;
+    pub const INTEREST: u8 = 0x19;
     pub const PUT: u8 = 0x01;
     pub const D_KEYEXPR: u8 = 0x00;
     pub const U_KEYEXPR: u8 = 0x01;
     pub const D_SUBSCRIBER: u8 = 0x02;
+    pub const U_SUBSCRIBER: u8 = 0x03;
     pub const D_TOKEN: u8 = 0x06;
     pub const D_FINAL: u8 = 0x1A;
 }
@@ -48,6 +60,13 @@ const FLAG_N: u8 = 0x20; // key expression has a suffix
 const FLAG_M: u8 = 0x40; // key expression in the sender's mapping
 const FLAG_R: u8 = 0x20; // FRAME: reliable channel
 const FLAG_I: u8 = 0x20; // DECLARE: interest id
+/// INTEREST: current and future declarations (the mode, bits 5-6).
+const MODE_CURRENT_FUTURE: u8 = 0b11 << 5;
+/// INTEREST options: subscribers, restricted to a key expression, in the sender's mapping.
+const OPT_S: u8 = 0x02;
+const OPT_R: u8 = 0x10;
+const OPT_N: u8 = 0x20;
+const OPT_M: u8 = 0x40;
 const PUT_T: u8 = 0x20; // PUT: timestamp
 const PUT_E: u8 = 0x40; // PUT: encoding
 const ATTACHMENT_ID: u8 = 0x03;
@@ -133,6 +152,25 @@ impl Key<'_> {
     }
 }
 
+/// The key expression of a subscriber the router declared, as the router named it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Declared<'a> {
+    /// In full: a prefix the router declared (or none), then the suffix.
+    Full(Key<'a>),
+    /// This client's own key expression `expr_id` (as [`Net::declare_keyexpr`] declared it),
+    /// then `suffix`: what a router sends for a subscriber on exactly a key this client
+    /// declared.
+    Own {
+        /// The key expression's id in this client's mapping.
+        expr_id: u16,
+        /// What follows it.
+        suffix: &'a str,
+    },
+    /// A prefix the router declared that this session no longer remembers (it keeps
+    /// [`MAX_REMOTE_KEYS`]): the key is not known.
+    Unknown,
+}
+
 /// What a received batch brought.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Event<'a> {
@@ -146,6 +184,26 @@ pub enum Event<'a> {
         payload: &'a [u8],
         /// Its attachment, if any.
         attachment: Option<&'a [u8]>,
+    },
+    /// A subscriber behind the router that matches one of this client's interests
+    /// ([`Net::declare_interest`]). `id` is the router's: one per key expression, whoever
+    /// subscribes on it; it may come again (for another interest it matches).
+    Subscriber {
+        /// The router's id for it.
+        id: u32,
+        /// Its key expression.
+        key: Declared<'a>,
+    },
+    /// The router's subscriber `id` is gone (the last one on its key expression left).
+    SubscriberGone {
+        /// The router's id.
+        id: u32,
+    },
+    /// Every subscriber that matched interest `id` when it arrived has been declared: from
+    /// now on, only changes come.
+    InterestFinal {
+        /// The interest's id.
+        id: u32,
     },
 }
 
@@ -457,9 +515,10 @@ impl Session {
                 Ok(())
             }
             id::DECLARE => {
-                if h & FLAG_I != 0 {
-                    r.zint()?;
-                }
+                let interest = match h & FLAG_I {
+                    0 => None,
+                    _ => Some(r.zint_max(u64::from(u32::MAX))? as u32),
+                };
                 if h & FLAG_Z != 0 {
                     r.skip_extensions()?;
                 }
@@ -492,8 +551,34 @@ impl Session {
                         }
                         Ok(())
                     }
-                    0x02 | 0x04 | 0x06 => {
-                        // another node's subscriber, queryable or token: read past it
+                    id::D_SUBSCRIBER => {
+                        let id = r.zint_max(u64::from(u32::MAX))? as u32;
+                        let (scope, suffix) = wire_expr(r, d & FLAG_N)?;
+                        if d & FLAG_Z != 0 {
+                            r.skip_extensions()?;
+                        }
+                        let key = match scope {
+                            0 => Declared::Full(Key { prefix: "", suffix }),
+                            // The router's mapping.
+                            s if d & FLAG_M != 0 => match lookup(&self.remote_keys, s) {
+                                Some(prefix) => Declared::Full(Key { prefix, suffix }),
+                                None => Declared::Unknown,
+                            },
+                            expr_id => Declared::Own { expr_id, suffix },
+                        };
+                        on(Event::Subscriber { id, key });
+                        Ok(())
+                    }
+                    id::U_SUBSCRIBER => {
+                        let id = r.zint_max(u64::from(u32::MAX))? as u32;
+                        if d & FLAG_Z != 0 {
+                            r.skip_extensions()?; // its key expression, if the router sent it
+                        }
+                        on(Event::SubscriberGone { id });
+                        Ok(())
+                    }
+                    0x04 | 0x06 => {
+                        // another node's queryable or token: read past it
                         r.zint()?;
                         wire_expr(r, d & FLAG_N)?;
                         if d & FLAG_Z != 0 {
@@ -502,7 +587,7 @@ impl Session {
                         self.stats.skipped = self.stats.skipped.wrapping_add(1);
                         Ok(())
                     }
-                    0x03 | 0x05 | 0x07 => {
+                    0x05 | 0x07 => {
                         r.zint()?;
                         if d & FLAG_Z != 0 {
                             r.skip_extensions()?;
@@ -514,13 +599,33 @@ impl Session {
                         if d & FLAG_Z != 0 {
                             r.skip_extensions()?;
                         }
+                        match interest {
+                            Some(id) => on(Event::InterestFinal { id }),
+                            None => self.stats.skipped = self.stats.skipped.wrapping_add(1),
+                        }
                         Ok(())
                     }
                     _ => Err(Step::Malformed),
                 }
             }
-            // A request, response, interest or OAM: not for a client that only publishes,
-            // subscribes and holds tokens. Their lengths are not self-describing here: stop.
+            id::INTEREST => {
+                // The router's interest in this client's declarations: it has them all already
+                // (they are sent once a session, unasked). Read past it.
+                r.zint()?; // its id
+                if h & MODE_CURRENT_FUTURE != 0 {
+                    let options = r.u8()?;
+                    if options & OPT_R != 0 {
+                        wire_expr(r, if options & OPT_N != 0 { FLAG_N } else { 0 })?;
+                    }
+                }
+                if h & FLAG_Z != 0 {
+                    r.skip_extensions()?;
+                }
+                self.stats.skipped = self.stats.skipped.wrapping_add(1);
+                Ok(())
+            }
+            // A request, response or OAM: not for a client that only publishes, subscribes and
+            // holds tokens. Their lengths are not self-describing here: stop.
             _ => Err(Step::Stop),
         }
     }
@@ -599,6 +704,17 @@ impl Net<'_, '_> {
         self.w.zint(u64::from(token_id));
         self.w.zint(0);
         self.w.zbytes(key.as_bytes());
+    }
+
+    /// Asks the router for the subscribers on this client's key expression `expr_id` (declared
+    /// before, [`Net::declare_keyexpr`]), now and as they come and go, as interest `interest_id`
+    /// (any id, unique in the session): the router answers with [`Event::Subscriber`]s, an
+    /// [`Event::InterestFinal`], then [`Event::Subscriber`] / [`Event::SubscriberGone`].
+    pub fn declare_interest(&mut self, interest_id: u32, expr_id: u16) {
+        self.w.u8(id::INTEREST | MODE_CURRENT_FUTURE);
+        self.w.zint(u64::from(interest_id));
+        self.w.u8(OPT_S | OPT_R | OPT_M);
+        self.w.zint(u64::from(expr_id));
     }
 
     /// A put on the key expression `expr_id` this client declared, with an attachment.

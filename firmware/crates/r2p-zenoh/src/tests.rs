@@ -1,7 +1,8 @@
 //! The session against a scripted router: the bytes a Zenoh 1.x router sends and expects.
 
 use crate::codec::Writer;
-use crate::session::{Config, Event, Session, SessionError, State};
+use crate::matching::{interest_id, Matching, MAX_KEYS};
+use crate::session::{Config, Declared, Event, Session, SessionError, State};
 use std::string::String;
 use std::vec;
 use std::vec::Vec;
@@ -218,4 +219,243 @@ fn writer_patch_out_of_range_is_an_overflow() {
     let mut w = Writer::new(&mut buf);
     w.patch_u16_le(0, 5);
     assert!(w.finish().is_err());
+}
+
+#[test]
+fn an_interest_asks_for_current_and_future_subscribers_of_an_own_key() {
+    let mut s = opened();
+    let mut out = [0u8; 64];
+    let n = s
+        .send(3, &mut out, |net| {
+            net.declare_keyexpr(1, "0/a");
+            net.declare_interest(1, 1);
+            net.declare_interest(300, 2);
+        })
+        .unwrap();
+    // INTEREST (0x19), mode current + future (0b11 << 5); its id; options S | R | M (the
+    // sender's mapping, no suffix); the key's id.
+    let mut expect = vec![0x25, 0x81, 0x84, 0x0C, 0x1E, 0x20, 1, 0, 3];
+    expect.extend_from_slice(b"0/a");
+    expect.extend_from_slice(&[0x79, 1, 0x52, 1, 0x79, 0xAC, 0x02, 0x52, 2]);
+    assert_eq!(&out[..n], &framed(&expect)[..]);
+}
+
+/// The events of one batch, with the keys of `Declared::Full` joined.
+fn events(s: &mut Session, batch: &[u8]) -> Vec<std::string::String> {
+    let mut out = [0u8; 64];
+    let mut got = Vec::new();
+    s.receive(7, batch, &mut out, |e| {
+        got.push(match e {
+            Event::Subscriber { id, key: Declared::Full(k) } => {
+                std::format!("sub {id} {}{}", k.prefix, k.suffix)
+            }
+            Event::Subscriber { id, key: Declared::Own { expr_id, suffix } } => {
+                std::format!("sub {id} own {expr_id}+{suffix}")
+            }
+            Event::Subscriber { id, key: Declared::Unknown } => std::format!("sub {id} ?"),
+            Event::SubscriberGone { id } => std::format!("gone {id}"),
+            Event::InterestFinal { id } => std::format!("final {id}"),
+            e => std::format!("{e:?}"),
+        })
+    })
+    .unwrap();
+    got
+}
+
+#[test]
+fn the_routers_subscriber_declarations_and_undeclarations_are_events() {
+    let mut s = opened();
+    // What a Zenoh 1.x router answers an interest with (zenoh's hat: DECLARE with the interest
+    // id and the DECLARE QoS extension for the current ones, then DECLARE FINAL; later ones
+    // without the id): a subscriber on this client's own key 1 (the router names it by this
+    // client's mapping), one on `0/**` in full, then the final.
+    let current = push_frame(&[
+        &[0xBE, 1, 0x21, 0x05, 0x02, 7, 1],
+        &[0xBE, 1, 0x21, 0x05, 0x22, 8, 0, 4, b'0', b'/', b'*', b'*'],
+        &[0xBE, 1, 0x21, 0x05, 0x1A],
+    ]);
+    assert_eq!(events(&mut s, &current), ["sub 7 own 1+", "sub 8 0/**", "final 1"]);
+    // Later: one by the router's own mapping (key 9 = "0/"), then one on a prefix it never
+    // declared; subscriber 7 undeclared, then 8 with its key expression as an extension
+    // (WireExprExt, id 0x0F, mandatory, ZBUF: flags N, scope 0, "0/**").
+    let mut decl = vec![0x1E, 0x20, 9, 0, 2];
+    decl.extend_from_slice(b"0/");
+    let later = push_frame(&[
+        &decl,
+        &[0x1E, 0x62, 10, 9, 1, b'b'],
+        &[0x1E, 0x42, 11, 77],
+        &[0x1E, 0x03, 7],
+        &[0x1E, 0x83, 8, 0x5F, 7, 0x01, 0, 4, b'0', b'/', b'*', b'*'],
+    ]);
+    assert_eq!(events(&mut s, &later), ["sub 10 0/b", "sub 11 ?", "gone 7", "gone 8"]);
+    // A DECLARE FINAL without an interest id answers nothing of this client's: skipped.
+    let skipped = s.stats().skipped;
+    assert!(events(&mut s, &push_frame(&[&[0x1E, 0x1A]])).is_empty());
+    assert_eq!(s.stats().skipped, skipped + 1);
+    assert_eq!(s.stats().malformed, 0);
+}
+
+#[test]
+fn an_interest_from_the_router_is_read_past_and_the_frame_goes_on() {
+    let mut s = opened();
+    // INTEREST id 5, current + future, options S | R | N with the key "a", a QoS extension;
+    // a final INTEREST (no options); one for all key expressions (S only), one restricted to a
+    // key id without a suffix (S | R); then a subscriber declaration.
+    let batch = push_frame(&[
+        &[0xF9, 5, 0x32, 0, 1, b'a', 0x01],
+        &[0x19, 6],
+        &[0x79, 7, 0x02],
+        &[0x79, 8, 0x12, 5],
+        &[0x1E, 0x22, 3, 0, 1, b'a'],
+    ]);
+    assert_eq!(events(&mut s, &batch), ["sub 3 a"]);
+    assert_eq!((s.stats().skipped, s.stats().malformed), (4, 0));
+    // Another node's token (named, with an extension) and its undeclaration, a key
+    // expression undeclared: read past, each with its extension; then a subscriber.
+    let batch = push_frame(&[
+        &[0x1E, 0xA6, 9, 0, 1, b't', 0x01],
+        &[0x1E, 0x87, 9, 0x01],
+        &[0x1E, 0x81, 3, 0x01],
+        &[0x1E, 0x02, 4, 1],
+    ]);
+    assert_eq!(events(&mut s, &batch), ["sub 4 own 1+"]);
+    assert_eq!((s.stats().skipped, s.stats().malformed), (6, 0));
+}
+
+#[test]
+fn declarations_without_a_suffix_or_extensions_are_read_exactly() {
+    let mut s = opened();
+    // The router declares key 9 = "0/"; key 5 = key 9 (no suffix, no extension); undeclares a
+    // key 3 it never declared; another node's token and its undeclaration, without a suffix or
+    // extensions; then subscribers by keys 9 and 5, and a push by this client's own id 9 (not
+    // the router's key 9: not for it).
+    let mut decl = vec![0x1E, 0x20, 9, 0, 2];
+    decl.extend_from_slice(b"0/");
+    let batch = push_frame(&[
+        &decl,
+        &[0x1E, 0x00, 5, 9],
+        &[0x1E, 0x01, 3],
+        &[0x1E, 0x06, 10, 1],
+        &[0x1E, 0x07, 10],
+        &[0x1E, 0x62, 11, 9, 1, b'x'],
+        &[0x1E, 0x42, 12, 5],
+        &[0x1D, 9, 0x01, 1, 0x55],
+    ]);
+    assert_eq!(events(&mut s, &batch), ["sub 11 0/x", "sub 12 0/"]);
+    assert_eq!((s.stats().samples, s.stats().malformed), (0, 0));
+}
+
+#[test]
+fn malformed_subscriber_declarations_are_counted_and_dropped() {
+    let mut s = opened();
+    for bad in [
+        &[0x25, 0x07, 0x1E, 0x02][..],                              // no id
+        &[0x25, 0x07, 0x1E, 0x22, 3, 0, 5, b'a'],                   // suffix past the end
+        &[0x25, 0x07, 0x1E, 0x02, 0x80, 0x80, 0x80, 0x80, 0x10, 1], // id over 32 bits
+        &[0x25, 0x07, 0x3E, 0x80, 0x80, 0x80, 0x80, 0x10, 0x1A],    // interest id over 32 bits
+        &[0x25, 0x07, 0x1E, 0x83, 8, 0x5F, 9, 1],                   // extension past the end
+        &[0x25, 0x07, 0xF9, 5, 0x32, 0, 9],                         // an interest's suffix too
+    ] {
+        assert!(events(&mut s, bad).is_empty(), "{bad:?}");
+    }
+    assert_eq!(s.stats().malformed, 6);
+    assert_eq!(s.state(), State::Open);
+}
+
+const KEYS: [&str; 3] = ["0/odom/T/H", "0/battery_state/T/H", "0/imu/data/T/H"];
+
+/// A session and a matching table fed from the same batches.
+fn matching_after(batches: &[Vec<u8>]) -> Matching<4> {
+    let mut s = opened();
+    let mut m = Matching::<4>::new();
+    let mut out = [0u8; 64];
+    for b in batches {
+        s.receive(7, b, &mut out, |e| m.on_event(&e, &KEYS)).unwrap();
+    }
+    m
+}
+
+fn matched(m: &Matching<4>) -> [Option<bool>; 3] {
+    [m.matched(0), m.matched(1), m.matched(2)]
+}
+
+#[test]
+fn a_key_is_matched_while_a_subscriber_on_it_is_declared() {
+    // Nothing known until each interest's answer is complete.
+    let mut m = matching_after(&[]);
+    assert_eq!(matched(&m), [None, None, None]);
+    // Interest 2 (battery) complete with nothing; interest 1 (odom) gets a subscriber on the
+    // own key 1 before its final; interest 3 stays open.
+    let answer = push_frame(&[&[0x3E, 2, 0x1A], &[0x3E, 1, 0x02, 7, 1], &[0x3E, 1, 0x1A]]);
+    m = matching_after(core::slice::from_ref(&answer));
+    assert_eq!(matched(&m), [Some(true), Some(false), None]);
+    assert_eq!((m.count(0), m.count(1)), (1, 0));
+    // A subscriber on `0/**` matches all three; declared again (for another interest) it
+    // counts once; one on another domain matches none and is not kept.
+    let wide = push_frame(&[
+        &[0x1E, 0x22, 8, 0, 4, b'0', b'/', b'*', b'*'],
+        &[0x3E, 3, 0x22, 8, 0, 4, b'0', b'/', b'*', b'*'],
+        &[0x1E, 0x22, 9, 0, 4, b'1', b'/', b'*', b'*'],
+        &[0x3E, 3, 0x1A],
+    ]);
+    m = matching_after(&[answer.clone(), wide.clone()]);
+    assert_eq!(matched(&m), [Some(true), Some(true), Some(true)]);
+    assert_eq!((m.count(0), m.count(1), m.count(2)), (2, 1, 1));
+    assert_eq!((m.count(3), m.count(MAX_KEYS)), (0, 0), "no such key");
+    assert_eq!((m.stats().declared, m.stats().unmatched), (3, 1));
+    // The wide one goes: the battery and the IMU have nobody; then the odom's goes too.
+    m = matching_after(&[answer.clone(), wide.clone(), push_frame(&[&[0x1E, 0x03, 8]])]);
+    assert_eq!(matched(&m), [Some(true), Some(false), Some(false)]);
+    let gone = push_frame(&[&[0x1E, 0x03, 8], &[0x1E, 0x03, 7], &[0x1E, 0x03, 9]]);
+    m = matching_after(&[answer, wide, gone]);
+    assert_eq!(matched(&m), [Some(false), Some(false), Some(false)]);
+    assert_eq!(m.stats().undeclared, 2, "9 was never kept");
+    // A new session starts over.
+    m.reset();
+    assert_eq!(matched(&m), [None, None, None]);
+}
+
+#[test]
+fn each_keys_interest_completes_that_key_and_no_other() {
+    for i in 0..KEYS.len() {
+        let id = interest_id(i);
+        assert!(id > 0 && id < 0x80, "one-byte zint");
+        let m = matching_after(&[push_frame(&[&[0x3E, id as u8, 0x1A]])]);
+        let want: [Option<bool>; 3] = core::array::from_fn(|k| (k == i).then_some(false));
+        assert_eq!(matched(&m), want, "interest {id}");
+    }
+    // An interest of no key (one past the last), and keys past the table: nothing known.
+    let m = matching_after(&[push_frame(&[&[0x3E, interest_id(KEYS.len()) as u8, 0x1A]])]);
+    assert_eq!(matched(&m), [None, None, None]);
+    assert_eq!((m.matched(KEYS.len()), m.matched(MAX_KEYS), m.count(MAX_KEYS)), (None, None, 0));
+}
+
+#[test]
+fn a_declaration_that_cannot_be_followed_counts_every_key_as_matched() {
+    let finals = push_frame(&[&[0x3E, 1, 0x1A], &[0x3E, 2, 0x1A], &[0x3E, 3, 0x1A]]);
+    assert_eq!(matched(&matching_after(core::slice::from_ref(&finals))), [Some(false); 3]);
+    // A prefix the router declared but the session does not know; an own key id this client
+    // never declared; more subscribers than the table holds (4).
+    for bad in [
+        push_frame(&[&[0x1E, 0x42, 11, 77]]),
+        push_frame(&[&[0x1E, 0x02, 12, 9]]),
+        push_frame(&[
+            &[0x1E, 0x02, 1, 1],
+            &[0x1E, 0x02, 2, 2],
+            &[0x1E, 0x02, 3, 3],
+            &[0x1E, 0x22, 4, 0, 4, b'0', b'/', b'*', b'*'],
+            &[0x1E, 0x22, 5, 0, 2, b'*', b'*'],
+        ]),
+    ] {
+        let m = matching_after(&[finals.clone(), bad]);
+        assert_eq!(matched(&m), [Some(true); 3]);
+        assert_eq!(m.stats().unresolved, 1);
+    }
+    // A key too long to join: also.
+    let mut long = vec![0x1E, 0x62, 13, 9, 0x81, 0x02];
+    long.extend_from_slice(&[b'a'; 257]);
+    let mut decl = vec![0x1E, 0x20, 9, 0, 2];
+    decl.extend_from_slice(b"0/");
+    let m = matching_after(&[finals, push_frame(&[&decl, &long])]);
+    assert_eq!(matched(&m), [Some(true); 3]);
 }

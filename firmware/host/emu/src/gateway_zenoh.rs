@@ -3,7 +3,9 @@
 //! a host TCP connection to a Zenoh router, in a thread of its own. The gateway's 1 kHz step
 //! leaves the latest R2P values in a [`RosSlot`] and takes the `/cmd_vel` command from it; the
 //! thread publishes, receives, keeps the session alive, and reconnects when the router goes
-//! away (every 500 ms until it is back).
+//! away (every 500 ms until it is back). The imports only ROS wants follow its subscribers as
+//! on the MCU (r2p-app-gateway's `demand`): the step leaves their [`Feed`]s here, the thread's
+//! bridge decides, and the step applies its `wanted` mask to the node.
 
 use std::io::{self, Read, Write};
 use std::net::{SocketAddr, TcpStream};
@@ -12,6 +14,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
+use r2p_app_gateway::demand::Feed;
 use r2p_app_gateway::ros::{zid_of, Latest, RosBridge, RosConfig, RosStats};
 use r2p_msgs::Twist2D;
 
@@ -28,6 +31,10 @@ pub struct RosShared {
     pub stats: RosStats,
     /// The session is open.
     pub open: bool,
+    /// The imports the ROS side may give up (the step writes them).
+    pub feeds: Vec<Feed<'static>>,
+    /// Bit `k`: `feeds[k]` is wanted (the thread writes it; `None` until it has decided).
+    pub wanted: Option<u32>,
 }
 
 /// The shared state, when the gateway is connected to a router.
@@ -60,8 +67,10 @@ impl ZenohClient {
                 return;
             };
             let start = Instant::now();
+            // The feeds the bridge follows, across sessions: a reconnection keeps its decisions.
+            let mut followed: Vec<Feed<'static>> = Vec::new();
             while !s.load(Ordering::SeqCst) {
-                if let Err(e) = session(&mut bridge, router, start, &s, &sl) {
+                if let Err(e) = session(&mut bridge, &mut followed, router, start, &s, &sl) {
                     eprintln!("r2p-emu: gateway: zenoh: {e}; reconnecting");
                 }
                 if let Some(sh) = sl.lock().unwrap_or_else(|e| e.into_inner()).as_mut() {
@@ -95,6 +104,7 @@ impl Drop for ZenohClient {
 
 fn session(
     bridge: &mut RosBridge,
+    followed: &mut Vec<Feed<'static>>,
     router: SocketAddr,
     start: Instant,
     stop: &AtomicBool,
@@ -142,10 +152,17 @@ fn session(
             sh.driving = bridge.driving();
             sh.stats = bridge.stats();
             sh.open = bridge.state() == r2p_zenoh_state_open();
+            if sh.feeds != *followed {
+                bridge.follow(&sh.feeds);
+                followed.clone_from(&sh.feeds);
+            }
             sh.latest
         };
         let n = bridge.poll(t, stamp, &latest, &mut out).map_err(err)?;
         tcp.write_all(&out[..n])?;
+        if let Some(sh) = slot.lock().unwrap_or_else(|e| e.into_inner()).as_mut() {
+            sh.wanted = Some(bridge.wanted());
+        }
     }
     Ok(())
 }

@@ -220,6 +220,13 @@ impl<
         Ok(())
     }
 
+    /// The index of the import of `topic`, if this node imports it (an application that did
+    /// not keep [`import`](Self::import)'s answer, such as the gateway finding the imports the
+    /// ROS side follows).
+    pub fn import_index(&self, topic: &str) -> Option<usize> {
+        self.imports.iter().position(|i| i.import.topic() == topic)
+    }
+
     /// Where import `import` stands.
     pub fn import_state(&self, import: usize) -> Option<ImportState> {
         self.imports.get(import).map(|i| i.state)

@@ -7,10 +7,14 @@
 //! teleoperator behind the gateway would (to the base controller here, or on the bus for the
 //! node that runs it).
 //!
+//! The imports only ROS 2 wants (the gateway's own, and `odom` and the ranges when the base
+//! runs elsewhere) follow the Zenoh subscribers as on the MCU ([`crate::gateway_zenoh`]).
+//!
 //! One node serves both applications' parameters, as the image's does: the gateway's first,
 //! the base controller's after them ([`PARAMS`]).
 
 use r2p_app_base::{params, App, Endpoints, Names};
+use r2p_app_gateway::demand::{Feed, Follower, GATEWAY_FEEDS};
 use r2p_app_gateway::params::{base_controller, followed_by, Offset, COUNT as NET_COUNT};
 use r2p_app_gateway::{BusLink, BusTap, RemoteBase};
 use r2p_middleware::{pool_size, Class, Publisher};
@@ -94,6 +98,9 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
         r.register(&mut n).map_err(|e| format!("importing odom and ranges: {e:?}"))?;
     }
     gw.register(&mut n).map_err(|e| format!("registering gateway/status: {e:?}"))?;
+    let mut feeds: Vec<Feed<'static>> = GATEWAY_FEEDS.to_vec();
+    feeds.extend(remote.as_ref().map(|r| r.feeds()).into_iter().flatten());
+    let mut follower = Follower::bind(&feeds, &n);
     *ctx.gateway.borrow_mut() = Some(GatewayBoot { tap: GatewayTap(BusTap::new(link)), link });
     let mut leds = Leds::new(&ctx, config.heartbeat_period_us);
     let net = ctx.net.clone();
@@ -129,6 +136,12 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
                     let _ = cmd_local.publish_with(|m| *m = c);
                 }
                 driving = sh.driving;
+                if sh.feeds != feeds {
+                    sh.feeds.clone_from(&feeds);
+                }
+                if let Some(wanted) = sh.wanted {
+                    follower.apply(wanted, node);
+                }
             }
             if now % TELEOP_PERIOD_US == 0 && !driving {
                 if let Some(t) = script.iter().rev().find(|t| (t.at_s * 1e6) as u64 <= now) {

@@ -6,7 +6,9 @@
 //! settings are parameters kept in flash (r2p-module's `FlashParams`), applied at boot.
 //! With a Zenoh router set (`zenoh_router`), the gateway is also a native ROS 2 node over
 //! Zenoh (r2p-app-gateway's `ros`, docs/ros2.md): `/gateway/status`, `/battery_state`,
-//! `/imu/data`, `/odom` out, `/cmd_vel` in.
+//! `/imu/data`, `/odom` out, `/cmd_vel` in. The imports only ROS 2 wants follow its Zenoh
+//! subscribers (r2p-app-gateway's `demand`): the `zenoh` task decides, the bus task
+//! unsubscribes and resubscribes them on the node ([`WANTED`]).
 //!
 //! It runs the robot-level nodes for the robot (`r2p-app-base`: inverse kinematics, obstacle
 //! avoidance, odometry; Triskar2's by default), its step in the application's task, its
@@ -25,7 +27,7 @@
 #![no_main]
 
 use core::cell::Cell;
-use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering};
 
 use embassy_executor::{InterruptExecutor, Spawner};
 use embassy_futures::select::{select, Either};
@@ -44,6 +46,7 @@ use embassy_stm32::rng::{self, Rng};
 use embassy_stm32::{bind_interrupts, pac, rcc, time::Hertz, Config};
 use embassy_time::{Delay, Duration, Instant, Ticker, Timer};
 use r2p_app_base as base;
+use r2p_app_gateway::demand::{Feeds, Follower, GATEWAY_FEEDS};
 use r2p_app_gateway::link::MAX_CLIENTS;
 use r2p_app_gateway::params::{self, followed_by, Net, Offset};
 use r2p_app_gateway::ros::{zid_of, Latest, RosBridge, RosConfig};
@@ -164,6 +167,9 @@ static LED_INPUTS: AtomicU8 = AtomicU8::new(0);
 static REBOOT: AtomicBool = AtomicBool::new(false);
 /// The image has just confirmed itself: the bus task says so in FIRMWARE.
 static TRIAL_OVER: AtomicBool = AtomicBool::new(false);
+/// Bit `k`: the import of feed `k` is wanted (the `zenoh` task writes it, the bus task applies
+/// it; all wanted without a router).
+static WANTED: AtomicU32 = AtomicU32::new(u32::MAX);
 /// The address in use came from DHCP.
 static FROM_DHCP: AtomicBool = AtomicBool::new(false);
 
@@ -176,6 +182,7 @@ async fn bus(
     mut can: BxCan<'static>,
     mut timer: SlotTimer,
     running_after_us: u64,
+    mut follower: Follower,
 ) {
     let mut tap = BusTap::new(&LINK);
     let (mut frames, mut last_frame_at) = (0u32, None::<u64>);
@@ -183,6 +190,7 @@ async fn bus(
         let now = Instant::now().as_micros();
         tap.run(now, &mut can, |c| node.slot_tick(now, c));
         while node.next_event().is_some() {}
+        follower.apply(WANTED.load(Ordering::Relaxed), node);
         if node.take_reboot_request() {
             REBOOT.store(true, Ordering::Relaxed);
         }
@@ -269,12 +277,14 @@ async fn zenoh(
     domain: u32,
     zid: [u8; 16],
     cmd_vel: &'static Publisher<'static, Twist2D>,
+    feeds: Feeds<'static>,
 ) -> ! {
     let Some(mut bridge) = RosBridge::new(&RosConfig { domain, namespace: "", zid }) else {
         loop {
             Timer::after_secs(3600).await;
         }
     };
+    bridge.follow(&feeds);
     let mut rx = [0u8; 1024];
     let mut tx = [0u8; 2048];
     let mut out = [0u8; 6 * 1024];
@@ -334,6 +344,7 @@ async fn ros_session(
         }
         let latest = cortex_m::interrupt::free(|cs| LATEST.borrow(cs).get());
         let n = bridge.poll(t, (t * 1000) as i64, &latest, out).map_err(|_| ())?;
+        WANTED.store(bridge.wanted(), Ordering::Relaxed);
         socket.write_all(&out[..n]).await.map_err(|_| ())?;
     }
 }
@@ -504,6 +515,13 @@ async fn main(spawner: Spawner) {
         remote.register(&mut node).unwrap();
         (Base::Elsewhere(remote), c.publisher)
     };
+    // The gateway's imports and, with the base elsewhere, its odometry and ranges: what only
+    // ROS 2 wants (the base controller's own imports stay).
+    let mut feeds = Feeds::from_slice(&GATEWAY_FEEDS).unwrap();
+    if let Base::Elsewhere(remote) = &base_app {
+        feeds.extend_from_slice(&remote.feeds()).unwrap();
+    }
+    let follower = Follower::bind(&feeds, &node);
     let running_after_us = u64::from(STARTING_HEARTBEATS) * u64::from(config.heartbeat_period_us);
     for irq in [interrupt::CAN1_RX0, interrupt::CAN1_RX1, interrupt::TIM2] {
         irq.set_priority(Priority::P1);
@@ -513,7 +531,7 @@ async fn main(spawner: Spawner) {
     let timer = SlotTimer::new(p.TIM5);
     BUS_EXECUTOR
         .start(interrupt::TIM5)
-        .spawn(bus(NODE.init(node), can, timer, running_after_us))
+        .spawn(bus(NODE.init(node), can, timer, running_after_us, follower))
         .unwrap();
 
     // The network.
@@ -551,7 +569,7 @@ async fn main(spawner: Spawner) {
         spawner.spawn(client(stack, net.tcp_port)).unwrap();
     }
     if let Some(router) = net.zenoh {
-        spawner.spawn(zenoh(stack, router, net.ros_domain, zid_of(uid), cmd_vel)).unwrap();
+        spawner.spawn(zenoh(stack, router, net.ros_domain, zid_of(uid), cmd_vel, feeds)).unwrap();
     }
     spawner.spawn(run(app, base_app, leds, flash, trial, stack)).unwrap();
 }
