@@ -879,6 +879,7 @@ mod proptests {
         loss_pct: u64,
         max_loss: u32,
         seed: u64,
+        babbler: Option<Babbler>,
     ) {
         let mut rng = seed | 1;
         let mut rand = move || {
@@ -965,11 +966,60 @@ mod proptests {
                     );
                 }
             }
+            // The babbler's sync of this cycle, if any, around the mid-cycle poll.
+            let babble = babbler.filter(|b| rand() % 100 < b.pct).map(|b| {
+                let off = match rand() % 8 {
+                    // Within 20 µs of the next sync (inside its tolerance), on the tolerance's
+                    // edges, right after this cycle's sync: the boundaries of the rule.
+                    0 => t - 20,
+                    1 => t - TOL - 1,
+                    2 => t - TOL,
+                    3 => 20,
+                    _ => t / 16 + rand() % (t - t / 8),
+                };
+                // A counter and an epoch of its own. Not the residual cases (docs/rtcan.md,
+                // "Babblers"): a due sync's counter and epoch (c or c + 1, true) on the grid
+                // is the master's or a continuing standby's sync, and the epoch flipped with
+                // counter 0 or 1 on the grid of a node that missed a sync a new calendar's.
+                let epoch = rand() % 2 == 0;
+                let cycle =
+                    if epoch { c + 2 + (rand() % 254) as u32 } else { 2 + (rand() % 254) as u32 };
+                (at + off, SyncFrame::new(cycle, u64::MAX, epoch).from_rank(b.rank))
+            });
+            let babble_to = |nodes: &mut [Failover], (when, sync): (Micros, SyncFrame)| {
+                // A master steps down for a better rank's sync by design (a start-up race):
+                // not a babbler this rule contains.
+                let live_master_rank = (0..nodes.len())
+                    .filter(|&i| alive[i] && nodes[i].role() == Role::Master)
+                    .map(|i| ranks[i])
+                    .max();
+                if live_master_rank.is_some_and(|r| sync.sender < r) {
+                    return;
+                }
+                for i in (0..nodes.len()).filter(|&i| alive[i]) {
+                    let role = nodes[i].role();
+                    let a = nodes[i].on_sync(when, &sync);
+                    assert!(
+                        a.start_syncing.is_none()
+                            && !a.stop_syncing
+                            && !a.re_register
+                            && !a.new_calendar,
+                        "cycle {c}: node {i} moved by a babbler at {when}: {a:?}"
+                    );
+                    assert_eq!(nodes[i].role(), role);
+                }
+            };
+            if let Some(b) = babble.filter(|b| b.0 < at + t / 2) {
+                babble_to(&mut nodes, b);
+            }
             for (i, n) in nodes.iter_mut().enumerate() {
                 if alive[i] {
                     // Nobody starts a new calendar while the standbys continue.
                     assert!(n.poll(at + t / 2).start_syncing.is_none(), "cycle {c}: node {i}");
                 }
+            }
+            if let Some(b) = babble.filter(|b| b.0 >= at + t / 2) {
+                babble_to(&mut nodes, b);
             }
             if c > death + 3 {
                 assert!(c - last_sync_cycle <= 2, "cycle {c}: no sync since {last_sync_cycle}");
@@ -991,7 +1041,37 @@ mod proptests {
         ) {
             // One sync lost in a row at most: the continuation covers exactly one missing sync
             // (a node's clock free-runs two; a second loss in a row is the new-calendar path's).
-            simulate_continuing(&ranks, death, global, loss, 1, seed);
+            simulate_continuing(&ranks, death, global, loss, 1, seed, None);
+        }
+
+        #[test]
+        fn babblers_move_nobody_while_a_master_lives_or_a_standby_continues(
+            ranks in proptest::sample::subsequence((0u8..=MAX_RANK).collect::<Vec<u8>>(), 2..=6)
+                .prop_shuffle(),
+            death in 5u32..150,
+            global in any::<bool>(),
+            loss in 0u64..=40,
+            seed in any::<u64>(),
+            rank in 0u8..=MAX_RANK,
+            pct in 20u64..=100,
+        ) {
+            // A babbler of any rank (one better than the live master's is the start-up race's
+            // rule, skipped) sends a sync in `pct` % of the cycles at random instants and on
+            // the rule's boundaries, before the master dies, while the standbys continue, and
+            // after: no node steps down, registers again or starts a new calendar for it, the
+            // syncs keep coming every cycle or two, no HRT cycle is lost.
+            simulate_continuing(&ranks, death, global, loss, 1, seed, Some(Babbler { rank, pct }));
         }
     }
+
+    /// A node that sends syncs of its own (any counter and epoch) at random instants.
+    #[derive(Clone, Copy)]
+    struct Babbler {
+        rank: u8,
+        /// The chance, in percent, of a babbled sync in each cycle.
+        pct: u64,
+    }
+
+    /// The sync tolerance one cycle after a sync (0.5 %).
+    const TOL: Micros = T as Micros * SYNC_TOLERANCE_PPM / 1_000_000;
 }
