@@ -486,6 +486,11 @@ pub(crate) mod tests {
                     assert_eq!(f.role(), role);
                 }
             }
+            // Off its grid with its own counter (n = 0): not a continuation, so its streams
+            // register again with the better master.
+            let mut f = master();
+            let a = f.on_sync(140_020, &SyncFrame::new(0, 0, false).from_rank(0));
+            assert!(a.stop_syncing && a.re_register, "{a:?}");
             // On its grid and in sequence (a continuing standby that won): any rank.
             let mut f = master();
             let a = f.on_sync(150_000, &SyncFrame::new(1, 0, false).from_rank(9));
