@@ -684,6 +684,21 @@ mod proptests {
     /// per-receiver loss a master lives at least MAX_SYNC_LOSS + 1 syncs; late joiners boot
     /// while a master is live, and it lives until they heard it.
     fn simulate(specs: &[Spec], global: bool, loss_pct: u64, seed: u64, kills: &[Micros]) {
+        simulate_with(specs, global, loss_pct, seed, kills, None);
+    }
+
+    /// [`simulate`] with a babbler of rank `babbler.0` sending a sync in `babbler.1` ‰ of the
+    /// 500 µs steps, at a random instant within the step, to every live node that follows a
+    /// live master of a better rank; its counter is off that node's sequence (its own epoch).
+    /// Each must be out of turn and move nothing, so the invariants above hold as without it.
+    fn simulate_with(
+        specs: &[Spec],
+        global: bool,
+        loss_pct: u64,
+        seed: u64,
+        kills: &[Micros],
+        babbler: Option<(u8, u64)>,
+    ) {
         let min_life = if global { 0 } else { MAX_SYNC_LOSS as Micros * T as Micros + STEP };
         let mut rng = seed | 1;
         let mut rand = move || {
@@ -812,6 +827,28 @@ mod proptests {
                     );
                 }
             }
+            let master_rank = (0..nodes.len())
+                .filter(|&i| nodes[i].alive && nodes[i].f.role() == Role::Master)
+                .filter_map(|i| nodes[i].f.rank())
+                .next();
+            if let (Some((rank, permille)), Some(m)) = (babbler, master_rank) {
+                if rand() % 1_000 < permille && rank > m.get() {
+                    let when = t + rand() % STEP;
+                    for (i, n) in nodes.iter_mut().enumerate() {
+                        if !n.alive || !n.f.synced() {
+                            continue;
+                        }
+                        let (role, takeover) = (n.f.role(), n.f.takeover_at());
+                        let cycle = n.f.last_cycle.wrapping_add(100 + (rand() % 50) as u8);
+                        let sync =
+                            SyncFrame::new(cycle as u32, u64::MAX, n.f.epoch() == Some(true))
+                                .from_rank(rank);
+                        let a = n.f.on_sync(when, &sync);
+                        assert!(a.out_of_turn, "node {i} followed a babbler at {when}: {a:?}");
+                        assert_eq!((n.f.role(), n.f.takeover_at()), (role, takeover));
+                    }
+                }
+            }
             t += STEP;
             if t > 30_000_000 {
                 break; // every standby that boots late may be needed; stop planning kills
@@ -867,6 +904,19 @@ mod proptests {
             let standbys = specs.iter().filter(|s| s.0.is_some()).count();
             let kills: Vec<Micros> = (1..standbys).map(|_| d).collect();
             simulate(&specs, true, loss, seed, &kills);
+        }
+
+        #[test]
+        fn babblers_never_move_a_follower_of_a_live_master(
+            (specs, loss, seed, kills) in scenario(),
+            global in any::<bool>(),
+            rank in 0u8..=MAX_RANK,
+            permille in 5u64..=200,
+        ) {
+            // Kills, late joiners, global or per-node loss, as above, with a babbler whose rank
+            // is worse than the live master's: nobody follows it, so a master is never moved,
+            // the takeover times and the bound stay.
+            simulate_with(&specs, global, loss, seed, &kills, Some((rank, permille)));
         }
     }
 
