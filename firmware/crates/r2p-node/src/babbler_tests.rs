@@ -1,8 +1,9 @@
 //! A babbler — a node sending syncs out of turn (a wrong clock, a bug) — while the master lives
-//! (issue 22; docs/rtcan.md, "Babblers"): a sync that comes before the followed master's next
-//! one can be due is counted and not followed (by a master, unless its rank is better), so
-//! the master keeps the bus, the slaves keep its phase and HRT streams lose nothing. A master
-//! steps down for an out-of-turn sync of a better rank: that is how a start-up race ends.
+//! (issue 22; docs/rtcan.md, "Babblers"): a sync off the followed cycle's grid or out of its
+//! sequence is counted and not followed (by a master, unless its rank is better), so the
+//! master keeps the bus, the slaves keep its phase and HRT streams lose nothing. A master
+//! steps down for an out-of-turn sync of a better rank: that is how a start-up race ends. The
+//! rule is `rtcan`'s (`Failover::on_sync`), whose unit tests and proptests time the edges.
 
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
 use rtcan::failover::Role;
@@ -90,7 +91,8 @@ fn an_out_of_turn_sync_of_a_better_rank_is_followed() {
     run_slots(&bus, nodes, at + 100);
     assert_eq!(nodes[0].role(), Role::Slave, "the worse master steps down");
     assert_eq!(nodes[0].stats().syncs_out_of_turn, 0);
-    // Its slave waits for the syncs it follows to stop (one cycle) before it follows another.
+    // Its slave waits for the syncs it follows to stop (the sync timeout) before it follows
+    // another.
     assert_eq!(nodes[1].stats().syncs_out_of_turn, 1);
 }
 

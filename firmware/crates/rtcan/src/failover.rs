@@ -24,9 +24,9 @@
 //!   restarts the cycle counter at 0 and flips the epoch bit (bit 0 of the sync payload) relative
 //!   to the last sync it heard; its calendar starts empty.
 //! * A master that receives a sync steps down (both masters of a start-up race would, and the
-//!   rank-ordered delays then elect one). `r2p-node` gives it only the syncs that are not out of
-//!   turn (docs/rtcan.md, "Babblers"): a master hears a sync that comes before its own next one
-//!   only from a better rank, so of a race's two masters the better one stays. A master whose sync
+//!   rank-ordered delays then elect one) unless the sync is out of turn ([`Failover::on_sync`],
+//!   docs/rtcan.md, "Babblers"): off its own syncs' grid, a sync makes it step down only from a
+//!   better rank, so of a race's two masters the better one stays. A master whose sync
 //!   failed to go out more than [`MAX_SYNC_LOSS`] times in a row steps down too, before anyone
 //!   could take over from it.
 //! * Every node re-registers its HRT streams on the first sync after losing sync, on a sync
@@ -43,7 +43,7 @@
 //! two masters ever sync in the same cycle.
 
 use crate::controller::Micros;
-use crate::cycle::{SyncFrame, MAX_SYNC_LOSS};
+use crate::cycle::{SyncFrame, MAX_SYNC_LOSS, SYNC_TOLERANCE_PPM};
 
 /// Cycles of silence before the rank-0 standby takes over: L + 2.
 pub const TAKEOVER_BASE_CYCLES: u32 = MAX_SYNC_LOSS + 2;
@@ -121,6 +121,9 @@ pub struct Actions {
     /// The sync heard starts a new calendar (its epoch bit flipped while this node followed
     /// the previous one): a standby's copy of the calendar starts empty and complete.
     pub new_calendar: bool,
+    /// The sync heard was out of turn ([`Failover::on_sync`]): ignored, nothing changed; the
+    /// node counts it and must not feed it to its clock either.
+    pub out_of_turn: bool,
 }
 
 impl Actions {
@@ -239,15 +242,43 @@ impl Failover {
     }
 
     /// A sync frame from another node was received at `now`.
+    ///
+    /// While synced, a sync is **out of turn** (docs/rtcan.md, "Babblers") unless it lands on
+    /// the grid of the sync followed last — n = 1, 2, … cycles after it within n times the
+    /// sync tolerance — and either continues it (counter + n, the same epoch) or starts a new
+    /// calendar (epoch flipped, counter at most n − 2, n ≥ 2). Every legitimate sync does: the
+    /// master's next, a continuing standby's (one missing sync: two cycles, its clock
+    /// extrapolating the master's phase), a new calendar's (its master took over at least two
+    /// cycles after this node's last sync under H1). What does not is a babbler's (a wrong
+    /// clock, a bug, syncs sent after the master died) or the other master's of a start-up
+    /// race: it is ignored ([`Actions::out_of_turn`]), so the cycle's phase, the calendar and
+    /// the mastership stay; a node that ignores syncs times out and then follows any. A master
+    /// steps down for one only from a better rank: of a race's two masters the better stays.
+    #[inline(never)] // one copy for the receive paths that inline the node's (F103 flash)
     pub fn on_sync(&mut self, now: Micros, sync: &SyncFrame) -> Actions {
+        const TOLERANCE_DIVISOR: u32 = (1_000_000 / SYNC_TOLERANCE_PPM) as u32;
         let mut a = Actions::default();
-        // Continuity: the counter advanced by the number of elapsed cycles (1..=L+1) since
-        // the last sync heard (or, as master, sent).
-        let t = self.cycle_us as Micros;
-        let n = (now.saturating_sub(self.last) + t / 2) / t;
-        let continuous = (1..=MAX_SYNC_LOSS as Micros + 1).contains(&n)
-            && self.last_cycle.wrapping_add(n as u8) == sync.cycle;
+        // n: the cycles elapsed since the last sync heard (or, as master, sent), rounded. The
+        // low 32 bits of the time (71 minutes) suffice: a sync is out of turn only while
+        // synced (one within 35 ms), and only then does continuity count (below).
+        let t = self.cycle_us;
+        let since = (now as u32).wrapping_sub(self.last as u32);
+        let n = since.saturating_add(t / 2) / t;
+        let counts = self.last_cycle.wrapping_add(n as u8) == sync.cycle;
         let flipped = self.epoch.is_some_and(|e| e != sync.epoch);
+        // A new calendar's counter started at least two cycles after the last sync (H1).
+        let in_turn = if flipped { n >= 2 && (sync.cycle as u32) <= n - 2 } else { counts };
+        let on_grid =
+            n >= 1 && since.abs_diff(n.wrapping_mul(t)) <= n * (t / TOLERANCE_DIVISOR) && in_turn;
+        if self.synced
+            && !on_grid
+            && !(self.role == Role::Master && self.rank.is_some_and(|r| sync.sender < r.0))
+        {
+            a.out_of_turn = true;
+            return a;
+        }
+        // Continuity: the counter advanced by the number of elapsed cycles (1..=L+1).
+        let continuous = (1..=MAX_SYNC_LOSS + 1).contains(&n) && counts;
         // A master steps down on any other master's sync; one that continues this cycle and
         // calendar (a standby that took over when a sync was missing) costs nothing.
         a.stop_syncing = self.role == Role::Master;
@@ -388,9 +419,82 @@ pub(crate) mod tests {
             let mut f = Failover::new(rank(1), T, 0);
             let first = f.on_sync(0, &SyncFrame::new(3, 0, true));
             assert!(first.re_register && !first.new_calendar, "first sync: unknown calendar");
-            let r = f.on_sync(10_000, &SyncFrame::new(0, 0, false));
+            // A new master's first sync one cycle after the last is out of turn (under H1 it
+            // comes at least two after: "Babblers"); two cycles after, it is followed.
+            assert!(f.on_sync(10_000, &SyncFrame::new(0, 0, false)).out_of_turn);
+            let r = f.on_sync(20_000, &SyncFrame::new(0, 0, false));
             assert!(r.re_register && r.new_calendar);
-            assert!(!f.on_sync(20_000, &SyncFrame::new(1, 0, false)).new_calendar);
+            assert!(!f.on_sync(30_000, &SyncFrame::new(1, 0, false)).new_calendar);
+        }
+
+        fn out_of_turn_is_off_the_grid_or_out_of_sequence() {
+            // A slave that followed the sync of cycle 5 (epoch true) at 0; the tolerance is
+            // 0.5 % of a cycle per cycle elapsed: 50 µs, 100 µs, 150 µs.
+            let followed = || {
+                let mut f = Failover::new(None, T, 0);
+                f.on_sync(0, &SyncFrame::new(5, 0, true));
+                f
+            };
+            let at = |at: Micros, cycle: u32, epoch: bool| {
+                followed().on_sync(at, &SyncFrame::new(cycle, 0, epoch)).out_of_turn
+            };
+            for (n, tol) in [(1u32, 50), (2, 100), (3, 150)] {
+                let due = n as Micros * 10_000;
+                for d in [0, tol] {
+                    assert!(!at(due - d, 5 + n, true), "n {n}: {d} µs early, in turn");
+                    assert!(!at(due + d, 5 + n, true), "n {n}: {d} µs late, in turn");
+                }
+                assert!(at(due - tol - 1, 5 + n, true), "n {n}: off the grid (early)");
+                assert!(at(due + tol + 1, 5 + n, true), "n {n}: off the grid (late)");
+                assert!(at(due - 20, 6 + n, true), "n {n}: the wrong counter");
+                assert!(at(due, 4 + n, true), "n {n}: the wrong counter");
+            }
+            // A babbler's counter: right after the sync, mid-cycle, within 20 µs of the next
+            // one (inside the tolerance: the counter tells), between the next ones.
+            for a in [1, 20, 5_000, 9_949, 9_980, 10_020, 15_000, 19_980, 25_000] {
+                assert!(at(a, 200, true) && at(a, 200, false), "{a} µs");
+            }
+            // A new calendar (epoch flipped): counter 0 two cycles on, 0 or 1 three cycles on.
+            assert!(at(10_000, 0, false), "a new calendar one cycle on");
+            assert!(at(10_000, 6, false), "the counter continued, the epoch flipped");
+            assert!(!at(20_000, 0, false) && at(20_000, 1, false));
+            assert!(!at(30_000, 1, false) && at(30_000, 2, false));
+            assert!(at(20_101, 0, false), "a new calendar off the grid");
+            // Not synced (boot, or after the timeout): anything is followed.
+            let mut f = Failover::new(None, T, 0);
+            assert!(!f.on_sync(3_333, &SyncFrame::new(77, 0, false)).out_of_turn);
+            f.poll(3_333 + sync_timeout_us(T));
+            assert!(!f.on_sync(3_333 + sync_timeout_us(T) + 7, &SyncFrame::new(1, 0, true))
+                .out_of_turn);
+        }
+
+        fn a_master_steps_down_out_of_turn_only_for_a_better_rank() {
+            // Rank 2 took over at 140 000 and sent its first sync then.
+            let master = || {
+                let mut f = Failover::new(rank(2), T, 0);
+                let s = f.poll(140_000).start_syncing.unwrap();
+                f.on_sync_sent(140_000, &SyncFrame::new(0, 0, s.epoch).from_rank(2), true);
+                f
+            };
+            for (sender, steps_down) in [(0, true), (1, true), (2, false), (3, false), (15, false)] {
+                for at in [140_001, 145_000, 149_949, 149_980, 150_051] {
+                    let mut f = master();
+                    let a = f.on_sync(at, &SyncFrame::new(9, 0, true).from_rank(sender));
+                    assert_eq!(a.stop_syncing, steps_down, "rank {sender} at {at}");
+                    assert_eq!(a.out_of_turn, !steps_down, "rank {sender} at {at}");
+                    let role = if steps_down { Role::Slave } else { Role::Master };
+                    assert_eq!(f.role(), role);
+                }
+            }
+            // Off its grid with its own counter (n = 0): not a continuation, so its streams
+            // register again with the better master.
+            let mut f = master();
+            let a = f.on_sync(140_020, &SyncFrame::new(0, 0, false).from_rank(0));
+            assert!(a.stop_syncing && a.re_register, "{a:?}");
+            // On its grid and in sequence (a continuing standby that won): any rank.
+            let mut f = master();
+            let a = f.on_sync(150_000, &SyncFrame::new(1, 0, false).from_rank(9));
+            assert!(a.stop_syncing && !a.out_of_turn && !a.re_register, "{a:?}");
         }
 
         fn nodes_without_rank_never_take_over() {
@@ -417,13 +521,16 @@ pub(crate) mod tests {
         fn epoch_flip_or_counter_restart_means_re_register() {
             let mut f = Failover::new(None, T, 0);
             f.on_sync(0, &SyncFrame::new(200, 0, false));
-            assert!(f.on_sync(10_000, &SyncFrame::new(201, 0, true)).re_register);
-            assert!(!f.on_sync(20_000, &SyncFrame::new(202, 0, true)).re_register);
-            assert!(f.on_sync(30_000, &SyncFrame::new(0, 0, true)).re_register);
-            // Lost for longer than the timeout: re-register even with the same epoch.
-            f.poll(66_000);
+            // A new calendar two cycles on: flipped epoch, counter 0.
+            assert!(f.on_sync(20_000, &SyncFrame::new(0, 0, true)).re_register);
+            assert!(!f.on_sync(30_000, &SyncFrame::new(1, 0, true)).re_register);
+            // A restarted counter with the same epoch (a master that lived under L cycles and
+            // one that did not hear it) waits for the timeout, then re-registers.
+            assert!(f.on_sync(50_000, &SyncFrame::new(0, 0, true)).out_of_turn);
+            assert!(f.on_sync(60_000, &SyncFrame::new(1, 0, true)).out_of_turn);
+            f.poll(65_000);
             assert!(!f.synced());
-            assert!(f.on_sync(70_000, &SyncFrame::new(4, 0, true)).re_register);
+            assert!(f.on_sync(70_000, &SyncFrame::new(2, 0, true)).re_register);
         }
 
         fn master_steps_down_on_a_foreign_sync() {
@@ -577,6 +684,21 @@ mod proptests {
     /// per-receiver loss a master lives at least MAX_SYNC_LOSS + 1 syncs; late joiners boot
     /// while a master is live, and it lives until they heard it.
     fn simulate(specs: &[Spec], global: bool, loss_pct: u64, seed: u64, kills: &[Micros]) {
+        simulate_with(specs, global, loss_pct, seed, kills, None);
+    }
+
+    /// [`simulate`] with a babbler of rank `babbler.0` sending a sync in `babbler.1` ‰ of the
+    /// 500 µs steps, at a random instant within the step, to every live node that follows a
+    /// live master of a better rank; its counter is off that node's sequence (its own epoch).
+    /// Each must be out of turn and move nothing, so the invariants above hold as without it.
+    fn simulate_with(
+        specs: &[Spec],
+        global: bool,
+        loss_pct: u64,
+        seed: u64,
+        kills: &[Micros],
+        babbler: Option<(u8, u64)>,
+    ) {
         let min_life = if global { 0 } else { MAX_SYNC_LOSS as Micros * T as Micros + STEP };
         let mut rng = seed | 1;
         let mut rand = move || {
@@ -705,6 +827,28 @@ mod proptests {
                     );
                 }
             }
+            let master_rank = (0..nodes.len())
+                .filter(|&i| nodes[i].alive && nodes[i].f.role() == Role::Master)
+                .filter_map(|i| nodes[i].f.rank())
+                .next();
+            if let (Some((rank, permille)), Some(m)) = (babbler, master_rank) {
+                if rand() % 1_000 < permille && rank > m.get() {
+                    let when = t + rand() % STEP;
+                    for (i, n) in nodes.iter_mut().enumerate() {
+                        if !n.alive || !n.f.synced() {
+                            continue;
+                        }
+                        let (role, takeover) = (n.f.role(), n.f.takeover_at());
+                        let cycle = n.f.last_cycle.wrapping_add(100 + (rand() % 50) as u8);
+                        let sync =
+                            SyncFrame::new(cycle as u32, u64::MAX, n.f.epoch() == Some(true))
+                                .from_rank(rank);
+                        let a = n.f.on_sync(when, &sync);
+                        assert!(a.out_of_turn, "node {i} followed a babbler at {when}: {a:?}");
+                        assert_eq!((n.f.role(), n.f.takeover_at()), (role, takeover));
+                    }
+                }
+            }
             t += STEP;
             if t > 30_000_000 {
                 break; // every standby that boots late may be needed; stop planning kills
@@ -761,6 +905,19 @@ mod proptests {
             let kills: Vec<Micros> = (1..standbys).map(|_| d).collect();
             simulate(&specs, true, loss, seed, &kills);
         }
+
+        #[test]
+        fn babblers_never_move_a_follower_of_a_live_master(
+            (specs, loss, seed, kills) in scenario(),
+            global in any::<bool>(),
+            rank in 0u8..=MAX_RANK,
+            permille in 5u64..=200,
+        ) {
+            // Kills, late joiners, global or per-node loss, as above, with a babbler whose rank
+            // is worse than the live master's: nobody follows it, so a master is never moved,
+            // the takeover times and the bound stay.
+            simulate_with(&specs, global, loss, seed, &kills, Some((rank, permille)));
+        }
     }
 
     /// The continuing takeover, cycle by cycle: `ranks` standbys that trust their copies of the
@@ -777,6 +934,7 @@ mod proptests {
         loss_pct: u64,
         max_loss: u32,
         seed: u64,
+        babbler: Option<Babbler>,
     ) {
         let mut rng = seed | 1;
         let mut rand = move || {
@@ -863,11 +1021,60 @@ mod proptests {
                     );
                 }
             }
+            // The babbler's sync of this cycle, if any, around the mid-cycle poll.
+            let babble = babbler.filter(|b| rand() % 100 < b.pct).map(|b| {
+                let off = match rand() % 8 {
+                    // Within 20 µs of the next sync (inside its tolerance), on the tolerance's
+                    // edges, right after this cycle's sync: the boundaries of the rule.
+                    0 => t - 20,
+                    1 => t - TOL - 1,
+                    2 => t - TOL,
+                    3 => 20,
+                    _ => t / 16 + rand() % (t - t / 8),
+                };
+                // A counter and an epoch of its own. Not the residual cases (docs/rtcan.md,
+                // "Babblers"): a due sync's counter and epoch (c or c + 1, true) on the grid
+                // is the master's or a continuing standby's sync, and the epoch flipped with
+                // counter 0 or 1 on the grid of a node that missed a sync a new calendar's.
+                let epoch = rand() % 2 == 0;
+                let cycle =
+                    if epoch { c + 2 + (rand() % 254) as u32 } else { 2 + (rand() % 254) as u32 };
+                (at + off, SyncFrame::new(cycle, u64::MAX, epoch).from_rank(b.rank))
+            });
+            let babble_to = |nodes: &mut [Failover], (when, sync): (Micros, SyncFrame)| {
+                // A master steps down for a better rank's sync by design (a start-up race):
+                // not a babbler this rule contains.
+                let live_master_rank = (0..nodes.len())
+                    .filter(|&i| alive[i] && nodes[i].role() == Role::Master)
+                    .map(|i| ranks[i])
+                    .max();
+                if live_master_rank.is_some_and(|r| sync.sender < r) {
+                    return;
+                }
+                for i in (0..nodes.len()).filter(|&i| alive[i]) {
+                    let role = nodes[i].role();
+                    let a = nodes[i].on_sync(when, &sync);
+                    assert!(
+                        a.start_syncing.is_none()
+                            && !a.stop_syncing
+                            && !a.re_register
+                            && !a.new_calendar,
+                        "cycle {c}: node {i} moved by a babbler at {when}: {a:?}"
+                    );
+                    assert_eq!(nodes[i].role(), role);
+                }
+            };
+            if let Some(b) = babble.filter(|b| b.0 < at + t / 2) {
+                babble_to(&mut nodes, b);
+            }
             for (i, n) in nodes.iter_mut().enumerate() {
                 if alive[i] {
                     // Nobody starts a new calendar while the standbys continue.
                     assert!(n.poll(at + t / 2).start_syncing.is_none(), "cycle {c}: node {i}");
                 }
+            }
+            if let Some(b) = babble.filter(|b| b.0 >= at + t / 2) {
+                babble_to(&mut nodes, b);
             }
             if c > death + 3 {
                 assert!(c - last_sync_cycle <= 2, "cycle {c}: no sync since {last_sync_cycle}");
@@ -889,7 +1096,37 @@ mod proptests {
         ) {
             // One sync lost in a row at most: the continuation covers exactly one missing sync
             // (a node's clock free-runs two; a second loss in a row is the new-calendar path's).
-            simulate_continuing(&ranks, death, global, loss, 1, seed);
+            simulate_continuing(&ranks, death, global, loss, 1, seed, None);
+        }
+
+        #[test]
+        fn babblers_move_nobody_while_a_master_lives_or_a_standby_continues(
+            ranks in proptest::sample::subsequence((0u8..=MAX_RANK).collect::<Vec<u8>>(), 2..=6)
+                .prop_shuffle(),
+            death in 5u32..150,
+            global in any::<bool>(),
+            loss in 0u64..=40,
+            seed in any::<u64>(),
+            rank in 0u8..=MAX_RANK,
+            pct in 20u64..=100,
+        ) {
+            // A babbler of any rank (one better than the live master's is the start-up race's
+            // rule, skipped) sends a sync in `pct` % of the cycles at random instants and on
+            // the rule's boundaries, before the master dies, while the standbys continue, and
+            // after: no node steps down, registers again or starts a new calendar for it, the
+            // syncs keep coming every cycle or two, no HRT cycle is lost.
+            simulate_continuing(&ranks, death, global, loss, 1, seed, Some(Babbler { rank, pct }));
         }
     }
+
+    /// A node that sends syncs of its own (any counter and epoch) at random instants.
+    #[derive(Clone, Copy)]
+    struct Babbler {
+        rank: u8,
+        /// The chance, in percent, of a babbled sync in each cycle.
+        pct: u64,
+    }
+
+    /// The sync tolerance one cycle after a sync (0.5 %).
+    const TOL: Micros = T as Micros * SYNC_TOLERANCE_PPM / 1_000_000;
 }

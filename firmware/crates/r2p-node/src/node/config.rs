@@ -67,10 +67,10 @@ pub struct SlotPath {
 
 /// The slot path built for the F103's Cortex-M3 (thumbv7m).
 pub const CORTEX_M3_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_724, max_instructions: 1_824 };
+    SlotPath { min_instructions: 1_719, max_instructions: 1_819 };
 /// The slot path built for the F407's Cortex-M4F (thumbv7em, hard float).
 pub const CORTEX_M4_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_729, max_instructions: 1_834 };
+    SlotPath { min_instructions: 1_724, max_instructions: 1_829 };
 
 impl SlotPath {
     /// The slot lead for a core clocked at `sysclk_hz` (µs): the shortest path at one cycle per
@@ -127,7 +127,7 @@ mod tests {
 
     #[test]
     fn each_mcu_leads_by_its_shortest_slot_path_rounded_down() {
-        // 1 724 / 72 = 23.9 µs; 1 729 / 168 = 10.3 µs.
+        // 1 719 / 72 = 23.9 µs; 1 724 / 168 = 10.3 µs.
         assert_eq!(MODULE_SLOT_LEAD_US, 23);
         assert_eq!(CORTEX_M4_SLOT_PATH.lead_us(168_000_000), 10);
         // Exactly on a microsecond: not rounded.
@@ -138,7 +138,7 @@ mod tests {
 
     #[test]
     fn the_emulated_path_is_the_longest_rounded_up() {
-        // 1 824 / 72 = 25.3 µs; 1 834 / 168 = 10.9 µs.
+        // 1 819 / 72 = 25.3 µs; 1 829 / 168 = 10.9 µs.
         assert_eq!(CORTEX_M3_SLOT_PATH.longest_us(72_000_000), 26);
         assert_eq!(CORTEX_M4_SLOT_PATH.longest_us(168_000_000), 11);
         let p = SlotPath { min_instructions: 145, max_instructions: 145 };

@@ -64,8 +64,9 @@ pub struct NodeStats {
     pub dropped_on_move: u32,
     /// Events dropped because the application did not take them.
     pub events_lost: u32,
-    /// Syncs not followed because they came out of turn (before the followed master's next one
-    /// was due; to a master, from a rank no better than its own): a babbler's (`tdma.rs`).
+    /// Syncs not followed because they came out of turn (off the followed cycle's grid or out
+    /// of its sequence; to a master, from a rank no better than its own): a babbler's
+    /// (`rtcan::failover::Failover::on_sync`).
     pub syncs_out_of_turn: u32,
 }
 

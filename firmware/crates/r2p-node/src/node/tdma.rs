@@ -4,7 +4,7 @@
 //! (`node.rs`) links none of it.
 
 use rtcan::controller::TxOutcome;
-use rtcan::cycle::{ClockState, SYNC_SLOT, SYNC_TOLERANCE_PPM};
+use rtcan::cycle::{ClockState, SYNC_SLOT};
 use rtcan::failover::{sync_timeout_us, Actions, Role};
 use rtcan::schedule::occurs;
 use rtcan::{CanController, Micros, SlotClock, SyncFrame};
@@ -233,35 +233,19 @@ impl<
         self.slot_tx.next_wake(now, boundary)
     }
 
+    /// A sync heard: ignored and counted if out of turn (a babbler's, docs/rtcan.md
+    /// "Babblers"; the decision is `rtcan`'s [`Failover::on_sync`](rtcan::failover::Failover)),
+    /// else it feeds the clock and the failover state machine.
     pub(super) fn on_sync(&mut self, at: Micros, sync: &SyncFrame) {
-        if self.out_of_turn(at, sync) {
+        let a = self.failover.on_sync(at, sync);
+        if a.out_of_turn {
             bump(&mut self.stats.syncs_out_of_turn);
             return;
         }
         let info = self.clock.on_sync(at, sync);
         self.last_sync = at;
-        let a = self.failover.on_sync(at, sync);
         self.apply(a);
         self.follow_sync(sync, info, a.new_calendar);
-    }
-
-    /// A sync that comes before the followed master's next one can be due (a cycle after its
-    /// last, less the sync tolerance): a babbler's — a wrong clock, a bug — or the other
-    /// master's of a start-up race. A slave does not follow it while its master's syncs come
-    /// on time; a master steps down for it only if its sender's rank is better than its own
-    /// (so the better master of a race stays, the worse one follows it, and the slaves of the
-    /// worse one follow once its syncs stop). The cycle's phase, the calendar and the
-    /// mastership stay (docs/rtcan.md, "Babblers").
-    #[inline(never)] // one copy for the receive paths that inline `on_sync` (F103 flash)
-    fn out_of_turn(&self, at: Micros, sync: &SyncFrame) -> bool {
-        const TOLERANCE_DIVISOR: u32 = (1_000_000 / SYNC_TOLERANCE_PPM) as u32;
-        let cycle = self.config.cycle.cycle_us;
-        // The low 32 bits (71 minutes) suffice: `synced` means a sync within 35 ms. The time
-        // first: a sync on schedule (every cycle, on the slot path) is decided by it alone.
-        (at as u32).wrapping_sub(self.last_sync as u32) < cycle - cycle / TOLERANCE_DIVISOR
-            && self.failover.synced()
-            && !(self.master.is_some()
-                && self.failover.rank().is_some_and(|r| sync.sender < r.get()))
     }
 
     /// A standby that knows the calendar and heard no sync at the start of this cycle sends
