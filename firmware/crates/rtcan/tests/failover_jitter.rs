@@ -25,13 +25,29 @@ fn syncs_a_little_early_or_late_continue_the_cycle() {
     let a = f.on_sync(0, &SyncFrame::new(0, 0, false));
     assert!(a.re_register, "the first sync heard registers the streams");
     let mut at = 0;
-    for (cycle, offset) in [(1, -40i64), (2, 35), (3, -2_000), (4, 2_000), (6, 0)] {
+    // Within the sync tolerance (0.5 % of the cycles since the last sync: 50 µs per cycle).
+    for (cycle, offset) in [(1, -20i64), (2, 15), (3, -20), (4, 20), (6, 0)] {
         let now = (cycle * T as i64 + offset) as u64;
         let a = f.on_sync(now, &SyncFrame::new(cycle as u32, 0, false));
         assert!(!a.re_register, "sync of cycle {cycle} {offset} µs off: the same master's cycle");
+        assert!(!a.out_of_turn, "sync of cycle {cycle} {offset} µs off is on the grid");
         at = now;
     }
-    // A sync whose counter does not match the elapsed cycles is another master's.
-    let a = f.on_sync(at + T, &SyncFrame::new(9, 0, false));
-    assert!(a.re_register);
+    // 2 ms early is off the grid (docs/rtcan.md, "Babblers"): skipped, the cycle goes on.
+    let a = f.on_sync(at + T - 2_000, &SyncFrame::new(7, 0, false));
+    assert!(a.out_of_turn && !a.re_register, "a sync 2 ms early is out of turn");
+    let a = f.on_sync(at + T, &SyncFrame::new(7, 0, false));
+    assert!(!a.out_of_turn && !a.re_register, "the master's own sync of cycle 7 continues");
+    let at = at + T;
+    // A sync whose counter does not match the elapsed cycles is another master's: while the
+    // node is synced it is out of sequence, skipped; once the sync timeout has passed without a
+    // sync it follows, the node follows it and registers its streams again.
+    let mut outcomes = Vec::new();
+    for k in 1..=4u64 {
+        let now = at + k * T;
+        f.poll(now);
+        let a = f.on_sync(now, &SyncFrame::new(8 + k as u32, 0, false));
+        outcomes.push((a.out_of_turn, a.re_register));
+    }
+    assert_eq!(outcomes, [(true, false), (true, false), (true, false), (false, true)]);
 }
