@@ -684,13 +684,15 @@ mod proptests {
     /// per-receiver loss a master lives at least MAX_SYNC_LOSS + 1 syncs; late joiners boot
     /// while a master is live, and it lives until they heard it.
     fn simulate(specs: &[Spec], global: bool, loss_pct: u64, seed: u64, kills: &[Micros]) {
-        simulate_with(specs, global, loss_pct, seed, kills, None);
+        simulate_with(specs, global, loss_pct, seed, kills, None, None);
     }
 
     /// [`simulate`] with a babbler of rank `babbler.0` sending a sync in `babbler.1` ‰ of the
     /// 500 µs steps, at a random instant within the step, to every live node that follows a
     /// live master of a better rank; its counter is off that node's sequence (its own epoch).
     /// Each must be out of turn and move nothing, so the invariants above hold as without it.
+    /// With `revive`, a killed master boots again that long after its death (a master that
+    /// comes back: reset, brown-out), as a late joiner does: once a master is live.
     fn simulate_with(
         specs: &[Spec],
         global: bool,
@@ -698,6 +700,7 @@ mod proptests {
         seed: u64,
         kills: &[Micros],
         babbler: Option<(u8, u64)>,
+        revive: Option<Micros>,
     ) {
         let min_life = if global { 0 } else { MAX_SYNC_LOSS as Micros * T as Micros + STEP };
         let mut rng = seed | 1;
@@ -728,14 +731,19 @@ mod proptests {
         let mut t: Micros = 0;
         let end_margin = (MAX_TAKEOVER_CYCLES as Micros + 10) * T as Micros;
         let mut quiet_since_last_kill: Micros = 0;
+        let mut revived = 0u32;
         while quiet_since_last_kill < end_margin {
             let live_master = nodes.iter().any(|n| n.alive && n.f.role() == Role::Master);
             // Boot: everyone at 0; late joiners only while a master is live.
             for n in nodes.iter_mut().filter(|n| !n.booted && t >= n.boot_at) {
                 if n.boot_at == 0 || live_master {
+                    revived += u32::from(n.boot_at != 0 && n.next_sync.is_some());
                     n.f = Failover::new(n.f.rank(), T, t);
                     n.booted = true;
                     n.alive = true;
+                    n.misses = 0;
+                    n.next_sync = None;
+                    n.registered_with = None;
                 }
             }
             // Kill the master when its turn comes (not before every joiner heard it).
@@ -750,6 +758,11 @@ mod proptests {
                     let m = nodes.iter().position(|n| n.alive && n.f.role() == Role::Master);
                     if let Some(m) = m {
                         nodes[m].alive = false;
+                        if let Some(after) = revive {
+                            // Boots again like a late joiner (below): not before a master is live.
+                            nodes[m].booted = false;
+                            nodes[m].boot_at = t + after.max(1);
+                        }
                         kills_done += 1;
                         takeover_at = None;
                     }
@@ -855,6 +868,9 @@ mod proptests {
             }
         }
         assert!(kills_done >= 1, "the first master was killed");
+        if revive.is_some() && t <= 30_000_000 {
+            assert!(revived >= 1, "a killed master came back");
+        }
     }
 
     fn scenario() -> impl Strategy<Value = (Vec<Spec>, u64, u64, Vec<Micros>)> {
@@ -916,7 +932,19 @@ mod proptests {
             // Kills, late joiners, global or per-node loss, as above, with a babbler whose rank
             // is worse than the live master's: nobody follows it, so a master is never moved,
             // the takeover times and the bound stay.
-            simulate_with(&specs, global, loss, seed, &kills, Some((rank, permille)));
+            simulate_with(&specs, global, loss, seed, &kills, Some((rank, permille)), None);
+        }
+
+        #[test]
+        fn masters_that_come_back_never_make_two(
+            (specs, loss, seed, kills) in scenario(),
+            global in any::<bool>(),
+            back_after in 0u64..=200_000,
+        ) {
+            // Every killed master boots again (often within a cycle or two, before or after the
+            // next master took over) and listens as any late joiner: one master at a time, the
+            // next within its rank's bound, every follower registered with its master.
+            simulate_with(&specs, global, loss, seed, &kills, None, Some(back_after));
         }
     }
 
