@@ -43,13 +43,14 @@ def test_the_stack_is_derived_from_board_and_case(doc):
     gap = c["z"]["board_bot"]                             # 6.5 mm boss on a 2 mm floor
     assert gap == 8.5
     for b, pad in zip(hp["blocks"], hp["pads"]):
-        assert b["box"][2] == 0.0 and b["box"][5] == pytest.approx(gap - 2.5 * (1 - 0.325))   # 6.81 mm
+        assert b["box"][2] == 0.0 and b["box"][5] == pytest.approx(gap - 0.7125)   # 7.79 mm
         assert pad[2] == b["box"][5] and pad[5] == gap
-        assert b["bar"] == [12.0, 8.0]                    # 10.8 mm across, 6.81 mm tall, + 0.5 mm to face
-    # A 2.5 mm gap filler at 32.5 %: +/-0.3 mm of stack (a printed layer, the block's face, the
-    # sink's flatness) keeps it within 20-45 % both ways (2.0 mm would open to 17.5 %).
-    assert (hp["pad_t"], hp["compression"], hp["pad_compressed"]) == (2.5, 0.325, 1.6875)
-    assert hp["compression_range"] == [0.205, 0.445] and hp["pad_thickest"] == 1.9875
+        assert b["bar"] == [12.0, 10.0]                   # 10.8 mm across, 7.79 mm tall, + 0.5 mm to face
+    # A 1.25 mm putty pad squeezed to 0.7125 mm: +/-0.3 mm of stack (a printed layer, the block's
+    # face, the sink's flatness) and +/-10 % of pad keep it within its maker's 10-70 % both ways,
+    # exactly (1.0 mm would need 0.51-0.63 mm of gap at once).
+    assert (hp["pad_t"], hp["compression"], hp["pad_compressed"]) == (1.25, 0.43, 0.7125)
+    assert hp["compression_range"] == [0.1, 0.7] and hp["pad_thickest"] == 1.0125
     # The islands are the tabs: Q101's from the board (case frame: y flipped).
     assert hp["tabs"][0] == ["Q101", 60.6, 33.8, 71.4, 43.2]
     sc = hp["screw"]
@@ -70,15 +71,15 @@ def _findings(case, doc, change) -> list[str]:
     return [str(f) for f in fit.check(case.with_standin(d)).findings]
 
 
-def test_a_block_1_mm_too_tall_is_caught(case, doc):
+def test_a_block_half_a_mm_too_tall_is_caught(case, doc):
     def taller(hp):
         for b, p in zip(hp["blocks"], hp["pads"]):
-            b["box"][5] += 1.0
-            p[2] += 1.0
-            p[5] += 1.0
+            b["box"][5] += 0.5
+            p[2] += 0.5
+            p[5] += 0.5
     found = _findings(case, doc, taller)
     assert any(f.startswith("gap pad1 vs board: overlaps") for f in found), found
-    assert "block1 vs board: clearance 0.688 mm < 1.6875 mm" in found, found    # the pad crushed by 1 mm
+    assert "block1 vs board: clearance 0.213 mm < 0.7125 mm" in found, found    # the pad crushed by 0.5 mm
 
 
 def test_a_block_too_short_leaves_the_pad_loose(case, doc):
@@ -124,17 +125,30 @@ def test_the_sink_must_lie_on_the_case_and_the_screws_reach(case, doc):
         _findings(case, doc, long_screws)
 
 
-def test_the_pad_absorbs_the_stack_tolerance():
-    """The thinnest pad that stays in the window both ways; a tighter print takes a thinner one,
-    a film-like window or a sloppier stack none at all."""
-    assert heatpath.pad_for(heatpath.STACK) == (2.5, pytest.approx(0.8125), pytest.approx(0.3))
-    assert heatpath.pad_for(heatpath.Stack(print_z_tol=0.1))[0] == 2.0      # +/-0.2: 1.5 mm would be 19.2 %
-    assert heatpath.pad_for(heatpath.Stack(print_z_tol=0.15))[0] == 2.0     # +/-0.25: 20.0 %, the edge
-    assert heatpath.pad_for(heatpath.Stack(print_z_tol=0.1, block_h_tol=0, sink_flatness=0))[0] == 1.0
-    with pytest.raises(board_facts.BoardError, match=r"no gap pad of 5.0 mm or less keeps a \+/-1.30 mm stack"):
-        heatpath.pad_for(heatpath.Stack(print_z_tol=1.2))
+def test_the_pad_absorbs_the_stack_and_its_own_tolerance():
+    """The thinnest pad that stays in the window at every extreme of the stack and of its own
+    thickness; a tighter print takes a thinner one, a sloppier stack or a narrow window none."""
+    assert heatpath.pad_for(heatpath.STACK) == (1.25, pytest.approx(0.5375), pytest.approx(0.3))
+    assert heatpath.pad_for(heatpath.Stack(print_z_tol=0.1))[0] == 1.0      # +/-0.2: 14-66 %
+    # +/-0.25: a 1.0 mm pad would need a gap >= 0.58 and <= 0.56 mm; the pad's own 10 % decides it
+    assert heatpath.pad_for(heatpath.Stack(print_z_tol=0.15))[0] == 1.25
+    assert heatpath.pad_for(heatpath.Stack(print_z_tol=0.15, pad_thickness_tol=0.0))[0] == 1.0
+    # a Shore 00 60 gap pad's 20-45 % cannot take +/-0.3 mm and +/-10 % below 5.2 mm
     with pytest.raises(board_facts.BoardError, match="within 20%-45% compression"):
-        heatpath.pad_for(heatpath.Stack(pad_thicknesses=(0.5, 1.0)))
+        heatpath.pad_for(heatpath.Stack(compression_window=(0.20, 0.45)))
+    assert heatpath.pad_for(heatpath.Stack(compression_window=(0.20, 0.45), pad_thickness_tol=0.0))[0] == 2.5
+    with pytest.raises(board_facts.BoardError,
+                       match=r"no pad of 5.0 mm or less keeps a \+/-1.30 mm stack and \+/-10% of its own"):
+        heatpath.pad_for(heatpath.Stack(print_z_tol=1.2))
+
+
+def test_the_compression_range_takes_the_pads_tolerance():
+    """The loosest case is the thinnest pad on the widest gap, the tightest the thickest pad on
+    the narrowest gap."""
+    lo, hi = heatpath.compression_range(heatpath.STACK, 1.25, 0.7125, 0.3)
+    assert (lo, hi) == (pytest.approx(1 - 1.0125 / 1.125), pytest.approx(1 - 0.4125 / 1.375))
+    lo0, hi0 = heatpath.compression_range(heatpath.Stack(pad_thickness_tol=0.0), 1.25, 0.7125, 0.3)
+    assert (lo0, hi0) == (pytest.approx(0.19), pytest.approx(0.67))
 
 
 def test_impossible_geometry_is_refused(doc):

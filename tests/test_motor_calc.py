@@ -73,8 +73,8 @@ def test_a_changed_board_value_fails_its_row(monkeypatch, name, value, guarded):
     ("OC_FILTER_C", 1e-9, "over-current input filter"),                 # τ 1 µs: a short passes I_DM
     ("OC_HYST_R", 10e6, "over-current hysteresis"),                     # 2.8 mV: inside the offsets
     ("OC_HYST_R", 20e3, "over-current hysteresis"),                     # idle lift past the swing
-    ("PAD_PRESSURE_MAX", 100e3, "board bow under the gap pads"),         # a firm pad: 0.5 mm of bow
-    ("PAD_K", 3.0, "T_J at the 23 A peak"),                             # the thin film's grade at 2.5 mm
+    ("PAD_PRESSURE_MAX", 100e3, "board bow under the pads"),         # a firm pad: 0.5 mm of bow
+    ("PAD_K", 3.0, "T_J at the 23 A peak"),                             # a common 3 W/(m·K) pad: 111 °C
 ])
 
 def test_a_changed_part_or_assumption_fails_its_row(monkeypatch, name, value, guarded):

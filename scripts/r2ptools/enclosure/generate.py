@@ -155,7 +155,8 @@ def readme(doc: dict, r: Result, source: str) -> str:
             x0, y0, z0, x1, y1, z1 = b["box"]
             lines.append(f"- heat-path block {k}: EN AW-6060 flat bar {b['bar'][0]:g} × {b['bar'][1]:g} mm, "
                          f"sawn and faced to {x1 - x0:.2f} × {y1 - y0:.2f} × {z1 - z0:.2f} mm (± 0.05 mm on the height)")
-        lines.append(f"- gap pad: {hp['pad_t']} mm soft gap filler, {len(hp['pads'])} pieces cut to the blocks' top faces")
+        lines.append(f"- thermal putty pad: {hp['pad_t']} mm, {len(hp['pads'])} pieces cut to the blocks' top faces "
+                     "(putty does not spring back: a new piece whenever the heatsink comes off)")
     return "\n".join(lines) + "\n"
 
 
@@ -167,8 +168,9 @@ def _heat_rows(hp: dict, d: dict, z: dict) -> list[str]:
                        f" × {b['box'][5] - b['box'][2]:.2f} mm" for b in hp["blocks"])
     return [
         f"| heat path | board bottom {z['board_bot']} mm above the case's underside: heatsink base on the "
-        f"underside, greased aluminium block through the window ({blocks}), gap pad {hp['pad_t']} mm "
-        f"compressed {hp['compression']:.1%} to {hp['pad_compressed']} mm (the stack's ± {hp['stack_tolerance']} mm: "
+        f"underside, greased aluminium block through the window ({blocks}), putty pad {hp['pad_t']} mm "
+        f"compressed {hp['compression']:.1%} to {hp['pad_compressed']} mm (the stack's ± {hp['stack_tolerance']} mm "
+        f"and the pad's ± {hp['pad_thickness_tol']:.0%}: "
         f"{hp['compression_range'][0]:.1%}–{hp['compression_range'][1]:.1%}) on the tabs' B.Cu islands; the pad "
         "is the insulator, block, sink and screws are on its far side |",
         f"| heatsink | {x1 - x0:g} × {y1 - y0:g} × {-hp['sink'][2]:g} mm envelope, base {hp['sink_base']:g} mm "

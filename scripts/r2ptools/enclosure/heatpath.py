@@ -11,16 +11,17 @@ window, so a flat sink base cannot reach the islands. The stack, bottom up:
     grease         between sink and block (a film: no height here)
     block          aluminium, one per group of tabs whose common rectangle no bottom-side
                    obstacle crosses; its top face is the tabs' extent; height = gap - compressed pad
-    gap pad        the insulator (the islands are at VMOT and the phase nodes): block, grease,
+    putty pad      the insulator (the islands are at VMOT and the phase nodes): block, grease,
                    sink and screws are on the sink's side of it, at no circuit's potential
     B.Cu islands   the tabs' thermal vias land on them
 
 The pad's compression is set by geometry: block height = gap - pad_t x (1 - compression). The
-gap comes from printed parts (boss + floor), whose height is good to a layer, so the pad is a
-soft gap filler thick enough that the stack's worst-case tolerance keeps it inside the range a
-gap filler is used in (`compression_window`): never loose (a film compressed a few hundredths
-would open an air gap on a tall print), never crushed into the board. The thermal calculation
-takes its least-compressed thickness. Every size is derived here; a board or case it cannot be
+gap comes from printed parts (boss + floor), whose height is good to a layer, and the pad's own
+thickness is good to 10 %, so the pad is a putty pad thick enough that both worst cases keep it
+inside the range its maker gives (`compression_window`): never loose (a film compressed a few
+hundredths would open an air gap on a tall print), never crushed into the board, and soft enough
+that it flows rather than bows the board. The thermal calculation takes its least-compressed
+thickness. Every size is derived here; a board or case it cannot be
 made for gets a BoardError that says what to move.
 """
 from __future__ import annotations
@@ -34,12 +35,16 @@ from .lidplan import r4, rects_overlap
 
 @dataclass(frozen=True)
 class Stack:
-    # --- gap pad (hardware/motor/off-board.csv HS102: Honeywell TGP 8000HV, a soft gap filler) ---
-    # CAPLINQ lists it 0.5-5 mm thick; the 0.5 mm steps are NOT VERIFIED (Honeywell's TDS not read).
-    pad_thicknesses: tuple[float, ...] = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5, 5.0)
-    # "A gap filler should always be used under a compression of 20-45 %" (T-Global's TIM
-    # selection tutorial on Digi-Key, slide 13): the range every tolerance extreme must stay in.
-    compression_window: tuple[float, float] = (0.20, 0.45)
+    # --- the pad (hardware/motor/off-board.csv HS102: Honeywell TGP 8000PT, a thermal putty pad) ---
+    # CAPLINQ's listing (repository jerardpelaez/caplinq-ecommerce at c50b429, tgp8000pt.md):
+    # "Thickness range: 1.0-5.0mm with 0.25mm incremental", "Thickness Tolerance: >=1mm, ±10%".
+    pad_thicknesses: tuple[float, ...] = tuple(1.0 + 0.25 * i for i in range(17))
+    pad_thickness_tol: float = 0.10     # of the pad's thickness, either way
+    # "With 10~70% compression, the final BLT could reach a minimum of 0.5mm" (the same listing):
+    # the range every tolerance extreme must stay in. A Shore 00 60 gap pad's 20-45 % (T-Global's
+    # rule, Digi-Key TIM tutorial slide 13) cannot take +/-10 % of pad on +/-0.3 mm of stack below
+    # 5.2 mm: one reason for a putty pad.
+    compression_window: tuple[float, float] = (0.10, 0.70)
     # --- what moves the board's bottom against the sink's face under a block (worst case, +/- mm) ---
     print_z_tol: float = 0.2            # boss + floor, FDM: one 0.2 mm layer (estimate)
     block_h_tol: float = 0.05           # the blocks are faced to it (HS104's drawing)
@@ -100,17 +105,28 @@ def _stock(s: Stack, across: float, height: float, where: str) -> list[float]:
 
 
 def pad_for(s: Stack) -> tuple[float, float, float]:
-    """The thinnest stocked pad whose compression stays inside the window at both extremes of the
-    stack's worst-case tolerance, compressed to the window's middle: (thickness, nominal squeeze,
-    tolerance), mm. Thinnest, because the pad is the stack's largest thermal resistance."""
+    """The thinnest stocked pad whose compression stays inside the window at every extreme of the
+    stack's and the pad's own worst-case tolerance: (thickness, nominal squeeze, stack tolerance),
+    mm. The loosest case is the thinnest pad on the widest gap, the tightest the thickest pad on
+    the narrowest; the nominal gap sits midway between the two limits they set. Thinnest, because
+    the pad is the stack's largest thermal resistance."""
     tol = s.print_z_tol + s.block_h_tol + s.sink_flatness
     lo, hi = s.compression_window
+    r = s.pad_thickness_tol
     for t in sorted(s.pad_thicknesses):
-        squeeze = t * (lo + hi) / 2
-        if squeeze - tol >= lo * t - 1e-9 and squeeze + tol <= hi * t + 1e-9:
-            return t, squeeze, tol
-    raise BoardError(f"no gap pad of {max(s.pad_thicknesses)} mm or less keeps a +/-{tol:.2f} mm stack "
-                     f"within {lo:.0%}-{hi:.0%} compression: tighten the case's or the blocks' tolerance")
+        widest = t * (1 - r) * (1 - lo) - tol       # the nominal gap's largest value: still lo
+        narrowest = t * (1 + r) * (1 - hi) + tol    # and its smallest: still hi
+        if narrowest <= widest + 1e-9:
+            return t, t - (widest + narrowest) / 2, tol
+    raise BoardError(f"no pad of {max(s.pad_thicknesses)} mm or less keeps a +/-{tol:.2f} mm stack and "
+                     f"+/-{r:.0%} of its own thickness within {lo:.0%}-{hi:.0%} compression: tighten the "
+                     "case's or the blocks' tolerance")
+
+
+def compression_range(s: Stack, pad_t: float, gap: float, tol: float) -> tuple[float, float]:
+    """The pad's least and most compression over the tolerances, for a nominal gap (mm)."""
+    r = s.pad_thickness_tol
+    return 1 - (gap + tol) / (pad_t * (1 - r)), 1 - (gap - tol) / (pad_t * (1 + r))
 
 
 def plan(b: Board, d, F, z: dict, interior: list[float], windows: list[list[float]], holes,
@@ -131,7 +147,7 @@ def plan(b: Board, d, F, z: dict, interior: list[float], windows: list[list[floa
         for other, k in keep:
             if rects_overlap(box, k):
                 raise BoardError(f"{where}: {other} stand(s) under {ref}'s tab island (within "
-                                 f"{s.live_clearance} mm): no block can press a gap pad on it; move them apart")
+                                 f"{s.live_clearance} mm): no block can press a pad on it; move them apart")
     # Tabs grouped: two groups become one block when their common rectangle stays clear.
     groups = [([ref], box) for ref, box in tabs]
     merged = True
@@ -207,7 +223,8 @@ def plan(b: Board, d, F, z: dict, interior: list[float], windows: list[list[floa
         "tabs": [[ref, *map(r4, box)] for ref, box in tabs],
         "pad_t": pad_t, "pad_compressed": r4(pad_c), "compression": r4(squeeze / pad_t),
         "stack_tolerance": r4(tol), "pad_thickest": r4(pad_c + tol),
-        "compression_range": [r4((squeeze - tol) / pad_t), r4((squeeze + tol) / pad_t)],
+        "pad_thickness_tol": s.pad_thickness_tol,
+        "compression_range": [r4(c) for c in compression_range(s, pad_t, pad_c, tol)],
         "blocks": blocks, "pads": pads,
         "sink": sink, "sink_base": s.sink_base,
         "screws": screws,

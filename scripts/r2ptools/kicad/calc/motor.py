@@ -225,15 +225,16 @@ CU_K = 390.0                  # W/(m·K)
 H_CONV = 12.0                 # W/(m²·K): natural convection + radiation, horizontal board: estimate
 VIA_DRILL, VIA_PLATING, BOARD_T = 0.3e-3, 25e-6, 1.6e-3
 VIAS_PER_FET = 40             # thermal vias under each D2PAK tab (8 × 5 at 1.2 mm pitch)
-PAD_K = 7.0                   # W/(m·K), the insulating gap pad under each tab: a requirement (the
-                              # candidate, Honeywell TGP 8000HV, is 8.0 by CAPLINQ's text: NOT VERIFIED)
+PAD_K = 7.0                   # W/(m·K), the insulating pad under each tab: a requirement (the
+                              # candidate, Honeywell TGP 8000PT, is 8.0 by CAPLINQ's text: NOT VERIFIED)
 # The heat path under the tabs is the case's (enclosures/motor/motor.json `heat_path`, made by
 # scripts/enclosures from the board: r2ptools/enclosure/heatpath.py): the pad's compressed
 # thickness, the islands' and blocks' sizes come from there, never typed here.
 # The pad pushes the board up between its standoffs; a firm pad bows it (and strains the tabs'
 # joints) instead of being compressed. Requirement on the pad, like PAD_K: its pressure at the
-# stack's most compression (Honeywell's pressure-deflection curve NOT VERIFIED: the candidate's
-# Shore 00 60 may exceed it; a Shore 00 ~30 grade of the same thickness then).
+# stack's most compression. The candidate is a putty pad, Shore 00 5 and "low stress" by
+# CAPLINQ's listing, which flows rather than springs back; its compression-pressure chart is not
+# read (NOT VERIFIED).
 PAD_PRESSURE_MAX = 15e3       # Pa at the top of the compression range
 BOW_LIMIT = 0.1e-3            # m: a third of the stack's ± 0.3 mm, so the pad stays in its window
 FR4_E = 20e9                  # Pa, FR-4's flexural modulus (as remembered, NOT VERIFIED); copper
@@ -490,7 +491,7 @@ def pad_force_row() -> Row:
     area = sum((p[3] - p[0]) * (p[4] - p[1]) for p in hp["pads"]) * 1e-6
     force = PAD_PRESSURE_MAX * area
     bow = force / k
-    return Row(f"board bow under the gap pads at {hp['compression_range'][1]:.1%} compression",
+    return Row(f"board bow under the pads at {hp['compression_range'][1]:.1%} compression",
                f"{bow * 1e3:.2f} mm", f"≤ {BOW_LIMIT * 1e3:g} mm", bow <= BOW_LIMIT,
                f"{force:.1f} N: the pad required to need ≤ {PAD_PRESSURE_MAX / 1e3:.0f} kPa there "
                f"(PAD_PRESSURE_MAX) over {area * 1e6:.0f} mm²; the board {BOARD_MM[1]:g} × {BOARD_T * 1e3:g} mm "
