@@ -659,6 +659,11 @@ mod proptests {
 
     const T: u32 = 10_000;
     const STEP: Micros = 500;
+    /// Cycles from a partition's end to one master that every node follows: the worse master
+    /// hears the better within L + 1 cycles, its followers stop ignoring the better one's syncs
+    /// (out of turn to them) at the sync timeout, L + 1.5 cycles after the last sync they
+    /// followed, and hear it within L + 1 more: 9.5 (docs/rtcan.md "Partitions").
+    const HEAL_CYCLES: u64 = 10;
 
     struct Node {
         f: Failover,
@@ -946,6 +951,186 @@ mod proptests {
             // next within its rank's bound, every follower registered with its master.
             simulate_with(&specs, global, loss, seed, &kills, None, Some(back_after));
         }
+
+        #[test]
+        fn partitions_heal_to_one_master(
+            (ranks, side) in (1usize..=5, 0usize..=2).prop_flat_map(|(standbys, plain)| {
+                let ranks = proptest::sample::subsequence((0..=MAX_RANK).collect::<Vec<u8>>(), standbys)
+                    .prop_shuffle();
+                let side = proptest::collection::vec(any::<bool>(), standbys + plain);
+                (ranks, Just(plain), side)
+            }).prop_map(|(ranks, plain, side)| {
+                let mut r: Vec<Option<u8>> = ranks.into_iter().map(Some).collect();
+                r.extend(core::iter::repeat_n(None, plain));
+                (r, side)
+            }),
+            global in any::<bool>(),
+            loss in 0u64..=60,
+            seed in any::<u64>(),
+            cut_at in 0u64..=2_000_000,
+            cut_cycles in 0u64..=120,
+        ) {
+            // Any split of 1-7 nodes, cut at any time (before the first master, during a
+            // takeover, later) for 0-120 cycles: within H1 and far past it alike, one master
+            // per segment while cut, one for all within HEAL_CYCLES once whole.
+            let healed = simulate_partition(&ranks, &side, global, loss, seed, cut_at, cut_cycles * T as Micros);
+            prop_assert!(healed <= HEAL_CYCLES, "healed in {healed} cycles");
+        }
+    }
+
+    /// A partition: the bus cut in two (`side[i]`: node i's segment) from `cut_at` for
+    /// `cut_len` µs, then whole again — outside H1 when it lasts more than L cycles. Everyone
+    /// boots at 0; each sync reaches the live nodes of its sender's segment (all of them when
+    /// whole), each losing it with probability `loss_pct`, at most L in a row (per node, or
+    /// for all at once with `global`). Checked: while cut, each segment is a bus of its own (at
+    /// most one master, one within its best rank's bound after the last sync it heard); once
+    /// whole, two masters never last more than L + 1 cycles (the worse steps down at the
+    /// first sync of the better it hears), and within `HEAL_CYCLES` there is one master, the
+    /// best rank of any that was master after the heal, every node follows it and is
+    /// registered with it. Returns the cycles the heal took (from the first takeover when that came
+    /// later).
+    fn simulate_partition(
+        ranks: &[Option<u8>],
+        side: &[bool],
+        global: bool,
+        loss_pct: u64,
+        seed: u64,
+        cut_at: Micros,
+        cut_len: Micros,
+    ) -> u64 {
+        let mut rng = seed | 1;
+        let mut rand = move || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            rng
+        };
+        let mut nodes: Vec<Node> = ranks
+            .iter()
+            .map(|&r| Node {
+                f: Failover::new(r.map(|r| Rank::new(r).unwrap()), T, 0),
+                boot_at: 0,
+                booted: true,
+                alive: true,
+                misses: 0,
+                next_sync: None,
+                registered_with: None,
+            })
+            .collect();
+        let heal = cut_at + cut_len;
+        // Past the heal, and past the first takeover (rank 15 alone: 79 cycles) when it came first.
+        let end = heal.max(MAX_TAKEOVER_CYCLES as Micros * T as Micros)
+            + (HEAL_CYCLES + 20) * T as Micros;
+        let mut first_master_at: Option<Micros> = None;
+        // Per segment: the last sync any node of it heard (the takeover bound's reference).
+        let mut last_heard = [0 as Micros; 2];
+        // H1 holds per master: the syncs of one sender lost at most L in a row, by all at once
+        // (`global`) or by each receiver (`misses[receiver][sender]`).
+        let mut global_misses = std::vec![0u32; ranks.len()];
+        let mut misses = std::vec![std::vec![0u32; ranks.len()]; ranks.len()];
+        let mut masterships = 0u32;
+        let mut two_masters_since: Option<Micros> = None;
+        let mut converged_at: Option<Micros> = None;
+        let mut t: Micros = 0;
+        while t <= end {
+            let cut = (cut_at..heal).contains(&t);
+            let hears = |i: usize, j: usize| !cut || side[i] == side[j];
+            for n in nodes.iter_mut() {
+                let a = n.f.poll(t);
+                if let Some(s) = a.start_syncing {
+                    masterships += 1;
+                    n.next_sync = Some((t, s.cycle, s.epoch, masterships));
+                    n.registered_with = Some(masterships);
+                    first_master_at.get_or_insert(t);
+                }
+            }
+            let masters: Vec<usize> =
+                (0..nodes.len()).filter(|&i| nodes[i].f.role() == Role::Master).collect();
+            if cut {
+                for seg in [false, true] {
+                    let on: Vec<usize> = (0..nodes.len()).filter(|&i| side[i] == seg).collect();
+                    let here = masters.iter().filter(|&&m| side[m] == seg).count();
+                    assert!(here <= 1, "two masters on one segment at {t}");
+                    let best = on.iter().filter_map(|&i| nodes[i].f.rank()).min();
+                    if let (0, Some(r)) = (here, best) {
+                        let bound = last_heard[seg as usize] + takeover_delay_us(r, T);
+                        assert!(t < bound, "segment without a master at {t}, bound {bound}");
+                    }
+                }
+            } else if masters.len() >= 2 {
+                let since = *two_masters_since.get_or_insert(t);
+                assert!(
+                    t - since <= (MAX_SYNC_LOSS as Micros + 1) * T as Micros + STEP,
+                    "two masters since {since} at {t} (heal {heal})"
+                );
+            } else {
+                two_masters_since = None;
+            }
+            // Syncs: each master's due sync goes to the live nodes of its segment.
+            for &m in &masters {
+                let Some((at, cycle, epoch, ship)) = nodes[m].next_sync else { continue };
+                if at > t || nodes[m].f.role() != Role::Master {
+                    continue;
+                }
+                let rank = nodes[m].f.rank().unwrap().get();
+                let sync = SyncFrame::new(cycle, 0, epoch).from_rank(rank);
+                assert!(nodes[m].f.on_sync_sent(t, &sync, true).is_empty());
+                nodes[m].next_sync = Some((at + T as Micros, cycle + 1, epoch, ship));
+                let lost_by_all = global_misses[m] < MAX_SYNC_LOSS && rand() % 100 < loss_pct;
+                global_misses[m] = if lost_by_all { global_misses[m] + 1 } else { 0 };
+                for i in 0..nodes.len() {
+                    if i == m || !hears(i, m) {
+                        continue;
+                    }
+                    let lost = if global {
+                        lost_by_all
+                    } else {
+                        misses[i][m] < MAX_SYNC_LOSS && rand() % 100 < loss_pct
+                    };
+                    if lost {
+                        misses[i][m] += 1;
+                        continue;
+                    }
+                    misses[i][m] = 0;
+                    let n = &mut nodes[i];
+                    last_heard[side[i] as usize] = t;
+                    let a = n.f.on_sync(t, &sync);
+                    assert!(a.start_syncing.is_none());
+                    if a.stop_syncing {
+                        n.next_sync = None;
+                    }
+                    if a.re_register {
+                        n.registered_with = Some(ship);
+                    }
+                }
+            }
+            // One master that every node follows and is registered with: the heal is done
+            // (it must stay so: checked at the end).
+            let masters: Vec<usize> =
+                (0..nodes.len()).filter(|&i| nodes[i].f.role() == Role::Master).collect();
+            let settled = match masters[..] {
+                [m] => {
+                    let ship = nodes[m].next_sync.map(|s| s.3);
+                    nodes.iter().all(|n| n.registered_with == ship && n.f.synced())
+                }
+                _ => false,
+            };
+            if t >= heal {
+                converged_at = match (settled, converged_at) {
+                    (true, Some(c)) => Some(c),
+                    (true, None) => Some(t),
+                    (false, _) => None,
+                };
+            }
+            t += STEP;
+        }
+        let at = converged_at.expect("one master followed by every node once whole");
+        // A heal before any master existed heals nothing: count from the first takeover then.
+        let from = heal.max(first_master_at.unwrap());
+        let best = ranks.iter().flatten().min().copied();
+        let m = nodes.iter().position(|n| n.f.role() == Role::Master).unwrap();
+        assert_eq!(nodes[m].f.rank().map(Rank::get), best, "the best rank ends as master");
+        at.saturating_sub(from) / T as Micros
     }
 
     /// The continuing takeover, cycle by cycle: `ranks` standbys that trust their copies of the
