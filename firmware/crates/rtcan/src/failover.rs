@@ -665,6 +665,17 @@ mod proptests {
     /// followed, and hear it within L + 1 more: 9.5 (docs/rtcan.md "Partitions").
     const HEAL_CYCLES: u64 = 10;
 
+    /// The simulations' random numbers: xorshift64, deterministic from the case's seed.
+    fn xorshift(seed: u64) -> impl FnMut() -> u64 {
+        let mut rng = seed | 1;
+        move || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            rng
+        }
+    }
+
     struct Node {
         f: Failover,
         /// Boots at this time (0, or later while a master is live: a late joiner).
@@ -708,13 +719,7 @@ mod proptests {
         revive: Option<Micros>,
     ) {
         let min_life = if global { 0 } else { MAX_SYNC_LOSS as Micros * T as Micros + STEP };
-        let mut rng = seed | 1;
-        let mut rand = move || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            rng
-        };
+        let mut rand = xorshift(seed);
         let mut nodes: Vec<Node> = specs
             .iter()
             .map(|&(r, boot_at)| Node {
@@ -998,13 +1003,7 @@ mod proptests {
         cut_at: Micros,
         cut_len: Micros,
     ) -> u64 {
-        let mut rng = seed | 1;
-        let mut rand = move || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            rng
-        };
+        let mut rand = xorshift(seed);
         let mut nodes: Vec<Node> = ranks
             .iter()
             .map(|&r| Node {
@@ -1149,13 +1148,7 @@ mod proptests {
         seed: u64,
         babbler: Option<Babbler>,
     ) {
-        let mut rng = seed | 1;
-        let mut rand = move || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            rng
-        };
+        let mut rand = xorshift(seed);
         let t = T as Micros;
         let mut nodes: Vec<Failover> =
             ranks.iter().map(|&r| Failover::new(Rank::new(r), T, 0)).collect();
