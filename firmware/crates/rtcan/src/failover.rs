@@ -1242,7 +1242,7 @@ mod proptests {
                 // "Babblers"): a due sync's counter and epoch (c or c + 1, true) on the grid
                 // is the master's or a continuing standby's sync, and the epoch flipped with
                 // counter 0 or 1 on the grid of a node that missed a sync a new calendar's.
-                let epoch = rand() % 2 == 0;
+                let epoch = rand().is_multiple_of(2);
                 let cycle =
                     if epoch { c + 2 + (rand() % 254) as u32 } else { 2 + (rand() % 254) as u32 };
                 (at + off, SyncFrame::new(cycle, u64::MAX, epoch).from_rank(b.rank))
