@@ -15,6 +15,8 @@ VOLUME_TOLERANCE = 0.001
 
 def all_problems(out: Path, module: str) -> list[str]:
     missing = [f for f in generate.files(module) if not (out / f).exists()]
+    if not missing and generate.has_heat_path(out, module):
+        missing = [f for f in generate.files(module, heat_path=True) if not (out / f).exists()]
     if missing:
         return [f"{out}: missing {', '.join(missing)}: run scripts/enclosures generate {module}"]
     K = solid.Case(solid.Params(params.read_json(out / f"{module}.json")))

@@ -7,6 +7,7 @@
     enclosures/<m>/<m>-lid.stl
     enclosures/<m>/<m>-assembly.step   base, lid, board stand-in, standoffs, heat path (cadquery)
     enclosures/<m>/<m>.png         exploded preview (OpenSCAD)
+    enclosures/<m>/<m>-heat-path.png   the heat path's stack in section (a case with one)
     enclosures/<m>/README.md       sizes, clearances, hardware, print settings
 """
 from __future__ import annotations
@@ -16,7 +17,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import ROOT_LIB, board_facts, fit, layout, mesh, params, render, solid
+from . import ROOT_LIB, board_facts, fit, heatpath_section, layout, mesh, params, render, solid
 from .case_rules import DESIGN, Design
 
 PLA_DENSITY = 1.24   # g/cm^3, for the README's mass estimate (PETG: 1.27)
@@ -31,9 +32,16 @@ class Result:
     volumes: dict[str, tuple[float, float]] = field(default_factory=dict)   # part: (stl, cadquery)
 
 
-def files(module: str) -> list[str]:
+def files(module: str, heat_path: bool = False) -> list[str]:
+    """The files a generated case consists of; `heat_path`: the case has one (its section)."""
     return [f"{module}.json", "board.scad", f"{module}.scad", f"{module}-base.stl", f"{module}-lid.stl",
-            f"{module}-assembly.step", f"{module}.png", "README.md"]
+            f"{module}-assembly.step", f"{module}.png", "README.md"] + \
+        ([f"{module}-heat-path.png"] if heat_path else [])
+
+
+def has_heat_path(out: Path, module: str) -> bool:
+    """True if the case in `out` was generated with a heat path (its parameters say)."""
+    return params.read_json(out / f"{module}.json")["case"].get("heat_path") is not None
 
 
 def parameters(pcb: Path, source: str, design: Design = DESIGN) -> dict:
@@ -82,6 +90,8 @@ def generate(pcb: Path, source: str, enclosures: Path, png: bool = True, design:
         t = time.monotonic()
         render.preview(top, out / f"{module}.png")
         r.seconds["OpenSCAD PNG"] = time.monotonic() - t
+    if doc["case"].get("heat_path"):
+        heatpath_section.draw(doc, out / f"{module}-heat-path.png")
     (out / "README.md").write_text(readme(doc, r, source))
     return r
 
@@ -157,6 +167,8 @@ def readme(doc: dict, r: Result, source: str) -> str:
                          f"sawn and faced to {x1 - x0:.2f} × {y1 - y0:.2f} × {z1 - z0:.2f} mm (± 0.05 mm on the height)")
         lines.append(f"- thermal putty pad: {hp['pad_t']} mm, {len(hp['pads'])} pieces cut to the blocks' top faces "
                      "(putty does not spring back: a new piece whenever the heatsink comes off)")
+        lines += ["", "The heat path in section (heatsink, floor, blocks, pads, board):", "",
+                  f"![{m} heat path in section]({m}-heat-path.png)"]
     return "\n".join(lines) + "\n"
 
 

@@ -226,6 +226,7 @@ def plan(b: Board, d, F, z: dict, interior: list[float], windows: list[list[floa
         "pad_thickness_tol": s.pad_thickness_tol,
         "compression_range": [r4(c) for c in compression_range(s, pad_t, pad_c, tol)],
         "blocks": blocks, "pads": pads,
+        "obstacles": [[ref, *map(r4, box)] for ref, box in below],
         "sink": sink, "sink_base": s.sink_base,
         "screws": screws,
         "screw": {"d": s.screw_d, "hole_d": s.screw_hole_d, "head_d": s.screw_head_d, "head_h": s.screw_head_h,
