@@ -664,6 +664,10 @@ mod proptests {
     /// (out of turn to them) at the sync timeout, L + 1.5 cycles after the last sync they
     /// followed, and hear it within L + 1 more: 9.5 (docs/rtcan.md "Partitions").
     const HEAL_CYCLES: u64 = 10;
+    /// The same with a rank-0 late joiner following the worse master: it may start a new
+    /// calendar 4 cycles after that master's last sync, before it follows the better one, and
+    /// the bus settles one round later: 3 + 4 + 3 + 3.5 + 3 = 16.5 cycles.
+    const HEAL_CYCLES_RANK0: u64 = 17;
 
     /// The simulations' random numbers: xorshift64, deterministic from the case's seed.
     fn xorshift(seed: u64) -> impl FnMut() -> u64 {
@@ -959,15 +963,22 @@ mod proptests {
 
         #[test]
         fn partitions_heal_to_one_master(
-            (ranks, side) in (1usize..=5, 0usize..=2).prop_flat_map(|(standbys, plain)| {
+            (ranks, boots, side) in (1usize..=5, 0usize..=2).prop_flat_map(|(standbys, plain)| {
                 let ranks = proptest::sample::subsequence((0..=MAX_RANK).collect::<Vec<u8>>(), standbys)
                     .prop_shuffle();
+                // Most boot at 0; some join later (in ms), once they hear a master.
+                let boots = proptest::collection::vec(
+                    prop_oneof![3 => Just(0u64), 1 => 1u64..=1_500],
+                    standbys + plain,
+                );
                 let side = proptest::collection::vec(any::<bool>(), standbys + plain);
-                (ranks, Just(plain), side)
-            }).prop_map(|(ranks, plain, side)| {
+                (ranks, Just(plain), boots, side)
+            }).prop_map(|(ranks, plain, boots, side)| {
                 let mut r: Vec<Option<u8>> = ranks.into_iter().map(Some).collect();
                 r.extend(core::iter::repeat_n(None, plain));
-                (r, side)
+                // The first node (ranked) boots at 0 so that a master appears.
+                let boots = boots.iter().enumerate().map(|(i, &b)| if i == 0 { 0 } else { b * 1_000 }).collect::<Vec<_>>();
+                (r, boots, side)
             }),
             global in any::<bool>(),
             loss in 0u64..=60,
@@ -975,53 +986,58 @@ mod proptests {
             cut_at in 0u64..=2_000_000,
             cut_cycles in 0u64..=120,
         ) {
-            // Any split of 1-7 nodes, cut at any time (before the first master, during a
-            // takeover, later) for 0-120 cycles: within H1 and far past it alike, one master
-            // per segment while cut, one for all within HEAL_CYCLES once whole.
-            let healed = simulate_partition(&ranks, &side, global, loss, seed, cut_at, cut_cycles * T as Micros);
-            prop_assert!(healed <= HEAL_CYCLES, "healed in {healed} cycles");
+            // Any split of 1-7 nodes, late joiners among them, cut at any time (before the first
+            // master, during a takeover, later) for 0-120 cycles: within H1 and far past it
+            // alike, one master per segment while cut, one for all soon after it is whole.
+            let healed = simulate_partition(&ranks, &boots, &side, global, loss, seed, cut_at..cut_at + cut_cycles * T as Micros);
+            let rank0_joiner = ranks.iter().zip(&boots).any(|(r, &b)| *r == Some(0) && b > 0);
+            let bound = if rank0_joiner { HEAL_CYCLES_RANK0 } else { HEAL_CYCLES };
+            prop_assert!(healed <= bound, "healed in {healed} cycles");
         }
     }
 
-    /// A partition: the bus cut in two (`side[i]`: node i's segment) from `cut_at` for
-    /// `cut_len` µs, then whole again — outside H1 when it lasts more than L cycles. Everyone
-    /// boots at 0; each sync reaches the live nodes of its sender's segment (all of them when
-    /// whole), each losing it with probability `loss_pct`, at most L in a row (per node, or
+    /// A partition: the bus cut in two (`side[i]`: node i's segment) over `split`, then
+    /// whole again — outside H1 when it lasts more than L cycles. Node i
+    /// boots at `boots[i]` (0, or later once it hears a master: a late joiner); each sync
+    /// reaches the booted nodes of its sender's segment (all of them when whole), each losing it with probability `loss_pct`, at most L in a row (per node, or
     /// for all at once with `global`). Checked: while cut, each segment is a bus of its own (at
     /// most one master, one within its best rank's bound after the last sync it heard); once
     /// whole, two masters never last more than L + 1 cycles (the worse steps down at the
-    /// first sync of the better it hears), and within `HEAL_CYCLES` there is one master, the
+    /// first sync of the better it hears), and within `HEAL_CYCLES` (`HEAL_CYCLES_RANK0` with a
+    /// rank-0 late joiner, which may follow a worse master) there is one master, the
     /// best rank of any that was master after the heal, every node follows it and is
     /// registered with it. Returns the cycles the heal took (from the first takeover when that came
     /// later).
     fn simulate_partition(
         ranks: &[Option<u8>],
+        boots: &[Micros],
         side: &[bool],
         global: bool,
         loss_pct: u64,
         seed: u64,
-        cut_at: Micros,
-        cut_len: Micros,
+        split: core::ops::Range<Micros>,
     ) -> u64 {
         let mut rand = xorshift(seed);
         let mut nodes: Vec<Node> = ranks
             .iter()
-            .map(|&r| Node {
+            .zip(boots)
+            .map(|(&r, &boot_at)| Node {
                 f: Failover::new(r.map(|r| Rank::new(r).unwrap()), T, 0),
-                boot_at: 0,
-                booted: true,
-                alive: true,
+                boot_at,
+                booted: boot_at == 0,
+                alive: boot_at == 0,
                 misses: 0,
                 next_sync: None,
                 registered_with: None,
             })
             .collect();
-        let heal = cut_at + cut_len;
+        let heal = split.end;
         // Past the heal, and past the first takeover (rank 15 alone: 79 cycles) when it came first.
         let end = heal.max(MAX_TAKEOVER_CYCLES as Micros * T as Micros)
             + (HEAL_CYCLES + 20) * T as Micros;
         let mut first_master_at: Option<Micros> = None;
-        // Per segment: the last sync any node of it heard (the takeover bound's reference).
+        // Per segment: the last sync any node of it heard, or a later boot (the takeover
+        // bound's reference).
         let mut last_heard = [0 as Micros; 2];
         // H1 holds per master: the syncs of one sender lost at most L in a row, by all at once
         // (`global`) or by each receiver (`misses[receiver][sender]`).
@@ -1030,11 +1046,27 @@ mod proptests {
         let mut masterships = 0u32;
         let mut two_masters_since: Option<Micros> = None;
         let mut converged_at: Option<Micros> = None;
+        // The best rank that was master once whole: it stays (a late joiner of a better rank
+        // follows a live master and never takes over from it).
+        let mut best_after_heal: Option<u8> = Some(u8::MAX);
         let mut t: Micros = 0;
         while t <= end {
-            let cut = (cut_at..heal).contains(&t);
+            let cut = split.contains(&t);
             let hears = |i: usize, j: usize| !cut || side[i] == side[j];
-            for n in nodes.iter_mut() {
+            // Late joiners boot once a master they can hear is live (H3).
+            for i in 0..nodes.len() {
+                let heard = (0..nodes.len())
+                    .any(|m| nodes[m].alive && nodes[m].f.role() == Role::Master && hears(i, m));
+                if !nodes[i].booted && t >= nodes[i].boot_at && heard {
+                    let n = &mut nodes[i];
+                    n.f = Failover::new(n.f.rank(), T, t);
+                    n.booted = true;
+                    n.alive = true;
+                    // Its boot is its reference until it hears a sync.
+                    last_heard[side[i] as usize] = t;
+                }
+            }
+            for n in nodes.iter_mut().filter(|n| n.alive) {
                 let a = n.f.poll(t);
                 if let Some(s) = a.start_syncing {
                     masterships += 1;
@@ -1045,9 +1077,15 @@ mod proptests {
             }
             let masters: Vec<usize> =
                 (0..nodes.len()).filter(|&i| nodes[i].f.role() == Role::Master).collect();
+            if t >= heal {
+                for &m in &masters {
+                    best_after_heal = best_after_heal.min(nodes[m].f.rank().map(Rank::get));
+                }
+            }
             if cut {
                 for seg in [false, true] {
-                    let on: Vec<usize> = (0..nodes.len()).filter(|&i| side[i] == seg).collect();
+                    let on: Vec<usize> =
+                        (0..nodes.len()).filter(|&i| side[i] == seg && nodes[i].alive).collect();
                     let here = masters.iter().filter(|&&m| side[m] == seg).count();
                     assert!(here <= 1, "two masters on one segment at {t}");
                     let best = on.iter().filter_map(|&i| nodes[i].f.rank()).min();
@@ -1078,7 +1116,7 @@ mod proptests {
                 let lost_by_all = global_misses[m] < MAX_SYNC_LOSS && rand() % 100 < loss_pct;
                 global_misses[m] = if lost_by_all { global_misses[m] + 1 } else { 0 };
                 for i in 0..nodes.len() {
-                    if i == m || !hears(i, m) {
+                    if i == m || !hears(i, m) || !nodes[i].alive {
                         continue;
                     }
                     let lost = if global {
@@ -1110,7 +1148,12 @@ mod proptests {
             let settled = match masters[..] {
                 [m] => {
                     let ship = nodes[m].next_sync.map(|s| s.3);
-                    nodes.iter().all(|n| n.registered_with == ship && n.f.synced())
+                    // The nodes the heal concerns: those up when the bus became whole (a later
+                    // one is an ordinary late joiner).
+                    nodes
+                        .iter()
+                        .filter(|n| n.alive && n.boot_at <= heal)
+                        .all(|n| n.registered_with == ship && n.f.synced())
                 }
                 _ => false,
             };
@@ -1126,9 +1169,8 @@ mod proptests {
         let at = converged_at.expect("one master followed by every node once whole");
         // A heal before any master existed heals nothing: count from the first takeover then.
         let from = heal.max(first_master_at.unwrap());
-        let best = ranks.iter().flatten().min().copied();
         let m = nodes.iter().position(|n| n.f.role() == Role::Master).unwrap();
-        assert_eq!(nodes[m].f.rank().map(Rank::get), best, "the best rank ends as master");
+        assert_eq!(nodes[m].f.rank().map(Rank::get), best_after_heal, "the best master stays");
         at.saturating_sub(from) / T as Micros
     }
 
