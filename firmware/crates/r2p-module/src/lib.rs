@@ -13,6 +13,7 @@
 //! - [`leds`]: the status LED patterns every module shows the same way;
 //! - [`long_division`]: a smaller 64-bit division than compiler-builtins' (the ABI's helpers);
 //! - [`mem_routines`]: smaller 8-byte aligned copy/clear than compiler-builtins';
+//! - [`soft_float`]: smaller `f32` add, subtract, multiply and divide than compiler-builtins';
 //! - [`param_doc`]: what each parameter means, for the README;
 //! - [`trig`]: sine, cosine and tangent in `f32` only (libm's pull in `f64` soft float);
 //! - `readme` (feature `std`): what the READMEs' generated sections share.
@@ -38,6 +39,7 @@ pub mod param_doc;
 pub mod ram_flash;
 #[cfg(any(test, feature = "std"))]
 pub mod readme;
+pub mod soft_float;
 pub mod trig;
 
 pub use dfu_sink::DfuSink;
