@@ -148,6 +148,9 @@ pub struct RosStats {
     pub opened: u32,
     /// Samples published.
     pub published: u32,
+    /// Samples held back by the write filter: the router had told that nobody subscribes to
+    /// their key ([`Matching::sends`]).
+    pub filtered: u32,
     /// `/cmd_vel` samples taken.
     pub cmd_vel: u32,
     /// `/cmd_vel` samples that were not a Twist: dropped.
@@ -443,6 +446,11 @@ impl RosBridge {
             let Some(Ok(len)) = len else { continue };
             let p = &mut self.pubs[i];
             p.next_us = p.next_us.max(now_us.saturating_sub(p.period_us)) + p.period_us;
+            // The write filter (the session is open here): nobody would receive it.
+            if !self.matching.sends(i) {
+                self.stats.filtered += 1;
+                continue;
+            }
             p.seq += 1;
             let att = ros::attachment(p.seq, stamp_ns, &p.gid);
             n += self.session.send(now_us, &mut out[n..], |net| {

@@ -974,4 +974,62 @@ mod demand {
         let battery = r.gw.import_index("psu/battery").unwrap();
         assert!(matches!(r.gw.import_state(battery), Some(ImportState::Subscribed { .. })));
     }
+
+    /// Polls the bridge alone every 10 ms from now to `until` with a battery sample to
+    /// publish (the router's keep-alive once a second); the bytes it sent.
+    fn publish_battery(r: &mut Rig, until: u64) -> usize {
+        let latest = Latest { battery: Some(Battery::default()), ..Latest::default() };
+        let (mut out, mut sent) = ([0u8; 8192], 0);
+        while r.bus.now.get() < until {
+            let now = r.bus.now.get();
+            if now.is_multiple_of(1_000_000) {
+                r.bridge.receive(now, &[0x04], &mut out).unwrap();
+            }
+            sent += r.bridge.poll(now, 0, &latest, &mut out).unwrap();
+            r.bus.now.set(now + 10_000);
+        }
+        sent
+    }
+
+    #[test]
+    fn no_put_leaves_for_a_key_nobody_subscribes_and_puts_resume_with_a_subscriber() {
+        let mut r = rig();
+        let stats = |r: &Rig| (r.bridge.stats().published, r.bridge.stats().filtered);
+        // No answer to the interests yet: the battery goes out (fail-safe).
+        publish_battery(&mut r, 2_000_000);
+        let (sent, filtered) = stats(&r);
+        assert!(sent > 0 && filtered == 0, "{sent} {filtered}");
+        // The router answers: nobody subscribes to anything. No PUT leaves, each is counted.
+        let finals: Vec<[u8; 3]> = (1..=topic::COUNT as u8).map(|i| [0x3E, i, 0x1A]).collect();
+        r.router(&frame(&finals.iter().map(|f| &f[..]).collect::<Vec<_>>()));
+        publish_battery(&mut r, 4_000_000);
+        let (held, filtered) = stats(&r);
+        assert_eq!(held, sent, "no PUT for an unsubscribed key");
+        assert!(filtered > 0);
+        // A subscriber declared on /battery_state's key: the next due sample goes.
+        r.router(&frame(&[&[0x1E, 0x02, 5, 2]]));
+        let at = r.bus.now.get();
+        let mut out = [0u8; 8192];
+        let latest = Latest { battery: Some(Battery::default()), ..Latest::default() };
+        assert!(r.bridge.poll(at, 0, &latest, &mut out).unwrap() > 0, "at once");
+        assert_eq!(stats(&r), (held + 1, filtered));
+        publish_battery(&mut r, 6_000_000);
+        assert!(stats(&r).0 > held + 1 && stats(&r).1 == filtered);
+        // It leaves: held back again at once, also while demand's hold-off keeps the import.
+        r.router(&frame(&[&[0x1E, 0x03, 5]]));
+        let (before, f) = stats(&r);
+        publish_battery(&mut r, 6_000_000 + HOLD_OFF_US / 2);
+        assert_eq!(stats(&r).0, before);
+        assert!(stats(&r).1 > f);
+        let feed = GATEWAY_FEEDS.iter().position(|f| f.topic == "psu/battery").unwrap();
+        assert_ne!(r.bridge.wanted() & 1 << feed, 0, "the import is kept within the hold-off");
+        // A new session: unknown again, the battery goes.
+        r.bridge.connect(r.bus.now.get(), &mut out).unwrap();
+        r.router(&[0x21, 0x09, 0x00, 0xAA, 0x01, 0xCC]);
+        r.router(&[0x62, 10, 0]);
+        let (before, f) = stats(&r);
+        let until = r.bus.now.get() + 2_000_000;
+        publish_battery(&mut r, until);
+        assert!(stats(&r).0 > before && stats(&r).1 == f);
+    }
 }

@@ -153,6 +153,14 @@ impl<const SUBS: usize> Matching<SUBS> {
         }
     }
 
+    /// The write filter: whether a sample on `keys[i]` should go to the router. Only a key
+    /// known to have no subscriber (its interest answered, none declared since, nothing that
+    /// could not be followed) is held back; anything unknown sends, as zenoh-pico's write
+    /// filter does, since publishing to nobody is waste and not publishing to someone a fault.
+    pub fn sends(&self, i: usize) -> bool {
+        self.matched(i) != Some(false)
+    }
+
     /// The counters.
     pub fn stats(&self) -> MatchingStats {
         self.stats

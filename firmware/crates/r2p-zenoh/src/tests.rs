@@ -459,3 +459,29 @@ fn a_declaration_that_cannot_be_followed_counts_every_key_as_matched() {
     let m = matching_after(&[finals, push_frame(&[&decl, &long])]);
     assert_eq!(matched(&m), [Some(true); 3]);
 }
+
+#[test]
+fn the_write_filter_holds_back_only_keys_known_to_have_no_subscriber() {
+    let sends = |m: &Matching<4>| [m.sends(0), m.sends(1), m.sends(2)];
+    // No answer yet: everything goes.
+    assert_eq!(sends(&matching_after(&[])), [true; 3]);
+    // Odom has a subscriber, battery's answer is complete with none, IMU's is not answered.
+    let answer = push_frame(&[&[0x3E, 2, 0x1A], &[0x3E, 1, 0x02, 7, 1], &[0x3E, 1, 0x1A]]);
+    let mut m = matching_after(core::slice::from_ref(&answer));
+    assert_eq!(sends(&m), [true, false, true]);
+    // Keys past the table are never followed: they send.
+    assert!(m.sends(KEYS.len()) && m.sends(MAX_KEYS) && m.sends(usize::MAX));
+    // A subscriber declared on the battery's key: it goes at once; undeclared: held again.
+    let battery = push_frame(&[&[0x1E, 0x02, 8, 2]]);
+    m = matching_after(&[answer.clone(), battery.clone()]);
+    assert_eq!(sends(&m), [true, true, true]);
+    m = matching_after(&[answer.clone(), battery, push_frame(&[&[0x1E, 0x03, 8]])]);
+    assert_eq!(sends(&m), [true, false, true]);
+    // A declaration that cannot be followed: everything goes.
+    m = matching_after(&[answer.clone(), push_frame(&[&[0x1E, 0x42, 11, 77]])]);
+    assert_eq!(sends(&m), [true; 3]);
+    // A new session: unknown again, everything goes.
+    m = matching_after(core::slice::from_ref(&answer));
+    m.reset();
+    assert_eq!(sends(&m), [true; 3]);
+}
