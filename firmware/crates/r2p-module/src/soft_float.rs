@@ -317,6 +317,11 @@ mod tests {
         assert_eq!(super::add(f(-0.0), f(-0.0)), f(-0.0));
         assert_eq!(super::mul(f(-3.0), f(0.5)), f(-1.5));
         assert_eq!(super::div(f(1.0), f(3.0)), f(1.0 / 3.0));
+        // Equal significands: the quotient is exactly a power of two (no pre-shift; pre-shifting
+        // would give 1.11…1 with a sticky remainder, which rounds to the same value).
+        assert_eq!(super::div(f(3.0), f(1.5)), f(2.0));
+        assert_eq!(super::div(f(-7.5), f(3.75)), f(-2.0));
+        assert_eq!(super::div(f(1.0), f(1.0)), f(1.0));
         assert_eq!(super::div(f(1.0), f(0.0)), f(f32::INFINITY));
         assert_eq!(super::div(f(-1.0), f(f32::INFINITY)), f(-0.0));
         assert_eq!(super::mul(f(0.0), f(f32::INFINITY)), super::DEFAULT_NAN);
