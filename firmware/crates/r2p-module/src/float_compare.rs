@@ -123,13 +123,7 @@ mod tests {
     #[test]
     fn orders_as_ieee_754_on_a_million_pairs_of_any_bits() {
         // xorshift32: any bit patterns (NaNs included), and pairs close to each other.
-        let mut x = 0x1234_5678u32;
-        let mut next = || {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            x
-        };
+        let mut next = crate::test_bits::xorshift32();
         for _ in 0..1_000_000 {
             let (a, b) = (next(), next());
             check(f32::from_bits(a), f32::from_bits(b));

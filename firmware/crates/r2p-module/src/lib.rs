@@ -40,6 +40,8 @@ pub mod ram_flash;
 #[cfg(any(test, feature = "std"))]
 pub mod readme;
 pub mod soft_float;
+#[cfg(test)]
+mod test_bits;
 pub mod trig;
 
 pub use dfu_sink::DfuSink;

@@ -292,13 +292,7 @@ mod tests {
     fn millions_of_pairs_as_compiler_builtins_computes_them() {
         // xorshift32: any bit patterns (NaNs and subnormals included), then operands of close
         // magnitudes (cancellation, ties), then results near the subnormal and overflow edges.
-        let mut x = 0x1234_5678u32;
-        let mut next = || {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            x
-        };
+        let mut next = crate::test_bits::xorshift32();
         for _ in 0..1_000_000 {
             let (a, b) = (next(), next());
             check(a, b);
