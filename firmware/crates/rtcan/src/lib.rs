@@ -35,7 +35,7 @@ pub use fragment::{fragments, Expect, Reassembler, ReassemblyStats};
 pub use frame::Frame;
 pub use id::{FrameId, IdError, MessageId};
 pub use laxity::{FrameClass, Laxity, LaxityEncoding};
-pub use schedule::{next_reserved, Period, Phase, Scheduler};
+pub use schedule::{next_reserved, Period, Phase, Scheduler, StreamSlots};
 pub use srt::{Missed, Ticket, TxQueue, Urgency};
 
 /// The crate's test suite, compiled in for bare-metal runners (feature `selftest`).

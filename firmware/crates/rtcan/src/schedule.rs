@@ -1,10 +1,11 @@
 //! HRT scheduling: admission control, phase assignment and the master's reservation calendar.
 //!
-//! An HRT stream sends one frame every `P` cycles in one slot. The master admits it, gives it a
-//! [`Phase`] — the cycle offset `o` (0 ≤ o < P) and the slot `s` — and from then on reserves
-//! slot `s` in every cycle `c` with `c mod P = o`. Each node computes its own occurrences from
-//! (period, phase) with [`next_reserved`]; only the master keeps the whole calendar
-//! ([`Scheduler`]) to build each sync's reservation mask.
+//! An HRT stream sends one message every `P` cycles. The master admits it, gives it a cycle
+//! offset `o` (0 ≤ o < P) and one slot per frame of its message — a [`Phase`] (o, s) each — and
+//! from then on reserves those slots in every cycle `c` with `c mod P = o`; the message's frames
+//! go out first to last in its slots' cycle order ([`StreamSlots`]). Each node computes its own
+//! occurrences from (period, phase) with [`next_reserved`]; only the master keeps the whole
+//! calendar ([`Scheduler`]) to build each sync's reservation mask.
 //!
 //! # Admission rule
 //! Periods are powers of two from 1 to [`MAX_PERIOD_CYCLES`] = 256 cycles. Any two such periods
@@ -18,6 +19,11 @@
 //! admitted iff `Σ 256/Pᵢ + 256/P ≤ 256 · hrt_slots` (and the table has room), and a collision-free
 //! phase exists. With registrations only (no removals) the placement below guarantees that a phase
 //! exists whenever the capacity test passes, so admission is exactly the utilization test.
+//!
+//! A message of k frames (at most [`MAX_HRT_FRAMES`]) takes k reservations with one period
+//! and one offset, in k slots: it uses k · 256/P, and is admitted iff that fits and k slots are
+//! free at one offset (best fit below, slot by slot). Its frames share the message ID, so a
+//! receiver reassembles them as any multi-frame message (docs/rtcan.md, "Fragmentation").
 //!
 //! # Placement (best-fit buddy)
 //! Bit-reversing the 8-bit cycle number maps the occurrences of (P = 2^k, o) onto one aligned
@@ -61,6 +67,9 @@ pub const MAX_PERIOD_CYCLES: u32 = 256;
 pub const MAX_PERIOD_LOG2: u8 = 8;
 /// Highest slot index the scheduler can reserve.
 pub const MAX_HRT_SLOT: u8 = MAX_SLOTS - 1;
+/// Most frames an HRT message may take, one slot each: 62 bytes with the transfer CRC, the
+/// longest message a node's reassembly buffer holds by default.
+pub const MAX_HRT_FRAMES: u8 = 8;
 
 /// An admissible HRT period: 2^k cycles, 0 ≤ k ≤ 8.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -95,7 +104,44 @@ pub struct Phase {
     pub slot: u8,
 }
 
-/// An admitted stream.
+/// Where a stream's message goes: in the cycles `c` with `c mod P = offset`, frame `j` (from 0)
+/// in the `j`-th lowest slot of `slots` (bit `s` for slot `s`), so that frames go out in order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct StreamSlots {
+    /// Cycle offset, less than the period.
+    pub offset: u8,
+    /// One bit per slot the stream holds; never bit 0 (the sync slot).
+    pub slots: u64,
+}
+
+impl StreamSlots {
+    /// A one-frame stream's slots.
+    pub const fn single(phase: Phase) -> Self {
+        Self { offset: phase.offset, slots: 1 << phase.slot }
+    }
+
+    /// The first frame's phase (offset and lowest slot).
+    pub const fn first(self) -> Phase {
+        Phase { offset: self.offset, slot: self.slots.trailing_zeros() as u8 }
+    }
+
+    /// The number of frames (slots).
+    pub const fn frames(self) -> u8 {
+        self.slots.count_ones() as u8
+    }
+
+    /// Which frame (from 0) goes in `slot`, if the stream holds it.
+    pub const fn frame_in(self, slot: u8) -> Option<u8> {
+        if slot < 64 && self.slots & 1 << slot != 0 {
+            Some((self.slots & ((1 << slot) - 1)).count_ones() as u8)
+        } else {
+            None
+        }
+    }
+}
+
+/// An admitted stream's reservation of one slot (a k-frame stream has k of them, with one
+/// period and one offset).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Reservation {
     /// The stream's message ID (its HRT frames carry it).
@@ -118,8 +164,11 @@ pub enum Reject {
     Full,
     /// The message ID is reserved for sync frames.
     ReservedId,
-    /// The stream is already admitted with another period (remove it first).
+    /// The stream is already admitted with another period or number of frames (remove it
+    /// first).
     Conflict,
+    /// No frames, or more than [`MAX_HRT_FRAMES`].
+    TooManyFrames,
 }
 
 /// True if a stream with `period` and `phase` sends in cycle `cycle` (only `cycle mod 256`
@@ -178,6 +227,20 @@ impl Occupancy {
         for w in 0..4 {
             self.0[w] |= Self::range_mask(w, start, len);
         }
+    }
+
+    /// If aligned block `block` of `size` positions is free: the size of the largest free
+    /// aligned block containing it (best fit takes the smallest).
+    fn fit(&self, block: u32, size: u32) -> Option<u32> {
+        if !self.is_free(block * size, size) {
+            return None;
+        }
+        let (mut idx, mut len) = (block, size);
+        while len < MAX_PERIOD_CYCLES && self.is_free((idx >> 1) * len * 2, len * 2) {
+            idx >>= 1;
+            len *= 2;
+        }
+        Some(len)
     }
 }
 
@@ -270,9 +333,17 @@ impl<const N: usize> Scheduler<N> {
         self.len() == 0
     }
 
-    /// The reservation of `stream`, if admitted.
+    /// The (first) reservation of `stream`, if admitted.
     pub fn get(&self, stream: MessageId) -> Option<&Reservation> {
         self.iter().find(|r| r.stream == stream)
+    }
+
+    /// The period and slots of `stream`, if admitted.
+    pub fn slots_of(&self, stream: MessageId) -> Option<(Period, StreamSlots)> {
+        let first = self.get(stream)?;
+        let slots =
+            self.iter().filter(|r| r.stream == stream).fold(0, |m, r| m | 1 << r.phase.slot);
+        Some((first.period, StreamSlots { offset: first.phase.offset, slots }))
     }
 
     /// Used capacity in 1/256 of a slot: Σ 256 / Pᵢ.
@@ -280,54 +351,100 @@ impl<const N: usize> Scheduler<N> {
         self.iter().map(|r| MAX_PERIOD_CYCLES >> r.period.log2()).sum()
     }
 
-    /// Admits `stream` with a period of `period_cycles` cycles and returns its phase.
+    /// Admits one-frame `stream` with a period of `period_cycles` cycles and returns its phase.
     /// Registering an admitted stream again with the same period returns its phase unchanged.
     pub fn register(&mut self, stream: MessageId, period_cycles: u32) -> Result<Phase, Reject> {
+        self.register_frames(stream, period_cycles, 1).map(StreamSlots::first)
+    }
+
+    /// Admits `stream`, whose messages take `frames` frames, with a period of `period_cycles`
+    /// cycles: one offset and `frames` slots. Registering it again with the same period and
+    /// frames returns its slots unchanged.
+    pub fn register_frames(
+        &mut self,
+        stream: MessageId,
+        period_cycles: u32,
+        frames: u8,
+    ) -> Result<StreamSlots, Reject> {
         if stream.is_reserved_for_sync() {
             return Err(Reject::ReservedId);
         }
         let period = Period::from_cycles(period_cycles)?;
-        if let Some(r) = self.get(stream) {
-            return if r.period == period { Ok(r.phase) } else { Err(Reject::Conflict) };
+        if frames == 0 || frames > MAX_HRT_FRAMES {
+            return Err(Reject::TooManyFrames);
         }
-        let Some(free) = self.table.iter().position(Option::is_none) else {
-            return Err(Reject::Full);
-        };
-        let need = MAX_PERIOD_CYCLES >> period.log2();
-        if self.utilization() + need > MAX_PERIOD_CYCLES * self.hrt_slots as u32 {
+        if let Some((held, slots)) = self.slots_of(stream) {
+            let same = held == period && slots.frames() == frames;
+            return if same { Ok(slots) } else { Err(Reject::Conflict) };
+        }
+        let need = u32::from(frames) * (MAX_PERIOD_CYCLES >> period.log2());
+        let room = self.table.iter().filter(|e| e.is_none()).count();
+        if room < usize::from(frames)
+            || self.utilization() + need > MAX_PERIOD_CYCLES * self.hrt_slots as u32
+        {
             return Err(Reject::Full);
         }
-        let phase = self.place(period).ok_or(Reject::NoFreePhase)?;
-        self.table[free] = Some(Reservation { stream, period, phase });
-        Ok(phase)
+        let got = self.place(period, frames).ok_or(Reject::NoFreePhase)?;
+        let mut slots = got.slots;
+        for e in self.table.iter_mut().filter(|e| e.is_none()) {
+            if slots == 0 {
+                break;
+            }
+            let phase = Phase { offset: got.offset, slot: slots.trailing_zeros() as u8 };
+            *e = Some(Reservation { stream, period, phase });
+            slots &= slots - 1;
+        }
+        Ok(got)
     }
 
-    /// Best-fit buddy placement (module documentation).
-    fn place(&self, period: Period) -> Option<Phase> {
+    /// Placement (module documentation): the best-fit block of the first frame, then the
+    /// best-fit slots at that offset; if too few slots are free there, the first offset that
+    /// has enough.
+    fn place(&self, period: Period, frames: u8) -> Option<StreamSlots> {
+        let first = self.best_fit(period)?;
+        core::iter::once(first)
+            .chain(0..1u32 << period.log2())
+            .find_map(|block| self.fill(period, block, frames))
+    }
+
+    /// The aligned block of 256/P positions, over all slots, whose largest free enclosing
+    /// block is smallest; ties: the slot placement tries first, then the lower block.
+    fn best_fit(&self, period: Period) -> Option<u32> {
         let k = period.log2();
         let size = MAX_PERIOD_CYCLES >> k;
-        let mut best: Option<(u32, Phase)> = None;
+        let mut best: Option<(u32, u32)> = None;
         for slot in self.slots() {
             let occ = self.occupancy(slot);
             for block in 0..(1u32 << k) {
-                if !occ.is_free(block * size, size) {
-                    continue;
-                }
-                // Largest free aligned block containing this one.
-                let (mut idx, mut len) = (block, size);
-                while len < MAX_PERIOD_CYCLES && occ.is_free((idx >> 1) * len * 2, len * 2) {
-                    idx >>= 1;
-                    len *= 2;
-                }
+                let Some(len) = occ.fit(block, size) else { continue };
                 if best.is_none_or(|(b, _)| len < b) {
-                    best = Some((len, Phase { offset: rev(block, k) as u8, slot }));
+                    best = Some((len, block));
                     if len == size {
-                        return best.map(|(_, p)| p);
+                        return Some(block);
                     }
                 }
             }
         }
-        best.map(|(_, p)| p)
+        best.map(|(_, block)| block)
+    }
+
+    /// `frames` slots in which aligned block `block` is free, each the best fit of those left
+    /// (ties: the slot placement tries first).
+    fn fill(&self, period: Period, block: u32, frames: u8) -> Option<StreamSlots> {
+        let k = period.log2();
+        let size = MAX_PERIOD_CYCLES >> k;
+        let mut slots = 0u64;
+        for _ in 0..frames {
+            let mut best: Option<(u32, u8)> = None;
+            for slot in self.slots().filter(|&s| slots & 1 << s == 0) {
+                let Some(len) = self.occupancy(slot).fit(block, size) else { continue };
+                if best.is_none_or(|(b, _)| len < b) {
+                    best = Some((len, slot));
+                }
+            }
+            slots |= 1 << best?.1;
+        }
+        Some(StreamSlots { offset: rev(block, k) as u8, slots })
     }
 
     fn occupancy(&self, slot: u8) -> Occupancy {
@@ -341,8 +458,9 @@ impl<const N: usize> Scheduler<N> {
     }
 
     /// Takes in a reservation the master's calendar made (a standby following the grants it
-    /// hears, docs/rtcan.md "Master failover"): it replaces the stream's own entry and every
-    /// entry it shares a (cycle, slot) with, which the master's calendar can no longer hold.
+    /// hears, docs/rtcan.md "Master failover"): it replaces the stream's entries of another
+    /// period or offset (an older grant; its other frames stay) and every entry it shares a
+    /// (cycle, slot) with, which the master's calendar can no longer hold.
     /// `Err(Full)` if the table has no room, `Err(ReservedId)` for a sync ID, `Err(Conflict)`
     /// for a phase the calendar could not have made (offset beyond the period, the sync slot).
     pub fn admit(&mut self, r: Reservation) -> Result<(), Reject> {
@@ -352,7 +470,11 @@ impl<const N: usize> Scheduler<N> {
         if u32::from(r.phase.offset) >= r.period.cycles() || r.phase.slot == SYNC_SLOT {
             return Err(Reject::Conflict);
         }
-        self.retain(|x| x.stream != r.stream && !collide(x, &r));
+        // The stream's other frames stay (same period and offset); an older grant of it goes.
+        let older = |x: &Reservation| {
+            x.stream == r.stream && (x.period != r.period || x.phase.offset != r.phase.offset)
+        };
+        self.retain(|x| !older(x) && !collide(x, &r));
         let free = self.table.iter_mut().find(|e| e.is_none()).ok_or(Reject::Full)?;
         *free = Some(r);
         Ok(())
@@ -367,10 +489,11 @@ impl<const N: usize> Scheduler<N> {
         }
     }
 
-    /// Removes `stream`; returns its reservation if it was admitted.
+    /// Removes `stream` (every frame's slot); returns its first reservation if it was admitted.
     pub fn remove(&mut self, stream: MessageId) -> Option<Reservation> {
-        let e = self.table.iter_mut().find(|e| e.is_some_and(|r| r.stream == stream))?;
-        e.take()
+        let first = self.get(stream).copied();
+        self.retain(|r| r.stream != stream);
+        first
     }
 
     /// Removes every stream (a new master starts with an empty calendar).
@@ -417,6 +540,13 @@ pub(crate) mod tests {
                 let phase = master.register(stream, period).unwrap();
                 standby.admit(Reservation { stream, period: p(period), phase }).unwrap();
             }
+            // A 3-frame stream: one grant per frame, the same offset.
+            let three = master.register_frames(MessageId(0x4209), 4, 3).unwrap();
+            for slot in (1..64).filter(|&x| three.slots & 1 << x != 0) {
+                let phase = Phase { offset: three.offset, slot };
+                standby.admit(Reservation { stream: MessageId(0x4209), period: p(4), phase }).unwrap();
+            }
+            assert_eq!(standby.slots_of(MessageId(0x4209)), Some((p(4), three)));
             master.remove(MessageId(0x4202));
             standby.remove(MessageId(0x4202));
             for c in 0..MAX_PERIOD_CYCLES {
@@ -435,24 +565,81 @@ pub(crate) mod tests {
             let b = Reservation { stream: MessageId(0x4301), period: p(4), phase: Phase { offset: 3, slot: 3 } };
             s.admit(b).unwrap();
             assert_eq!((s.get(a.stream), s.get(b.stream)), (None, Some(&b)));
-            // Offset 1 of period 4 does not meet offset 3: both stay. The same stream moves.
+            // Offset 1 of period 4 does not meet offset 3: both stay. The same stream moves to
+            // another offset (a new grant): its old slot goes.
             let c = Reservation { stream: MessageId(0x4401), period: p(4), phase: Phase { offset: 1, slot: 3 } };
             s.admit(c).unwrap();
             assert_eq!(s.len(), 2);
-            let c2 = Reservation { phase: Phase { offset: 1, slot: 4 }, ..c };
+            let c2 = Reservation { phase: Phase { offset: 2, slot: 4 }, ..c };
             s.admit(c2).unwrap();
             assert_eq!((s.len(), s.get(c.stream)), (2, Some(&c2)));
+            // At the same offset in another slot: the stream's next frame, kept beside it.
+            let c3 = Reservation { phase: Phase { offset: 2, slot: 5 }, ..c };
+            s.admit(c3).unwrap();
+            assert_eq!(s.slots_of(c.stream), Some((p(4), StreamSlots { offset: 2, slots: 0b11_0000 })));
+            s.remove(c.stream);
+            assert_eq!(s.len(), 1);
             // A phase the calendar cannot make, a sync ID, a full table.
             let bad = Reservation { phase: Phase { offset: 4, slot: 3 }, ..c };
             assert_eq!(s.admit(bad), Err(Reject::Conflict));
             assert_eq!(s.admit(Reservation { phase: Phase { offset: 0, slot: 0 }, ..c }), Err(Reject::Conflict));
             assert_eq!(s.admit(Reservation { stream: MessageId(0x45), ..c }), Err(Reject::ReservedId));
-            for k in 0..2u16 {
+            for k in 0..3u16 {
                 let r = Reservation { stream: MessageId(0x4501 + k), period: p(1), phase: Phase { offset: 0, slot: 10 + k as u8 } };
                 s.admit(r).unwrap();
             }
             let r = Reservation { stream: MessageId(0x4601), period: p(1), phase: Phase { offset: 0, slot: 20 } };
             assert_eq!(s.admit(r), Err(Reject::Full));
+        }
+
+        fn a_multi_frame_stream_takes_one_offset_and_a_slot_per_frame() {
+            let mut s: Scheduler<8> = Scheduler::new(15, 30);
+            let a = s.register_frames(MessageId(0x4201), 4, 3).unwrap();
+            // The first three slots placement opens, in one offset; frames in cycle order.
+            assert_eq!(a, StreamSlots { offset: 0, slots: 1 << 1 | 1 << 4 | 1 << 7 });
+            assert_eq!((a.frames(), a.first(), a.frame_in(4), a.frame_in(7)), (3, Phase { offset: 0, slot: 1 }, Some(1), Some(2)));
+            assert_eq!((a.frame_in(2), a.frame_in(64)), (None, None));
+            assert_eq!((s.len(), s.utilization()), (3, 3 * 64));
+            assert_eq!(s.mask(4), 1 | 1 << 1 | 1 << 4 | 1 << 7);
+            assert_eq!(s.mask(5), 1);
+            // Again with the same period and frames: the same slots; otherwise a conflict.
+            assert_eq!(s.register_frames(MessageId(0x4201), 4, 3), Ok(a));
+            assert_eq!(s.register_frames(MessageId(0x4201), 4, 2), Err(Reject::Conflict));
+            assert_eq!(s.register(MessageId(0x4201), 4), Err(Reject::Conflict));
+            assert_eq!(s.slots_of(MessageId(0x4201)), Some((p(4), a)));
+            for bad in [0, MAX_HRT_FRAMES + 1] {
+                assert_eq!(s.register_frames(MessageId(0x4301), 4, bad), Err(Reject::TooManyFrames));
+            }
+            // A one-frame stream of the same period takes the best fit beside it.
+            assert_eq!(s.register(MessageId(0x4301), 4), Ok(Phase { offset: 2, slot: 1 }));
+            check_no_collision(&s);
+            // The table holds 8 reservations: four left, so a 5-frame stream is refused.
+            assert_eq!(s.register_frames(MessageId(0x4401), 4, 5), Err(Reject::Full));
+            assert_eq!(s.register_frames(MessageId(0x4401), 4, 4).map(|x| x.frames()), Ok(4));
+            assert!(s.remove(MessageId(0x4201)).is_some());
+            assert_eq!((s.len(), s.slots_of(MessageId(0x4201))), (5, None));
+        }
+
+        fn a_multi_frame_stream_needs_every_frame_at_one_offset() {
+            let r = |stream, period, offset, slot| Reservation { stream: MessageId(stream), period: p(period), phase: Phase { offset, slot } };
+            // Slot 1 is free at offset 1 only, slot 2 at offset 0 only (period 2): room for two
+            // frames, but not at one offset.
+            let mut s: Scheduler<8> = Scheduler::new(2, 4);
+            s.admit(r(0x4201, 2, 0, 1)).unwrap();
+            s.admit(r(0x4202, 2, 1, 2)).unwrap();
+            assert_eq!(s.register_frames(MessageId(0x4301), 2, 2), Err(Reject::NoFreePhase));
+            assert_eq!(s.register(MessageId(0x4301), 2), Ok(Phase { offset: 1, slot: 1 }));
+            // Slots 1, 2, 4 (period 4): slot 1 is free at offset 3 only, the best fit of a first
+            // frame, but slots 2 and 4 are taken there; offset 0 has both.
+            let mut s: Scheduler<8> = Scheduler::new(3, 5);
+            for (stream, offset, slot) in [(0x4201, 0, 1), (0x4202, 1, 1), (0x4203, 2, 1), (0x4204, 3, 2), (0x4205, 3, 4)] {
+                s.admit(r(stream, 4, offset, slot)).unwrap();
+            }
+            assert_eq!(s.register(MessageId(0x4301), 4), Ok(Phase { offset: 3, slot: 1 }));
+            s.remove(MessageId(0x4301));
+            let got = s.register_frames(MessageId(0x4301), 4, 2).unwrap();
+            assert_eq!(got, StreamSlots { offset: 0, slots: 1 << 2 | 1 << 4 });
+            check_no_collision(&s);
         }
 
         fn periods_are_powers_of_two_up_to_256() {
@@ -654,13 +841,19 @@ mod proptests {
 
     /// Brute force: is there any (slot, offset) free for `period`?
     fn some_phase_free<const N: usize>(s: &Scheduler<N>, period: Period) -> bool {
-        s.slots().any(|slot| {
-            (0..period.cycles()).any(|o| {
+        some_offset_free(s, period, 1)
+    }
+
+    /// Brute force: is there an offset at which `frames` slots are free for `period`?
+    fn some_offset_free<const N: usize>(s: &Scheduler<N>, period: Period, frames: u8) -> bool {
+        (0..period.cycles()).any(|o| {
+            let free = s.slots().filter(|&slot| {
                 s.iter().filter(|r| r.phase.slot == slot).all(|r| {
                     let m = period.cycles().min(r.period.cycles()) - 1;
                     o & m != r.phase.offset as u32 & m
                 })
-            })
+            });
+            free.count() >= usize::from(frames)
         })
     }
 
@@ -680,12 +873,15 @@ mod proptests {
     proptest! {
         #[test]
         fn any_sequence_keeps_streams_apart(
-            hrt_slots in 1u8..=3,
+            hrt_slots in 1u8..=4,
             extra in 1u8..8,
-            ops in proptest::collection::vec((any::<bool>(), 0u16..12, 0usize..PERIODS.len()), 1..60),
+            ops in proptest::collection::vec(
+                (any::<bool>(), 0u16..12, 0usize..PERIODS.len(), 0u8..=4),
+                1..60,
+            ),
         ) {
             let mut s = Scheduler::<10>::new(hrt_slots, hrt_slots + extra);
-            for (reg, id, pi) in ops {
+            for (reg, id, pi, frames) in ops {
                 let stream = MessageId(0x100 + id);
                 if !reg {
                     let before = s.get(stream).copied();
@@ -694,34 +890,44 @@ mod proptests {
                     check_calendar(&s);
                     continue;
                 }
+                // Mostly one frame, as most streams are.
+                let frames = if frames == 4 { MAX_HRT_FRAMES + 1 } else { frames.max(1) };
                 let cycles = PERIODS[pi];
-                let existing = s.get(stream).copied();
+                let existing = s.slots_of(stream);
                 let util = s.utilization();
                 let cap = MAX_PERIOD_CYCLES * hrt_slots as u32;
                 let len = s.len();
-                let res = s.register(stream, cycles);
+                let res = s.register_frames(stream, cycles, frames);
+                let need = |per: Period| u32::from(frames) * (256 >> per.log2());
                 match (Period::from_cycles(cycles), res) {
                     (Err(_), r) => prop_assert_eq!(r, Err(Reject::NotHarmonic)),
-                    (Ok(per), Ok(ph)) => {
-                        prop_assert!((ph.offset as u32) < per.cycles());
-                        prop_assert!(s.slots().any(|x| x == ph.slot));
-                        match existing {
-                            Some(e) => prop_assert_eq!(e.phase, ph),
-                            None => prop_assert!(util + (256 >> per.log2()) <= cap),
+                    (Ok(_), Err(Reject::TooManyFrames)) => prop_assert!(frames > MAX_HRT_FRAMES),
+                    (Ok(per), Ok(got)) => {
+                        prop_assert!((got.offset as u32) < per.cycles());
+                        prop_assert_eq!(got.frames(), frames);
+                        for slot in (0..64).filter(|&x| got.slots & 1 << x != 0) {
+                            prop_assert!(s.slots().any(|x| x == slot));
                         }
-                        prop_assert_eq!(s.get(stream).map(|r| r.phase), Some(ph));
+                        match existing {
+                            Some(e) => prop_assert_eq!(e, (per, got)),
+                            None => prop_assert!(util + need(per) <= cap),
+                        }
+                        prop_assert_eq!(s.slots_of(stream), Some((per, got)));
                     }
                     (Ok(per), Err(Reject::Conflict)) => {
-                        prop_assert!(existing.is_some_and(|e| e.period != per));
+                        prop_assert!(existing.is_some_and(|(p, sl)| p != per || sl.frames() != frames));
                     }
                     (Ok(per), Err(Reject::Full)) => {
                         prop_assert!(existing.is_none());
-                        prop_assert!(len == 10 || util + (256 >> per.log2()) > cap);
+                        prop_assert!(len + usize::from(frames) > 10 || util + need(per) > cap);
                     }
                     (Ok(per), Err(Reject::NoFreePhase)) => {
-                        prop_assert!(existing.is_none());
-                        prop_assert!(util + (256 >> per.log2()) <= cap);
-                        prop_assert!(!some_phase_free(&s, per));
+                        prop_assert!(existing.is_none() && frames <= MAX_HRT_FRAMES);
+                        prop_assert!(util + need(per) <= cap);
+                        prop_assert!(!some_offset_free(&s, per, frames));
+                        if frames == 1 {
+                            prop_assert!(!some_phase_free(&s, per));
+                        }
                     }
                     (_, Err(e)) => prop_assert!(false, "unexpected {:?}", e),
                 }
@@ -778,7 +984,8 @@ mod vectors {
     #[derive(Deserialize)]
     struct Accept {
         offset: u8,
-        slot: u8,
+        slot: Option<u8>,
+        slots: Option<Vec<u8>>,
     }
 
     #[derive(Deserialize)]
@@ -786,6 +993,7 @@ mod vectors {
         op: String,
         stream: Option<u16>,
         period: Option<u32>,
+        frames: Option<u8>,
         accept: Option<Accept>,
         reject: Option<String>,
         removed: Option<bool>,
@@ -805,14 +1013,16 @@ mod vectors {
                 let at = (case.name.as_str(), i);
                 match st.op.as_str() {
                     "register" => {
-                        let r = s.register(MessageId(st.stream.unwrap()), st.period.unwrap());
+                        let (stream, period) = (MessageId(st.stream.unwrap()), st.period.unwrap());
+                        let r = s.register_frames(stream, period, st.frames.unwrap_or(1));
                         match (&st.accept, &st.reject) {
                             (Some(a), None) => {
-                                assert_eq!(
-                                    r,
-                                    Ok(Phase { offset: a.offset, slot: a.slot }),
-                                    "{at:?}"
-                                )
+                                let slots = match (a.slot, &a.slots) {
+                                    (Some(x), None) => 1u64 << x,
+                                    (None, Some(v)) => v.iter().fold(0, |m, x| m | 1 << x),
+                                    _ => panic!("bad accept {at:?}"),
+                                };
+                                assert_eq!(r, Ok(StreamSlots { offset: a.offset, slots }), "{at:?}")
                             }
                             (None, Some(why)) => {
                                 let want = match why.as_str() {
@@ -821,6 +1031,7 @@ mod vectors {
                                     "full" => Reject::Full,
                                     "reserved_id" => Reject::ReservedId,
                                     "conflict" => Reject::Conflict,
+                                    "too_many_frames" => Reject::TooManyFrames,
                                     other => panic!("unknown reason {other}"),
                                 };
                                 assert_eq!(r, Err(want), "{at:?}");
