@@ -245,7 +245,8 @@ mod tests {
         out.publisher.publish_with(|v| *v = 0x0102_0304).unwrap();
         assert_eq!(out.remote.pending(), 1, "the remote subscriber got the message");
         let mut buf = [0u8; 4];
-        assert_eq!(out.remote.pop_encoded(&mut buf), Some(Ok((4, None))));
+        let remote: &dyn r2p_node::Export = out.remote;
+        assert_eq!(remote.pop_encoded(&mut buf), Some(Ok((4, None))));
         assert_eq!(buf, 0x0102_0304u32.to_le_bytes());
         assert_eq!(out.topic.free_slots(), pool_size(&[2], 1), "its slot is free again");
     }

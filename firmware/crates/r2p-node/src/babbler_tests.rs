@@ -19,7 +19,7 @@ const EVERY_CYCLE: Class = Class::SyncRealTime { period_us: CYCLE_US as u32 };
 
 fn granted(n: &TestNode<'_>) -> Option<rtcan::Phase> {
     match n.hrt_state(0) {
-        Some(HrtState::Granted { phase }) => Some(phase),
+        Some(HrtState::Granted { slots }) => Some(slots.first()),
         _ => None,
     }
 }

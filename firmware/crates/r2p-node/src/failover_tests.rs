@@ -20,7 +20,7 @@ const TRUSTED_AT: Micros = 1_400_000;
 
 fn granted(n: &TestNode<'_>) -> Option<rtcan::Phase> {
     match n.hrt_state(0) {
-        Some(HrtState::Granted { phase }) => Some(phase),
+        Some(HrtState::Granted { slots }) => Some(slots.first()),
         _ => None,
     }
 }

@@ -454,7 +454,7 @@ mod tdma {
     /// The phase HRT export `export` of `n` was granted, if it was.
     fn granted(n: &TestNode<'_>, export: usize) -> Option<rtcan::Phase> {
         match n.hrt_state(export) {
-            Some(HrtState::Granted { phase }) => Some(phase),
+            Some(HrtState::Granted { slots }) => Some(slots.first()),
             _ => None,
         }
     }

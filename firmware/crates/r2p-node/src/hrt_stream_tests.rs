@@ -18,7 +18,7 @@ const EVERY_2: Class = Class::SyncRealTime { period_us: 8_000 };
 
 fn granted(n: &TestNode<'_>, export: usize) -> Phase {
     match n.hrt_state(export) {
-        Some(HrtState::Granted { phase }) => phase,
+        Some(HrtState::Granted { slots }) => slots.first(),
         other => panic!("export {export} not granted: {other:?}"),
     }
 }

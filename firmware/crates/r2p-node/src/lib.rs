@@ -52,6 +52,8 @@ mod host_tests;
 #[cfg(test)]
 mod hrt_master_tests;
 #[cfg(test)]
+mod hrt_multiframe_tests;
+#[cfg(test)]
 mod hrt_stream_tests;
 #[cfg(test)]
 mod import_request_tests;

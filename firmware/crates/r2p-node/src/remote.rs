@@ -41,11 +41,26 @@ pub trait Export: Sync {
     fn active_len(&self) -> usize;
     /// Messages waiting to be encoded.
     fn pending(&self) -> usize;
-    /// Takes the oldest waiting message and encodes it into `buf`: its length and the time it
-    /// was published (if the sink has a clock). `None` if nothing waits.
-    fn pop_encoded(&self, buf: &mut [u8]) -> Option<Result<(usize, Option<Micros>), WireError>>;
+    /// Encodes the oldest waiting message into `buf`: its length and the time it was published
+    /// (if the sink has a clock). `None` if nothing waits. The message stays waiting: an HRT
+    /// message goes out a frame per slot, and one published meanwhile must not replace it
+    /// halfway.
+    fn peek_encoded(&self, buf: &mut [u8]) -> Option<Result<(usize, Option<Micros>), WireError>>;
+    /// Drops the oldest waiting message; false if none waited.
+    fn drop_oldest(&self) -> bool;
     /// One of its messages missed its deadline on the bus: tell the publisher.
     fn report_deadline_miss(&self);
+}
+
+impl dyn Export + '_ {
+    /// Takes the oldest waiting message and encodes it into `buf` (as
+    /// [`peek_encoded`](Export::peek_encoded)). One copy for every export type, on the trait
+    /// object.
+    pub fn pop_encoded(&self, buf: &mut [u8]) -> Option<Result<(usize, Option<Micros>), WireError>> {
+        let r = self.peek_encoded(buf)?;
+        self.drop_oldest();
+        Some(r)
+    }
 }
 
 /// A remote topic the node subscribes to for a local topic, without its type (implemented by
@@ -196,11 +211,15 @@ impl<'a, T: Wire + Copy + Send + Sync, const Q: usize> Export for RemoteSubscrib
     fn pending(&self) -> usize {
         self.queue.lock(|q| q.borrow().msgs.len())
     }
-    fn pop_encoded(&self, buf: &mut [u8]) -> Option<Result<(usize, Option<Micros>), WireError>> {
-        let (msg, at) = self.queue.lock(|q| q.borrow_mut().msgs.pop_front())?;
-        let r = msg.encode(buf).map(|n| (n, at));
-        drop(msg); // the slot returns to the pool: the bytes are in the transmit queue now
-        Some(r)
+    fn peek_encoded(&self, buf: &mut [u8]) -> Option<Result<(usize, Option<Micros>), WireError>> {
+        // Encoded under the lock (interrupts off): a message a node exports is at most its
+        // reassembly buffer (64 bytes on the modules), a few µs of copying. One encoder per
+        // type serves both the SRT/NRT queue (`pop_encoded`) and the HRT frames.
+        self.queue.lock(|q| q.borrow().msgs.front().map(|(m, at)| m.encode(buf).map(|n| (n, *at))))
+    }
+    fn drop_oldest(&self) -> bool {
+        // The handle is dropped after the lock (dropping takes the pool's lock).
+        self.queue.lock(|q| q.borrow_mut().msgs.pop_front()).is_some()
     }
     fn report_deadline_miss(&self) {
         self.publisher.report_deadline_miss();
@@ -297,7 +316,7 @@ pub(crate) mod tests {
             assert_eq!(R.missed(), 1);
             assert_eq!(P.stats().missed_deliveries, 1);
             let mut buf = [0u8; 4];
-            assert_eq!(R.pop_encoded(&mut buf), Some(Ok((4, None))));
+            assert_eq!((&R as &dyn Export).pop_encoded(&mut buf), Some(Ok((4, None))));
             assert_eq!(u32::from_le_bytes(buf), 1, "oldest first");
             assert_eq!(T.free_slots(), 3, "encoding released the slot");
         }

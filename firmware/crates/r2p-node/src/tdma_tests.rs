@@ -146,9 +146,10 @@ r2p_testkit::suite! {
         run_slots(&bus, &mut [&mut m, &mut a, &mut b], 150_000);
 
         assert_eq!((m.role(), a.role(), b.role()), (Role::Master, Role::Slave, Role::Slave));
-        let Some(HrtState::Granted { phase }) = a.hrt_state(0) else {
+        let Some(HrtState::Granted { slots }) = a.hrt_state(0) else {
             panic!("not granted: {:?}", a.hrt_state(0))
         };
+        let phase = slots.first();
         assert!(phase.offset < 2 && (1..=2).contains(&phase.slot));
         let message = a.node_id().message_id(1);
         assert_eq!(b.import_state(0), Some(ImportState::Subscribed { from: a.node_id(), message }));

@@ -244,9 +244,12 @@ r2p_testkit::suite! {
         static HRT_OUT: RemoteSubscriber<'static, u32, 1> = RemoteSubscriber::new(&HRT);
         static HRT3: Publisher<'static, u32> = Publisher::new(&T, Class::SyncRealTime { period_us: 30_000 });
         static HRT3_OUT: RemoteSubscriber<'static, u32, 1> = RemoteSubscriber::new(&HRT3);
-        static LONG: Topic<'static, [u8; 9], 2, 1> = Topic::new("long", [0; 9]);
-        static LONG_PUB: Publisher<'static, [u8; 9]> = Publisher::new(&LONG, Class::SyncRealTime { period_us: 20_000 });
-        static LONG_OUT: RemoteSubscriber<'static, [u8; 9], 1> = RemoteSubscriber::new(&LONG_PUB);
+        static LONG: Topic<'static, [u8; 63], 2, 1> = Topic::new("long", [0; 63]);
+        static LONG_PUB: Publisher<'static, [u8; 63]> = Publisher::new(&LONG, Class::SyncRealTime { period_us: 20_000 });
+        static LONG_OUT: RemoteSubscriber<'static, [u8; 63], 1> = RemoteSubscriber::new(&LONG_PUB);
+        static EIGHT: Topic<'static, [u8; 62], 2, 1> = Topic::new("eight", [0; 62]);
+        static EIGHT_PUB: Publisher<'static, [u8; 62]> = Publisher::new(&EIGHT, Class::SyncRealTime { period_us: 20_000 });
+        static EIGHT_OUT: RemoteSubscriber<'static, [u8; 62], 1> = RemoteSubscriber::new(&EIGHT_PUB);
         static NRT: Publisher<'static, u32> = Publisher::new(&T, Class::NonRealTime);
         static NRT_OUT: RemoteSubscriber<'static, u32, 1> = RemoteSubscriber::new(&NRT);
         static BIG: Topic<'static, [u8; 65], 2, 1> = Topic::new("big", [0; 65]);
@@ -258,7 +261,8 @@ r2p_testkit::suite! {
         let mut a = TestNode::new(config(1, "a"), &NoParams).unwrap();
         assert_eq!(a.export(&HRT_OUT), Err(NodeError::HrtPeriod { period_us: 5_000, cycle_us: 10_000 }));
         assert_eq!(a.export(&HRT3_OUT), Err(NodeError::HrtPeriod { period_us: 30_000, cycle_us: 10_000 }));
-        assert_eq!(a.export(&LONG_OUT), Err(NodeError::TooLarge { size: 9, max: 8 }), "HRT: one frame");
+        // HRT: at most eight frames (62 bytes and the transfer CRC), one slot each.
+        assert_eq!(a.export(&LONG_OUT), Err(NodeError::TooLarge { size: 63, max: 62 }));
         assert!(matches!(TestNode::new(NodeConfig { rank: Some(16), ..config(1, "a") }, &NoParams), Err(NodeError::BadRank)));
         let short = rtcan::CycleConfig { slots: 64, ..rtcan::CycleConfig::DEFAULT };
         assert!(matches!(TestNode::new(NodeConfig { cycle: short, ..config(1, "a") }, &NoParams), Err(NodeError::BadCycle(_))));
@@ -266,6 +270,7 @@ r2p_testkit::suite! {
         assert_eq!(a.export(&BAD_OUT), Err(NodeError::BadTopicName));
         assert_eq!(a.export(&NRT_OUT), Ok(1));
         assert_eq!(a.export(&NRT_OUT), Err(NodeError::DuplicateTopic));
+        assert_eq!(a.export(&EIGHT_OUT), Ok(2));
         assert_eq!(NRT_OUT.topic(), "setpoint");
         assert!(matches!(TestNode::new(config(1, "a name longer than 16"), &NoParams), Err(NodeError::BadName)));
         assert!(matches!(TestNode::new(config(1, "tab\t"), &NoParams), Err(NodeError::BadName)));

@@ -22,7 +22,8 @@
 //!
 //! A message of k frames (at most [`MAX_HRT_FRAMES`]) takes k reservations with one period
 //! and one offset, in k slots: it uses k · 256/P, and is admitted iff that fits and k slots are
-//! free at one offset (best fit below, slot by slot). Its frames share the message ID, so a
+//! free at one offset. Best fit (below) gives the offset, then each frame the best-fit slot
+//! left at that offset; if too few are free there, the first offset where enough are. Its frames share the message ID, so a
 //! receiver reassembles them as any multi-frame message (docs/rtcan.md, "Fragmentation").
 //!
 //! # Placement (best-fit buddy)
@@ -228,20 +229,6 @@ impl Occupancy {
             self.0[w] |= Self::range_mask(w, start, len);
         }
     }
-
-    /// If aligned block `block` of `size` positions is free: the size of the largest free
-    /// aligned block containing it (best fit takes the smallest).
-    fn fit(&self, block: u32, size: u32) -> Option<u32> {
-        if !self.is_free(block * size, size) {
-            return None;
-        }
-        let (mut idx, mut len) = (block, size);
-        while len < MAX_PERIOD_CYCLES && self.is_free((idx >> 1) * len * 2, len * 2) {
-            idx >>= 1;
-            len *= 2;
-        }
-        Some(len)
-    }
 }
 
 /// The cycle slot of the scheduler's HRT slot `k` (1…) when HRT slots come in runs of `run`,
@@ -397,54 +384,51 @@ impl<const N: usize> Scheduler<N> {
         Ok(got)
     }
 
-    /// Placement (module documentation): the best-fit block of the first frame, then the
-    /// best-fit slots at that offset; if too few slots are free there, the first offset that
-    /// has enough.
+    /// Placement (module documentation): the offset best fit gives the first frame, each frame
+    /// in the best-fit slot left at that offset; if too few are free there, the first offset at
+    /// which enough are. One frame: best fit itself.
     fn place(&self, period: Period, frames: u8) -> Option<StreamSlots> {
-        let first = self.best_fit(period)?;
-        core::iter::once(first)
-            .chain(0..1u32 << period.log2())
-            .find_map(|block| self.fill(period, block, frames))
+        let (first, _) = self.best_fit(period, None, 0)?;
+        core::iter::once(first).chain(0..1u32 << period.log2()).find_map(|block| {
+            let mut slots = 0u64;
+            for _ in 0..frames {
+                slots |= 1 << self.best_fit(period, Some(block), slots)?.1;
+            }
+            Some(StreamSlots { offset: rev(block, period.log2()) as u8, slots })
+        })
     }
 
-    /// The aligned block of 256/P positions, over all slots, whose largest free enclosing
-    /// block is smallest; ties: the slot placement tries first, then the lower block.
-    fn best_fit(&self, period: Period) -> Option<u32> {
+    /// Best fit (module documentation): over the slots not in `taken`, the aligned block of
+    /// 256/P positions (block `only`, if given) whose largest free enclosing aligned block is
+    /// smallest; ties: the slot placement tries first, then the lower block. (block, slot).
+    fn best_fit(&self, period: Period, only: Option<u32>, taken: u64) -> Option<(u32, u8)> {
         let k = period.log2();
         let size = MAX_PERIOD_CYCLES >> k;
-        let mut best: Option<(u32, u32)> = None;
-        for slot in self.slots() {
+        let mut best: Option<(u32, u32, u8)> = None;
+        for slot in self.slots().filter(|&s| taken & 1 << s == 0) {
             let occ = self.occupancy(slot);
             for block in 0..(1u32 << k) {
-                let Some(len) = occ.fit(block, size) else { continue };
-                if best.is_none_or(|(b, _)| len < b) {
-                    best = Some((len, block));
+                if only.is_some_and(|b| b != block) || !occ.is_free(block * size, size) {
+                    continue;
+                }
+                // Largest free aligned block containing this one.
+                let (mut idx, mut len) = (block, size);
+                while len < MAX_PERIOD_CYCLES && occ.is_free((idx >> 1) * len * 2, len * 2) {
+                    idx >>= 1;
+                    len *= 2;
+                }
+                if best.is_none_or(|(b, ..)| len < b) {
+                    best = Some((len, block, slot));
                     if len == size {
-                        return Some(block);
+                        break;
                     }
                 }
             }
-        }
-        best.map(|(_, block)| block)
-    }
-
-    /// `frames` slots in which aligned block `block` is free, each the best fit of those left
-    /// (ties: the slot placement tries first).
-    fn fill(&self, period: Period, block: u32, frames: u8) -> Option<StreamSlots> {
-        let k = period.log2();
-        let size = MAX_PERIOD_CYCLES >> k;
-        let mut slots = 0u64;
-        for _ in 0..frames {
-            let mut best: Option<(u32, u8)> = None;
-            for slot in self.slots().filter(|&s| slots & 1 << s == 0) {
-                let Some(len) = self.occupancy(slot).fit(block, size) else { continue };
-                if best.is_none_or(|(b, _)| len < b) {
-                    best = Some((len, slot));
-                }
+            if best.is_some_and(|(len, ..)| len == size) {
+                break;
             }
-            slots |= 1 << best?.1;
         }
-        Some(StreamSlots { offset: rev(block, k) as u8, slots })
+        best.map(|(_, block, slot)| (block, slot))
     }
 
     fn occupancy(&self, slot: u8) -> Occupancy {

@@ -148,15 +148,19 @@ impl Export for DynExport {
     fn pending(&self) -> usize {
         locked(&self.queue).len()
     }
-    fn pop_encoded(&self, buf: &mut [u8]) -> Option<Result<(usize, Option<Micros>), WireError>> {
-        let bytes = locked(&self.queue).pop_front()?;
+    fn peek_encoded(&self, buf: &mut [u8]) -> Option<Result<(usize, Option<Micros>), WireError>> {
+        let queue = locked(&self.queue);
+        let bytes = queue.front()?;
         Some(match buf.get_mut(..bytes.len()) {
             Some(out) => {
-                out.copy_from_slice(&bytes);
+                out.copy_from_slice(bytes);
                 Ok((bytes.len(), None))
             }
             None => Err(WireError::BufferTooSmall),
         })
+    }
+    fn drop_oldest(&self) -> bool {
+        locked(&self.queue).pop_front().is_some()
     }
     fn report_deadline_miss(&self) {
         self.misses.fetch_add(1, Relaxed);

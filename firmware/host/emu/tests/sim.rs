@@ -157,7 +157,7 @@ fn check_hrt_slots(sim: &Sim<'static, EmuNode>, from_ns: u64, slot: u8, jitter_n
 
 fn granted(sim: &Sim<'static, EmuNode>) -> rtcan::Phase {
     match sim.node(1).hrt_state(0) {
-        Some(HrtState::Granted { phase }) => phase,
+        Some(HrtState::Granted { slots }) => slots.first(),
         other => panic!("not granted: {other:?}"),
     }
 }

@@ -60,6 +60,12 @@ impl LoadPublisher {
             }
         }
     }
+
+    /// One message's bytes: every message is the same.
+    fn fill(&self, buf: &mut [u8]) -> Result<(usize, Option<Micros>), WireError> {
+        buf.get_mut(..SIZE).ok_or(WireError::BufferTooSmall)?.fill(0x55);
+        Ok((SIZE, None))
+    }
 }
 
 impl Export for LoadPublisher {
@@ -88,10 +94,11 @@ impl Export for LoadPublisher {
     fn pending(&self) -> usize {
         self.due.load(Relaxed) as usize
     }
-    fn pop_encoded(&self, buf: &mut [u8]) -> Option<Result<(usize, Option<Micros>), WireError>> {
-        self.due.fetch_update(Relaxed, Relaxed, |d| d.checked_sub(1)).ok()?;
-        buf[..SIZE].fill(0x55);
-        Some(Ok((SIZE, None)))
+    fn peek_encoded(&self, buf: &mut [u8]) -> Option<Result<(usize, Option<Micros>), WireError>> {
+        (self.due.load(Relaxed) > 0).then(|| self.fill(buf))
+    }
+    fn drop_oldest(&self) -> bool {
+        self.due.fetch_update(Relaxed, Relaxed, |d| d.checked_sub(1)).is_ok()
     }
     fn report_deadline_miss(&self) {
         self.missed.fetch_add(1, Relaxed);

@@ -1,14 +1,14 @@
 //! HRT streams (docs/middleware.md, "The TDMA cycle and HRT streams"): an export of class
-//! `SyncRealTime` asks the master for a slot when its first remote subscriber arrives
-//! (HRT_REQUEST / HRT_GRANT), the master answers from its calendar, and the stream's newest
-//! message is loaded in each reserved slot.
+//! `SyncRealTime` asks the master for one slot per frame of its messages when its first remote
+//! subscriber arrives (HRT_REQUEST / one HRT_GRANT per slot), the master answers from its
+//! calendar, and the stream's newest message goes out frame by frame in its reserved slots.
 
 use heapless::String;
 use r2p_management::message::{HrtResult, Message, SubscribeResult};
 use r2p_management::{NodeId, MANAGEMENT_INDEX};
-use rtcan::frame::MAX_PAYLOAD;
-use rtcan::schedule::Reject;
-use rtcan::{CanController, Frame, FrameId, Laxity, MessageId, Micros, Period, Phase};
+use rtcan::fragment::{fragments, wire_len};
+use rtcan::schedule::{Reject, MAX_HRT_FRAMES};
+use rtcan::{CanController, FrameId, Laxity, MessageId, Micros, Period, Phase, StreamSlots};
 
 use super::stats::bump;
 use super::{Event, Node};
@@ -16,8 +16,15 @@ use crate::slot_tx::Slotted;
 #[cfg(doc)]
 use rtcan::Scheduler;
 
-/// HRT streams a node's calendar holds when it is master ([`Scheduler`] capacity).
+/// HRT reservations a node's calendar holds when it is master ([`Scheduler`] capacity): one
+/// per frame of each stream.
 pub const MASTER_STREAMS: usize = 16;
+
+/// The longest HRT message: [`MAX_HRT_FRAMES`] frames less the transfer CRC.
+pub const MAX_HRT_MESSAGE: usize = 8 * MAX_HRT_FRAMES as usize - 2;
+
+/// Bytes of an HRT message on the wire (payload and transfer CRC).
+const HRT_WIRE_MAX: usize = wire_len(MAX_HRT_MESSAGE);
 
 /// Where an HRT export's reservation stands ([`Node::hrt_state`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,11 +38,13 @@ pub enum HrtState {
     Requested {
         /// When the request was (last) queued.
         since: Micros,
+        /// The slots granted so far (one HRT_GRANT per frame).
+        got: StreamSlots,
     },
-    /// Sending in slot `phase.slot` of the cycles c with c mod period = `phase.offset`.
+    /// Sending in the cycles c with c mod period = `slots.offset`, frame j in the j-th slot.
     Granted {
-        /// The reserved phase.
-        phase: Phase,
+        /// The reserved slots.
+        slots: StreamSlots,
     },
     /// The master refused (the subscriber got `NoSlot`); a new subscription asks again.
     Refused(HrtResult),
@@ -44,9 +53,13 @@ pub enum HrtState {
 #[derive(Clone, Copy)]
 pub(super) struct HrtStream {
     pub(super) period: Period,
+    /// Frames of each message (slots it asks for).
+    pub(super) frames: u8,
     pub(super) state: HrtState,
     /// A subscriber waiting for the reservation before it is answered (others ask again).
     pub(super) waiting: Option<(NodeId, u8)>,
+    /// The frame of the message in flight to load next (0: none in flight).
+    pub(super) next_frame: u8,
 }
 
 impl<
@@ -81,25 +94,27 @@ impl<
                     return;
                 }
                 let granted = match NodeId::of(message) {
-                    Some((owner, index)) if owner == from && index != MANAGEMENT_INDEX => {
-                        if frames != 1 {
-                            Err(HrtResult::TooManyFrames)
-                        } else {
-                            self.scheduler
-                                .register(message, u32::from(period_cycles))
-                                .map_err(hrt_result)
-                        }
-                    }
+                    Some((owner, index)) if owner == from && index != MANAGEMENT_INDEX => self
+                        .scheduler
+                        .register_frames(message, u32::from(period_cycles), frames)
+                        .map_err(hrt_result),
                     _ => Err(HrtResult::Conflict),
                 };
-                if granted.is_ok() {
-                    self.owner_granted(from, now);
+                match granted {
+                    Ok(got) => {
+                        self.owner_granted(from, now);
+                        let mut slots = got.slots;
+                        while slots != 0 {
+                            let phase =
+                                Phase { offset: got.offset, slot: slots.trailing_zeros() as u8 };
+                            self.send_grant(message_id, period_cycles, phase, HrtResult::Ok);
+                            slots &= slots - 1;
+                        }
+                    }
+                    Err(r) => {
+                        self.send_grant(message_id, period_cycles, Phase { offset: 0, slot: 0 }, r);
+                    }
                 }
-                let (offset, slot, result) = match granted {
-                    Ok(p) => (p.offset, p.slot, HrtResult::Ok),
-                    Err(r) => (0, 0, r),
-                };
-                self.send_grant(message_id, period_cycles, Phase { offset, slot }, result);
             }
             Message::HrtGrant { message_id, period_cycles, offset, slot, result } => {
                 let Some((owner, index)) = NodeId::of(MessageId(message_id)) else {
@@ -114,25 +129,45 @@ impl<
                     return; // another node's grant
                 }
                 let i = usize::from(index).wrapping_sub(1);
-                let hrt = self.exports.get(i).and_then(|e| e.hrt);
-                let held = Phase { offset, slot };
-                if hrt.is_some_and(|h| h.state == HrtState::Granted { phase: held }) {
-                    return; // the master's calendar beacon repeating this node's grant
-                }
-                let asked = hrt.is_some_and(|h| {
-                    matches!(h.state, HrtState::Requested { .. })
-                        && h.period.cycles() == u32::from(period_cycles)
-                });
-                let slots = self.config.cycle.slots;
-                let valid = result != HrtResult::Ok
-                    || (u32::from(offset) < u32::from(period_cycles) && slot > 0 && slot < slots);
-                if !asked || !valid {
+                let Some(h) = self.exports.get(i).and_then(|e| e.hrt) else {
                     bump(&mut self.stats.unexpected);
                     return;
+                };
+                let held = |x: StreamSlots| x.offset == offset && x.frame_in(slot).is_some();
+                if matches!(h.state, HrtState::Granted { slots } if held(slots)) {
+                    return; // the master's calendar beacon repeating this node's grant
                 }
-                let r =
-                    if result == HrtResult::Ok { Ok(Phase { offset, slot }) } else { Err(result) };
-                self.on_grant(i, r, now);
+                let valid = result != HrtResult::Ok
+                    || (u32::from(offset) < u32::from(period_cycles)
+                        && slot > 0
+                        && slot < self.config.cycle.slots);
+                let got = match h.state {
+                    HrtState::Requested { got, .. }
+                        if valid && h.period.cycles() == u32::from(period_cycles) =>
+                    {
+                        got
+                    }
+                    _ => {
+                        bump(&mut self.stats.unexpected);
+                        return;
+                    }
+                };
+                if result != HrtResult::Ok {
+                    self.on_grant(i, Err(result), now);
+                    return;
+                }
+                // One grant per frame, all at one offset (a grant at another offset starts a
+                // new set: the master placed the stream again).
+                let mut got =
+                    if got.offset == offset { got } else { StreamSlots { offset, slots: 0 } };
+                got.slots |= 1 << slot;
+                if got.frames() >= h.frames {
+                    self.on_grant(i, Ok(got), now);
+                } else if let Some(e) = self.exports[i].hrt.as_mut() {
+                    if let HrtState::Requested { got: g, .. } = &mut e.state {
+                        *g = got;
+                    }
+                }
             }
             _ => {}
         }
@@ -190,7 +225,7 @@ impl<
             let Some(h) = self.exports[i].hrt else { continue };
             let due = match h.state {
                 HrtState::Wanted => true,
-                HrtState::Requested { since } => now.saturating_sub(since) >= timeout,
+                HrtState::Requested { since, .. } => now.saturating_sub(since) >= timeout,
                 _ => false,
             };
             if !due {
@@ -200,32 +235,33 @@ impl<
             let cycles = h.period.cycles();
             if MASTER && self.master.is_some() {
                 // The master answers itself at once: `on_grant` sets the state.
-                let r = self.scheduler.register(message, cycles).map_err(hrt_result);
-                self.on_grant(i, r, now);
+                let r = self.scheduler.register_frames(message, cycles, h.frames);
+                self.on_grant(i, r.map_err(hrt_result), now);
             } else {
                 let msg = Message::HrtRequest {
                     message_id: message.0,
                     period_cycles: cycles as u16,
-                    frames: 1,
+                    frames: h.frames,
                 };
                 if self.send(&msg).is_err() {
                     break; // retried at the next slot
                 }
+                let got = StreamSlots { offset: 0, slots: 0 };
                 self.exports[i].hrt =
-                    Some(HrtStream { state: HrtState::Requested { since: now }, ..h });
+                    Some(HrtStream { state: HrtState::Requested { since: now, got }, ..h });
             }
         }
     }
 
     /// The master answered HRT export `i`'s request; answers the subscriber waiting for it.
-    fn on_grant(&mut self, i: usize, r: Result<Phase, HrtResult>, now: Micros) {
+    fn on_grant(&mut self, i: usize, r: Result<StreamSlots, HrtResult>, now: Micros) {
         let Some(mut h) = self.exports[i].hrt else { return };
         let waiting = h.waiting.take();
         let e = self.exports[i].export;
         let me = self.ids.node_id();
         let (state, result, message_id) = match r {
-            Ok(phase) => {
-                (HrtState::Granted { phase }, SubscribeResult::Ok, me.message_id(i as u8 + 1).0)
+            Ok(slots) => {
+                (HrtState::Granted { slots }, SubscribeResult::Ok, me.message_id(i as u8 + 1).0)
             }
             Err(res) => {
                 bump(&mut self.stats.hrt_refused);
@@ -249,39 +285,73 @@ impl<
         });
     }
 
-    /// Loads HRT export `i`'s newest message in its reserved slot; older ones missed their
-    /// deadline (each occurrence carries one message: the implicit deadline is the period).
-    pub(super) fn send_hrt<C: CanController + ?Sized>(&mut self, i: usize, can: &mut C) {
+    /// Loads frame `frame` of HRT export `i`'s message in its reserved slot. At the first
+    /// frame the newest message is taken; older ones missed their deadline (each occurrence
+    /// carries one message: the implicit deadline is the period). It stays queued until its
+    /// last frame is loaded, so a message the application publishes meanwhile waits for the
+    /// next occurrence; if a frame cannot go, the rest of the message is dropped (a receiver
+    /// cannot complete it).
+    pub(super) fn send_hrt<C: CanController + ?Sized>(&mut self, i: usize, frame: u8, can: &mut C) {
         let e = self.exports[i].export;
+        let Some(h) = self.exports[i].hrt else { return };
+        if frame == 0 {
+            if h.next_frame != 0 {
+                self.hrt_miss(i); // the previous message's last slots never came round
+            }
+            while e.pending() > 1 && e.drop_oldest() {
+                bump(&mut self.stats.deadline_misses);
+                e.report_deadline_miss(); // superseded by a newer message
+            }
+        } else if h.next_frame != frame {
+            if h.next_frame != 0 {
+                self.hrt_miss(i); // a slot of the message passed without its frame
+            }
+            return;
+        }
         let id = FrameId {
             laxity: Laxity::HRT,
             message: self.ids.node_id().message_id(i as u8 + 1),
             fragment: 0,
         };
-        let mut buf = [0u8; MAX_PAYLOAD];
-        let mut frame = None;
-        while let Some(encoded) = e.pop_encoded(&mut buf) {
-            if frame.is_some() {
-                bump(&mut self.stats.deadline_misses);
-                e.report_deadline_miss(); // superseded by a newer message
-            }
-            match encoded.ok().and_then(|(n, _)| Frame::new(id, &buf[..n]).ok()) {
-                Some(f) => frame = Some(f),
-                None => bump(&mut self.stats.bad_payloads),
-            }
+        let mut buf = [0u8; HRT_WIRE_MAX];
+        let Some(encoded) = e.peek_encoded(&mut buf) else { return };
+        let frame_of = |n| fragments(id, &buf[..n]).ok()?.nth(usize::from(frame));
+        let Some(f) = encoded.ok().and_then(|(n, _)| frame_of(n)) else {
+            e.drop_oldest();
+            bump(&mut self.stats.bad_payloads);
+            return;
+        };
+        let last = frame + 1 >= h.frames;
+        if let Some(x) = self.exports[i].hrt.as_mut() {
+            x.next_frame = if last { 0 } else { frame + 1 };
         }
-        let Some(frame) = frame else { return };
-        if self.slot_tx.load_slotted(can, Slotted::Hrt(i), &frame) {
+        if last {
+            e.drop_oldest(); // its bytes are in the frame
+        }
+        if self.slot_tx.load_slotted(can, Slotted::Hrt(i), &f) {
             bump(&mut self.stats.queued);
         } else {
             self.hrt_miss(i);
         }
     }
 
+    /// A frame of HRT export `i` did not go out: the occurrence is missed, and the rest of its
+    /// message is dropped.
     pub(super) fn hrt_miss(&mut self, i: usize) {
         bump(&mut self.stats.hrt_missed);
         bump(&mut self.stats.deadline_misses);
         self.exports[i].export.report_deadline_miss();
+        self.hrt_abandon(i);
+    }
+
+    /// Drops HRT export `i`'s message in flight, if any (its miss is counted already).
+    fn hrt_abandon(&mut self, i: usize) {
+        if let Some(h) = self.exports[i].hrt.as_mut() {
+            if h.next_frame != 0 {
+                h.next_frame = 0;
+                self.exports[i].export.drop_oldest();
+            }
+        }
     }
 }
 
@@ -291,5 +361,6 @@ fn hrt_result(r: Reject) -> HrtResult {
         Reject::NoFreePhase => HrtResult::NoFreePhase,
         Reject::Full => HrtResult::Full,
         Reject::ReservedId | Reject::Conflict => HrtResult::Conflict,
+        Reject::TooManyFrames => HrtResult::TooManyFrames,
     }
 }

@@ -124,16 +124,16 @@ impl<
         match state {
             ClockState::Running(p) if p.slot == SYNC_SLOT => {}
             ClockState::Running(p) if self.clock.mask(p.cycle) & (1 << p.slot) != 0 => {
-                let mine = self.exports.iter().position(|e| {
-                    e.hrt.is_some_and(|h| match h.state {
-                        HrtState::Granted { phase } => {
-                            phase.slot == p.slot && occurs(h.period, phase, p.cycle)
-                        }
-                        _ => false,
-                    })
+                let mine = self.exports.iter().enumerate().find_map(|(i, e)| match e.hrt?.state {
+                    HrtState::Granted { slots }
+                        if occurs(e.hrt?.period, slots.first(), p.cycle) =>
+                    {
+                        Some((i, slots.frame_in(p.slot)?))
+                    }
+                    _ => None,
                 });
-                if let Some(i) = mine {
-                    self.send_hrt(i, can);
+                if let Some((i, frame)) = mine {
+                    self.send_hrt(i, frame, can);
                 }
             }
             ClockState::Running(p) => {

@@ -6,10 +6,10 @@ use r2p_management::message::{is_topic_char, SubscribeResult, TOPIC_MAX};
 use r2p_management::NodeId;
 use r2p_middleware::Class;
 use rtcan::fragment::{frame_count, MAX_MESSAGE_LEN};
-use rtcan::frame::MAX_PAYLOAD;
+use rtcan::schedule::MAX_HRT_FRAMES;
 use rtcan::{MessageId, Micros, Period, Urgency};
 
-use super::hrt::HrtStream;
+use super::hrt::{HrtStream, MAX_HRT_MESSAGE};
 use super::stats::bump;
 use super::subscribers::Subscribers;
 use super::{HrtState, Node, NodeError};
@@ -116,8 +116,9 @@ impl<
     ///
     /// A `Class::SyncRealTime { period_us }` publisher becomes an HRT stream: its period must
     /// be a power of two (1…256) of cycles ([`NodeError::HrtPeriod`]) and its messages must fit
-    /// one frame (8 bytes). Its slot is asked of the master when the first remote module
-    /// subscribes; it is sent only by [`slot_tick`](Self::slot_tick).
+    /// [`MAX_HRT_FRAMES`] frames (62 bytes; one slot each). Its slots are asked of the master
+    /// when the first remote module subscribes; it is sent only by
+    /// [`slot_tick`](Self::slot_tick).
     pub fn export(&mut self, export: &'a dyn Export) -> Result<u8, NodeError> {
         check_topic(export.topic())?;
         let max = self.max_export_size();
@@ -132,10 +133,16 @@ impl<
                     return Err(bad);
                 }
                 let period = Period::from_cycles(period_us / cycle_us).map_err(|_| bad)?;
-                if export.size() > MAX_PAYLOAD {
-                    return Err(NodeError::TooLarge { size: export.size(), max: MAX_PAYLOAD });
-                }
-                Some(HrtStream { period, state: HrtState::Idle, waiting: None })
+                let frames = frame_count(export.size())
+                    .filter(|&n| n <= usize::from(MAX_HRT_FRAMES))
+                    .ok_or(NodeError::TooLarge { size: export.size(), max: MAX_HRT_MESSAGE })?;
+                Some(HrtStream {
+                    period,
+                    frames: frames as u8,
+                    state: HrtState::Idle,
+                    waiting: None,
+                    next_frame: 0,
+                })
             }
             _ => None,
         };
