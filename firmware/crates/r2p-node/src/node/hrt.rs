@@ -8,7 +8,7 @@ use r2p_management::message::{HrtResult, Message, SubscribeResult};
 use r2p_management::{NodeId, MANAGEMENT_INDEX};
 use rtcan::fragment::{fragments, wire_len};
 use rtcan::schedule::{Reject, MAX_HRT_FRAMES};
-use rtcan::{CanController, FrameId, Laxity, MessageId, Micros, Period, Phase, StreamSlots};
+use rtcan::{CanController, Frame, FrameId, Laxity, MessageId, Micros, Period, Phase, StreamSlots};
 
 use super::stats::bump;
 use super::{Event, Node};
@@ -315,7 +315,11 @@ impl<
         };
         let mut buf = [0u8; HRT_WIRE_MAX];
         let Some(encoded) = e.peek_encoded(&mut buf) else { return };
-        let frame_of = |n| fragments(id, &buf[..n]).ok()?.nth(usize::from(frame));
+        // A one-frame message is its own frame: the slot path stays short for the usual case.
+        let frame_of = |n: usize| match h.frames {
+            1 => Frame::new(id, buf.get(..n)?).ok(),
+            _ => fragments(id, buf.get(..n)?).ok()?.nth(usize::from(frame)),
+        };
         let Some(f) = encoded.ok().and_then(|(n, _)| frame_of(n)) else {
             e.drop_oldest();
             bump(&mut self.stats.bad_payloads);
