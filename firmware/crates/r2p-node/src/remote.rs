@@ -56,7 +56,10 @@ impl dyn Export + '_ {
     /// Takes the oldest waiting message and encodes it into `buf` (as
     /// [`peek_encoded`](Export::peek_encoded)). One copy for every export type, on the trait
     /// object.
-    pub fn pop_encoded(&self, buf: &mut [u8]) -> Option<Result<(usize, Option<Micros>), WireError>> {
+    pub fn pop_encoded(
+        &self,
+        buf: &mut [u8],
+    ) -> Option<Result<(usize, Option<Micros>), WireError>> {
         let r = self.peek_encoded(buf)?;
         self.drop_oldest();
         Some(r)

@@ -133,11 +133,12 @@ impl StreamSlots {
 
     /// Which frame (from 0) goes in `slot`, if the stream holds it.
     pub const fn frame_in(self, slot: u8) -> Option<u8> {
-        if slot < 64 && self.slots & 1 << slot != 0 {
-            Some((self.slots & ((1 << slot) - 1)).count_ones() as u8)
-        } else {
-            None
+        if slot >= 64 || self.slots & 1 << slot == 0 {
+            return None;
         }
+        // The first frame without counting bits: the usual one-frame stream's slot path.
+        let below = self.slots & ((1 << slot) - 1);
+        Some(if below == 0 { 0 } else { below.count_ones() as u8 })
     }
 }
 

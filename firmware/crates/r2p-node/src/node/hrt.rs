@@ -293,17 +293,22 @@ impl<
     /// cannot complete it).
     pub(super) fn send_hrt<C: CanController + ?Sized>(&mut self, i: usize, frame: u8, can: &mut C) {
         let e = self.exports[i].export;
-        let Some(h) = self.exports[i].hrt else { return };
+        // Only these two: the slot path does not copy the whole stream state.
+        let Some((frames, next_frame)) =
+            self.exports[i].hrt.as_ref().map(|h| (h.frames, h.next_frame))
+        else {
+            return;
+        };
         if frame == 0 {
-            if h.next_frame != 0 {
+            if next_frame != 0 {
                 self.hrt_miss(i); // the previous message's last slots never came round
             }
             while e.pending() > 1 && e.drop_oldest() {
                 bump(&mut self.stats.deadline_misses);
                 e.report_deadline_miss(); // superseded by a newer message
             }
-        } else if h.next_frame != frame {
-            if h.next_frame != 0 {
+        } else if next_frame != frame {
+            if next_frame != 0 {
                 self.hrt_miss(i); // a slot of the message passed without its frame
             }
             return;
@@ -316,7 +321,7 @@ impl<
         let mut buf = [0u8; HRT_WIRE_MAX];
         let Some(encoded) = e.peek_encoded(&mut buf) else { return };
         // A one-frame message is its own frame: the slot path stays short for the usual case.
-        let frame_of = |n: usize| match h.frames {
+        let frame_of = |n: usize| match frames {
             1 => Frame::new(id, buf.get(..n)?).ok(),
             _ => fragments(id, buf.get(..n)?).ok()?.nth(usize::from(frame)),
         };
@@ -325,14 +330,15 @@ impl<
             bump(&mut self.stats.bad_payloads);
             return;
         };
-        let last = frame + 1 >= h.frames;
+        let last = frame + 1 >= frames;
         if let Some(x) = self.exports[i].hrt.as_mut() {
             x.next_frame = if last { 0 } else { frame + 1 };
         }
+        let loaded = self.slot_tx.load_slotted(can, Slotted::Hrt(i), &f);
         if last {
-            e.drop_oldest(); // its bytes are in the frame
+            e.drop_oldest(); // its bytes are in the frame (after the request: off the slot path)
         }
-        if self.slot_tx.load_slotted(can, Slotted::Hrt(i), &f) {
+        if loaded {
             bump(&mut self.stats.queued);
         } else {
             self.hrt_miss(i);

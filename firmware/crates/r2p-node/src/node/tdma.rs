@@ -7,7 +7,7 @@ use rtcan::controller::TxOutcome;
 use rtcan::cycle::{ClockState, SYNC_SLOT};
 use rtcan::failover::{sync_timeout_us, Actions, Role};
 use rtcan::schedule::occurs;
-use rtcan::{CanController, Micros, SlotClock, SyncFrame};
+use rtcan::{CanController, Micros, Phase, SlotClock, SyncFrame};
 
 use super::stats::bump;
 use super::{HrtState, Node};
@@ -126,7 +126,11 @@ impl<
             ClockState::Running(p) if self.clock.mask(p.cycle) & (1 << p.slot) != 0 => {
                 let mine = self.exports.iter().enumerate().find_map(|(i, e)| match e.hrt?.state {
                     HrtState::Granted { slots }
-                        if occurs(e.hrt?.period, slots.first(), p.cycle) =>
+                        if occurs(
+                            e.hrt?.period,
+                            Phase { offset: slots.offset, slot: 0 },
+                            p.cycle,
+                        ) =>
                     {
                         Some((i, slots.frame_in(p.slot)?))
                     }
