@@ -100,20 +100,19 @@ impl<
                         .map_err(hrt_result),
                     _ => Err(HrtResult::Conflict),
                 };
-                match granted {
+                // One grant per slot (a refusal: one, slot 0), all at one offset.
+                let (got, result) = match granted {
                     Ok(got) => {
                         self.owner_granted(from, now);
-                        let mut slots = got.slots;
-                        while slots != 0 {
-                            let phase =
-                                Phase { offset: got.offset, slot: slots.trailing_zeros() as u8 };
-                            self.send_grant(message_id, period_cycles, phase, HrtResult::Ok);
-                            slots &= slots - 1;
-                        }
+                        (got, HrtResult::Ok)
                     }
-                    Err(r) => {
-                        self.send_grant(message_id, period_cycles, Phase { offset: 0, slot: 0 }, r);
-                    }
+                    Err(r) => (StreamSlots { offset: 0, slots: 1 }, r),
+                };
+                let mut slots = got.slots;
+                while slots != 0 {
+                    let phase = Phase { offset: got.offset, slot: slots.trailing_zeros() as u8 };
+                    self.send_grant(message_id, period_cycles, phase, result);
+                    slots &= slots - 1;
                 }
             }
             Message::HrtGrant { message_id, period_cycles, offset, slot, result } => {
@@ -129,45 +128,44 @@ impl<
                     return; // another node's grant
                 }
                 let i = usize::from(index).wrapping_sub(1);
-                let Some(h) = self.exports.get(i).and_then(|e| e.hrt) else {
-                    bump(&mut self.stats.unexpected);
-                    return;
-                };
-                let held = |x: StreamSlots| x.offset == offset && x.frame_in(slot).is_some();
-                if matches!(h.state, HrtState::Granted { slots } if held(slots)) {
-                    return; // the master's calendar beacon repeating this node's grant
-                }
                 let valid = result != HrtResult::Ok
                     || (u32::from(offset) < u32::from(period_cycles)
                         && slot > 0
                         && slot < self.config.cycle.slots);
-                let got = match h.state {
-                    HrtState::Requested { got, .. }
-                        if valid && h.period.cycles() == u32::from(period_cycles) =>
+                let Some(h) = self.exports.get_mut(i).and_then(|e| e.hrt.as_mut()) else {
+                    bump(&mut self.stats.unexpected);
+                    return;
+                };
+                let (frames, asked) = (h.frames, h.period.cycles() == u32::from(period_cycles));
+                let answer = match &mut h.state {
+                    // The master's calendar beacon repeating this node's grant.
+                    HrtState::Granted { slots }
+                        if slots.offset == offset && slots.frame_in(slot).is_some() =>
                     {
-                        got
+                        return
+                    }
+                    HrtState::Requested { got, .. } if valid && asked => {
+                        if result != HrtResult::Ok {
+                            Err(result)
+                        } else {
+                            // One grant per frame, all at one offset (a grant at another
+                            // offset starts a new set: the master placed the stream again).
+                            if got.offset != offset {
+                                *got = StreamSlots { offset, slots: 0 };
+                            }
+                            got.slots |= 1 << slot;
+                            if got.frames() < frames {
+                                return;
+                            }
+                            Ok(*got)
+                        }
                     }
                     _ => {
                         bump(&mut self.stats.unexpected);
                         return;
                     }
                 };
-                if result != HrtResult::Ok {
-                    self.on_grant(i, Err(result), now);
-                    return;
-                }
-                // One grant per frame, all at one offset (a grant at another offset starts a
-                // new set: the master placed the stream again).
-                let mut got =
-                    if got.offset == offset { got } else { StreamSlots { offset, slots: 0 } };
-                got.slots |= 1 << slot;
-                if got.frames() >= h.frames {
-                    self.on_grant(i, Ok(got), now);
-                } else if let Some(e) = self.exports[i].hrt.as_mut() {
-                    if let HrtState::Requested { got: g, .. } = &mut e.state {
-                        *g = got;
-                    }
-                }
+                self.on_grant(i, answer, now);
             }
             _ => {}
         }
