@@ -116,11 +116,6 @@ pub struct StreamSlots {
 }
 
 impl StreamSlots {
-    /// A one-frame stream's slots.
-    pub const fn single(phase: Phase) -> Self {
-        Self { offset: phase.offset, slots: 1 << phase.slot }
-    }
-
     /// The first frame's phase (offset and lowest slot).
     pub const fn first(self) -> Phase {
         Phase { offset: self.offset, slot: self.slots.trailing_zeros() as u8 }
@@ -595,6 +590,10 @@ pub(crate) mod tests {
             for bad in [0, MAX_HRT_FRAMES + 1] {
                 assert_eq!(s.register_frames(MessageId(0x4301), 4, bad), Err(Reject::TooManyFrames));
             }
+            // The longest message: eight frames, eight slots.
+            let mut eight: Scheduler<8> = Scheduler::new(15, 30);
+            let got = eight.register_frames(MessageId(0x4501), 1, MAX_HRT_FRAMES).unwrap();
+            assert_eq!((got.frames(), eight.len()), (MAX_HRT_FRAMES, 8));
             // A one-frame stream of the same period takes the best fit beside it.
             assert_eq!(s.register(MessageId(0x4301), 4), Ok(Phase { offset: 2, slot: 1 }));
             check_no_collision(&s);
