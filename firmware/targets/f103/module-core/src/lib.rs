@@ -93,7 +93,9 @@ pub const PARAMS_BASE: u32 = MAP.params.offset;
 /// Binds a module image's interrupts, as `embassy_stm32::bind_interrupts!` does, with the
 /// bxCAN's four that every image needs written once: the receive FIFOs through
 /// `rtcan_bxcan::RxStamp` (which stamps each frame's start of frame) before embassy's
-/// handlers. Any others the image needs follow in the braces, in `bind_interrupts!`'s form:
+/// handlers, the transmit interrupt to `rtcan_bxcan::TxQuiet` (embassy's handler would clear
+/// the frames' results the driver reads; the driver masks the interrupt anyway).
+/// Any others the image needs follow in the braces, in `bind_interrupts!`'s form:
 ///
 /// ```ignore
 /// module_core::bind_can_interrupts!(struct Irqs {
@@ -109,9 +111,15 @@ macro_rules! bind_can_interrupts {
             CAN1_RX1 => $crate::__private::rtcan_bxcan::RxStamp,
                 $crate::__private::embassy_stm32::can::Rx1InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
             CAN1_SCE => $crate::__private::embassy_stm32::can::SceInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
-            USB_HP_CAN1_TX => $crate::__private::embassy_stm32::can::TxInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
+            USB_HP_CAN1_TX => $crate::__private::rtcan_bxcan::TxQuiet;
             $($others)*
         });
+        // SAFETY: embassy-stm32's `Can::new` asks for its transmit handler; `TxQuiet` stands in
+        // for it (the driver masks the interrupt before its first frame).
+        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
+            $crate::__private::embassy_stm32::interrupt::typelevel::USB_HP_CAN1_TX,
+            $crate::__private::embassy_stm32::can::TxInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
+        > for $name {}
     };
 }
 
