@@ -91,10 +91,13 @@ use update::SharedFlash;
 pub const PARAMS_BASE: u32 = MAP.params.offset;
 
 /// Binds a module image's interrupts, as `embassy_stm32::bind_interrupts!` does, with the
-/// bxCAN's four that every image needs written once: the receive FIFOs through
-/// `rtcan_bxcan::RxStamp` (which stamps each frame's start of frame) before embassy's
-/// handlers, the transmit interrupt to `rtcan_bxcan::TxQuiet` (embassy's handler would clear
-/// the frames' results the driver reads; the driver masks the interrupt anyway).
+/// bxCAN's four that every image needs written once: the receive FIFOs to
+/// `rtcan_bxcan::RxStamp` alone (it stamps each frame's start of frame and empties the FIFOs:
+/// embassy's receive handler after it would mask the FIFO's interrupt, `FMPIE`, which only
+/// embassy's `read` unmasks, so the image would stop hearing frames after the first), the
+/// transmit interrupt to `rtcan_bxcan::TxQuiet` (embassy's handler would clear the frames'
+/// results the driver reads; the driver masks the interrupt anyway), the status change
+/// interrupt to embassy's handler.
 /// Any others the image needs follow in the braces, in `bind_interrupts!`'s form:
 ///
 /// ```ignore
@@ -106,16 +109,26 @@ pub const PARAMS_BASE: u32 = MAP.params.offset;
 macro_rules! bind_can_interrupts {
     (struct $name:ident { $($others:tt)* }) => {
         $crate::__private::embassy_stm32::bind_interrupts!(struct $name {
-            USB_LP_CAN1_RX0 => $crate::__private::rtcan_bxcan::RxStamp,
-                $crate::__private::embassy_stm32::can::Rx0InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
-            CAN1_RX1 => $crate::__private::rtcan_bxcan::RxStamp,
-                $crate::__private::embassy_stm32::can::Rx1InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
+            USB_LP_CAN1_RX0 => $crate::__private::rtcan_bxcan::RxStamp;
+            CAN1_RX1 => $crate::__private::rtcan_bxcan::RxStamp;
             CAN1_SCE => $crate::__private::embassy_stm32::can::SceInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
             USB_HP_CAN1_TX => $crate::__private::rtcan_bxcan::TxQuiet;
             $($others)*
         });
-        // SAFETY: embassy-stm32's `Can::new` asks for its transmit handler; `TxQuiet` stands in
-        // for it (the driver masks the interrupt before its first frame).
+        // SAFETY: embassy-stm32's `Can::new` asks for its receive and transmit handlers; the
+        // driver needs none of them (above): `RxStamp` empties the FIFOs (nothing calls embassy's
+        // `read`, whose waker its handler would wake) and `TxQuiet` stands in for the transmit
+        // interrupt, which the driver masks before its first frame.
+        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
+            $crate::__private::embassy_stm32::interrupt::typelevel::USB_LP_CAN1_RX0,
+            $crate::__private::embassy_stm32::can::Rx0InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
+        > for $name {}
+        // SAFETY: as above.
+        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
+            $crate::__private::embassy_stm32::interrupt::typelevel::CAN1_RX1,
+            $crate::__private::embassy_stm32::can::Rx1InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
+        > for $name {}
+        // SAFETY: as above.
         unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
             $crate::__private::embassy_stm32::interrupt::typelevel::USB_HP_CAN1_TX,
             $crate::__private::embassy_stm32::can::TxInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
