@@ -30,7 +30,7 @@ mod driver;
 #[cfg(feature = "stm32")]
 mod rx_stamp;
 #[cfg(feature = "stm32")]
-mod tx_quiet;
+mod unused_irq;
 
 #[cfg(feature = "stm32")]
 pub use driver::BxCan;
@@ -38,4 +38,4 @@ pub use filter_plan::FILTER_BANKS;
 #[cfg(feature = "stm32")]
 pub use rx_stamp::RxStamp;
 #[cfg(feature = "stm32")]
-pub use tx_quiet::TxQuiet;
+pub use unused_irq::UnusedIrq;

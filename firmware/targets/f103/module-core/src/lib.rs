@@ -95,9 +95,9 @@ pub const PARAMS_BASE: u32 = MAP.params.offset;
 /// `rtcan_bxcan::RxStamp` alone (it stamps each frame's start of frame and empties the FIFOs:
 /// embassy's receive handler after it would mask the FIFO's interrupt, `FMPIE`, which only
 /// embassy's `read` unmasks, so the image would stop hearing frames after the first), the
-/// transmit interrupt to `rtcan_bxcan::TxQuiet` (embassy's handler would clear the frames'
-/// results the driver reads; the driver masks the interrupt anyway), the status change
-/// interrupt to embassy's handler.
+/// transmit and status change interrupts to `rtcan_bxcan::UnusedIrq` (embassy's transmit
+/// handler would clear the frames' results the driver reads, and the driver masks that
+/// interrupt anyway; its status change handler only serves embassy's `read` and `write`).
 /// Any others the image needs follow in the braces, in `bind_interrupts!`'s form:
 ///
 /// ```ignore
@@ -111,14 +111,14 @@ macro_rules! bind_can_interrupts {
         $crate::__private::embassy_stm32::bind_interrupts!(struct $name {
             USB_LP_CAN1_RX0 => $crate::__private::rtcan_bxcan::RxStamp;
             CAN1_RX1 => $crate::__private::rtcan_bxcan::RxStamp;
-            CAN1_SCE => $crate::__private::embassy_stm32::can::SceInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
-            USB_HP_CAN1_TX => $crate::__private::rtcan_bxcan::TxQuiet;
+            CAN1_SCE => $crate::__private::rtcan_bxcan::UnusedIrq;
+            USB_HP_CAN1_TX => $crate::__private::rtcan_bxcan::UnusedIrq;
             $($others)*
         });
-        // SAFETY: embassy-stm32's `Can::new` asks for its receive and transmit handlers; the
-        // driver needs none of them (above): `RxStamp` empties the FIFOs (nothing calls embassy's
-        // `read`, whose waker its handler would wake) and `TxQuiet` stands in for the transmit
-        // interrupt, which the driver masks before its first frame.
+        // SAFETY: embassy-stm32's `Can::new` asks for its handlers; the driver needs none of
+        // them (above): `RxStamp` empties the FIFOs and `UnusedIrq` turns the other two
+        // interrupts off if they fire (nothing calls embassy's `read` or `write`, whose wakers
+        // its handlers would wake).
         unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
             $crate::__private::embassy_stm32::interrupt::typelevel::USB_LP_CAN1_RX0,
             $crate::__private::embassy_stm32::can::Rx0InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
@@ -132,6 +132,11 @@ macro_rules! bind_can_interrupts {
         unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
             $crate::__private::embassy_stm32::interrupt::typelevel::USB_HP_CAN1_TX,
             $crate::__private::embassy_stm32::can::TxInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
+        > for $name {}
+        // SAFETY: as above.
+        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
+            $crate::__private::embassy_stm32::interrupt::typelevel::CAN1_SCE,
+            $crate::__private::embassy_stm32::can::SceInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
         > for $name {}
     };
 }
