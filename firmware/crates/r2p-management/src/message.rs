@@ -335,10 +335,12 @@ struct Writer<'a> {
 }
 
 impl Writer<'_> {
+    // What is left after `at` (never past the end), then `b`'s length of it: no sum to check
+    // for overflow (20 B less in a module image, where every field's write inlines this).
     fn bytes(&mut self, b: &[u8]) -> Result<(), BufferTooSmall> {
-        let end = self.at.checked_add(b.len()).ok_or(BufferTooSmall)?;
-        self.buf.get_mut(self.at..end).ok_or(BufferTooSmall)?.copy_from_slice(b);
-        self.at = end;
+        let rest = self.buf.get_mut(self.at..).ok_or(BufferTooSmall)?;
+        rest.get_mut(..b.len()).ok_or(BufferTooSmall)?.copy_from_slice(b);
+        self.at += b.len();
         Ok(())
     }
     fn u8(&mut self, v: u8) -> Result<(), BufferTooSmall> {
@@ -887,6 +889,20 @@ pub(crate) mod tests {
         fn small_buffers_are_refused_not_overrun() {
             let mut buf = [0u8; 8];
             assert_eq!(samples()[0].encode(&mut buf), Err(BufferTooSmall));
+        }
+
+        fn every_message_needs_exactly_its_length() {
+            // A buffer one byte short of any message is refused, down to its last field.
+            for m in samples() {
+                let mut full = [0u8; ENCODED_MAX];
+                let n = m.encode(&mut full).unwrap();
+                let mut exact = [0u8; ENCODED_MAX];
+                assert_eq!(m.encode(&mut exact[..n]), Ok(n), "{m:?}");
+                assert_eq!(exact[..n], full[..n]);
+                for short in 0..n {
+                    assert_eq!(m.encode(&mut exact[..short]), Err(BufferTooSmall), "{m:?} in {short}");
+                }
+            }
         }
     }
 }

@@ -55,7 +55,7 @@ impl<'d> BxCan<'d> {
     ///
     /// It also masks the transmit-mailbox-empty interrupt: embassy-stm32's handler for it
     /// acknowledges `RQCP`, which clears the `TXOK`/`ALST`/`TERR` bits this driver reads to
-    /// report each frame's result. (The handler stays bound; it no longer fires.)
+    /// report each frame's result. (Images bind [`crate::UnusedIrq`] to it instead.)
     ///
     /// Received frames reach the driver through [`crate::RxStamp`], which the image binds to
     /// the receive interrupts before embassy's handlers. `bit_rate` is the bus's (bit/s): the

@@ -29,9 +29,13 @@ pub mod stamps;
 mod driver;
 #[cfg(feature = "stm32")]
 mod rx_stamp;
+#[cfg(feature = "stm32")]
+mod unused_irq;
 
 #[cfg(feature = "stm32")]
 pub use driver::BxCan;
 pub use filter_plan::FILTER_BANKS;
 #[cfg(feature = "stm32")]
 pub use rx_stamp::RxStamp;
+#[cfg(feature = "stm32")]
+pub use unused_irq::UnusedIrq;

@@ -3,11 +3,16 @@
 //! first thing in the receive interrupt.
 //!
 //! embassy-stm32 0.6 with a time driver keeps only its own `Instant::now()` of a received
-//! frame and drops `TIME`, so [`RxStamp`] is bound to the receive interrupts *before*
-//! embassy's handlers (`USB_LP_CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN>;`):
-//! it empties both FIFOs into a ring with both stamps, and embassy's handler then finds them
-//! empty. [`crate::BxCan`] turns the pair into the start of frame with
-//! [`rtcan::time_counter::TimeCounter`].
+//! frame and drops `TIME`, so [`RxStamp`] is bound to the receive interrupts in place of
+//! embassy's handlers (module-core's `bind_can_interrupts!`): it empties both FIFOs into a ring
+//! with both stamps. embassy's handler must not follow it: in its non-buffered mode it masks
+//! the FIFO's interrupt (`FMPIE`) on every call, and only its `read`, which the driver never
+//! calls, unmasks it, so reception would stop after a FIFO's first interrupt. [`crate::BxCan`]
+//! turns the pair into the start of frame with [`rtcan::time_counter::TimeCounter`].
+//!
+//! Until [`crate::BxCan::new`] attaches the registers the handler has nothing to drain; no
+//! frame arrives before then: `BxCan::new` attaches them before it programs the first filter
+//! (a bxCAN out of reset has no filter active and accepts nothing).
 
 use core::cell::RefCell;
 

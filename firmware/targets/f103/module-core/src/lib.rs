@@ -72,7 +72,7 @@ use static_cell::StaticCell;
 // The global defmt logger: RTT, read by `probe-rs run` (`cargo run`, docs/flashing.md).
 use defmt_rtt as _;
 
-defmt::timestamp!("{=u64:us}", Instant::now().as_micros());
+defmt::timestamp!("{=u64:us}", now().as_micros());
 
 mod analog;
 pub mod can_timing;
@@ -91,9 +91,14 @@ use update::SharedFlash;
 pub const PARAMS_BASE: u32 = MAP.params.offset;
 
 /// Binds a module image's interrupts, as `embassy_stm32::bind_interrupts!` does, with the
-/// bxCAN's four that every image needs written once: the receive FIFOs through
-/// `rtcan_bxcan::RxStamp` (which stamps each frame's start of frame) before embassy's
-/// handlers. Any others the image needs follow in the braces, in `bind_interrupts!`'s form:
+/// bxCAN's four that every image needs written once: the receive FIFOs to
+/// `rtcan_bxcan::RxStamp` alone (it stamps each frame's start of frame and empties the FIFOs:
+/// embassy's receive handler after it would mask the FIFO's interrupt, `FMPIE`, which only
+/// embassy's `read` unmasks, so the image would stop hearing frames after the first), the
+/// transmit and status change interrupts to `rtcan_bxcan::UnusedIrq` (embassy's transmit
+/// handler would clear the frames' results the driver reads, and the driver masks that
+/// interrupt anyway; its status change handler only serves embassy's `read` and `write`).
+/// Any others the image needs follow in the braces, in `bind_interrupts!`'s form:
 ///
 /// ```ignore
 /// module_core::bind_can_interrupts!(struct Irqs {
@@ -104,14 +109,35 @@ pub const PARAMS_BASE: u32 = MAP.params.offset;
 macro_rules! bind_can_interrupts {
     (struct $name:ident { $($others:tt)* }) => {
         $crate::__private::embassy_stm32::bind_interrupts!(struct $name {
-            USB_LP_CAN1_RX0 => $crate::__private::rtcan_bxcan::RxStamp,
-                $crate::__private::embassy_stm32::can::Rx0InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
-            CAN1_RX1 => $crate::__private::rtcan_bxcan::RxStamp,
-                $crate::__private::embassy_stm32::can::Rx1InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
-            CAN1_SCE => $crate::__private::embassy_stm32::can::SceInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
-            USB_HP_CAN1_TX => $crate::__private::embassy_stm32::can::TxInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>;
+            USB_LP_CAN1_RX0 => $crate::__private::rtcan_bxcan::RxStamp;
+            CAN1_RX1 => $crate::__private::rtcan_bxcan::RxStamp;
+            CAN1_SCE => $crate::__private::rtcan_bxcan::UnusedIrq;
+            USB_HP_CAN1_TX => $crate::__private::rtcan_bxcan::UnusedIrq;
             $($others)*
         });
+        // SAFETY: embassy-stm32's `Can::new` asks for its handlers; the driver needs none of
+        // them (above): `RxStamp` empties the FIFOs and `UnusedIrq` turns the other two
+        // interrupts off if they fire (nothing calls embassy's `read` or `write`, whose wakers
+        // its handlers would wake).
+        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
+            $crate::__private::embassy_stm32::interrupt::typelevel::USB_LP_CAN1_RX0,
+            $crate::__private::embassy_stm32::can::Rx0InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
+        > for $name {}
+        // SAFETY: as above.
+        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
+            $crate::__private::embassy_stm32::interrupt::typelevel::CAN1_RX1,
+            $crate::__private::embassy_stm32::can::Rx1InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
+        > for $name {}
+        // SAFETY: as above.
+        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
+            $crate::__private::embassy_stm32::interrupt::typelevel::USB_HP_CAN1_TX,
+            $crate::__private::embassy_stm32::can::TxInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
+        > for $name {}
+        // SAFETY: as above.
+        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
+            $crate::__private::embassy_stm32::interrupt::typelevel::CAN1_SCE,
+            $crate::__private::embassy_stm32::can::SceInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
+        > for $name {}
     };
 }
 
@@ -332,7 +358,7 @@ impl ModuleFlash {
     fn poll_trial(&mut self) {
         let b = LED_INPUTS.load(Ordering::Relaxed);
         let healthy = b & RUNNING != 0 && b & SYNCED != 0 && b & STORAGE_FAULT == 0;
-        let now_ms = Instant::now().as_millis();
+        let now_ms = now().as_millis();
         let was_on_trial = self.confirmation.on_trial();
         if !self.confirmation.poll(&mut self.state, now_ms, healthy) {
             defmt::warn!("trial: confirming this image failed");
@@ -341,6 +367,14 @@ impl ModuleFlash {
             TRIAL_OVER.store(true, Ordering::Relaxed);
         }
     }
+}
+
+/// The time driver's clock, read out of line for thread mode (the application's step, the
+/// trial, the logs' time stamps): inlined, each call carried its own copy of the read (~35 B).
+/// The bus task reads it inline, on the slot path.
+#[inline(never)]
+fn now() -> Instant {
+    Instant::now()
 }
 
 /// Loads the parameters from flash (defaults where nothing valid is stored) and reads the
@@ -360,7 +394,7 @@ pub fn load_params<const N: usize>(
     let mut state = update::state_partition(flash);
     let confirmation = if behind_bootloader() {
         let whole = Partition { offset: 0, size: MAP.state.size };
-        Confirmation::at_boot(&mut state, whole, iwdg, Instant::now().as_millis())
+        Confirmation::at_boot(&mut state, whole, iwdg, now().as_millis())
     } else {
         Confirmation::not_on_trial()
     };
@@ -421,7 +455,7 @@ impl<'a, const N: usize> EveryMs<'a, N> {
 
     /// The time for this step, µs since boot.
     pub fn now(&self) -> u64 {
-        Instant::now().as_micros()
+        now().as_micros()
     }
 
     /// Ends the step: every 100th polls the trial and persists the parameters ([`persist`]);

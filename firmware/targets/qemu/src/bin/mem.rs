@@ -1,7 +1,8 @@
 //! r2p-module's memory routines (`mem_routines.rs`: the copy every module image links instead
 //! of compiler-builtins') on a Cortex-M3: every alignment of source and destination, every
 //! length up to 72 bytes, through each entry point, against a byte-by-byte reference; bytes
-//! around the destination untouched; the fill; the aligned clear at every length.
+//! around the destination untouched; the fill; the aligned clear at every length; the
+//! comparison (`mem_compare.rs`) against a byte-by-byte reference.
 #![no_std]
 #![no_main]
 
@@ -16,6 +17,21 @@ extern "C" {
     fn __aeabi_memset(dest: *mut u8, n: usize, c: i32);
     fn __aeabi_memclr4(dest: *mut u8, n: usize);
     fn __aeabi_memclr8(dest: *mut u8, n: usize);
+    fn memcmp(a: *const u8, b: *const u8, n: usize) -> i32;
+}
+
+/// What `memcmp` must return for `n` bytes at `a` and `b`: the difference of the first bytes
+/// that differ, as unsigned bytes (compiler-builtins' result), or 0. Volatile reads: the
+/// reference must not itself become a call to `memcmp`.
+fn compare_reference(a: *const u8, b: *const u8, n: usize) -> i32 {
+    for i in 0..n {
+        // SAFETY: the caller's ranges are in bounds.
+        let (x, y) = unsafe { (a.add(i).read_volatile(), b.add(i).read_volatile()) };
+        if x != y {
+            return i32::from(x) - i32::from(y);
+        }
+    }
+    0
 }
 
 const LEN: usize = 72;
@@ -99,6 +115,43 @@ mod tests {
                         let got = unsafe { core::ptr::read_volatile(b.0.as_ptr().add(i)) };
                         let want = if i >= d && i < d + n { 0 } else { before.0[i] };
                         assert_eq!(got, want, "byte {} of a {}-byte clear at {}", i, n, d);
+                    }
+                }
+            }
+        }
+
+        fn memcmp_is_the_byte_by_byte_difference() {
+            // Equal ranges at every alignment and length, then one byte changed at every
+            // position to values below and above the original (0x00 and 0xFF among them, so
+            // the bytes compare unsigned) and a second difference after it, which must not count.
+            let a = pattern();
+            for (ao, bo) in [(0, 0), (1, 0), (0, 3), (2, 1), (3, 3)] {
+                for n in 0..=LEN {
+                    let mut b = Buf([0; LEN + 16]);
+                    b.0[bo..bo + n].copy_from_slice(&a.0[ao..ao + n]);
+                    let (pa, pb) = (a.0[ao..].as_ptr(), b.0[bo..].as_mut_ptr());
+                    // SAFETY: n bytes from each offset are in bounds.
+                    assert_eq!(unsafe { memcmp(pa, pb, n) }, 0, "{n} equal bytes, {ao}/{bo}");
+                    for at in 0..n {
+                        let was = a.0[ao + at];
+                        for v in [0x00, 0xFF, was.wrapping_add(1), was.wrapping_sub(1), was ^ 0x80] {
+                            if v == was {
+                                continue;
+                            }
+                            b.0[bo + at] = v;
+                            if at + 1 < n {
+                                b.0[bo + at + 1] ^= 0x55;
+                            }
+                            let want = compare_reference(pa, pb, n);
+                            assert_eq!(want, i32::from(was) - i32::from(v));
+                            // SAFETY: as above.
+                            let got = unsafe { memcmp(pa, pb, n) };
+                            assert_eq!(got, want, "{n} bytes, {ao}/{bo}, byte {at} = {v:#x}");
+                            if at + 1 < n {
+                                b.0[bo + at + 1] ^= 0x55;
+                            }
+                        }
+                        b.0[bo + at] = was;
                     }
                 }
             }
