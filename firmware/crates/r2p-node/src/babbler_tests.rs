@@ -196,8 +196,8 @@ fn lone_syncs_after_the_master_died_are_never_followed() {
     assert_eq!(received, 20);
     assert_eq!(nodes[2].role(), Role::Master);
     // Counted: every sync not followed — the four lone ones and the master's first, which a
-    // lone sync displaced — for the plain nodes; the master, the lone sync it heard as master
-    // (out of turn) and the two lone ones the third displaced.
+    // lone sync displaced — on the plain nodes; on the master, the first two lone ones (each
+    // displaced by the next) and the one it heard as master (out of turn).
     let counts = [1, 2, 3].map(|i| nodes[i].stats().syncs_out_of_turn);
     assert_eq!(counts, [5, 3, 5]);
     assert_eq!(bus.violations(), 0);

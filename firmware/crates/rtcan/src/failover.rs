@@ -29,9 +29,12 @@
 //!   better rank, so of a race's two masters the better one stays. A master whose sync
 //!   failed to go out more than [`MAX_SYNC_LOSS`] times in a row steps down too, before anyone
 //!   could take over from it.
-//! * Every node re-registers its HRT streams on the first sync after losing sync, on a sync
-//!   whose epoch bit differs from the previous one, and on a sync that does not continue the
-//!   previous one's counter (a new master's restarted counter).
+//! * A node that is not synced (since boot, or after the sync timeout) follows a master only
+//!   at the second of two of its syncs in sequence, so a babbler's lone sync is never followed
+//!   ([`Failover::on_sync`]).
+//! * Every node re-registers its HRT streams on the sync it follows after losing sync, on a
+//!   sync whose epoch bit differs from the previous one, and on a sync that does not continue
+//!   the previous one's counter (a new master's restarted counter).
 //!
 //! Under the fault hypothesis (a node misses at most [`MAX_SYNC_LOSS`] = L consecutive syncs of a
 //! live master): a live master is never suspected, since syncs are heard at least every (L+1)
@@ -825,8 +828,9 @@ mod proptests {
     const STEP: Micros = 500;
     /// Cycles from a partition's end to one master that every node follows: the worse master
     /// hears the better within L + 1 cycles, its followers stop ignoring the better one's syncs
-    /// (out of turn to them) at the sync timeout, L + 1.5 cycles after the last sync they
-    /// followed, and hear it within L + 1 more: 9.5 (docs/rtcan.md "Partitions").
+    /// (out of turn to them, held) at the sync timeout, L + 1.5 cycles after the last sync they
+    /// followed, and follow its next, in sequence with the one held, within L + 1 more: 9.5
+    /// (docs/rtcan.md "Partitions").
     const HEAL_CYCLES: u64 = 10;
     /// The same with a rank-0 late joiner following the worse master: it may start a new
     /// calendar 4 cycles after that master's last sync, before it follows the better one, and
