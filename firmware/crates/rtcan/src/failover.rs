@@ -29,9 +29,12 @@
 //!   better rank, so of a race's two masters the better one stays. A master whose sync
 //!   failed to go out more than [`MAX_SYNC_LOSS`] times in a row steps down too, before anyone
 //!   could take over from it.
-//! * Every node re-registers its HRT streams on the first sync after losing sync, on a sync
-//!   whose epoch bit differs from the previous one, and on a sync that does not continue the
-//!   previous one's counter (a new master's restarted counter).
+//! * A node that is not synced (since boot, or after the sync timeout) follows a master only
+//!   at the second of two of its syncs in sequence, so a babbler's lone sync is never followed
+//!   ([`Failover::on_sync`]).
+//! * Every node re-registers its HRT streams on the sync it follows after losing sync, on a
+//!   sync whose epoch bit differs from the previous one, and on a sync that does not continue
+//!   the previous one's counter (a new master's restarted counter).
 //!
 //! Under the fault hypothesis (a node misses at most [`MAX_SYNC_LOSS`] = L consecutive syncs of a
 //! live master): a live master is never suspected, since syncs are heard at least every (L+1)
@@ -121,8 +124,12 @@ pub struct Actions {
     /// The sync heard starts a new calendar (its epoch bit flipped while this node followed
     /// the previous one): a standby's copy of the calendar starts empty and complete.
     pub new_calendar: bool,
-    /// The sync heard was out of turn ([`Failover::on_sync`]): ignored, nothing changed; the
-    /// node counts it and must not feed it to its clock either.
+    /// The sync heard is not followed ([`Failover::on_sync`]): out of turn, or held until a
+    /// sync in sequence with it confirms it. Nothing else changed; the node must not feed it
+    /// to its clock either.
+    pub ignored: bool,
+    /// A sync was not followed, and the node counts it: this one, out of turn, or, while not
+    /// synced, the one held before, which this one did not continue (a lone sync).
     pub out_of_turn: bool,
 }
 
@@ -139,15 +146,32 @@ pub struct Failover {
     rank: Option<Rank>,
     cycle_us: u32,
     role: Role,
-    /// Last sync heard (or, as master, sent): time, counter, epoch bit.
+    /// Last sync followed (or, as master, sent): time, counter, epoch bit.
     last: Micros,
     last_cycle: u8,
     epoch: Option<bool>,
     synced: bool,
-    tx_failures: u32,
+    tx_failures: u8,
     /// As master: no sync of this mastership has gone out yet after continuing a cycle (the
     /// first failure means another node's sync won: step down at once).
     tentative: bool,
+    /// The last sync heard and not followed since the last one followed.
+    held: Option<Held>,
+}
+
+/// A sync heard and not followed (docs/rtcan.md, "Babblers"): while not synced, a node
+/// follows a sync only if it is in sequence with this one — two syncs of one master — and its
+/// takeover delay counts from it, as from a followed one, since it may be a live master's.
+#[derive(Clone, Copy, Debug)]
+struct Held {
+    /// The low 32 bits of its time (it pairs only within L + 1 cycles).
+    at: u32,
+    cycle: u8,
+    epoch: bool,
+    sender: u8,
+    /// Heard while synced, out of turn: counted then (a node that is not synced counts a held
+    /// sync when the next one does not continue it).
+    out_of_turn: bool,
 }
 
 impl Failover {
@@ -163,6 +187,7 @@ impl Failover {
             synced: false,
             tx_failures: 0,
             tentative: false,
+            held: None,
         }
     }
 
@@ -186,11 +211,17 @@ impl Failover {
         self.epoch
     }
 
-    /// When this node will take over if it hears nothing until then.
+    /// When this node will take over if it hears nothing until then: its rank's delay after
+    /// the last sync it heard, followed or held (a live master's, maybe, that it has yet to
+    /// follow; and nodes that hear the same syncs keep a common reference: docs/rtcan.md,
+    /// "Babblers").
     pub fn takeover_at(&self) -> Option<Micros> {
+        // A held sync came after the last followed one (by less than 35 minutes).
+        let held = self.held.map_or(0, |h| h.at.wrapping_sub(self.last as u32) as i32);
+        let heard = self.last + held.max(0) as Micros;
         match self.role {
             Role::Master => None,
-            _ => self.rank.map(|r| self.last + takeover_delay_us(r, self.cycle_us)),
+            _ => self.rank.map(|r| heard + takeover_delay_us(r, self.cycle_us)),
         }
     }
 
@@ -251,30 +282,55 @@ impl Failover {
     /// extrapolating the master's phase), a new calendar's (its master took over at least two
     /// cycles after this node's last sync under H1). What does not is a babbler's (a wrong
     /// clock, a bug, syncs sent after the master died) or the other master's of a start-up
-    /// race: it is ignored ([`Actions::out_of_turn`]), so the cycle's phase, the calendar and
-    /// the mastership stay; a node that ignores syncs times out and then follows any. A master
-    /// steps down for one only from a better rank: of a race's two masters the better stays.
+    /// race: it is ignored ([`Actions::ignored`], counted: [`Actions::out_of_turn`]), so the
+    /// cycle's phase, the calendar and the mastership stay. A master steps down for one only
+    /// from a better rank: of a race's two masters the better stays.
+    ///
+    /// While not synced (since boot, or after the sync timeout), a sync is followed only if it
+    /// is **in sequence with the sync held**, the last one heard and not followed: from the
+    /// same sender, n = 1 … L + 1 cycles after it within n times the sync tolerance, counter +
+    /// n, the same epoch — two syncs of one master (H1: a node hears one of every L + 1). Any
+    /// other is held in its place: a babbler's lone sync is never followed, and is counted
+    /// when the next sync heard does not continue it. Syncs out of turn are held too, so a node
+    /// that times out follows the master it heard meanwhile at that master's next sync. A held
+    /// sync restarts the node's takeover delay ([`Failover::takeover_at`]), as a followed one
+    /// does.
     #[inline(never)] // one copy for the receive paths that inline the node's (F103 flash)
     pub fn on_sync(&mut self, now: Micros, sync: &SyncFrame) -> Actions {
         const TOLERANCE_DIVISOR: u32 = (1_000_000 / SYNC_TOLERANCE_PPM) as u32;
         let mut a = Actions::default();
-        // n: the cycles elapsed since the last sync heard (or, as master, sent), rounded. The
-        // low 32 bits of the time (71 minutes) suffice: a sync is out of turn only while
-        // synced (one within 35 ms), and only then does continuity count (below).
+        // The sync this one must continue: synced, the last followed (or, as master, sent);
+        // else the one held, from the same sender, and only in sequence (no new calendar).
+        let held = self.held.filter(|h| !self.synced && h.sender == sync.sender);
+        let (at, cycle, epoch) = match held {
+            Some(h) => (h.at, h.cycle, Some(h.epoch)),
+            None => (self.last as u32, self.last_cycle, self.epoch),
+        };
+        // n: the cycles elapsed since it, rounded. The low 32 bits of the time (71 minutes)
+        // suffice: only n up to L + 1 counts.
         let t = self.cycle_us;
-        let since = (now as u32).wrapping_sub(self.last as u32);
+        let since = (now as u32).wrapping_sub(at);
         let n = since.saturating_add(t / 2) / t;
-        let counts = self.last_cycle.wrapping_add(n as u8) == sync.cycle;
-        let flipped = self.epoch.is_some_and(|e| e != sync.epoch);
+        let counts = cycle.wrapping_add(n as u8) == sync.cycle;
+        let flipped = epoch.is_some_and(|e| e != sync.epoch);
         // A new calendar's counter started at least two cycles after the last sync (H1).
-        let in_turn = if flipped { n >= 2 && (sync.cycle as u32) <= n - 2 } else { counts };
-        let on_grid =
-            n >= 1 && since.abs_diff(n.wrapping_mul(t)) <= n * (t / TOLERANCE_DIVISOR) && in_turn;
-        if self.synced
-            && !on_grid
-            && !(self.role == Role::Master && self.rank.is_some_and(|r| sync.sender < r.0))
-        {
-            a.out_of_turn = true;
+        let in_turn =
+            if flipped { self.synced && n >= 2 && (sync.cycle as u32) <= n - 2 } else { counts };
+        let on_grid = (1..=MAX_SYNC_LOSS + 1).contains(&n)
+            && since.abs_diff(n * t) <= n * (t / TOLERANCE_DIVISOR)
+            && in_turn;
+        let follow = if self.synced {
+            on_grid || self.role == Role::Master && self.rank.is_some_and(|r| sync.sender < r.0)
+        } else {
+            held.is_some() && on_grid
+        };
+        if !follow {
+            // Counted now if out of turn; else the held sync it replaces, if never counted.
+            a.ignored = true;
+            a.out_of_turn = self.synced || self.held.is_some_and(|h| !h.out_of_turn);
+            let (cycle, epoch, sender, out_of_turn) =
+                (sync.cycle, sync.epoch, sync.sender, self.synced);
+            self.held = Some(Held { at: now as u32, cycle, epoch, sender, out_of_turn });
             return a;
         }
         // Continuity: the counter advanced by the number of elapsed cycles (1..=L+1).
@@ -290,6 +346,7 @@ impl Failover {
         self.last = now;
         self.last_cycle = sync.cycle;
         self.epoch = Some(sync.epoch);
+        self.held = None;
         a
     }
 
@@ -315,7 +372,7 @@ impl Failover {
             return a;
         }
         self.tx_failures += 1;
-        if self.tx_failures > MAX_SYNC_LOSS {
+        if u32::from(self.tx_failures) > MAX_SYNC_LOSS {
             // Others may be counting silence since our last good sync: compete from there.
             self.role = Role::Slave;
             self.synced = false;
@@ -334,6 +391,14 @@ pub(crate) mod tests {
 
     fn rank(r: u8) -> Option<Rank> {
         Rank::new(r)
+    }
+
+    /// A node that is not synced follows the second of two syncs in sequence: the sync of
+    /// `cycle - 1` one cycle before `at` (held), then that of `cycle` at `at` (returned).
+    fn follow(f: &mut Failover, at: Micros, cycle: u32, epoch: bool) -> Actions {
+        let held = f.on_sync(at - T as Micros, &SyncFrame::new(cycle - 1, 0, epoch));
+        assert!(held.ignored && !held.out_of_turn && !held.re_register, "{held:?}");
+        f.on_sync(at, &SyncFrame::new(cycle, 0, epoch))
     }
 
     r2p_testkit::suite! {
@@ -398,7 +463,7 @@ pub(crate) mod tests {
 
         fn a_continuing_standby_whose_sync_lost_follows_the_winner() {
             let mut s = Failover::new(rank(2), T, 0);
-            s.on_sync(10_000, &SyncFrame::new(8, 0, false));
+            follow(&mut s, 10_000, 8, false);
             assert!(s.continue_cycle(30_000, 10).start_syncing.is_some());
             let sync = SyncFrame::new(10, 0, false).from_rank(2);
             // Withdrawn (another started first) or lost arbitration: a slave at once.
@@ -417,14 +482,14 @@ pub(crate) mod tests {
 
         fn a_flipped_epoch_starts_a_new_calendar() {
             let mut f = Failover::new(rank(1), T, 0);
-            let first = f.on_sync(0, &SyncFrame::new(3, 0, true));
+            let first = follow(&mut f, 10_000, 3, true);
             assert!(first.re_register && !first.new_calendar, "first sync: unknown calendar");
             // A new master's first sync one cycle after the last is out of turn (under H1 it
             // comes at least two after: "Babblers"); two cycles after, it is followed.
-            assert!(f.on_sync(10_000, &SyncFrame::new(0, 0, false)).out_of_turn);
-            let r = f.on_sync(20_000, &SyncFrame::new(0, 0, false));
+            assert!(f.on_sync(20_000, &SyncFrame::new(0, 0, false)).out_of_turn);
+            let r = f.on_sync(30_000, &SyncFrame::new(0, 0, false));
             assert!(r.re_register && r.new_calendar);
-            assert!(!f.on_sync(30_000, &SyncFrame::new(1, 0, false)).new_calendar);
+            assert!(!f.on_sync(40_000, &SyncFrame::new(1, 0, false)).new_calendar);
         }
 
         fn out_of_turn_is_off_the_grid_or_out_of_sequence() {
@@ -432,11 +497,11 @@ pub(crate) mod tests {
             // 0.5 % of a cycle per cycle elapsed: 50 µs, 100 µs, 150 µs.
             let followed = || {
                 let mut f = Failover::new(None, T, 0);
-                f.on_sync(0, &SyncFrame::new(5, 0, true));
+                follow(&mut f, 10_000, 5, true);
                 f
             };
             let at = |at: Micros, cycle: u32, epoch: bool| {
-                followed().on_sync(at, &SyncFrame::new(cycle, 0, epoch)).out_of_turn
+                followed().on_sync(10_000 + at, &SyncFrame::new(cycle, 0, epoch)).out_of_turn
             };
             for (n, tol) in [(1u32, 50), (2, 100), (3, 150)] {
                 let due = n as Micros * 10_000;
@@ -460,12 +525,123 @@ pub(crate) mod tests {
             assert!(!at(20_000, 0, false) && at(20_000, 1, false));
             assert!(!at(30_000, 1, false) && at(30_000, 2, false));
             assert!(at(20_101, 0, false), "a new calendar off the grid");
-            // Not synced (boot, or after the timeout): anything is followed.
+            // Not synced (boot, or after the timeout): no sync is out of turn, and the second
+            // of two in sequence is followed ("Babblers", `lone_syncs_are_held_never_followed`).
             let mut f = Failover::new(None, T, 0);
             assert!(!f.on_sync(3_333, &SyncFrame::new(77, 0, false)).out_of_turn);
-            f.poll(3_333 + sync_timeout_us(T));
-            assert!(!f.on_sync(3_333 + sync_timeout_us(T) + 7, &SyncFrame::new(1, 0, true))
-                .out_of_turn);
+            assert!(!f.on_sync(13_333, &SyncFrame::new(78, 0, false)).ignored);
+            let timeout = 13_333 + sync_timeout_us(T);
+            f.poll(timeout);
+            assert!(!f.on_sync(timeout + 7, &SyncFrame::new(1, 0, true)).out_of_turn);
+        }
+
+        fn lone_syncs_are_held_never_followed() {
+            // Not synced (booted at 0), a node holds the sync of cycle 5 from rank 1 at 10 000
+            // and follows only a sync in sequence with it: the same sender and epoch, n = 1…L+1
+            // cycles later within n times the tolerance (50, 100, 150 µs), counter + n.
+            let held = || {
+                let mut f = Failover::new(rank(3), T, 0);
+                let a = f.on_sync(10_000, &SyncFrame::new(5, 0, true).from_rank(1));
+                assert!(a.ignored && !a.out_of_turn && !a.re_register, "{a:?}");
+                assert!(!f.synced() && f.epoch().is_none());
+                f
+            };
+            let follows = |at: Micros, cycle: u32, epoch: bool, sender: u8| {
+                let mut f = held();
+                let a = f.on_sync(10_000 + at, &SyncFrame::new(cycle, 0, epoch).from_rank(sender));
+                assert_eq!(a.ignored, !f.synced(), "{a:?}");
+                f.synced()
+            };
+            for (n, tol) in [(1u32, 50), (2, 100), (3, 150)] {
+                let due = n as Micros * 10_000;
+                for d in [0, tol] {
+                    assert!(follows(due - d, 5 + n, true, 1), "n {n}: {d} µs early");
+                    assert!(follows(due + d, 5 + n, true, 1), "n {n}: {d} µs late");
+                }
+                assert!(!follows(due - tol - 1, 5 + n, true, 1), "n {n}: off the grid (early)");
+                assert!(!follows(due + tol + 1, 5 + n, true, 1), "n {n}: off the grid (late)");
+                assert!(!follows(due, 6 + n, true, 1) && !follows(due, 4 + n, true, 1), "n {n}");
+                assert!(!follows(due, 5 + n, false, 1), "n {n}: the other epoch");
+                assert!(!follows(due, 5 + n, true, 0), "n {n}: another sender, even a better");
+                assert!(!follows(due, 5 + n, true, 2), "n {n}: another sender");
+            }
+            assert!(!follows(40_000, 9, true, 1), "L + 2 cycles on: more than H1 loses");
+            assert!(!follows(0, 5, true, 1), "the same sync again");
+            // The second sync in sequence is followed: a master new to this node.
+            let mut f = held();
+            let a = f.on_sync(20_000, &SyncFrame::new(6, 0, true).from_rank(1));
+            assert!(a.re_register && !a.new_calendar && !a.ignored && !a.out_of_turn, "{a:?}");
+            assert_eq!((f.synced(), f.epoch(), f.role()), (true, Some(true), Role::Slave));
+            // A lone sync between a master's two: held in place of the first, which is counted
+            // (no sync continued it); the master's next is held in place of the lone one
+            // (counted), the one after it followed.
+            let mut f = held();
+            let lone = f.on_sync(14_321, &SyncFrame::new(77, 0, false).from_rank(9));
+            assert!(lone.ignored && lone.out_of_turn && !lone.re_register, "{lone:?}");
+            let a = f.on_sync(20_000, &SyncFrame::new(6, 0, true).from_rank(1));
+            assert!(a.ignored && a.out_of_turn, "{a:?}");
+            let a = f.on_sync(30_000, &SyncFrame::new(7, 0, true).from_rank(1));
+            assert!(!a.ignored && !a.out_of_turn && a.re_register, "{a:?}");
+        }
+
+        fn a_held_sync_restarts_the_takeover_delay() {
+            // Rank 3 (19 cycles) booted at 0: a sync held while not synced may be a live
+            // master's first (the next-ranked standby of a new calendar, a late joiner): its
+            // delay counts from it, so it hears the next before its own time.
+            let mut f = Failover::new(rank(3), T, 0);
+            assert_eq!(f.takeover_at(), Some(190_000));
+            f.on_sync(10_000, &SyncFrame::new(5, 0, true).from_rank(1));
+            assert_eq!(f.takeover_at(), Some(200_000));
+            assert!(f.poll(199_999).is_empty());
+            f.on_sync(20_000, &SyncFrame::new(6, 0, true).from_rank(1));
+            assert_eq!(f.takeover_at(), Some(210_000), "followed");
+            // Synced, a sync out of turn is held and restarts it too: every node that heard
+            // that sync, synced or not, counts from it, so the ranks' order stands.
+            assert!(f.on_sync(25_000, &SyncFrame::new(50, 0, true).from_rank(2)).out_of_turn);
+            assert_eq!(f.takeover_at(), Some(215_000));
+            assert!(f.on_sync(30_000, &SyncFrame::new(7, 0, true).from_rank(1)).is_empty());
+            assert_eq!(f.takeover_at(), Some(220_000), "the master's next, followed");
+            // Timed out, it holds a sync again: its delay restarts.
+            f.poll(65_000);
+            assert!(!f.synced());
+            assert!(f.on_sync(71_234, &SyncFrame::new(200, 0, false).from_rank(4)).ignored);
+            assert_eq!(f.takeover_at(), Some(261_234));
+            // A master that steps down after failed syncs counts from its last good one, not
+            // from a sync it held before it.
+            let mut m = Failover::new(rank(0), T, 0);
+            let s = m.poll(40_000).start_syncing.unwrap();
+            let sync = SyncFrame::new(s.cycle, 0, s.epoch);
+            assert!(m.on_sync(45_000, &SyncFrame::new(9, 0, true).from_rank(5)).out_of_turn);
+            assert!(m.on_sync_sent(50_000, &sync, true).is_empty());
+            for k in 1..=3 {
+                m.on_sync_sent(50_000 + k * 10_000, &sync, false);
+            }
+            assert_eq!((m.role(), m.takeover_at()), (Role::Slave, Some(90_000)));
+        }
+
+        fn a_node_that_times_out_follows_the_master_it_heard_meanwhile() {
+            // A node follows rank 2's syncs; rank 1's (a partition healed, the worse master's
+            // syncs stop) are out of turn to it, counted and held. Timed out, it follows rank 1
+            // at its next sync, in sequence with the one held, without waiting for another.
+            let mut f = Failover::new(None, T, 0);
+            follow(&mut f, 20_000, 9, false);
+            for (at, cycle) in [(23_000, 40), (33_000, 41)] {
+                let a = f.on_sync(at, &SyncFrame::new(cycle, 0, true).from_rank(1));
+                assert!(a.ignored && a.out_of_turn, "{a:?}");
+            }
+            f.poll(55_000);
+            assert!(!f.synced());
+            let a = f.on_sync(63_000, &SyncFrame::new(44, 0, true).from_rank(1));
+            assert!(!a.ignored && a.re_register, "{a:?}");
+            assert_eq!(f.epoch(), Some(true));
+            // Syncs out of turn were counted when heard: one held then, displaced after the
+            // timeout, is not counted again.
+            let mut f = Failover::new(None, T, 0);
+            follow(&mut f, 20_000, 9, false);
+            assert!(f.on_sync(23_000, &SyncFrame::new(40, 0, true).from_rank(1)).out_of_turn);
+            f.poll(55_000);
+            let a = f.on_sync(63_000, &SyncFrame::new(100, 0, true).from_rank(1));
+            assert!(a.ignored && !a.out_of_turn, "{a:?}");
         }
 
         fn a_master_steps_down_out_of_turn_only_for_a_better_rank() {
@@ -506,9 +682,8 @@ pub(crate) mod tests {
 
         fn syncs_keep_a_standby_slave_and_losses_are_tolerated() {
             let mut f = Failover::new(rank(0), T, 0);
-            let a = f.on_sync(1_000, &SyncFrame::new(7, 0, true));
-            assert!(a.re_register, "first sync: register");
-            assert!(f.on_sync(11_000, &SyncFrame::new(8, 0, true)).is_empty());
+            let a = follow(&mut f, 11_000, 8, true);
+            assert!(a.re_register, "the first sync followed: register");
             // Two syncs lost, the third arrives: still the same master.
             assert!(f.poll(40_999).is_empty());
             assert_eq!(f.role(), Role::Slave);
@@ -520,17 +695,18 @@ pub(crate) mod tests {
 
         fn epoch_flip_or_counter_restart_means_re_register() {
             let mut f = Failover::new(None, T, 0);
-            f.on_sync(0, &SyncFrame::new(200, 0, false));
+            follow(&mut f, 10_000, 200, false);
             // A new calendar two cycles on: flipped epoch, counter 0.
-            assert!(f.on_sync(20_000, &SyncFrame::new(0, 0, true)).re_register);
-            assert!(!f.on_sync(30_000, &SyncFrame::new(1, 0, true)).re_register);
+            assert!(f.on_sync(30_000, &SyncFrame::new(0, 0, true)).re_register);
+            assert!(!f.on_sync(40_000, &SyncFrame::new(1, 0, true)).re_register);
             // A restarted counter with the same epoch (a master that lived under L cycles and
-            // one that did not hear it) waits for the timeout, then re-registers.
-            assert!(f.on_sync(50_000, &SyncFrame::new(0, 0, true)).out_of_turn);
-            assert!(f.on_sync(60_000, &SyncFrame::new(1, 0, true)).out_of_turn);
-            f.poll(65_000);
+            // one that did not hear it) waits for the timeout, then re-registers: at its next
+            // sync, in sequence with the one held (out of turn) before.
+            assert!(f.on_sync(60_000, &SyncFrame::new(0, 0, true)).out_of_turn);
+            assert!(f.on_sync(70_000, &SyncFrame::new(1, 0, true)).out_of_turn);
+            f.poll(75_000);
             assert!(!f.synced());
-            assert!(f.on_sync(70_000, &SyncFrame::new(2, 0, true)).re_register);
+            assert!(f.on_sync(80_000, &SyncFrame::new(2, 0, true)).re_register);
         }
 
         fn master_steps_down_on_a_foreign_sync() {
@@ -637,15 +813,17 @@ pub(crate) mod tests {
             let mut a = Failover::new(rank(0), T, 0);
             let mut b = Failover::new(rank(1), T, 0);
             for f in [&mut a, &mut b] {
-                f.on_sync(5_000, &SyncFrame::new(1, 0, false));
+                follow(f, 15_000, 1, false);
             }
-            assert!(a.poll(45_000).start_syncing.is_some());
-            // b hears a's first sync before its own time (95 000) and stays slave.
-            assert!(b.poll(45_000).is_empty());
-            let r = b.on_sync(45_000, &SyncFrame::new(0, 0, true));
+            assert!(a.poll(55_000).start_syncing.is_some());
+            // b hears a's first sync before its own time (105 000), holds it (no longer
+            // synced) and follows a at its second.
+            assert!(b.poll(55_000).is_empty());
+            assert!(b.on_sync(55_000, &SyncFrame::new(0, 0, true)).ignored);
+            let r = b.on_sync(65_000, &SyncFrame::new(1, 0, true));
             assert!(r.re_register);
             assert_eq!(b.role(), Role::Slave);
-            assert!(b.poll(94_999).is_empty());
+            assert!(b.poll(154_999).is_empty());
         }
     }
 }
@@ -661,13 +839,13 @@ mod proptests {
     const STEP: Micros = 500;
     /// Cycles from a partition's end to one master that every node follows: the worse master
     /// hears the better within L + 1 cycles, its followers stop ignoring the better one's syncs
-    /// (out of turn to them) at the sync timeout, L + 1.5 cycles after the last sync they
-    /// followed, and hear it within L + 1 more: 9.5 (docs/rtcan.md "Partitions").
+    /// (out of turn to them, held) at the sync timeout, L + 1.5 cycles after the last sync they
+    /// followed, and follow its next, in sequence with the one held, within L + 1 more: 9.5
+    /// (docs/rtcan.md "Partitions"). A rank-0 late joiner following the worse master is no
+    /// exception: the better master's syncs it holds (out of turn) restart its takeover delay
+    /// (4 cycles) at least every L + 1 cycles, so it never takes over (before the two-sync rule:
+    /// 17 cycles, 3 + 4 + 3 + 3.5 + 3).
     const HEAL_CYCLES: u64 = 10;
-    /// The same with a rank-0 late joiner following the worse master: it may start a new
-    /// calendar 4 cycles after that master's last sync, before it follows the better one, and
-    /// the bus settles one round later: 3 + 4 + 3 + 3.5 + 3 = 16.5 cycles.
-    const HEAL_CYCLES_RANK0: u64 = 17;
 
     /// The simulations' random numbers: xorshift64, deterministic from the case's seed.
     fn xorshift(seed: u64) -> impl FnMut() -> u64 {
@@ -692,6 +870,8 @@ mod proptests {
         next_sync: Option<(Micros, u32, bool, u32)>,
         /// The mastership this node's streams are registered with.
         registered_with: Option<u32>,
+        /// When it booted last.
+        up_at: Micros,
     }
 
     /// A node: rank (None = never master) and boot time.
@@ -704,24 +884,65 @@ mod proptests {
     /// per-receiver loss a master lives at least MAX_SYNC_LOSS + 1 syncs; late joiners boot
     /// while a master is live, and it lives until they heard it.
     fn simulate(specs: &[Spec], global: bool, loss_pct: u64, seed: u64, kills: &[Micros]) {
-        simulate_with(specs, global, loss_pct, seed, kills, None, None);
+        simulate_with(specs, global, loss_pct, seed, kills, Faults::default());
     }
 
-    /// [`simulate`] with a babbler of rank `babbler.0` sending a sync in `babbler.1` ‰ of the
-    /// 500 µs steps, at a random instant within the step, to every live node that follows a
-    /// live master of a better rank; its counter is off that node's sequence (its own epoch).
-    /// Each must be out of turn and move nothing, so the invariants above hold as without it.
-    /// With `revive`, a killed master boots again that long after its death (a master that
-    /// comes back: reset, brown-out), as a late joiner does: once a master is live.
+    /// What [`simulate_with`] adds to [`simulate`].
+    #[derive(Clone, Copy, Default)]
+    struct Faults {
+        /// A babbler of rank `.0` sending a sync in `.1` ‰ of the 500 µs steps, at a random
+        /// instant within the step, to every live node that follows a live master of a better
+        /// rank; its counter is off that node's sequence (its own epoch). Each must be out of
+        /// turn and move nothing, so the invariants above hold as without it.
+        babbler: Option<(u8, u64)>,
+        /// A babbler sending lone syncs in `.0` ‰ of the steps, at a random instant, `.1` of
+        /// them from the start and again from each death, to every live node — synced or not,
+        /// a master (unless the babble's rank is better than its own: a start-up race's rule)
+        /// — of a random rank, epoch and counter, none in sequence with a sync of the bus
+        /// before it or a live master's after it ([`lone_sync`]). None is followed; held by a
+        /// node that is not synced, one restarts its takeover delay, as a followed sync does
+        /// (a babbler that never stops holds the takeover off: `.1` lets it happen).
+        lone_syncs: Option<(u64, u32)>,
+        /// A killed master boots again that long after its death (a master that comes back:
+        /// reset, brown-out), as a late joiner does: once a master is live.
+        revive: Option<Micros>,
+    }
+
+    /// A babbled sync for [`Faults::lone_syncs`] at `when`, of rank `rank` and epoch `epoch`:
+    /// a counter no two syncs in sequence can make of it with a sync of `recent` (every sync
+    /// sent in the last L + 2 cycles: (time, counter, epoch)), a live master's next ones
+    /// (`masters`: next counter, epoch), or a new calendar's first (counters 0…3, and 252…255
+    /// which a new master's first counters would continue). `None` if the draws all failed.
+    fn lone_sync(
+        rand: &mut impl FnMut() -> u64,
+        recent: &[(Micros, u8, bool)],
+        masters: &[(u8, bool)],
+        rank: u8,
+        epoch: bool,
+    ) -> Option<SyncFrame> {
+        let window = MAX_SYNC_LOSS as u8 + 3;
+        (0..8).find_map(|_| {
+            let cycle = 4 + (rand() % 248) as u8;
+            let follows =
+                recent.iter().any(|&(_, c, e)| e == epoch && cycle.wrapping_sub(c) <= window);
+            let due = masters.iter().any(|&(c, e)| {
+                e == epoch && cycle.wrapping_sub(c.wrapping_sub(window)) <= 2 * window
+            });
+            (!follows && !due)
+                .then(|| SyncFrame::new(cycle.into(), u64::MAX, epoch).from_rank(rank))
+        })
+    }
+
+    /// [`simulate`] with the faults of `faults`.
     fn simulate_with(
         specs: &[Spec],
         global: bool,
         loss_pct: u64,
         seed: u64,
         kills: &[Micros],
-        babbler: Option<(u8, u64)>,
-        revive: Option<Micros>,
+        faults: Faults,
     ) {
+        let Faults { babbler, lone_syncs, revive } = faults;
         let min_life = if global { 0 } else { MAX_SYNC_LOSS as Micros * T as Micros + STEP };
         let mut rand = xorshift(seed);
         let mut nodes: Vec<Node> = specs
@@ -734,6 +955,7 @@ mod proptests {
                 misses: 0,
                 next_sync: None,
                 registered_with: None,
+                up_at: 0,
             })
             .collect();
         let mut last_sync_at: Micros = 0; // boot is the common reference
@@ -746,6 +968,11 @@ mod proptests {
         let end_margin = (MAX_TAKEOVER_CYCLES as Micros + 10) * T as Micros;
         let mut quiet_since_last_kill: Micros = 0;
         let mut revived = 0u32;
+        // Lone syncs: the last one, and every sync of the last L + 2 cycles (time, counter,
+        // epoch) that a babbled one must not continue.
+        let mut last_babble: Option<Micros> = None;
+        let mut recent: Vec<(Micros, u8, bool)> = Vec::new();
+        let mut lone_left = lone_syncs.map_or(0, |l| l.1);
         while quiet_since_last_kill < end_margin {
             let live_master = nodes.iter().any(|n| n.alive && n.f.role() == Role::Master);
             // Boot: everyone at 0; late joiners only while a master is live.
@@ -755,6 +982,7 @@ mod proptests {
                     n.f = Failover::new(n.f.rank(), T, t);
                     n.booted = true;
                     n.alive = true;
+                    n.up_at = t;
                     n.misses = 0;
                     n.next_sync = None;
                     n.registered_with = None;
@@ -779,6 +1007,7 @@ mod proptests {
                         }
                         kills_done += 1;
                         takeover_at = None;
+                        lone_left = lone_syncs.map_or(0, |l| l.1);
                     }
                 }
             }
@@ -805,10 +1034,12 @@ mod proptests {
                 .filter(|&i| nodes[i].alive && nodes[i].f.role() == Role::Master)
                 .collect();
             assert!(alive_masters.len() <= 1, "two masters at {t}: {alive_masters:?}");
-            // Bound: with no live master, one must appear within the rank's takeover time.
+            // Bound: with no live master, one must appear within the rank's takeover time after
+            // the last sync, or lone sync (which may be a master's to the nodes that hold it).
             if alive_masters.is_empty() {
                 if let Some(r) = best {
-                    let bound = last_sync_at + takeover_delay_us(r, T);
+                    let bound = (last_sync_at + takeover_delay_us(r, T))
+                        .max(last_babble.map_or(0, |b| b + takeover_delay_us(r, T) + STEP));
                     assert!(t < bound, "no master at {t}, bound {bound} (rank {r:?})");
                 }
             }
@@ -821,10 +1052,14 @@ mod proptests {
                 if last_sender.is_some_and(|s| s != m) {
                     assert!(t >= last_sync_at + T as Micros, "two masters' syncs within a cycle");
                 }
-                let sync = SyncFrame::new(cycle, 0, epoch);
+                let rank = nodes[m].f.rank().unwrap().get();
+                let sync = SyncFrame::new(cycle, 0, epoch).from_rank(rank);
                 assert!(nodes[m].f.on_sync_sent(t, &sync, true).is_empty());
                 last_sync_at = t;
                 last_sender = Some(m);
+                if lone_syncs.is_some() {
+                    recent.push((t, sync.cycle, epoch));
+                }
                 nodes[m].next_sync = Some((at + T as Micros, cycle + 1, epoch, ship));
                 let lost_by_all = global_misses < MAX_SYNC_LOSS && rand() % 100 < loss_pct;
                 global_misses = if lost_by_all { global_misses + 1 } else { 0 };
@@ -847,11 +1082,37 @@ mod proptests {
                     if a.re_register {
                         n.registered_with = Some(ship);
                     }
-                    assert_eq!(
-                        n.registered_with,
-                        Some(ship),
-                        "node {i} thinks it is registered with another master"
-                    );
+                    // A node that is not synced holds a master's first sync it hears and
+                    // follows the next ("Babblers"): it is registered once it follows.
+                    if !a.ignored {
+                        assert_eq!(
+                            n.registered_with,
+                            Some(ship),
+                            "node {i} thinks it is registered with another master"
+                        );
+                    }
+                }
+            }
+            // Every node follows the live master, registered with it, by 2L + 1 cycles after
+            // its takeover (it hears one of every L + 1 of its syncs, H1, and follows the
+            // second it hears), 2L + 2 after its own boot when it booted later, 2L + 2 after
+            // the last lone sync (which the node may have held in place of the first).
+            let masters: Vec<usize> = (0..nodes.len())
+                .filter(|&i| nodes[i].alive && nodes[i].f.role() == Role::Master)
+                .collect();
+            if let (Some(d), &[m]) = (takeover_at, &masters[..]) {
+                let ship = nodes[m].next_sync.map(|s| s.3);
+                let cycles = |k: u32| k as Micros * T as Micros;
+                for (i, n) in nodes.iter().enumerate().filter(|(i, n)| *i != m && n.alive) {
+                    let by = (d + cycles(2 * MAX_SYNC_LOSS + 1))
+                        .max(n.up_at + cycles(2 * MAX_SYNC_LOSS + 2))
+                        .max(last_babble.map_or(0, |b| b + cycles(2 * MAX_SYNC_LOSS + 2)));
+                    if t >= by {
+                        assert!(
+                            n.f.synced() && n.registered_with == ship,
+                            "node {i} does not follow the master of {d} at {t}"
+                        );
+                    }
                 }
             }
             let master_rank = (0..nodes.len())
@@ -861,6 +1122,7 @@ mod proptests {
             if let (Some((rank, permille)), Some(m)) = (babbler, master_rank) {
                 if rand() % 1_000 < permille && rank > m.get() {
                     let when = t + rand() % STEP;
+                    last_babble = Some(when);
                     for (i, n) in nodes.iter_mut().enumerate() {
                         if !n.alive || !n.f.synced() {
                             continue;
@@ -872,8 +1134,44 @@ mod proptests {
                                 .from_rank(rank);
                         let a = n.f.on_sync(when, &sync);
                         assert!(a.out_of_turn, "node {i} followed a babbler at {when}: {a:?}");
-                        assert_eq!((n.f.role(), n.f.takeover_at()), (role, takeover));
+                        assert_eq!(n.f.role(), role);
+                        // Held, it can postpone a takeover (as any sync heard), never bring one
+                        // closer.
+                        assert!(n.f.takeover_at() >= takeover);
                     }
+                }
+            }
+            if lone_syncs.is_some_and(|(p, _)| lone_left > 0 && rand() % 1_000 < p) {
+                let when = t + rand() % STEP;
+                let (rank, epoch) = ((rand() % 16) as u8, rand().is_multiple_of(2));
+                recent.retain(|r| r.0 + (MAX_SYNC_LOSS as Micros + 2) * T as Micros >= when);
+                let masters: Vec<(u8, bool)> = nodes
+                    .iter()
+                    .filter(|n| n.alive)
+                    .filter_map(|n| n.next_sync.filter(|_| n.f.role() == Role::Master))
+                    .map(|s| (s.1 as u8, s.2))
+                    .collect();
+                if let Some(sync) = lone_sync(&mut rand, &recent, &masters, rank, epoch) {
+                    for (i, n) in nodes.iter_mut().enumerate().filter(|(_, n)| n.alive) {
+                        let (role, synced) = (n.f.role(), n.f.synced());
+                        if role == Role::Master && n.f.rank().is_some_and(|r| rank < r.get()) {
+                            continue; // it steps down for it: a start-up race's rule
+                        }
+                        let a = n.f.on_sync(when, &sync);
+                        assert!(
+                            a.ignored
+                                && (a.out_of_turn || !synced)
+                                && a.start_syncing.is_none()
+                                && !a.stop_syncing
+                                && !a.re_register
+                                && !a.new_calendar,
+                            "node {i} (synced: {synced}) followed a lone sync at {when}: {a:?}"
+                        );
+                        assert_eq!((n.f.role(), n.f.synced()), (role, synced));
+                    }
+                    recent.push((when, sync.cycle, epoch));
+                    last_babble = Some(when);
+                    lone_left -= 1;
                 }
             }
             t += STEP;
@@ -946,7 +1244,26 @@ mod proptests {
             // Kills, late joiners, global or per-node loss, as above, with a babbler whose rank
             // is worse than the live master's: nobody follows it, so a master is never moved,
             // the takeover times and the bound stay.
-            simulate_with(&specs, global, loss, seed, &kills, Some((rank, permille)), None);
+            let babbler = Some((rank, permille));
+            simulate_with(&specs, global, loss, seed, &kills, Faults { babbler, ..Faults::default() });
+        }
+
+        #[test]
+        fn lone_syncs_are_never_followed_and_a_new_master_still_is(
+            (specs, loss, seed, kills) in scenario(),
+            global in any::<bool>(),
+            permille in 1u64..=10,
+            burst in 1u32..=12,
+        ) {
+            // Kills, late joiners, global or per-node loss, as above, with a babbler of lone
+            // syncs (random instants, ranks, epochs and counters, one every 1-10 cycles on
+            // average, `burst` of them from the start and from each death) that reach every
+            // node: at boot and after each death, when every node timed out, too. No node ever
+            // follows one; a new master, two syncs in sequence, is followed by every node within
+            // 2L + 1 cycles (2L + 2 after the last lone sync or the node's boot), and appears
+            // within its rank's delay after the last sync or lone sync.
+            let lone_syncs = Some((permille, burst));
+            simulate_with(&specs, global, loss, seed, &kills, Faults { lone_syncs, ..Faults::default() });
         }
 
         #[test]
@@ -958,7 +1275,8 @@ mod proptests {
             // Every killed master boots again (often within a cycle or two, before or after the
             // next master took over) and listens as any late joiner: one master at a time, the
             // next within its rank's bound, every follower registered with its master.
-            simulate_with(&specs, global, loss, seed, &kills, None, Some(back_after));
+            let revive = Some(back_after);
+            simulate_with(&specs, global, loss, seed, &kills, Faults { revive, ..Faults::default() });
         }
 
         #[test]
@@ -990,9 +1308,7 @@ mod proptests {
             // master, during a takeover, later) for 0-120 cycles: within H1 and far past it
             // alike, one master per segment while cut, one for all soon after it is whole.
             let healed = simulate_partition(&ranks, &boots, &side, global, loss, seed, cut_at..cut_at + cut_cycles * T as Micros);
-            let rank0_joiner = ranks.iter().zip(&boots).any(|(r, &b)| *r == Some(0) && b > 0);
-            let bound = if rank0_joiner { HEAL_CYCLES_RANK0 } else { HEAL_CYCLES };
-            prop_assert!(healed <= bound, "healed in {healed} cycles");
+            prop_assert!(healed <= HEAL_CYCLES, "healed in {healed} cycles");
         }
     }
 
@@ -1003,9 +1319,9 @@ mod proptests {
     /// for all at once with `global`). Checked: while cut, each segment is a bus of its own (at
     /// most one master, one within its best rank's bound after the last sync it heard); once
     /// whole, two masters never last more than L + 1 cycles (the worse steps down at the
-    /// first sync of the better it hears), and within `HEAL_CYCLES` (`HEAL_CYCLES_RANK0` with a
-    /// rank-0 late joiner, which may follow a worse master) there is one master, the
-    /// best rank of any that was master after the heal, every node follows it and is
+    /// first sync of the better it hears), and within `HEAL_CYCLES` (a rank-0 late joiner that
+    /// follows a worse master included) there is one master, the best rank of any that was
+    /// master after the heal, every node follows it and is
     /// registered with it. Returns the cycles the heal took (from the first takeover when that came
     /// later).
     fn simulate_partition(
@@ -1029,6 +1345,7 @@ mod proptests {
                 misses: 0,
                 next_sync: None,
                 registered_with: None,
+                up_at: boot_at,
             })
             .collect();
         let heal = split.end;
@@ -1062,6 +1379,7 @@ mod proptests {
                     n.f = Failover::new(n.f.rank(), T, t);
                     n.booted = true;
                     n.alive = true;
+                    n.up_at = t;
                     // Its boot is its reference until it hears a sync.
                     last_heard[side[i] as usize] = t;
                 }
@@ -1195,13 +1513,16 @@ mod proptests {
         let mut nodes: Vec<Failover> =
             ranks.iter().map(|&r| Failover::new(Rank::new(r), T, 0)).collect();
         let best = (0..nodes.len()).min_by_key(|&i| ranks[i]).unwrap();
-        // Cycle 0: the first master's new calendar, heard by all.
+        // Cycles 0 and 1: the first master's new calendar, heard by all, who follow it at its
+        // second sync.
         let first = nodes[best].continue_cycle(0, 0); // not synced yet: nothing
         assert!(first.is_empty());
-        let sync0 = SyncFrame::new(0, 0, true).from_rank(ranks[best]);
-        for (i, n) in nodes.iter_mut().enumerate() {
-            if i != best {
-                n.on_sync(0, &sync0);
+        for c in 0..2 {
+            let sync = SyncFrame::new(c, 0, true).from_rank(ranks[best]);
+            for (i, n) in nodes.iter_mut().enumerate() {
+                if i != best {
+                    assert_eq!(n.on_sync(c as Micros * t, &sync).ignored, c == 0);
+                }
             }
         }
         nodes[best].role = Role::Master;
@@ -1211,9 +1532,9 @@ mod proptests {
         let mut misses = std::vec![0u32; nodes.len()];
         let mut global_misses = 0;
         // Per node: the cycle number of the last sync heard or sent.
-        let mut heard: Vec<Option<u32>> = std::vec![Some(0); nodes.len()];
-        let mut last_sync_cycle = 0u32;
-        for c in 1..200u32 {
+        let mut heard: Vec<Option<u32>> = std::vec![Some(1); nodes.len()];
+        let mut last_sync_cycle = 1u32;
+        for c in 2..200u32 {
             let at = c as Micros * t;
             if c == death {
                 alive[best] = false;

@@ -61,8 +61,11 @@ fn the_count_restarts_at_the_good_sync_then_l_plus_one_in_a_row_step_down() {
 fn the_epoch_is_the_current_masters_and_a_takeover_flips_it() {
     let mut f = Failover::new(rtcan::failover::Rank::new(1), CYCLE_US, 0);
     assert_eq!(f.epoch(), None, "no master heard yet");
+    // Not synced: the first sync is held, the second in sequence followed.
     f.on_sync(10_000, &SyncFrame::new(4, 0, true));
-    assert_eq!(f.epoch(), Some(true), "the epoch of the master heard");
+    assert_eq!(f.epoch(), None, "a sync held is not followed");
+    f.on_sync(20_000, &SyncFrame::new(5, 0, true));
+    assert_eq!(f.epoch(), Some(true), "the epoch of the master followed");
     // The master goes silent: this standby takes over with the other epoch.
     let at = f.takeover_at().unwrap();
     let s = f.poll(at).start_syncing.expect("takes over at its time");

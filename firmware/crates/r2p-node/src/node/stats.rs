@@ -64,9 +64,11 @@ pub struct NodeStats {
     pub dropped_on_move: u32,
     /// Events dropped because the application did not take them.
     pub events_lost: u32,
-    /// Syncs not followed because they came out of turn (off the followed cycle's grid or out
-    /// of its sequence; to a master, from a rank no better than its own): a babbler's
-    /// (`rtcan::failover::Failover::on_sync`).
+    /// Syncs not followed (`rtcan::failover::Failover::on_sync`, docs/rtcan.md "Babblers"):
+    /// while synced, those out of turn (off the followed cycle's grid or out of its sequence;
+    /// to a master, from a rank no better than its own); while not synced, those no sync in
+    /// sequence continued (a lone sync, or a master's first that one displaced). A babbler's,
+    /// or a start-up race's or healed partition's other master: without them it stays 0.
     pub syncs_out_of_turn: u32,
 }
 

@@ -237,13 +237,21 @@ impl<
         self.slot_tx.next_wake(now, boundary)
     }
 
-    /// A sync heard: ignored and counted if out of turn (a babbler's, docs/rtcan.md
-    /// "Babblers"; the decision is `rtcan`'s [`Failover::on_sync`](rtcan::failover::Failover)),
-    /// else it feeds the clock and the failover state machine.
+    /// A sync heard: ignored if out of turn (a babbler's, docs/rtcan.md "Babblers") or, while
+    /// not synced, until a sync in sequence with it confirms it; counted when not followed
+    /// (the decision is `rtcan`'s [`Failover::on_sync`](rtcan::failover::Failover)); else it
+    /// feeds the clock and the failover state machine.
     pub(super) fn on_sync(&mut self, at: Micros, sync: &SyncFrame) {
         let a = self.failover.on_sync(at, sync);
         if a.out_of_turn {
             bump(&mut self.stats.syncs_out_of_turn);
+        }
+        if a.ignored {
+            if !self.failover.synced() {
+                // Held: a cycle may run, which the node follows at the next sync; until then
+                // it sends nothing outside one (no frame into that cycle's slots).
+                self.last_sync = at;
+            }
             return;
         }
         let info = self.clock.on_sync(at, sync);
