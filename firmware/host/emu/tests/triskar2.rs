@@ -396,11 +396,11 @@ fn the_gateways_hrt_setpoints_start_at_their_slot_boundaries_with_the_f407s_lead
     r.sim.run_until(2 * S);
     let g = r.board("gateway").unwrap();
     let cycle = CycleConfig { cycle_us: r.robot.bus.cycle_us, ..CycleConfig::DEFAULT };
-    // The F407's slot timer fires its lead (10 µs) before each boundary; its path (11 µs) puts
-    // the frame in the mailbox 1 µs after it. The F103's 23 µs would start it 12 µs early,
+    // The F407's slot timer fires its lead (10 µs) before each boundary; its path (12 µs) puts
+    // the frame in the mailbox 2 µs after it. The F103's 25 µs would start it 13 µs early,
     // in the previous slot.
     let slack_ns = (Mcu::F407.slot_path_us() - u64::from(Mcu::F407.slot_lead_us())) * 1_000;
-    assert_eq!(slack_ns, 1_000);
+    assert_eq!(slack_ns, 2_000);
     let (mut sync_at, mut checked) = (None, 0);
     for e in r.sim.bus().trace() {
         let EventKind::Sent { start_ns, frame, .. } = e.kind else { continue };

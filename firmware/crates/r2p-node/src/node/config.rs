@@ -67,10 +67,10 @@ pub struct SlotPath {
 
 /// The slot path built for the F103's Cortex-M3 (thumbv7m).
 pub const CORTEX_M3_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_719, max_instructions: 1_819 };
+    SlotPath { min_instructions: 1_814, max_instructions: 1_914 };
 /// The slot path built for the F407's Cortex-M4F (thumbv7em, hard float).
 pub const CORTEX_M4_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_724, max_instructions: 1_829 };
+    SlotPath { min_instructions: 1_819, max_instructions: 1_919 };
 
 impl SlotPath {
     /// The slot lead for a core clocked at `sysclk_hz` (µs): the shortest path at one cycle per
@@ -127,8 +127,8 @@ mod tests {
 
     #[test]
     fn each_mcu_leads_by_its_shortest_slot_path_rounded_down() {
-        // 1 719 / 72 = 23.9 µs; 1 724 / 168 = 10.3 µs.
-        assert_eq!(MODULE_SLOT_LEAD_US, 23);
+        // 1 814 / 72 = 25.2 µs; 1 819 / 168 = 10.8 µs.
+        assert_eq!(MODULE_SLOT_LEAD_US, 25);
         assert_eq!(CORTEX_M4_SLOT_PATH.lead_us(168_000_000), 10);
         // Exactly on a microsecond: not rounded.
         let p = SlotPath { min_instructions: 144, max_instructions: 144 };
@@ -138,9 +138,9 @@ mod tests {
 
     #[test]
     fn the_emulated_path_is_the_longest_rounded_up() {
-        // 1 819 / 72 = 25.3 µs; 1 829 / 168 = 10.9 µs.
-        assert_eq!(CORTEX_M3_SLOT_PATH.longest_us(72_000_000), 26);
-        assert_eq!(CORTEX_M4_SLOT_PATH.longest_us(168_000_000), 11);
+        // 1 914 / 72 = 26.6 µs; 1 919 / 168 = 11.4 µs.
+        assert_eq!(CORTEX_M3_SLOT_PATH.longest_us(72_000_000), 27);
+        assert_eq!(CORTEX_M4_SLOT_PATH.longest_us(168_000_000), 12);
         let p = SlotPath { min_instructions: 145, max_instructions: 145 };
         assert_eq!(p.longest_us(72_000_000), 3);
     }
