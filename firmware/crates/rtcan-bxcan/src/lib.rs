@@ -26,12 +26,18 @@ pub mod rx_ring;
 pub mod stamps;
 
 #[cfg(feature = "stm32")]
+#[doc(hidden)]
+pub mod bind;
+#[cfg(feature = "stm32")]
 mod driver;
 #[cfg(feature = "stm32")]
 mod rx_stamp;
 #[cfg(feature = "stm32")]
 mod unused_irq;
 
+#[cfg(feature = "stm32")]
+#[doc(hidden)]
+pub use bind::__private;
 #[cfg(feature = "stm32")]
 pub use driver::BxCan;
 pub use filter_plan::FILTER_BANKS;

@@ -6,22 +6,16 @@
 #![no_main]
 
 use embassy_executor::Spawner;
-use embassy_stm32::can::{
-    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
-};
-use embassy_stm32::peripherals::CAN;
-use embassy_stm32::{bind_interrupts, pac, rcc, time::Hertz, Config};
+use embassy_stm32::can::Can;
+use embassy_stm32::{pac, rcc, time::Hertz, Config};
 use panic_halt as _;
 use rtcan_bxcan::BxCan;
 
 #[path = "../../../shared/footprint_core.rs"]
 mod footprint_core;
 
-bind_interrupts!(struct Irqs {
-    USB_LP_CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN>;
-    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN>;
-    CAN1_SCE => SceInterruptHandler<CAN>;
-    USB_HP_CAN1_TX => TxInterruptHandler<CAN>;
+rtcan_bxcan::bind_bxcan_interrupts!(struct Irqs {
+    can: CAN, rx0: USB_LP_CAN1_RX0, rx1: CAN1_RX1, sce: CAN1_SCE, tx: USB_HP_CAN1_TX;
 });
 
 /// 72 MHz SYSCLK from the 8 MHz crystal; APB1 at 36 MHz clocks bxCAN.

@@ -108,36 +108,10 @@ pub const PARAMS_BASE: u32 = MAP.params.offset;
 #[macro_export]
 macro_rules! bind_can_interrupts {
     (struct $name:ident { $($others:tt)* }) => {
-        $crate::__private::embassy_stm32::bind_interrupts!(struct $name {
-            USB_LP_CAN1_RX0 => $crate::__private::rtcan_bxcan::RxStamp;
-            CAN1_RX1 => $crate::__private::rtcan_bxcan::RxStamp;
-            CAN1_SCE => $crate::__private::rtcan_bxcan::UnusedIrq;
-            USB_HP_CAN1_TX => $crate::__private::rtcan_bxcan::UnusedIrq;
+        $crate::__private::rtcan_bxcan::bind_bxcan_interrupts!(struct $name {
+            can: CAN, rx0: USB_LP_CAN1_RX0, rx1: CAN1_RX1, sce: CAN1_SCE, tx: USB_HP_CAN1_TX;
             $($others)*
         });
-        // SAFETY: embassy-stm32's `Can::new` asks for its handlers; the driver needs none of
-        // them (above): `RxStamp` empties the FIFOs and `UnusedIrq` turns the other two
-        // interrupts off if they fire (nothing calls embassy's `read` or `write`, whose wakers
-        // its handlers would wake).
-        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
-            $crate::__private::embassy_stm32::interrupt::typelevel::USB_LP_CAN1_RX0,
-            $crate::__private::embassy_stm32::can::Rx0InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
-        > for $name {}
-        // SAFETY: as above.
-        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
-            $crate::__private::embassy_stm32::interrupt::typelevel::CAN1_RX1,
-            $crate::__private::embassy_stm32::can::Rx1InterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
-        > for $name {}
-        // SAFETY: as above.
-        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
-            $crate::__private::embassy_stm32::interrupt::typelevel::USB_HP_CAN1_TX,
-            $crate::__private::embassy_stm32::can::TxInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
-        > for $name {}
-        // SAFETY: as above.
-        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
-            $crate::__private::embassy_stm32::interrupt::typelevel::CAN1_SCE,
-            $crate::__private::embassy_stm32::can::SceInterruptHandler<$crate::__private::embassy_stm32::peripherals::CAN>,
-        > for $name {}
     };
 }
 

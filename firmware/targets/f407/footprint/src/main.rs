@@ -5,22 +5,16 @@
 #![no_main]
 
 use embassy_executor::Spawner;
-use embassy_stm32::can::{
-    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
-};
-use embassy_stm32::peripherals::CAN1;
-use embassy_stm32::{bind_interrupts, pac, rcc, time::Hertz, Config};
+use embassy_stm32::can::Can;
+use embassy_stm32::{pac, rcc, time::Hertz, Config};
 use panic_halt as _;
 use rtcan_bxcan::BxCan;
 
 #[path = "../../../shared/footprint_core.rs"]
 mod footprint_core;
 
-bind_interrupts!(struct Irqs {
-    CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN1>;
-    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN1>;
-    CAN1_SCE => SceInterruptHandler<CAN1>;
-    CAN1_TX => TxInterruptHandler<CAN1>;
+rtcan_bxcan::bind_bxcan_interrupts!(struct Irqs {
+    can: CAN1, rx0: CAN1_RX0, rx1: CAN1_RX1, sce: CAN1_SCE, tx: CAN1_TX;
 });
 
 /// 168 MHz SYSCLK from the 8 MHz crystal; APB1 at 42 MHz clocks bxCAN.

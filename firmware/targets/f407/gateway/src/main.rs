@@ -33,17 +33,15 @@ use embassy_executor::{InterruptExecutor, Spawner};
 use embassy_futures::select::{select, Either};
 use embassy_net::tcp::TcpSocket;
 use embassy_net::{Ipv4Address, Ipv4Cidr, Stack, StackResources, StaticConfigV4};
-use embassy_stm32::can::{
-    Can, Rx0InterruptHandler, Rx1InterruptHandler, SceInterruptHandler, TxInterruptHandler,
-};
+use embassy_stm32::can::Can;
 use embassy_stm32::eth::{self, Ethernet, GenericPhy, PacketQueue, Sma};
 use embassy_stm32::flash::{Bank1Region1, Blocking, Flash};
 use embassy_stm32::gpio::{Level, Output};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
-use embassy_stm32::peripherals::{CAN1, ETH, ETH_SMA};
+use embassy_stm32::peripherals::{ETH, ETH_SMA};
 use embassy_stm32::rng::{self, Rng};
-use embassy_stm32::{bind_interrupts, pac, rcc, time::Hertz, Config};
+use embassy_stm32::{pac, rcc, time::Hertz, Config};
 use embassy_time::{Delay, Duration, Instant, Ticker, Timer};
 use r2p_app_base as base;
 use r2p_app_gateway::demand::{Feeds, Follower, GATEWAY_FEEDS};
@@ -75,11 +73,10 @@ mod update;
 use slot_timer::SlotTimer;
 use trial::Confirmation;
 
-bind_interrupts!(struct Irqs {
-    CAN1_RX0 => rtcan_bxcan::RxStamp, Rx0InterruptHandler<CAN1>;
-    CAN1_RX1 => rtcan_bxcan::RxStamp, Rx1InterruptHandler<CAN1>;
-    CAN1_SCE => SceInterruptHandler<CAN1>;
-    CAN1_TX => TxInterruptHandler<CAN1>;
+// The bxCAN's receive interrupts to `RxStamp` alone: embassy's handler after it would mask the
+// FIFO's interrupt for good (`rtcan_bxcan::bind`).
+rtcan_bxcan::bind_bxcan_interrupts!(struct Irqs {
+    can: CAN1, rx0: CAN1_RX0, rx1: CAN1_RX1, sce: CAN1_SCE, tx: CAN1_TX;
     ETH => eth::InterruptHandler;
     RNG => rng::InterruptHandler<embassy_stm32::peripherals::RNG>;
 });
