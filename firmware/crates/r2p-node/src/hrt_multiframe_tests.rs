@@ -11,7 +11,7 @@ use rtcan::{Micros, StreamSlots};
 use crate::node::{HrtState, NodeConfig};
 use crate::tdma_tests::{tdma, CYCLE, CYCLE_US};
 use crate::testbus::{run_slots, Bus, TestNode};
-use crate::{NoParams, RemotePublisher, RemoteSubscriber};
+use crate::{Export, Import, NoParams, RemotePublisher, RemoteSubscriber};
 
 /// 20 bytes: with the transfer CRC, three frames.
 type Pose = [u8; 20];
@@ -62,22 +62,40 @@ fn one_slot<const P: usize>(bus: &Bus<P>, nodes: &mut [&mut TestNode<'_>]) {
     run_slots(bus, nodes, until);
 }
 
+/// Declares the publisher `P` of the 3-frame topic with its remote subscriber `OUT` (a queue of
+/// `$q`), and the subscribing module's remote publisher `IN` with a local subscriber `SUB`.
+macro_rules! pose_topics {
+    ($q:literal) => {
+        static T: Topic<'static, Pose, { pool_size(&[$q], 1) }, 1> = Topic::new("pose", [0; 20]);
+        static P: Publisher<'static, Pose> = Publisher::new(&T, EVERY_2);
+        static OUT: RemoteSubscriber<'static, Pose, $q> = RemoteSubscriber::new(&P);
+        static L: Topic<'static, Pose, { pool_size(&[8], 1) }, 1> = Topic::new("pose", [0; 20]);
+        static LP: Publisher<'static, Pose> = Publisher::new(&L, Class::NonRealTime);
+        static IN: RemotePublisher<'static, Pose> = RemotePublisher::new(&LP, &L);
+        static SUB: Subscriber<'static, Pose, 8> = Subscriber::new();
+        T.subscribe(&OUT).unwrap();
+        L.subscribe(&SUB).unwrap();
+    };
+}
+
+/// The master, module A offering `out` and module B importing it (`b_rank`: B may stand by).
+fn rig(
+    out: &'static dyn Export,
+    inp: &'static dyn Import,
+    b_rank: Option<u8>,
+) -> (Bus<3>, TestNode<'static>, TestNode<'static>, TestNode<'static>) {
+    let bus = Bus::<3>::slotted(CYCLE);
+    let (m, mut a, mut b) = (node(1, "psu", Some(0)), node(2, "imu", None), node(3, "b", b_rank));
+    a.export(out).unwrap();
+    b.import(inp).unwrap();
+    (bus, m, a, b)
+}
+
 #[test]
 fn a_three_frame_message_goes_a_frame_per_slot_in_order_and_arrives_whole() {
-    static T: Topic<'static, Pose, { pool_size(&[1], 1) }, 1> = Topic::new("pose", [0; 20]);
-    static P: Publisher<'static, Pose> = Publisher::new(&T, EVERY_2);
-    static OUT: RemoteSubscriber<'static, Pose, 1> = RemoteSubscriber::new(&P);
-    static L: Topic<'static, Pose, { pool_size(&[8], 1) }, 1> = Topic::new("pose", [0; 20]);
-    static LP: Publisher<'static, Pose> = Publisher::new(&L, Class::NonRealTime);
-    static IN: RemotePublisher<'static, Pose> = RemotePublisher::new(&LP, &L);
-    static SUB: Subscriber<'static, Pose, 8> = Subscriber::new();
-    T.subscribe(&OUT).unwrap();
-    L.subscribe(&SUB).unwrap();
+    pose_topics!(1);
 
-    let bus = Bus::<3>::slotted(CYCLE);
-    let (mut m, mut a, mut b) = (node(1, "psu", Some(0)), node(2, "imu", None), node(3, "b", None));
-    a.export(&OUT).unwrap();
-    b.import(&IN).unwrap();
+    let (bus, mut m, mut a, mut b) = rig(&OUT, &IN, None);
     run_slots(&bus, &mut [&mut m, &mut a, &mut b], 200_000);
     let slots = granted(&a);
     assert_eq!(slots.frames(), 3, "one slot per frame: {slots:?}");
@@ -109,20 +127,9 @@ fn a_three_frame_message_goes_a_frame_per_slot_in_order_and_arrives_whole() {
 
 #[test]
 fn a_message_published_between_its_frames_waits_for_the_next_occurrence() {
-    static T: Topic<'static, Pose, { pool_size(&[2], 1) }, 1> = Topic::new("pose", [0; 20]);
-    static P: Publisher<'static, Pose> = Publisher::new(&T, EVERY_2);
-    static OUT: RemoteSubscriber<'static, Pose, 2> = RemoteSubscriber::new(&P);
-    static L: Topic<'static, Pose, { pool_size(&[8], 1) }, 1> = Topic::new("pose", [0; 20]);
-    static LP: Publisher<'static, Pose> = Publisher::new(&L, Class::NonRealTime);
-    static IN: RemotePublisher<'static, Pose> = RemotePublisher::new(&LP, &L);
-    static SUB: Subscriber<'static, Pose, 8> = Subscriber::new();
-    T.subscribe(&OUT).unwrap();
-    L.subscribe(&SUB).unwrap();
+    pose_topics!(2);
 
-    let bus = Bus::<3>::slotted(CYCLE);
-    let (mut m, mut a, mut b) = (node(1, "psu", Some(0)), node(2, "imu", None), node(3, "b", None));
-    a.export(&OUT).unwrap();
-    b.import(&IN).unwrap();
+    let (bus, mut m, mut a, mut b) = rig(&OUT, &IN, None);
     let nodes = &mut [&mut m, &mut a, &mut b];
     run_slots(&bus, nodes, 200_000);
     granted(nodes[1]);
@@ -145,20 +152,9 @@ fn a_message_published_between_its_frames_waits_for_the_next_occurrence() {
 
 #[test]
 fn a_frame_that_cannot_go_out_drops_the_rest_of_its_message() {
-    static T: Topic<'static, Pose, { pool_size(&[2], 1) }, 1> = Topic::new("pose", [0; 20]);
-    static P: Publisher<'static, Pose> = Publisher::new(&T, EVERY_2);
-    static OUT: RemoteSubscriber<'static, Pose, 2> = RemoteSubscriber::new(&P);
-    static L: Topic<'static, Pose, { pool_size(&[8], 1) }, 1> = Topic::new("pose", [0; 20]);
-    static LP: Publisher<'static, Pose> = Publisher::new(&L, Class::NonRealTime);
-    static IN: RemotePublisher<'static, Pose> = RemotePublisher::new(&LP, &L);
-    static SUB: Subscriber<'static, Pose, 8> = Subscriber::new();
-    T.subscribe(&OUT).unwrap();
-    L.subscribe(&SUB).unwrap();
+    pose_topics!(2);
 
-    let bus = Bus::<3>::slotted(CYCLE);
-    let (mut m, mut a, mut b) = (node(1, "psu", Some(0)), node(2, "imu", None), node(3, "b", None));
-    a.export(&OUT).unwrap();
-    b.import(&IN).unwrap();
+    let (bus, mut m, mut a, mut b) = rig(&OUT, &IN, None);
     let nodes = &mut [&mut m, &mut a, &mut b];
     run_slots(&bus, nodes, 200_000);
     granted(nodes[1]);
@@ -186,21 +182,9 @@ fn a_frame_that_cannot_go_out_drops_the_rest_of_its_message() {
 
 #[test]
 fn a_standby_holds_every_frames_slot_and_continues_the_stream_when_the_master_dies() {
-    static T: Topic<'static, Pose, { pool_size(&[1], 1) }, 1> = Topic::new("pose", [0; 20]);
-    static P: Publisher<'static, Pose> = Publisher::new(&T, EVERY_2);
-    static OUT: RemoteSubscriber<'static, Pose, 1> = RemoteSubscriber::new(&P);
-    static L: Topic<'static, Pose, { pool_size(&[8], 1) }, 1> = Topic::new("pose", [0; 20]);
-    static LP: Publisher<'static, Pose> = Publisher::new(&L, Class::NonRealTime);
-    static IN: RemotePublisher<'static, Pose> = RemotePublisher::new(&LP, &L);
-    static SUB: Subscriber<'static, Pose, 8> = Subscriber::new();
-    T.subscribe(&OUT).unwrap();
-    L.subscribe(&SUB).unwrap();
+    pose_topics!(1);
 
-    let bus = Bus::<3>::slotted(CYCLE);
-    let (mut m, mut a, mut b) =
-        (node(1, "psu", Some(0)), node(2, "imu", None), node(3, "gateway", Some(1)));
-    a.export(&OUT).unwrap();
-    b.import(&IN).unwrap();
+    let (bus, mut m, mut a, mut b) = rig(&OUT, &IN, Some(1));
     let nodes = &mut [&mut m, &mut a, &mut b];
     // A hyperperiod of 4 ms syncs after the grants: the standby's copy predicted every mask.
     run_slots(&bus, nodes, 1_400_000);
