@@ -45,7 +45,7 @@ def test_a_stale_constant_is_caught_with_what_to_do(measured, tmp_path, monkeypa
     (tmp_path / "config.rs").write_text(stale)
     monkeypatch.setattr(slotlead, "CONFIG_RS", tmp_path / "config.rs")
     assert slotlead.main() == 1
-    assert "CORTEX_M4_SLOT_PATH gives 27/11 µs: measure it again" in capsys.readouterr().out
+    assert "CORTEX_M4_SLOT_PATH gives 27/12 µs: measure it again" in capsys.readouterr().out
 
 
 def test_a_missing_constant_is_named():
