@@ -32,27 +32,25 @@ macro_rules! bind_bxcan_interrupts {
             $tx => $crate::UnusedIrq;
             $($others)*
         });
-        // SAFETY: embassy-stm32's `Can::new` asks for its handlers; the driver needs none of
-        // them (module documentation of `rtcan_bxcan::bind`).
-        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
-            $crate::__private::embassy_stm32::interrupt::typelevel::$rx0,
-            $crate::__private::embassy_stm32::can::Rx0InterruptHandler<$crate::__private::embassy_stm32::peripherals::$can>,
-        > for $name {}
-        // SAFETY: as above.
-        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
-            $crate::__private::embassy_stm32::interrupt::typelevel::$rx1,
-            $crate::__private::embassy_stm32::can::Rx1InterruptHandler<$crate::__private::embassy_stm32::peripherals::$can>,
-        > for $name {}
-        // SAFETY: as above.
-        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
-            $crate::__private::embassy_stm32::interrupt::typelevel::$tx,
-            $crate::__private::embassy_stm32::can::TxInterruptHandler<$crate::__private::embassy_stm32::peripherals::$can>,
-        > for $name {}
-        // SAFETY: as above.
-        unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
-            $crate::__private::embassy_stm32::interrupt::typelevel::$sce,
-            $crate::__private::embassy_stm32::can::SceInterruptHandler<$crate::__private::embassy_stm32::peripherals::$can>,
-        > for $name {}
+        $crate::__bxcan_bindings!($name, $can,
+            $rx0 => Rx0InterruptHandler, $rx1 => Rx1InterruptHandler,
+            $tx => TxInterruptHandler, $sce => SceInterruptHandler);
+    };
+}
+
+/// The bindings embassy-stm32's `Can::new` asks for, one per interrupt (not an API).
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __bxcan_bindings {
+    ($name:ident, $can:ident, $($irq:ident => $handler:ident),*) => {
+        $(
+            // SAFETY: embassy-stm32's `Can::new` asks for its handlers; the driver needs none
+            // of them (module documentation of `rtcan_bxcan::bind`).
+            unsafe impl $crate::__private::embassy_stm32::interrupt::typelevel::Binding<
+                $crate::__private::embassy_stm32::interrupt::typelevel::$irq,
+                $crate::__private::embassy_stm32::can::$handler<$crate::__private::embassy_stm32::peripherals::$can>,
+            > for $name {}
+        )*
     };
 }
 

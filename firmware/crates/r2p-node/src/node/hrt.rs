@@ -7,7 +7,9 @@ use heapless::String;
 use r2p_management::message::{HrtResult, Message, SubscribeResult};
 use r2p_management::{NodeId, MANAGEMENT_INDEX};
 use rtcan::fragment::{fragments, wire_len};
+use rtcan::frame::MAX_PAYLOAD;
 use rtcan::schedule::{Reject, MAX_HRT_FRAMES};
+use rtcan::transfer_crc::CRC_LEN;
 use rtcan::{CanController, Frame, FrameId, Laxity, MessageId, Micros, Period, Phase, StreamSlots};
 
 use super::stats::bump;
@@ -21,7 +23,7 @@ use rtcan::Scheduler;
 pub const MASTER_STREAMS: usize = 16;
 
 /// The longest HRT message: [`MAX_HRT_FRAMES`] frames less the transfer CRC.
-pub const MAX_HRT_MESSAGE: usize = 8 * MAX_HRT_FRAMES as usize - 2;
+pub const MAX_HRT_MESSAGE: usize = MAX_PAYLOAD * MAX_HRT_FRAMES as usize - CRC_LEN;
 
 /// Bytes of an HRT message on the wire (payload and transfer CRC).
 const HRT_WIRE_MAX: usize = wire_len(MAX_HRT_MESSAGE);
