@@ -194,6 +194,16 @@ fn only_a_grant_that_answers_the_request_with_a_slot_of_the_cycle_is_taken() {
     run_slots(&bus, &mut [&mut m, &mut a, &mut b], until);
     let phase = granted(&a, 0);
     assert!(phase.offset < 2 && (1..CYCLE.slots).contains(&phase.slot), "{phase:?}");
+    // Granted: the beacon repeating its grant is taken silently; a grant of a slot it does not
+    // hold is counted, and the reservation stays.
+    let other = if phase.slot == 1 { 2 } else { 1 };
+    let unexpected = a.stats().unexpected;
+    inject(&bus, master, &grant(2, phase.offset, phase.slot));
+    inject(&bus, master, &grant(2, phase.offset, other));
+    let until = bus.now.get() + step;
+    run_slots(&bus, &mut [&mut m, &mut a, &mut b], until);
+    assert_eq!(a.stats().unexpected - unexpected, 1, "only the slot it does not hold");
+    assert_eq!(granted(&a, 0), phase);
 }
 
 #[test]
