@@ -1,6 +1,7 @@
 //! The master reserves a slot only for a stream of the node that asks (docs/rtcan.md, "HRT
 //! registration"): a request for another node's stream, or for a management stream, is
-//! answered `Conflict` and reserves nothing, so no node can take slots in another's name.
+//! answered `Conflict` and reserves nothing, so no node can take slots in another's name, nor
+//! release them.
 
 use r2p_management::message::{HrtResult, Message};
 use r2p_management::NodeId;
@@ -64,4 +65,17 @@ fn the_master_reserves_slots_only_for_the_asking_nodes_own_streams() {
     let (grants, mask) = grants_and_mask(&bus);
     assert_eq!(grants, [(own.0, HrtResult::Ok)]);
     assert_eq!((mask & !empty).count_ones(), 1, "one slot reserved");
+
+    // A release (period 0) from another node leaves the reservation; its owner's frees it.
+    let release = Message::HrtRequest { message_id: own.0, period_cycles: 0, frames: 1 };
+    inject(&bus, other.get(), &release);
+    let until = bus.now.get() + 3 * CYCLE_US;
+    run_slots(&bus, &mut [&mut m], until);
+    assert_eq!(grants_and_mask(&bus).1, mask, "not released in another's name");
+    assert_eq!(m.stats().hrt_released, 0);
+    inject(&bus, asker.get(), &release);
+    let until = bus.now.get() + 3 * CYCLE_US;
+    run_slots(&bus, &mut [&mut m], until);
+    assert_eq!(grants_and_mask(&bus).1, empty, "released by its owner");
+    assert_eq!(m.stats().hrt_released, 1);
 }
