@@ -123,6 +123,9 @@ pub struct SlotTx<T> {
     policy: FreeSlots,
     slots: u8,
     frame_us: Micros,
+    /// Fitted windows ([`SlotTx::fitted`]): the bit rate, to time each frame by its length.
+    #[cfg(feature = "fitted-windows")]
+    fitted: Option<u32>,
     slotted: [Option<(Slotted<T>, FrameId)>; SLOTTED_MAX],
     queued: [Option<(Ticket, FrameId)>; QUEUED_MAX],
     window: Option<Window>,
@@ -141,6 +144,8 @@ impl<T: Copy> SlotTx<T> {
             policy,
             slots: cycle.slots,
             frame_us: cycle.frame_us() as Micros,
+            #[cfg(feature = "fitted-windows")]
+            fitted: None,
             slotted: [None; SLOTTED_MAX],
             queued: [None; QUEUED_MAX],
             window: None,
@@ -148,6 +153,14 @@ impl<T: Copy> SlotTx<T> {
             draining: false,
             mode: None,
         }
+    }
+
+    /// Merged windows take the queue's most urgent frames that still fit in what remains of
+    /// the window, each withdrawn at its own latest start (feature `fitted-windows`).
+    #[cfg(feature = "fitted-windows")]
+    pub const fn fitted(mut self, cycle: &CycleConfig) -> Self {
+        self.fitted = Some(cycle.bit_rate);
+        self
     }
 
     /// The free-slot policy.
@@ -230,8 +243,35 @@ impl<T: Copy> SlotTx<T> {
                 |d| matches!(d, Done::Queued { ticket, outcome: TxOutcome::Sent, .. } if *ticket == t),
             )
         };
+        #[cfg(feature = "fitted-windows")]
+        let end = self.window.map_or(now, |w| w.end);
+        #[cfg(feature = "fitted-windows")]
+        let mut blocked = Blocked::default();
+        #[cfg(feature = "fitted-windows")]
+        let mut next = tx
+            .upcoming(now)
+            .filter(|&(t, _)| !sent(t))
+            .filter(|(_, f)| blocked.admits(f, self.fits(now, end, f)));
+        #[cfg(not(feature = "fitted-windows"))]
         let mut next = tx.upcoming(now).filter(|&(t, _)| !sent(t));
         self.queued().all(|q| next.next().is_some_and(|(t, f)| q == (t, f.id())))
+    }
+
+    /// A frame's own worst-case time on the bus, intermission included (µs, rounded up);
+    /// a worst-case frame's unless the windows are fitted.
+    #[cfg(feature = "fitted-windows")]
+    fn frame_time(&self, frame: &Frame) -> Micros {
+        let Some(bit_rate) = self.fitted else { return self.frame_us };
+        let bits = rtcan::cycle::frame_bits(frame.payload().len());
+        (u64::from(bits) * 1_000_000).div_ceil(u64::from(bit_rate)) as Micros
+    }
+
+    /// True if `frame` may be loaded at `now` for a window ending at `end`: its latest start is
+    /// still ahead, so the guard's timer can withdraw it if the bus stays busy until then
+    /// (always, unless the windows are fitted: the window's guard decides).
+    #[cfg(feature = "fitted-windows")]
+    fn fits(&self, now: Micros, end: Micros, frame: &Frame) -> bool {
+        self.fitted.is_none() || now + self.frame_time(frame) < end
     }
 
     /// Takes the controller's results into `done` from index `n`; returns the next index.
@@ -323,7 +363,17 @@ impl<T: Copy> SlotTx<T> {
         can: &mut C,
         tx: &TxQueue<N>,
     ) -> bool {
+        #[cfg(not(feature = "fitted-windows"))]
         let guard = end.saturating_sub(self.frame_us);
+        // Each frame's own latest start; the window's guard is the earliest of those loaded.
+        #[cfg(feature = "fitted-windows")]
+        let mut guard = match (self.fitted, self.window) {
+            (None, _) => end.saturating_sub(self.frame_us),
+            (Some(_), Some(w)) if self.has_queued() => w.guard,
+            (Some(_), _) => end,
+        };
+        #[cfg(feature = "fitted-windows")]
+        let mut blocked = Blocked::default();
         let other_window = self.window.is_some_and(|w| w.end != end);
         if now >= guard || (self.has_queued() && (other_window || self.draining)) {
             return false;
@@ -341,6 +391,10 @@ impl<T: Copy> SlotTx<T> {
             if loaded == depth {
                 break;
             }
+            #[cfg(feature = "fitted-windows")]
+            if !blocked.admits(&frame, self.fits(now, end, &frame)) {
+                continue;
+            }
             if self.queued().any(|(t, _)| t == ticket) {
                 continue;
             }
@@ -355,6 +409,10 @@ impl<T: Copy> SlotTx<T> {
             }
             self.queued[loaded] = Some((ticket, frame.id()));
             loaded += 1;
+            #[cfg(feature = "fitted-windows")]
+            if self.fitted.is_some() {
+                guard = guard.min(end - self.frame_time(&frame));
+            }
         }
         if loaded == first {
             return false;
@@ -362,6 +420,10 @@ impl<T: Copy> SlotTx<T> {
         if first == 0 {
             self.window = Some(Window { end, guard });
             self.late = false;
+        }
+        #[cfg(feature = "fitted-windows")]
+        if let Some(w) = &mut self.window {
+            w.guard = guard;
         }
         true
     }
@@ -373,5 +435,33 @@ impl<T: Copy> SlotTx<T> {
             Some(w) if self.has_queued() && now < w.guard && w.guard < boundary => w.guard,
             _ => boundary,
         }
+    }
+}
+
+/// The messages a fitted window passes over: a frame that does not fit holds back the frames
+/// of its message behind it (fragments go in order), and a node holding back more messages
+/// than this loads nothing further.
+#[cfg(feature = "fitted-windows")]
+#[derive(Default)]
+struct Blocked {
+    messages: [Option<rtcan::MessageId>; 4],
+    full: bool,
+}
+
+#[cfg(feature = "fitted-windows")]
+impl Blocked {
+    /// True if `frame` may be loaded: it fits, and no frame of its message was passed over.
+    fn admits(&mut self, frame: &Frame, fits: bool) -> bool {
+        let message = frame.id().message;
+        if self.full || self.messages.contains(&Some(message)) {
+            return false;
+        }
+        if !fits {
+            match self.messages.iter_mut().find(|m| m.is_none()) {
+                Some(free) => *free = Some(message),
+                None => self.full = true,
+            }
+        }
+        fits
     }
 }

@@ -54,6 +54,14 @@ pub const INTERFRAME_BITS: u32 = 3;
 pub const WORST_CASE_FRAME_BITS: u32 =
     STUFFABLE_BITS + MAX_STUFF_BITS + FRAME_TAIL_BITS + INTERFRAME_BITS;
 
+/// Worst-case bit times of an extended data frame with `len` data bytes plus interframe space:
+/// its stuffable bits, ⌊(stuffable − 1)/4⌋ stuff bits, the tail and the intermission.
+/// `frame_bits(8)` is [`WORST_CASE_FRAME_BITS`].
+pub const fn frame_bits(len: usize) -> u32 {
+    let stuffable = STUFFABLE_BITS - 64 + 8 * len as u32;
+    stuffable + (stuffable - 1) / 4 + FRAME_TAIL_BITS + INTERFRAME_BITS
+}
+
 /// Consecutive syncs a node may miss while the master is alive (fault hypothesis). A node
 /// free-runs through that many missing syncs and keeps sending HRT frames.
 pub const MAX_SYNC_LOSS: u32 = 2;
@@ -502,6 +510,8 @@ pub(crate) mod tests {
             assert_eq!(c.slot_us(), 166);
             assert_eq!(c.slot_bits(), 166);
             assert_eq!(c.frame_us(), 160);
+            assert_eq!(frame_bits(8), WORST_CASE_FRAME_BITS);
+            assert_eq!(frame_bits(0), 80); // 54 stuffable, 13 stuff bits, tail, intermission
             assert_eq!(c.slot_offset_us(1), 167);
             assert_eq!(c.slot_offset_us(60), 10_000);
         }

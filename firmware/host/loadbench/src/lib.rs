@@ -20,6 +20,7 @@ pub mod record;
 pub mod rtcan_node;
 pub mod run;
 pub mod setup;
+pub mod timeline;
 pub mod traffic;
 
 use serde::Serialize;
@@ -68,13 +69,10 @@ pub struct Point {
 /// reservation's owner must not start earlier than that after this one's worst-case end.
 pub const RESERVATION_GUARD_BITS: u32 = 3;
 
-/// Bit times of an extended data frame with `len` data bytes in the worst case: its stuffable
-/// bits, ⌊(stuffable − 1)/4⌋ stuff bits (docs/rtcan.md, "Slot length"), the tail and the
-/// intermission. 160 for 8 bytes: `rtcan::cycle::WORST_CASE_FRAME_BITS`.
+/// Bit times of an extended data frame with `len` data bytes in the worst case
+/// ([`rtcan::cycle::frame_bits`]). 160 for 8 bytes: `rtcan::cycle::WORST_CASE_FRAME_BITS`.
 pub const fn worst_case_frame_bits(len: usize) -> u32 {
-    use rtcan::cycle::{FRAME_TAIL_BITS, INTERFRAME_BITS, STUFFABLE_BITS};
-    let stuffable = STUFFABLE_BITS - 64 + 8 * len as u32;
-    stuffable + (stuffable - 1) / 4 + FRAME_TAIL_BITS + INTERFRAME_BITS
+    rtcan::cycle::frame_bits(len)
 }
 
 /// Generates the traffic of `setup` and runs it under each of `policies`.

@@ -15,8 +15,9 @@ const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L
   --seconds S     measured virtual time per load point (default 10)
   --loads ...     offered loads as fractions of 1 Mbit/s (default 0.10,0.15,...,0.95)
   --policies ...  rtcan (the node runtime's default), rtcan_oneshot (one one-shot frame per
-                  free slot), rtcan_merged (merged free-slot windows), fixed (default: rtcan,
-                  the free-slot policy rtcan does not use, fixed)
+                  free slot), rtcan_merged (merged free-slot windows), rtcan_framed (what-if:
+                  frame-sized reservations in one block, fitted windows), fixed (default:
+                  rtcan, the free-slot policy rtcan does not use, fixed)
   --mix H,S       HRT and SRT shares of the offered load, NRT the rest (default 0.3,0.5)
   --laxity E:T    SRT laxity encoding, log or linear, tick T µs (default log:100)
 ";

@@ -68,7 +68,8 @@ pub struct Report {
     pub hrt_on_time: f64,
     /// RTCAN: share sent entirely inside their reserved slot (fixed priority: none).
     pub hrt_in_slot: Option<f64>,
-    /// Largest |start of frame − nominal start| (slot start; release for fixed priority).
+    /// Largest |start of frame − nominal start| (slot start, or the frame-sized reservation's;
+    /// release for fixed priority).
     pub hrt_jitter_max_us: f64,
     /// 99th percentile of the same.
     pub hrt_jitter_p99_us: f64,
@@ -117,7 +118,7 @@ pub fn report(setup: &Setup, traffic: &Traffic, run: &Run) -> Report {
     let (mut srt, mut srt_missed) = (0u64, 0u64);
     let mut latency = Vec::new();
     let (mut nrt, mut nrt_done) = (0u64, 0u64);
-    for (m, d) in traffic.messages.iter().zip(&del) {
+    for (i, (m, d)) in traffic.messages.iter().zip(&del).enumerate() {
         let stream = &traffic.streams[usize::from(m.stream)];
         let release_ns = m.release_us * 1_000;
         let delivered = d.frames == m.frames;
@@ -128,11 +129,14 @@ pub fn report(setup: &Setup, traffic: &Traffic, run: &Run) -> Report {
                 hrt += 1;
                 hrt_missed += u64::from(!on_time);
                 if delivered {
-                    jitter.push(d.first_start_ns.abs_diff(release_ns) as f64 / 1e3);
-                    let slot_end = u64::from(setup.cycle.slot_offset_us(phase.slot + 1))
+                    let grid_end = u64::from(setup.cycle.slot_offset_us(phase.slot + 1))
                         + u64::from(m.cycle) * u64::from(cycle_us);
-                    in_slot +=
-                        u64::from(d.first_start_ns >= release_ns && d.end_ns <= slot_end * 1_000);
+                    let (due_ns, end_us) = match &run.reservations {
+                        Some(r) => (r[i].0 * 1_000, r[i].1),
+                        None => (release_ns, grid_end),
+                    };
+                    jitter.push(d.first_start_ns.abs_diff(due_ns) as f64 / 1e3);
+                    in_slot += u64::from(d.first_start_ns >= due_ns && d.end_ns <= end_us * 1_000);
                 }
             }
             Kind::Srt { .. } => {

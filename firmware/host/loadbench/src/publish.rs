@@ -69,6 +69,11 @@ impl Publishers {
         }
     }
 
+    /// When the next message is released, µs (none left: `None`).
+    pub fn next_release(&self, traffic: &Traffic) -> Option<u64> {
+        self.releases.front().map(|&m| traffic.messages[m as usize].release_us)
+    }
+
     /// Moves whole messages into the transmit queue while `free` frames allow: `push(m)` queues
     /// message `m`; SRT messages whose deadline is at or before `now_us` go to `lost`. NRT
     /// messages leave half the queue free for SRT ones, as the node runtime's `drain_exports`

@@ -30,6 +30,7 @@ use rtcan::{
 use crate::publish::Publishers;
 use crate::record::{Carried, Counters, Sent};
 use crate::setup::{Setup, TX_QUEUE};
+use crate::timeline::Timeline;
 use crate::traffic::{Kind, Traffic};
 
 #[derive(Clone, Copy, Debug)]
@@ -58,6 +59,10 @@ pub struct RtcanNode<'t> {
     queued: Vec<VecDeque<u32>>,
     /// The next slot boundary.
     next_slot: Micros,
+    /// What-if: reservations as long as their frames ([`Timeline`]); windows between them.
+    timeline: Option<Timeline>,
+    /// When the node reacts to the last bus event or release (framed what-if).
+    reaction: Option<Micros>,
     /// When the node's timer fires next: the next slot boundary or a loaded frame's guard.
     wake_at: Micros,
     /// Frames this node's port sent, in order.
@@ -65,6 +70,10 @@ pub struct RtcanNode<'t> {
     /// What the node counted.
     pub counters: Counters,
 }
+
+/// The framed what-if's reaction time: from a frame's end (or a release) to the node's next
+/// frames in its mailboxes, the longest slot path of an F103 module (as the emulator takes it).
+pub const REACTION_US: Micros = r2p_node::CORTEX_M3_SLOT_PATH.longest_us(72_000_000) as Micros;
 
 /// Message ID → stream index.
 fn stream_of(message: MessageId) -> usize {
@@ -79,6 +88,7 @@ impl<'t> RtcanNode<'t> {
         index: usize,
         mut can: SimPort,
         free_slots: FreeSlots,
+        timeline: Option<Timeline>,
     ) -> Self {
         let master = (index == 0).then_some(Master { cycle: 0, next_sync: 0 });
         // Slaves hear syncs only (laxity 0, fragment 0, message ID < 0x100); the master nothing.
@@ -105,21 +115,33 @@ impl<'t> RtcanNode<'t> {
             clock: SlotClock::new(setup.cycle),
             tx: TxQueue::new(setup.laxity),
             master,
-            slot_tx: SlotTx::new(&setup.cycle, free_slots),
+            slot_tx: match timeline {
+                Some(_) => SlotTx::new(&setup.cycle, free_slots).fitted(&setup.cycle),
+                None => SlotTx::new(&setup.cycle, free_slots),
+            },
             loaded: Vec::new(),
             publishers: Publishers::new(traffic, setup, index, |s| !is_hrt(s)),
             hrt,
             queued: vec![VecDeque::new(); traffic.streams.len()],
             next_slot: 0,
+            timeline,
+            reaction: None,
             wake_at: 0,
             sent: Vec::new(),
             counters: Counters::default(),
         }
     }
 
-    /// When the node's timer fires next (`Node::next_slot_at`).
+    /// When the node's timer fires next (`Node::next_slot_at`), or it reacts to a bus event.
     pub fn next_wake(&self) -> Micros {
-        self.wake_at
+        self.reaction.map_or(self.wake_at, |r| r.min(self.wake_at))
+    }
+
+    /// A frame started or ended on the bus at `now` (framed what-if): the node's interrupt
+    /// runs its transmit path [`REACTION_US`] later. Its latest-start timer does not wait.
+    pub fn on_bus_event(&mut self, now: Micros) {
+        let at = now + REACTION_US;
+        self.reaction = Some(self.reaction.map_or(at, |r| r.min(at)));
     }
 
     /// The node's timer at `now`: a loaded frame's guard, a slot boundary, or both.
@@ -127,6 +149,11 @@ impl<'t> RtcanNode<'t> {
         self.counters.activations += 1;
         if self.slot_tx.at_guard(now) {
             self.slot_tx.on_guard(&mut self.can);
+        }
+        if self.timeline.is_some() {
+            self.reaction = self.reaction.filter(|&r| r > now);
+            self.framed_tick(now);
+            return;
         }
         if now >= self.next_slot {
             self.slot_tick(now);
@@ -183,6 +210,86 @@ impl<'t> RtcanNode<'t> {
             }
             ClockState::Unsynced | ClockState::Lost => {}
         }
+    }
+
+    /// The what-if's activation ([`Timeline`]): the same steps as [`Self::slot_tick`], at
+    /// reservation starts and ends, releases and bus events instead of slot boundaries. In a
+    /// reservation: its HRT frame at its start; between reservations: the queue's frames for
+    /// the window up to the next one.
+    fn framed_tick(&mut self, now: Micros) {
+        for done in self.slot_tx.settle(now, &mut self.can, &self.tx).into_iter().flatten() {
+            self.on_done(done);
+        }
+        while let Some(r) = self.can.try_receive() {
+            if let (None, Ok(sync)) = (self.master, SyncFrame::from_frame(&r.frame)) {
+                let first = self.clock.state(r.at) == ClockState::Unsynced;
+                if !self.clock.on_sync(r.at, &sync).continuous && !first {
+                    self.counters.resyncs += 1;
+                }
+            }
+        }
+        self.tick(now);
+        let slot_us = Micros::from(self.setup.cycle.slot_us().max(1));
+        let mut next = now + slot_us;
+        if let Some(mut m) = self.master {
+            if now >= m.next_sync {
+                let mask = self.traffic.mask(m.cycle.wrapping_add(1));
+                let sync = SyncFrame::new(m.cycle, mask, false);
+                if self.slot_tx.load_slotted(&mut self.can, Slotted::Sync, &sync.to_frame()) {
+                    self.clock.on_sync(now, &sync);
+                }
+                let cycle_us = Micros::from(self.setup.cycle.cycle_us);
+                m.cycle = m.cycle.wrapping_add(1);
+                m.next_sync += cycle_us;
+                if m.next_sync <= now {
+                    m.next_sync = now + cycle_us;
+                }
+                self.master = Some(m);
+            }
+            next = next.min(m.next_sync);
+        }
+        if let ClockState::Running(p) = self.clock.state(now) {
+            let timeline = self.timeline.as_ref().expect("framed");
+            let (Some(c0), Some(c1)) = (
+                self.clock.slot_start(p.cycle, 0),
+                self.clock.slot_start(p.cycle, self.setup.cycle.slots),
+            ) else {
+                self.wake_at = self.slot_tx.next_wake(now, next);
+                return;
+            };
+            let reservations = timeline.of(self.clock.mask(p.cycle));
+            let at = |us: u32| c0 + Micros::from(us);
+            let inside =
+                reservations.iter().find(|r| (at(r.start_us)..at(r.end_us)).contains(&now));
+            match inside {
+                Some(r) if r.slot != SYNC_SLOT && now == at(r.start_us) => {
+                    self.send_hrt(p.cycle, r.slot);
+                }
+                Some(_) => {}
+                None => {
+                    let end = reservations
+                        .iter()
+                        .map(|r| at(r.start_us))
+                        .find(|&t| t > now)
+                        .unwrap_or(c1);
+                    if self.slot_tx.load_queued(now, end, &mut self.can, &self.tx) {
+                        self.note_loaded(now);
+                    }
+                }
+            }
+            let boundary = reservations
+                .iter()
+                .flat_map(|r| [at(r.start_us), at(r.end_us)])
+                .chain([c1])
+                .filter(|&t| t > now)
+                .min()
+                .unwrap_or(c1);
+            next = next.min(boundary);
+        }
+        if let Some(r) = self.publishers.next_release(self.traffic) {
+            next = next.min((r + REACTION_US).max(now + 1));
+        }
+        self.wake_at = self.slot_tx.next_wake(now, next);
     }
 
     /// Records which message and fragment each newly loaded frame carries: the queue's frames

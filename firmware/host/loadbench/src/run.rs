@@ -8,7 +8,8 @@ use crate::fixed_node::FixedNode;
 use crate::record::{Counters, Sent};
 use crate::rtcan_node::RtcanNode;
 use crate::setup::Setup;
-use crate::traffic::Traffic;
+use crate::timeline::Timeline;
+use crate::traffic::{Kind, Traffic};
 
 /// How the nodes get frames onto the bus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -19,19 +20,32 @@ pub enum Policy {
     RtcanOneShot,
     /// RTCAN, free slots merged into windows with retransmission (`FreeSlots::Merged`).
     RtcanMerged,
+    /// What-if (issue 22's capacity): reservations as long as their frames, laid out as one
+    /// block after the sync ([`crate::timeline`]); the rest of the cycle one merged window, in
+    /// which each node loads the most urgent frames that still fit (`SlotTx::fitted`), at
+    /// release and whenever one of its frames ends, not only at slot boundaries.
+    RtcanFramed,
     /// Plain fixed-priority CAN, rate-monotonic identifiers: the baseline.
     Fixed,
 }
 
 impl Policy {
     /// Every policy, in report order.
-    pub const ALL: [Policy; 4] =
-        [Policy::Rtcan, Policy::RtcanOneShot, Policy::RtcanMerged, Policy::Fixed];
+    pub const ALL: [Policy; 5] = [
+        Policy::Rtcan,
+        Policy::RtcanOneShot,
+        Policy::RtcanMerged,
+        Policy::RtcanFramed,
+        Policy::Fixed,
+    ];
 
     /// The sweep's default: the node runtime's default, its other free-slot policy, and the
     /// baseline (the policy equal to the default is left out: it would repeat `rtcan`).
     pub fn defaults() -> Vec<Policy> {
-        let repeats = |p: Policy| p != Policy::Rtcan && p.free_slots() == Some(DEFAULT_FREE_SLOTS);
+        let repeats = |p: Policy| {
+            p == Policy::RtcanFramed
+                || (p != Policy::Rtcan && p.free_slots() == Some(DEFAULT_FREE_SLOTS))
+        };
         Self::ALL.into_iter().filter(|&p| !repeats(p)).collect()
     }
 
@@ -41,6 +55,7 @@ impl Policy {
             Policy::Rtcan => "rtcan",
             Policy::RtcanOneShot => "rtcan_oneshot",
             Policy::RtcanMerged => "rtcan_merged",
+            Policy::RtcanFramed => "rtcan_framed",
             Policy::Fixed => "fixed",
         }
     }
@@ -55,7 +70,7 @@ impl Policy {
         match self {
             Policy::Rtcan => Some(DEFAULT_FREE_SLOTS),
             Policy::RtcanOneShot => Some(FreeSlots::Single),
-            Policy::RtcanMerged => Some(FreeSlots::Merged),
+            Policy::RtcanMerged | Policy::RtcanFramed => Some(FreeSlots::Merged),
             Policy::Fixed => None,
         }
     }
@@ -76,6 +91,10 @@ pub struct Run {
     pub counters: Counters,
     /// Simulation events: node activations, frames on the bus (start and end), releases.
     pub events: u64,
+    /// Frame-sized reservations ([`Policy::RtcanFramed`]): per message, its HRT reservation's
+    /// start and end, µs (where its frame is due; 0s for other messages). Otherwise HRT
+    /// frames are due at their release, their grid slot's start.
+    pub reservations: Option<Vec<(u64, u64)>>,
 }
 
 /// Runs `policy` over `traffic`.
@@ -85,21 +104,29 @@ pub fn run(setup: &Setup, traffic: &Traffic, policy: Policy) -> Run {
     let stop_ns = setup.stop_us() * 1_000;
     let (sent, counters): (Vec<Vec<Sent>>, Vec<Counters>) = match policy.free_slots() {
         Some(free_slots) => {
+            let framed = policy == Policy::RtcanFramed;
             let mut nodes: Vec<RtcanNode> = (0..setup.nodes)
                 .map(|i| {
                     let port = SimPort::new(bus.port(i), setup.cycle.bit_rate);
-                    RtcanNode::new(traffic, setup, i, port, free_slots)
+                    let timeline = framed.then(|| Timeline::new(traffic, setup.cycle));
+                    RtcanNode::new(traffic, setup, i, port, free_slots, timeline)
                 })
                 .collect();
             loop {
                 // The nodes' slot timers (slot boundaries, latest starts); the bus runs
-                // everything due up to then.
-                let t = nodes.iter().map(|n| n.next_wake() * 1_000).min().expect("nodes");
+                // everything due up to then. Framed: also every frame's start and end on the
+                // bus, which each node's interrupt reacts to (`RtcanNode::on_bus_event`).
+                let timers = nodes.iter().map(|n| n.next_wake() * 1_000).min().expect("nodes");
+                let bus_event = if framed { bus.next_event() } else { None };
+                let t = bus_event.map_or(timers, |b| b.min(timers));
                 if t > stop_ns {
                     break;
                 }
                 bus.advance_to(t);
                 for node in nodes.iter_mut() {
+                    if bus_event == Some(t) {
+                        node.on_bus_event(t / 1_000);
+                    }
                     if node.next_wake() * 1_000 <= t {
                         node.wake(t / 1_000);
                     }
@@ -133,5 +160,22 @@ pub fn run(setup: &Setup, traffic: &Traffic, policy: Policy) -> Run {
     counters.into_iter().for_each(|c| total += c);
     let frames = trace.iter().filter(|e| matches!(e.kind, EventKind::Sent { .. })).count() as u64;
     let events = total.activations + 2 * frames + traffic.messages.len() as u64;
-    Run { policy, trace, sent, counters: total, events }
+    let reservations = (policy == Policy::RtcanFramed).then(|| {
+        let timeline = Timeline::new(traffic, setup.cycle);
+        let cycle_us = u64::from(setup.cycle.cycle_us);
+        traffic
+            .messages
+            .iter()
+            .map(|m| {
+                let Kind::Hrt { phase, .. } = traffic.streams[usize::from(m.stream)].kind else {
+                    return (0, 0);
+                };
+                let r = timeline.of(traffic.mask(m.cycle));
+                let r = r.iter().find(|r| r.slot == phase.slot).expect("its slot is reserved");
+                let c0 = u64::from(m.cycle) * cycle_us;
+                (c0 + u64::from(r.start_us), c0 + u64::from(r.end_us))
+            })
+            .collect()
+    });
+    Run { policy, trace, sent, counters: total, events, reservations }
 }

@@ -114,6 +114,8 @@ pub struct Traffic {
     pub messages: Vec<Message>,
     /// The master's calendar with every HRT stream admitted.
     pub scheduler: Scheduler<MAX_HRT_STREAMS>,
+    /// HRT streams' payload length, bytes (streams `0..hrt_len.len()` are the HRT ones).
+    pub hrt_len: Vec<usize>,
     /// Bits offered in the window.
     pub offered_bits: u64,
 }
@@ -324,7 +326,13 @@ impl Traffic {
         let offered_bits = b.nrt_fill(target);
         let mut messages = b.messages;
         messages.sort_by_key(|m| (m.release_us, m.stream));
-        Ok(Self { streams: b.streams, messages, scheduler: b.scheduler, offered_bits })
+        Ok(Self {
+            streams: b.streams,
+            messages,
+            scheduler: b.scheduler,
+            hrt_len: b.hrt_len,
+            offered_bits,
+        })
     }
 
     /// The reservations the master announces for cycle `cycle` (sync slot included).

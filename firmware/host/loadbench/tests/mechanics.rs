@@ -299,3 +299,66 @@ fn frame_sized_reservations_would_leave_only_their_frames_worst_case_idle() {
     );
     assert!(p.frame_sized_ceiling < 1.0, "{}", p.frame_sized_ceiling);
 }
+
+#[test]
+fn frame_sized_reservations_keep_hrt_frames_on_time_and_strictly_periodic() {
+    // Issue 22's capacity what-if (`rtcan_framed`): at 95 % the free window is full up to each
+    // reservation, and every HRT frame still starts at its reservation's start and ends inside
+    // it; each stream's frames start at one offset in the cycle, every cycle.
+    let setup = short(0.95, 8, 500_000);
+    let traffic = Traffic::generate(&setup).unwrap();
+    let r = run(&setup, &traffic, Policy::RtcanFramed);
+    let report = r2p_loadbench::metrics::report(&setup, &traffic, &r);
+    assert_eq!(report.hrt_missed, 0);
+    assert_eq!(report.hrt_in_slot, Some(1.0));
+    assert_eq!(report.hrt_jitter_max_us, 0.0);
+    let due = r.reservations.as_ref().expect("framed runs report their reservations");
+    let cycle_us = u64::from(setup.cycle.cycle_us);
+    let mut offset = std::collections::HashMap::new();
+    for (m, d) in traffic.messages.iter().zip(deliveries(&traffic, &r)) {
+        if let Kind::Hrt { .. } = traffic.streams[usize::from(m.stream)].kind {
+            let at = d.first_start_ns / 1_000 % cycle_us;
+            assert_eq!(*offset.entry(m.stream).or_insert(at), at, "stream {} moved", m.stream);
+            let i = traffic.messages.iter().position(|x| std::ptr::eq(x, m)).unwrap();
+            assert!(due[i].0 % cycle_us == at && due[i].1 > due[i].0);
+        }
+    }
+    assert!(offset.len() > 10, "{} HRT streams", offset.len());
+}
+
+#[test]
+fn framed_windows_end_before_every_reservation_and_carry_past_the_grids_ceiling() {
+    let setup = short(0.95, 6, 500_000);
+    let traffic = Traffic::generate(&setup).unwrap();
+    let r = run(&setup, &traffic, Policy::RtcanFramed);
+    let timeline = r2p_loadbench::timeline::Timeline::new(&traffic, setup.cycle);
+    let cycle_us = u64::from(setup.cycle.cycle_us);
+    // Every SRT/NRT frame, intermission included, lies between two reservations of its cycle.
+    let mut free_frames = 0;
+    for e in &r.trace {
+        let EventKind::Sent { start_ns, frame, .. } = e.kind else { continue };
+        if SyncFrame::from_frame(&frame).is_ok() || frame.id().laxity == Laxity::HRT {
+            continue;
+        }
+        let (start, idle) = (start_ns / 1_000, e.time_ns / 1_000 + u64::from(INTERMISSION_BITS));
+        let cycle = start / cycle_us;
+        for c in [cycle, cycle + 1] {
+            for res in timeline.of(traffic.mask(c as u32)) {
+                let (a, b) =
+                    (c * cycle_us + u64::from(res.start_us), c * cycle_us + u64::from(res.end_us));
+                assert!(idle <= a || start >= b, "{frame:?} at {start}–{idle} µs overlaps {a}–{b}");
+            }
+        }
+        free_frames += 1;
+    }
+    assert!(free_frames > 1_000, "{free_frames}");
+    // What no layout of whole slots can carry (docs/rtcan.md, "Capacity").
+    let p = point(&setup, &[Policy::RtcanFramed]).unwrap();
+    assert!(
+        p.reports[0].utilisation > p.grid_ceiling + 0.01,
+        "{:?} {}",
+        p.reports[0],
+        p.grid_ceiling
+    );
+    assert!(p.reports[0].utilisation <= p.frame_sized_ceiling);
+}
