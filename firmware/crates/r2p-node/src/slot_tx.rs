@@ -262,7 +262,7 @@ impl<T: Copy> SlotTx<T> {
     #[cfg(feature = "fitted-windows")]
     fn frame_time(&self, frame: &Frame) -> Micros {
         let Some(bit_rate) = self.fitted else { return self.frame_us };
-        let bits = rtcan::cycle::frame_bits(frame.payload().len());
+        let bits = rtcan::cycle::frame_bits_of(frame.id().to_raw(), frame.payload().len());
         (u64::from(bits) * 1_000_000).div_ceil(u64::from(bit_rate)) as Micros
     }
 

@@ -62,6 +62,38 @@ pub const fn frame_bits(len: usize) -> u32 {
     stuffable + (stuffable - 1) / 4 + FRAME_TAIL_BITS + INTERFRAME_BITS
 }
 
+/// Bits of an extended data frame from SOF to the DLC, the part its identifier and length fix:
+/// SOF, base ID 11, SRR, IDE, extended ID 18, RTR, r1, r0, DLC 4.
+pub const HEADER_BITS: u32 = 1 + 11 + 1 + 1 + 18 + 1 + 2 + 4;
+
+/// Worst-case bit times of a frame with identifier `raw_id` (29 bits) and `len` data bytes,
+/// intermission included, for a sender that knows the identifier: the header's stuff bits
+/// exactly, then the worst case for the data and CRC after the header's last run of `r` equal
+/// bits — a stuff bit after 5 − `r` more, then one every 4. At most [`frame_bits`]`(len)`.
+pub const fn frame_bits_of(raw_id: u32, len: usize) -> u32 {
+    // The header, first bit at the top: SOF 0, base ID, SRR 1, IDE 1, extended ID, RTR 0,
+    // r1 0, r0 0, DLC.
+    let header: u64 = ((raw_id as u64 >> 18 & 0x7ff) << 27)
+        | (0b11 << 25)
+        | ((raw_id as u64 & 0x3ffff) << 7)
+        | (len as u64 & 0xf);
+    let (mut level, mut run, mut stuff, mut i) = (2u64, 0u32, 0u32, 0);
+    while i < HEADER_BITS {
+        let bit = header >> (HEADER_BITS - 1 - i) & 1;
+        run = if bit == level { run + 1 } else { 1 };
+        level = bit;
+        if run == 5 {
+            stuff += 1;
+            level = bit ^ 1;
+            run = 1;
+        }
+        i += 1;
+    }
+    let rest = 8 * len as u32 + 15;
+    let rest_stuff = if rest >= 5 - run { 1 + (rest - (5 - run)) / 4 } else { 0 };
+    HEADER_BITS + rest + stuff + rest_stuff + FRAME_TAIL_BITS + INTERFRAME_BITS
+}
+
 /// Consecutive syncs a node may miss while the master is alive (fault hypothesis). A node
 /// free-runs through that many missing syncs and keeps sending HRT frames.
 pub const MAX_SYNC_LOSS: u32 = 2;
@@ -512,6 +544,10 @@ pub(crate) mod tests {
             assert_eq!(c.frame_us(), 160);
             assert_eq!(frame_bits(8), WORST_CASE_FRAME_BITS);
             assert_eq!(frame_bits(0), 80); // 54 stuffable, 13 stuff bits, tail, intermission
+            // Identifier 0, 8 bytes: the header's runs of zeros take 6 stuff bits (not the 9 of
+            // the worst header) and end in a run of 3, so data and CRC take at most 20.
+            assert_eq!(frame_bits_of(0, 8), HEADER_BITS + 79 + 6 + 20 + 10 + 3);
+            assert!(frame_bits_of(0x1555_5555, 8) < frame_bits_of(0, 8)); // alternating: none
             assert_eq!(c.slot_offset_us(1), 167);
             assert_eq!(c.slot_offset_us(60), 10_000);
         }

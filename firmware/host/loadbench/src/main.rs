@@ -20,6 +20,7 @@ const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L
                   rtcan, the free-slot policy rtcan does not use, fixed)
   --mix H,S       HRT and SRT shares of the offered load, NRT the rest (default 0.3,0.5)
   --laxity E:T    SRT laxity encoding, log or linear, tick T µs (default log:100)
+  --blocks K      rtcan_framed: blocks of HRT reservations per cycle (default 2)
 ";
 
 struct Args {
@@ -29,6 +30,7 @@ struct Args {
     policies: Vec<Policy>,
     mix: Mix,
     laxity: LaxityEncoding,
+    blocks: u8,
 }
 
 fn parse() -> Result<Args, String> {
@@ -39,6 +41,7 @@ fn parse() -> Result<Args, String> {
         policies: Policy::defaults(),
         mix: Setup::new(0.5, 0).mix,
         laxity: Setup::new(0.5, 0).laxity,
+        blocks: Setup::new(0.5, 0).hrt_blocks,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -81,6 +84,7 @@ fn parse() -> Result<Args, String> {
                 let [hrt, srt] = v[..] else { return Err(bad("give two shares, HRT,SRT")) };
                 a.mix = Mix { hrt, srt };
             }
+            "--blocks" => a.blocks = value.parse().map_err(|_| bad("not a block count"))?,
             "--laxity" => {
                 let (kind, tick) =
                     value.split_once(':').ok_or(bad("write log:TICK or linear:TICK"))?;
@@ -120,6 +124,7 @@ fn main() -> ExitCode {
             duration_us: (args.seconds * 1e6).round() as u64,
             mix: args.mix,
             laxity: args.laxity,
+            hrt_blocks: args.blocks,
             ..Setup::new(load, args.seed)
         };
         let t = Instant::now();

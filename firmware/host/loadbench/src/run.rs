@@ -108,7 +108,8 @@ pub fn run(setup: &Setup, traffic: &Traffic, policy: Policy) -> Run {
             let mut nodes: Vec<RtcanNode> = (0..setup.nodes)
                 .map(|i| {
                     let port = SimPort::new(bus.port(i), setup.cycle.bit_rate);
-                    let timeline = framed.then(|| Timeline::new(traffic, setup.cycle));
+                    let timeline =
+                        framed.then(|| Timeline::new(traffic, setup.cycle, setup.hrt_blocks));
                     RtcanNode::new(traffic, setup, i, port, free_slots, timeline)
                 })
                 .collect();
@@ -161,7 +162,7 @@ pub fn run(setup: &Setup, traffic: &Traffic, policy: Policy) -> Run {
     let frames = trace.iter().filter(|e| matches!(e.kind, EventKind::Sent { .. })).count() as u64;
     let events = total.activations + 2 * frames + traffic.messages.len() as u64;
     let reservations = (policy == Policy::RtcanFramed).then(|| {
-        let timeline = Timeline::new(traffic, setup.cycle);
+        let timeline = Timeline::new(traffic, setup.cycle, setup.hrt_blocks);
         let cycle_us = u64::from(setup.cycle.cycle_us);
         traffic
             .messages

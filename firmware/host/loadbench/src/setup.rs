@@ -29,6 +29,9 @@ pub struct Setup {
     pub cycle: CycleConfig,
     /// Slots the master may reserve for HRT streams (`rtcan::Scheduler` lays them out).
     pub hrt_slots: u8,
+    /// `rtcan_framed` (what-if): blocks the frame-sized reservations are laid out in, evenly
+    /// spaced over the cycle ([`crate::timeline`]).
+    pub hrt_blocks: u8,
     /// SRT laxity encoding (the node runtime's default: logarithmic, 100 µs ticks).
     pub laxity: LaxityEncoding,
     /// Class shares of the offered load.
@@ -60,6 +63,7 @@ impl Setup {
             nodes: 8,
             cycle: CycleConfig { bit_rate: 1_000_000, cycle_us: 5_000, slots: 30 },
             hrt_slots: 15,
+            hrt_blocks: 2,
             laxity: LaxityEncoding::Logarithmic { tick_us: 100 },
             mix: Mix { hrt: 0.3, srt: 0.5 },
             srt_streams_per_node: 4,
@@ -82,6 +86,9 @@ impl Setup {
         self.cycle.validate().map_err(SetupError::Cycle)?;
         if self.hrt_slots == 0 || self.hrt_slots >= self.cycle.slots {
             return Err(SetupError::HrtSlots(self.hrt_slots));
+        }
+        if self.hrt_blocks == 0 || self.hrt_blocks > self.hrt_slots {
+            return Err(SetupError::HrtBlocks(self.hrt_blocks));
         }
         let m = self.mix;
         if !(m.hrt >= 0.0 && m.srt > 0.0 && m.hrt + m.srt <= 1.0) {
@@ -134,6 +141,8 @@ pub enum SetupError {
     Cycle(rtcan::cycle::ConfigError),
     /// HRT slots must be 1 … slots − 1.
     HrtSlots(u8),
+    /// HRT blocks must be 1 … hrt_slots.
+    HrtBlocks(u8),
     /// Class shares must be non-negative, SRT positive, summing to at most 1.
     Mix(Mix),
     /// The deadline range must be positive, ordered and shorter than the drain time.
@@ -153,6 +162,7 @@ impl core::fmt::Display for SetupError {
             Self::HrtSlots(s) => {
                 write!(f, "hrt_slots = {s}: use 1 … slots − 1")
             }
+            Self::HrtBlocks(b) => write!(f, "hrt_blocks = {b}: use 1 … hrt_slots"),
             Self::Mix(m) => write!(f, "class mix {m:?}: shares must be ≥ 0, SRT > 0, sum ≤ 1"),
             Self::Deadlines(d) => {
                 write!(f, "SRT deadlines {d:?} µs: need 0 < low ≤ high < drain time")

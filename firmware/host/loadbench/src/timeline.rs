@@ -1,6 +1,7 @@
 //! Frame-sized reservations, a what-if of docs/rtcan.md "Capacity": where a cycle's sync and
 //! HRT frames would lie if each reservation lasted its own frame's worst case
-//! ([`worst_case_frame_bits`] of the stream's payload length, plus [`RESERVATION_GUARD_BITS`])
+//! ([`rtcan::cycle::frame_bits_of`] the stream's identifier and payload length, plus
+//! [`RESERVATION_GUARD_BITS`])
 //! instead of a whole 166 µs slot, and the calendar's slots were laid out back to back after
 //! the sync as one block.
 //!
@@ -12,11 +13,11 @@
 //! the grants and the calendar beacon would have to carry the length, which the protocol does
 //! not do yet.
 
-use rtcan::cycle::SYNC_SLOT;
-use rtcan::CycleConfig;
+use rtcan::cycle::{SYNC_PAYLOAD_LEN, SYNC_SLOT};
+use rtcan::{CycleConfig, FrameId, Laxity, SyncFrame};
 
 use crate::traffic::{Kind, Traffic};
-use crate::{worst_case_frame_bits, RESERVATION_GUARD_BITS};
+use crate::RESERVATION_GUARD_BITS;
 
 /// One reservation of a cycle, µs from the cycle's start.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,22 +43,33 @@ impl Timeline {
     /// of the streams that share it (streams of period 2 alternate in one slot). A slot's
     /// offset is the same in every cycle, so each stream stays strictly periodic; in a cycle
     /// where a slot's streams do not send, its time is free.
-    pub fn new(traffic: &Traffic, cycle: CycleConfig) -> Self {
-        let us = |len: usize| {
-            let bits = u64::from(worst_case_frame_bits(len) + RESERVATION_GUARD_BITS);
+    pub fn new(traffic: &Traffic, cycle: CycleConfig, blocks: u8) -> Self {
+        let us = |bits: u32| {
+            let bits = u64::from(bits + RESERVATION_GUARD_BITS);
             (bits * 1_000_000).div_ceil(u64::from(cycle.bit_rate)) as u32
         };
         let n = usize::from(cycle.slots);
         let mut len = vec![0u32; n];
         // Per slot, the share of cycles its streams send in, in 256ths.
         let mut used = vec![0u32; n];
-        len[usize::from(SYNC_SLOT)] =
-            us(rtcan::SyncFrame::new(0, 0, false).to_frame().payload().len());
+        // The sync's identifier carries the cycle counter and the sender's rank: the longest.
+        let sync_bits = (0..=u8::MAX)
+            .flat_map(|c| {
+                (0..4).map(move |rank| SyncFrame {
+                    sender: rank,
+                    ..SyncFrame::new(u32::from(c), 0, false)
+                })
+            })
+            .map(|s| rtcan::cycle::frame_bits_of(s.to_frame().id().to_raw(), SYNC_PAYLOAD_LEN))
+            .max()
+            .expect("256 counters");
+        len[usize::from(SYNC_SLOT)] = us(sync_bits);
         used[usize::from(SYNC_SLOT)] = 256;
         for (&bytes, stream) in traffic.hrt_len.iter().zip(&traffic.streams) {
             if let Kind::Hrt { period, phase } = stream.kind {
                 let slot = usize::from(phase.slot);
-                len[slot] = len[slot].max(us(bytes));
+                let id = FrameId { laxity: Laxity::HRT, message: stream.message, fragment: 0 };
+                len[slot] = len[slot].max(us(rtcan::cycle::frame_bits_of(id.to_raw(), bytes)));
                 used[slot] += 256 / period.cycles();
             }
         }
@@ -67,8 +79,11 @@ impl Timeline {
         let mut order: Vec<usize> = (0..n).filter(|&s| len[s] > 0).collect();
         order.sort_by_key(|&s| (std::cmp::Reverse(used[s]), s));
         let mut slots = vec![(0u32, 0u32); n];
+        let (k, total) = (usize::from(blocks), order.len());
         let mut at = 0;
-        for s in order {
+        for (i, s) in order.into_iter().enumerate() {
+            let b = (i * k / total) as u32;
+            at = at.max(b * cycle.cycle_us / k as u32);
             slots[s] = (at, len[s]);
             at += len[s];
         }

@@ -258,6 +258,10 @@ fn a_bad_setup_is_refused_with_the_reason() {
     assert_eq!(e, SetupError::Nodes(1));
     let e = Traffic::generate(&Setup { srt_deadline_us: (5_000, 1_000), ..Setup::new(0.5, 0) });
     assert_eq!(e.unwrap_err(), SetupError::Deadlines((5_000, 1_000)));
+    for blocks in [0, 16] {
+        let e = Traffic::generate(&Setup { hrt_blocks: blocks, ..Setup::new(0.5, 0) });
+        assert_eq!(e.unwrap_err(), SetupError::HrtBlocks(blocks));
+    }
 }
 
 #[test]
@@ -331,7 +335,7 @@ fn framed_windows_end_before_every_reservation_and_carry_past_the_grids_ceiling(
     let setup = short(0.95, 6, 500_000);
     let traffic = Traffic::generate(&setup).unwrap();
     let r = run(&setup, &traffic, Policy::RtcanFramed);
-    let timeline = r2p_loadbench::timeline::Timeline::new(&traffic, setup.cycle);
+    let timeline = r2p_loadbench::timeline::Timeline::new(&traffic, setup.cycle, setup.hrt_blocks);
     let cycle_us = u64::from(setup.cycle.cycle_us);
     // Every SRT/NRT frame, intermission included, lies between two reservations of its cycle.
     let mut free_frames = 0;
@@ -361,4 +365,33 @@ fn framed_windows_end_before_every_reservation_and_carry_past_the_grids_ceiling(
         p.grid_ceiling
     );
     assert!(p.reports[0].utilisation <= p.frame_sized_ceiling);
+}
+
+#[test]
+fn a_reservation_sized_by_its_identifier_holds_every_frame_of_that_identifier() {
+    // `rtcan::cycle::frame_bits_of`: the header's stuffing exactly, the worst case after it.
+    // Every frame the bus carries fits it, and it is never longer than the identifier-blind
+    // worst case (the slot's 160 bits for 8 bytes).
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(22);
+    let mut saved = 0u32;
+    for _ in 0..20_000 {
+        let raw_id = rng.random::<u32>() & 0x1fff_ffff;
+        let len = rng.random_range(0..=8usize);
+        let data: Vec<u8> = (0..len)
+            .map(|_| {
+                if rng.random_bool(0.5) {
+                    rng.random()
+                } else {
+                    [0, 0xff][rng.random_range(0..2)]
+                }
+            })
+            .collect();
+        let bound = rtcan::cycle::frame_bits_of(raw_id, len);
+        let actual = FrameBits::of_raw(raw_id, &data).total();
+        assert!(actual <= bound, "id {raw_id:#x} {data:02x?}: {actual} > {bound}");
+        assert!(bound <= worst_case_frame_bits(len), "id {raw_id:#x} len {len}");
+        saved += worst_case_frame_bits(len) - bound;
+    }
+    assert!(saved > 20_000 * 3, "{saved}"); // a few bits a frame: what the reservation gains
 }
