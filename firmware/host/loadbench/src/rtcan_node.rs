@@ -260,7 +260,7 @@ impl<'t> RtcanNode<'t> {
             let reservations = timeline.of(self.clock.mask(p.cycle));
             let at = |us: u32| c0 + Micros::from(us);
             let inside =
-                reservations.iter().find(|r| (at(r.start_us)..at(r.end_us)).contains(&now));
+                reservations.iter().find(|r| (at(r.start_us)..at(r.free_at_us)).contains(&now));
             match inside {
                 Some(r) if r.slot != SYNC_SLOT && now == at(r.start_us) => {
                     self.send_hrt(p.cycle, r.slot);
@@ -279,7 +279,7 @@ impl<'t> RtcanNode<'t> {
             }
             let boundary = reservations
                 .iter()
-                .flat_map(|r| [at(r.start_us), at(r.end_us)])
+                .flat_map(|r| [at(r.start_us), at(r.free_at_us)])
                 .chain([c1])
                 .filter(|&t| t > now)
                 .min()

@@ -28,7 +28,16 @@ pub struct Reservation {
     pub start_us: u32,
     /// Its frame has ended (worst case, guard included) by here: the next may start.
     pub end_us: u32,
+    /// Free frames may be loaded from here: the end, or — the last reservation of a block —
+    /// [`FOLLOW_US`] after the start, when its frame is on the wire and they go right after it.
+    pub free_at_us: u32,
 }
+
+/// How long after the start of a block's last reservation free frames are loaded: its owner's
+/// one-shot frame has started by then (the clocks agree within a few µs), so they queue behind
+/// it and go out at its actual end instead of its worst case's; if it was not sent, they use
+/// the idle reservation.
+pub const FOLLOW_US: u32 = 10;
 
 /// Where each slot of the calendar lies when reservations are as long as their frames.
 #[derive(Clone, Debug)]
@@ -97,10 +106,16 @@ impl Timeline {
             .filter(|&slot| slot == SYNC_SLOT || mask & (1 << slot) != 0)
             .filter_map(|slot| {
                 let (start_us, len) = self.slots[usize::from(slot)];
-                (len > 0).then_some(Reservation { slot, start_us, end_us: start_us + len })
+                let end_us = start_us + len;
+                (len > 0).then_some(Reservation { slot, start_us, end_us, free_at_us: end_us })
             })
             .collect();
         out.sort_by_key(|r| r.start_us);
+        for i in 0..out.len() {
+            if out.get(i + 1).is_none_or(|next| next.start_us > out[i].end_us) {
+                out[i].free_at_us = out[i].end_us.min(out[i].start_us + FOLLOW_US);
+            }
+        }
         out
     }
 }

@@ -337,7 +337,9 @@ fn framed_windows_end_before_every_reservation_and_carry_past_the_grids_ceiling(
     let r = run(&setup, &traffic, Policy::RtcanFramed);
     let timeline = r2p_loadbench::timeline::Timeline::new(&traffic, setup.cycle, setup.hrt_blocks);
     let cycle_us = u64::from(setup.cycle.cycle_us);
-    // Every SRT/NRT frame, intermission included, lies between two reservations of its cycle.
+    // No SRT/NRT frame, intermission included, runs into a reservation's start, or starts in
+    // a reservation before its owner's frame has (`FOLLOW_US` after its start: only the last
+    // of a block lets free frames follow its frame).
     let mut free_frames = 0;
     for e in &r.trace {
         let EventKind::Sent { start_ns, frame, .. } = e.kind else { continue };
@@ -348,8 +350,10 @@ fn framed_windows_end_before_every_reservation_and_carry_past_the_grids_ceiling(
         let cycle = start / cycle_us;
         for c in [cycle, cycle + 1] {
             for res in timeline.of(traffic.mask(c as u32)) {
-                let (a, b) =
-                    (c * cycle_us + u64::from(res.start_us), c * cycle_us + u64::from(res.end_us));
+                let (a, b) = (
+                    c * cycle_us + u64::from(res.start_us),
+                    c * cycle_us + u64::from(res.free_at_us),
+                );
                 assert!(idle <= a || start >= b, "{frame:?} at {start}–{idle} µs overlaps {a}–{b}");
             }
         }
