@@ -36,13 +36,14 @@ def test_one_report_per_policy_and_load(loadbench):
     points, sim = sweep(*ARGS)
     assert [p["load"] for p in points] == [0.2, 0.9]
     for p in points:
-        # The node runtime's default (merged windows), its other free-slot policy, the baseline.
-        assert [r["policy"] for r in p["reports"]] == ["rtcan", "rtcan_oneshot", "fixed"]
+        # The node runtime's default (merged windows), its other free-slot policy, the
+        # frame-sized what-if (issue 22), the baseline.
+        assert [r["policy"] for r in p["reports"]] == ["rtcan", "rtcan_oneshot", "rtcan_framed", "fixed"]
         assert abs(p["offered"] - p["load"]) <= 0.01 * p["load"]
         for r in p["reports"]:
             assert r["srt_messages"] > 0 and r["hrt_messages"] > 0
             assert 0 <= r["srt_miss_ratio"] <= 1 and 0 < r["utilisation"] < 1
-    assert sim["bench"] == "rtcan_load_sim" and sim["runs"] == 6 and sim["events"] > 0
+    assert sim["bench"] == "rtcan_load_sim" and sim["runs"] == 8 and sim["events"] > 0
 
 
 def test_same_seed_same_numbers_across_processes(loadbench):
@@ -60,7 +61,7 @@ def test_plots_regenerate_byte_for_byte(loadbench, tmp_path):
     first = bench.plot_load(points, tmp_path / "a")
     second = bench.plot_load(json.loads(json.dumps(points)), tmp_path / "b")
     assert [p.name for p in first] == ["rtcan-load-srt-miss.png", "rtcan-load-latency.png",
-                                       "rtcan-load-hrt-jitter.png"]
+                                       "rtcan-load-hrt-jitter.png", "rtcan-load-carried.png"]
     for x, y in zip(first, second):
         assert x.read_bytes() == y.read_bytes(), x.name
         assert b"tEXt" not in x.read_bytes()  # no software/date stamp
@@ -82,6 +83,39 @@ def test_goal_summary_says_where_a_goal_fails():
     assert by_goal[f"{name}: SRT misses ≤ 0.1 % at 90 % load"] == (False, "0.20 %")
     ok = {g: ok for g, ok, _ in bench.load_goals([_point(0.9, 0.0005, 0.001)])}
     assert all(ok.values())
+
+
+def test_capacity_goals_say_where_they_fail():
+    from r2ptools import bench
+
+    def point(load, carried, p50, fixed_p50=100.0):
+        return {"load": load, "reports": [
+            {"policy": "rtcan_framed", "srt_miss_ratio": 0, "hrt_missed": 0, "utilisation": carried,
+             "srt_p50_us": p50},
+            {"policy": "fixed", "srt_miss_ratio": 0, "hrt_missed": 0, "utilisation": 0.94,
+             "srt_p50_us": fixed_p50}]}
+
+    name = bench.POLICIES["rtcan_framed"][0]
+    goals = {g: (ok, d) for g, ok, d in bench.load_goals(
+        [point(0.5, 0.5, 120), point(0.9, 0.9, 160), point(0.95, 0.919, 300)])}
+    assert goals[f"{name}: carries ≥ 92 % of the bus at 95 % load"] == (False, "91.9 %")
+    assert goals[f"{name}: median SRT latency ≤ 1.5× fixed priority's up to 90 %"] == (
+        False, "at most 1.60×, above at 90 %")
+    goals = {g: ok for g, ok, _ in bench.load_goals([point(0.9, 0.9, 150), point(0.95, 0.92, 300)])}
+    assert all(goals.values()), goals
+
+
+def test_seed_capacity_table_spans_the_seeds():
+    from r2ptools import bench
+
+    def point(load, carried, p50):
+        return {"load": load, "reports": [
+            {"policy": "rtcan", "utilisation": carried, "srt_p50_us": p50},
+            {"policy": "fixed", "utilisation": 0.946, "srt_p50_us": 500.0}]}
+
+    text = bench.seeds_capacity({1: [point(0.95, 0.823, 1500)], 2: [point(0.95, 0.80, 750)]})
+    assert text.splitlines()[1].split() == ["0.95", "|", "80.0–82.3", "%", "94.6–94.6", "%", "|",
+                                            "1.50–3.00"]
 
 
 def test_seed_table_sums_misses_and_names_the_seeds_where_rtcan_misses_more():

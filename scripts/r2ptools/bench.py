@@ -222,16 +222,23 @@ def plot(rows: list[dict], out: Path = PLOT) -> Path:
 # --- 4. RTCAN under load -------------------------------------------------------------------
 
 LOAD_IMG = ROOT / "docs" / "img"
-LOAD_PLOTS = ("srt-miss", "latency", "hrt-jitter")
+LOAD_PLOTS = ("srt-miss", "latency", "hrt-jitter", "carried")
 # Policy in the JSON → label and line style in tables and plots; "fixed" is the baseline.
 POLICIES = {
     "rtcan": ("RTCAN (firmware: merged free-slot windows)", "o-"),
     "rtcan_oneshot": ("RTCAN, one one-shot frame per free slot", "v--"),
     "rtcan_merged": ("RTCAN merged windows (what-if)", "^--"),
+    "rtcan_framed": ("RTCAN frame-sized reservations (what-if)", "D-."),
     "fixed": ("fixed-priority CAN (baseline)", "s-"),
 }
+SHORT = {"rtcan": "rtcan", "rtcan_oneshot": "1-shot", "rtcan_merged": "merged",
+         "rtcan_framed": "framed", "fixed": "fixed"}
 GOAL_LOAD = 0.90
 GOAL_MISS = 0.001
+# Issue 22's capacity goals: the bus carried at 95 % offered load, and the median SRT latency
+# against fixed priority's up to 90 %.
+GOAL_CARRIED = (0.95, 0.92)
+GOAL_MEDIAN = (0.90, 1.5)
 
 
 def rtcan_load(args: list[str] | None = None) -> tuple[list[dict], dict]:
@@ -250,30 +257,65 @@ SEED_LOADS = "0.6,0.65,0.7,0.75,0.8,0.85,0.9,0.95"
 
 
 def rtcan_seeds(seeds=SEEDS) -> dict[int, list[dict]]:
-    """The high-load points again for other traffic seeds (RTCAN and fixed priority only): the
-    goals are judged on seed 1, this says whether they would hold for other traffic."""
+    """The high-load points again for other traffic seeds (RTCAN, the frame-sized what-if and
+    fixed priority): the goals are judged on seed 1, this says whether they would hold for other
+    traffic."""
     return {seed: rtcan_load(["--seed", str(seed), "--loads", SEED_LOADS,
-                              "--policies", "rtcan,fixed"])[0] for seed in seeds}
+                              "--policies", "rtcan,rtcan_framed,fixed"])[0] for seed in seeds}
+
+
+def _rtcan_policies(points: list[dict]) -> list[str]:
+    """The RTCAN policies the points report, in table order."""
+    return [p for p in POLICIES if p != "fixed" and p in by_policy(points[0])]
 
 
 def seeds_table(by_seed: dict[int, list[dict]]) -> str:
-    """Per load: SRT misses summed over the seeds, RTCAN and fixed priority, and the seeds at
-    which RTCAN missed more."""
+    """Per load: SRT misses summed over the seeds, each RTCAN policy and fixed priority, and
+    the seeds at which each RTCAN policy missed more."""
     loads = sorted({pt["load"] for pts in by_seed.values() for pt in pts})
-    out = [f"{'load':>5} | {'messages':>9} | {'missed rtcan':>12} {'fixed':>6} | seeds where rtcan > fixed"]
+    pols = _rtcan_policies(next(iter(by_seed.values())))
+    out = [f"{'load':>5} | {'messages':>9} | "
+           + " ".join(f"{'missed ' + SHORT[p] if i == 0 else SHORT[p]:>{12 if i == 0 else 7}}"
+                      for i, p in enumerate(pols))
+           + f" {'fixed':>6} | " + " | ".join(f"seeds where {SHORT[p]} > fixed" for p in pols)]
     for load in loads:
-        n = a = b = 0
-        worse = []
+        n, fixed = 0, 0
+        missed = {p: 0 for p in pols}
+        worse: dict[str, list[str]] = {p: [] for p in pols}
         for seed, pts in sorted(by_seed.items()):
             for pt in (pt for pt in pts if pt["load"] == load):
                 r = by_policy(pt)
-                n += r["rtcan"]["srt_messages"]
-                a += r["rtcan"]["srt_missed"]
-                b += r["fixed"]["srt_missed"]
-                if r["rtcan"]["srt_missed"] > r["fixed"]["srt_missed"]:
-                    worse.append(str(seed))
-        out.append(f"{load:>5.2f} | {n:>9,} | {a:>12,} {b:>6,} | "
-                   f"{len(worse)} of {len(by_seed)}" + (f" ({', '.join(worse)})" if worse else ""))
+                n += r["fixed"]["srt_messages"]
+                fixed += r["fixed"]["srt_missed"]
+                for p in pols:
+                    missed[p] += r[p]["srt_missed"]
+                    if r[p]["srt_missed"] > r["fixed"]["srt_missed"]:
+                        worse[p].append(str(seed))
+        line = f"{load:>5.2f} | {n:>9,} | " + " ".join(
+            f"{missed[p]:>{12 if i == 0 else 7},}" for i, p in enumerate(pols)) + f" {fixed:>6,} | "
+        line += " | ".join(f"{len(worse[p])} of {len(by_seed)}"
+                           + (f" ({', '.join(worse[p])})" if worse[p] else "") for p in pols)
+        out.append(line)
+    return "\n".join(out)
+
+
+def seeds_capacity(by_seed: dict[int, list[dict]]) -> str:
+    """Per load, over the seeds (issue 22's capacity goals): the share of the bus each policy
+    carried, min–max, and each RTCAN policy's median SRT latency over fixed priority's, min–max."""
+    loads = sorted({pt["load"] for pts in by_seed.values() for pt in pts})
+    pols = _rtcan_policies(next(iter(by_seed.values())))
+    out = [f"{'load':>5} | " + " ".join(f"{'carried ' + SHORT[p]:>16}" for p in [*pols, "fixed"])
+           + " | " + " ".join(f"{'p50 ' + SHORT[p] + '/fixed':>16}" for p in pols)]
+    span = lambda v, f: f"{f(min(v))}–{f(max(v))}"  # noqa: E731
+    for load in loads:
+        at = [by_policy(pt) for pts in by_seed.values() for pt in pts if pt["load"] == load]
+        line = f"{load:>5.2f} | " + " ".join(
+            f"{span([r[p]['utilisation'] for r in at], lambda x: f'{100 * x:.1f}') + ' %':>16}"
+            for p in [*pols, "fixed"])
+        line += " | " + " ".join(
+            f"{span([r[p]['srt_p50_us'] / r['fixed']['srt_p50_us'] for r in at], lambda x: f'{x:.2f}'):>16}"
+            for p in pols)
+        out.append(line)
     return "\n".join(out)
 
 
@@ -292,7 +334,7 @@ def _us(x: float | None) -> str:
 def load_tables(points: list[dict]) -> str:
     """The SRT and HRT tables, RTCAN against fixed priority (ratios: RTCAN / fixed)."""
     pols = [p for p in POLICIES if p in by_policy(points[0])]
-    short = {"rtcan": "rtcan", "rtcan_oneshot": "1-shot", "rtcan_merged": "merged", "fixed": "fixed"}
+    short = SHORT
     out = ["SRT: deadline-miss ratio (%), latency release → end of frame (µs, delivered messages)"]
     head = f"{'load':>5} {'offered':>7} |" + "".join(f"{short[p]:>8}" for p in pols)
     head += f" | {'rtcan/fixed':>11} | {'p50 rtcan':>9} {'fixed':>6} | {'p95 rtcan':>9} {'fixed':>6}"
@@ -345,6 +387,21 @@ def load_goals(points: list[dict]) -> list[tuple[str, bool, str]]:
             miss = by_policy(at[0])[p]["srt_miss_ratio"]
             goals.append((f"{name}: SRT misses ≤ {100 * GOAL_MISS:.1f} % at {100 * GOAL_LOAD:.0f} % load",
                           miss <= GOAL_MISS, f"{100 * miss:.2f} %"))
+        load, share = GOAL_CARRIED
+        at = [pt for pt in points if abs(pt["load"] - load) < 1e-9 and "utilisation" in by_policy(pt)[p]]
+        if at:
+            carried = by_policy(at[0])[p]["utilisation"]
+            goals.append((f"{name}: carries ≥ {100 * share:.0f} % of the bus at {100 * load:.0f} % load",
+                          carried >= share, f"{100 * carried:.1f} %"))
+        upto, ratio = GOAL_MEDIAN
+        ratios = [(pt["load"], by_policy(pt)[p]["srt_p50_us"] / by_policy(pt)["fixed"]["srt_p50_us"])
+                  for pt in points if pt["load"] <= upto + 1e-9
+                  and by_policy(pt)[p].get("srt_p50_us") and by_policy(pt)["fixed"].get("srt_p50_us")]
+        if ratios:
+            over = [f"{100 * x:.0f} %" for x, r in ratios if r > ratio]
+            worst = max(r for _, r in ratios)
+            goals.append((f"{name}: median SRT latency ≤ {ratio}× fixed priority's up to {100 * upto:.0f} %",
+                          not over, f"at most {worst:.2f}×" + (f", above at {', '.join(over)}" if over else "")))
     return goals
 
 
@@ -372,7 +429,7 @@ def redraw_load(data: Path = LOAD_DATA, outdir: Path = LOAD_IMG) -> list[Path]:
 
 
 def plot_load(points: list[dict], outdir: Path = LOAD_IMG) -> list[Path]:
-    """The three figures of docs/rtcan.md; same points, same bytes."""
+    """The four figures of docs/rtcan.md; same points, same bytes."""
     with pictures.style() as plt:
         return _draw_load(plt, points, outdir)
 
@@ -430,6 +487,26 @@ def _draw_load(plt, points: list[dict], outdir: Path) -> list[Path]:
     ax1.legend(fontsize=7)
     fig.tight_layout()
     pictures.save(fig, paths[2])
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=100)
+    for p in pols:
+        ax.plot(x, [100 * v for v in col(p, "utilisation")], POLICIES[p][1], ms=4, label=POLICIES[p][0])
+    ax.plot(x, [100 * pt["grid_ceiling"] for pt in points], ":", color="grey", lw=1,
+            label="ceiling of the slot grid")
+    ax.plot(x, [100 * pt["frame_sized_ceiling"] for pt in points], "--", color="grey", lw=1,
+            label="ceiling of frame-sized reservations")
+    load, share = GOAL_CARRIED
+    ax.plot([100 * load], [100 * share], "*", color="red", ms=9,
+            label=f"goal (issue 22): ≥ {100 * share:.0f} % at {100 * load:.0f} %")
+    ax.set_xlabel("offered load (% of 1 Mbit/s, bits on the wire)")
+    ax.set_ylabel("bus carried (%, RTCAN's syncs included)")
+    ax.set_title("What the bus carries vs offered load (seed 1)")
+    ax.set_ylim(60, 100)
+    ax.set_xlim(55, 97)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    pictures.save(fig, paths[3])
     return paths
 
 
@@ -437,7 +514,7 @@ def report_load(points: list[dict], sim: dict) -> None:
     print("\n=== RTCAN under load: same traffic, RTCAN vs fixed-priority CAN (virtual bus, "
           f"{points[0]['seconds']:g} s per point, seed {points[0]['seed']})")
     print(load_tables(points))
-    print("\ngoals (issue 5):")
+    print("\ngoals (issues 5 and 22):")
     for goal, ok, detail in load_goals(points):
         print(f"  [{'holds' if ok else 'FAILS'}] {goal}: {detail}")
     print(f"simulation: {sim['events']:,} events in {sim['wall_s']:.1f} s = {sim['events_per_s']:,.0f} "
@@ -649,6 +726,9 @@ def main() -> int:
     report_load(load_points, load_sim)
     print(f"\nthe same at other traffic seeds ({SEEDS.start}–{SEEDS.stop - 1}), SRT messages summed:")
     print(seeds_table(load_seeds))
+    print("\nissue 22's capacity over the same seeds: bus carried (syncs included) and median SRT "
+          "latency against fixed priority's:")
+    print(seeds_capacity(load_seeds))
     print(f"data: {write_load(load_points).relative_to(ROOT)}")
     for path in redraw_load():
         print(f"plot: {path.relative_to(ROOT)}")

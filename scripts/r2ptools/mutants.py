@@ -46,13 +46,17 @@ def scratch_dir():
 
     The rtcan tests include the shared vectors as `../../../../tests/vectors/...` from their
     source file, i.e. `<copy>/../tests`: the copies are made in a directory beside a link to the
-    repository's tests/ so that the path resolves in them as it does in the checkout.
+    repository's tests/ (and its modules.toml) so that the path resolves in them as it does in
+    the checkout.
     """
     scratch = CACHE / "scratch"
     scratch.mkdir(parents=True, exist_ok=True)
-    link = scratch / "tests"
-    if not link.is_symlink():
-        link.symlink_to(ROOT / "tests")
+    # tests/ for the vectors; modules.toml for the emulator's build script (r2p-world), which
+    # crates tested through r2p-loadbench or the emulator build.
+    for name in ("tests", "modules.toml"):
+        link = scratch / name
+        if not link.is_symlink():
+            link.symlink_to(ROOT / name)
     return scratch
 
 

@@ -16,8 +16,8 @@ const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L
   --loads ...     offered loads as fractions of 1 Mbit/s (default 0.10,0.15,...,0.95)
   --policies ...  rtcan (the node runtime's default), rtcan_oneshot (one one-shot frame per
                   free slot), rtcan_merged (merged free-slot windows), rtcan_framed (what-if:
-                  frame-sized reservations in one block, fitted windows), fixed (default:
-                  rtcan, the free-slot policy rtcan does not use, fixed)
+                  frame-sized reservations in blocks, fitted windows), fixed (default: rtcan,
+                  the free-slot policy rtcan does not use, rtcan_framed, fixed)
   --mix H,S       HRT and SRT shares of the offered load, NRT the rest (default 0.3,0.5)
   --laxity E:T    SRT laxity encoding, log or linear, tick T µs (default log:100)
   --blocks K      rtcan_framed: blocks of HRT reservations per cycle (default 2)

@@ -39,12 +39,14 @@ impl Policy {
         Policy::Fixed,
     ];
 
-    /// The sweep's default: the node runtime's default, its other free-slot policy, and the
-    /// baseline (the policy equal to the default is left out: it would repeat `rtcan`).
+    /// The sweep's default: the node runtime's default, its other free-slot policy, the
+    /// frame-sized what-if and the baseline (the policy equal to the default is left out: it
+    /// would repeat `rtcan`).
     pub fn defaults() -> Vec<Policy> {
         let repeats = |p: Policy| {
-            p == Policy::RtcanFramed
-                || (p != Policy::Rtcan && p.free_slots() == Some(DEFAULT_FREE_SLOTS))
+            p != Policy::Rtcan
+                && p != Policy::RtcanFramed
+                && p.free_slots() == Some(DEFAULT_FREE_SLOTS)
         };
         Self::ALL.into_iter().filter(|&p| !repeats(p)).collect()
     }
