@@ -1,10 +1,11 @@
 //! Multi-frame HRT streams (issue 22; docs/middleware.md, "The TDMA cycle and HRT streams"): a
 //! message longer than one frame gets one slot per frame at one offset, goes out first frame to
 //! last in its slots' cycle order and arrives whole; a message published between its frames
-//! waits for the next occurrence; a frame that cannot go out drops the rest of its message; a
-//! standby's copy of the calendar holds every frame's slot, so the stream survives the master.
+//! waits for the next occurrence; a frame that cannot go out drops the rest of its message, and so
+//! does a message whose last slots never came round; a standby's copy of the calendar holds every
+//! frame's slot, so the stream survives the master.
 
-use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
+use r2p_middleware::{pool_size, Class, Fault, Publisher, Subscriber, Topic};
 use rtcan::failover::Role;
 use rtcan::{Micros, StreamSlots};
 
@@ -60,6 +61,28 @@ fn until_frames<const P: usize>(bus: &Bus<P>, nodes: &mut [&mut TestNode<'_>], n
 fn one_slot<const P: usize>(bus: &Bus<P>, nodes: &mut [&mut TestNode<'_>]) {
     let until = bus.now.get() + Micros::from(CYCLE.slot_us());
     run_slots(bus, nodes, until);
+}
+
+/// Runs slot by slot to the end of the cycle of HRT frame `frame` of the log, without node
+/// `stalled`'s slot ticks: its CPU stalls (a flash page erase stops instruction fetch,
+/// docs/rtcan.md), so the rest of that cycle's slots pass without it.
+fn stall_to_cycle_end<const P: usize>(
+    bus: &Bus<P>,
+    nodes: &mut [&mut TestNode<'_>],
+    stalled: usize,
+    frame: usize,
+) {
+    let f = bus.hrt_log()[frame];
+    let end = f.at - Micros::from(CYCLE.slot_offset_us(f.slot)) + CYCLE_US;
+    let step = Micros::from(CYCLE.slot_us());
+    while bus.now.get() < end {
+        let now = bus.now.get();
+        for (i, n) in nodes.iter_mut().enumerate().filter(|&(i, _)| i != stalled) {
+            n.slot_tick(now, &mut bus.port(i));
+        }
+        bus.arbitrate();
+        bus.now.set(now + step);
+    }
 }
 
 /// Declares the publisher `P` of the 3-frame topic with its remote subscriber `OUT` (a queue of
@@ -211,4 +234,70 @@ fn a_standby_holds_every_frames_slot_and_continues_the_stream_when_the_master_di
     assert_eq!(got, (0..16).map(pose).collect::<std::vec::Vec<_>>(), "no message lost");
     assert_eq!(nodes[1].stats().hrt_missed, 0);
     assert_eq!(bus.violations(), 0);
+}
+
+#[test]
+fn a_message_whose_last_slots_never_came_round_is_one_missed_occurrence() {
+    pose_topics!(2);
+
+    let (bus, mut m, mut a, mut b) = rig(&OUT, &IN, None);
+    let nodes = &mut [&mut m, &mut a, &mut b];
+    run_slots(&bus, nodes, 200_000);
+    let slots = granted(nodes[1]);
+    bus.clear_hrt_log();
+    let _ = P.take_fault();
+
+    P.publish_with(|v| *v = pose(1)).unwrap();
+    until_frames(&bus, nodes, 1);
+    // Its first frame is out, the next message is published, and A stalls through the slots of
+    // the second and third frames: at the next occurrence the first message is unfinished.
+    P.publish_with(|v| *v = pose(2)).unwrap();
+    stall_to_cycle_end(&bus, nodes, 1, 0);
+    assert_eq!(bus.hrt_log().len(), 1, "nothing of the stream went meanwhile");
+    let until = bus.now.get() + 2 * CYCLE_US;
+    run_slots(&bus, nodes, until);
+
+    assert_eq!(nodes[1].stats().hrt_missed, 1, "the unfinished message: one missed occurrence");
+    assert_eq!(P.stats().deadline_misses, 1, "the publisher heard of it once");
+    assert_eq!(P.take_fault(), Some(Fault::DeadlineMiss));
+    let got: std::vec::Vec<Pose> = core::iter::from_fn(|| SUB.try_recv()).map(|v| *v).collect();
+    assert_eq!(got, [pose(2)], "nothing of the unfinished message, the next one whole");
+    // The next message went whole at the next occurrence, first frame to last in its slots.
+    let log = bus.hrt_log();
+    assert_eq!(log.len(), 4, "{log:?}");
+    let next = &log[1..];
+    assert_eq!(next[0].cycle, log[0].cycle + 2, "{log:?}");
+    for (j, f) in next.iter().enumerate() {
+        assert_eq!((f.cycle, f.slot, f.first), (next[0].cycle, slots_of(slots)[j], pose(2)[8 * j]));
+    }
+    assert_eq!(bus.violations(), 0);
+}
+
+#[test]
+fn an_unfinished_message_is_not_sent_again_at_the_next_occurrence() {
+    pose_topics!(2);
+
+    let (bus, mut m, mut a, mut b) = rig(&OUT, &IN, None);
+    let nodes = &mut [&mut m, &mut a, &mut b];
+    run_slots(&bus, nodes, 200_000);
+    granted(nodes[1]);
+    bus.clear_hrt_log();
+
+    P.publish_with(|v| *v = pose(1)).unwrap();
+    until_frames(&bus, nodes, 1);
+    // A stalls through the rest of the cycle, and nothing newer is published: the next
+    // occurrence is a period after the message's deadline, so it carries nothing.
+    stall_to_cycle_end(&bus, nodes, 1, 0);
+    let until = bus.now.get() + 2 * CYCLE_US;
+    run_slots(&bus, nodes, until);
+    assert_eq!(bus.hrt_log().len(), 1, "the late message did not go: {:?}", bus.hrt_log());
+    assert!(SUB.try_recv().is_none(), "neither partial nor late");
+    assert_eq!((nodes[1].stats().hrt_missed, P.stats().deadline_misses), (1, 1));
+    // The stream goes on with the next message, whole.
+    P.publish_with(|v| *v = pose(3)).unwrap();
+    let until = bus.now.get() + 2 * CYCLE_US;
+    run_slots(&bus, nodes, until);
+    assert_eq!(SUB.try_recv().map(|v| *v), Some(pose(3)));
+    assert_eq!(bus.hrt_log().len(), 4);
+    assert_eq!((nodes[1].stats().hrt_missed, P.stats().deadline_misses), (1, 1));
 }
