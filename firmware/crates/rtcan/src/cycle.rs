@@ -89,8 +89,9 @@ pub const fn frame_bits_of(raw_id: u32, len: usize) -> u32 {
         }
         i += 1;
     }
+    // Data and CRC: 1 + ⌊(rest − (5 − run))/4⌋ stuff bits at most (rest ≥ 15 > 5 − run).
     let rest = 8 * len as u32 + 15;
-    let rest_stuff = if rest >= 5 - run { 1 + (rest - (5 - run)) / 4 } else { 0 };
+    let rest_stuff = (rest + run - 1) / 4;
     HEADER_BITS + rest + stuff + rest_stuff + FRAME_TAIL_BITS + INTERFRAME_BITS
 }
 
@@ -548,6 +549,10 @@ pub(crate) mod tests {
             // the worst header) and end in a run of 3, so data and CRC take at most 20.
             assert_eq!(frame_bits_of(0, 8), HEADER_BITS + 79 + 6 + 20 + 10 + 3);
             assert!(frame_bits_of(0x1555_5555, 8) < frame_bits_of(0, 8)); // alternating: none
+            // Identifier 0x1fff_ffff, no data: SOF then 11 ones (2 stuff bits), SRR and IDE
+            // (run of 3 ones after the second), 18 ones (4 more), RTR r1 r0 0 and DLC 0000: 7
+            // zeros (1 more, a run of 2 left); the CRC's 15 bits take at most 4.
+            assert_eq!(frame_bits_of(0x1fff_ffff, 0), HEADER_BITS + 15 + 7 + 4 + 10 + 3);
             assert_eq!(c.slot_offset_us(1), 167);
             assert_eq!(c.slot_offset_us(60), 10_000);
         }
