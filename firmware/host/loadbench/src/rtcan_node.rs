@@ -63,6 +63,8 @@ pub struct RtcanNode<'t> {
     timeline: Option<Timeline>,
     /// When the node reacts to the last bus event or release (framed what-if).
     reaction: Option<Micros>,
+    /// Frames in its mailboxes after its last activation or bus event (framed what-if).
+    mailboxes: usize,
     /// When the node's timer fires next: the next slot boundary or a loaded frame's guard.
     wake_at: Micros,
     /// Frames this node's port sent, in order.
@@ -126,6 +128,7 @@ impl<'t> RtcanNode<'t> {
             next_slot: 0,
             timeline,
             reaction: None,
+            mailboxes: 0,
             wake_at: 0,
             sent: Vec::new(),
             counters: Counters::default(),
@@ -137,11 +140,17 @@ impl<'t> RtcanNode<'t> {
         self.reaction.map_or(self.wake_at, |r| r.min(self.wake_at))
     }
 
-    /// A frame started or ended on the bus at `now` (framed what-if): the node's interrupt
-    /// runs its transmit path [`REACTION_US`] later. Its latest-start timer does not wait.
+    /// The bus moved at `now` (framed what-if). If that raised one of this node's interrupts —
+    /// a frame of its own left a mailbox (sent, or lost a one-shot arbitration), or a frame
+    /// passed its acceptance filters — its transmit path runs [`REACTION_US`] later; other
+    /// nodes' frames it filters out, it never hears of. Its latest-start timer does not wait.
     pub fn on_bus_event(&mut self, now: Micros) {
-        let at = now + REACTION_US;
-        self.reaction = Some(self.reaction.map_or(at, |r| r.min(at)));
+        let port = self.can.port();
+        if port.pending() < self.mailboxes || port.rx_len() > 0 {
+            let at = now + REACTION_US;
+            self.reaction = Some(self.reaction.map_or(at, |r| r.min(at)));
+        }
+        self.mailboxes = self.can.port().pending();
     }
 
     /// The node's timer at `now`: a loaded frame's guard, a slot boundary, or both.
@@ -255,6 +264,7 @@ impl<'t> RtcanNode<'t> {
                 self.clock.slot_start(p.cycle, self.setup.cycle.slots),
             ) else {
                 self.wake_at = self.slot_tx.next_wake(now, next);
+                self.mailboxes = self.can.port().pending();
                 return;
             };
             let reservations = timeline.of(self.clock.mask(p.cycle));
@@ -290,6 +300,7 @@ impl<'t> RtcanNode<'t> {
             next = next.min((r + REACTION_US).max(now + 1));
         }
         self.wake_at = self.slot_tx.next_wake(now, next);
+        self.mailboxes = self.can.port().pending();
     }
 
     /// Records which message and fragment each newly loaded frame carries: the queue's frames
