@@ -72,11 +72,11 @@ pub const HEADER_BITS: u32 = 1 + 11 + 1 + 1 + 18 + 1 + 2 + 4;
 /// bits — a stuff bit after 5 − `r` more, then one every 4. At most [`frame_bits`]`(len)`.
 pub const fn frame_bits_of(raw_id: u32, len: usize) -> u32 {
     // The header, first bit at the top: SOF 0, base ID, SRR 1, IDE 1, extended ID, RTR 0,
-    // r1 0, r0 0, DLC.
+    // r1 0, r0 0, DLC (disjoint fields, so a sum).
     let header: u64 = ((raw_id as u64 >> 18 & 0x7ff) << 27)
-        | (0b11 << 25)
-        | ((raw_id as u64 & 0x3ffff) << 7)
-        | (len as u64 & 0xf);
+        + (0b11 << 25)
+        + ((raw_id as u64 & 0x3ffff) << 7)
+        + (len as u64 & 0xf);
     let (mut level, mut run, mut stuff, mut i) = (2u64, 0u32, 0u32, 0);
     while i < HEADER_BITS {
         let bit = header >> (HEADER_BITS - 1 - i) & 1;

@@ -393,6 +393,20 @@ fn a_reservation_sized_by_its_identifier_holds_every_frame_of_that_identifier() 
             .collect();
         let bound = rtcan::cycle::frame_bits_of(raw_id, len);
         let actual = FrameBits::of_raw(raw_id, &data).total();
+        // The header's part, from the bus's own encoder: its stuff bits and last run exactly.
+        let bits = r2p_vbus::bits::unstuffed_bits(raw_id, &data);
+        let header = rtcan::cycle::HEADER_BITS as usize;
+        let (mut level, mut run, mut stuff) = (None, 0, 0);
+        for &bit in &bits[..header] {
+            run = if level == Some(bit) { run + 1 } else { 1 };
+            level = Some(bit);
+            if run == 5 {
+                (stuff, level, run) = (stuff + 1, Some(!bit), 1);
+            }
+        }
+        let rest = (bits.len() - header) as u32;
+        let exact_header = header as u32 + stuff + rest + (rest + run - 1) / 4 + 10 + 3;
+        assert_eq!(bound, exact_header, "id {raw_id:#x} len {len}");
         assert!(actual <= bound, "id {raw_id:#x} {data:02x?}: {actual} > {bound}");
         assert!(bound <= worst_case_frame_bits(len), "id {raw_id:#x} len {len}");
         saved += worst_case_frame_bits(len) - bound;
