@@ -173,38 +173,10 @@ impl<'t> RtcanNode<'t> {
 
     /// The slot timer at boundary `now` (module documentation, steps 1–5).
     fn slot_tick(&mut self, now: Micros) {
-        for done in self.slot_tx.settle(now, &mut self.can, &self.tx).into_iter().flatten() {
-            self.on_done(done);
-        }
-        while let Some(r) = self.can.try_receive() {
-            if let (None, Ok(sync)) = (self.master, SyncFrame::from_frame(&r.frame)) {
-                let first = self.clock.state(r.at) == ClockState::Unsynced;
-                if !self.clock.on_sync(r.at, &sync).continuous && !first {
-                    self.counters.resyncs += 1;
-                }
-            }
-        }
-        self.tick(now);
+        self.settle_receive_publish(now);
 
-        if let Some(mut m) = self.master {
-            if now >= m.next_sync {
-                let mask = self.traffic.mask(m.cycle.wrapping_add(1));
-                let sync = SyncFrame::new(m.cycle, mask, false);
-                let ok = self.slot_tx.load_slotted(&mut self.can, Slotted::Sync, &sync.to_frame());
-                if ok {
-                    self.clock.on_sync(now, &sync);
-                }
-                let cycle_us = Micros::from(self.setup.cycle.cycle_us);
-                m.cycle = m.cycle.wrapping_add(1);
-                m.next_sync += cycle_us;
-                if m.next_sync <= now {
-                    m.next_sync = now + cycle_us;
-                }
-                self.master = Some(m);
-                if ok {
-                    return;
-                }
-            }
+        if self.send_sync_if_due(now) == Some(true) {
+            return;
         }
         match self.clock.state(now) {
             ClockState::Running(p) if p.slot == SYNC_SLOT => {}
@@ -221,11 +193,8 @@ impl<'t> RtcanNode<'t> {
         }
     }
 
-    /// The what-if's activation ([`Timeline`]): the same steps as [`Self::slot_tick`], at
-    /// reservation starts and ends, releases and bus events instead of slot boundaries. In a
-    /// reservation: its HRT frame at its start; between reservations: the queue's frames for
-    /// the window up to the next one.
-    fn framed_tick(&mut self, now: Micros) {
+    /// Steps 1–3: the controller's results, received syncs into the clock, publishing.
+    fn settle_receive_publish(&mut self, now: Micros) {
         for done in self.slot_tx.settle(now, &mut self.can, &self.tx).into_iter().flatten() {
             self.on_done(done);
         }
@@ -238,23 +207,38 @@ impl<'t> RtcanNode<'t> {
             }
         }
         self.tick(now);
+    }
+
+    /// Step 4: as master, at a cycle's start, the sync with the next cycle's reservations.
+    /// `Some(loaded)` if one was due, `None` otherwise.
+    fn send_sync_if_due(&mut self, now: Micros) -> Option<bool> {
+        let mut m = self.master.filter(|m| now >= m.next_sync)?;
+        let mask = self.traffic.mask(m.cycle.wrapping_add(1));
+        let sync = SyncFrame::new(m.cycle, mask, false);
+        let loaded = self.slot_tx.load_slotted(&mut self.can, Slotted::Sync, &sync.to_frame());
+        if loaded {
+            self.clock.on_sync(now, &sync);
+        }
+        let cycle_us = Micros::from(self.setup.cycle.cycle_us);
+        m.cycle = m.cycle.wrapping_add(1);
+        m.next_sync += cycle_us;
+        if m.next_sync <= now {
+            m.next_sync = now + cycle_us;
+        }
+        self.master = Some(m);
+        Some(loaded)
+    }
+
+    /// The what-if's activation ([`Timeline`]): the same steps as [`Self::slot_tick`], at
+    /// reservation starts and ends, releases and bus events instead of slot boundaries. In a
+    /// reservation: its HRT frame at its start; between reservations: the queue's frames for
+    /// the window up to the next one.
+    fn framed_tick(&mut self, now: Micros) {
+        self.settle_receive_publish(now);
         let slot_us = Micros::from(self.setup.cycle.slot_us().max(1));
         let mut next = now + slot_us;
-        if let Some(mut m) = self.master {
-            if now >= m.next_sync {
-                let mask = self.traffic.mask(m.cycle.wrapping_add(1));
-                let sync = SyncFrame::new(m.cycle, mask, false);
-                if self.slot_tx.load_slotted(&mut self.can, Slotted::Sync, &sync.to_frame()) {
-                    self.clock.on_sync(now, &sync);
-                }
-                let cycle_us = Micros::from(self.setup.cycle.cycle_us);
-                m.cycle = m.cycle.wrapping_add(1);
-                m.next_sync += cycle_us;
-                if m.next_sync <= now {
-                    m.next_sync = now + cycle_us;
-                }
-                self.master = Some(m);
-            }
+        self.send_sync_if_due(now);
+        if let Some(m) = self.master {
             next = next.min(m.next_sync);
         }
         if let ClockState::Running(p) = self.clock.state(now) {
