@@ -497,6 +497,10 @@ fn status_is_published_once_a_second_with_the_link_and_counters() {
     app.step(3_000_000, &Sample::default());
     let s = *sub.try_recv().unwrap();
     assert!(!s.link_up && !s.configured && s.ip == 0 && s.clients == 0);
+    // The static address (DHCP gave none): configured, not from DHCP.
+    app.step(4_000_000, &Sample { net: NetState { dhcp: false, ..UP }, ..Sample::default() });
+    let s = *sub.try_recv().unwrap();
+    assert!(s.configured && !s.dhcp && s.ip == 0x0A00_0007);
 }
 
 #[test]
