@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+import socket
 import struct
 import threading
 import time
@@ -393,6 +394,114 @@ def test_the_gateway_imports_the_battery_only_while_a_zenoh_subscriber_listens(b
     finally:
         peer.close()
         sim.kill()
+        router.close()
+
+
+class Relay:
+    """A TCP relay between the gateway and the router: what the gateway puts on its link to the
+    router, byte for byte (`upstream`), as a capture on the robot's Ethernet would show it."""
+
+    def __init__(self, router_port: int):
+        self.router_port = router_port
+        self.listener = socket.create_server(("127.0.0.1", 0))
+        self.port = self.listener.getsockname()[1]
+        self.up = bytearray()
+        self.lock = threading.Lock()
+        self.socks: list[socket.socket] = []
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self):
+        while True:
+            try:
+                gateway, _ = self.listener.accept()
+            except OSError:
+                return
+            router = socket.create_connection(("127.0.0.1", self.router_port))
+            self.socks += [gateway, router]
+            threading.Thread(target=self._pump, args=(gateway, router, True), daemon=True).start()
+            threading.Thread(target=self._pump, args=(router, gateway, False), daemon=True).start()
+
+    def _pump(self, src: socket.socket, dst: socket.socket, upstream: bool):
+        try:
+            while data := src.recv(65536):
+                if upstream:
+                    with self.lock:
+                        self.up += data
+                dst.sendall(data)
+        except OSError:
+            pass
+        for s in (src, dst):
+            try:
+                s.shutdown(socket.SHUT_RDWR)
+            except OSError:
+                pass
+
+    def upstream(self) -> bytes:
+        with self.lock:
+            return bytes(self.up)
+
+    def close(self):
+        self.listener.close()
+        for s in self.socks:
+            s.close()
+
+
+def cdr_frame_id(frame_id: str) -> bytes:
+    """A sample's header.frame_id as CDR writes it (length with the NUL, the bytes, the NUL): in
+    the gateway's PUTs only, not in its declarations (keys are Zenoh strings)."""
+    return struct.pack("<I", len(frame_id) + 1) + frame_id.encode() + b"\0"
+
+
+def test_the_gateway_puts_no_sample_nobody_subscribes_to_counts_it_and_sends_once_subscribed(built, tmp_path):
+    """Issue 22's write filter end to end: a client subscribing to /odom and /gateway/status
+    only. On the gateway's link to the router (a relay in between) the /range_N and
+    /battery_state samples stop while /odom's go on; /gateway/status's ros_filtered counts them;
+    a subscriber on /range_0 makes its samples flow on the link again, /range_1's still held."""
+    from rosbags.typesys import get_types_from_msg
+    store = get_typestore(Stores.ROS2_JAZZY)
+    msg_text = (ROOT / "firmware" / "msgs" / "r2p_msgs" / "msg" / "GatewayStatus.msg").read_text()
+    store.register(get_types_from_msg(msg_text, "r2p_msgs/msg/GatewayStatus"))
+    status_key = f"0/gateway/status/r2p_msgs::msg::dds_::GatewayStatus_/{store.hash_rihs01('r2p_msgs/msg/GatewayStatus')}"
+    range_key = f"0/range_0/sensor_msgs::msg::dds_::Range_/{TS.hash_rihs01('sensor_msgs/msg/Range')}"
+    robot = tmp_path / "triskar2.toml"
+    robot.write_text(TRISKAR2.read_text().split("[[teleop]]")[0])
+    port = free_port()
+    router = Router(port)
+    relay = Relay(port)
+    sim = SocketcandProcess([str(R2P), "sim", str(robot), "--realtime", "--zenoh", f"tcp/127.0.0.1:{relay.port}"],
+                            "r2p sim")
+    peer = Peer(port)  # /odom
+    statuses = []
+    status_sub = peer.session.declare_subscriber(
+        status_key, lambda s: statuses.append(store.deserialize_cdr(bytes(s.payload.to_bytes()), "r2p_msgs/msg/GatewayStatus")))
+    filtered = lambda: statuses[-1].ros_filtered if statuses else 0  # noqa: E731
+    odom, range0, range1, battery = (cdr_frame_id(f) for f in ("odom", "range_0", "range_1", "battery"))
+    try:
+        # The router has answered the gateway's interests: the status counts held-back samples.
+        wait_for("ros_filtered to count", lambda: filtered() > 0, timeout=20)
+        before, mark = filtered(), len(relay.upstream())
+        time.sleep(2.0)
+        link, counted = relay.upstream()[mark:], filtered()
+        assert link.count(odom) >= 30, "the subscribed /odom goes on (20 Hz)"
+        held = [link.count(f) for f in (range0, range1, battery)]
+        assert held == [0, 0, 0], "no sample of a key nobody subscribes to on the link"
+        # Four ranges at 10 Hz alone are 40 a second; the status comes once a second.
+        assert counted - before >= 40, (before, counted)
+        # A subscriber on /range_0: its samples are on the link and reach it; /range_1's are not.
+        got = []
+        sub = peer.session.declare_subscriber(range_key, lambda s: got.append(bytes(s.payload.to_bytes())))
+        wait_for("/range_0 samples", lambda: len(got) >= 5, timeout=10)
+        mark = len(relay.upstream())
+        time.sleep(1.0)
+        link = relay.upstream()[mark:]
+        assert link.count(range0) >= 8 and link.count(range1) == 0, (link.count(range0), link.count(range1))
+        assert TS.deserialize_cdr(got[-1], "sensor_msgs/msg/Range").header.frame_id == "range_0"
+        sub.undeclare()
+    finally:
+        status_sub.undeclare()
+        peer.close()
+        sim.kill()
+        relay.close()
         router.close()
 
 

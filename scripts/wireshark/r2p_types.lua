@@ -39,7 +39,7 @@ return {
       { name = "mask", type = "uint8", count = 0, doc = "fault bits to clear (0xFF: all)" },
     },
   },
-  { name = "GatewayStatus", hash = 0x4E80AA5A, size = 24,
+  { name = "GatewayStatus", hash = 0xA2792338, size = 28,
     doc = "The gateway's network link and its server of the bus on TCP, published by the gateway module once a second (the node's heartbeat carries the bus side: uptime, CAN error counters).",
     fields = {
       { name = "link_up", type = "bool", count = 0, doc = "Ethernet link up (the PHY reports a link)" },
@@ -51,6 +51,7 @@ return {
       { name = "frames_from_clients", type = "uint32", count = 0, doc = "client frames put on the bus" },
       { name = "client_errors", type = "uint32", count = 0, doc = "client messages answered with < error >" },
       { name = "lost", type = "uint32", count = 0, doc = "frames lost: a client too slow, the queue to the bus full, or not sent" },
+      { name = "ros_filtered", type = "uint32", count = 0, doc = "ROS samples not sent: the Zenoh router had said nobody subscribes to their topic" },
     },
   },
   { name = "GnssFix", hash = 0xCA3FBF0B, size = 36,

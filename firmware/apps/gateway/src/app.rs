@@ -52,6 +52,9 @@ pub struct NetState {
     pub ip: Option<[u8; 4]>,
     /// It came from DHCP.
     pub dhcp: bool,
+    /// ROS samples the Zenoh bridge's write filter held back (`RosStats::filtered`): the
+    /// bridge runs beside the step, so its count comes in with the network's state.
+    pub ros_filtered: u32,
 }
 
 /// What the board-support layer reads before each step.
@@ -163,6 +166,7 @@ impl<'a> App<'a> {
             frames_from_clients: s.frames_from_clients.load(Relaxed),
             client_errors: s.client_errors.load(Relaxed),
             lost: s.lost.load(Relaxed),
+            ros_filtered: net.ros_filtered,
         }
     }
 

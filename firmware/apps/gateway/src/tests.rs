@@ -471,7 +471,8 @@ fn rig() -> (
     (App::new(ep, link), link, sub)
 }
 
-const UP: NetState = NetState { link_up: true, ip: Some([10, 0, 0, 7]), dhcp: true };
+const UP: NetState =
+    NetState { link_up: true, ip: Some([10, 0, 0, 7]), dhcp: true, ros_filtered: 0 };
 
 #[test]
 fn status_is_published_once_a_second_with_the_link_and_counters() {
@@ -480,7 +481,9 @@ fn status_is_published_once_a_second_with_the_link_and_counters() {
     let client = link.join().unwrap();
     let mut got = Vec::new();
     for ms in 0..2500u64 {
-        app.step(ms * 1000, &Sample { net: UP, ..Sample::default() });
+        // The ROS bridge's write filter count, as the board reports it beside the network's.
+        let net = NetState { ros_filtered: 40 + ms as u32 / 1000, ..UP };
+        app.step(ms * 1000, &Sample { net, ..Sample::default() });
         while let Some(m) = sub.try_recv() {
             got.push((ms, *m));
         }
@@ -489,10 +492,15 @@ fn status_is_published_once_a_second_with_the_link_and_counters() {
     let s = got[0].1;
     assert!(s.link_up && s.configured && s.dhcp);
     assert_eq!((s.ip, s.clients, s.client_errors), (0x0A00_0007, 1, 3));
+    assert_eq!(got.iter().map(|g| g.1.ros_filtered).collect::<Vec<_>>(), [40, 41, 42]);
     link.leave(client);
     app.step(3_000_000, &Sample::default());
     let s = *sub.try_recv().unwrap();
     assert!(!s.link_up && !s.configured && s.ip == 0 && s.clients == 0);
+    // The static address (DHCP gave none): configured, not from DHCP.
+    app.step(4_000_000, &Sample { net: NetState { dhcp: false, ..UP }, ..Sample::default() });
+    let s = *sub.try_recv().unwrap();
+    assert!(s.configured && !s.dhcp && s.ip == 0x0A00_0007);
 }
 
 #[test]
@@ -621,6 +629,9 @@ fn the_ros_bridge_declares_its_node_and_publishes_only_what_it_has() {
     assert!(text
         .contains("/MS/%/%robot1/r2p_gateway/%robot1%cmd_vel/geometry_msgs::msg::dds_::Twist_/"));
     assert!(text.contains("/MP/%/%robot1/r2p_gateway/%robot1%odom/nav_msgs::msg::dds_::Odometry_/"));
+    // The session's counters come with the bridge's: its declarations went in frames.
+    let declarations = b.stats().session.frames_sent;
+    assert!(declarations > 0);
     // Nothing to publish yet; then odometry only, at its rate.
     assert_eq!(b.poll(3, 0, &Latest::default(), &mut out), Ok(0));
     let latest = Latest { odom: Some(r2p_msgs::Odometry::default()), ..Latest::default() };
@@ -628,6 +639,7 @@ fn the_ros_bridge_declares_its_node_and_publishes_only_what_it_has() {
     assert_eq!(b.poll(5, 0, &latest, &mut out), Ok(0), "20 Hz: not again within 50 ms");
     assert!(b.poll(50_004, 0, &latest, &mut out).unwrap() > 724);
     assert_eq!(b.stats().published, 2);
+    assert_eq!(b.stats().session.frames_sent, declarations + 2, "a frame per sample");
 }
 
 #[test]
@@ -825,6 +837,8 @@ mod demand {
         remote: &'static dyn Export,
         /// Frames of the battery's stream seen on the bus, by the ms they were seen at.
         seen: Vec<u64>,
+        /// What the bridge sent when the session opened: its declarations.
+        declared: Vec<u8>,
     }
 
     impl Rig {
@@ -894,13 +908,54 @@ mod demand {
             battery: out.publisher,
             remote: out.remote,
             seen: Vec::new(),
+            declared: Vec::new(),
         };
         // The session: INIT ack, OPEN ack (r2p-zenoh's tests have their bytes).
         let mut buf = [0u8; 8192];
         rig.bridge.connect(0, &mut buf).unwrap();
         rig.router(&[0x21, 0x09, 0x00, 0xAA, 0x01, 0xCC]);
-        rig.router(&[0x62, 10, 0]);
+        let n = rig.bridge.receive(0, &[0x62, 10, 0], &mut buf).unwrap();
+        rig.declared = buf[..n].to_vec();
         rig
+    }
+
+    /// A Zenoh integer (LEB128) at `at`, and the index after it.
+    fn zint(b: &[u8], at: usize) -> (u64, usize) {
+        let (mut v, mut i) = (0, at);
+        while b[i] & 0x80 != 0 {
+            v |= u64::from(b[i] & 0x7F) << (7 * (i - at));
+            i += 1;
+        }
+        (v | u64::from(b[i]) << (7 * (i - at)), i + 1)
+    }
+
+    /// The key expression id `declared` gives `key` (a DECLARE KEYEXPR: id, no prefix, the
+    /// key's length and bytes).
+    fn declared_id(declared: &[u8], key: &str) -> u64 {
+        let at = declared.windows(key.len()).position(|w| w == key.as_bytes()).unwrap();
+        assert_eq!((declared[at - 2], usize::from(declared[at - 1])), (0, key.len()));
+        u64::from(declared[at - 3])
+    }
+
+    /// The PUTs in the bridge's output, one per FRAME as it sends them: the key expression id
+    /// each names and the sequence number of its attachment (rmw_zenoh's, which subscribers
+    /// read gaps in).
+    fn puts(out: &[u8]) -> Vec<(u64, i64)> {
+        let (mut got, mut at) = (Vec::new(), 0);
+        while at < out.len() {
+            let end = at + 2 + usize::from(u16::from_le_bytes([out[at], out[at + 1]]));
+            // FRAME (reliable), its sequence number, PUSH on a declared key, PUT with an
+            // attachment: its extension header and 33 bytes.
+            if out[at + 2] == 0x25 {
+                let (_, i) = zint(out, at + 3);
+                assert_eq!(out[i], 0x5D, "PUSH by a declared key");
+                let (expr, i) = zint(out, i + 1);
+                assert_eq!((out[i], out[i + 2]), (0x81, 33), "PUT with its attachment");
+                got.push((expr, i64::from_le_bytes(out[i + 3..i + 11].try_into().unwrap())));
+            }
+            at = end;
+        }
+        got
     }
 
     #[test]
@@ -976,49 +1031,61 @@ mod demand {
     }
 
     /// Polls the bridge alone every 10 ms from now to `until` with a battery sample to
-    /// publish (the router's keep-alive once a second); the bytes it sent.
-    fn publish_battery(r: &mut Rig, until: u64) -> usize {
+    /// publish (the router's keep-alive once a second); the PUTs it sent ([`puts`]).
+    fn publish_battery(r: &mut Rig, until: u64) -> Vec<(u64, i64)> {
         let latest = Latest { battery: Some(Battery::default()), ..Latest::default() };
-        let (mut out, mut sent) = ([0u8; 8192], 0);
+        let (mut out, mut sent) = ([0u8; 8192], Vec::new());
         while r.bus.now.get() < until {
             let now = r.bus.now.get();
             if now.is_multiple_of(1_000_000) {
                 r.bridge.receive(now, &[0x04], &mut out).unwrap();
             }
-            sent += r.bridge.poll(now, 0, &latest, &mut out).unwrap();
+            let n = r.bridge.poll(now, 0, &latest, &mut out).unwrap();
+            sent.extend(puts(&out[..n]));
             r.bus.now.set(now + 10_000);
         }
         sent
+    }
+
+    /// Whether `puts` are all on key expression `id`, numbered on from `next`, one by one.
+    fn numbered_from(puts: &[(u64, i64)], id: u64, next: i64) -> bool {
+        puts.iter().zip(next..).all(|(&(e, s), n)| e == id && s == n)
     }
 
     #[test]
     fn no_put_leaves_for_a_key_nobody_subscribes_and_puts_resume_with_a_subscriber() {
         let mut r = rig();
         let stats = |r: &Rig| (r.bridge.stats().published, r.bridge.stats().filtered);
+        // The battery's PUTs name the key the session declared for /battery_state.
+        let battery = declared_id(&r.declared, r.bridge.key(topic::BATTERY));
         // No answer to the interests yet: the battery goes out (fail-safe).
-        publish_battery(&mut r, 2_000_000);
+        let first = publish_battery(&mut r, 2_000_000);
         let (sent, filtered) = stats(&r);
         assert!(sent > 0 && filtered == 0, "{sent} {filtered}");
+        assert!(first.len() == sent as usize && numbered_from(&first, battery, 1), "{first:?}");
         // The router answers: nobody subscribes to anything. No PUT leaves, each is counted.
         let finals: Vec<[u8; 3]> = (1..=topic::COUNT as u8).map(|i| [0x3E, i, 0x1A]).collect();
         r.router(&frame(&finals.iter().map(|f| &f[..]).collect::<Vec<_>>()));
-        publish_battery(&mut r, 4_000_000);
+        assert_eq!(publish_battery(&mut r, 4_000_000), [], "no PUT for an unsubscribed key");
         let (held, filtered) = stats(&r);
-        assert_eq!(held, sent, "no PUT for an unsubscribed key");
+        assert_eq!(held, sent);
         assert!(filtered > 0);
-        // A subscriber declared on /battery_state's key: the next due sample goes.
+        // A subscriber declared on /battery_state's key: the next due sample goes, numbered
+        // next to the last one sent (a sample held back is no gap a subscriber would see).
         r.router(&frame(&[&[0x1E, 0x02, 5, 2]]));
         let at = r.bus.now.get();
         let mut out = [0u8; 8192];
         let latest = Latest { battery: Some(Battery::default()), ..Latest::default() };
-        assert!(r.bridge.poll(at, 0, &latest, &mut out).unwrap() > 0, "at once");
+        let n = r.bridge.poll(at, 0, &latest, &mut out).unwrap();
+        assert_eq!(puts(&out[..n]), [(battery, i64::from(sent) + 1)], "at once");
         assert_eq!(stats(&r), (held + 1, filtered));
-        publish_battery(&mut r, 6_000_000);
+        let then = publish_battery(&mut r, 6_000_000);
+        assert!(numbered_from(&then, battery, i64::from(sent) + 2), "{then:?}");
         assert!(stats(&r).0 > held + 1 && stats(&r).1 == filtered);
         // It leaves: held back again at once, also while demand's hold-off keeps the import.
         r.router(&frame(&[&[0x1E, 0x03, 5]]));
         let (before, f) = stats(&r);
-        publish_battery(&mut r, 6_000_000 + HOLD_OFF_US / 2);
+        assert_eq!(publish_battery(&mut r, 6_000_000 + HOLD_OFF_US / 2), []);
         assert_eq!(stats(&r).0, before);
         assert!(stats(&r).1 > f);
         let feed = GATEWAY_FEEDS.iter().position(|f| f.topic == "psu/battery").unwrap();

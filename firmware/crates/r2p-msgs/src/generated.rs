@@ -155,7 +155,7 @@ crate::impl_wire!(FaultClear);
 
 /// The gateway's network link and its server of the bus on TCP, published by the gateway module once a second (the node's heartbeat carries the bus side: uptime, CAN error counters).
 ///
-/// 24 bytes on the bus, type hash `0x4E80AA5A`; schema `firmware/msgs/GatewayStatus.msg`.
+/// 28 bytes on the bus, type hash `0xA2792338`; schema `firmware/msgs/GatewayStatus.msg`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GatewayStatus {
     /// Ethernet link up (the PHY reports a link) (`bool`, bytes 0..1)
@@ -176,13 +176,15 @@ pub struct GatewayStatus {
     pub client_errors: u32,
     /// frames lost: a client too slow, the queue to the bus full, or not sent (`uint32`, bytes 20..24)
     pub lost: u32,
+    /// ROS samples not sent: the Zenoh router had said nobody subscribes to their topic (`uint32`, bytes 24..28)
+    pub ros_filtered: u32,
 }
 
 impl crate::R2pMessage for GatewayStatus {
     const NAME: &'static str = "GatewayStatus";
-    const CANONICAL: &'static str = "GatewayStatus:bool link_up;bool configured;bool dhcp;uint32 ip;uint8 clients;uint32 frames_to_clients;uint32 frames_from_clients;uint32 client_errors;uint32 lost";
-    const SIZE: usize = 24;
-    const TYPE_HASH: u32 = 0x4E80_AA5A;
+    const CANONICAL: &'static str = "GatewayStatus:bool link_up;bool configured;bool dhcp;uint32 ip;uint8 clients;uint32 frames_to_clients;uint32 frames_from_clients;uint32 client_errors;uint32 lost;uint32 ros_filtered";
+    const SIZE: usize = 28;
+    const TYPE_HASH: u32 = 0xA279_2338;
 
     fn encode(&self, out: &mut [u8]) -> core::result::Result<usize, crate::BufferTooSmall> {
         let mut w = crate::wire::Writer::new(out, Self::SIZE)?;
@@ -195,6 +197,7 @@ impl crate::R2pMessage for GatewayStatus {
         w.put(&self.frames_from_clients);
         w.put(&self.client_errors);
         w.put(&self.lost);
+        w.put(&self.ros_filtered);
         Ok(w.finish())
     }
 
@@ -210,6 +213,7 @@ impl crate::R2pMessage for GatewayStatus {
             frames_from_clients: r.get()?,
             client_errors: r.get()?,
             lost: r.get()?,
+            ros_filtered: r.get()?,
         })
     }
 }
@@ -735,7 +739,7 @@ pub const ALL: &[(&str, u32, usize)] = &[
     ("Battery", 0x471D_E2CA, 16),
     ("BusPower", 0xC2BD_8B69, 1),
     ("FaultClear", 0x9688_B902, 1),
-    ("GatewayStatus", 0x4E80_AA5A, 24),
+    ("GatewayStatus", 0xA279_2338, 28),
     ("GnssFix", 0xCA3F_BF0B, 36),
     ("Imu", 0xFB1F_2638, 42),
     ("MagneticField", 0x7F66_2741, 29),

@@ -121,10 +121,10 @@ pub const R2P_TYPES: &[R2pRosType] = &[
     },
     R2pRosType {
         name: "GatewayStatus",
-        r2p_hash: 0x4E80_AA5A,
+        r2p_hash: 0xA279_2338,
         ros: RosType {
             dds_name: "r2p_msgs::msg::dds_::GatewayStatus_",
-            hash: "RIHS01_77b2e525bc205bec7f233e48eb80a8c388215af0b5d4a663f1ea110b3749d35e",
+            hash: "RIHS01_8511bdaf8606fb76389b2ea5f2073c8dd3e78494b1f6dde1085d77c87f58ded1",
         },
         fields: &[
             Field { kind: Kind::Bool, count: 1 },
@@ -132,6 +132,7 @@ pub const R2P_TYPES: &[R2pRosType] = &[
             Field { kind: Kind::Bool, count: 1 },
             Field { kind: Kind::U32, count: 1 },
             Field { kind: Kind::U8, count: 1 },
+            Field { kind: Kind::U32, count: 1 },
             Field { kind: Kind::U32, count: 1 },
             Field { kind: Kind::U32, count: 1 },
             Field { kind: Kind::U32, count: 1 },

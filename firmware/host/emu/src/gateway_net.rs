@@ -84,7 +84,7 @@ impl GatewayServer {
             IpAddr::V6(_) => None,
         };
         *net.lock().unwrap_or_else(|e| e.into_inner()) =
-            NetState { link_up: true, ip, dhcp: false };
+            NetState { link_up: true, ip, dhcp: false, ros_filtered: 0 };
         Ok(Self { addr, stop, thread: Some(thread), net })
     }
 

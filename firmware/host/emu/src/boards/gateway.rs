@@ -111,7 +111,12 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
         n,
         Box::new(move |now, node| {
             let status = leds.status(now, node, false);
-            let net = *net.lock().unwrap_or_else(|e| e.into_inner());
+            let mut net = *net.lock().unwrap_or_else(|e| e.into_inner());
+            // The Zenoh thread's write filter count, for gateway/status (as the F407's
+            // `zenoh` task leaves it for its bus task).
+            if let Some(sh) = ros.lock().unwrap_or_else(|e| e.into_inner()).as_ref() {
+                net.ros_filtered = sh.stats.filtered;
+            }
             gw.step(now, &r2p_app_gateway::Sample { status, net });
             // ROS 2 over Zenoh: the latest values out, /cmd_vel in (it takes over from the
             // teleop script while it arrives; its watchdog's zero command stops the base).

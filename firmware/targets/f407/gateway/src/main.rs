@@ -167,6 +167,9 @@ static TRIAL_OVER: AtomicBool = AtomicBool::new(false);
 /// Bit `k`: the import of feed `k` is wanted (the `zenoh` task writes it, the bus task applies
 /// it; all wanted without a router).
 static WANTED: AtomicU32 = AtomicU32::new(u32::MAX);
+/// The samples the `zenoh` task's write filter held back (`RosStats::filtered`), for
+/// `gateway/status` (the `zenoh` task writes it, the bus task reads it).
+static FILTERED: AtomicU32 = AtomicU32::new(0);
 /// The address in use came from DHCP.
 static FROM_DHCP: AtomicBool = AtomicBool::new(false);
 
@@ -342,6 +345,7 @@ async fn ros_session(
         let latest = cortex_m::interrupt::free(|cs| LATEST.borrow(cs).get());
         let n = bridge.poll(t, (t * 1000) as i64, &latest, out).map_err(|_| ())?;
         WANTED.store(bridge.wanted(), Ordering::Relaxed);
+        FILTERED.store(bridge.stats().filtered, Ordering::Relaxed);
         socket.write_all(&out[..n]).await.map_err(|_| ())?;
     }
 }
@@ -363,8 +367,12 @@ async fn run(
     loop {
         let now = Instant::now().as_micros();
         let ip = stack.config_v4().map(|c| c.address.address().octets());
-        let net =
-            NetState { link_up: stack.is_link_up(), ip, dhcp: FROM_DHCP.load(Ordering::Relaxed) };
+        let net = NetState {
+            link_up: stack.is_link_up(),
+            ip,
+            dhcp: FROM_DHCP.load(Ordering::Relaxed),
+            ros_filtered: FILTERED.load(Ordering::Relaxed),
+        };
         let c = app.step(now, &Sample { status: led_status(), net });
         let (status, battery, imu) = (app.status(&net), app.battery(), app.imu());
         let mirrored = app.mirrored();

@@ -248,7 +248,7 @@ fn gateway_steps() -> (Tally, Tally) {
         [ep.imu.remote, ep.mag.remote, ep.baro.remote, ep.gnss.remote, ep.battery.remote];
     let mut app = App::new(ep, &LINK);
     let running = leds::Status { running: true, synced: true, traffic: true, ..Default::default() };
-    let net = NetState { link_up: true, ip: Some([192, 168, 1, 50]), dhcp: true };
+    let net = NetState { link_up: true, ip: Some([192, 168, 1, 50]), dhcp: true, ros_filtered: 0 };
     let sample = Sample { status: running, net };
     let (mut all, mut handover) = (Tally::default(), Tally::default());
     for i in 0..STEPS {
