@@ -21,6 +21,12 @@
 //! controller sends its mailboxes in load order), so a multi-frame message goes out back to
 //! back as on plain CAN instead of one fragment per slot boundary; the guard withdraws every
 //! one that has not started.
+//!
+//! With the feature `fitted-windows` (issue 22's frame-sized reservations, measured by
+//! `r2p-loadbench`'s `rtcan_framed`; no image turns it on), [`SlotTx::fitted`] makes each
+//! loaded frame's latest start its own — the window's end less its own worst case — and lets a
+//! window take the most urgent frames that still fit rather than stop at a worst-case frame's
+//! guard.
 
 use rtcan::controller::{TxMode, TxOutcome};
 use rtcan::cycle::SlotPosition;
