@@ -23,7 +23,7 @@
 //! one that has not started.
 //!
 //! With the feature `fitted-windows` (issue 22's frame-sized reservations, measured by
-//! `r2p-loadbench`'s `rtcan_framed`; no image turns it on), [`SlotTx::fitted`] makes each
+//! `r2p-loadbench`'s `rtcan_framed`; no image turns it on), `SlotTx::fitted` makes each
 //! loaded frame's latest start its own — the window's end less its own worst case — and lets a
 //! window take the most urgent frames that still fit rather than stop at a worst-case frame's
 //! guard.
