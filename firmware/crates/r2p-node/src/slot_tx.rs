@@ -371,12 +371,13 @@ impl<T: Copy> SlotTx<T> {
     ) -> bool {
         #[cfg(not(feature = "fitted-windows"))]
         let guard = end.saturating_sub(self.frame_us);
-        // Each frame's own latest start; the window's guard is the earliest of those loaded.
+        // Each frame's own latest start; the window's guard is the earliest of those loaded (a
+        // window is kept only while frames are loaded: `settle` drops it).
         #[cfg(feature = "fitted-windows")]
         let mut guard = match (self.fitted, self.window) {
             (None, _) => end.saturating_sub(self.frame_us),
-            (Some(_), Some(w)) if self.has_queued() => w.guard,
-            (Some(_), _) => end,
+            (Some(_), Some(w)) => w.guard,
+            (Some(_), None) => end,
         };
         #[cfg(feature = "fitted-windows")]
         let mut blocked = Blocked::default();
