@@ -69,12 +69,6 @@ pub struct Point {
 /// reservation's owner must not start earlier than that after this one's worst-case end.
 pub const RESERVATION_GUARD_BITS: u32 = 3;
 
-/// Bit times of an extended data frame with `len` data bytes in the worst case
-/// ([`rtcan::cycle::frame_bits`]). 160 for 8 bytes: `rtcan::cycle::WORST_CASE_FRAME_BITS`.
-pub const fn worst_case_frame_bits(len: usize) -> u32 {
-    rtcan::cycle::frame_bits(len)
-}
-
 /// Generates the traffic of `setup` and runs it under each of `policies`.
 pub fn point(setup: &Setup, policies: &[Policy]) -> Result<Point, SetupError> {
     let traffic = Traffic::generate(setup)?;
@@ -100,10 +94,10 @@ pub fn point(setup: &Setup, policies: &[Policy]) -> Result<Point, SetupError> {
     // HRT message in its slot.
     let sync = rtcan::SyncFrame::new(0, 0, false).to_frame();
     let reserved_worst_bits = cycles
-        * f64::from(worst_case_frame_bits(sync.payload().len()) + RESERVATION_GUARD_BITS)
+        * f64::from(rtcan::cycle::frame_bits(sync.payload().len()) + RESERVATION_GUARD_BITS)
         + hrt_messages
             .iter()
-            .map(|m| f64::from(worst_case_frame_bits(m.payload.len()) + RESERVATION_GUARD_BITS))
+            .map(|m| f64::from(rtcan::cycle::frame_bits(m.payload.len()) + RESERVATION_GUARD_BITS))
             .sum::<f64>();
     let slotted_bits = cycles * f64::from(r2p_vbus::FrameBits::of(&sync).total())
         + hrt_messages

@@ -42,8 +42,8 @@ pub const FOLLOW_US: u32 = 10;
 /// Where each slot of the calendar lies when reservations are as long as their frames.
 #[derive(Clone, Debug)]
 pub struct Timeline {
-    /// Per slot: its offset in the cycle and its length, µs (length 0: no stream uses it).
-    slots: Vec<(u32, u32)>,
+    /// The slots the calendar uses, in time order: slot, offset in the cycle and length, µs.
+    slots: Vec<(u8, u32, u32)>,
 }
 
 impl Timeline {
@@ -87,30 +87,33 @@ impl Timeline {
         // own inside the block.
         let mut order: Vec<usize> = (0..n).filter(|&s| len[s] > 0).collect();
         order.sort_by_key(|&s| (std::cmp::Reverse(used[s]), s));
-        let mut slots = vec![(0u32, 0u32); n];
         let (k, total) = (usize::from(blocks), order.len());
         let mut at = 0;
-        for (i, s) in order.into_iter().enumerate() {
-            let b = (i * k / total) as u32;
-            at = at.max(b * cycle.cycle_us / k as u32);
-            slots[s] = (at, len[s]);
-            at += len[s];
-        }
+        let slots = order
+            .into_iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let b = (i * k / total) as u32;
+                at = at.max(b * cycle.cycle_us / k as u32);
+                at += len[s];
+                (s as u8, at - len[s], len[s])
+            })
+            .collect();
         Self { slots }
     }
 
     /// The reservations of cycle `cycle` whose sync announced `mask`, in time order (slots
     /// the calendar does not use are never reserved).
     pub fn of(&self, mask: u64) -> Vec<Reservation> {
-        let mut out: Vec<Reservation> = (0..self.slots.len() as u8)
-            .filter(|&slot| slot == SYNC_SLOT || mask & (1 << slot) != 0)
-            .filter_map(|slot| {
-                let (start_us, len) = self.slots[usize::from(slot)];
+        let mut out: Vec<Reservation> = self
+            .slots
+            .iter()
+            .filter(|&&(slot, ..)| slot == SYNC_SLOT || mask & (1 << slot) != 0)
+            .map(|&(slot, start_us, len)| {
                 let end_us = start_us + len;
-                (len > 0).then_some(Reservation { slot, start_us, end_us, free_at_us: end_us })
+                Reservation { slot, start_us, end_us, free_at_us: end_us }
             })
             .collect();
-        out.sort_by_key(|r| r.start_us);
         for i in 0..out.len() {
             if out.get(i + 1).is_none_or(|next| next.start_us > out[i].end_us) {
                 out[i].free_at_us = out[i].end_us.min(out[i].start_us + FOLLOW_US);

@@ -3,10 +3,11 @@
 
 use r2p_loadbench::metrics::deliveries;
 use r2p_loadbench::traffic::Kind;
-use r2p_loadbench::{point, run, worst_case_frame_bits, Policy, Setup, SetupError, Traffic};
+use r2p_loadbench::{point, run, Policy, Setup, SetupError, Traffic};
 use r2p_node::FreeSlots;
 use r2p_vbus::bits::INTERMISSION_BITS;
 use r2p_vbus::{EventKind, FrameBits};
+use rtcan::cycle::frame_bits as worst_case_frame_bits;
 use rtcan::{Laxity, SyncFrame};
 
 /// The RTCAN policies (the node runtime's default and both free-slot policies).
