@@ -148,7 +148,8 @@ def test_tables_show_ratios_against_fixed_priority(loadbench):
     (["--seconds", "0"], "must be in (0, 3600]"),
     (["--mix", "0.5"], "give two shares"),
     (["--frobnicate", "1"], "unknown option --frobnicate"),
-    (["--blocks", "0"], "hrt_blocks = 0: use 1 … hrt_slots"),
+    (["--blocks", "0"], "hrt_blocks = 0: use 1 … 4"),
+    (["--blocks", "5"], "hrt_blocks = 5: use 1 … 4"),
     (["--blocks", "two"], "not a block count"),
 ])
 def test_bad_arguments_are_refused_with_the_reason(loadbench, args, message):

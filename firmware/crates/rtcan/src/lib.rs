@@ -22,6 +22,7 @@ pub mod fragment;
 pub mod frame;
 pub mod id;
 pub mod laxity;
+pub mod layout;
 pub mod schedule;
 pub mod srt;
 pub mod time_counter;
@@ -51,6 +52,7 @@ pub mod selftest {
         crate::srt::tests::SUITE,
         crate::cycle::tests::SUITE,
         crate::schedule::tests::SUITE,
+        crate::layout::tests::SUITE,
         crate::failover::tests::SUITE,
         crate::filter_banks::tests::SUITE,
         crate::wire_bits::tests::SUITE,

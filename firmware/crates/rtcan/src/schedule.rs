@@ -349,6 +349,19 @@ impl<const N: usize> Scheduler<N> {
         period_cycles: u32,
         frames: u8,
     ) -> Result<StreamSlots, Reject> {
+        self.register_in(stream, period_cycles, frames, |_| true)
+    }
+
+    /// [`Self::register_frames`] in the slots for which `usable` is true only (frame-sized
+    /// reservations: a slot placed already and too short for the stream's frames,
+    /// [`crate::layout::Layout::admit`]).
+    pub fn register_in(
+        &mut self,
+        stream: MessageId,
+        period_cycles: u32,
+        frames: u8,
+        usable: impl Fn(u8) -> bool,
+    ) -> Result<StreamSlots, Reject> {
         if stream.is_reserved_for_sync() {
             return Err(Reject::ReservedId);
         }
@@ -367,7 +380,7 @@ impl<const N: usize> Scheduler<N> {
         {
             return Err(Reject::Full);
         }
-        let got = self.place(period, frames).ok_or(Reject::NoFreePhase)?;
+        let got = self.place(period, frames, &usable).ok_or(Reject::NoFreePhase)?;
         let mut slots = got.slots;
         for e in self.table.iter_mut().filter(|e| e.is_none()) {
             if slots == 0 {
@@ -383,12 +396,17 @@ impl<const N: usize> Scheduler<N> {
     /// Placement (module documentation): the offset best fit gives the first frame, each frame
     /// in the best-fit slot left at that offset; if too few are free there, the first offset at
     /// which enough are. One frame: best fit itself.
-    fn place(&self, period: Period, frames: u8) -> Option<StreamSlots> {
-        let (first, _) = self.best_fit(period, None, 0)?;
+    fn place(
+        &self,
+        period: Period,
+        frames: u8,
+        usable: &impl Fn(u8) -> bool,
+    ) -> Option<StreamSlots> {
+        let (first, _) = self.best_fit(period, None, 0, usable)?;
         core::iter::once(first).chain(0..1u32 << period.log2()).find_map(|block| {
             let mut slots = 0u64;
             for _ in 0..frames {
-                slots |= 1 << self.best_fit(period, Some(block), slots)?.1;
+                slots |= 1 << self.best_fit(period, Some(block), slots, usable)?.1;
             }
             Some(StreamSlots { offset: rev(block, period.log2()) as u8, slots })
         })
@@ -397,11 +415,17 @@ impl<const N: usize> Scheduler<N> {
     /// Best fit (module documentation): over the slots not in `taken`, the aligned block of
     /// 256/P positions (block `only`, if given) whose largest free enclosing aligned block is
     /// smallest; ties: the slot placement tries first, then the lower block. (block, slot).
-    fn best_fit(&self, period: Period, only: Option<u32>, taken: u64) -> Option<(u32, u8)> {
+    fn best_fit(
+        &self,
+        period: Period,
+        only: Option<u32>,
+        taken: u64,
+        usable: &impl Fn(u8) -> bool,
+    ) -> Option<(u32, u8)> {
         let k = period.log2();
         let size = MAX_PERIOD_CYCLES >> k;
         let mut best: Option<(u32, u32, u8)> = None;
-        for slot in self.slots().filter(|&s| taken & 1 << s == 0) {
+        for slot in self.slots().filter(|&s| taken & 1 << s == 0 && usable(s)) {
             let occ = self.occupancy(slot);
             for block in 0..(1u32 << k) {
                 if only.is_some_and(|b| b != block) || !occ.is_free(block * size, size) {

@@ -64,10 +64,7 @@ pub struct Point {
     pub reports: Vec<Report>,
 }
 
-/// Bit times a frame-sized reservation would add to its frame's worst case: the nodes' clocks
-/// agree within a few µs of the master's sync (docs/rtcan.md, "Slave clock"), so the next
-/// reservation's owner must not start earlier than that after this one's worst-case end.
-pub const RESERVATION_GUARD_BITS: u32 = 3;
+pub use rtcan::layout::RESERVATION_GUARD_BITS;
 
 /// Generates the traffic of `setup` and runs it under each of `policies`.
 pub fn point(setup: &Setup, policies: &[Policy]) -> Result<Point, SetupError> {

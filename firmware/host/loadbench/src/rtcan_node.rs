@@ -213,7 +213,11 @@ impl<'t> RtcanNode<'t> {
     /// `Some(loaded)` if one was due, `None` otherwise.
     fn send_sync_if_due(&mut self, now: Micros) -> Option<bool> {
         let mut m = self.master.filter(|m| now >= m.next_sync)?;
-        let mask = self.traffic.mask(m.cycle.wrapping_add(1));
+        let next = m.cycle.wrapping_add(1);
+        let mask = match self.timeline {
+            Some(_) => self.traffic.framed_mask(next),
+            None => self.traffic.mask(next),
+        };
         let sync = SyncFrame::new(m.cycle, mask, false);
         let loaded = self.slot_tx.load_slotted(&mut self.can, Slotted::Sync, &sync.to_frame());
         if loaded {
@@ -377,17 +381,27 @@ impl<'t> RtcanNode<'t> {
         let traffic = self.traffic;
         for (s, occurrences) in &mut self.hrt {
             let stream = &traffic.streams[usize::from(*s)];
-            let Kind::Hrt { period, phase } = stream.kind else { continue };
+            let Kind::Hrt { period, phase, framed } = stream.kind else { continue };
+            let phase = if self.timeline.is_some() { framed } else { phase };
             if phase.slot != slot || !occurs(period, phase, cycle) {
                 continue;
             }
-            while occurrences.front().is_some_and(|&m| traffic.messages[m as usize].cycle < cycle) {
+            // The cycle whose reservation carries the message (framed: its calendar's offset).
+            let carried_in = |m: u32| {
+                let msg = &traffic.messages[m as usize];
+                if self.timeline.is_some() {
+                    traffic.framed_cycle(msg).expect("an HRT message")
+                } else {
+                    msg.cycle
+                }
+            };
+            while occurrences.front().is_some_and(|&m| carried_in(m) < cycle) {
                 occurrences.pop_front();
                 self.counters.hrt_skipped += 1;
             }
             let Some(&m) = occurrences.front() else { return };
             let msg = &traffic.messages[m as usize];
-            if msg.cycle != cycle {
+            if carried_in(m) != cycle {
                 return;
             }
             occurrences.pop_front();

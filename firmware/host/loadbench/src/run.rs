@@ -110,8 +110,7 @@ pub fn run(setup: &Setup, traffic: &Traffic, policy: Policy) -> Run {
             let mut nodes: Vec<RtcanNode> = (0..setup.nodes)
                 .map(|i| {
                     let port = SimPort::new(bus.port(i), setup.cycle.bit_rate);
-                    let timeline =
-                        framed.then(|| Timeline::new(traffic, setup.cycle, setup.hrt_blocks));
+                    let timeline = framed.then(|| Timeline::new(&traffic.layout));
                     RtcanNode::new(traffic, setup, i, port, free_slots, timeline)
                 })
                 .collect();
@@ -164,18 +163,19 @@ pub fn run(setup: &Setup, traffic: &Traffic, policy: Policy) -> Run {
     let frames = trace.iter().filter(|e| matches!(e.kind, EventKind::Sent { .. })).count() as u64;
     let events = total.activations + 2 * frames + traffic.messages.len() as u64;
     let reservations = (policy == Policy::RtcanFramed).then(|| {
-        let timeline = Timeline::new(traffic, setup.cycle, setup.hrt_blocks);
+        let timeline = Timeline::new(&traffic.layout);
         let cycle_us = u64::from(setup.cycle.cycle_us);
         traffic
             .messages
             .iter()
             .map(|m| {
-                let Kind::Hrt { phase, .. } = traffic.streams[usize::from(m.stream)].kind else {
+                let Kind::Hrt { framed, .. } = traffic.streams[usize::from(m.stream)].kind else {
                     return (0, 0);
                 };
-                let r = timeline.of(traffic.mask(m.cycle));
-                let r = r.iter().find(|r| r.slot == phase.slot).expect("its slot is reserved");
-                let c0 = u64::from(m.cycle) * cycle_us;
+                let cycle = traffic.framed_cycle(m).expect("an HRT message");
+                let r = timeline.of(traffic.framed_mask(cycle));
+                let r = r.iter().find(|r| r.slot == framed.slot).expect("its slot is reserved");
+                let c0 = u64::from(cycle) * cycle_us;
                 (c0 + u64::from(r.start_us), c0 + u64::from(r.end_us))
             })
             .collect()

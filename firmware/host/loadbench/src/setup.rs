@@ -1,5 +1,6 @@
 //! The experiment's parameters: one load point of the sweep.
 
+use rtcan::layout::Layout;
 use rtcan::{CycleConfig, LaxityEncoding};
 
 /// Frames a node's transmit queue holds (the demo boards' `TxQueue<32>`); the loaded frame
@@ -30,7 +31,7 @@ pub struct Setup {
     /// Slots the master may reserve for HRT streams (`rtcan::Scheduler` lays them out).
     pub hrt_slots: u8,
     /// `rtcan_framed` (what-if): blocks the frame-sized reservations are laid out in, evenly
-    /// spaced over the cycle ([`crate::timeline`]).
+    /// spaced over the cycle ([`rtcan::layout`]; 1 … [`rtcan::layout::MAX_BLOCKS`]).
     pub hrt_blocks: u8,
     /// SRT laxity encoding (the node runtime's default: logarithmic, 100 µs ticks).
     pub laxity: LaxityEncoding,
@@ -87,9 +88,7 @@ impl Setup {
         if self.hrt_slots == 0 || self.hrt_slots >= self.cycle.slots {
             return Err(SetupError::HrtSlots(self.hrt_slots));
         }
-        if self.hrt_blocks == 0 || self.hrt_blocks > self.hrt_slots {
-            return Err(SetupError::HrtBlocks(self.hrt_blocks));
-        }
+        self.layout()?;
         let m = self.mix;
         if !(m.hrt >= 0.0 && m.srt > 0.0 && m.hrt + m.srt <= 1.0) {
             return Err(SetupError::Mix(m));
@@ -102,6 +101,14 @@ impl Setup {
             return Err(SetupError::Empty);
         }
         Ok(())
+    }
+
+    /// The frame-sized calendar's empty layout: `hrt_blocks` blocks which together may hold
+    /// as much time as `hrt_slots` grid slots.
+    pub fn layout(&self) -> Result<Layout, SetupError> {
+        let reservable_us = u32::from(self.hrt_slots) * self.cycle.slot_us();
+        Layout::new(self.cycle, self.hrt_blocks, reservable_us)
+            .map_err(|_| SetupError::HrtBlocks(self.hrt_blocks))
     }
 
     /// Bit time in ns.
@@ -141,7 +148,7 @@ pub enum SetupError {
     Cycle(rtcan::cycle::ConfigError),
     /// HRT slots must be 1 … slots − 1.
     HrtSlots(u8),
-    /// HRT blocks must be 1 … hrt_slots.
+    /// HRT blocks must be 1 … `rtcan::layout::MAX_BLOCKS`, each with room for its share.
     HrtBlocks(u8),
     /// Class shares must be non-negative, SRT positive, summing to at most 1.
     Mix(Mix),
@@ -162,7 +169,11 @@ impl core::fmt::Display for SetupError {
             Self::HrtSlots(s) => {
                 write!(f, "hrt_slots = {s}: use 1 … slots − 1")
             }
-            Self::HrtBlocks(b) => write!(f, "hrt_blocks = {b}: use 1 … hrt_slots"),
+            Self::HrtBlocks(b) => write!(
+                f,
+                "hrt_blocks = {b}: use 1 … {} (each block must hold its share of hrt_slots' time)",
+                rtcan::layout::MAX_BLOCKS
+            ),
             Self::Mix(m) => write!(f, "class mix {m:?}: shares must be ≥ 0, SRT > 0, sum ≤ 1"),
             Self::Deadlines(d) => {
                 write!(f, "SRT deadlines {d:?} µs: need 0 < low ≤ high < drain time")

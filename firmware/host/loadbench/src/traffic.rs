@@ -19,7 +19,8 @@ use r2p_vbus::FrameBits;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 use rtcan::id::SYNC_MESSAGE_IDS;
-use rtcan::schedule::{Period, Phase, Scheduler};
+use rtcan::layout::Layout;
+use rtcan::schedule::{next_reserved, Period, Phase, Scheduler};
 use rtcan::{fragments, Frame, FrameId, Laxity, MessageId};
 
 use crate::setup::{Setup, SetupError};
@@ -42,6 +43,8 @@ pub enum Kind {
         period: Period,
         /// The master's phase for it.
         phase: Phase,
+        /// Its phase in the frame-sized calendar ([`Traffic::framed`]).
+        framed: Phase,
     },
     /// Deadline-driven.
     Srt {
@@ -116,6 +119,11 @@ pub struct Traffic {
     pub scheduler: Scheduler<MAX_HRT_STREAMS>,
     /// HRT streams' payload length, bytes (streams `0..hrt_len.len()` are the HRT ones).
     pub hrt_len: Vec<usize>,
+    /// The frame-sized what-if's calendar: the same streams admitted in the same order by
+    /// [`Layout::admit`] (their cycle offsets may differ from [`Self::scheduler`]'s).
+    pub framed: Scheduler<MAX_HRT_STREAMS>,
+    /// Where the frame-sized calendar's slots lie in the cycle.
+    pub layout: Layout,
     /// Bits offered in the window.
     pub offered_bits: u64,
 }
@@ -136,6 +144,8 @@ struct Builder<'s> {
     messages: Vec<Message>,
     /// HRT streams' payload length (streams `0..hrt_len.len()` are the HRT ones).
     hrt_len: Vec<usize>,
+    framed: Scheduler<MAX_HRT_STREAMS>,
+    layout: Layout,
 }
 
 impl Builder<'_> {
@@ -182,9 +192,16 @@ impl Builder<'_> {
             let Ok(phase) = self.scheduler.register(probe.message, cycles) else {
                 return offered;
             };
+            let id = FrameId { laxity: Laxity::HRT, message: probe.message, fragment: 0 };
+            let needs_us = self.layout.reservation_us(id.to_raw(), len);
+            let framed = self.layout.admit(&mut self.framed, probe.message, cycles, 1, needs_us);
+            let Ok(framed) = framed.map(|s| s.first()) else {
+                self.scheduler.remove(probe.message);
+                return offered;
+            };
             let period = Period::from_cycles(cycles).expect("1 and 2 cycles are harmonic");
             let node = self.streams.len() % self.setup.nodes;
-            self.add_stream(node, Kind::Hrt { period, phase }, rate_hz);
+            self.add_stream(node, Kind::Hrt { period, phase, framed }, rate_hz);
             self.hrt_len.push(len);
             offered += bits;
         }
@@ -242,7 +259,7 @@ impl Builder<'_> {
         let (start, end) = (self.setup.start_us(), self.setup.end_us());
         let cycle_us = u64::from(self.setup.cycle.cycle_us);
         for s in 0..self.hrt_len.len() {
-            let Kind::Hrt { period, phase } = self.streams[s].kind else { continue };
+            let Kind::Hrt { period, phase, .. } = self.streams[s].kind else { continue };
             let slot_us = u64::from(self.setup.cycle.slot_offset_us(phase.slot));
             let p = u64::from(period.cycles());
             let mut c = start.div_ceil(cycle_us);
@@ -312,6 +329,8 @@ impl Traffic {
             scheduler: Scheduler::new(setup.hrt_slots, setup.cycle.slots),
             messages: Vec::new(),
             hrt_len: Vec::new(),
+            framed: Scheduler::new(setup.hrt_slots, setup.cycle.slots),
+            layout: setup.layout()?,
         };
         let target = setup.load * setup.capacity_bits();
         let hrt = b.add_hrt_streams(setup.mix.hrt * target);
@@ -331,6 +350,8 @@ impl Traffic {
             messages,
             scheduler: b.scheduler,
             hrt_len: b.hrt_len,
+            framed: b.framed,
+            layout: b.layout,
             offered_bits,
         })
     }
@@ -338,6 +359,20 @@ impl Traffic {
     /// The reservations the master announces for cycle `cycle` (sync slot included).
     pub fn mask(&self, cycle: u32) -> u64 {
         self.scheduler.mask(cycle)
+    }
+
+    /// The reservations the frame-sized calendar announces for cycle `cycle`.
+    pub fn framed_mask(&self, cycle: u32) -> u64 {
+        self.framed.mask(cycle)
+    }
+
+    /// The cycle whose frame-sized reservation carries HRT message `m`: its stream's first
+    /// occurrence in the frame-sized calendar from the cycle of its release on.
+    pub fn framed_cycle(&self, m: &Message) -> Option<u32> {
+        match self.streams[usize::from(m.stream)].kind {
+            Kind::Hrt { period, framed, .. } => Some(next_reserved(period, framed, m.cycle).0),
+            _ => None,
+        }
     }
 
     /// Offered load: offered bits over the window's bit times.

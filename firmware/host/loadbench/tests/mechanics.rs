@@ -79,7 +79,9 @@ fn hrt_messages_are_released_at_their_reserved_slot() {
     let t = Traffic::generate(&setup).unwrap();
     let mut seen = 0;
     for m in &t.messages {
-        let Kind::Hrt { period, phase } = t.streams[usize::from(m.stream)].kind else { continue };
+        let Kind::Hrt { period, phase, .. } = t.streams[usize::from(m.stream)].kind else {
+            continue;
+        };
         let slot_start = u64::from(m.cycle) * u64::from(setup.cycle.cycle_us)
             + u64::from(setup.cycle.slot_offset_us(phase.slot));
         assert_eq!(m.release_us, slot_start);
@@ -259,7 +261,7 @@ fn a_bad_setup_is_refused_with_the_reason() {
     assert_eq!(e, SetupError::Nodes(1));
     let e = Traffic::generate(&Setup { srt_deadline_us: (5_000, 1_000), ..Setup::new(0.5, 0) });
     assert_eq!(e.unwrap_err(), SetupError::Deadlines((5_000, 1_000)));
-    for blocks in [0, 16] {
+    for blocks in [0, rtcan::layout::MAX_BLOCKS + 1] {
         let e = Traffic::generate(&Setup { hrt_blocks: blocks, ..Setup::new(0.5, 0) });
         assert_eq!(e.unwrap_err(), SetupError::HrtBlocks(blocks));
     }
@@ -336,7 +338,7 @@ fn framed_windows_end_before_every_reservation_and_carry_past_the_grids_ceiling(
     let setup = short(0.95, 6, 500_000);
     let traffic = Traffic::generate(&setup).unwrap();
     let r = run(&setup, &traffic, Policy::RtcanFramed);
-    let timeline = r2p_loadbench::timeline::Timeline::new(&traffic, setup.cycle, setup.hrt_blocks);
+    let timeline = r2p_loadbench::timeline::Timeline::new(&traffic.layout);
     let cycle_us = u64::from(setup.cycle.cycle_us);
     // No SRT/NRT frame, intermission included, runs into a reservation's start, or starts in
     // a reservation before its owner's frame has (`FOLLOW_US` after its start: only the last
@@ -350,7 +352,7 @@ fn framed_windows_end_before_every_reservation_and_carry_past_the_grids_ceiling(
         let (start, idle) = (start_ns / 1_000, e.time_ns / 1_000 + u64::from(INTERMISSION_BITS));
         let cycle = start / cycle_us;
         for c in [cycle, cycle + 1] {
-            for res in timeline.of(traffic.mask(c as u32)) {
+            for res in timeline.of(traffic.framed_mask(c as u32)) {
                 let (a, b) = (
                     c * cycle_us + u64::from(res.start_us),
                     c * cycle_us + u64::from(res.free_at_us),
