@@ -178,11 +178,15 @@ impl Layout {
             return Err(LayoutError::NotHrtSlot(slot));
         }
         if let Some(has) = self.span(slot) {
-            return if has.len_us >= needs_us {
-                Ok(has)
-            } else {
-                Err(LayoutError::TooShort { slot, has_us: has.len_us, needs_us })
-            };
+            if has.len_us >= needs_us {
+                return Ok(has);
+            }
+            let grown = Span { len_us: needs_us, ..has };
+            if !self.room_for(grown, slot) {
+                return Err(LayoutError::TooShort { slot, has_us: has.len_us, needs_us });
+            }
+            self.spans[usize::from(slot)] = grown;
+            return Ok(grown);
         }
         let mut best: Option<(u32, Span)> = None;
         for b in 0..u32::from(self.blocks) {
@@ -210,34 +214,36 @@ impl Layout {
         frames: u8,
         needs_us: u16,
     ) -> Result<StreamSlots, Reject> {
-        let usable = |slot: u8| self.span(slot).is_none_or(|s| s.len_us >= needs_us);
+        let usable = |slot: u8| match self.span(slot) {
+            None => true,
+            Some(has) => {
+                has.len_us >= needs_us || self.room_for(Span { len_us: needs_us, ..has }, slot)
+            }
+        };
         let known = calendar.slots_of(stream);
         if let Some((_, held)) = known {
             // Registered again (a node repeating its request): its slots must hold the frames.
             let mut rest = held.slots;
             while rest != 0 {
-                if !usable(rest.trailing_zeros() as u8) {
+                if self.span(rest.trailing_zeros() as u8).is_none_or(|s| s.len_us < needs_us) {
                     return Err(Reject::Conflict);
                 }
                 rest &= rest - 1;
             }
         }
         let got = calendar.register_in(stream, period_cycles, frames, usable)?;
-        let (mut rest, mut opened) = (got.slots, 0u64);
+        let before = self.clone();
+        let mut rest = got.slots;
         while rest != 0 {
             let slot = rest.trailing_zeros() as u8;
             rest &= rest - 1;
-            if self.span(slot).is_some() {
-                continue;
-            }
             if self.place(slot, needs_us).is_err() {
                 if known.is_none() {
                     calendar.remove(stream);
                 }
-                (1..MAX_SLOTS).filter(|&s| opened & 1 << s != 0).for_each(|s| self.release(s));
+                *self = before;
                 return Err(Reject::Full);
             }
-            opened |= 1 << slot;
         }
         Ok(got)
     }
@@ -271,11 +277,26 @@ impl Layout {
         self.config.cycle_us / u32::from(self.blocks)
     }
 
+    /// True if `span` overlaps no placed reservation but `slot`'s own and ends within its
+    /// block's share: a slot nothing follows in its block may grow without moving another.
+    fn room_for(&self, span: Span, slot: u8) -> bool {
+        let b = u32::from(span.start_us) / self.block_us();
+        let free = (0..MAX_SLOTS)
+            .filter(|&s| s != slot)
+            .filter_map(|s| self.span(s))
+            .all(|other| !other.overlaps(span));
+        free && span.end_us() <= self.limit(b)
+    }
+
+    /// The end of block `b`'s share: its reservations must end by then.
+    fn limit(&self, b: u32) -> u32 {
+        b * self.block_us() + self.per_block_us + if b == 0 { self.spans[0].end_us() } else { 0 }
+    }
+
     /// The earliest `len_us` long gap of block `b` between its placed reservations, within its
     /// share.
     fn first_gap(&self, b: u32, len_us: u16) -> Option<Span> {
-        let start = b * self.block_us();
-        let limit = start + self.per_block_us + if b == 0 { self.spans[0].end_us() } else { 0 };
+        let (start, limit) = (b * self.block_us(), self.limit(b));
         let mut at = start;
         loop {
             let candidate = Span { start_us: at as u16, len_us };
@@ -331,9 +352,11 @@ pub(crate) mod tests {
             // Now block 0 ends earlier (260 against 370).
             let c = l.place(9, 100).unwrap();
             assert_eq!(c, Span { start_us: 160, len_us: 100 });
-            // A slot placed already: its reservation holds a frame as long or shorter.
+            // A slot placed already: its reservation holds a frame as long or shorter; a longer
+            // one only if nothing follows it in its block (slot 3 follows slot 5).
             assert_eq!(l.place(5, 115), Ok(a));
             assert_eq!(l.place(5, 116), Err(LayoutError::TooShort { slot: 5, has_us: 115, needs_us: 116 }));
+            assert_eq!(l.place(3, 170), Ok(Span { start_us: 2_615, len_us: 170 }));
         }
 
         fn a_released_slot_leaves_a_hole_the_next_slot_that_fits_takes_and_nothing_moves() {
@@ -359,18 +382,23 @@ pub(crate) mod tests {
         }
 
         fn a_stream_goes_into_a_slot_long_enough_or_opens_its_own() {
-            let mut l = Layout::new(CYCLE, 2, 2_400).unwrap();
+            let mut l = Layout::new(CYCLE, 1, 2_400).unwrap();
             let mut cal: Scheduler<8> = Scheduler::new(15, 30);
             // Two streams of period 2 could share one slot in alternate cycles.
             let long = l.admit(&mut cal, MessageId(0x101), 2, 1, 155).unwrap();
             let short = l.admit(&mut cal, MessageId(0x102), 2, 1, 115).unwrap();
             assert_eq!(short.slots, long.slots, "a shorter frame shares the longer one's slot");
             assert_ne!(short.offset, long.offset);
-            // The other way round, the longer one must not share the shorter one's slot: that
-            // slot cannot grow without moving the slots after it.
+            // The other way round, the longer one shares the shorter one's slot only if that
+            // slot can grow without moving another: when nothing follows it in its block.
             let a = l.admit(&mut cal, MessageId(0x103), 2, 1, 115).unwrap();
+            let after_a = l.admit(&mut cal, MessageId(0x105), 1, 1, 100).unwrap();
             let b = l.admit(&mut cal, MessageId(0x104), 2, 1, 155).unwrap();
-            assert_ne!(a.slots, b.slots);
+            assert_ne!(a.slots, b.slots, "slot {} is followed by {}", a.slots, after_a.slots);
+            let c = l.admit(&mut cal, MessageId(0x106), 2, 1, 160).unwrap();
+            assert_eq!(c.slots, b.slots, "the block's last slot grows to 160 µs");
+            let grown = l.span(c.slots.trailing_zeros() as u8).unwrap();
+            assert_eq!(grown.len_us, 160);
             for got in [long, a, b] {
                 let slot = got.slots.trailing_zeros() as u8;
                 assert!(l.span(slot).is_some(), "slot {slot} placed");
@@ -382,7 +410,6 @@ pub(crate) mod tests {
                     assert!(!x.overlaps(*y), "{x:?} {y:?}");
                 }
             }
-            assert_eq!(l.span(b.slots.trailing_zeros() as u8).unwrap().len_us, 155);
         }
 
         fn a_stream_the_layout_has_no_room_for_is_refused_and_leaves_nothing_behind() {

@@ -1,7 +1,7 @@
 //! Frame-sized reservations (docs/rtcan.md "Capacity"): whatever streams come and go, the
 //! master's layout never lets two reservations overlap or leave their block's share, never
-//! moves a slot a stream still uses (every node sends at its slot's offset), and every
-//! stream's slots hold its frames.
+//! moves a slot a stream still uses (every node sends at its slot's offset; a slot grows only
+//! when nothing follows it in its block), and every stream's slots hold its frames.
 
 use proptest::prelude::*;
 use rtcan::layout::{Layout, Span};
@@ -81,7 +81,15 @@ proptest! {
             // no stream uses is free.
             for &(slot, span) in &before {
                 if calendar.iter().any(|r| r.phase.slot == slot) {
-                    prop_assert_eq!(layout.span(slot), Some(span), "slot {} moved", slot);
+                    let now = layout.span(slot).unwrap();
+                    prop_assert_eq!(now.start_us, span.start_us, "slot {} moved", slot);
+                    prop_assert!(now.len_us >= span.len_us, "slot {slot} shrank");
+                    // It grew only with no reservation after it in its block then.
+                    if now.len_us > span.len_us {
+                        let after = before.iter().any(|&(s, x)| s != slot && x.start_us > span.start_us
+                            && u32::from(x.start_us) < now.end_us());
+                        prop_assert!(!after, "slot {slot} grew over another");
+                    }
                 }
             }
             for r in calendar.iter() {
