@@ -175,7 +175,7 @@ MGMT_FIELDS = ["r2p.message.length", "r2p.mgmt.type", "r2p.mgmt.name", "r2p.mgmt
                "r2p.mgmt.uptime_s", "r2p.mgmt.topic", "r2p.mgmt.type_hash", "r2p.mgmt.type_name",
                "r2p.mgmt.size", "r2p.mgmt.index", "r2p.mgmt.class", "r2p.mgmt.target",
                "r2p.mgmt.message_id", "r2p.mgmt.hrt_period_cycles", "r2p.mgmt.offset", "r2p.mgmt.slot",
-               "r2p.mgmt.hrt_result", "r2p.mgmt.subscribe_result", "r2p.mgmt.kind", "r2p.mgmt.version",
+               "r2p.mgmt.hrt_result", "r2p.mgmt.start_us", "r2p.mgmt.len_us", "r2p.mgmt.subscribe_result", "r2p.mgmt.kind", "r2p.mgmt.version",
                "r2p.topic", "r2p.type"]
 
 
@@ -211,8 +211,13 @@ def test_messages_reassembled_and_management_decoded(pcap):
             advertised[topic] = name
         elif m.type == 0x25:                                            # HRT_GRANT
             g = m.take("HHBBB")
+            start, length = m.take("HH")
             assert (number(row["r2p.mgmt.message_id"]), int(row["r2p.mgmt.hrt_period_cycles"]),
                     int(row["r2p.mgmt.offset"]), int(row["r2p.mgmt.slot"]), int(row["r2p.mgmt.hrt_result"])) == g
+            assert (int(row["r2p.mgmt.start_us"]), int(row["r2p.mgmt.len_us"])) == (start, length)
+            # Where the reservation lies: on the emulated bus's slot grid (10 ms, 60 slots), slot
+            # k's whole slot.
+            assert (start, length) == (-(-g[3] * 10_000 // 60), -(-(g[3] + 1) * 10_000 // 60) - start), g
             grants.append((n, g))
         elif m.type == 0x23:                                            # SUBSCRIBE_RESPONSE
             target, topic = m.take("B"), m.string()
@@ -226,13 +231,12 @@ def test_messages_reassembled_and_management_decoded(pcap):
     assert {"psu", "proximity", "gateway", "motor1", "motor2", "motor3"} <= names, names
     assert {0x11, 0x15, 0x21, 0x22, 0x23, 0x24, 0x25} <= set(seen), seen
     assert advertised["motor1/setpoint"] == "WheelSetpoint" and advertised["psu/battery"] == "Battery"
-    # Each granted slot is then reserved in the sync frames (the master's calendar). The three
-    # answers come first; the master's calendar beacon repeats them later, unchanged (one table
-    # entry per heartbeat, docs/rtcan.md "Master failover").
+    # Each granted slot is then reserved in the sync frames (the master's calendar). Three
+    # grants, each repeated unchanged by the master's calendar beacon (one table entry per
+    # heartbeat, docs/rtcan.md "Master failover"); a repetition may come before another's answer.
     assert len({g for _, g in grants}) == 3 and all(g[4] == 0 for _, g in grants), grants
-    answers = grants[:3]
-    assert all(g in {a for _, a in answers} for _, g in grants[3:]), grants
-    last = max(n for n, _ in answers)
+    answers = {g: n for n, g in reversed(grants)}                    # each grant's first frame
+    last = max(answers.values())
     later = [int.from_bytes(d, "little") for k, (_, raw, d) in enumerate(frames, 1)
              if k > last + 200 and raw < 0x100 << 7 and raw & 0x7F == 0]
     assert later and all(w >> g[3] & 1 for w in later for _, g in grants)

@@ -128,6 +128,9 @@ local M = {
     frames = ProtoField.uint8("r2p.mgmt.frames", "Frames per message", base.DEC),
     offset = ProtoField.uint8("r2p.mgmt.offset", "Cycle offset", base.DEC),
     slot = ProtoField.uint8("r2p.mgmt.slot", "Slot", base.DEC),
+    hrt_size = ProtoField.uint8("r2p.mgmt.hrt_size", "Message size (bytes)", base.DEC),
+    start_us = ProtoField.uint16("r2p.mgmt.start_us", "Reservation start (us)", base.DEC),
+    len_us = ProtoField.uint16("r2p.mgmt.len_us", "Reservation length (us)", base.DEC),
     hrt_result = ProtoField.uint8("r2p.mgmt.hrt_result", "Result", base.DEC, HRT_RESULTS),
     param_index = ProtoField.uint16("r2p.mgmt.param", "Parameter index", base.DEC),
     value_tag = ProtoField.uint8("r2p.mgmt.value_type", "Value type", base.DEC, VALUE_TAGS),
@@ -421,14 +424,17 @@ local function dissect_management(tvb, tree, node, first_pass)
             local mid = r:u16(M.message_id)
             local period = r:u16(M.hrt_period)
             local fr = r:u8(M.frames)
-            summary = string.format("HRT_REQUEST 0x%04X every %d cycles, %d frame(s)", mid, period, fr)
+            local size = r:u8(M.hrt_size)
+            summary = string.format("HRT_REQUEST 0x%04X every %d cycles, %d frame(s) of %d B", mid, period, fr, size)
         elseif ty == 0x25 then
             local mid = r:u16(M.message_id)
             local period = r:u16(M.hrt_period)
             local off = r:u8(M.offset)
             local slot = r:u8(M.slot)
             local res = r:enum(M.hrt_result, HRT_RESULTS)
-            summary = res == 0 and string.format("HRT_GRANT 0x%04X slot %d, cycle %d mod %d", mid, slot, off, period)
+            local start, len = r:u16(M.start_us), r:u16(M.len_us)
+            summary = res == 0 and string.format("HRT_GRANT 0x%04X slot %d (%d+%d us), cycle %d mod %d",
+                    mid, slot, start, len, off, period)
                 or string.format("HRT_GRANT 0x%04X refused: %s", mid, HRT_RESULTS[res])
         elseif ty == 0x41 then
             local target = r:u8(M.target)

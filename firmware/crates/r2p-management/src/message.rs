@@ -250,7 +250,8 @@ pub enum Message {
         message_id: u16,
     },
     /// Asks the bus master (whoever it is: there is no target) to reserve HRT slots for the
-    /// sender's stream `message_id`: `frames` frames every `period_cycles` cycles.
+    /// sender's stream `message_id`: `frames` frames of a `size`-byte message every
+    /// `period_cycles` cycles.
     HrtRequest {
         /// The stream (a stream of the sender: `sender << 8 | index`).
         message_id: u16,
@@ -258,6 +259,9 @@ pub enum Message {
         period_cycles: u16,
         /// Frames per message.
         frames: u8,
+        /// The message's payload bytes (its frames' lengths follow, transfer CRC included):
+        /// a master that sizes reservations to their frames needs them.
+        size: u8,
     },
     /// The master's answer on its own management stream: the stream may send in slot `slot` of
     /// every cycle c with c mod `period_cycles` = `offset` (when `result` is `Ok`).
@@ -272,6 +276,11 @@ pub enum Message {
         slot: u8,
         /// Outcome.
         result: HrtResult,
+        /// Where the slot's reservation starts, µs from the cycle's start (0 when refused).
+        start_us: u16,
+        /// How long it lasts, µs: its frame's worst case and a guard (0 when refused). Every
+        /// node hears every grant, so each learns where each reservation lies.
+        len_us: u16,
     },
     /// Reads parameter `index` of `target`.
     ParamGet {
@@ -506,17 +515,28 @@ impl Message {
                 w.u8(*result as u8)?;
                 w.u16(*message_id)?;
             }
-            Message::HrtRequest { message_id, period_cycles, frames } => {
+            Message::HrtRequest { message_id, period_cycles, frames, size } => {
                 w.u16(*message_id)?;
                 w.u16(*period_cycles)?;
                 w.u8(*frames)?;
+                w.u8(*size)?;
             }
-            Message::HrtGrant { message_id, period_cycles, offset, slot, result } => {
+            Message::HrtGrant {
+                message_id,
+                period_cycles,
+                offset,
+                slot,
+                result,
+                start_us,
+                len_us,
+            } => {
                 w.u16(*message_id)?;
                 w.u16(*period_cycles)?;
                 w.u8(*offset)?;
                 w.u8(*slot)?;
                 w.u8(*result as u8)?;
+                w.u16(*start_us)?;
+                w.u16(*len_us)?;
             }
             Message::ParamGet { target, index } => {
                 w.u8(*target)?;
@@ -642,6 +662,7 @@ impl Message {
                 message_id: r.u16()?,
                 period_cycles: r.u16()?,
                 frames: r.u8()?,
+                size: r.u8()?,
             },
             ty::HRT_GRANT => {
                 let (message_id, period_cycles, offset, slot) =
@@ -655,7 +676,16 @@ impl Message {
                     5 => HrtResult::TooManyFrames,
                     other => return Err(DecodeError::BadValue(other)),
                 };
-                Message::HrtGrant { message_id, period_cycles, offset, slot, result }
+                let (start_us, len_us) = (r.u16()?, r.u16()?);
+                Message::HrtGrant {
+                    message_id,
+                    period_cycles,
+                    offset,
+                    slot,
+                    result,
+                    start_us,
+                    len_us,
+                }
             }
             ty::PARAM_GET => Message::ParamGet { target: r.u8()?, index: r.u16()? },
             ty::PARAM_SET => {
@@ -728,13 +758,15 @@ pub(crate) mod tests {
                 result: SubscribeResult::Ok,
                 message_id: 0x1203,
             },
-            Message::HrtRequest { message_id: 0x1201, period_cycles: 2, frames: 1 },
+            Message::HrtRequest { message_id: 0x1201, period_cycles: 2, frames: 1, size: 6 },
             Message::HrtGrant {
                 message_id: 0x1201,
                 period_cycles: 2,
                 offset: 1,
                 slot: 3,
                 result: HrtResult::Ok,
+                start_us: 500,
+                len_us: 167,
             },
             Message::ParamGet { target: 3, index: 9 },
             Message::ParamSet { target: 3, index: 9, value: Value::F32(0.25) },
@@ -847,23 +879,28 @@ pub(crate) mod tests {
 
         fn hrt_layout_matches_spec() {
             let mut buf = [0u8; ENCODED_MAX];
-            let request = Message::HrtRequest { message_id: 0x1201, period_cycles: 2, frames: 1 };
+            let request =
+                Message::HrtRequest { message_id: 0x1201, period_cycles: 2, frames: 1, size: 6 };
             let n = request.encode(&mut buf).unwrap();
-            assert_eq!(&buf[..n], &[0x24, 0x01, 0x12, 0x02, 0x00, 0x01]);
+            assert_eq!(&buf[..n], &[0x24, 0x01, 0x12, 0x02, 0x00, 0x01, 0x06]);
             let grant = Message::HrtGrant {
                 message_id: 0x1201,
                 period_cycles: 4,
                 offset: 3,
                 slot: 7,
                 result: HrtResult::Ok,
+                start_us: 0x0489,
+                len_us: 0x009b,
             };
             let n = grant.encode(&mut buf).unwrap();
-            assert_eq!(&buf[..n], &[0x25, 0x01, 0x12, 0x04, 0x00, 3, 7, 0]);
+            assert_eq!(&buf[..n], &[0x25, 0x01, 0x12, 0x04, 0x00, 3, 7, 0, 0x89, 0x04, 0x9b, 0]);
             assert_eq!(
-                Message::decode(&[0x25, 0x01, 0x12, 0x04, 0x00, 0, 0, 6]),
+                Message::decode(&[0x25, 0x01, 0x12, 0x04, 0x00, 0, 0, 6, 0, 0, 0, 0]),
                 Err(DecodeError::BadValue(6))
             );
-            let full = [0x25, 0x01, 0x12, 0x04, 0x00, 0, 0, 1];
+            // The reservation's position is part of the grant: one without it is cut short.
+            assert!(Message::decode(&[0x25, 0x01, 0x12, 0x04, 0x00, 3, 7, 0]).is_err());
+            let full = [0x25, 0x01, 0x12, 0x04, 0x00, 0, 0, 1, 0, 0, 0, 0];
             assert!(matches!(
                 Message::decode(&full),
                 Ok(Message::HrtGrant { result: HrtResult::Full, .. })

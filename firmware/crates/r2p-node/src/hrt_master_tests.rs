@@ -45,6 +45,7 @@ fn the_master_reserves_slots_only_for_the_asking_nodes_own_streams() {
         message_id: message.0,
         period_cycles: 1,
         frames: 1,
+        size: 4,
     };
 
     for (stream, what) in [
@@ -67,7 +68,7 @@ fn the_master_reserves_slots_only_for_the_asking_nodes_own_streams() {
     assert_eq!((mask & !empty).count_ones(), 1, "one slot reserved");
 
     // A release (period 0) from another node leaves the reservation; its owner's frees it.
-    let release = Message::HrtRequest { message_id: own.0, period_cycles: 0, frames: 1 };
+    let release = Message::HrtRequest { message_id: own.0, period_cycles: 0, frames: 1, size: 0 };
     inject(&bus, other.get(), &release);
     let until = bus.now.get() + 3 * CYCLE_US;
     run_slots(&bus, &mut [&mut m], until);

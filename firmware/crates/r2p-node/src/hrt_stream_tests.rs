@@ -163,18 +163,23 @@ fn only_a_grant_that_answers_the_request_with_a_slot_of_the_cycle_is_taken() {
         run_slots(&bus, &mut [&mut m, &mut a, &mut b], until);
     }
     let message_id = a.node_id().message_id(1).0;
-    let grant = |period_cycles, offset, slot| Message::HrtGrant {
+    // A grant of the slot grid (no reservation of its own), or one placing it at `start`.
+    let grant_at = |period_cycles, offset, slot, start_us| Message::HrtGrant {
         message_id,
         period_cycles,
         offset,
         slot,
         result: HrtResult::Ok,
+        start_us,
+        len_us: if start_us == 0 { 0 } else { 115 },
     };
+    let grant = |period_cycles, offset, slot| grant_at(period_cycles, offset, slot, 0);
     let bogus = [
         grant(2, 2, 1),           // offset not less than the period
         grant(2, 0, 0),           // slot 0 is the sync's
         grant(2, 1, CYCLE.slots), // beyond the cycle
         grant(4, 1, 1),           // not the period asked for
+        grant_at(2, 1, 1, 167),   // a frame-sized reservation: a bus of another layout
     ];
     let master = m.node_id().get();
     for g in &bogus {

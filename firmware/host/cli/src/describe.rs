@@ -154,12 +154,21 @@ pub fn message_text(m: &Message) -> String {
             "SUBSCRIBE_RESPONSE target={target} topic={topic} result={} message=0x{message_id:04X}",
             result_name(*result)
         ),
-        Message::HrtRequest { message_id, period_cycles, frames } => format!(
-            "HRT_REQUEST message=0x{message_id:04X} period={period_cycles} cycles frames={frames}"
+        Message::HrtRequest { message_id, period_cycles, frames, size } => format!(
+            "HRT_REQUEST message=0x{message_id:04X} period={period_cycles} cycles frames={frames} \
+             size={size}"
         ),
-        Message::HrtGrant { message_id, period_cycles, offset, slot, result } => format!(
+        Message::HrtGrant {
+            message_id,
+            period_cycles,
+            offset,
+            slot,
+            result,
+            start_us,
+            len_us,
+        } => format!(
             "HRT_GRANT message=0x{message_id:04X} period={period_cycles} offset={offset} \
-             slot={slot} result={result:?}"
+             slot={slot} result={result:?} at={start_us}+{len_us} us"
         ),
         Message::ParamGet { target, index } => format!("PARAM_GET target={target} index={index}"),
         Message::ParamSet { target, index, value } => {
@@ -205,14 +214,17 @@ pub fn message_json(m: &Message) -> Json {
             "type": "SUBSCRIBE_RESPONSE", "target": target, "topic": topic.as_str(),
             "result": result_name(*result), "message_id": message_id,
         }),
-        Message::HrtRequest { message_id, period_cycles, frames } => json!({
+        Message::HrtRequest { message_id, period_cycles, frames, size } => json!({
             "type": "HRT_REQUEST", "message_id": message_id, "period_cycles": period_cycles,
-            "frames": frames,
+            "frames": frames, "size": size,
         }),
-        Message::HrtGrant { message_id, period_cycles, offset, slot, result } => json!({
-            "type": "HRT_GRANT", "message_id": message_id, "period_cycles": period_cycles,
-            "offset": offset, "slot": slot, "result": format!("{result:?}"),
-        }),
+        Message::HrtGrant { message_id, period_cycles, offset, slot, result, start_us, len_us } => {
+            json!({
+                "type": "HRT_GRANT", "message_id": message_id, "period_cycles": period_cycles,
+                "offset": offset, "slot": slot, "result": format!("{result:?}"),
+                "start_us": start_us, "len_us": len_us,
+            })
+        }
         Message::ParamGet { target, index } => {
             json!({"type": "PARAM_GET", "target": target, "index": index})
         }
@@ -495,13 +507,15 @@ mod tests {
                 result: SubscribeResult::TypeMismatch,
                 message_id: 0,
             },
-            Message::HrtRequest { message_id: 0x201, period_cycles: 2, frames: 1 },
+            Message::HrtRequest { message_id: 0x201, period_cycles: 2, frames: 1, size: 4 },
             Message::HrtGrant {
                 message_id: 0x201,
                 period_cycles: 2,
                 offset: 1,
                 slot: 3,
                 result: HrtResult::Ok,
+                start_us: 500,
+                len_us: 167,
             },
             Message::ParamGet { target: 1, index: 4 },
             Message::ParamSet { target: 1, index: 4, value: Value::F32(1.5) },
@@ -511,6 +525,10 @@ mod tests {
         ];
         let lines: Vec<String> = msgs.iter().map(message_text).collect();
         assert_eq!(lines[1], "REBOOT target=all");
+        assert_eq!(
+            lines[5],
+            "HRT_GRANT message=0x0201 period=2 offset=1 slot=3 result=Ok at=500+167 us"
+        );
         assert!(lines[3].contains("result=type mismatch"));
         assert_eq!(lines[7], "PARAM_SET target=1 index=4 value=f32:1.5");
         assert_eq!(lines[8], "PARAM_VALUE index=4 value=i32:-3");

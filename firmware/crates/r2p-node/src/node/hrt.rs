@@ -22,6 +22,11 @@ use rtcan::Scheduler;
 /// per frame of each stream.
 pub const MASTER_STREAMS: usize = 16;
 
+/// An HRT_GRANT's reservation (start, length) on the slot grid: none of its own, the slot is
+/// the reservation. Frame-sized reservations (docs/rtcan.md "Capacity") will carry where each
+/// lies; a node on the grid that hears one is on a bus of another layout and ignores it.
+const GRID_RESERVATION: (u16, u16) = (0, 0);
+
 /// The longest HRT message: [`MAX_HRT_FRAMES`] frames less the transfer CRC.
 pub const MAX_HRT_MESSAGE: usize = MAX_PAYLOAD * MAX_HRT_FRAMES as usize - CRC_LEN;
 
@@ -57,6 +62,8 @@ pub(super) struct HrtStream {
     pub(super) period: Period,
     /// Frames of each message (slots it asks for).
     pub(super) frames: u8,
+    /// Payload bytes of each message (the master sizes reservations by them).
+    pub(super) size: u8,
     pub(super) state: HrtState,
     /// A subscriber waiting for the reservation before it is answered (others ask again).
     pub(super) waiting: Option<(NodeId, u8)>,
@@ -83,7 +90,7 @@ impl<
     pub(super) fn on_hrt_management(&mut self, from: NodeId, msg: Message, now: Micros) {
         let me = self.ids.node_id();
         match msg {
-            Message::HrtRequest { message_id, period_cycles, frames }
+            Message::HrtRequest { message_id, period_cycles, frames, .. }
                 if MASTER && self.master.is_some() =>
             {
                 let message = MessageId(message_id);
@@ -117,7 +124,15 @@ impl<
                     slots &= slots - 1;
                 }
             }
-            Message::HrtGrant { message_id, period_cycles, offset, slot, result } => {
+            Message::HrtGrant {
+                message_id,
+                period_cycles,
+                offset,
+                slot,
+                result,
+                start_us,
+                len_us,
+            } => {
                 let Some((owner, index)) = NodeId::of(MessageId(message_id)) else {
                     bump(&mut self.stats.unexpected);
                     return;
@@ -133,7 +148,8 @@ impl<
                 let valid = result != HrtResult::Ok
                     || (u32::from(offset) < u32::from(period_cycles)
                         && slot > 0
-                        && slot < self.config.cycle.slots);
+                        && slot < self.config.cycle.slots
+                        && (start_us, len_us) == GRID_RESERVATION);
                 let Some(h) = self.exports.get_mut(i).and_then(|e| e.hrt.as_mut()) else {
                     bump(&mut self.stats.unexpected);
                     return;
@@ -197,7 +213,9 @@ impl<
         result: HrtResult,
     ) -> bool {
         let (offset, slot) = (at.offset, at.slot);
-        let grant = Message::HrtGrant { message_id, period_cycles, offset, slot, result };
+        let (start_us, len_us) = GRID_RESERVATION;
+        let grant =
+            Message::HrtGrant { message_id, period_cycles, offset, slot, result, start_us, len_us };
         self.send(&grant).is_ok()
     }
 
@@ -242,6 +260,7 @@ impl<
                     message_id: message.0,
                     period_cycles: cycles as u16,
                     frames: h.frames,
+                    size: h.size,
                 };
                 if self.send(&msg).is_err() {
                     break; // retried at the next slot

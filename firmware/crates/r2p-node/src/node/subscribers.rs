@@ -115,7 +115,7 @@ impl<
             // Period 0: a release (a master that does not know it refuses it as not
             // harmonic, and the slot stays until this node goes silent or reboots).
             let release =
-                Message::HrtRequest { message_id: message.0, period_cycles: 0, frames: 1 };
+                Message::HrtRequest { message_id: message.0, period_cycles: 0, frames: 1, size: 0 };
             let _ = self.send(&release);
         }
     }

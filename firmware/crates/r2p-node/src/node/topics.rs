@@ -139,6 +139,7 @@ impl<
                 Some(HrtStream {
                     period,
                     frames: frames as u8,
+                    size: export.size() as u8,
                     state: HrtState::Idle,
                     waiting: None,
                     next_frame: 0,
