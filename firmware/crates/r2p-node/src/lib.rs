@@ -43,6 +43,8 @@ mod advertising_tests;
 mod babbler_tests;
 #[cfg(test)]
 mod failover_tests;
+#[cfg(all(test, feature = "framed-reservations"))]
+mod framed_tests;
 #[cfg(test)]
 mod guard_tests;
 #[cfg(test)]

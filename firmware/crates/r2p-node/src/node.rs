@@ -38,6 +38,7 @@ mod calendar;
 mod config;
 mod error;
 mod events;
+mod framed;
 mod hrt;
 mod liveness;
 mod management;
@@ -134,6 +135,10 @@ pub struct Node<
     clock: SlotClock,
     failover: Failover,
     scheduler: Scheduler<MASTER_STREAMS>,
+    /// Frame-sized reservations (`hrt_blocks` > 0): where each slot's reservation lies, placed
+    /// here as master, heard in the grants otherwise (`framed.rs`).
+    #[cfg(feature = "framed-reservations")]
+    layout: Option<rtcan::layout::Layout>,
     /// The nodes holding reservations in `scheduler`, followed by their heartbeats (master).
     owners: Vec<liveness::Owner, { liveness::OWNERS }>,
     /// As standby: syncs in a row whose masks `scheduler` (its copy of the master's calendar)
@@ -176,6 +181,19 @@ impl<
         }
         let name = String::try_from(config.name).map_err(|_| NodeError::BadName)?;
         config.cycle.validate().map_err(NodeError::BadCycle)?;
+        #[cfg(feature = "framed-reservations")]
+        let layout = match config.hrt_blocks {
+            0 => None,
+            blocks => {
+                let reservable_us = u32::from(config.hrt_slots) * config.cycle.slot_us();
+                let l = rtcan::layout::Layout::new(config.cycle, blocks, reservable_us);
+                Some(l.map_err(|_| NodeError::BadBlocks(blocks))?)
+            }
+        };
+        #[cfg(not(feature = "framed-reservations"))]
+        if config.hrt_blocks != 0 {
+            return Err(NodeError::BadBlocks(config.hrt_blocks));
+        }
         let rank = match config.rank {
             None => None,
             Some(_) if !MASTER => return Err(NodeError::NotMasterCapable),
@@ -209,6 +227,8 @@ impl<
             clock: SlotClock::new(config.cycle),
             failover: Failover::new(rank, config.cycle.cycle_us, 0),
             scheduler: Scheduler::new(config.hrt_slots, config.cycle.slots),
+            #[cfg(feature = "framed-reservations")]
+            layout,
             owners: Vec::new(),
             calendar_agree: 0,
             beacon: 0,

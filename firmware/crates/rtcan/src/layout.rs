@@ -257,6 +257,28 @@ impl Layout {
         }
     }
 
+    /// Takes in where the master placed `slot` (a node learning the layout from the grants it
+    /// hears): the master's newest word wins, so a reservation of another slot it overlaps is
+    /// forgotten (that slot was released and its time reused). `Err` for a position the master
+    /// cannot have given: the sync slot, a slot beyond [`MAX_SLOTS`], no length, past the
+    /// cycle's end or into the sync's reservation.
+    pub fn take(&mut self, slot: u8, span: Span) -> Result<(), LayoutError> {
+        let sync = self.spans[usize::from(SYNC_SLOT)];
+        if slot == SYNC_SLOT || slot >= MAX_SLOTS {
+            return Err(LayoutError::NotHrtSlot(slot));
+        }
+        if span.len_us == 0 || span.end_us() > self.config.cycle_us || span.overlaps(sync) {
+            return Err(LayoutError::NoRoom { needs_us: span.len_us });
+        }
+        for (s, other) in self.spans.iter_mut().enumerate().skip(1) {
+            if s != usize::from(slot) && other.len_us > 0 && other.overlaps(span) {
+                *other = Span::default();
+            }
+        }
+        self.spans[usize::from(slot)] = span;
+        Ok(())
+    }
+
     /// Frees `slot`'s time (its last stream left); its gap is reused by the next slot that fits.
     pub fn release(&mut self, slot: u8) {
         if slot != SYNC_SLOT {
@@ -432,6 +454,34 @@ pub(crate) mod tests {
             cal.remove(MessageId(0x104));
             l.release_unused(&cal);
             assert!(l.admit(&mut cal, MessageId(0x105), 1, 2, 150).is_ok());
+        }
+
+        fn a_node_takes_the_masters_positions_and_forgets_what_they_overlap() {
+            let mut master = Layout::new(CYCLE, 2, 2_400).unwrap();
+            let mut node = Layout::new(CYCLE, 2, 2_400).unwrap();
+            for (slot, us) in [(4, 120), (2, 155), (9, 100)] {
+                let span = master.place(slot, us).unwrap();
+                node.take(slot, span).unwrap();
+            }
+            assert_eq!(node, master);
+            // Slot 4 released and its time given to slot 6: a node that hears slot 6's grant
+            // forgets slot 4's old place.
+            let old = master.span(4).unwrap();
+            master.release(4);
+            let six = master.place(6, 100).unwrap();
+            assert_eq!(six.start_us, old.start_us);
+            node.take(6, six).unwrap();
+            assert_eq!(node.span(4), None);
+            assert_eq!(node, master);
+            // Positions the master cannot have given.
+            let at = |start_us, len_us| Span { start_us, len_us };
+            assert_eq!(node.take(0, at(200, 100)), Err(LayoutError::NotHrtSlot(0)));
+            assert_eq!(node.take(64, at(200, 100)), Err(LayoutError::NotHrtSlot(64)));
+            assert!(node.take(7, at(200, 0)).is_err(), "no length");
+            assert!(node.take(7, at(4_950, 51)).is_err(), "past the cycle's end");
+            assert!(node.take(7, at(159, 100)).is_err(), "into the sync's reservation");
+            assert!(node.take(7, at(4_900, 100)).is_ok(), "ends with the cycle");
+            assert!(node.take(7, at(160, 100)).is_ok(), "right after the sync");
         }
 
         fn bad_slots_and_configurations_are_refused() {

@@ -29,7 +29,9 @@ impl<
     /// True if this node's copy of the calendar may carry the bus: as master, or as a standby
     /// whose copy predicted the master's masks for a hyperperiod.
     pub fn knows_calendar(&self) -> bool {
-        MASTER && (self.master.is_some() || u32::from(self.calendar_agree) >= MAX_PERIOD_CYCLES)
+        MASTER
+            && (self.master.is_some()
+                || u32::from(self.calendar_agree) >= MAX_PERIOD_CYCLES && self.positions_known())
     }
 
     /// The master granted `stream` of `owner` (this node's or another's) `period_cycles` at
@@ -62,7 +64,7 @@ impl<
             return;
         }
         if new_calendar {
-            self.scheduler.clear();
+            self.scheduler.clear(); // the layout too (`Node::on_sync`)
             self.owners.clear();
             self.calendar_agree = MAX_PERIOD_CYCLES as u16;
             return;
@@ -73,6 +75,7 @@ impl<
         let mask = sync.reservations;
         self.scheduler
             .retain(|r| !occurs(r.period, r.phase, next) || mask & 1 << r.phase.slot != 0);
+        self.calendar_released();
         let agrees = info.continuous && self.scheduler.mask(next) == mask;
         self.calendar_agree = if agrees {
             self.calendar_agree.saturating_add(1).min(MAX_PERIOD_CYCLES as u16)

@@ -34,6 +34,11 @@ pub struct NodeConfig {
     /// SRT/NRT traffic (including HRT registrations). Keep it well below the cycle's slot count,
     /// the same on every node with a rank.
     pub hrt_slots: u8,
+    /// Frame-sized reservations (issue 22, docs/rtcan.md "Frame-sized reservations"): the
+    /// blocks the master lays them out in, which together hold `hrt_slots` slots' time; 0 for
+    /// the slot grid (the default, every image). Needs the feature `framed-reservations`; the
+    /// same on every node of a bus (a grant of the other layout is ignored and counted).
+    pub hrt_blocks: u8,
     /// How the node sends SRT/NRT frames in the free slots (slotted mode): merged windows
     /// with retransmission, or one one-shot frame per free slot.
     pub free_slots: FreeSlots,
@@ -107,6 +112,7 @@ impl NodeConfig {
             cycle: CycleConfig::DEFAULT,
             rank: None,
             hrt_slots: 30,
+            hrt_blocks: 0,
             free_slots: FreeSlots::Merged,
             slot_lead_us: 0,
             listen_first: false,

@@ -36,6 +36,9 @@ pub enum NodeError {
     NotMasterCapable,
     /// The cycle configuration is invalid (slots too short, bit rate, slot count).
     BadCycle(ConfigError),
+    /// `NodeConfig::hrt_blocks` > 0 needs a node built with the feature `framed-reservations`
+    /// and 1 … `rtcan::layout::MAX_BLOCKS` blocks, each with room for its share of `hrt_slots`.
+    BadBlocks(u8),
     /// The transmit queue is full: the management message was not queued.
     TxFull,
     /// No import has this index (indices are what [`Node::import`](crate::Node::import)

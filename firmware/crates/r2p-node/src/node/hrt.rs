@@ -22,11 +22,6 @@ use rtcan::Scheduler;
 /// per frame of each stream.
 pub const MASTER_STREAMS: usize = 16;
 
-/// An HRT_GRANT's reservation (start, length) on the slot grid: none of its own, the slot is
-/// the reservation. Frame-sized reservations (docs/rtcan.md "Capacity") will carry where each
-/// lies; a node on the grid that hears one is on a bus of another layout and ignores it.
-const GRID_RESERVATION: (u16, u16) = (0, 0);
-
 /// The longest HRT message: [`MAX_HRT_FRAMES`] frames less the transfer CRC.
 pub const MAX_HRT_MESSAGE: usize = MAX_PAYLOAD * MAX_HRT_FRAMES as usize - CRC_LEN;
 
@@ -90,7 +85,7 @@ impl<
     pub(super) fn on_hrt_management(&mut self, from: NodeId, msg: Message, now: Micros) {
         let me = self.ids.node_id();
         match msg {
-            Message::HrtRequest { message_id, period_cycles, frames, .. }
+            Message::HrtRequest { message_id, period_cycles, frames, size }
                 if MASTER && self.master.is_some() =>
             {
                 let message = MessageId(message_id);
@@ -98,14 +93,14 @@ impl<
                 if period_cycles == 0 {
                     // A release (`subscribers.rs`): the stream's last subscriber left.
                     if owned && self.scheduler.remove(message).is_some() {
+                        self.calendar_released();
                         bump(&mut self.stats.hrt_released);
                     }
                     return;
                 }
                 let granted = match NodeId::of(message) {
                     Some((owner, index)) if owner == from && index != MANAGEMENT_INDEX => self
-                        .scheduler
-                        .register_frames(message, u32::from(period_cycles), frames)
+                        .admit_stream(message, u32::from(period_cycles), frames, size)
                         .map_err(hrt_result),
                     _ => Err(HrtResult::Conflict),
                 };
@@ -124,20 +119,14 @@ impl<
                     slots &= slots - 1;
                 }
             }
-            Message::HrtGrant {
-                message_id,
-                period_cycles,
-                offset,
-                slot,
-                result,
-                start_us,
-                len_us,
-            } => {
+            Message::HrtGrant { message_id, period_cycles, offset, slot, result, .. } => {
                 let Some((owner, index)) = NodeId::of(MessageId(message_id)) else {
                     bump(&mut self.stats.unexpected);
                     return;
                 };
-                if result == HrtResult::Ok {
+                // Where the reservation lies, as this bus lays them out (`framed.rs`).
+                let placed = self.take_grant_position(&msg);
+                if result == HrtResult::Ok && placed {
                     let phase = Phase { offset, slot };
                     self.follow_grant(owner, MessageId(message_id), period_cycles, phase, now);
                 }
@@ -149,7 +138,7 @@ impl<
                     || (u32::from(offset) < u32::from(period_cycles)
                         && slot > 0
                         && slot < self.config.cycle.slots
-                        && (start_us, len_us) == GRID_RESERVATION);
+                        && placed);
                 let Some(h) = self.exports.get_mut(i).and_then(|e| e.hrt.as_mut()) else {
                     bump(&mut self.stats.unexpected);
                     return;
@@ -213,7 +202,10 @@ impl<
         result: HrtResult,
     ) -> bool {
         let (offset, slot) = (at.offset, at.slot);
-        let (start_us, len_us) = GRID_RESERVATION;
+        let (start_us, len_us) = match result {
+            HrtResult::Ok => self.grant_position(slot),
+            _ => super::framed::GRID,
+        };
         let grant =
             Message::HrtGrant { message_id, period_cycles, offset, slot, result, start_us, len_us };
         self.send(&grant).is_ok()
@@ -253,7 +245,7 @@ impl<
             let cycles = h.period.cycles();
             if MASTER && self.master.is_some() {
                 // The master answers itself at once: `on_grant` sets the state.
-                let r = self.scheduler.register_frames(message, cycles, h.frames);
+                let r = self.admit_stream(message, cycles, h.frames, h.size);
                 self.on_grant(i, r.map_err(hrt_result), now);
             } else {
                 let msg = Message::HrtRequest {

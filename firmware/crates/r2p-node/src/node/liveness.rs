@@ -109,5 +109,6 @@ impl<
             self.scheduler.remove(s);
             bump(&mut self.stats.hrt_released);
         }
+        self.calendar_released();
     }
 }

@@ -111,6 +111,7 @@ impl<
         let message = self.ids.node_id().message_id(i as u8 + 1);
         if MASTER && self.master.is_some() {
             self.scheduler.remove(message);
+            self.calendar_released();
         } else {
             // Period 0: a release (a master that does not know it refuses it as not
             // harmonic, and the slot stays until this node goes silent or reboots).

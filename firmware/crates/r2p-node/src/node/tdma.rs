@@ -256,6 +256,12 @@ impl<
         }
         let info = self.clock.on_sync(at, sync);
         self.last_sync = at;
+        if a.re_register {
+            // The positions it heard belong to a calendar it may no longer follow (a new one,
+            // or one it lost track of): it hears them again in the grants of the registrations
+            // that follow and in the master's beacon.
+            self.calendar_cleared();
+        }
         self.apply(a);
         self.follow_sync(sync, info, a.new_calendar);
     }
@@ -283,6 +289,7 @@ impl<
             self.master = Some(MasterCycle { cycle: s.cycle, next_sync: s.at, epoch: s.epoch });
             if !s.continuing {
                 self.scheduler.clear();
+                self.calendar_cleared();
                 self.owners.clear();
                 self.clock.reset();
             }
