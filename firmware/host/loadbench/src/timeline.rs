@@ -1,8 +1,9 @@
 //! The frame-sized what-if's cycle as the nodes see it: the master's [`Layout`] of its
 //! calendar's slots (each reservation as long as its frame's worst case, back to back in
 //! blocks, never moved once placed; `rtcan::layout`), cut into the reservations of one cycle.
-//! Every node could be told these positions in its grants; the protocol does not do that yet
-//! (docs/rtcan.md "Capacity").
+//! The grants carry these positions to every node (r2p-node's `framed-reservations`); the
+//! nodes' slot path does not use them yet, which is what this what-if's nodes stand in for
+//! (docs/rtcan.md "Frame-sized reservations").
 
 use rtcan::cycle::SYNC_SLOT;
 use rtcan::layout::Layout;
