@@ -433,8 +433,10 @@ local function dissect_management(tvb, tree, node, first_pass)
             local slot = r:u8(M.slot)
             local res = r:enum(M.hrt_result, HRT_RESULTS)
             local start, len = r:u16(M.start_us), r:u16(M.len_us)
-            summary = res == 0 and string.format("HRT_GRANT 0x%04X slot %d (%d+%d us), cycle %d mod %d",
-                    mid, slot, start, len, off, period)
+            -- A position only with frame-sized reservations; on the slot grid the slot is it.
+            local at = len > 0 and string.format(" (%d+%d us)", start, len) or ""
+            summary = res == 0 and string.format("HRT_GRANT 0x%04X slot %d%s, cycle %d mod %d",
+                    mid, slot, at, off, period)
                 or string.format("HRT_GRANT 0x%04X refused: %s", mid, HRT_RESULTS[res])
         elseif ty == 0x41 then
             local target = r:u8(M.target)
