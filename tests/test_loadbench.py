@@ -61,7 +61,8 @@ def test_plots_regenerate_byte_for_byte(loadbench, tmp_path):
     first = bench.plot_load(points, tmp_path / "a")
     second = bench.plot_load(json.loads(json.dumps(points)), tmp_path / "b")
     assert [p.name for p in first] == ["rtcan-load-srt-miss.png", "rtcan-load-latency.png",
-                                       "rtcan-load-hrt-jitter.png", "rtcan-load-carried.png"]
+                                       "rtcan-load-hrt-jitter.png", "rtcan-load-carried.png",
+                                       "rtcan-load-layout.png"]
     for x, y in zip(first, second):
         assert x.read_bytes() == y.read_bytes(), x.name
         assert b"tEXt" not in x.read_bytes()  # no software/date stamp

@@ -180,6 +180,7 @@ CHECKED_BY = {
     "docs/img/rtcan-load-latency.png": "test_pictures.py (from rtcan-load.json, bytes)",
     "docs/img/rtcan-load-hrt-jitter.png": "test_pictures.py (from rtcan-load.json, bytes)",
     "docs/img/rtcan-load-carried.png": "test_pictures.py (from rtcan-load.json, bytes)",
+    "docs/img/rtcan-load-layout.png": "test_pictures.py (from rtcan-load.json, bytes)",
     "docs/img/bus-voltage-drop.png": "test_pictures.py (from its script's model, bytes)",
     "docs/img/r2p-ui.png": "test_ui.py (live values: what the page shows, docs/img/r2p-ui.json)",
     "hardware/*/fab/*": "test_hardware.py::test_fab_package_is_current_and_byte_identical (renders, "

@@ -222,7 +222,7 @@ def plot(rows: list[dict], out: Path = PLOT) -> Path:
 # --- 4. RTCAN under load -------------------------------------------------------------------
 
 LOAD_IMG = ROOT / "docs" / "img"
-LOAD_PLOTS = ("srt-miss", "latency", "hrt-jitter", "carried")
+LOAD_PLOTS = ("srt-miss", "latency", "hrt-jitter", "carried", "layout")
 # Policy in the JSON → label and line style in tables and plots; "fixed" is the baseline.
 POLICIES = {
     "rtcan": ("RTCAN (firmware: merged free-slot windows)", "o-"),
@@ -507,7 +507,33 @@ def _draw_load(plt, points: list[dict], outdir: Path) -> list[Path]:
     ax.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
     pictures.save(fig, paths[3])
+
+    _draw_layout(plt, points[-1], paths[4])
     return paths
+
+
+def _draw_layout(plt, point: dict, path: Path) -> None:
+    """One cycle of `point`'s calendar on the slot grid and frame-sized (rtcan::layout): where
+    the reservations lie and the free time between them."""
+    cycle_us = point["cycle_us"]
+    rows = (("slot grid (firmware)", point["grid_slots"]), ("frame-sized (rtcan::layout)", point["framed_slots"]))
+    fig, ax = plt.subplots(figsize=(9.6, 2.6), dpi=100)
+    for y, (_, slots) in enumerate(reversed(rows)):
+        ax.broken_barh([(0, cycle_us)], (y - 0.35, 0.7), facecolor="white", edgecolor="0.6", lw=0.6)
+        for slot, start, length, used in slots:
+            colour = "0.25" if slot == 0 else ("tab:blue" if used >= 256 else "lightsteelblue")
+            ax.broken_barh([(start, length)], (y - 0.35, 0.7), facecolor=colour, edgecolor="white", lw=0.6)
+        reserved = sum(length * used / 256 for _, _, length, used in slots)
+        ax.text(cycle_us + 40, y, f"{100 * reserved / cycle_us:.0f} % reserved", va="center", fontsize=8)
+    ax.set_yticks(range(len(rows)), [name for name, _ in reversed(rows)], fontsize=8)
+    ax.set_xlim(0, cycle_us * 1.16)
+    ax.set_xticks(range(0, cycle_us + 1, 500))
+    ax.set_xlabel("µs from the cycle's start (the sync)")
+    ax.set_title(f"One cycle's reservations at {100 * point['load']:.0f} % offered load (seed "
+                 f"{point['seed']}): sync (dark), HRT every cycle (blue), every second cycle (light); "
+                 "white is free", fontsize=8)
+    fig.tight_layout()
+    pictures.save(fig, path)
 
 
 def report_load(points: list[dict], sim: dict) -> None:

@@ -150,16 +150,6 @@ impl Layout {
         Self::us(&self.config, frame_bits_of(raw_id, len)) as u16
     }
 
-    /// The cycle's configuration.
-    pub const fn config(&self) -> &CycleConfig {
-        &self.config
-    }
-
-    /// The block count.
-    pub const fn blocks(&self) -> u8 {
-        self.blocks
-    }
-
     /// Where `slot`'s reservation lies, if it is placed (the sync slot always is).
     pub fn span(&self, slot: u8) -> Option<Span> {
         self.spans.get(usize::from(slot)).copied().filter(|s| s.len_us > 0)
@@ -359,6 +349,17 @@ pub(crate) mod tests {
             assert!(met);
             let l = Layout::new(CYCLE, 2, 2_400).unwrap();
             assert_eq!(l.span(SYNC_SLOT), Some(Span { start_us: 0, len_us: (SYNC_FRAME_BITS + 3) as u16 }));
+        }
+
+        fn a_reservation_lasts_its_frames_worst_case_and_the_guard_in_whole_us() {
+            let l = Layout::new(CYCLE, 2, 2_400).unwrap();
+            // Identifier 0, 8 bytes: 157 bits (cycle.rs), 3 guard bits: 160 µs at 1 Mbit/s.
+            assert_eq!(frame_bits_of(0, 8), 157);
+            assert_eq!(l.reservation_us(0, 8), 160);
+            // At 250 kbit/s a bit is 4 µs; at 300 kbit/s 160 bits take 533.3 µs: rounded up.
+            let slow = |bit_rate| CycleConfig { bit_rate, cycle_us: 40_000, ..CYCLE };
+            assert_eq!(Layout::new(slow(250_000), 2, 9_000).unwrap().reservation_us(0, 8), 640);
+            assert_eq!(Layout::new(slow(300_000), 2, 9_000).unwrap().reservation_us(0, 8), 534);
         }
 
         fn slots_lie_back_to_back_after_the_sync_in_the_emptier_block() {

@@ -56,6 +56,13 @@ pub struct Point {
     /// slot: what the frame-sized reservations of docs/rtcan.md "Capacity" could reach with this
     /// calendar — a bound computed from the run's frames, not a run of that protocol.
     pub frame_sized_ceiling: f64,
+    /// The cycle's length, µs.
+    pub cycle_us: u32,
+    /// Where the grid calendar's slots lie: (slot, start µs, length µs, 256ths of the cycles it
+    /// is reserved in), the sync's first; for the layout picture of docs/rtcan.md.
+    pub grid_slots: Vec<[u32; 4]>,
+    /// The same for the frame-sized calendar (`rtcan::layout`, [`Traffic::framed`]).
+    pub framed_slots: Vec<[u32; 4]>,
     /// Streams per class: HRT, SRT, NRT.
     pub streams: [usize; 3],
     /// Messages released.
@@ -65,6 +72,26 @@ pub struct Point {
 }
 
 pub use rtcan::layout::RESERVATION_GUARD_BITS;
+
+/// The sync's slot and every slot `calendar` reserves, in slot order: (slot, start, length,
+/// 256ths of the cycles it is reserved in), `at` giving start and length.
+fn slots_of<const N: usize>(
+    calendar: &rtcan::Scheduler<N>,
+    at: impl Fn(u8) -> (u32, u32),
+) -> Vec<[u32; 4]> {
+    let mut used = [0u32; 64];
+    used[usize::from(rtcan::cycle::SYNC_SLOT)] = 256;
+    for r in calendar.iter() {
+        used[usize::from(r.phase.slot)] += 256 / r.period.cycles();
+    }
+    (0..64u8)
+        .filter(|&s| used[usize::from(s)] > 0)
+        .map(|s| {
+            let (start, len) = at(s);
+            [u32::from(s), start, len, used[usize::from(s)]]
+        })
+        .collect()
+}
 
 /// Generates the traffic of `setup` and runs it under each of `policies`.
 pub fn point(setup: &Setup, policies: &[Policy]) -> Result<Point, SetupError> {
@@ -121,6 +148,15 @@ pub fn point(setup: &Setup, policies: &[Policy]) -> Result<Point, SetupError> {
         grid_ceiling: 1.0
             - (reserved_us * f64::from(setup.cycle.bit_rate) / 1e6 - slotted_bits) / cap,
         frame_sized_ceiling: 1.0 - (reserved_worst_bits - slotted_bits) / cap,
+        cycle_us: setup.cycle.cycle_us,
+        grid_slots: slots_of(&traffic.scheduler, |slot| {
+            let start = setup.cycle.slot_offset_us(slot);
+            (start, setup.cycle.slot_offset_us(slot + 1) - start)
+        }),
+        framed_slots: slots_of(&traffic.framed, |slot| {
+            let span = traffic.layout.span(slot).expect("a slot of the calendar is placed");
+            (u32::from(span.start_us), u32::from(span.len_us))
+        }),
         streams: [count(is_hrt), count(is_srt), count(is_nrt)],
         messages: traffic.messages.len(),
         reports,
