@@ -261,7 +261,7 @@ impl Layout {
             return Err(LayoutError::NoRoom { needs_us: span.len_us });
         }
         for (s, other) in self.spans.iter_mut().enumerate().skip(1) {
-            if s != usize::from(slot) && other.len_us > 0 && other.overlaps(span) {
+            if s != usize::from(slot) && other.overlaps(span) {
                 *other = Span::default();
             }
         }
@@ -382,6 +382,13 @@ pub(crate) mod tests {
             assert_eq!(l.place(3, 170), Ok(Span { start_us: 2_615, len_us: 170 }));
         }
 
+        fn of_two_blocks_that_would_end_it_as_early_the_first_takes_a_slot() {
+            let mut l = Layout::new(CYCLE, 2, 2_400).unwrap();
+            // Block 1 holds as much as block 0's sync: a slot would end as far into either.
+            assert_eq!(l.place(1, 160).unwrap().start_us, 2_500);
+            assert_eq!(l.place(2, 100).unwrap().start_us, 160);
+        }
+
         fn a_released_slot_leaves_a_hole_the_next_slot_that_fits_takes_and_nothing_moves() {
             let mut l = Layout::new(CYCLE, 1, 2_400).unwrap();
             let spans: [Span; 3] = [l.place(1, 120).unwrap(), l.place(2, 120).unwrap(), l.place(3, 120).unwrap()];
@@ -433,6 +440,21 @@ pub(crate) mod tests {
                     assert!(!x.overlaps(*y), "{x:?} {y:?}");
                 }
             }
+        }
+
+        fn a_stream_registered_again_with_longer_frames_is_a_conflict() {
+            // Its message changed (another type, another size): its slot is not made to fit,
+            // even where it could grow.
+            let mut l = Layout::new(CYCLE, 1, 2_400).unwrap();
+            let mut cal: Scheduler<8> = Scheduler::new(15, 30);
+            let a = l.admit(&mut cal, MessageId(0x101), 1, 1, 115).unwrap();
+            assert_eq!(l.admit(&mut cal, MessageId(0x101), 1, 1, 115), Ok(a), "the same again");
+            assert_eq!(l.admit(&mut cal, MessageId(0x101), 1, 1, 100), Ok(a), "shorter: it fits");
+            let before = l.clone();
+            assert_eq!(l.admit(&mut cal, MessageId(0x101), 1, 1, 116), Err(Reject::Conflict));
+            l.admit(&mut cal, MessageId(0x102), 1, 1, 100).unwrap();
+            assert_eq!(l.admit(&mut cal, MessageId(0x101), 1, 1, 150), Err(Reject::Conflict));
+            assert_eq!(l.span(a.slots.trailing_zeros() as u8), before.span(a.slots.trailing_zeros() as u8));
         }
 
         fn a_stream_the_layout_has_no_room_for_is_refused_and_leaves_nothing_behind() {
