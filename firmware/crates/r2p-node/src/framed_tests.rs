@@ -294,3 +294,30 @@ fn a_stream_released_by_its_publisher_frees_its_slots_time() {
     // B asks the master to release it (HRT_REQUEST with period 0).
     assert_eq!(after_the_subscriber_left!(false), std::vec::Vec::new());
 }
+
+#[test]
+fn a_request_whose_size_is_not_its_frames_is_refused() {
+    use crate::hrt_master_tests::grants_and_mask;
+    use crate::hrt_stream_tests::inject;
+    use r2p_management::message::{HrtResult, Message};
+    use r2p_management::NodeId;
+
+    let bus = Bus::<2>::slotted(CYCLE);
+    let mut m = TestNode::new(framed(1, "psu", Some(0)), &NoParams).unwrap();
+    run_slots(&bus, &mut [&mut m], 20 * CYCLE_US);
+    grants_and_mask(&bus);
+    let asker = NodeId::new(0x40).unwrap();
+    let stream = asker.message_id(1);
+    // 20 bytes are three frames, not one; 63 bytes are no HRT message at all. Then the truth.
+    for (frames, size, result) in
+        [(1, 20, HrtResult::Conflict), (8, 63, HrtResult::Conflict), (3, 20, HrtResult::Ok)]
+    {
+        let request = Message::HrtRequest { message_id: stream.0, period_cycles: 2, frames, size };
+        inject(&bus, asker.get(), &request);
+        let until = bus.now.get() + 3 * CYCLE_US;
+        run_slots(&bus, &mut [&mut m], until);
+        let want = if result == HrtResult::Ok { 3 } else { 1 };
+        assert_eq!(grants_and_mask(&bus).0, std::vec![(stream.0, result); want], "{frames} {size}");
+    }
+    assert_eq!(positions(&m).len(), 3);
+}

@@ -15,7 +15,7 @@ use crate::testbus::{run_slots, Bus, TestNode};
 use crate::NoParams;
 
 /// The master's HRT_GRANTs and the reservations of its last sync, seen on port 1.
-fn grants_and_mask(bus: &Bus<2>) -> (std::vec::Vec<(u16, HrtResult)>, u64) {
+pub(crate) fn grants_and_mask(bus: &Bus<2>) -> (std::vec::Vec<(u16, HrtResult)>, u64) {
     let mut r: Reassembler<4, 64> = Reassembler::new(1_000_000);
     let (mut grants, mut mask) = (std::vec::Vec::new(), 0);
     let mut port = bus.port(1);

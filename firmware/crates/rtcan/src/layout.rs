@@ -316,13 +316,7 @@ impl Layout {
                 return None;
             }
             // The placed reservation that ends last among those the candidate overlaps.
-            match self
-                .spans
-                .iter()
-                .filter(|s| s.len_us > 0 && s.overlaps(candidate))
-                .map(|s| s.end_us())
-                .max()
-            {
+            match self.spans.iter().filter(|s| s.overlaps(candidate)).map(|s| s.end_us()).max() {
                 None => return Some(candidate),
                 Some(end) => at = end,
             }
@@ -347,6 +341,12 @@ pub(crate) mod tests {
                 })
             });
             assert!(met);
+            let held = (0..256).all(|c| {
+                (0..=MAX_SYNC_SENDER).all(|s| {
+                    frame_bits_of(FrameId::sync_from(c, s).to_raw(), 8) <= SYNC_FRAME_BITS
+                })
+            });
+            assert!(held);
             let l = Layout::new(CYCLE, 2, 2_400).unwrap();
             assert_eq!(l.span(SYNC_SLOT), Some(Span { start_us: 0, len_us: (SYNC_FRAME_BITS + 3) as u16 }));
         }

@@ -9,11 +9,13 @@
 //! of issue 22). Compiled in with the feature `framed-reservations` only, so that no image pays
 //! for it; without it, `hrt_blocks` > 0 is refused when the node is built.
 
+#[cfg(feature = "framed-reservations")]
+use super::hrt::MAX_HRT_MESSAGE;
 use r2p_management::message::Message;
 #[cfg(feature = "framed-reservations")]
 use rtcan::layout::{Layout, Span};
 #[cfg(feature = "framed-reservations")]
-use rtcan::{fragment::wire_len, FrameId, Laxity};
+use rtcan::{fragment::fragments, FrameId, Laxity};
 use rtcan::{schedule::Reject, MessageId, StreamSlots};
 
 use super::Node;
@@ -42,7 +44,7 @@ impl<
     ) -> Result<StreamSlots, Reject> {
         #[cfg(feature = "framed-reservations")]
         if let Some(layout) = self.layout.as_mut() {
-            let needs = reservation_us(layout, stream, frames, size);
+            let needs = reservation_us(layout, stream, frames, size).ok_or(Reject::Conflict)?;
             return layout.admit(&mut self.scheduler, stream, period_cycles, frames, needs);
         }
         let _ = size;
@@ -110,18 +112,17 @@ impl<
     }
 }
 
-/// The reservation `stream`'s slots need: the longest of its frames' worst cases. Frame j of a
-/// k-frame message carries the next 8 of its bytes on the wire (transfer CRC included) and k − 1
-/// − j in its identifier's fragment field.
+/// The reservation `stream`'s slots need: the longest worst case among the frames of a
+/// `size`-byte message (as `rtcan::fragment` cuts it: their lengths and fragment fields; the
+/// worst case does not depend on the bytes). `None` unless that message is `frames` frames, as
+/// the request says: the request contradicts itself.
 #[cfg(feature = "framed-reservations")]
-fn reservation_us(layout: &Layout, stream: MessageId, frames: u8, size: u8) -> u16 {
-    let wire = wire_len(usize::from(size));
-    (0..frames)
-        .map(|j| {
-            let len = wire.saturating_sub(8 * usize::from(j)).min(8);
-            let id = FrameId { laxity: Laxity::HRT, message: stream, fragment: frames - 1 - j };
-            layout.reservation_us(id.to_raw(), len)
-        })
-        .max()
-        .unwrap_or(0)
+fn reservation_us(layout: &Layout, stream: MessageId, frames: u8, size: u8) -> Option<u16> {
+    let template = FrameId { laxity: Laxity::HRT, message: stream, fragment: 0 };
+    let payload = [0u8; MAX_HRT_MESSAGE];
+    let cut = fragments(template, payload.get(..usize::from(size))?).ok()?;
+    if cut.frame_count() != usize::from(frames) {
+        return None;
+    }
+    cut.map(|f| layout.reservation_us(f.id().to_raw(), f.payload().len())).max()
 }
