@@ -48,6 +48,7 @@
 
 use core::cell::RefCell;
 use core::future::Future;
+use core::mem::ManuallyDrop;
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
 use embassy_executor::InterruptExecutor;
@@ -226,13 +227,24 @@ struct BusNode(&'static mut ModuleNode);
 
 /// The bus: the node driven by the TDMA slot timer at interrupt priority (a rank-0 PSU sends
 /// the syncs; every other module follows them, as every node of a bus with a cycle must).
+///
+/// The driver and the timer come in `ManuallyDrop`: a spawn can fail, and the drop glue of the
+/// arguments it would then drop (the bxCAN's and its pins' teardown) cost every module image
+/// ~100 B. It never runs: this one spawn of a one-task pool cannot fail (and if it did, the
+/// `unwrap` resets the module). The task owns them as before; its poll is instruction for
+/// instruction the same (`r2ptools.slotpath`).
 #[embassy_executor::task]
-async fn bus(node: BusNode, mut can: BxCan<'static>, mut timer: SlotTimer, running_after_us: u64) {
+async fn bus(
+    node: BusNode,
+    mut can: ManuallyDrop<BxCan<'static>>,
+    mut timer: ManuallyDrop<SlotTimer>,
+    running_after_us: u64,
+) {
     let node = node.0;
     let (mut frames, mut last_frame_at) = (0u32, None::<u64>);
     loop {
         let now = Instant::now().as_micros();
-        node.slot_tick(now, &mut can);
+        node.slot_tick(now, &mut *can);
         // Parameters are persisted from the store's dirty flags, not from these events.
         while node.next_event().is_some() {}
         if node.take_reboot_request() {
@@ -305,7 +317,7 @@ pub fn start_bus(
     interrupt::TIM2.set_priority(Priority::P0);
     let node = BusNode(node);
     let timer = SlotTimer::new(tim2);
-    BUS_EXECUTOR.start(interrupt::TIM2).spawn(bus(node, can, timer, running_after_us)).unwrap();
+    BUS_EXECUTOR.start(interrupt::TIM2).spawn(bus(node, ManuallyDrop::new(can), ManuallyDrop::new(timer), running_after_us)).unwrap();
 }
 
 /// The module's flash as the application's task keeps it: the parameter pages and the
