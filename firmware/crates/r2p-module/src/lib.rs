@@ -12,6 +12,7 @@
 //! - [`filters`]: median and first-order low-pass filters for sensor channels;
 //! - [`leds`]: the status LED patterns every module shows the same way;
 //! - [`long_division`]: a smaller 64-bit division than compiler-builtins' (the ABI's helpers);
+//! - [`mem_clear`]: a smaller unaligned clear (`__aeabi_memclr`) than compiler-builtins';
 //! - [`mem_compare`]: a smaller `memcmp` than compiler-builtins';
 //! - [`mem_routines`]: smaller 8-byte aligned copy/clear than compiler-builtins';
 //! - [`soft_float`]: smaller `f32` add, subtract, multiply and divide than compiler-builtins';
@@ -35,6 +36,7 @@ pub mod flash_params;
 pub mod float_compare;
 pub mod leds;
 pub mod long_division;
+pub mod mem_clear;
 pub mod mem_compare;
 pub mod mem_routines;
 pub mod param_doc;
