@@ -227,14 +227,14 @@ async fn main(_spawner: Spawner) {
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
-    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
+    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG, module_core::linked!());
     let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
     Timer::after_millis(SENSOR_BOOT_MS).await;
     // The parts are set up by the first poll, after their boot time: a part that does not
     // answer leaves the module on the bus, reporting it (`Imu::sensors`, "no data") and
     // publishing what the others give; it is set up again when it answers.
     let config = r2p_app_imu::node_config(embassy_stm32::uid::uid(), &PARAMS);
-    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
+    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2, module_core::linked!());
 
     let gnss = Gnss { uart, link: Link::new(app.gnss_rate_hz()), pps };
     run(app, Io { sensors, gnss, leds }, flash).await

@@ -88,10 +88,10 @@ async fn main(spawner: Spawner) {
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
-    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
+    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG, module_core::linked!());
     let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
     let config = r2p_app_proximity::node_config(embassy_stm32::uid::uid(), &PARAMS);
-    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
+    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2, module_core::linked!());
 
     spawner.spawn(run(app, IO.init(io), flash)).unwrap();
 }

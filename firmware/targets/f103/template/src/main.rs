@@ -47,10 +47,10 @@ async fn main(_spawner: Spawner) {
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
-    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
+    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG, module_core::linked!());
     let app = App::new(ENDPOINTS.build(), &PARAMS);
     let config = r2p_app_template::node_config(embassy_stm32::uid::uid());
-    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
+    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2, module_core::linked!());
 
     run(app, leds, flash).await
 }
