@@ -8,7 +8,7 @@
 //! - [`dfu_sink`]: the module's side of a firmware update over the bus (into the DFU slot,
 //!   checked, marked for the bootloader's swap);
 //! - [`endpoints`]: a topic on the bus, written once: [`Outbound`] (published and exported),
-//!   [`Inbound`] (imported and subscribed), built at boot in a `StaticCell`;
+//!   [`Inbound`] (imported and subscribed), built at boot in a cell taken once;
 //! - [`filters`]: median and first-order low-pass filters for sensor channels;
 //! - [`leds`]: the status LED patterns every module shows the same way;
 //! - [`long_division`]: a smaller 64-bit division than compiler-builtins' (the ABI's helpers);
