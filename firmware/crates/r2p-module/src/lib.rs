@@ -50,6 +50,6 @@ pub mod trig;
 
 pub use dfu_sink::DfuSink;
 pub use endpoints::{Inbound, InboundCell, Outbound, OutboundCell, TopicNode};
-pub use flash_params::{CommitReport, FlashParams, LoadReport};
+pub use flash_params::{CommitReport, FlashParams, LoadReport, ParamValues};
 pub use param_doc::ParamDoc;
 pub use ram_flash::RamFlash;

@@ -33,7 +33,7 @@ use r2p_app_imu::{params, sensor, App, Storage};
 use r2p_drivers::lis3mdl::{self, Lis3mdl};
 use r2p_drivers::lps22::{self, Lps22};
 use r2p_drivers::lsm6dso::{Lsm6dso, SpiBus};
-use r2p_module::FlashParams;
+use r2p_module::{FlashParams, ParamValues};
 
 mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
@@ -47,7 +47,8 @@ module_core::bind_can_interrupts!(
 );
 
 static PARAMS: FlashParams<{ params::COUNT }> =
-    FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
+    FlashParams::new(&params::DEFAULTS, &PARAM_VALUES, module_core::PARAMS_BASE);
+static PARAM_VALUES: ParamValues<{ params::COUNT }> = ParamValues::new();
 static ENDPOINTS: Storage = Storage::new();
 
 /// SPI clock: the LSM6DSO takes up to 10 MHz; SPI1 divides its 72 MHz APB2 clock by powers of

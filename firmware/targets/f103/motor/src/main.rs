@@ -32,7 +32,7 @@ use embassy_time::{Duration, Instant, Ticker, Timer};
 use module_core::Leds;
 use r2p_app_motor::names::NameBuf;
 use r2p_app_motor::{params, App, Endpoints, Names, Sample, Storage};
-use r2p_module::FlashParams;
+use r2p_module::{FlashParams, ParamValues};
 use r2p_node::NodeConfig;
 use static_cell::StaticCell;
 
@@ -44,7 +44,8 @@ module_core::bind_can_interrupts!(struct Irqs {
 });
 
 static PARAMS: FlashParams<{ params::COUNT }> =
-    FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
+    FlashParams::new(&params::DEFAULTS, &PARAM_VALUES, module_core::PARAMS_BASE);
+static PARAM_VALUES: ParamValues<{ params::COUNT }> = ParamValues::new();
 static ENDPOINTS: Storage = Storage::new();
 static NAMES: StaticCell<NameBuf> = StaticCell::new();
 
