@@ -129,6 +129,9 @@ impl<T> Once<T> {
     ///
     /// # Panics
     /// If taken before.
+    // A `&mut` from `&self`, as `StaticCell::uninit` gives: sound because `take_once` lets it
+    // happen once per cell.
+    #[allow(clippy::mut_from_ref)]
     fn take(&'static self) -> &'static mut T
     where
         T: AllUninit,

@@ -156,7 +156,11 @@ impl<const N: usize> FlashParams<N> {
     /// A store of the parameters `table` describes (index = position), their values in
     /// `values`, persisted at byte `base` of the flash given to [`Self::load`] and
     /// [`Self::commit`] (two erase pages from there).
-    pub const fn new(table: &'static [Param; N], values: &'static ParamValues<N>, base: u32) -> Self {
+    pub const fn new(
+        table: &'static [Param; N],
+        values: &'static ParamValues<N>,
+        base: u32,
+    ) -> Self {
         assert!(N <= 32, "FlashParams tracks dirty parameters in a u32");
         Self {
             table,

@@ -235,7 +235,14 @@ async fn main(_spawner: Spawner) {
     // answer leaves the module on the bus, reporting it (`Imu::sensors`, "no data") and
     // publishing what the others give; it is set up again when it answers.
     let config = r2p_app_imu::node_config(embassy_stm32::uid::uid(), &PARAMS);
-    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2, module_core::linked!());
+    module_core::start_bus(
+        config,
+        &PARAMS,
+        |node| app.register(node),
+        can,
+        p.TIM2,
+        module_core::linked!(),
+    );
 
     let gnss = Gnss { uart, link: Link::new(app.gnss_rate_hz()), pps };
     run(app, Io { sensors, gnss, leds }, flash).await

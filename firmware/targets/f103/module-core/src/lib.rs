@@ -319,7 +319,10 @@ pub fn start_bus(
     interrupt::TIM2.set_priority(Priority::P0);
     let node = BusNode(node);
     let timer = SlotTimer::new(tim2);
-    BUS_EXECUTOR.start(interrupt::TIM2).spawn(bus(node, ManuallyDrop::new(can), ManuallyDrop::new(timer), running_after_us)).unwrap();
+    BUS_EXECUTOR
+        .start(interrupt::TIM2)
+        .spawn(bus(node, ManuallyDrop::new(can), ManuallyDrop::new(timer), running_after_us))
+        .unwrap();
 }
 
 /// The module's flash as the application's task keeps it: the parameter pages and the

@@ -123,7 +123,14 @@ async fn main(_spawner: Spawner) {
         slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
         ..NodeConfig::module(embassy_stm32::uid::uid(), names.node)
     };
-    module_core::start_bus(config, &PARAMS, |node| ep.register(node), can, p.TIM2, module_core::linked!());
+    module_core::start_bus(
+        config,
+        &PARAMS,
+        |node| ep.register(node),
+        can,
+        p.TIM2,
+        module_core::linked!(),
+    );
 
     interrupt::USART2.set_priority(CONTROL_PRIORITY);
     let io = CONTROL_IO.init((sensors, bridge, leds));

@@ -92,7 +92,14 @@ async fn main(spawner: Spawner) {
     let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG, module_core::linked!());
     let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
     let config = r2p_app_proximity::node_config(embassy_stm32::uid::uid(), &PARAMS);
-    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2, module_core::linked!());
+    module_core::start_bus(
+        config,
+        &PARAMS,
+        |node| app.register(node),
+        can,
+        p.TIM2,
+        module_core::linked!(),
+    );
 
     spawner.spawn(run(app, IO.init(io), flash)).unwrap();
 }

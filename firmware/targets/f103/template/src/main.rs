@@ -51,7 +51,14 @@ async fn main(_spawner: Spawner) {
     let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG, module_core::linked!());
     let app = App::new(ENDPOINTS.build(), &PARAMS);
     let config = r2p_app_template::node_config(embassy_stm32::uid::uid());
-    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2, module_core::linked!());
+    module_core::start_bus(
+        config,
+        &PARAMS,
+        |node| app.register(node),
+        can,
+        p.TIM2,
+        module_core::linked!(),
+    );
 
     run(app, leds, flash).await
 }
