@@ -5,7 +5,7 @@
 //! Every module application has the same few objects per topic: the topic, the publisher, the
 //! remote proxy the node sees and, for an imported topic, the application's subscriber. Their
 //! names come from parameters (the `instance`), so they are made at boot rather than as
-//! `const` statics: each cell is one `StaticCell` (no heap), a `static` on the MCU and a leaked
+//! `const` statics: each cell is made once in place (no heap), a `static` on the MCU and a leaked
 //! one per emulated board on the host, so two boards in one process never share a topic. An
 //! application lists its topics as one field each of its `Endpoints` and its `Storage`.
 //!
@@ -25,11 +25,12 @@
 //! assert_eq!(*limit.subscriber.try_recv().unwrap(), 3);
 //! ```
 
+use core::cell::UnsafeCell;
 use core::mem::MaybeUninit;
+use core::sync::atomic::{AtomicBool, Ordering};
 
 use r2p_middleware::{Class, Error, Publisher, Subscriber, Topic};
 use r2p_node::{Export, Import, Node, NodeError, RemotePublisher, RemoteSubscriber};
-use static_cell::StaticCell;
 
 /// A topic the module publishes on the bus: `SLOTS` pool slots, room for `SUBS` subscribers
 /// (the remote one and local ones), a remote queue of up to `Q` messages.
@@ -107,20 +108,67 @@ impl<
     }
 }
 
-/// Room for one [`Outbound`]: one `StaticCell` for its three objects.
+/// Room for objects made once, in place (a `static`): what `static_cell::StaticCell` does, but
+/// with the check that it is taken once in one function for every cell ([`take_once`]):
+/// `StaticCell`'s, inlined into each cell's `build`, cost ~40 B a topic.
+struct Once<T> {
+    taken: AtomicBool,
+    value: UnsafeCell<MaybeUninit<T>>,
+}
+
+// SAFETY: the value is reached only through `take`, once (`take_once`), by whoever takes it;
+// `T: Send` because that may be another thread than the one that made the cell.
+unsafe impl<T: Send> Sync for Once<T> {}
+
+impl<T> Once<T> {
+    const fn new() -> Self {
+        Self { taken: AtomicBool::new(false), value: UnsafeCell::new(MaybeUninit::uninit()) }
+    }
+
+    /// The room, uninitialised (its parts are `MaybeUninit`s, written by the caller).
+    ///
+    /// # Panics
+    /// If taken before.
+    // A `&mut` from `&self`, as `StaticCell::uninit` gives: sound because `take_once` lets it
+    // happen once per cell.
+    #[allow(clippy::mut_from_ref)]
+    fn take(&'static self) -> &'static mut T
+    where
+        T: AllUninit,
+    {
+        take_once(&self.taken);
+        // SAFETY: `take_once` returned, so this is the one taking of the cell: no other
+        // reference to its value exists; `T` is made of `MaybeUninit`s (`AllUninit`), which
+        // need no initialisation.
+        unsafe { (*self.value.get()).assume_init_mut() }
+    }
+}
+
+/// Tuples of `MaybeUninit`s: valid whatever their bytes.
+trait AllUninit {}
+impl<A, B, C> AllUninit for (MaybeUninit<A>, MaybeUninit<B>, MaybeUninit<C>) {}
+impl<A, B, C, D> AllUninit for (MaybeUninit<A>, MaybeUninit<B>, MaybeUninit<C>, MaybeUninit<D>) {}
+
+/// Marks a cell taken; panics if it was (a cell's `build` called twice: a bug of the image).
+#[inline(never)]
+fn take_once(taken: &AtomicBool) {
+    assert!(!taken.swap(true, Ordering::AcqRel), "an endpoint cell is built once");
+}
+
+/// Room for one [`Outbound`]: one cell for its three objects.
 pub struct OutboundCell<T: 'static, const SLOTS: usize, const SUBS: usize, const Q: usize>(
     #[allow(clippy::type_complexity)]
-    StaticCell<(
+    Once<(
         MaybeUninit<Topic<'static, T, SLOTS, SUBS>>,
         MaybeUninit<Publisher<'static, T>>,
         MaybeUninit<RemoteSubscriber<'static, T, Q>>,
     )>,
 );
 
-/// Room for one [`Inbound`]: one `StaticCell` for its four objects.
+/// Room for one [`Inbound`]: one cell for its four objects.
 pub struct InboundCell<T: 'static, const SLOTS: usize, const SUBS: usize, const QS: usize>(
     #[allow(clippy::type_complexity)]
-    StaticCell<(
+    Once<(
         MaybeUninit<Topic<'static, T, SLOTS, SUBS>>,
         MaybeUninit<Publisher<'static, T>>,
         MaybeUninit<RemotePublisher<'static, T>>,
@@ -134,7 +182,7 @@ where
 {
     /// Empty room.
     pub const fn new() -> Self {
-        Self(StaticCell::new())
+        Self(Once::new())
     }
 
     /// Makes the topic `name` (its slots start as `init`), its publisher of `class` and its
@@ -149,8 +197,7 @@ where
         init: T,
         class: Class,
     ) -> Result<Outbound<'static, T, SLOTS, SUBS, Q>, Error> {
-        let (topic, publisher, remote) =
-            self.0.init((MaybeUninit::uninit(), MaybeUninit::uninit(), MaybeUninit::uninit()));
+        let (topic, publisher, remote) = self.0.take();
         let topic = &*topic.write(Topic::new(name, init));
         let publisher = &*publisher.write(Publisher::new(topic, class));
         let remote = &*remote.write(RemoteSubscriber::new(publisher));
@@ -166,7 +213,7 @@ where
 {
     /// Empty room.
     pub const fn new() -> Self {
-        Self(StaticCell::new())
+        Self(Once::new())
     }
 
     /// Makes the topic `name` (its slots start as `init`), the node's publisher (NRT), the
@@ -180,12 +227,7 @@ where
         name: &'static str,
         init: T,
     ) -> Result<Inbound<'static, T, SLOTS, SUBS, QS>, Error> {
-        let (topic, publisher, remote, subscriber) = self.0.init((
-            MaybeUninit::uninit(),
-            MaybeUninit::uninit(),
-            MaybeUninit::uninit(),
-            MaybeUninit::uninit(),
-        ));
+        let (topic, publisher, remote, subscriber) = self.0.take();
         let topic = &*topic.write(Topic::new(name, init));
         let publisher = &*publisher.write(Publisher::new(topic, Class::NonRealTime));
         let remote = &*remote.write(RemotePublisher::new(publisher, topic));

@@ -20,7 +20,7 @@ use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embedded_storage::nor_flash::{NorFlash, ReadNorFlash};
 use r2p_management::message::{ParamFault, Value};
-use r2p_node::{Param, ParamStore, RamParams};
+use r2p_node::{Param, ParamStore};
 
 const MAGIC: u32 = u32::from_le_bytes(*b"R2PP");
 const HEADER: u32 = 8;
@@ -60,15 +60,43 @@ struct Log {
 
 /// `N` parameters (N ≤ 32) in RAM, persisted to two flash pages starting at byte `base` of a
 /// [`NorFlash`]. See the module documentation.
+///
+/// The table (names, ranges, defaults) stays where it is, in flash; the values are in a
+/// [`ParamValues`] of their own, a `static` of zero bytes (`.bss`) that takes the defaults
+/// when first used. A table in this `static` (`.data`) cost each parameter its 36 B twice,
+/// in flash for the initial image and in RAM, and its default 8 B more (psu: 684 B of each).
 pub struct FlashParams<const N: usize> {
-    ram: RamParams<N>,
-    /// The default values alone: the table's names and ranges are in `ram` already, and this
-    /// static is all `.data` (its initial image in flash and a copy in RAM), so a second copy
-    /// of the whole table cost 28 B of each per parameter (motor: 588 B of flash and of RAM).
-    defaults: [Value; N],
+    table: &'static [Param; N],
+    values: &'static ParamValues<N>,
     base: u32,
     dirty: Mutex<CriticalSectionRawMutex, Cell<u32>>,
     log: Mutex<CriticalSectionRawMutex, Cell<Log>>,
+}
+
+/// The values of a [`FlashParams`]: declare it `static` beside it. Zero bytes until first used,
+/// then the table's defaults ([`FlashParams::load`] or any read or write before it).
+pub struct ParamValues<const N: usize>(Mutex<CriticalSectionRawMutex, Values<N>>);
+
+struct Values<const N: usize> {
+    /// Whether `values` holds the parameters (else the table's defaults are theirs).
+    filled: Cell<bool>,
+    values: [Cell<Value>; N],
+}
+
+impl<const N: usize> ParamValues<N> {
+    /// Room for `N` values, not filled yet.
+    pub const fn new() -> Self {
+        Self(Mutex::new(Values {
+            filled: Cell::new(false),
+            values: [const { Cell::new(Value::Bool(false)) }; N],
+        }))
+    }
+}
+
+impl<const N: usize> Default for ParamValues<N> {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 // Out of line: inlined, it was copied into each record's encoding (twice in `commit`) and its
@@ -125,28 +153,55 @@ fn same(a: Value, b: Value) -> bool {
 }
 
 impl<const N: usize> FlashParams<N> {
-    /// A store holding `defaults` (index = position), persisted at byte `base` of the flash
-    /// given to [`Self::load`] and [`Self::commit`] (two erase pages from there).
-    pub const fn new(defaults: [Param; N], base: u32) -> Self {
+    /// A store of the parameters `table` describes (index = position), their values in
+    /// `values`, persisted at byte `base` of the flash given to [`Self::load`] and
+    /// [`Self::commit`] (two erase pages from there).
+    pub const fn new(
+        table: &'static [Param; N],
+        values: &'static ParamValues<N>,
+        base: u32,
+    ) -> Self {
         assert!(N <= 32, "FlashParams tracks dirty parameters in a u32");
-        let mut values = [Value::Bool(false); N];
-        let mut i = 0;
-        while i < N {
-            values[i] = defaults[i].value;
-            i += 1;
-        }
         Self {
-            ram: RamParams::new(defaults),
-            defaults: values,
+            table,
+            values,
             base,
             dirty: Mutex::new(Cell::new(0)),
             log: Mutex::new(Cell::new(Log { page: None, sequence: 0, next: 0 })),
         }
     }
 
+    /// Runs `f` on the values, filled with the table's defaults if they were not yet.
+    fn with_values<R>(&self, f: impl FnOnce(&[Cell<Value>; N]) -> R) -> R {
+        self.values.0.lock(|v| {
+            if !v.filled.get() {
+                for (cell, p) in v.values.iter().zip(self.table) {
+                    cell.set(p.value);
+                }
+                v.filled.set(true);
+            }
+            f(&v.values)
+        })
+    }
+
     /// Parameter `index` as the application reads it.
     pub fn param(&self, index: u16) -> Option<Param> {
-        self.ram.param(index)
+        let p = self.table.get(usize::from(index))?;
+        Some(Param { value: self.with_values(|v| v[usize::from(index)].get()), ..*p })
+    }
+
+    /// Sets parameter `index` to `value` if the table allows it (type, range, writable): what
+    /// [`ParamStore::set`] does, without marking it dirty (what `load` reads is in flash).
+    fn set_value(&self, index: u16, value: Value) -> Result<Value, ParamFault> {
+        let p = self.table.get(usize::from(index)).ok_or(ParamFault::UnknownIndex)?;
+        p.check(value)?;
+        self.with_values(|v| v[usize::from(index)].set(value));
+        Ok(value)
+    }
+
+    /// The value of parameter `index` (which the caller knows is in the table).
+    fn value(&self, index: u16) -> Value {
+        self.with_values(|v| v.get(usize::from(index)).map_or(Value::U32(0), Cell::get))
     }
 
     /// Whether some value set over the bus is not in flash yet.
@@ -188,7 +243,7 @@ impl<const N: usize> FlashParams<N> {
             off += RECORD;
             match decode(&r) {
                 None => report.corrupt += 1,
-                Some((index, value)) => match self.ram.set(index, value) {
+                Some((index, value)) => match self.set_value(index, value) {
                     Ok(_) => report.applied += 1,
                     Err(_) => report.refused += 1,
                 },
@@ -213,7 +268,7 @@ impl<const N: usize> FlashParams<N> {
         if fits {
             let start = self.page_at(log.page.unwrap_or(0), size);
             for index in (0..N as u16).filter(|i| dirty & (1 << i) != 0) {
-                let value = self.ram.get(index).unwrap_or(Value::U32(0));
+                let value = self.value(index);
                 flash.write(start + log.next, &encode(index, value))?;
                 log.next += RECORD;
                 self.log.lock(|l| l.set(log));
@@ -228,8 +283,8 @@ impl<const N: usize> FlashParams<N> {
         flash.erase(start, start + size)?;
         let mut next = HEADER;
         for index in 0..N as u16 {
-            let value = self.ram.get(index).unwrap_or(Value::U32(0));
-            if !same(value, self.defaults[usize::from(index)]) {
+            let value = self.value(index);
+            if !same(value, self.table[usize::from(index)].value) {
                 flash.write(start + next, &encode(index, value))?;
                 next += RECORD;
                 report.records += 1;
@@ -250,11 +305,15 @@ impl<const N: usize> FlashParams<N> {
 
 impl<const N: usize> ParamStore for FlashParams<N> {
     fn get(&self, index: u16) -> Result<Value, ParamFault> {
-        self.ram.get(index)
+        if usize::from(index) < N {
+            Ok(self.value(index))
+        } else {
+            Err(ParamFault::UnknownIndex)
+        }
     }
 
     fn set(&self, index: u16, value: Value) -> Result<Value, ParamFault> {
-        let v = self.ram.set(index, value)?;
+        let v = self.set_value(index, value)?;
         self.dirty.lock(|d| d.set(d.get() | (1 << index)));
         Ok(v)
     }
@@ -273,8 +332,12 @@ mod tests {
         Param::bool("enabled", true),
     ];
 
+    fn values<const N: usize>() -> &'static ParamValues<N> {
+        std::boxed::Box::leak(std::boxed::Box::new(ParamValues::new()))
+    }
+
     fn store() -> FlashParams<3> {
-        FlashParams::new(TABLE, PAGE as u32) // pages 1 and 2 of the flash
+        FlashParams::new(&TABLE, values(), PAGE as u32) // pages 1 and 2 of the flash
     }
 
     #[test]
@@ -294,6 +357,22 @@ mod tests {
         assert_eq!(b.get(1), Ok(Value::F32(2.25)));
         assert_eq!(b.get(2), Ok(Value::Bool(true)));
         assert!(flash.bytes()[..PAGE].iter().all(|&x| x == 0xFF), "page 0 is not ours");
+    }
+
+    #[test]
+    fn before_load_the_values_are_the_tables_defaults() {
+        // The values start as zero bytes (`ParamValues` is `.bss`): the first use fills them.
+        let a = store();
+        assert_eq!(a.get(1), Ok(Value::F32(1.5)));
+        assert_eq!(a.param(2).map(|p| (p.name, p.value)), Some(("enabled", Value::Bool(true))));
+        a.set(0, Value::U32(7)).unwrap();
+        assert_eq!(
+            (a.get(0), a.get(1), a.get(2)),
+            (Ok(Value::U32(7)), Ok(Value::F32(1.5)), Ok(Value::Bool(true)))
+        );
+        assert_eq!(a.get(3), Err(ParamFault::UnknownIndex));
+        assert_eq!(a.set(3, Value::U32(1)), Err(ParamFault::UnknownIndex));
+        assert!(a.param(3).is_none());
     }
 
     #[test]
@@ -379,8 +458,8 @@ mod tests {
         a.load(&mut flash).unwrap();
         a.set(0, Value::U32(900)).unwrap();
         a.commit(&mut flash).unwrap();
-        let narrower =
-            FlashParams::new([Param::u32("rate_hz", 100, 1, 500), TABLE[1], TABLE[2]], PAGE as u32);
+        const NARROWER: [Param; 3] = [Param::u32("rate_hz", 100, 1, 500), TABLE[1], TABLE[2]];
+        let narrower = FlashParams::new(&NARROWER, values(), PAGE as u32);
         let r = narrower.load(&mut flash).unwrap();
         assert_eq!((r.applied, r.refused), (0, 1));
         assert_eq!(narrower.get(0), Ok(Value::U32(100)));

@@ -8,10 +8,11 @@
 //! - [`dfu_sink`]: the module's side of a firmware update over the bus (into the DFU slot,
 //!   checked, marked for the bootloader's swap);
 //! - [`endpoints`]: a topic on the bus, written once: [`Outbound`] (published and exported),
-//!   [`Inbound`] (imported and subscribed), built at boot in a `StaticCell`;
+//!   [`Inbound`] (imported and subscribed), built at boot in a cell taken once;
 //! - [`filters`]: median and first-order low-pass filters for sensor channels;
 //! - [`leds`]: the status LED patterns every module shows the same way;
 //! - [`long_division`]: a smaller 64-bit division than compiler-builtins' (the ABI's helpers);
+//! - [`mem_clear`]: a smaller unaligned clear (`__aeabi_memclr`) than compiler-builtins';
 //! - [`mem_compare`]: a smaller `memcmp` than compiler-builtins';
 //! - [`mem_routines`]: smaller 8-byte aligned copy/clear than compiler-builtins';
 //! - [`soft_float`]: smaller `f32` add, subtract, multiply and divide than compiler-builtins';
@@ -35,6 +36,7 @@ pub mod flash_params;
 pub mod float_compare;
 pub mod leds;
 pub mod long_division;
+pub mod mem_clear;
 pub mod mem_compare;
 pub mod mem_routines;
 pub mod param_doc;
@@ -48,6 +50,6 @@ pub mod trig;
 
 pub use dfu_sink::DfuSink;
 pub use endpoints::{Inbound, InboundCell, Outbound, OutboundCell, TopicNode};
-pub use flash_params::{CommitReport, FlashParams, LoadReport};
+pub use flash_params::{CommitReport, FlashParams, LoadReport, ParamValues};
 pub use param_doc::ParamDoc;
 pub use ram_flash::RamFlash;

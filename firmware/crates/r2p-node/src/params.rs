@@ -110,46 +110,91 @@ impl<'a> Typed<'a> {
         Self { store, defaults }
     }
 
+    /// The table's default of parameter `index`, if the table has it. Inlined: with the table
+    /// a constant and `index` one, it folds to the default's value.
     #[inline]
-    fn value(&self, index: u16) -> (Option<Value>, Option<Value>) {
-        let default = self.defaults.get(usize::from(index)).map(|p| p.value);
-        (self.store.get(index).ok(), default)
+    fn default(&self, index: u16) -> Option<Value> {
+        self.defaults.get(usize::from(index)).map(|p| p.value)
     }
 
     /// A `u32` parameter.
     #[inline]
     pub fn u32(&self, index: u16) -> u32 {
-        match self.value(index) {
-            (Some(Value::U32(v)), _) | (_, Some(Value::U32(v))) => v,
+        let default = match self.default(index) {
+            Some(Value::U32(v)) => v,
             _ => 0,
-        }
+        };
+        u32_or(self.store, index, default)
     }
 
     /// An `i32` parameter.
     #[inline]
     pub fn i32(&self, index: u16) -> i32 {
-        match self.value(index) {
-            (Some(Value::I32(v)), _) | (_, Some(Value::I32(v))) => v,
+        let default = match self.default(index) {
+            Some(Value::I32(v)) => v,
             _ => 0,
-        }
+        };
+        i32_or(self.store, index, default)
     }
 
     /// An `f32` parameter.
     #[inline]
     pub fn f32(&self, index: u16) -> f32 {
-        match self.value(index) {
-            (Some(Value::F32(v)), _) | (_, Some(Value::F32(v))) => v,
+        let default = match self.default(index) {
+            Some(Value::F32(v)) => v,
             _ => 0.0,
-        }
+        };
+        f32_or(self.store, index, default)
     }
 
     /// A `bool` parameter.
     #[inline]
     pub fn bool(&self, index: u16) -> bool {
-        match self.value(index) {
-            (Some(Value::Bool(v)), _) | (_, Some(Value::Bool(v))) => v,
+        let default = match self.default(index) {
+            Some(Value::Bool(v)) => v,
             _ => false,
-        }
+        };
+        bool_or(self.store, index, default)
+    }
+}
+
+// The store's read, out of line and one per type: inlined into each of an application's reads
+// (the PSU's step reads fifteen), each carried its own copy of the dyn call and the type check
+// (~40 B); the default is folded at the call site, so no table is needed in flash.
+
+/// `store`'s `u32` parameter `index`, or `default` if it has none of that type.
+#[inline(never)]
+fn u32_or(store: &dyn ParamStore, index: u16, default: u32) -> u32 {
+    match store.get(index) {
+        Ok(Value::U32(v)) => v,
+        _ => default,
+    }
+}
+
+/// `store`'s `i32` parameter `index`, or `default` if it has none of that type.
+#[inline(never)]
+fn i32_or(store: &dyn ParamStore, index: u16, default: i32) -> i32 {
+    match store.get(index) {
+        Ok(Value::I32(v)) => v,
+        _ => default,
+    }
+}
+
+/// `store`'s `f32` parameter `index`, or `default` if it has none of that type.
+#[inline(never)]
+fn f32_or(store: &dyn ParamStore, index: u16, default: f32) -> f32 {
+    match store.get(index) {
+        Ok(Value::F32(v)) => v,
+        _ => default,
+    }
+}
+
+/// `store`'s `bool` parameter `index`, or `default` if it has none of that type.
+#[inline(never)]
+fn bool_or(store: &dyn ParamStore, index: u16, default: bool) -> bool {
+    match store.get(index) {
+        Ok(Value::Bool(v)) => v,
+        _ => default,
     }
 }
 
@@ -241,9 +286,14 @@ pub(crate) mod tests {
                 Param::bool("enabled", true),
             ];
             let store = RamParams::new(TABLE);
-            store.set(0, Value::U32(50)).unwrap();
             let t = Typed::new(&store, &TABLE);
-            assert_eq!((t.u32(0), t.f32(1), t.i32(2), t.bool(3)), (50, 0.5, -3, true));
+            assert_eq!((t.u32(0), t.f32(1), t.i32(2), t.bool(3)), (100, 0.5, -3, true));
+            // The store's values, of every type, before the table's.
+            store.set(0, Value::U32(50)).unwrap();
+            store.set(1, Value::F32(1.5)).unwrap();
+            store.set(2, Value::I32(7)).unwrap();
+            store.set(3, Value::Bool(false)).unwrap();
+            assert_eq!((t.u32(0), t.f32(1), t.i32(2), t.bool(3)), (50, 1.5, 7, false));
             // A store without the parameters (a lost flash page): the table's defaults.
             let t = Typed::new(&NoParams, &TABLE);
             assert_eq!((t.u32(0), t.f32(1), t.i32(2), t.bool(3)), (100, 0.5, -3, true));

@@ -62,15 +62,21 @@ pub fn calls_in(
     skip: usize,
 ) -> ([u32; CALLS], usize) {
     let mut calls = [0; CALLS];
-    let mut found = 0;
-    let found_calls = stack.into_iter().filter_map(|w| call_before(w, text, &halfword));
-    for call in found_calls.skip(skip) {
-        {
-            calls[found] = call;
-            found += 1;
-            if found == CALLS {
-                break;
-            }
+    let (mut found, mut skipped) = (0, 0);
+    // A plain loop rather than `filter_map(..).skip(skip)`: `Skip` called `Iterator::nth`, an
+    // out-of-line copy of the scan (~100 B of every image for a path that runs once, in a panic).
+    for word in stack {
+        let Some(call) = call_before(word, text, &halfword) else {
+            continue;
+        };
+        if skipped < skip {
+            skipped += 1;
+            continue;
+        }
+        calls[found] = call;
+        found += 1;
+        if found == CALLS {
+            break;
         }
     }
     (calls, found)

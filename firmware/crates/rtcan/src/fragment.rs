@@ -235,7 +235,10 @@ impl<const BUF: usize> Slot<BUF> {
         last_at: 0,
         last_len: 0,
         last_data: [0; MAX_PAYLOAD],
-        crc: transfer_crc::INITIAL,
+        // Not read until a message starts in the slot, which sets it to `INITIAL` first
+        // (`start`). Zero keeps a free slot all zero bytes: a reassembler is then made by
+        // clearing its memory, not by copying a slot-sized template from flash (~90 B).
+        crc: 0,
         buf: [0; BUF],
     };
 

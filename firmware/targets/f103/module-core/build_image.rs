@@ -33,6 +33,12 @@ fn build_image(board: &str, link: Link) {
         "MEMORY\n{{\n  FLASH : ORIGIN = {:#010x}, LENGTH = {length}\n  RAM : ORIGIN = 0x20000000, LENGTH = 20K\n}}\n",
         FLASH_BASE + origin
     );
+    // The same choice for the image's code: `module_core::linked!()` reads it.
+    let place = match link {
+        Link::ActiveSlot => "active",
+        Link::FlashBase => "base",
+    };
+    println!("cargo:rustc-env=R2P_IMAGE_LINK={place}");
     let out = std::env::var("OUT_DIR").expect("OUT_DIR");
     std::fs::write(format!("{out}/memory.x"), memory).expect("writing memory.x");
     println!("cargo:rustc-link-search={out}");

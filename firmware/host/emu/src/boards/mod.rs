@@ -23,7 +23,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use r2p_module::leds::Status;
-use r2p_module::FlashParams;
+use r2p_module::{FlashParams, ParamValues};
 use r2p_node::node::STARTING_HEARTBEATS;
 use r2p_node::{Node, NodeConfig, ParamStore};
 use r2p_world::robot_file::{Module, Robot};
@@ -121,7 +121,7 @@ fn load_params<const N: usize>(
     flash: &'static BoardChip,
 ) -> Result<&'static FlashParams<N>, String> {
     // The parameter pages are the map's `params` partition, from its start.
-    let params = leak(FlashParams::new(defaults, 0));
+    let params = leak(FlashParams::new(leak(defaults), leak(ParamValues::new()), 0));
     on_layout!(flash, load_on::<N>(params, flash))
         .map_err(|e| format!("reading parameters: {e:?}"))?;
     Ok(params)

@@ -1,7 +1,7 @@
 //! A robot file's `[modules.params]`, stored in a board's flash before its first boot.
 
 use r2p_management::message::{ParamFault, Value};
-use r2p_module::FlashParams;
+use r2p_module::{FlashParams, ParamValues};
 use r2p_node::{Param, ParamStore};
 use r2p_world::kinematics::Layout;
 use r2p_world::ranger::RangerKind;
@@ -133,7 +133,9 @@ fn store<const N: usize>(
     flash: &'static BoardChip,
 ) -> Result<(), String> {
     // The parameter pages are the map's `params` partition, from its start.
-    let params = FlashParams::new(defaults, 0);
+    // Leaked, as a board's are: a store's table and values are `'static` (statics on the MCU).
+    let table: &'static [Param; N] = Box::leak(Box::new(defaults));
+    let params = FlashParams::new(table, Box::leak(Box::new(ParamValues::new())), 0);
     on_layout!(flash, load::<N>(&params, flash))
         .map_err(|e| format!("reading parameters: {e:?}"))?;
     set_values(&params, &defaults, values)?;

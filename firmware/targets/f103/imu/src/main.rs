@@ -33,7 +33,7 @@ use r2p_app_imu::{params, sensor, App, Storage};
 use r2p_drivers::lis3mdl::{self, Lis3mdl};
 use r2p_drivers::lps22::{self, Lps22};
 use r2p_drivers::lsm6dso::{Lsm6dso, SpiBus};
-use r2p_module::FlashParams;
+use r2p_module::{FlashParams, ParamValues};
 
 mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
@@ -47,7 +47,8 @@ module_core::bind_can_interrupts!(
 );
 
 static PARAMS: FlashParams<{ params::COUNT }> =
-    FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
+    FlashParams::new(&params::DEFAULTS, &PARAM_VALUES, module_core::PARAMS_BASE);
+static PARAM_VALUES: ParamValues<{ params::COUNT }> = ParamValues::new();
 static ENDPOINTS: Storage = Storage::new();
 
 /// SPI clock: the LSM6DSO takes up to 10 MHz; SPI1 divides its 72 MHz APB2 clock by powers of
@@ -227,14 +228,21 @@ async fn main(_spawner: Spawner) {
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
-    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
+    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG, module_core::linked!());
     let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
     Timer::after_millis(SENSOR_BOOT_MS).await;
     // The parts are set up by the first poll, after their boot time: a part that does not
     // answer leaves the module on the bus, reporting it (`Imu::sensors`, "no data") and
     // publishing what the others give; it is set up again when it answers.
     let config = r2p_app_imu::node_config(embassy_stm32::uid::uid(), &PARAMS);
-    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
+    module_core::start_bus(
+        config,
+        &PARAMS,
+        |node| app.register(node),
+        can,
+        p.TIM2,
+        module_core::linked!(),
+    );
 
     let gnss = Gnss { uart, link: Link::new(app.gnss_rate_hz()), pps };
     run(app, Io { sensors, gnss, leds }, flash).await

@@ -12,10 +12,10 @@
 //! let leds = module_core::leds!(board, pins); // outputs first
 //! let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
 //! module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
-//! let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
+//! let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG, module_core::linked!());
 //! let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
 //! let config = node_config(uid(), &PARAMS);
-//! module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
+//! module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2, module_core::linked!());
 //! // and in the application's task, every millisecond:
 //! let mut ms = module_core::EveryMs::new(&PARAMS, flash);
 //! loop {
@@ -48,6 +48,7 @@
 
 use core::cell::RefCell;
 use core::future::Future;
+use core::mem::ManuallyDrop;
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
 use embassy_executor::InterruptExecutor;
@@ -226,13 +227,24 @@ struct BusNode(&'static mut ModuleNode);
 
 /// The bus: the node driven by the TDMA slot timer at interrupt priority (a rank-0 PSU sends
 /// the syncs; every other module follows them, as every node of a bus with a cycle must).
+///
+/// The driver and the timer come in `ManuallyDrop`: a spawn can fail, and the drop glue of the
+/// arguments it would then drop (the bxCAN's and its pins' teardown) cost every module image
+/// ~100 B. It never runs: this one spawn of a one-task pool cannot fail (and if it did, the
+/// `unwrap` resets the module). The task owns them as before; its poll is instruction for
+/// instruction the same (`r2ptools.slotpath`).
 #[embassy_executor::task]
-async fn bus(node: BusNode, mut can: BxCan<'static>, mut timer: SlotTimer, running_after_us: u64) {
+async fn bus(
+    node: BusNode,
+    mut can: ManuallyDrop<BxCan<'static>>,
+    mut timer: ManuallyDrop<SlotTimer>,
+    running_after_us: u64,
+) {
     let node = node.0;
     let (mut frames, mut last_frame_at) = (0u32, None::<u64>);
     loop {
         let now = Instant::now().as_micros();
-        node.slot_tick(now, &mut can);
+        node.slot_tick(now, &mut *can);
         // Parameters are persisted from the store's dirty flags, not from these events.
         while node.next_event().is_some() {}
         if node.take_reboot_request() {
@@ -264,7 +276,8 @@ async fn bus(node: BusNode, mut can: BxCan<'static>, mut timer: SlotTimer, runni
 /// Makes the module's node from `config` and `params`, lets `register` export and import the
 /// application's topics on it, and starts it on the bus executor with the RTCAN driver on
 /// `can`, its slot boundaries from TIM2's compare; if this boot followed a panic, the node
-/// reports it (panic.rs).
+/// reports it (panic.rs). An image `linked` in the active slot reports its firmware from its
+/// trailer and takes updates over the bus.
 ///
 /// # Panics
 /// If `config` is not a valid node configuration or the node has no room for the topics
@@ -275,12 +288,13 @@ pub fn start_bus(
     register: impl FnOnce(&mut ModuleNode) -> Result<(), NodeError>,
     can: Can<'static>,
     tim2: Peri<'static, TIM2>,
+    linked: Linked,
 ) {
     // Made in its static: moving the ~3 KB node out of `Result::expect` cost 248 B of code.
     let node =
         NODE.init_with(|| ModuleNode::new(config, params).expect("valid node configuration"));
     register(node).expect("room for the module's topics on its node");
-    if behind_bootloader() {
+    if linked == Linked::ActiveSlot {
         if let Some(flash) = FLASH_FOR_BUS.try_get() {
             node.set_update_sink(update::sink(flash, config.name));
         }
@@ -305,7 +319,10 @@ pub fn start_bus(
     interrupt::TIM2.set_priority(Priority::P0);
     let node = BusNode(node);
     let timer = SlotTimer::new(tim2);
-    BUS_EXECUTOR.start(interrupt::TIM2).spawn(bus(node, can, timer, running_after_us)).unwrap();
+    BUS_EXECUTOR
+        .start(interrupt::TIM2)
+        .spawn(bus(node, ManuallyDrop::new(can), ManuallyDrop::new(timer), running_after_us))
+        .unwrap();
 }
 
 /// The module's flash as the application's task keeps it: the parameter pages and the
@@ -351,13 +368,14 @@ fn now() -> Instant {
     Instant::now()
 }
 
-/// Loads the parameters from flash (defaults where nothing valid is stored) and reads the
-/// bootloader's state: on a trial boot the independent watchdog (`iwdg`) starts. The flash,
-/// for [`persist`].
+/// Loads the parameters from flash (defaults where nothing valid is stored) and, for an image
+/// `linked` in the active slot, reads the bootloader's state: on a trial boot the independent
+/// watchdog (`iwdg`) starts. The flash, for [`persist`].
 pub fn load_params<const N: usize>(
     params: &FlashParams<N>,
     flash: Peri<'static, FLASH>,
     iwdg: Peri<'static, IWDG>,
+    linked: Linked,
 ) -> ModuleFlash {
     let flash: &'static SharedFlash =
         SHARED_FLASH.init(Mutex::new(RefCell::new(Flash::new_blocking(flash))));
@@ -366,7 +384,7 @@ pub fn load_params<const N: usize>(
         LED_INPUTS.fetch_or(STORAGE_FAULT, Ordering::Relaxed);
     }
     let mut state = update::state_partition(flash);
-    let confirmation = if behind_bootloader() {
+    let confirmation = if linked == Linked::ActiveSlot {
         let whole = Partition { offset: 0, size: MAP.state.size };
         Confirmation::at_boot(&mut state, whole, iwdg, now().as_millis())
     } else {
@@ -377,16 +395,33 @@ pub fn load_params<const N: usize>(
     ModuleFlash { flash, state, confirmation }
 }
 
-/// Whether this image is linked at the active slot (build_image.rs), so runs behind the
-/// bootloader and has its state partition to read; an image flashed alone at the flash base
-/// must never take its own code there for the bootloader's state.
-fn behind_bootloader() -> bool {
-    extern "C" {
-        // cortex-m-rt's link.x: the image's vector table, at the start of its FLASH region.
-        static __vector_table: u32;
-    }
-    let start = core::ptr::addr_of!(__vector_table) as u32;
-    start == 0x0800_0000 + MAP.active.offset
+/// Where an image is linked, as its build script linked it (`build_image.rs`'s `Link`, which
+/// also writes its memory.x): [`linked!`] in the image's `main` says which, and
+/// [`load_params`] and [`start_bus`] take it. A constant of the image, so the branch for the
+/// other place is not in it (176 B of a module image in a slot: the firmware ID of an image
+/// flashed alone); it was read at run time from the vector table's address, which the same
+/// memory.x placed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Linked {
+    /// In the flash map's active slot, behind the bootloader: it has the bootloader's state
+    /// partition, is on trial after an update and takes updates over the bus.
+    ActiveSlot,
+    /// Alone at the flash base: no bootloader, so no state partition (its own code may lie
+    /// there), no trial, no updates over the bus.
+    FlashBase,
+}
+
+/// Where this image is linked ([`Linked`]), from its build script (`build_image.rs` sets
+/// `R2P_IMAGE_LINK` for the image's crate). Use it in the image's `main`.
+#[macro_export]
+macro_rules! linked {
+    () => {
+        if matches!(env!("R2P_IMAGE_LINK").as_bytes(), b"active") {
+            $crate::Linked::ActiveSlot
+        } else {
+            $crate::Linked::FlashBase
+        }
+    };
 }
 
 /// From the application's task, every 100 ms: confirms the image on trial once it is healthy

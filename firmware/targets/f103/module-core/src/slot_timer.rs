@@ -90,11 +90,12 @@ impl SlotTimer {
 }
 
 /// (time driver ticks − TIM2 count) mod 2¹⁶, read between two equal readings of the clock.
+/// At boot only: the clock is read out of line (`crate::now`), one copy of the read less.
 fn relate() -> u16 {
     loop {
-        let before = Instant::now().as_ticks();
+        let before = crate::now().as_ticks();
         let cnt = pac::TIM2.cnt().read().cnt();
-        if Instant::now().as_ticks() == before {
+        if crate::now().as_ticks() == before {
             return (before as u16).wrapping_sub(cnt);
         }
     }

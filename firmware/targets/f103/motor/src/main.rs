@@ -32,7 +32,7 @@ use embassy_time::{Duration, Instant, Ticker, Timer};
 use module_core::Leds;
 use r2p_app_motor::names::NameBuf;
 use r2p_app_motor::{params, App, Endpoints, Names, Sample, Storage};
-use r2p_module::FlashParams;
+use r2p_module::{FlashParams, ParamValues};
 use r2p_node::NodeConfig;
 use static_cell::StaticCell;
 
@@ -44,7 +44,8 @@ module_core::bind_can_interrupts!(struct Irqs {
 });
 
 static PARAMS: FlashParams<{ params::COUNT }> =
-    FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
+    FlashParams::new(&params::DEFAULTS, &PARAM_VALUES, module_core::PARAMS_BASE);
+static PARAM_VALUES: ParamValues<{ params::COUNT }> = ParamValues::new();
 static ENDPOINTS: Storage = Storage::new();
 static NAMES: StaticCell<NameBuf> = StaticCell::new();
 
@@ -115,14 +116,21 @@ async fn main(_spawner: Spawner) {
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
-    let mut flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
+    let mut flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG, module_core::linked!());
     let names = Names::write(Names::instance(&PARAMS), NAMES.init(NameBuf::new()));
     let ep = ENDPOINTS.build(names);
     let config = NodeConfig {
         slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
         ..NodeConfig::module(embassy_stm32::uid::uid(), names.node)
     };
-    module_core::start_bus(config, &PARAMS, |node| ep.register(node), can, p.TIM2);
+    module_core::start_bus(
+        config,
+        &PARAMS,
+        |node| ep.register(node),
+        can,
+        p.TIM2,
+        module_core::linked!(),
+    );
 
     interrupt::USART2.set_priority(CONTROL_PRIORITY);
     let io = CONTROL_IO.init((sensors, bridge, leds));

@@ -13,7 +13,7 @@ use embassy_stm32::gpio::{Input, Output};
 use embassy_stm32::peripherals::ADC1;
 use module_core::{analog_input, asserted, drive, AnalogInputs, EveryMs, Leds, ModuleFlash};
 use r2p_app_proximity::{params, App, Sample, Storage};
-use r2p_module::FlashParams;
+use r2p_module::{FlashParams, ParamValues};
 use static_cell::StaticCell;
 
 mod board {
@@ -25,7 +25,8 @@ module_core::bind_can_interrupts!(struct Irqs {
 });
 
 static PARAMS: FlashParams<{ params::COUNT }> =
-    FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
+    FlashParams::new(&params::DEFAULTS, &PARAM_VALUES, module_core::PARAMS_BASE);
+static PARAM_VALUES: ParamValues<{ params::COUNT }> = ParamValues::new();
 static ENDPOINTS: Storage = Storage::new();
 /// The board's I/O, in a static: the task takes a reference, because arguments it took by
 /// value would be dropped if its spawn failed, and that drop glue (never run) cost flash
@@ -88,10 +89,17 @@ async fn main(spawner: Spawner) {
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
-    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
+    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG, module_core::linked!());
     let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
     let config = r2p_app_proximity::node_config(embassy_stm32::uid::uid(), &PARAMS);
-    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
+    module_core::start_bus(
+        config,
+        &PARAMS,
+        |node| app.register(node),
+        can,
+        p.TIM2,
+        module_core::linked!(),
+    );
 
     spawner.spawn(run(app, IO.init(io), flash)).unwrap();
 }

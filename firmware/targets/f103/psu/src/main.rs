@@ -12,7 +12,7 @@ use embassy_stm32::gpio::{Input, Output};
 use embassy_stm32::peripherals::ADC1;
 use module_core::{analog_input, asserted, drive, AnalogInputs, EveryMs, Leds, ModuleFlash};
 use r2p_app_psu::{params, App, Sample, Storage};
-use r2p_module::FlashParams;
+use r2p_module::{FlashParams, ParamValues};
 
 mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
@@ -23,7 +23,8 @@ module_core::bind_can_interrupts!(struct Irqs {
 });
 
 static PARAMS: FlashParams<{ params::COUNT }> =
-    FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
+    FlashParams::new(&params::DEFAULTS, &PARAM_VALUES, module_core::PARAMS_BASE);
+static PARAM_VALUES: ParamValues<{ params::COUNT }> = ParamValues::new();
 static ENDPOINTS: Storage = Storage::new();
 
 /// ADC sample time: the dividers' source impedance is up to 9 kΩ; 239.5 cycles at 12 MHz
@@ -87,10 +88,17 @@ async fn main(_spawner: Spawner) {
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
-    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
+    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG, module_core::linked!());
     let app = App::new(ENDPOINTS.build(&PARAMS), &PARAMS);
     let config = r2p_app_psu::node_config(embassy_stm32::uid::uid(), &PARAMS);
-    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
+    module_core::start_bus(
+        config,
+        &PARAMS,
+        |node| app.register(node),
+        can,
+        p.TIM2,
+        module_core::linked!(),
+    );
 
     run(app, io, flash).await
 }

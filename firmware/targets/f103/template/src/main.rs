@@ -10,7 +10,7 @@ use embassy_executor::Spawner;
 use embassy_stm32::can::Can;
 use module_core::{EveryMs, Leds, ModuleFlash};
 use r2p_app_template::{params, App, Sample, Storage};
-use r2p_module::FlashParams;
+use r2p_module::{FlashParams, ParamValues};
 
 mod board {
     include!(concat!(env!("OUT_DIR"), "/board.rs"));
@@ -21,7 +21,8 @@ module_core::bind_can_interrupts!(
 );
 
 static PARAMS: FlashParams<{ params::COUNT }> =
-    FlashParams::new(params::DEFAULTS, module_core::PARAMS_BASE);
+    FlashParams::new(&params::DEFAULTS, &PARAM_VALUES, module_core::PARAMS_BASE);
+static PARAM_VALUES: ParamValues<{ params::COUNT }> = ParamValues::new();
 static ENDPOINTS: Storage = Storage::new();
 
 /// The application: one step per millisecond in thread mode.
@@ -47,10 +48,17 @@ async fn main(_spawner: Spawner) {
 
     let mut can = Can::new(p.CAN, pins.can_rx, pins.can_tx, Irqs);
     module_core::enable_can::<{ board::SYSCLK_HZ }>(&mut can).await;
-    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG);
+    let flash = module_core::load_params(&PARAMS, p.FLASH, p.IWDG, module_core::linked!());
     let app = App::new(ENDPOINTS.build(), &PARAMS);
     let config = r2p_app_template::node_config(embassy_stm32::uid::uid());
-    module_core::start_bus(config, &PARAMS, |node| app.register(node), can, p.TIM2);
+    module_core::start_bus(
+        config,
+        &PARAMS,
+        |node| app.register(node),
+        can,
+        p.TIM2,
+        module_core::linked!(),
+    );
 
     run(app, leds, flash).await
 }

@@ -54,7 +54,7 @@ use r2p_app_gateway::{App, BusLink, BusTap, NetState, RemoteBase, RemoteBaseStor
 use r2p_boot::layout::STM32F407VG as MAP;
 use r2p_management::message::{ParamFault, Value};
 use r2p_middleware::{pool_size, Class, Publisher};
-use r2p_module::{leds, FlashParams, OutboundCell};
+use r2p_module::{leds, FlashParams, OutboundCell, ParamValues};
 use r2p_msgs::{Odometry, Twist2D};
 use r2p_node::node::STARTING_HEARTBEATS;
 use r2p_node::{Node, ParamStore};
@@ -101,7 +101,8 @@ const PARAM_COUNT: usize = params::COUNT + base::params::COUNT;
 /// In the flash map's parameter sectors (2 and 3, 16 KiB each: embassy-stm32's bank 1 region 1
 /// starts at the flash base, so the map's offset is the region's).
 static PARAMS: FlashParams<PARAM_COUNT> =
-    FlashParams::new(followed_by(base::params::DEFAULTS), MAP.params.offset);
+    FlashParams::new(&followed_by(base::params::DEFAULTS), &PARAM_VALUES, MAP.params.offset);
+static PARAM_VALUES: ParamValues<PARAM_COUNT> = ParamValues::new();
 
 /// The base controller's part of [`PARAMS`], as its application indexes it.
 struct BaseParams;

@@ -15,6 +15,7 @@ extern "C" {
     fn __aeabi_memcpy4(dest: *mut u8, src: *const u8, n: usize);
     fn __aeabi_memcpy8(dest: *mut u8, src: *const u8, n: usize);
     fn __aeabi_memset(dest: *mut u8, n: usize, c: i32);
+    fn __aeabi_memclr(dest: *mut u8, n: usize);
     fn __aeabi_memclr4(dest: *mut u8, n: usize);
     fn __aeabi_memclr8(dest: *mut u8, n: usize);
     fn memcmp(a: *const u8, b: *const u8, n: usize) -> i32;
@@ -152,6 +153,23 @@ mod tests {
                             }
                         }
                         b.0[bo + at] = was;
+                    }
+                }
+            }
+        }
+
+        fn unaligned_memclr_clears_exactly_its_bytes() {
+            for d in 0..4 {
+                for n in 0..=LEN {
+                    let mut b = pattern();
+                    let before = pattern();
+                    // SAFETY: in bounds (d + n ≤ LEN + 3); any alignment is allowed.
+                    unsafe { __aeabi_memclr(b.0.as_mut_ptr().add(d), n) };
+                    for i in 0..b.0.len() {
+                        // SAFETY: in bounds.
+                        let got = unsafe { core::ptr::read_volatile(b.0.as_ptr().add(i)) };
+                        let want = if i >= d && i < d + n { 0 } else { before.0[i] };
+                        assert_eq!(got, want, "byte {} of a {}-byte clear at {}", i, n, d);
                     }
                 }
             }
