@@ -86,7 +86,7 @@ fn every_node_learns_where_each_reservation_lies_as_long_as_its_frames() {
 
     // The master's own placement, computed again: each slot as long as its stream's longest
     // frame's worst case (the speed: 4 bytes; the pose: 8, 8 and 6 bytes with the CRC).
-    let layout = Layout::new(CYCLE, 2, 4 * CYCLE.slot_us()).unwrap();
+    let layout = Layout::for_hrt_slots(CYCLE, 2, 4).unwrap();
     let frame_us = |export: u8, fragment: u8, len: usize| {
         let id = FrameId { laxity: Laxity::HRT, message: a.node_id().message_id(export), fragment };
         layout.reservation_us(id.to_raw(), len)

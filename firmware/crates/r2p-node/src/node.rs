@@ -185,8 +185,8 @@ impl<
         let layout = match config.hrt_blocks {
             0 => None,
             blocks => {
-                let reservable_us = u32::from(config.hrt_slots) * config.cycle.slot_us();
-                let l = rtcan::layout::Layout::new(config.cycle, blocks, reservable_us);
+                let l =
+                    rtcan::layout::Layout::for_hrt_slots(config.cycle, blocks, config.hrt_slots);
                 Some(l.map_err(|_| NodeError::BadBlocks(blocks))?)
             }
         };

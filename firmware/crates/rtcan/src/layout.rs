@@ -138,6 +138,17 @@ impl Layout {
         Ok(Self { config, blocks, per_block_us, spans })
     }
 
+    /// An empty layout whose `blocks` blocks together may hold as much time as `hrt_slots`
+    /// slots of the grid `config` cuts the cycle into: what a bus configured for the grid
+    /// reserves at most, laid out frame-sized.
+    pub fn for_hrt_slots(
+        config: CycleConfig,
+        blocks: u8,
+        hrt_slots: u8,
+    ) -> Result<Self, LayoutConfigError> {
+        Self::new(config, blocks, u32::from(hrt_slots) * config.slot_us())
+    }
+
     /// µs a reservation for a frame of `bits` worst-case bit times lasts: with the guard,
     /// rounded up.
     fn us(config: &CycleConfig, bits: u32) -> u32 {
@@ -213,20 +224,13 @@ impl Layout {
         let known = calendar.slots_of(stream);
         if let Some((_, held)) = known {
             // Registered again (a node repeating its request): its slots must hold the frames.
-            let mut rest = held.slots;
-            while rest != 0 {
-                if self.span(rest.trailing_zeros() as u8).is_none_or(|s| s.len_us < needs_us) {
-                    return Err(Reject::Conflict);
-                }
-                rest &= rest - 1;
+            if slots_in(held).any(|s| self.span(s).is_none_or(|s| s.len_us < needs_us)) {
+                return Err(Reject::Conflict);
             }
         }
         let got = calendar.register_in(stream, period_cycles, frames, usable)?;
         let before = self.clone();
-        let mut rest = got.slots;
-        while rest != 0 {
-            let slot = rest.trailing_zeros() as u8;
-            rest &= rest - 1;
+        for slot in slots_in(got) {
             if self.place(slot, needs_us).is_err() {
                 if known.is_none() {
                     calendar.remove(stream);
@@ -322,6 +326,11 @@ impl Layout {
             }
         }
     }
+}
+
+/// The slots a stream holds, lowest first.
+fn slots_in(held: StreamSlots) -> impl Iterator<Item = u8> {
+    (1..MAX_SLOTS).filter(move |&s| held.frame_in(s).is_some())
 }
 
 #[cfg(any(test, feature = "selftest"))]

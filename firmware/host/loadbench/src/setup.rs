@@ -106,8 +106,7 @@ impl Setup {
     /// The frame-sized calendar's empty layout: `hrt_blocks` blocks which together may hold
     /// as much time as `hrt_slots` grid slots.
     pub fn layout(&self) -> Result<Layout, SetupError> {
-        let reservable_us = u32::from(self.hrt_slots) * self.cycle.slot_us();
-        Layout::new(self.cycle, self.hrt_blocks, reservable_us)
+        Layout::for_hrt_slots(self.cycle, self.hrt_blocks, self.hrt_slots)
             .map_err(|_| SetupError::HrtBlocks(self.hrt_blocks))
     }
 
