@@ -166,10 +166,14 @@ pub fn message_text(m: &Message) -> String {
             result,
             start_us,
             len_us,
-        } => format!(
-            "HRT_GRANT message=0x{message_id:04X} period={period_cycles} offset={offset} \
-             slot={slot} result={result:?} at={start_us}+{len_us} us"
-        ),
+        } => {
+            // A position only with frame-sized reservations; on the slot grid the slot is it.
+            let at = if *len_us > 0 { format!(" at={start_us}+{len_us} us") } else { String::new() };
+            format!(
+                "HRT_GRANT message=0x{message_id:04X} period={period_cycles} offset={offset} \
+                 slot={slot} result={result:?}{at}"
+            )
+        }
         Message::ParamGet { target, index } => format!("PARAM_GET target={target} index={index}"),
         Message::ParamSet { target, index, value } => {
             format!("PARAM_SET target={target} index={index} value={}", value_text(*value))
@@ -528,6 +532,19 @@ mod tests {
         assert_eq!(
             lines[5],
             "HRT_GRANT message=0x0201 period=2 offset=1 slot=3 result=Ok at=500+167 us"
+        );
+        let grid = Message::HrtGrant {
+            message_id: 0x201,
+            period_cycles: 2,
+            offset: 1,
+            slot: 3,
+            result: HrtResult::Ok,
+            start_us: 0,
+            len_us: 0,
+        };
+        assert_eq!(
+            message_text(&grid),
+            "HRT_GRANT message=0x0201 period=2 offset=1 slot=3 result=Ok"
         );
         assert!(lines[3].contains("result=type mismatch"));
         assert_eq!(lines[7], "PARAM_SET target=1 index=4 value=f32:1.5");
