@@ -516,6 +516,12 @@ pub(crate) mod tests {
             assert!(node.take(7, at(160, 100)).is_ok(), "right after the sync");
         }
 
+        fn blocks_for_hrt_slots_hold_as_much_time_as_those_grid_slots() {
+            // 30 slots of 166 µs in 5 ms: two HRT slots' time is 332 µs, in one block.
+            let l = Layout::for_hrt_slots(CYCLE, 1, 2).unwrap();
+            assert_eq!(l, Layout::new(CYCLE, 1, 332).unwrap());
+        }
+
         fn bad_slots_and_configurations_are_refused() {
             let mut l = Layout::new(CYCLE, 2, 2_400).unwrap();
             assert_eq!(l.place(SYNC_SLOT, 10), Err(LayoutError::NotHrtSlot(0)));
