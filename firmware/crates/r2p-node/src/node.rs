@@ -30,6 +30,8 @@
 //! - `management.rs`: the management protocol (heartbeats, advertisements, subscriptions,
 //!   reboot, parameters);
 //! - `tdma.rs`: the slot timer's path through the TDMA cycle, as slave or master;
+//! - `framed.rs` and `framed_tx.rs`: frame-sized reservations (issue 22): where the master
+//!   places them, and the slot path that sends in them;
 //! - `hrt.rs`: HRT streams, their reservations with the master and their frames;
 //! - `liveness.rs` and `calendar.rs`: the master's reservations following their nodes, and a
 //!   standby's copy of them.
@@ -39,6 +41,7 @@ mod config;
 mod error;
 mod events;
 mod framed;
+mod framed_tx;
 mod hrt;
 mod liveness;
 mod management;
@@ -139,6 +142,10 @@ pub struct Node<
     /// here as master, heard in the grants otherwise (`framed.rs`).
     #[cfg(feature = "framed-reservations")]
     layout: Option<rtcan::layout::Layout>,
+    /// Frame-sized reservations: the reservation start this node last loaded an HRT frame
+    /// for (the slot timer may fire again inside that reservation).
+    #[cfg(feature = "framed-reservations")]
+    hrt_loaded_for: Micros,
     /// The nodes holding reservations in `scheduler`, followed by their heartbeats (master).
     owners: Vec<liveness::Owner, { liveness::OWNERS }>,
     /// As standby: syncs in a row whose masks `scheduler` (its copy of the master's calendar)
@@ -190,6 +197,10 @@ impl<
                 Some(l.map_err(|_| NodeError::BadBlocks(blocks))?)
             }
         };
+        let slot_tx = SlotTx::new(&config.cycle, config.free_slots);
+        // Frames fitted around reservations as long as their frames (`framed.rs`).
+        #[cfg(feature = "framed-reservations")]
+        let slot_tx = if layout.is_some() { slot_tx.fitted(&config.cycle) } else { slot_tx };
         #[cfg(not(feature = "framed-reservations"))]
         if config.hrt_blocks != 0 {
             return Err(NodeError::BadBlocks(config.hrt_blocks));
@@ -229,11 +240,13 @@ impl<
             scheduler: Scheduler::new(config.hrt_slots, config.cycle.slots),
             #[cfg(feature = "framed-reservations")]
             layout,
+            #[cfg(feature = "framed-reservations")]
+            hrt_loaded_for: Micros::MAX,
             owners: Vec::new(),
             calendar_agree: 0,
             beacon: 0,
             master: None,
-            slot_tx: SlotTx::new(&config.cycle, config.free_slots),
+            slot_tx,
             filters_for: None,
             last_sync: 0,
             sync_loaded: None,

@@ -132,6 +132,9 @@ pub struct SlotTx<T> {
     /// Fitted windows ([`SlotTx::fitted`]): the bit rate, to time each frame by its length.
     #[cfg(feature = "fitted-windows")]
     fitted: Option<u32>,
+    /// The slotted frames loaded are not withdrawn before this ([`SlotTx::hold_slotted`]).
+    #[cfg(feature = "fitted-windows")]
+    slotted_until: Micros,
     slotted: [Option<(Slotted<T>, FrameId)>; SLOTTED_MAX],
     queued: [Option<(Ticket, FrameId)>; QUEUED_MAX],
     window: Option<Window>,
@@ -152,6 +155,8 @@ impl<T: Copy> SlotTx<T> {
             frame_us: cycle.frame_us() as Micros,
             #[cfg(feature = "fitted-windows")]
             fitted: None,
+            #[cfg(feature = "fitted-windows")]
+            slotted_until: 0,
             slotted: [None; SLOTTED_MAX],
             queued: [None; QUEUED_MAX],
             window: None,
@@ -226,7 +231,12 @@ impl<T: Copy> SlotTx<T> {
         }
         let n = self.take_results(can, &mut done, 0);
         let inside = self.policy == FreeSlots::Merged && self.window.is_some_and(|w| now < w.end);
-        if !inside || !self.still_next(now, tx, &done) || self.has_slotted() {
+        #[cfg(not(feature = "fitted-windows"))]
+        let withdraw = !inside || !self.still_next(now, tx, &done) || self.has_slotted();
+        #[cfg(feature = "fitted-windows")]
+        let withdraw = (self.has_queued() && (!inside || !self.still_next(now, tx, &done)))
+            || (self.has_slotted() && now >= self.slotted_until);
+        if withdraw {
             can.abort_pending();
             self.take_results(can, &mut done, n);
             self.draining = true;
@@ -342,6 +352,15 @@ impl<T: Copy> SlotTx<T> {
         }
         self.slotted[free] = Some((what, frame.id()));
         true
+    }
+
+    /// Keeps the slotted frames loaded until `until`, their reservation's worst-case end:
+    /// frame-sized reservations load free frames behind a slotted frame while it is on the
+    /// wire (`rtcan::framed_cycle::FOLLOW_US`), which must not withdraw it — on the grid the
+    /// next call is the next slot's boundary, where a slotted frame not yet sent is late.
+    #[cfg(feature = "fitted-windows")]
+    pub fn hold_slotted(&mut self, until: Micros) {
+        self.slotted_until = until;
     }
 
     /// The end of the window a free slot at `p` opens: the start of the next slot (`Single`),

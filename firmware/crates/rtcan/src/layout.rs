@@ -293,6 +293,28 @@ impl Layout {
         self.config.cycle_us / u32::from(self.blocks)
     }
 
+    /// The cycle's length, µs.
+    pub const fn cycle_us(&self) -> u32 {
+        self.config.cycle_us
+    }
+
+    /// The calendar's slots (the sync's included): the grid's count.
+    pub const fn slots(&self) -> u8 {
+        self.config.slots
+    }
+
+    /// How many blocks the cycle is cut into.
+    pub const fn blocks(&self) -> u8 {
+        self.blocks
+    }
+
+    /// Where block `b`'s share of the cycle lies (start, end), µs: its reservations lie
+    /// there (block 0's after the sync), wherever the master placed them.
+    pub fn share(&self, b: u8) -> (u32, u32) {
+        let b = u32::from(b);
+        (b * self.block_us(), self.limit(b))
+    }
+
     /// True if `span` overlaps no placed reservation but `slot`'s own and ends within its
     /// block's share: a slot nothing follows in its block may grow without moving another.
     fn room_for(&self, span: Span, slot: u8) -> bool {

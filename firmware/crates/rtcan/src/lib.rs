@@ -20,6 +20,7 @@ pub mod failover;
 pub mod filter_banks;
 pub mod fragment;
 pub mod frame;
+pub mod framed_cycle;
 pub mod id;
 pub mod laxity;
 pub mod layout;
@@ -53,6 +54,7 @@ pub mod selftest {
         crate::cycle::tests::SUITE,
         crate::schedule::tests::SUITE,
         crate::layout::tests::SUITE,
+        crate::framed_cycle::tests::SUITE,
         crate::failover::tests::SUITE,
         crate::filter_banks::tests::SUITE,
         crate::wire_bits::tests::SUITE,

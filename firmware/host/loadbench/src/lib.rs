@@ -20,7 +20,6 @@ pub mod record;
 pub mod rtcan_node;
 pub mod run;
 pub mod setup;
-pub mod timeline;
 pub mod traffic;
 
 use serde::Serialize;

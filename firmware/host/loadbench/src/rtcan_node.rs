@@ -20,6 +20,7 @@ use r2p_node::slot_tx::{Done, Slotted};
 use r2p_node::{FreeSlots, SlotTx};
 use rtcan::controller::{Filter, TxOutcome};
 use rtcan::cycle::{ClockState, SYNC_SLOT};
+use rtcan::framed_cycle::{FramedCycle, Moment};
 use rtcan::id::{EXTENDED_ID_MAX, MESSAGE_ID_SHIFT, SYNC_MESSAGE_IDS};
 use rtcan::schedule::occurs;
 use rtcan::{
@@ -30,7 +31,6 @@ use rtcan::{
 use crate::publish::Publishers;
 use crate::record::{Carried, Counters, Sent};
 use crate::setup::{Setup, TX_QUEUE};
-use crate::timeline::Timeline;
 use crate::traffic::{Kind, Traffic};
 
 #[derive(Clone, Copy, Debug)]
@@ -59,8 +59,9 @@ pub struct RtcanNode<'t> {
     queued: Vec<VecDeque<u32>>,
     /// The next slot boundary.
     next_slot: Micros,
-    /// What-if: reservations as long as their frames ([`Timeline`]); windows between them.
-    timeline: Option<Timeline>,
+    /// What-if: reservations as long as their frames (`traffic.layout`), windows between them
+    /// as the node runtime's slot path sees them ([`FramedCycle`]).
+    framed: bool,
     /// When the node reacts to the last bus event or release (framed what-if).
     reaction: Option<Micros>,
     /// Frames in its mailboxes after its last activation or bus event (framed what-if).
@@ -90,7 +91,7 @@ impl<'t> RtcanNode<'t> {
         index: usize,
         mut can: SimPort,
         free_slots: FreeSlots,
-        timeline: Option<Timeline>,
+        framed: bool,
     ) -> Self {
         let master = (index == 0).then_some(Master { cycle: 0, next_sync: 0 });
         // Slaves hear syncs only (laxity 0, fragment 0, message ID < 0x100); the master nothing.
@@ -117,16 +118,16 @@ impl<'t> RtcanNode<'t> {
             clock: SlotClock::new(setup.cycle),
             tx: TxQueue::new(setup.laxity),
             master,
-            slot_tx: match timeline {
-                Some(_) => SlotTx::new(&setup.cycle, free_slots).fitted(&setup.cycle),
-                None => SlotTx::new(&setup.cycle, free_slots),
+            slot_tx: match framed {
+                true => SlotTx::new(&setup.cycle, free_slots).fitted(&setup.cycle),
+                false => SlotTx::new(&setup.cycle, free_slots),
             },
             loaded: Vec::new(),
             publishers: Publishers::new(traffic, setup, index, |s| !is_hrt(s)),
             hrt,
             queued: vec![VecDeque::new(); traffic.streams.len()],
             next_slot: 0,
-            timeline,
+            framed,
             reaction: None,
             mailboxes: 0,
             wake_at: 0,
@@ -159,7 +160,7 @@ impl<'t> RtcanNode<'t> {
         if self.slot_tx.at_guard(now) {
             self.slot_tx.on_guard(&mut self.can);
         }
-        if self.timeline.is_some() {
+        if self.framed {
             self.reaction = self.reaction.filter(|&r| r > now);
             self.framed_tick(now);
             return;
@@ -214,9 +215,9 @@ impl<'t> RtcanNode<'t> {
     fn send_sync_if_due(&mut self, now: Micros) -> Option<bool> {
         let mut m = self.master.filter(|m| now >= m.next_sync)?;
         let next = m.cycle.wrapping_add(1);
-        let mask = match self.timeline {
-            Some(_) => self.traffic.framed_mask(next),
-            None => self.traffic.mask(next),
+        let mask = match self.framed {
+            true => self.traffic.framed_mask(next),
+            false => self.traffic.mask(next),
         };
         let sync = SyncFrame::new(m.cycle, mask, false);
         let loaded = self.slot_tx.load_slotted(&mut self.can, Slotted::Sync, &sync.to_frame());
@@ -233,7 +234,7 @@ impl<'t> RtcanNode<'t> {
         Some(loaded)
     }
 
-    /// The what-if's activation ([`Timeline`]): the same steps as [`Self::slot_tick`], at
+    /// The what-if's activation ([`FramedCycle`]): the same steps as [`Self::slot_tick`], at
     /// reservation starts and ends, releases and bus events instead of slot boundaries. In a
     /// reservation: its HRT frame at its start; between reservations: the queue's frames for
     /// the window up to the next one.
@@ -246,7 +247,6 @@ impl<'t> RtcanNode<'t> {
             next = next.min(m.next_sync);
         }
         if let ClockState::Running(p) = self.clock.state(now) {
-            let timeline = self.timeline.as_ref().expect("framed");
             let (Some(c0), Some(c1)) = (
                 self.clock.slot_start(p.cycle, 0),
                 self.clock.slot_start(p.cycle, self.setup.cycle.slots),
@@ -255,34 +255,23 @@ impl<'t> RtcanNode<'t> {
                 self.mailboxes = self.can.port().pending();
                 return;
             };
-            let reservations = timeline.of(self.clock.mask(p.cycle));
-            let at = |us: u32| c0 + Micros::from(us);
-            let inside =
-                reservations.iter().find(|r| (at(r.start_us)..at(r.free_at_us)).contains(&now));
-            match inside {
-                Some(r) if r.slot != SYNC_SLOT && now == at(r.start_us) => {
-                    self.send_hrt(p.cycle, r.slot);
+            let cycle = FramedCycle::new(&self.traffic.layout, self.clock.mask(p.cycle));
+            let t = (now - c0) as u32;
+            match cycle.at(t) {
+                Moment::Reserved { slot: Some(slot), start_us }
+                    if slot != SYNC_SLOT && now == c0 + Micros::from(start_us) =>
+                {
+                    self.send_hrt(p.cycle, slot);
                 }
-                Some(_) => {}
-                None => {
-                    let end = reservations
-                        .iter()
-                        .map(|r| at(r.start_us))
-                        .find(|&t| t > now)
-                        .unwrap_or(c1);
+                Moment::Reserved { .. } => {}
+                Moment::Free { end_us } => {
+                    let end = (c0 + Micros::from(end_us)).min(c1);
                     if self.slot_tx.load_queued(now, end, &mut self.can, &self.tx) {
                         self.note_loaded(now);
                     }
                 }
             }
-            let boundary = reservations
-                .iter()
-                .flat_map(|r| [at(r.start_us), at(r.free_at_us)])
-                .chain([c1])
-                .filter(|&t| t > now)
-                .min()
-                .unwrap_or(c1);
-            next = next.min(boundary);
+            next = next.min((c0 + Micros::from(cycle.next_edge(t))).min(c1));
         }
         if let Some(r) = self.publishers.next_release(self.traffic) {
             next = next.min((r + REACTION_US).max(now + 1));
@@ -382,14 +371,14 @@ impl<'t> RtcanNode<'t> {
         for (s, occurrences) in &mut self.hrt {
             let stream = &traffic.streams[usize::from(*s)];
             let Kind::Hrt { period, phase, framed } = stream.kind else { continue };
-            let phase = if self.timeline.is_some() { framed } else { phase };
+            let phase = if self.framed { framed } else { phase };
             if phase.slot != slot || !occurs(period, phase, cycle) {
                 continue;
             }
             // The cycle whose reservation carries the message (framed: its calendar's offset).
             let carried_in = |m: u32| {
                 let msg = &traffic.messages[m as usize];
-                if self.timeline.is_some() {
+                if self.framed {
                     traffic.framed_cycle(msg).expect("an HRT message")
                 } else {
                     msg.cycle

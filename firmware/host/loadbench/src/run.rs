@@ -8,7 +8,6 @@ use crate::fixed_node::FixedNode;
 use crate::record::{Counters, Sent};
 use crate::rtcan_node::RtcanNode;
 use crate::setup::Setup;
-use crate::timeline::Timeline;
 use crate::traffic::{Kind, Traffic};
 
 /// How the nodes get frames onto the bus.
@@ -20,10 +19,11 @@ pub enum Policy {
     RtcanOneShot,
     /// RTCAN, free slots merged into windows with retransmission (`FreeSlots::Merged`).
     RtcanMerged,
-    /// What-if (issue 22's capacity): reservations as long as their frames, laid out as one
-    /// block after the sync ([`crate::timeline`]); the rest of the cycle one merged window, in
-    /// which each node loads the most urgent frames that still fit (`SlotTx::fitted`), at
-    /// release and whenever one of its frames ends, not only at slot boundaries.
+    /// What-if (issue 22's capacity): reservations as long as their frames, laid out in blocks
+    /// (`rtcan::layout`); between them merged windows (`rtcan::framed_cycle`, the node
+    /// runtime's rule), in which each node loads the most urgent frames that still fit
+    /// (`SlotTx::fitted`), at release and whenever one of its frames ends, not only at slot
+    /// boundaries.
     RtcanFramed,
     /// Plain fixed-priority CAN, rate-monotonic identifiers: the baseline.
     Fixed,
@@ -110,8 +110,7 @@ pub fn run(setup: &Setup, traffic: &Traffic, policy: Policy) -> Run {
             let mut nodes: Vec<RtcanNode> = (0..setup.nodes)
                 .map(|i| {
                     let port = SimPort::new(bus.port(i), setup.cycle.bit_rate);
-                    let timeline = framed.then(|| Timeline::new(&traffic.layout));
-                    RtcanNode::new(traffic, setup, i, port, free_slots, timeline)
+                    RtcanNode::new(traffic, setup, i, port, free_slots, framed)
                 })
                 .collect();
             loop {
@@ -163,7 +162,6 @@ pub fn run(setup: &Setup, traffic: &Traffic, policy: Policy) -> Run {
     let frames = trace.iter().filter(|e| matches!(e.kind, EventKind::Sent { .. })).count() as u64;
     let events = total.activations + 2 * frames + traffic.messages.len() as u64;
     let reservations = (policy == Policy::RtcanFramed).then(|| {
-        let timeline = Timeline::new(&traffic.layout);
         let cycle_us = u64::from(setup.cycle.cycle_us);
         traffic
             .messages
@@ -173,10 +171,9 @@ pub fn run(setup: &Setup, traffic: &Traffic, policy: Policy) -> Run {
                     return (0, 0);
                 };
                 let cycle = traffic.framed_cycle(m).expect("an HRT message");
-                let r = timeline.of(traffic.framed_mask(cycle));
-                let r = r.iter().find(|r| r.slot == framed.slot).expect("its slot is reserved");
+                let r = traffic.layout.span(framed.slot).expect("its slot is placed");
                 let c0 = u64::from(cycle) * cycle_us;
-                (c0 + u64::from(r.start_us), c0 + u64::from(r.end_us))
+                (c0 + u64::from(r.start_us), c0 + u64::from(r.end_us()))
             })
             .collect()
     });

@@ -8,6 +8,7 @@ use r2p_node::FreeSlots;
 use r2p_vbus::bits::INTERMISSION_BITS;
 use r2p_vbus::{EventKind, FrameBits};
 use rtcan::cycle::frame_bits as worst_case_frame_bits;
+use rtcan::framed_cycle::{FramedCycle, Moment};
 use rtcan::{Laxity, SyncFrame};
 
 /// The RTCAN policies (the node runtime's default and both free-slot policies).
@@ -338,11 +339,28 @@ fn framed_windows_end_before_every_reservation_and_carry_past_the_grids_ceiling(
     let setup = short(0.95, 6, 500_000);
     let traffic = Traffic::generate(&setup).unwrap();
     let r = run(&setup, &traffic, Policy::RtcanFramed);
-    let timeline = r2p_loadbench::timeline::Timeline::new(&traffic.layout);
     let cycle_us = u64::from(setup.cycle.cycle_us);
     // No SRT/NRT frame, intermission included, runs into a reservation's start, or starts in
     // a reservation before its owner's frame has (`FOLLOW_US` after its start: only the last
     // of a block lets free frames follow its frame).
+    // Per cycle: each announced reservation, from its start until free frames may follow it.
+    let held_in = |c: u64| -> Vec<(u64, u64)> {
+        let cycle = FramedCycle::new(&traffic.layout, traffic.framed_mask(c as u32));
+        let reserved =
+            |slot, t| matches!(cycle.at(t), Moment::Reserved { slot: Some(s), .. } if s == slot);
+        traffic
+            .layout
+            .iter()
+            .filter(|&(slot, res)| reserved(slot, u32::from(res.start_us)))
+            .map(|(slot, res)| {
+                let start = u32::from(res.start_us);
+                let free_at = (start..res.end_us()).find(|&t| !reserved(slot, t));
+                let at = |us: u32| c * cycle_us + u64::from(us);
+                (at(start), at(free_at.unwrap_or(res.end_us())))
+            })
+            .collect()
+    };
+    let mut held = std::collections::HashMap::new();
     let mut free_frames = 0;
     for e in &r.trace {
         let EventKind::Sent { start_ns, frame, .. } = e.kind else { continue };
@@ -352,11 +370,7 @@ fn framed_windows_end_before_every_reservation_and_carry_past_the_grids_ceiling(
         let (start, idle) = (start_ns / 1_000, e.time_ns / 1_000 + u64::from(INTERMISSION_BITS));
         let cycle = start / cycle_us;
         for c in [cycle, cycle + 1] {
-            for res in timeline.of(traffic.framed_mask(c as u32)) {
-                let (a, b) = (
-                    c * cycle_us + u64::from(res.start_us),
-                    c * cycle_us + u64::from(res.free_at_us),
-                );
+            for &(a, b) in held.entry(c).or_insert_with(|| held_in(c)) as &Vec<(u64, u64)> {
                 assert!(idle <= a || start >= b, "{frame:?} at {start}–{idle} µs overlaps {a}–{b}");
             }
         }

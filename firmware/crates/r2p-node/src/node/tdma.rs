@@ -97,6 +97,7 @@ impl<
                 let sync = SyncFrame::new(m.cycle, next, m.epoch).from_rank(rank);
                 let ok = self.slot_tx.load_slotted(can, Slotted::Sync, &sync.to_frame());
                 if ok {
+                    self.hold_slotted(now, SYNC_SLOT);
                     self.clock.on_sync(now, &sync);
                     self.last_sync = now;
                     // Its outcome comes from the controller (`on_done`); `syncs_sent` and the
@@ -121,22 +122,13 @@ impl<
 
         let state = self.clock.state(now);
         self.continue_cycle(state);
+        if self.framed_load(now, state, can) {
+            return;
+        }
         match state {
             ClockState::Running(p) if p.slot == SYNC_SLOT => {}
             ClockState::Running(p) if self.clock.mask(p.cycle) & (1 << p.slot) != 0 => {
-                let mine = self.exports.iter().enumerate().find_map(|(i, e)| match e.hrt?.state {
-                    HrtState::Granted { slots }
-                        if occurs(
-                            e.hrt?.period,
-                            Phase { offset: slots.offset, slot: 0 },
-                            p.cycle,
-                        ) =>
-                    {
-                        Some((i, slots.frame_in(p.slot)?))
-                    }
-                    _ => None,
-                });
-                if let Some((i, frame)) = mine {
+                if let Some((i, frame)) = self.hrt_frame_in(p.cycle, p.slot) {
                     self.send_hrt(i, frame, can);
                 }
             }
@@ -156,10 +148,27 @@ impl<
         }
     }
 
+    /// The export whose HRT frame goes in slot `slot` of cycle `cycle`, and which of its
+    /// message's frames.
+    pub(super) fn hrt_frame_in(&self, cycle: u32, slot: u8) -> Option<(usize, u8)> {
+        self.exports.iter().enumerate().find_map(|(i, e)| match e.hrt?.state {
+            HrtState::Granted { slots }
+                if occurs(e.hrt?.period, Phase { offset: slots.offset, slot: 0 }, cycle) =>
+            {
+                Some((i, slots.frame_in(slot)?))
+            }
+            _ => None,
+        })
+    }
+
     /// True if `now` is a slot boundary (a slot's start as the clock sees it, or the master's
     /// next sync), not only a loaded frame's latest start (they meet when a slot is exactly
-    /// one worst-case frame long).
+    /// one worst-case frame long). With frame-sized reservations every call is one: the
+    /// window after a latest start may still take a shorter frame.
     fn at_boundary(&self, now: Micros) -> bool {
+        if self.framed_running(now) {
+            return true;
+        }
         let slot_start = match self.clock.state(now) {
             ClockState::Running(p) => self.clock.slot_start(p.cycle, p.slot),
             _ => None,
@@ -226,7 +235,9 @@ impl<
         // No cycle: a nominal slot after this tick. Ticks without a cycle are boundaries, or
         // guards of a loaded window, after which `next_wake` returns the window's end.
         let by_clock = match self.clock.state(now) {
-            ClockState::Running(p) => self.clock.slot_start(p.cycle, p.slot + 1),
+            ClockState::Running(p) => {
+                self.framed_next(now, p).or_else(|| self.clock.slot_start(p.cycle, p.slot + 1))
+            }
             _ => None,
         }
         .unwrap_or(now + slot_us);

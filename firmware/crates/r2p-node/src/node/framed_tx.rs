@@ -1,0 +1,134 @@
+//! The slot path on frame-sized reservations (issue 22; docs/rtcan.md "Frame-sized
+//! reservations"): with [`NodeConfig::hrt_blocks`](super::NodeConfig) > 0 the node sends in the
+//! cycle as the master laid it out (`framed.rs`, `rtcan::framed_cycle`) instead of on the slot
+//! grid: each HRT frame at its reservation's start, free frames in the windows between the
+//! reservations, each fitted to what remains of its window (`SlotTx::fitted`). Its timer fires
+//! where what it may load changes (a reservation's start, a window's opening), at a loaded
+//! frame's latest start, and at the grid's slot boundaries as before: there it tops the window
+//! up (its last frames may have gone) and a standby checks for a missing sync
+//! (`CONTINUE_AFTER_SLOT`). Any other call — on a transmit-complete interrupt, say — tops the
+//! window up sooner.
+//!
+//! Without the feature `framed-reservations` these are constant and compile to nothing.
+
+#[cfg(feature = "framed-reservations")]
+use rtcan::cycle::SYNC_SLOT;
+use rtcan::cycle::{ClockState, SlotPosition};
+#[cfg(feature = "framed-reservations")]
+use rtcan::framed_cycle::{FramedCycle, Moment};
+use rtcan::{CanController, Micros};
+
+#[cfg(feature = "framed-reservations")]
+use super::HrtState;
+use super::Node;
+
+impl<
+        'a,
+        const EXPORTS: usize,
+        const IMPORTS: usize,
+        const TXQ: usize,
+        const RX: usize,
+        const BUF: usize,
+        const MASTER: bool,
+    > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF, MASTER>
+{
+    /// True if the node sends on frame-sized reservations at `now`: it has a layout and the
+    /// cycle runs (without a cycle every slot is free, as on the grid).
+    #[inline(always)]
+    pub(super) fn framed_running(&self, now: Micros) -> bool {
+        #[cfg(feature = "framed-reservations")]
+        if self.layout.is_some() {
+            return matches!(self.clock.state(now), ClockState::Running(_));
+        }
+        let _ = now;
+        false
+    }
+
+    /// Step 5 of `slot_tick` on frame-sized reservations: loads this node's HRT frame at its
+    /// reservation's start (once), or the queue's frames for the free window `now` is in.
+    /// False if the node is on the slot grid or no cycle runs: the grid's step 5 applies.
+    #[inline(always)]
+    pub(super) fn framed_load<C: CanController + ?Sized>(
+        &mut self,
+        now: Micros,
+        state: ClockState,
+        can: &mut C,
+    ) -> bool {
+        #[cfg(feature = "framed-reservations")]
+        if let (Some(layout), ClockState::Running(p)) = (self.layout.as_ref(), state) {
+            let Some((c0, c1)) = self.cycle_bounds(p) else { return true };
+            let cycle = FramedCycle::new(layout, self.clock.mask(p.cycle));
+            match cycle.at(now.saturating_sub(c0) as u32) {
+                Moment::Reserved { slot: Some(slot), start_us } if slot != SYNC_SLOT => {
+                    let start = c0 + Micros::from(start_us);
+                    if self.hrt_loaded_for != start {
+                        if let Some((i, frame)) = self.framed_frame_in(p.cycle, slot) {
+                            self.hrt_loaded_for = start;
+                            self.send_hrt(i, frame, can);
+                            self.hold_slotted(start, slot);
+                        }
+                    }
+                }
+                Moment::Reserved { .. } => {}
+                Moment::Free { end_us } => {
+                    let end = (c0 + Micros::from(end_us)).min(c1);
+                    self.slot_tx.load_queued(now, end, can, &self.tx);
+                }
+            }
+            return true;
+        }
+        let _ = (now, state, can);
+        false
+    }
+
+    /// On frame-sized reservations: the next time after `now` the slot timer must fire in
+    /// cycle position `p` (module documentation); `None` on the slot grid.
+    #[inline(always)]
+    pub(super) fn framed_next(&self, now: Micros, p: SlotPosition) -> Option<Micros> {
+        #[cfg(feature = "framed-reservations")]
+        if let Some(layout) = self.layout.as_ref() {
+            let (c0, c1) = self.cycle_bounds(p)?;
+            let cycle = FramedCycle::new(layout, self.clock.mask(p.cycle));
+            let edge = (c0 + Micros::from(cycle.next_edge(now.saturating_sub(c0) as u32))).min(c1);
+            let grid = self.clock.slot_start(p.cycle, p.slot + 1).filter(|&t| t > now);
+            return Some(grid.map_or(edge, |t| t.min(edge)));
+        }
+        let _ = (now, p);
+        None
+    }
+
+    /// A sync or HRT frame loaded for `slot`'s reservation starting at `start`: free frames
+    /// loaded behind it while it is on the wire must not withdraw it before its worst-case end.
+    #[inline(always)]
+    pub(super) fn hold_slotted(&mut self, start: Micros, slot: u8) {
+        #[cfg(feature = "framed-reservations")]
+        if let Some(span) = self.layout.as_ref().and_then(|l| l.span(slot)) {
+            self.slot_tx.hold_slotted(start + Micros::from(span.len_us));
+        }
+        let _ = (start, slot);
+    }
+
+    /// The export whose HRT frame goes in slot `slot` of cycle `cycle`, and which of its
+    /// message's frames: a message's frames go in its slots in the order the reservations lie
+    /// in the cycle, which is not the slots' order (the master places each slot where it ends
+    /// earliest).
+    #[cfg(feature = "framed-reservations")]
+    fn framed_frame_in(&self, cycle: u32, slot: u8) -> Option<(usize, u8)> {
+        let (i, _) = self.hrt_frame_in(cycle, slot)?;
+        let HrtState::Granted { slots } = self.exports[i].hrt?.state else { return None };
+        let layout = self.layout.as_ref()?;
+        let at = layout.span(slot)?.start_us;
+        let earlier = (1..self.config.cycle.slots)
+            .filter(|&s| slots.frame_in(s).is_some())
+            .filter(|&s| layout.span(s).is_some_and(|o| o.start_us < at))
+            .count();
+        Some((i, earlier as u8))
+    }
+
+    /// Where cycle `p.cycle` starts and ends as the clock sees it.
+    #[cfg(feature = "framed-reservations")]
+    fn cycle_bounds(&self, p: SlotPosition) -> Option<(Micros, Micros)> {
+        let slots = self.config.cycle.slots;
+        Some((self.clock.slot_start(p.cycle, SYNC_SLOT)?, self.clock.slot_start(p.cycle, slots)?))
+    }
+}
