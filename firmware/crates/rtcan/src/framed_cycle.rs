@@ -52,6 +52,8 @@ struct Held {
 #[derive(Clone, Copy)]
 pub struct FramedCycle<'l> {
     layout: &'l Layout,
+    /// The slots reserved this cycle whose position is known: announced and placed, and the
+    /// sync's.
     mask: u64,
     /// A slot `mask` announces has no known position: every block's share is held.
     unknown: bool,
@@ -60,10 +62,9 @@ pub struct FramedCycle<'l> {
 impl<'l> FramedCycle<'l> {
     /// The cycle whose sync announced `mask`, as `layout` places its slots.
     pub fn new(layout: &'l Layout, mask: u64) -> Self {
-        let unknown = (1..64u8)
-            .filter(|&s| mask & (1 << s) != 0)
-            .any(|s| s < layout.slots() && layout.span(s).is_none());
-        Self { layout, mask, unknown }
+        let slots = u64::MAX.checked_shr(64 - u32::from(layout.slots())).unwrap_or(0);
+        let unknown = mask & slots & !layout.placed() != 0;
+        Self { layout, mask: (mask | 1 << SYNC_SLOT) & layout.placed(), unknown }
     }
 
     /// True if a slot the sync announced has no known position (module documentation).
@@ -74,15 +75,17 @@ impl<'l> FramedCycle<'l> {
     /// Every reservation of the cycle, in slot order then the blocks' shares (not in time
     /// order; they never overlap each other, but a share overlaps the slots it holds).
     fn held(&self) -> impl Iterator<Item = Held> + '_ {
-        let slots = self
-            .layout
-            .iter()
-            .filter(|&(slot, _)| slot == SYNC_SLOT || self.mask & (1 << slot) != 0)
-            .map(|(slot, s)| Held {
-                slot: Some(slot),
-                start_us: s.start_us.into(),
-                end_us: s.end_us(),
-            });
+        // The announced, placed slots' bits, lowest first: a few, not every slot.
+        let mut left = self.mask;
+        let bits = core::iter::from_fn(move || {
+            let slot = (left != 0).then(|| left.trailing_zeros() as u8)?;
+            left &= left - 1;
+            Some(slot)
+        });
+        let slots = bits.filter_map(|slot| {
+            let s = self.layout.span(slot)?;
+            Some(Held { slot: Some(slot), start_us: s.start_us.into(), end_us: s.end_us() })
+        });
         let shares = (0..if self.unknown { self.layout.blocks() } else { 0 }).map(|b| {
             let (start_us, end_us) = self.layout.share(b);
             Held { slot: None, start_us, end_us }

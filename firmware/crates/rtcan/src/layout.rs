@@ -114,6 +114,8 @@ pub struct Layout {
     per_block_us: u32,
     /// Per slot; `len_us == 0`: not placed.
     spans: [Span; MAX_SLOTS as usize],
+    /// One bit per placed slot (`spans` with a length).
+    placed: u64,
 }
 
 impl Layout {
@@ -135,7 +137,7 @@ impl Layout {
         }
         let mut spans = [Span::default(); MAX_SLOTS as usize];
         spans[usize::from(SYNC_SLOT)] = Span { start_us: 0, len_us: sync_us as u16 };
-        Ok(Self { config, blocks, per_block_us, spans })
+        Ok(Self { config, blocks, per_block_us, spans, placed: 1 << SYNC_SLOT })
     }
 
     /// An empty layout whose `blocks` blocks together may hold as much time as `hrt_slots`
@@ -171,6 +173,12 @@ impl Layout {
         (0..MAX_SLOTS).filter_map(|slot| self.span(slot).map(|s| (slot, s)))
     }
 
+    /// One bit per placed slot (the sync's, bit 0, always): what a node's slot path looks up
+    /// instead of walking every slot.
+    pub const fn placed(&self) -> u64 {
+        self.placed
+    }
+
     /// Places `slot` for frames needing `needs_us` (from [`Self::reservation_us`]), or checks
     /// that its reservation holds them if it is placed already (streams sharing a slot in
     /// alternate cycles). Never moves a placed slot.
@@ -200,6 +208,7 @@ impl Layout {
         }
         let (_, span) = best.ok_or(LayoutError::NoRoom { needs_us })?;
         self.spans[usize::from(slot)] = span;
+        self.placed |= 1 << slot;
         Ok(span)
     }
 
@@ -267,9 +276,11 @@ impl Layout {
         for (s, other) in self.spans.iter_mut().enumerate().skip(1) {
             if s != usize::from(slot) && other.overlaps(span) {
                 *other = Span::default();
+                self.placed &= !(1 << s);
             }
         }
         self.spans[usize::from(slot)] = span;
+        self.placed |= 1 << slot;
         Ok(())
     }
 
@@ -278,6 +289,7 @@ impl Layout {
         if slot != SYNC_SLOT {
             if let Some(s) = self.spans.get_mut(usize::from(slot)) {
                 *s = Span::default();
+                self.placed &= !(1 << slot);
             }
         }
     }
@@ -287,6 +299,7 @@ impl Layout {
         let sync = self.spans[usize::from(SYNC_SLOT)];
         self.spans = [Span::default(); MAX_SLOTS as usize];
         self.spans[usize::from(SYNC_SLOT)] = sync;
+        self.placed = 1 << SYNC_SLOT;
     }
 
     fn block_us(&self) -> u32 {
@@ -536,6 +549,11 @@ pub(crate) mod tests {
             assert!(node.take(7, at(159, 100)).is_err(), "into the sync's reservation");
             assert!(node.take(7, at(4_900, 100)).is_ok(), "ends with the cycle");
             assert!(node.take(7, at(160, 100)).is_ok(), "right after the sync");
+            // Slot 7 right after the sync took slot 9's time: the bitmask follows the spans.
+            assert_eq!(node.placed(), 1 << 2 | 1 << 6 | 1 << 7 | 1);
+            assert_eq!(node.span(9), None);
+            node.clear();
+            assert_eq!((node.placed(), node.iter().count()), (1, 1), "the sync's only");
         }
 
         fn blocks_for_hrt_slots_hold_as_much_time_as_those_grid_slots() {

@@ -64,6 +64,9 @@ proptest! {
                 }
             }
             let placed: Vec<(u8, Span)> = layout.iter().collect();
+            // The bitmask the nodes' slot path reads says the same.
+            let bits = placed.iter().fold(0u64, |m, &(s, _)| m | 1 << s);
+            prop_assert_eq!(layout.placed(), bits);
             // No overlap; inside the cycle, within its block's share (block 0: the sync besides).
             let block_us = CYCLE.cycle_us / u32::from(blocks);
             let sync_end = layout.span(0).unwrap().end_us();

@@ -51,6 +51,16 @@ pub trait Runtime {
     fn slot_tick(&mut self, now: Micros, can: &mut dyn CanController);
     /// TDMA mode: the next slot boundary ([`Node::next_slot_at`]).
     fn next_slot_at(&self, now: Micros) -> Micros;
+    /// TDMA mode: the slot timer also runs when one of the board's frames leaves its mailbox
+    /// ([`Node::wakes_on_transmit`]).
+    fn wakes_on_transmit(&self) -> bool {
+        false
+    }
+    /// Messages released on the board's exports, not yet queued ([`Node::releases_waiting`]):
+    /// a slot timer that wakes on transmit also wakes when they grow.
+    fn releases_waiting(&self) -> usize {
+        0
+    }
 }
 
 impl<
@@ -71,6 +81,12 @@ impl<
     fn next_slot_at(&self, now: Micros) -> Micros {
         Node::next_slot_at(self, now)
     }
+    fn wakes_on_transmit(&self) -> bool {
+        Node::wakes_on_transmit(self)
+    }
+    fn releases_waiting(&self) -> usize {
+        Node::releases_waiting(self)
+    }
 }
 
 impl<R: Runtime + ?Sized> Runtime for Box<R> {
@@ -82,6 +98,12 @@ impl<R: Runtime + ?Sized> Runtime for Box<R> {
     }
     fn next_slot_at(&self, now: Micros) -> Micros {
         (**self).next_slot_at(now)
+    }
+    fn wakes_on_transmit(&self) -> bool {
+        (**self).wakes_on_transmit()
+    }
+    fn releases_waiting(&self) -> usize {
+        (**self).releases_waiting()
     }
 }
 
@@ -162,6 +184,11 @@ struct Board<'a, N> {
     /// Next application step, ns.
     app_ns: u64,
     powered: bool,
+    /// Frames in its mailboxes when the sim last looked: one fewer is its transmit-complete
+    /// interrupt ([`Runtime::wakes_on_transmit`]).
+    mailboxes: usize,
+    /// Released messages waiting after its last slot tick: more is a publish that wakes it.
+    releases: usize,
 }
 
 impl<N> Board<'_, N> {
@@ -261,6 +288,8 @@ impl<'a, N: Runtime> Sim<'a, N> {
             wake_ns: self.now_ns,
             app_ns: self.now_ns,
             powered: true,
+            mailboxes: 0,
+            releases: 0,
         });
         self.boards.len() - 1
     }
@@ -389,11 +418,26 @@ impl<'a, N: Runtime> Sim<'a, N> {
                         app(now_us, &mut b.node);
                         b.app_ns += NS_PER_MS;
                         self.stats.app_steps += 1;
+                        // A publish to a remote subscriber wakes a slot timer that asks for it
+                        // (once the application's own CPU time is over).
+                        let waiting = b.node.releases_waiting();
+                        if mode == Mode::Tdma && waiting > b.releases && b.node.wakes_on_transmit()
+                        {
+                            b.wake_ns = b.wake_ns.min(t);
+                        }
+                        b.releases = waiting;
                         b.hold(t);
                     }
                 }
             }
             for b in self.boards.iter_mut().filter(|b| b.powered && b.down_until_ns.is_none()) {
+                // A frame of its own left a mailbox (sent, or lost a one-shot arbitration):
+                // its transmit-complete interrupt runs the slot path now.
+                let pending = b.port.port().pending();
+                if mode == Mode::Tdma && pending < b.mailboxes && b.node.wakes_on_transmit() {
+                    b.wake_ns = b.wake_ns.min(t);
+                }
+                b.mailboxes = pending;
                 if b.wake_ns > t {
                     continue;
                 }
@@ -409,6 +453,8 @@ impl<'a, N: Runtime> Sim<'a, N> {
                     None => call(&mut port),
                 }
                 let stalled_ns = port.stalled_ns();
+                b.mailboxes = b.port.port().pending();
+                b.releases = b.node.releases_waiting();
                 b.wake_ns = match mode {
                     Mode::Tdma => (b.node.next_slot_at(now_us) * NS_PER_US).max(t + 1),
                     Mode::Poll { period_us } => t + period_us.max(1) * NS_PER_US,

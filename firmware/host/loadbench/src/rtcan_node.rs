@@ -74,8 +74,10 @@ pub struct RtcanNode<'t> {
     pub counters: Counters,
 }
 
-/// The framed what-if's reaction time: from a frame's end (or a release) to the node's next
-/// frames in its mailboxes, the longest slot path of an F103 module (as the emulator takes it).
+/// The framed what-if's reaction time: from a frame of its own leaving its mailbox (the
+/// transmit-complete interrupt, `Node::wakes_on_transmit`) or a message's release (a publish,
+/// `Node::releases_waiting`) to the node's next frames in its mailboxes, the longest slot path
+/// of an F103 module (as the emulator takes it).
 pub const REACTION_US: Micros = r2p_node::CORTEX_M3_SLOT_PATH.longest_us(72_000_000) as Micros;
 
 /// Message ID → stream index.
@@ -141,13 +143,12 @@ impl<'t> RtcanNode<'t> {
         self.reaction.map_or(self.wake_at, |r| r.min(self.wake_at))
     }
 
-    /// The bus moved at `now` (framed what-if). If that raised one of this node's interrupts —
-    /// a frame of its own left a mailbox (sent, or lost a one-shot arbitration), or a frame
-    /// passed its acceptance filters — its transmit path runs [`REACTION_US`] later; other
-    /// nodes' frames it filters out, it never hears of. Its latest-start timer does not wait.
+    /// The bus moved at `now` (framed what-if). If a frame of its own left a mailbox (sent, or
+    /// lost a one-shot arbitration), its transmit-complete interrupt runs the slot path:
+    /// [`REACTION_US`] later its next frames are loaded, as `Node::wakes_on_transmit` asks of
+    /// the firmware. Received frames wake it at no other time than its timer.
     pub fn on_bus_event(&mut self, now: Micros) {
-        let port = self.can.port();
-        if port.pending() < self.mailboxes || port.rx_len() > 0 {
+        if self.can.port().pending() < self.mailboxes {
             let at = now + REACTION_US;
             self.reaction = Some(self.reaction.map_or(at, |r| r.min(at)));
         }
@@ -271,8 +272,13 @@ impl<'t> RtcanNode<'t> {
                     }
                 }
             }
+            // As `Node::next_slot_at` on frame-sized reservations: the next edge, or the next
+            // grid boundary (where the node tops its window up).
+            let grid = self.clock.slot_start(p.cycle, p.slot + 1).filter(|&g| g > now);
             next = next.min((c0 + Micros::from(cycle.next_edge(t))).min(c1));
+            next = grid.map_or(next, |g| next.min(g));
         }
+        // A message's release (the application's publish) wakes it too (`releases_waiting`).
         if let Some(r) = self.publishers.next_release(self.traffic) {
             next = next.min((r + REACTION_US).max(now + 1));
         }

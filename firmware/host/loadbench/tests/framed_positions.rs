@@ -92,6 +92,49 @@ fn hrt_off_position(sim: &Sim<'static, TestNode>, from_us: Micros, known: &[(u8,
     off
 }
 
+/// A frame on the bus: the port that sent it, its start of frame and its end (µs), and the
+/// reservation mask it announces if it is a sync.
+struct OnBus {
+    port: usize,
+    start_us: u64,
+    end_us: u64,
+    mask: Option<u64>,
+}
+
+fn on_bus(sim: &Sim<'static, TestNode>) -> Vec<OnBus> {
+    sim.bus()
+        .trace()
+        .into_iter()
+        .filter_map(|e| match e.kind {
+            EventKind::Sent { start_ns, frame, .. } => Some(OnBus {
+                port: e.port,
+                start_us: start_ns / 1_000,
+                end_us: e.time_ns.div_ceil(1_000),
+                mask: SyncFrame::from_frame(&frame).ok().map(|s| s.reservations),
+            }),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Where, on the bus, each reservation of `known` started in the cycles whose previous sync
+/// announced it.
+fn reservation_starts(sim: &Sim<'static, TestNode>, known: &[(u8, Span)]) -> Vec<u64> {
+    let syncs: Vec<(u64, u64)> =
+        on_bus(sim).into_iter().filter_map(|f| Some((f.start_us, f.mask?))).collect();
+    syncs
+        .windows(2)
+        .filter(|w| w[1].0 - w[0].0 == CYCLE_US)
+        .flat_map(|w| {
+            let (c0, mask) = (w[1].0, w[0].1);
+            known
+                .iter()
+                .filter(move |(slot, _)| mask & (1 << slot) != 0)
+                .map(move |(_, span)| c0 + u64::from(span.start_us))
+        })
+        .collect()
+}
+
 /// One stream of a 4-byte message every cycle (O1) and one of a three-frame pose every second
 /// cycle (O2), for A to export and B to import (I1, I2): statics of the calling test.
 macro_rules! streams {
@@ -187,10 +230,25 @@ fn every_node_learns_where_each_reservation_lies_as_long_as_its_frames() {
     // One plugged in later learns them from the master's calendar beacon (one entry per
     // heartbeat of 20 ms, 16 entries).
     sim.power(4, true);
+    let plugged = sim.now_us();
     assert!(positions(sim.node(4)).is_empty());
-    run_for(&mut sim, 20 * 20_000);
+    while positions(sim.node(4)) != known && sim.now_us() < plugged + 20 * 20_000 {
+        run_for(&mut sim, CYCLE_US);
+    }
     assert_eq!(positions(sim.node(4)), known, "the late node");
     assert_eq!(sim.node(4).stats().unexpected, 0);
+    // Until then it knew the sync's masks but not where all the slots lie: it held the blocks'
+    // shares for the slots it did not know, and no frame of its ran over a reservation's start.
+    let late: Vec<(u64, u64)> = on_bus(&sim)
+        .into_iter()
+        .filter(|f| f.port == 4 && (plugged..sim.now_us()).contains(&f.start_us))
+        .map(|f| (f.start_us, f.end_us))
+        .collect();
+    assert!(late.len() >= 5, "{} frames while it learned", late.len());
+    for start in reservation_starts(&sim, &known) {
+        let over = late.iter().find(|&&(s, e)| s <= start && start < e);
+        assert!(over.is_none(), "{over:?} over a reservation starting at {start}");
+    }
 }
 
 #[test]

@@ -42,8 +42,9 @@ struct Run {
     scans: &'static AtomicU32,
 }
 
-/// The demo's traffic with `hrt_blocks` blocks of frame-sized reservations (0: the grid).
-fn run(hrt_blocks: u8) -> Run {
+/// The demo's traffic with `hrt_blocks` blocks of frame-sized reservations (0: the grid),
+/// `scans` scans published per millisecond.
+fn run(hrt_blocks: u8, scans: u32) -> Run {
     let a_set: &'static Topic<'static, u32, { pool_size(&[2], 1) }, 1> =
         leak(Topic::new("setpoint", 0));
     let a_set_pub = leak(Publisher::new(a_set, Class::SyncRealTime { period_us: 20_000 }));
@@ -67,7 +68,7 @@ fn run(hrt_blocks: u8) -> Run {
         leak(RemotePublisher::new(leak(Publisher::new(b_scan, Class::NonRealTime)), b_scan));
     let b_scan_sub: &'static Subscriber<'static, [u32; 4], 16> = leak(Subscriber::new());
     b_scan.subscribe(b_scan_sub).unwrap();
-    let scans: &'static AtomicU32 = leak(AtomicU32::new(0));
+    let received: &'static AtomicU32 = leak(AtomicU32::new(0));
 
     let config = |n, name, rank| r2p_node::NodeConfig { hrt_blocks, ..tdma(n, name, rank) };
     let mut sim: Sim<'static, DemoNode> =
@@ -86,14 +87,14 @@ fn run(hrt_blocks: u8) -> Run {
             k += 1;
         }
         if now >= 200_000 {
-            for _ in 0..SCANS_PER_MS {
+            for _ in 0..scans {
                 let _ = a_scan_pub.publish_with(|v| *v = [k; 4]);
             }
         }
     };
     let app_b = move |_: Micros, _: &mut DemoNode| {
         while b_scan_sub.try_recv().is_some() {
-            scans.fetch_add(1, Ordering::Relaxed);
+            received.fetch_add(1, Ordering::Relaxed);
         }
     };
     sim.add_board(m, 0, None);
@@ -117,12 +118,12 @@ fn run(hrt_blocks: u8) -> Run {
             _ => None,
         })
         .collect();
-    Run { frames, sim, scans }
+    Run { frames, sim, scans: received }
 }
 
 #[test]
 fn hrt_frames_start_at_their_reservations_and_free_frames_fill_the_gaps() {
-    let r = run(2);
+    let r = run(2, SCANS_PER_MS);
     let (m, a, b) = (r.sim.node(0), r.sim.node(1), r.sim.node(2));
     // The motor's HRT stream was granted, frame-sized, and every board knows where it lies.
     let Some(HrtState::Granted { slots }) = a.hrt_state(0) else { panic!("setpoint granted") };
@@ -156,14 +157,21 @@ fn hrt_frames_start_at_their_reservations_and_free_frames_fill_the_gaps() {
     }
     eprintln!("{} HRT frames, at most {worst} µs from their reservations' starts", hrt.len());
     assert_eq!(a.stats().hrt_missed, 0);
-    // Free frames follow the HRT frame at once: it ends, the next starts (the window opened
-    // while it was on the wire), instead of waiting out a grid slot.
-    let followed = hrt
-        .iter()
-        .filter(|h| steady.iter().any(|f| !f.sync && (f.start_us - h.end_us).abs() < 1.0))
-        .count();
-    eprintln!("{followed} followed at once");
-    assert!(followed * 2 > hrt.len(), "{followed} of {} HRT frames followed at once", hrt.len());
+    // Free frames start inside the HRT frame's reservation only right at its end: the window
+    // opened while it was on the wire (FOLLOW_US), so they use the time its worst case leaves.
+    let mut followed = 0;
+    for h in &hrt {
+        let reservation = h.start_us..h.start_us + f64::from(span.len_us);
+        for f in steady.iter().filter(|f| !f.sync && reservation.contains(&f.start_us)) {
+            if f.start_us == h.start_us {
+                continue; // the HRT frame itself
+            }
+            assert!((f.start_us - h.end_us).abs() < 1.0, "{f:?} inside {h:?}'s reservation");
+            followed += 1;
+        }
+    }
+    eprintln!("{followed} of {} HRT frames followed at once", hrt.len());
+    assert!(followed >= 10, "{followed} of {} HRT frames followed at once", hrt.len());
 }
 
 /// The share of the bus's time frames occupied from [`STEADY_US`] to the run's end.
@@ -175,7 +183,7 @@ fn busy(r: &Run) -> f64 {
 
 #[test]
 fn frame_sized_reservations_carry_a_load_the_grid_cannot() {
-    let (framed, grid) = (run(2), run(0));
+    let (framed, grid) = (run(2, SCANS_PER_MS), run(0, SCANS_PER_MS));
     let published = u64::from(SCANS_PER_MS) * (RUN_NS / MS - 200);
     let carried = |r: &Run| f64::from(r.scans.load(Ordering::Relaxed)) / published as f64;
     let misses = |r: &Run| r.sim.node(1).stats().deadline_misses;
@@ -188,9 +196,30 @@ fn frame_sized_reservations_carry_a_load_the_grid_cannot() {
         misses(&grid),
         busy(&grid)
     );
-    // ~90 % offered: the grid's slot remainders leave it short, frame-sized reservations not.
-    assert!(carried(&framed) > 0.95, "framed carried {:.3}", carried(&framed));
+    // ~90 % offered: the grid's slot remainders leave it short, frame-sized reservations not
+    // (with the transmit-complete wake: 96.7 % and 23 misses without it).
+    assert!(carried(&framed) > 0.99, "framed carried {:.3}", carried(&framed));
+    assert_eq!(misses(&framed), 0);
     assert!(carried(&grid) < 0.7, "grid carried {:.3}", carried(&grid));
     assert!(busy(&framed) > 0.8, "framed bus {:.3}", busy(&framed));
-    assert!(misses(&framed) * 10 < misses(&grid));
+}
+
+#[test]
+fn a_published_message_goes_out_without_waiting_for_a_grid_boundary() {
+    // One scan a millisecond, published on the millisecond: the bus mostly idle. The node's
+    // slot timer wakes on the publish (`Node::releases_waiting`), so the scan's first frame
+    // starts one slot path later, not at the next 250 µs grid boundary.
+    let r = run(2, 1);
+    let mut delays: Vec<f64> = r
+        .frames
+        .iter()
+        .filter(|f| f.port == 1 && f.start_us >= STEADY_US as f64 && f.id.laxity != Laxity::HRT)
+        .filter(|f| f.id.fragment == 3) // a scan's first frame (three, counted down to 1)
+        .map(|f| f.start_us % 1_000.0)
+        .collect();
+    delays.sort_by(f64::total_cmp);
+    assert!(delays.len() > 900, "{} scans", delays.len());
+    let median = delays[delays.len() / 2];
+    eprintln!("publish to first frame: median {median} µs, max {}", delays[delays.len() - 1]);
+    assert!(median < 60.0, "median {median} µs");
 }

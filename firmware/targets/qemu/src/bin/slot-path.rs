@@ -6,12 +6,19 @@
 //! same interrupt; counted from the instruction that pends the interrupt (standing in for the
 //! timer's compare event) to the mailbox request.
 //!
+//! With the feature `framed` the nodes use frame-sized reservations (issue 22,
+//! `NodeConfig::hrt_blocks` = 2) and the module's slot timer fires where its node asks
+//! (`next_slot_at`: its reservation's start among others), not at every grid boundary; the
+//! interrupt half is left out (it adds the same wake and poll as on the grid).
+//!
 //! A master and a module with an HRT stream every cycle on the suite's loopback bus; the
 //! module also receives the master's frames and the stream's subscriber, so its receive queue
 //! is not empty at its slot boundaries. Instructions are counted with SysTick under `-icount`,
 //! calibrated on 10 000 `nop`s as in `bench`.
 #![no_std]
 #![no_main]
+// The frame-sized bench replaces the grid's, and leaves the interrupt half out.
+#![cfg_attr(feature = "framed", allow(dead_code, unused_imports, unreachable_code))]
 
 use core::cell::Cell;
 use core::fmt::Write;
@@ -162,6 +169,7 @@ fn config(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
         cycle: CYCLE,
         rank,
         hrt_slots: 2,
+        hrt_blocks: if cfg!(feature = "framed") { 2 } else { 0 },
         ..NodeConfig::new(uid(n), name)
     }
 }
@@ -196,6 +204,10 @@ fn main() -> ! {
         let _ = writeln!(out, "slot-path: the HRT stream was not granted");
         debug::exit(debug::EXIT_FAILURE);
     }
+
+    // The frame-sized bench instead of the grid's (it does not return).
+    #[cfg(feature = "framed")]
+    framed(bus, m, a, insn_per_tick, &mut out);
 
     // 400 cycles: A publishes every cycle; time A's slot ticks.
     let step = Micros::from(CYCLE.slot_us());
@@ -259,6 +271,68 @@ fn main() -> ! {
         irq_requests,
         insn(irq_min),
         insn(irq_max)
+    );
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// The frame-sized bench: 400 cycles as in the grid's first half, but the module ticks at
+/// every time its node asks for (`next_slot_at`) as well as at the grid's boundaries, where the
+/// master and the bus step; its HRT frame is requested at its reservation's start.
+#[cfg(feature = "framed")]
+fn framed(
+    bus: &mut Bus<2>,
+    m: &mut TestNode<'static>,
+    a: &mut TestNode<'static>,
+    insn_per_tick: f64,
+    out: &mut hio::HostStream,
+) -> ! {
+    let step = Micros::from(CYCLE.slot_us());
+    let (mut to_request_max, mut to_request_min, mut whole_max, mut requests, mut ticks) =
+        (0u32, u32::MAX, 0u32, 0u32, 0u32);
+    let end = bus.now.get() + 400 * Micros::from(CYCLE.cycle_us);
+    while bus.now.get() < end {
+        let boundary = bus.now.get();
+        if boundary.is_multiple_of(Micros::from(CYCLE.cycle_us)) {
+            let _ = A_PUB.publish_with(|v| *v = boundary as u32);
+        }
+        m.slot_tick(boundary, &mut bus.port(0));
+        // A's ticks from this boundary to the next, the boundary's included.
+        let mut now = boundary;
+        while now < boundary + step {
+            let mut can = Timed { inner: bus.port(1), hrt_at: Cell::new(None) };
+            let start = icount::now();
+            a.slot_tick(now, &mut can);
+            let stop = icount::now();
+            ticks += 1;
+            whole_max = whole_max.max(start.wrapping_sub(stop) & RELOAD);
+            if let Some(at) = can.hrt_at.get() {
+                let t = start.wrapping_sub(at) & RELOAD;
+                to_request_max = to_request_max.max(t);
+                to_request_min = to_request_min.min(t);
+                requests += 1;
+            }
+            now = a.next_slot_at(now).max(now + 1).min(boundary + step);
+        }
+        while M_SUB.try_recv().is_some() {}
+        bus.arbitrate();
+        bus.now.set(boundary + step);
+    }
+    if requests < 390 {
+        let _ = writeln!(out, "slot-path: only {requests} framed HRT requests in 400 cycles");
+        debug::exit(debug::EXIT_FAILURE);
+    }
+    let insn = |t: u32| (t as f64 * insn_per_tick) as u32;
+    let _ = writeln!(
+        out,
+        "{{\"bench\":\"framed_slot_path\",\"hrt_requests\":{},\"ticks\":{},\"to_request_min_insn\":{},\"to_request_max_insn\":{},\"slot_tick_max_insn\":{}}}",
+        requests,
+        ticks,
+        insn(to_request_min),
+        insn(to_request_max),
+        insn(whole_max)
     );
     debug::exit(debug::EXIT_SUCCESS);
     loop {
