@@ -223,8 +223,9 @@ fn every_node_learns_where_each_reservation_lies_as_long_as_its_frames() {
     for (who, n) in [("owner", a), ("subscriber", b), ("bystander", c)] {
         assert_eq!(positions(n), known, "{who}");
     }
-    // The speed and the pose went out in their reservations.
+    // The speed and the pose went out in their reservations, each frame once.
     assert!(a.stats().hrt_sent > 100, "{:?}", a.stats());
+    assert_eq!(a.stats().hrt_missed, 0, "{:?}", a.stats());
     assert_eq!(hrt_off_position(&sim, 0, &known), 0);
 
     // One plugged in later learns them from the master's calendar beacon (one entry per
