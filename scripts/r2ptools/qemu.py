@@ -43,12 +43,15 @@ def images() -> list[str]:
     return sorted(p.stem for p in (WORKSPACE / "src" / "bin").glob("*.rs"))
 
 
-def build(profile: str = "dev", cpu: str = "cortex-m3", image: str | None = None) -> Path:
-    """Builds every image (or only `image`) for `cpu`; returns the folder they are in."""
+def build(profile: str = "dev", cpu: str = "cortex-m3", image: str | None = None,
+          features: tuple[str, ...] = ()) -> Path:
+    """Builds every image (or only `image`) for `cpu`, with the workspace's `features`; returns
+    the folder they are in."""
     target = CORES[cpu]
     which = ["--bin", image] if image else ["--bins"]
-    subprocess.run(["cargo", "build", "--locked", *which, "--profile", profile, "--target", target],
-                   cwd=WORKSPACE, check=True)
+    feats = ["--features", ",".join(features)] if features else []
+    subprocess.run(["cargo", "build", "--locked", *which, *feats, "--profile", profile,
+                    "--target", target], cwd=WORKSPACE, check=True)
     return WORKSPACE / "target" / target / ("debug" if profile == "dev" else profile)
 
 

@@ -57,7 +57,9 @@ impl<
     /// 1. the controller's results: an SRT/NRT frame that went out leaves the queue, one that
     ///    did not stays in it with its deadline (and is loaded again with its laxity for then);
     ///    an HRT frame that did not go out is a missed occurrence;
-    /// 2. take received frames (syncs feed the [`SlotClock`] and the failover state machine);
+    /// 2. on frame-sized reservations, this node's HRT frame if its reservation starts now
+    ///    (step 5's, brought forward: `framed_tx.rs`); take received frames (syncs feed the
+    ///    [`SlotClock`] and the failover state machine);
     /// 3. the protocol's timers ([`tick`](Self::tick)), master takeover, HRT registrations;
     /// 4. as master, at a cycle's start: send the sync with the next cycle's reservations;
     /// 5. load this slot's frame: in slot 0 nothing (the sync's); in a reserved slot this
@@ -81,6 +83,7 @@ impl<
         for done in self.slot_tx.settle(now, can, &self.tx).into_iter().flatten() {
             self.on_done(done);
         }
+        self.framed_hrt_first(now, can);
         while let Some(r) = can.try_receive() {
             self.receive::<true>(&r);
         }
