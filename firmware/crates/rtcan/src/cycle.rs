@@ -77,9 +77,13 @@ pub const fn frame_bits_of(raw_id: u32, len: usize) -> u32 {
         + (0b11 << 25)
         + ((raw_id as u64 & 0x3ffff) << 7)
         + (len as u64 & 0xf);
+    // Left-aligned, so each bit is the top one after shifting by one: a constant shift, which a
+    // Cortex-M3 does in two instructions (a variable 64-bit shift takes a dozen).
+    let mut window = header << (64 - HEADER_BITS);
     let (mut level, mut run, mut stuff, mut i) = (2u64, 0u32, 0u32, 0);
     while i < HEADER_BITS {
-        let bit = header >> (HEADER_BITS - 1 - i) & 1;
+        let bit = window >> 63;
+        window <<= 1;
         run = if bit == level { run + 1 } else { 1 };
         level = bit;
         if run == 5 {

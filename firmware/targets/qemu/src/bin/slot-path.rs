@@ -128,10 +128,19 @@ struct Timed<C> {
     hrt_at: Cell<Option<u32>>,
 }
 
+/// The frame-sized bench: SysTick when the first SRT/NRT frame of the current call was
+/// requested (`u32::MAX`: none).
+#[cfg(feature = "framed")]
+static QUEUED_AT: AtomicU32 = AtomicU32::new(u32::MAX);
+
 impl<C: CanController> CanController for Timed<C> {
     fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
         if frame.id().laxity == Laxity::HRT && frame.id().message.0 >= 0x100 {
             self.hrt_at.set(Some(icount::now()));
+        }
+        #[cfg(feature = "framed")]
+        if frame.id().laxity != Laxity::HRT && QUEUED_AT.load(Ordering::Relaxed) == u32::MAX {
+            QUEUED_AT.store(icount::now(), Ordering::Relaxed);
         }
         self.inner.try_transmit(frame)
     }
@@ -292,6 +301,8 @@ fn framed(
     let step = Micros::from(CYCLE.slot_us());
     let (mut to_request_max, mut to_request_min, mut whole_max, mut requests, mut ticks) =
         (0u32, u32::MAX, 0u32, 0u32, 0u32);
+    // The first SRT/NRT frame's request, in the calls that load one (the window's path).
+    let (mut queued_min, mut queued_max, mut queued) = (u32::MAX, 0u32, 0u32);
     let end = bus.now.get() + 400 * Micros::from(CYCLE.cycle_us);
     while bus.now.get() < end {
         let boundary = bus.now.get();
@@ -303,10 +314,17 @@ fn framed(
         let mut now = boundary;
         while now < boundary + step {
             let mut can = Timed { inner: bus.port(1), hrt_at: Cell::new(None) };
+            QUEUED_AT.store(u32::MAX, Ordering::Relaxed);
             let start = icount::now();
             a.slot_tick(now, &mut can);
             let stop = icount::now();
             ticks += 1;
+            let q = QUEUED_AT.load(Ordering::Relaxed);
+            if q != u32::MAX {
+                let t = start.wrapping_sub(q) & RELOAD;
+                (queued_min, queued_max) = (queued_min.min(t), queued_max.max(t));
+                queued += 1;
+            }
             whole_max = whole_max.max(start.wrapping_sub(stop) & RELOAD);
             if let Some(at) = can.hrt_at.get() {
                 let t = start.wrapping_sub(at) & RELOAD;
@@ -327,12 +345,15 @@ fn framed(
     let insn = |t: u32| (t as f64 * insn_per_tick) as u32;
     let _ = writeln!(
         out,
-        "{{\"bench\":\"framed_slot_path\",\"hrt_requests\":{},\"ticks\":{},\"to_request_min_insn\":{},\"to_request_max_insn\":{},\"slot_tick_max_insn\":{}}}",
+        "{{\"bench\":\"framed_slot_path\",\"hrt_requests\":{},\"ticks\":{},\"to_request_min_insn\":{},\"to_request_max_insn\":{},\"slot_tick_max_insn\":{},\"queued_requests\":{},\"queued_min_insn\":{},\"queued_max_insn\":{}}}",
         requests,
         ticks,
         insn(to_request_min),
         insn(to_request_max),
-        insn(whole_max)
+        insn(whole_max),
+        queued,
+        insn(queued_min),
+        insn(queued_max)
     );
     debug::exit(debug::EXIT_SUCCESS);
     loop {
