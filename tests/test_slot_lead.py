@@ -74,3 +74,9 @@ def test_the_frame_sized_path_requests_the_hrt_frame_first():
     # 1 119–1 134 measured; the grid's path is 1 624–1 724 in the same harness.
     assert r["to_request_max_insn"] - r["to_request_min_insn"] < 50, r
     assert r["to_request_max_insn"] < slotlead.constant("CORTEX_M3_SLOT_PATH").min_instructions - 190, r
+    # The load bench's what-if waits this long from a wake to a node's next SRT/NRT frame: not
+    # less than the shortest such path measured here, from the interrupt (~190 more), at 72 MHz.
+    src = (slotlead.ROOT / "firmware/host/loadbench/src/rtcan_node.rs").read_text()
+    reaction_us = int(re.search(r"pub const REACTION_US: Micros = (\d+);", src).group(1))
+    assert r["queued_requests"] > 100
+    assert (r["queued_min_insn"] + 190) / 72 <= reaction_us < (r["queued_min_insn"] + 190) / 72 + 1, r

@@ -76,9 +76,13 @@ pub struct RtcanNode<'t> {
 
 /// The framed what-if's reaction time: from a frame of its own leaving its mailbox (the
 /// transmit-complete interrupt, `Node::wakes_on_transmit`) or a message's release (a publish,
-/// `Node::releases_waiting`) to the node's next frames in its mailboxes, the longest slot path
-/// of an F103 module (as the emulator takes it).
-pub const REACTION_US: Micros = r2p_node::CORTEX_M3_SLOT_PATH.longest_us(72_000_000) as Micros;
+/// `Node::releases_waiting`) to the node's next SRT/NRT frame in its mailbox. Measured on the
+/// frame-sized slot path (QEMU Cortex-M3, `slot-path --features framed`, its `queued_min_insn`):
+/// 2 658 instructions at the shortest from the call, ~190 more from the interrupt, 40 µs at
+/// 72 MHz (up to 5 652 + 190, 81 µs, when the call also takes frames and runs timers).
+/// `tests/test_slot_lead.py` checks it against the bench. Before that measurement the what-if
+/// used the HRT frame's path, 27 µs: seed 3 at 95 % carried 92.00 % then, 91.97 % at 40 µs.
+pub const REACTION_US: Micros = 40;
 
 /// Message ID → stream index.
 fn stream_of(message: MessageId) -> usize {
