@@ -15,6 +15,7 @@
 
 use crate::cycle::SYNC_SLOT;
 use crate::layout::Layout;
+use crate::schedule::slots_in;
 
 /// How long after the start of a reservation followed by a gap free frames may be loaded:
 /// its owner's one-shot frame has started by then (the nodes' clocks agree within a few µs of
@@ -75,14 +76,7 @@ impl<'l> FramedCycle<'l> {
     /// Every reservation of the cycle, in slot order then the blocks' shares (not in time
     /// order; they never overlap each other, but a share overlaps the slots it holds).
     fn held(&self) -> impl Iterator<Item = Held> + '_ {
-        // The announced, placed slots' bits, lowest first: a few, not every slot.
-        let mut left = self.mask;
-        let bits = core::iter::from_fn(move || {
-            let slot = (left != 0).then(|| left.trailing_zeros() as u8)?;
-            left &= left - 1;
-            Some(slot)
-        });
-        let slots = bits.filter_map(|slot| {
+        let slots = slots_in(self.mask).filter_map(|slot| {
             let s = self.layout.span(slot)?;
             Some(Held { slot: Some(slot), start_us: s.start_us.into(), end_us: s.end_us() })
         });

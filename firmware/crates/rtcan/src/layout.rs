@@ -233,13 +233,13 @@ impl Layout {
         let known = calendar.slots_of(stream);
         if let Some((_, held)) = known {
             // Registered again (a node repeating its request): its slots must hold the frames.
-            if slots_in(held).any(|s| self.span(s).is_none_or(|s| s.len_us < needs_us)) {
+            if held.iter().any(|s| self.span(s).is_none_or(|s| s.len_us < needs_us)) {
                 return Err(Reject::Conflict);
             }
         }
         let got = calendar.register_in(stream, period_cycles, frames, usable)?;
         let before = self.clone();
-        for slot in slots_in(got) {
+        for slot in got.iter() {
             if self.place(slot, needs_us).is_err() {
                 if known.is_none() {
                     calendar.remove(stream);
@@ -361,11 +361,6 @@ impl Layout {
             }
         }
     }
-}
-
-/// The slots a stream holds, lowest first.
-fn slots_in(held: StreamSlots) -> impl Iterator<Item = u8> {
-    (1..MAX_SLOTS).filter(move |&s| held.frame_in(s).is_some())
 }
 
 #[cfg(any(test, feature = "selftest"))]

@@ -115,7 +115,35 @@ pub struct StreamSlots {
     pub slots: u64,
 }
 
+/// The slots whose bits `mask` sets, lowest first: a few steps for a few slots, not one per
+/// slot of the cycle (the frame-sized slot path walks them).
+pub const fn slots_in(mask: u64) -> SlotBits {
+    SlotBits(mask)
+}
+
+/// The iterator [`slots_in`] returns.
+#[derive(Clone, Copy, Debug)]
+pub struct SlotBits(u64);
+
+impl Iterator for SlotBits {
+    type Item = u8;
+
+    fn next(&mut self) -> Option<u8> {
+        if self.0 == 0 {
+            return None;
+        }
+        let slot = self.0.trailing_zeros() as u8;
+        self.0 &= self.0 - 1;
+        Some(slot)
+    }
+}
+
 impl StreamSlots {
+    /// The slots the stream holds, lowest first.
+    pub const fn iter(self) -> SlotBits {
+        slots_in(self.slots)
+    }
+
     /// The first frame's phase (offset and lowest slot).
     pub const fn first(self) -> Phase {
         Phase { offset: self.offset, slot: self.slots.trailing_zeros() as u8 }

@@ -420,12 +420,13 @@ impl<'a, N: Runtime> Sim<'a, N> {
                         self.stats.app_steps += 1;
                         // A publish to a remote subscriber wakes a slot timer that asks for it
                         // (once the application's own CPU time is over).
-                        let waiting = b.node.releases_waiting();
-                        if mode == Mode::Tdma && waiting > b.releases && b.node.wakes_on_transmit()
-                        {
-                            b.wake_ns = b.wake_ns.min(t);
+                        if mode == Mode::Tdma && b.node.wakes_on_transmit() {
+                            let waiting = b.node.releases_waiting();
+                            if waiting > b.releases {
+                                b.wake_ns = b.wake_ns.min(t);
+                            }
+                            b.releases = waiting;
                         }
-                        b.releases = waiting;
                         b.hold(t);
                     }
                 }
@@ -454,7 +455,9 @@ impl<'a, N: Runtime> Sim<'a, N> {
                 }
                 let stalled_ns = port.stalled_ns();
                 b.mailboxes = b.port.port().pending();
-                b.releases = b.node.releases_waiting();
+                if b.node.wakes_on_transmit() {
+                    b.releases = b.node.releases_waiting();
+                }
                 b.wake_ns = match mode {
                     Mode::Tdma => (b.node.next_slot_at(now_us) * NS_PER_US).max(t + 1),
                     Mode::Poll { period_us } => t + period_us.max(1) * NS_PER_US,

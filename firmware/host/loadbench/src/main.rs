@@ -11,6 +11,7 @@ use r2p_loadbench::{point, Policy, Setup};
 use rtcan::LaxityEncoding;
 
 const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L2,...] [--policies P1,P2,...] [--mix HRT,SRT]
+                     [--laxity E:T] [--blocks K]
   --seed N        traffic seed (default 1)
   --seconds S     measured virtual time per load point (default 10)
   --loads ...     offered loads as fractions of 1 Mbit/s (default 0.10,0.15,...,0.95)
@@ -47,6 +48,11 @@ fn parse() -> Result<Args, String> {
     while let Some(flag) = it.next() {
         if flag == "--help" || flag == "-h" {
             return Err(String::new());
+        }
+        const FLAGS: [&str; 7] =
+            ["--seed", "--seconds", "--loads", "--policies", "--mix", "--blocks", "--laxity"];
+        if !FLAGS.contains(&flag.as_str()) {
+            return Err(format!("unknown option {flag}"));
         }
         let value = it.next().ok_or(format!("{flag} needs a value"))?;
         let bad = |what: &str| format!("{flag} {value}: {what}");
@@ -99,7 +105,7 @@ fn parse() -> Result<Args, String> {
                     _ => return Err(bad("the encoding is log or linear")),
                 };
             }
-            _ => return Err(format!("unknown option {flag}")),
+            _ => unreachable!("every flag in FLAGS has its arm"),
         }
     }
     Ok(a)

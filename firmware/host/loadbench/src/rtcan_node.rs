@@ -124,9 +124,10 @@ impl<'t> RtcanNode<'t> {
             clock: SlotClock::new(setup.cycle),
             tx: TxQueue::new(setup.laxity),
             master,
-            slot_tx: match framed {
-                true => SlotTx::new(&setup.cycle, free_slots).fitted(&setup.cycle),
-                false => SlotTx::new(&setup.cycle, free_slots),
+            slot_tx: if framed {
+                SlotTx::new(&setup.cycle, free_slots).fitted(&setup.cycle)
+            } else {
+                SlotTx::new(&setup.cycle, free_slots)
             },
             loaded: Vec::new(),
             publishers: Publishers::new(traffic, setup, index, |s| !is_hrt(s)),
@@ -220,10 +221,8 @@ impl<'t> RtcanNode<'t> {
     fn send_sync_if_due(&mut self, now: Micros) -> Option<bool> {
         let mut m = self.master.filter(|m| now >= m.next_sync)?;
         let next = m.cycle.wrapping_add(1);
-        let mask = match self.framed {
-            true => self.traffic.framed_mask(next),
-            false => self.traffic.mask(next),
-        };
+        let mask =
+            if self.framed { self.traffic.framed_mask(next) } else { self.traffic.mask(next) };
         let sync = SyncFrame::new(m.cycle, mask, false);
         let loaded = self.slot_tx.load_slotted(&mut self.can, Slotted::Sync, &sync.to_frame());
         if loaded {

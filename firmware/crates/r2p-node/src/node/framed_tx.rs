@@ -174,11 +174,9 @@ impl<
         let HrtState::Granted { slots } = self.exports[i].hrt?.state else { return None };
         let layout = self.layout.as_ref()?;
         let at = layout.span(slot)?.start_us;
-        // The stream's slots whose reservations start earlier: a few bits, not every slot.
-        let (mut left, mut earlier) = (slots.slots, 0);
-        while left != 0 {
-            let s = left.trailing_zeros() as u8;
-            left &= left - 1;
+        // The stream's slots whose reservations start earlier.
+        let mut earlier = 0;
+        for s in slots.iter() {
             earlier += u8::from(layout.span(s).is_some_and(|o| o.start_us < at));
         }
         Some((i, earlier))
