@@ -52,6 +52,11 @@ impl Frame {
         self.id
     }
 
+    /// The same frame under identifier `id` (its payload copied as a whole, not re-checked).
+    pub const fn with_id(self, id: FrameId) -> Frame {
+        Frame { id, ..self }
+    }
+
     /// The payload (0–8 bytes).
     pub fn payload(&self) -> &[u8] {
         &self.data[..self.len as usize]

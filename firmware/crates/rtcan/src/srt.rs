@@ -407,8 +407,7 @@ impl<const N: usize> TxQueue<N> {
                 self.encoding.encode(remaining).unwrap_or(Laxity::from_code(1))
             }
         };
-        let id = FrameId { laxity, ..e.frame.id() };
-        Frame::new(id, e.frame.payload()).unwrap_or(e.frame)
+        e.frame.with_id(FrameId { laxity, ..e.frame.id() })
     }
 }
 
