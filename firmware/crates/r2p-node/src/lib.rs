@@ -88,7 +88,7 @@ mod update_tests;
 
 pub use node::{
     Event, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats, SlotPath,
-    CORTEX_M3_SLOT_PATH, CORTEX_M4_SLOT_PATH, MODULE_SLOT_LEAD_US,
+    CORTEX_M3_SLOT_PATH, CORTEX_M3_TOP_UP_PATH, CORTEX_M4_SLOT_PATH, MODULE_SLOT_LEAD_US,
 };
 pub use params::{NoParams, Param, ParamStore, RamParams, Typed};
 pub use remote::{Export, Import, ImportError, RemotePublisher, RemoteSubscriber};

@@ -31,6 +31,7 @@ mod stalled;
 use std::io::{self, Write};
 use std::time::Duration;
 
+use boards::Mcu;
 use r2p_canlink::candump::LogWriter;
 use r2p_canlink::{CanFrame, Stamped};
 use r2p_node::Node;
@@ -61,6 +62,10 @@ pub trait Runtime {
     fn releases_waiting(&self) -> usize {
         0
     }
+    /// TDMA mode: what those two wakes run ([`Node::top_up`]).
+    fn top_up(&mut self, now: Micros, can: &mut dyn CanController) {
+        self.slot_tick(now, can);
+    }
 }
 
 impl<
@@ -87,6 +92,9 @@ impl<
     fn releases_waiting(&self) -> usize {
         Node::releases_waiting(self)
     }
+    fn top_up(&mut self, now: Micros, can: &mut dyn CanController) {
+        Node::top_up(self, now, can);
+    }
 }
 
 impl<R: Runtime + ?Sized> Runtime for Box<R> {
@@ -104,6 +112,9 @@ impl<R: Runtime + ?Sized> Runtime for Box<R> {
     }
     fn releases_waiting(&self) -> usize {
         (**self).releases_waiting()
+    }
+    fn top_up(&mut self, now: Micros, can: &mut dyn CanController) {
+        (**self).top_up(now, can);
     }
 }
 
@@ -181,6 +192,13 @@ struct Board<'a, N> {
     down_until_ns: Option<u64>,
     /// Next slot tick / poll, ns.
     wake_ns: u64,
+    /// Next short path ([`Runtime::top_up`]: a transmit-complete or a publish), ns; `u64::MAX`:
+    /// none. A slot tick due by then runs instead.
+    event_ns: u64,
+    /// From a slot tick's clock read to its frames' mailbox request, µs.
+    slot_path_us: u64,
+    /// The same for the short path.
+    top_up_us: u64,
     /// Next application step, ns.
     app_ns: u64,
     powered: bool,
@@ -203,6 +221,9 @@ impl<N> Board<'_, N> {
         if ns > 0 {
             self.wake_ns = self.wake_ns.max(t + ns);
             self.app_ns = self.app_ns.max(t + ns);
+            if self.event_ns != u64::MAX {
+                self.event_ns = self.event_ns.max(t + ns);
+            }
         }
     }
 }
@@ -264,18 +285,19 @@ impl<'a, N: Runtime> Sim<'a, N> {
     /// Adds an F103 board: `node` on port `port`, with application step `app` (if any). Returns
     /// the board's index. Its first tick is at the current time.
     pub fn add_board(&mut self, node: N, port: usize, app: Option<App<'a, N>>) -> usize {
-        self.add_board_on(node, port, app, SLOT_PATH_US)
+        self.add_board_on(node, port, app, Mcu::F103)
     }
 
-    /// Adds a board whose slot path takes `slot_path_us` from its tick to its frame's mailbox
-    /// request (its MCU's: `boards::Mcu::slot_path_us`).
+    /// Adds a board on `mcu`, whose slot path and short path take their time on it from a
+    /// call to its frame's mailbox request (`Mcu::slot_path_us`, `Mcu::top_up_path_us`).
     pub fn add_board_on(
         &mut self,
         node: N,
         port: usize,
         app: Option<App<'a, N>>,
-        slot_path_us: u64,
+        mcu: Mcu,
     ) -> usize {
+        let slot_path_us = mcu.slot_path_us();
         assert!(self.boards.iter().all(|b| b.port.port().index() != port), "port {port} taken");
         let bit_rate = self.bus.config().bit_rate;
         self.boards.push(Board {
@@ -286,6 +308,9 @@ impl<'a, N: Runtime> Sim<'a, N> {
             stall: None,
             down_until_ns: None,
             wake_ns: self.now_ns,
+            event_ns: u64::MAX,
+            slot_path_us,
+            top_up_us: mcu.top_up_path_us(),
             app_ns: self.now_ns,
             powered: true,
             mailboxes: 0,
@@ -312,6 +337,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
         b.app = app;
         b.powered = true;
         b.wake_ns = self.now_ns;
+        b.event_ns = u64::MAX;
         b.app_ns = self.now_ns;
     }
 
@@ -374,6 +400,9 @@ impl<'a, N: Runtime> Sim<'a, N> {
         self.bus.power(b.port.port().index(), on);
         b.powered = on;
         b.wake_ns = b.wake_ns.max(self.now_ns);
+        if !on {
+            b.event_ns = u64::MAX; // its interrupts went with its power
+        }
         b.app_ns = b.app_ns.max(self.now_ns);
     }
 
@@ -383,7 +412,9 @@ impl<'a, N: Runtime> Sim<'a, N> {
         self.boards
             .iter()
             .filter(|b| b.powered)
-            .flat_map(|b| [b.wake_ns, if b.app.is_some() { b.app_ns } else { u64::MAX }])
+            .flat_map(|b| {
+                [b.wake_ns.min(b.event_ns), if b.app.is_some() { b.app_ns } else { u64::MAX }]
+            })
             .fold(bus, u64::min)
             .min(if self.world.is_some() { self.world_ns } else { u64::MAX })
             .min(limit_ns)
@@ -423,7 +454,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
                         if mode == Mode::Tdma && b.node.wakes_on_transmit() {
                             let waiting = b.node.releases_waiting();
                             if waiting > b.releases {
-                                b.wake_ns = b.wake_ns.min(t);
+                                b.event_ns = b.event_ns.min(t);
                             }
                             b.releases = waiting;
                         }
@@ -436,16 +467,22 @@ impl<'a, N: Runtime> Sim<'a, N> {
                 // its transmit-complete interrupt runs the slot path now.
                 let pending = b.port.port().pending();
                 if mode == Mode::Tdma && pending < b.mailboxes && b.node.wakes_on_transmit() {
-                    b.wake_ns = b.wake_ns.min(t);
+                    b.event_ns = b.event_ns.min(t);
                 }
                 b.mailboxes = pending;
-                if b.wake_ns > t {
+                if b.wake_ns.min(b.event_ns) > t {
                     continue;
                 }
                 self.stats.ticks += 1;
+                // The slot timer's tick, or else the short path of a transmit-complete or a
+                // publish; each with its own time to the mailboxes.
+                let short = b.wake_ns > t;
+                b.event_ns = u64::MAX;
+                b.port.set_load_latency(if short { b.top_up_us } else { b.slot_path_us });
                 let node = &mut b.node;
                 let mut port = StalledPort::new(&mut b.port, b.stall.as_mut());
                 let mut call = |c: &mut dyn CanController| match mode {
+                    Mode::Tdma if short => node.top_up(now_us, c),
                     Mode::Tdma => node.slot_tick(now_us, c),
                     Mode::Poll { .. } => node.poll(now_us, c),
                 };
@@ -474,6 +511,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
                         b.tap = r.tap;
                         let up = t + r.down_ns.max(1);
                         (b.down_until_ns, b.wake_ns, b.app_ns) = (Some(up), up, up);
+                        b.event_ns = u64::MAX;
                     }
                 }
             }

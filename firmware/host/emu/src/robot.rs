@@ -197,7 +197,7 @@ impl EmuRobot {
         }));
         for (i, b) in boards.iter().enumerate() {
             let (node, app, tap, _) = booter.borrow_mut().boot(i, 0)?;
-            sim.add_board_on(node, i, Some(app), Mcu::of(b.kind).slot_path_us());
+            sim.add_board_on(node, i, Some(app), Mcu::of(b.kind));
             sim.set_tap(i, tap);
             let chip = b.flash;
             sim.set_stall(i, Box::new(move || chip.lock(|c| c.borrow_mut().take_stall_ns())));

@@ -74,15 +74,17 @@ pub struct RtcanNode<'t> {
     pub counters: Counters,
 }
 
-/// The framed what-if's reaction time: from a frame of its own leaving its mailbox (the
-/// transmit-complete interrupt, `Node::wakes_on_transmit`) or a message's release (a publish,
-/// `Node::releases_waiting`) to the node's next SRT/NRT frame in its mailbox. Measured on the
-/// frame-sized slot path (QEMU Cortex-M3, `slot-path --features framed`, its `queued_min_insn`):
-/// 2 658 instructions at the shortest from the call, ~190 more from the interrupt, 40 µs at
-/// 72 MHz (up to 5 652 + 190, 81 µs, when the call also takes frames and runs timers).
-/// `tests/test_slot_lead.py` checks it against the bench. Before that measurement the what-if
-/// used the HRT frame's path, 27 µs: seed 3 at 95 % carried 92.00 % then, 91.97 % at 40 µs.
-pub const REACTION_US: Micros = 40;
+/// The framed what-if's reaction to a frame of its own leaving its mailbox (the
+/// transmit-complete interrupt, `Node::wakes_on_transmit`): the short path (`Node::top_up`) to
+/// the node's next SRT/NRT frame in its mailbox. Measured on QEMU, Cortex-M3 (`slot-path
+/// --features framed`, its `top_up_transmit_min_insn`): 1 699 instructions at the shortest
+/// from the call, ~190 more from the interrupt, 27 µs at 72 MHz (up to 3 923 + 190, 57 µs).
+/// `tests/test_slot_lead.py` checks it against the bench. The whole slot tick took 40 µs.
+pub const TRANSMIT_REACTION_US: Micros = 27;
+
+/// The same for a message's release (a publish, `Node::releases_waiting`), whose path also
+/// queues it: `top_up_publish_min_insn`, 1 854 + 190 instructions, 29 µs.
+pub const RELEASE_REACTION_US: Micros = 29;
 
 /// Message ID → stream index.
 fn stream_of(message: MessageId) -> usize {
@@ -149,15 +151,19 @@ impl<'t> RtcanNode<'t> {
     }
 
     /// The bus moved at `now` (framed what-if). If a frame of its own left a mailbox (sent, or
-    /// lost a one-shot arbitration), its transmit-complete interrupt runs the slot path:
-    /// [`REACTION_US`] later its next frames are loaded, as `Node::wakes_on_transmit` asks of
-    /// the firmware. Received frames wake it at no other time than its timer.
+    /// lost a one-shot arbitration), its transmit-complete interrupt runs the short path:
+    /// [`TRANSMIT_REACTION_US`] later its next frames are loaded, as `Node::wakes_on_transmit`
+    /// asks of the firmware. Received frames wake it at no other time than its timer.
     pub fn on_bus_event(&mut self, now: Micros) {
         if self.can.port().pending() < self.mailboxes {
-            let at = now + REACTION_US;
-            self.reaction = Some(self.reaction.map_or(at, |r| r.min(at)));
+            self.react_at(now + TRANSMIT_REACTION_US);
         }
         self.mailboxes = self.can.port().pending();
+    }
+
+    /// Runs the short path at `at` (unless it runs sooner).
+    fn react_at(&mut self, at: Micros) {
+        self.reaction = Some(self.reaction.map_or(at, |r| r.min(at)));
     }
 
     /// The node's timer at `now`: a loaded frame's guard, a slot boundary, or both.
@@ -167,8 +173,10 @@ impl<'t> RtcanNode<'t> {
             self.slot_tx.on_guard(&mut self.can);
         }
         if self.framed {
+            // Woken by a transmit-complete or a release, not by its timer: the short path.
+            let short = self.reaction.is_some_and(|r| r <= now) && now < self.wake_at;
             self.reaction = self.reaction.filter(|&r| r > now);
-            self.framed_tick(now);
+            self.framed_tick(now, short);
             return;
         }
         if now >= self.next_slot {
@@ -241,12 +249,21 @@ impl<'t> RtcanNode<'t> {
     /// The what-if's activation ([`FramedCycle`]): the same steps as [`Self::slot_tick`], at
     /// reservation starts and ends, releases and bus events instead of slot boundaries. In a
     /// reservation: its HRT frame at its start; between reservations: the queue's frames for
-    /// the window up to the next one.
-    fn framed_tick(&mut self, now: Micros) {
-        self.settle_receive_publish(now);
+    /// the window up to the next one. The `short` path (`Node::top_up`) only takes the
+    /// controller's results (`SlotTx::settle_sent`), queues the released messages and loads;
+    /// syncs, received frames and the master's sync wait for the timer.
+    fn framed_tick(&mut self, now: Micros, short: bool) {
+        if short {
+            for done in self.slot_tx.settle_sent(now, &mut self.can).into_iter().flatten() {
+                self.on_done(done);
+            }
+            self.tick(now);
+        } else {
+            self.settle_receive_publish(now);
+            self.send_sync_if_due(now);
+        }
         let slot_us = Micros::from(self.setup.cycle.slot_us().max(1));
         let mut next = now + slot_us;
-        self.send_sync_if_due(now);
         if let Some(m) = self.master {
             next = next.min(m.next_sync);
         }
@@ -283,7 +300,7 @@ impl<'t> RtcanNode<'t> {
         }
         // A message's release (the application's publish) wakes it too (`releases_waiting`).
         if let Some(r) = self.publishers.next_release(self.traffic) {
-            next = next.min((r + REACTION_US).max(now + 1));
+            self.react_at((r + RELEASE_REACTION_US).max(now + 1));
         }
         self.wake_at = self.slot_tx.next_wake(now, next);
         self.mailboxes = self.can.port().pending();

@@ -58,6 +58,12 @@ impl BxCanPort {
         self
     }
 
+    /// Changes the load latency ([`with_load_latency`](Self::with_load_latency)): firmware with
+    /// more than one path to the mailboxes takes each one's.
+    pub fn set_load_latency(&mut self, us: u64) {
+        self.load_latency_ns = us * 1_000;
+    }
+
     /// [`CanController::try_transmit`] for firmware whose CPU stalled `stalled_ns` since its
     /// clock read (its flash, on an F103): the request reaches the mailbox that much later.
     pub fn transmit_after_stall(&mut self, frame: &Frame, stalled_ns: u64) -> Result<(), TxError> {

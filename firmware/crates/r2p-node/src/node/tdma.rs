@@ -180,7 +180,7 @@ impl<
     }
 
     /// A loaded frame's fate (step 1 of [`slot_tick`](Self::slot_tick)).
-    fn on_done(&mut self, done: Done<usize>) {
+    pub(super) fn on_done(&mut self, done: Done<usize>) {
         if done.is_retry(self.slot_tx.policy()) {
             bump(&mut self.stats.slot_retries);
         }

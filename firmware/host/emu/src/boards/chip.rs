@@ -25,7 +25,7 @@ use embedded_storage::nor_flash::{
     ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
 };
 use r2p_boot::layout::{FlashMap, Partition, STM32F103CB, STM32F407VG};
-use r2p_node::{SlotPath, CORTEX_M3_SLOT_PATH, CORTEX_M4_SLOT_PATH};
+use r2p_node::{SlotPath, CORTEX_M3_SLOT_PATH, CORTEX_M3_TOP_UP_PATH, CORTEX_M4_SLOT_PATH};
 use r2p_world::BoardKind;
 
 /// The MCUs the emulated boards have.
@@ -62,6 +62,12 @@ impl Mcu {
     /// How long its slot path takes in the emulator (µs): the longest at its clock.
     pub const fn slot_path_us(self) -> u64 {
         self.slot_path().longest_us(self.sysclk_hz()) as u64
+    }
+
+    /// How long its short path on frame-sized reservations takes in the emulator (µs), the
+    /// longest at its clock (`r2p_node::CORTEX_M3_TOP_UP_PATH`, `Node::top_up`).
+    pub const fn top_up_path_us(self) -> u64 {
+        CORTEX_M3_TOP_UP_PATH.longest_us(self.sysclk_hz()) as u64
     }
 }
 

@@ -9,7 +9,9 @@
 //! With the feature `framed` the nodes use frame-sized reservations (issue 22,
 //! `NodeConfig::hrt_blocks` = 2) and the module's slot timer fires where its node asks
 //! (`next_slot_at`: its reservation's start among others), not at every grid boundary; the
-//! interrupt half is left out (it adds the same wake and poll as on the grid).
+//! interrupt half is left out (it adds the same wake and poll as on the grid). A second half
+//! times the short path a transmit-complete or a publish runs (`Node::top_up`), with an SRT
+//! stream from the module to the master.
 //!
 //! A master and a module with an HRT stream every cycle on the suite's loopback bus; the
 //! module also receives the master's frames and the stream's subscriber, so its receive queue
@@ -113,6 +115,18 @@ async fn bus_task(
     }
 }
 
+/// The frame-sized bench's SRT stream from the module to the master: a four-frame message
+/// every fourth slot, so that the short path (`Node::top_up`) finds a release to queue or a
+/// queued frame to load behind one that just went.
+static B_T: Topic<'static, [u32; 6], { pool_size(&[2], 1) }, 1> = Topic::new("scan", [0; 6]);
+static B_PUB: Publisher<'static, [u32; 6]> =
+    Publisher::new(&B_T, Class::AsyncRealTime { deadline_us: 4_000 });
+static B_OUT: RemoteSubscriber<'static, [u32; 6], 2> = RemoteSubscriber::new(&B_PUB);
+static B_M: Topic<'static, [u32; 6], { pool_size(&[2], 1) }, 1> = Topic::new("scan", [0; 6]);
+static B_MPUB: Publisher<'static, [u32; 6]> = Publisher::new(&B_M, Class::NonRealTime);
+static B_IN: RemotePublisher<'static, [u32; 6]> = RemotePublisher::new(&B_MPUB, &B_M);
+static B_SUB: Subscriber<'static, [u32; 6], 2> = Subscriber::new();
+
 static A_T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("setpoint", 0);
 static A_PUB: Publisher<'static, u32> =
     Publisher::new(&A_T, Class::SyncRealTime { period_us: 4_000 });
@@ -197,6 +211,10 @@ fn main() -> ! {
     A_T.subscribe(&A_OUT).unwrap();
     M_T.advertise(&M_PUB).unwrap();
     M_T.subscribe(&M_SUB).unwrap();
+    B_T.advertise(&B_PUB).unwrap();
+    B_T.subscribe(&B_OUT).unwrap();
+    B_M.advertise(&B_MPUB).unwrap();
+    B_M.subscribe(&B_SUB).unwrap();
 
     // The bus and the nodes in statics, not on main's stack, which the compare interrupt's
     // executor shares (by value, main's frame held them and their copies for the bus task:
@@ -208,6 +226,10 @@ fn main() -> ! {
         cortex_m::singleton!(: TestNode<'static> = node(2, "motor", None)).unwrap();
     a.export(&A_OUT).unwrap();
     m.import(&M_IN).unwrap();
+    if cfg!(feature = "framed") {
+        a.export(&B_OUT).unwrap();
+        m.import(&B_IN).unwrap();
+    }
     run_slots(bus, &mut [&mut *m, &mut *a], 150_000);
     if !matches!(a.hrt_state(0), Some(HrtState::Granted { .. })) {
         let _ = writeln!(out, "slot-path: the HRT stream was not granted");
@@ -289,7 +311,10 @@ fn main() -> ! {
 
 /// The frame-sized bench: 400 cycles as in the grid's first half, but the module ticks at
 /// every time its node asks for (`next_slot_at`) as well as at the grid's boundaries, where the
-/// master and the bus step; its HRT frame is requested at its reservation's start.
+/// master and the bus step; its HRT frame is requested at its reservation's start. Then 400
+/// more in which the module's short path (`Node::top_up`) runs first at each boundary, as its
+/// transmit-complete interrupt would after the boundary's frame went (or, every fourth slot,
+/// its application's publish): from that call to its first SRT/NRT frame's request.
 #[cfg(feature = "framed")]
 fn framed(
     bus: &mut Bus<2>,
@@ -301,15 +326,33 @@ fn framed(
     let step = Micros::from(CYCLE.slot_us());
     let (mut to_request_max, mut to_request_min, mut whole_max, mut requests, mut ticks) =
         (0u32, u32::MAX, 0u32, 0u32, 0u32);
-    // The first SRT/NRT frame's request, in the calls that load one (the window's path).
-    let (mut queued_min, mut queued_max, mut queued) = (u32::MAX, 0u32, 0u32);
-    let end = bus.now.get() + 400 * Micros::from(CYCLE.cycle_us);
+    // The first SRT/NRT frame's request, in the calls that load one: the slot tick's (the
+    // window's path), the short path's after a transmit-complete and after a publish.
+    let mut queued = Span::default();
+    let (mut after_transmit, mut after_publish) = (Span::default(), Span::default());
+    let half = bus.now.get() + 400 * Micros::from(CYCLE.cycle_us);
+    let end = half + 400 * Micros::from(CYCLE.cycle_us);
     while bus.now.get() < end {
         let boundary = bus.now.get();
         if boundary.is_multiple_of(Micros::from(CYCLE.cycle_us)) {
             let _ = A_PUB.publish_with(|v| *v = boundary as u32);
         }
         m.slot_tick(boundary, &mut bus.port(0));
+        if boundary >= half {
+            let publish = (boundary / step).is_multiple_of(4);
+            if publish {
+                let _ = B_PUB.publish_with(|v| *v = [boundary as u32; 6]);
+            }
+            let mut can = Timed { inner: bus.port(1), hrt_at: Cell::new(None) };
+            QUEUED_AT.store(u32::MAX, Ordering::Relaxed);
+            let start = icount::now();
+            a.top_up(boundary, &mut can);
+            let q = QUEUED_AT.load(Ordering::Relaxed);
+            if q != u32::MAX {
+                let span = if publish { &mut after_publish } else { &mut after_transmit };
+                span.add(start.wrapping_sub(q) & RELOAD);
+            }
+        }
         // A's ticks from this boundary to the next, the boundary's included.
         let mut now = boundary;
         while now < boundary + step {
@@ -318,45 +361,77 @@ fn framed(
             let start = icount::now();
             a.slot_tick(now, &mut can);
             let stop = icount::now();
-            ticks += 1;
-            let q = QUEUED_AT.load(Ordering::Relaxed);
-            if q != u32::MAX {
-                let t = start.wrapping_sub(q) & RELOAD;
-                (queued_min, queued_max) = (queued_min.min(t), queued_max.max(t));
-                queued += 1;
-            }
-            whole_max = whole_max.max(start.wrapping_sub(stop) & RELOAD);
-            if let Some(at) = can.hrt_at.get() {
-                let t = start.wrapping_sub(at) & RELOAD;
-                to_request_max = to_request_max.max(t);
-                to_request_min = to_request_min.min(t);
-                requests += 1;
+            if boundary < half {
+                ticks += 1;
+                let q = QUEUED_AT.load(Ordering::Relaxed);
+                if q != u32::MAX {
+                    queued.add(start.wrapping_sub(q) & RELOAD);
+                }
+                whole_max = whole_max.max(start.wrapping_sub(stop) & RELOAD);
+                if let Some(at) = can.hrt_at.get() {
+                    let t = start.wrapping_sub(at) & RELOAD;
+                    to_request_max = to_request_max.max(t);
+                    to_request_min = to_request_min.min(t);
+                    requests += 1;
+                }
             }
             now = a.next_slot_at(now).max(now + 1).min(boundary + step);
         }
         while M_SUB.try_recv().is_some() {}
+        while B_SUB.try_recv().is_some() {}
         bus.arbitrate();
         bus.now.set(boundary + step);
     }
-    if requests < 390 {
-        let _ = writeln!(out, "slot-path: only {requests} framed HRT requests in 400 cycles");
+    if requests < 390 || after_transmit.n < 100 || after_publish.n < 100 {
+        let (t, p) = (after_transmit.n, after_publish.n);
+        let _ = writeln!(
+            out,
+            "slot-path: only {requests} framed HRT requests, {t} and {p} short-path requests"
+        );
         debug::exit(debug::EXIT_FAILURE);
     }
     let insn = |t: u32| (t as f64 * insn_per_tick) as u32;
     let _ = writeln!(
         out,
-        "{{\"bench\":\"framed_slot_path\",\"hrt_requests\":{},\"ticks\":{},\"to_request_min_insn\":{},\"to_request_max_insn\":{},\"slot_tick_max_insn\":{},\"queued_requests\":{},\"queued_min_insn\":{},\"queued_max_insn\":{}}}",
+        "{{\"bench\":\"framed_slot_path\",\"hrt_requests\":{},\"ticks\":{},\"to_request_min_insn\":{},\"to_request_max_insn\":{},\"slot_tick_max_insn\":{},\"queued_requests\":{},\"queued_min_insn\":{},\"queued_max_insn\":{},\"top_up_transmit_requests\":{},\"top_up_transmit_min_insn\":{},\"top_up_transmit_max_insn\":{},\"top_up_publish_requests\":{},\"top_up_publish_min_insn\":{},\"top_up_publish_max_insn\":{}}}",
         requests,
         ticks,
         insn(to_request_min),
         insn(to_request_max),
         insn(whole_max),
-        queued,
-        insn(queued_min),
-        insn(queued_max)
+        queued.n,
+        insn(queued.min),
+        insn(queued.max),
+        after_transmit.n,
+        insn(after_transmit.min),
+        insn(after_transmit.max),
+        after_publish.n,
+        insn(after_publish.min),
+        insn(after_publish.max)
     );
     debug::exit(debug::EXIT_SUCCESS);
     loop {
         cortex_m::asm::wfi();
+    }
+}
+/// Shortest and longest of `n` measured paths (SysTick counts).
+#[cfg(feature = "framed")]
+struct Span {
+    n: u32,
+    min: u32,
+    max: u32,
+}
+
+#[cfg(feature = "framed")]
+impl Default for Span {
+    fn default() -> Self {
+        Self { n: 0, min: u32::MAX, max: 0 }
+    }
+}
+
+#[cfg(feature = "framed")]
+impl Span {
+    fn add(&mut self, t: u32) {
+        (self.n, self.min, self.max) = (self.n + 1, self.min.min(t), self.max.max(t));
     }
 }
