@@ -147,6 +147,9 @@ pub struct Node<
     /// for (the slot timer may fire again inside that reservation).
     #[cfg(feature = "framed-reservations")]
     hrt_loaded_for: Micros,
+    /// The board's wake on a publish for the bus (`Node::wake_on_release`).
+    #[cfg(feature = "framed-reservations")]
+    release_wake: Option<fn()>,
     /// The nodes holding reservations in `scheduler`, followed by their heartbeats (master).
     owners: Vec<liveness::Owner, { liveness::OWNERS }>,
     /// As standby: syncs in a row whose masks `scheduler` (its copy of the master's calendar)
@@ -243,6 +246,8 @@ impl<
             layout,
             #[cfg(feature = "framed-reservations")]
             hrt_loaded_for: Micros::MAX,
+            #[cfg(feature = "framed-reservations")]
+            release_wake: None,
             owners: Vec::new(),
             calendar_agree: 0,
             beacon: 0,

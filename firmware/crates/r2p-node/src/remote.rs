@@ -50,6 +50,13 @@ pub trait Export: Sync {
     fn drop_oldest(&self) -> bool;
     /// One of its messages missed its deadline on the bus: tell the publisher.
     fn report_deadline_miss(&self);
+    /// Calls `wake` each time a message is queued for the bus, from the publisher's context
+    /// (feature `framed-reservations`: the board's wake for the node's short path,
+    /// [`Node::wake_on_release`](crate::Node::wake_on_release)).
+    #[cfg(feature = "framed-reservations")]
+    fn wake_on_release(&self, wake: fn()) {
+        let _ = wake;
+    }
 }
 
 impl dyn Export + '_ {
@@ -95,6 +102,9 @@ struct Queue<'a, T, const Q: usize> {
     /// Longest queue a remote subscriber asked for (≤ Q); 0 while nobody is subscribed.
     active: usize,
     missed: u32,
+    /// Called once a message is queued ([`Export::wake_on_release`]).
+    #[cfg(feature = "framed-reservations")]
+    wake: Option<fn()>,
 }
 
 /// The remote subscriber of a local topic: a [`Sink`] that queues up to `Q` message handles for
@@ -131,7 +141,13 @@ impl<'a, T, const Q: usize> RemoteSubscriber<'a, T, Q> {
         Self {
             publisher,
             clock: None,
-            queue: Mutex::new(RefCell::new(Queue { msgs: Deque::new(), active: 0, missed: 0 })),
+            queue: Mutex::new(RefCell::new(Queue {
+                msgs: Deque::new(),
+                active: 0,
+                missed: 0,
+                #[cfg(feature = "framed-reservations")]
+                wake: None,
+            })),
         }
     }
 
@@ -165,7 +181,13 @@ impl<'a, T: Send + Sync, const Q: usize> Sink<'a, T> for RemoteSubscriber<'a, T,
             q.msgs.push_back((msg, at)).err().map(|(m, _)| (m, false))
         });
         match refused {
-            None => true,
+            None => {
+                #[cfg(feature = "framed-reservations")]
+                if let Some(wake) = self.queue.lock(|q| q.borrow().wake) {
+                    wake();
+                }
+                true
+            }
             Some((m, ok)) => {
                 drop(m);
                 ok
@@ -226,6 +248,10 @@ impl<'a, T: Wire + Copy + Send + Sync, const Q: usize> Export for RemoteSubscrib
     }
     fn report_deadline_miss(&self) {
         self.publisher.report_deadline_miss();
+    }
+    #[cfg(feature = "framed-reservations")]
+    fn wake_on_release(&self, wake: fn()) {
+        self.queue.lock(|q| q.borrow_mut().wake = Some(wake));
     }
 }
 
@@ -336,5 +362,63 @@ pub(crate) mod tests {
             assert_eq!(*S.try_recv().unwrap(), [1, 2]);
             assert_eq!(R.publish_bytes(&[1, 0, 2]), Err(ImportError::Decode(WireError::BadLength)));
         }
+    }
+}
+
+/// The release wake (feature `framed-reservations`, which the QEMU suite leaves out).
+#[cfg(all(test, feature = "framed-reservations"))]
+mod release_wake_tests {
+    use super::*;
+    use r2p_middleware::{pool_size, Topic};
+
+    const SRT: Class = Class::AsyncRealTime { deadline_us: 1_000 };
+
+    #[test]
+    fn a_queued_message_wakes_the_board_and_a_dropped_one_does_not() {
+        use core::sync::atomic::{AtomicU32, Ordering};
+        static T: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("scan", 0);
+        static P: Publisher<'static, u32> = Publisher::new(&T, SRT);
+        static R: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&P);
+        static WOKEN: AtomicU32 = AtomicU32::new(0);
+        T.subscribe(&R).unwrap();
+        (&R as &dyn Export).wake_on_release(|| {
+            WOKEN.fetch_add(1, Ordering::Relaxed);
+        });
+        P.publish_with(|m| *m = 1).unwrap();
+        assert_eq!(WOKEN.load(Ordering::Relaxed), 0, "nobody remote: nothing queued");
+        R.activate(1);
+        P.publish_with(|m| *m = 2).unwrap();
+        assert_eq!(WOKEN.load(Ordering::Relaxed), 1, "queued: the board is woken");
+        P.publish_with(|m| *m = 3).unwrap();
+        assert_eq!((R.pending(), R.missed()), (1, 1));
+        assert_eq!(WOKEN.load(Ordering::Relaxed), 1, "the queue was full: missed");
+    }
+
+    #[test]
+    fn the_node_wakes_on_its_exports_and_on_those_added_later() {
+        use crate::{NoParams, Node, NodeConfig};
+        use core::sync::atomic::{AtomicU32, Ordering};
+        static A: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("a", 0);
+        static A_PUB: Publisher<'static, u32> = Publisher::new(&A, SRT);
+        static A_OUT: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&A_PUB);
+        static B: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("b", 0);
+        static B_PUB: Publisher<'static, u32> = Publisher::new(&B, SRT);
+        static B_OUT: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&B_PUB);
+        static WOKEN: AtomicU32 = AtomicU32::new(0);
+        A.subscribe(&A_OUT).unwrap();
+        B.subscribe(&B_OUT).unwrap();
+        let mut node: Node<'static, 2, 1, 16, 2, 64> =
+            Node::new(NodeConfig::new([0; 12], "sensor"), &NoParams).unwrap();
+        node.export(&A_OUT).unwrap();
+        node.wake_on_release(|| {
+            WOKEN.fetch_add(1, Ordering::Relaxed);
+        });
+        node.export(&B_OUT).unwrap();
+        A_OUT.activate(1);
+        B_OUT.activate(1);
+        A_PUB.publish_with(|m| *m = 1).unwrap();
+        B_PUB.publish_with(|m| *m = 2).unwrap();
+        assert_eq!(WOKEN.load(Ordering::Relaxed), 2);
+        assert_eq!(node.releases_waiting(), 2);
     }
 }

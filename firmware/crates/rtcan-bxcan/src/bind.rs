@@ -5,10 +5,11 @@
 //! The receive FIFOs go to [`RxStamp`](crate::RxStamp) alone: it stamps each frame's start of
 //! frame and empties the FIFOs. embassy-stm32's receive handler after it would mask the FIFO's
 //! interrupt (`FMPIE`), which only embassy's `read` unmasks — the driver never calls it — so an
-//! image would stop hearing frames after each FIFO's first interrupt. The transmit and status
-//! change interrupts go to [`UnusedIrq`](crate::UnusedIrq) (the driver masks the first and reads
-//! the error counters itself). embassy-stm32's `Can::new` still asks for its four handlers'
-//! bindings: the macro declares them, since none of them is needed.
+//! image would stop hearing frames after each FIFO's first interrupt. The transmit interrupt goes
+//! to [`TransmitWake`](crate::TransmitWake): masked unless a node on frame-sized reservations
+//! arms it (crate feature `transmit-wake`; without it, [`UnusedIrq`](crate::UnusedIrq)). The status change interrupt goes to [`UnusedIrq`](crate::UnusedIrq) (the driver
+//! reads the error counters itself). embassy-stm32's `Can::new` still asks for its four
+//! handlers' bindings: the macro declares them, since none of them is needed.
 
 /// Binds an image's interrupts, as `embassy_stm32::bind_interrupts!` does, with the bxCAN's four
 /// named once (module documentation). Any others the image needs follow the `;`:
@@ -29,7 +30,7 @@ macro_rules! bind_bxcan_interrupts {
             $rx0 => $crate::RxStamp;
             $rx1 => $crate::RxStamp;
             $sce => $crate::UnusedIrq;
-            $tx => $crate::UnusedIrq;
+            $tx => $crate::TransmitWake;
             $($others)*
         });
         $crate::__bxcan_bindings!($name, $can,

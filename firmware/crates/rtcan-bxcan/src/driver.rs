@@ -55,7 +55,8 @@ impl<'d> BxCan<'d> {
     ///
     /// It also masks the transmit-mailbox-empty interrupt: embassy-stm32's handler for it
     /// acknowledges `RQCP`, which clears the `TXOK`/`ALST`/`TERR` bits this driver reads to
-    /// report each frame's result. (Images bind [`crate::UnusedIrq`] to it instead.)
+    /// report each frame's result. (Images bind [`crate::TransmitWake`] to it instead, which
+    /// only runs once [`arm_transmit_wake`](Self::arm_transmit_wake) unmasks it.)
     ///
     /// Received frames reach the driver through [`crate::RxStamp`], which the image binds to
     /// the receive interrupts before embassy's handlers. `bit_rate` is the bus's (bit/s): the
@@ -78,6 +79,20 @@ impl<'d> BxCan<'d> {
         };
         this.set_filters(&[Filter::ACCEPT_ALL]);
         this
+    }
+
+    /// Calls `wake` from the transmit interrupt when a frame leaves its mailbox, once per
+    /// [`arm_transmit_wake`](Self::arm_transmit_wake) ([`crate::TransmitWake`]).
+    #[cfg(feature = "transmit-wake")]
+    pub fn on_transmit(&mut self, wake: fn()) {
+        crate::transmit_wake::set(wake);
+    }
+
+    /// Unmasks the transmit-mailbox-empty interrupt (`TMEIE`) until it next fires: at once if
+    /// a mailbox finished since its result was last taken.
+    #[cfg(feature = "transmit-wake")]
+    pub fn arm_transmit_wake(&mut self) {
+        self.regs.ier().modify(|w| w.set_tmeie(true));
     }
 
     /// Received frames lost because the driver did not take them from the receive

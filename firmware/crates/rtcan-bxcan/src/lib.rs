@@ -32,6 +32,8 @@ pub mod bind;
 mod driver;
 #[cfg(feature = "stm32")]
 mod rx_stamp;
+#[cfg(feature = "transmit-wake")]
+mod transmit_wake;
 #[cfg(feature = "stm32")]
 mod unused_irq;
 
@@ -43,5 +45,11 @@ pub use driver::BxCan;
 pub use filter_plan::FILTER_BANKS;
 #[cfg(feature = "stm32")]
 pub use rx_stamp::RxStamp;
+#[cfg(feature = "transmit-wake")]
+pub use transmit_wake::TransmitWake;
+/// The transmit interrupt's handler: without the feature `transmit-wake` the interrupt stays
+/// masked, and [`UnusedIrq`] stands in.
+#[cfg(all(feature = "stm32", not(feature = "transmit-wake")))]
+pub type TransmitWake = UnusedIrq;
 #[cfg(feature = "stm32")]
 pub use unused_irq::UnusedIrq;

@@ -39,6 +39,12 @@ pub(crate) fn attach(regs: pac::can::Can) {
     });
 }
 
+/// The controller's registers, once [`attach`]ed.
+#[cfg(feature = "transmit-wake")]
+pub(crate) fn regs() -> Option<pac::can::Can> {
+    critical_section::with(|cs| RX.borrow_ref(cs).regs)
+}
+
 /// The oldest captured frame.
 pub(crate) fn take() -> Option<Captured> {
     critical_section::with(|cs| RX.borrow_ref_mut(cs).ring.take())

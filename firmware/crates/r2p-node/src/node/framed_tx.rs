@@ -67,6 +67,16 @@ impl<
         waiting.map(|e| e.export.pending()).sum()
     }
 
+    /// Calls `wake` from the publisher's context whenever the application publishes a message
+    /// for the bus on one of the node's exports, those to come included: the board's wake for
+    /// [`top_up`](Self::top_up), as [`releases_waiting`](Self::releases_waiting) asks of it
+    /// (module-core's bus task). Only with the feature `framed-reservations`.
+    #[cfg(feature = "framed-reservations")]
+    pub fn wake_on_release(&mut self, wake: fn()) {
+        self.release_wake = Some(wake);
+        self.exports.iter().for_each(|e| e.export.wake_on_release(wake));
+    }
+
     /// The short path for the two wakes above (a transmit-complete, a publish), instead of
     /// [`slot_tick`](Self::slot_tick): takes the controller's results, queues the released
     /// messages and, in a free window, loads the frames that still fit; at one of this node's

@@ -156,6 +156,10 @@ impl<
         self.exports
             .push(ExportSlot { export, advertise: true, hrt, subscribers: Subscribers::default() })
             .map_err(|_| NodeError::TooMany)?;
+        #[cfg(feature = "framed-reservations")]
+        if let Some(wake) = self.release_wake {
+            export.wake_on_release(wake);
+        }
         Ok(self.exports.len() as u8)
     }
 

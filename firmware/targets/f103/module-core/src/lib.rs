@@ -96,9 +96,10 @@ pub const PARAMS_BASE: u32 = MAP.params.offset;
 /// `rtcan_bxcan::RxStamp` alone (it stamps each frame's start of frame and empties the FIFOs:
 /// embassy's receive handler after it would mask the FIFO's interrupt, `FMPIE`, which only
 /// embassy's `read` unmasks, so the image would stop hearing frames after the first), the
-/// transmit and status change interrupts to `rtcan_bxcan::UnusedIrq` (embassy's transmit
-/// handler would clear the frames' results the driver reads, and the driver masks that
-/// interrupt anyway; its status change handler only serves embassy's `read` and `write`).
+/// transmit interrupt to `rtcan_bxcan::TransmitWake` (embassy's would clear the frames' results
+/// the driver reads; this one only wakes the bus task, with the feature `framed-reservations`,
+/// and is `UnusedIrq` without) and the status change interrupt to `rtcan_bxcan::UnusedIrq`
+/// (embassy's only serves its `read` and `write`).
 /// Any others the image needs follow in the braces, in `bind_interrupts!`'s form:
 ///
 /// ```ignore
@@ -242,8 +243,18 @@ async fn bus(
 ) {
     let node = node.0;
     let (mut frames, mut last_frame_at) = (0u32, None::<u64>);
+    // Frame-sized reservations: a transmit-complete or a publish runs the node's short path.
+    #[cfg(feature = "framed-reservations")]
+    let mut woken = slot_timer::Woken::Timer;
     loop {
         let now = Instant::now().as_micros();
+        #[cfg(feature = "framed-reservations")]
+        if woken == slot_timer::Woken::Event {
+            node.top_up(now, &mut *can);
+        } else {
+            node.slot_tick(now, &mut *can);
+        }
+        #[cfg(not(feature = "framed-reservations"))]
         node.slot_tick(now, &mut *can);
         // Parameters are persisted from the store's dirty flags, not from these events.
         while node.next_event().is_some() {}
@@ -269,7 +280,16 @@ async fn bus(
         }
         LED_INPUTS.fetch_and(STORAGE_FAULT, Ordering::Relaxed);
         LED_INPUTS.fetch_or(bits, Ordering::Relaxed);
-        timer.wait_until(node.next_slot_at(now)).await;
+        #[cfg(feature = "framed-reservations")]
+        {
+            if node.wakes_on_transmit() {
+                can.arm_transmit_wake();
+            }
+            timer.wait_until::<true>(node.next_slot_at(now)).await;
+            woken = timer.woken();
+        }
+        #[cfg(not(feature = "framed-reservations"))]
+        timer.wait_until::<false>(node.next_slot_at(now)).await;
     }
 }
 
@@ -306,7 +326,16 @@ pub fn start_bus(
             ..r2p_node::FirmwareId::default()
         });
     }
-    let can = BxCan::new(can, pac::CAN, BIT_RATE);
+    #[allow(unused_mut)] // frame-sized reservations set its transmit wake
+    let mut can = BxCan::new(can, pac::CAN, BIT_RATE);
+    // Frame-sized reservations: the transmit interrupt and the application's publishes for the
+    // bus wake the bus task (`Node::wakes_on_transmit`, `Node::releases_waiting`).
+    #[cfg(feature = "framed-reservations")]
+    {
+        can.on_transmit(slot_timer::wake_bus);
+        node.wake_on_release(slot_timer::wake_bus);
+        interrupt::USB_HP_CAN1_TX.set_priority(Priority::P1);
+    }
     if let Some(text) = r2p_panic::take_last() {
         defmt::warn!("the last reset followed a panic: {=[u8]:a}", text);
         node.set_panic_report(text);

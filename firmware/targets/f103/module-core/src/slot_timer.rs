@@ -31,12 +31,38 @@ const MAX_AHEAD_TICKS: u64 = 0xC000;
 /// The bus task waiting for the compare.
 static SLOT_WAKER: AtomicWaker = AtomicWaker::new();
 
+/// A wake of the bus task other than the compare ([`wake_bus`]) since it last looked.
+#[cfg(feature = "framed-reservations")]
+static EVENT: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
+
+/// What ended [`SlotTimer::wait_until`]`::<true>`.
+#[cfg(feature = "framed-reservations")]
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Woken {
+    /// The time asked for came: the node's slot timer (`Node::slot_tick`).
+    Timer,
+    /// [`wake_bus`] before it: one of the node's frames left its mailbox, or the application
+    /// published for the bus (`Node::top_up`).
+    Event,
+}
+
+/// Wakes the bus task before its time (frame-sized reservations: the transmit interrupt's and
+/// the node's release wake, `Node::wakes_on_transmit`, `Node::wake_on_release`).
+#[cfg(feature = "framed-reservations")]
+pub fn wake_bus() {
+    EVENT.store(true, core::sync::atomic::Ordering::Release);
+    SLOT_WAKER.wake();
+}
+
 /// TIM2's compare on channel 1 as the bus's slot timer.
 pub struct SlotTimer {
     /// Owns TIM2 (and keeps its clock enabled).
     _tim: Timer<'static, TIM2>,
     /// (time driver ticks − TIM2 count) mod 2¹⁶.
     offset: u16,
+    /// What ended the last [`wait_until`](Self::wait_until)`::<true>`.
+    #[cfg(feature = "framed-reservations")]
+    woken: Woken,
 }
 
 impl SlotTimer {
@@ -49,14 +75,29 @@ impl SlotTimer {
         r.arr().write(|w| w.set_arr(u16::MAX));
         r.dier().write(|w| w.set_ccie(0, false));
         t.start();
-        Self { _tim: t, offset: relate() }
+        Self {
+            _tim: t,
+            offset: relate(),
+            #[cfg(feature = "framed-reservations")]
+            woken: Woken::Timer,
+        }
     }
 
     /// Returns at the node's time `at` (µs), woken by the compare interrupt (at once if `at`
-    /// has passed).
-    pub async fn wait_until(&mut self, at: u64) {
+    /// has passed); with `OR_EVENT`, sooner on [`wake_bus`] (at once if it came since the last
+    /// return), which [`woken`](Self::woken) then tells. (Without, the body is the slot
+    /// timer's alone: the bus task's future and poll are those of a wait for the compare.)
+    pub async fn wait_until<const OR_EVENT: bool>(&mut self, at: u64) {
+        #[cfg(feature = "framed-reservations")]
+        {
+            self.woken = Woken::Timer;
+        }
         let r = pac::TIM2;
         loop {
+            if OR_EVENT && event() {
+                self.note_event();
+                return;
+            }
             let now = Instant::now().as_ticks();
             if at <= now {
                 return;
@@ -75,18 +116,57 @@ impl SlotTimer {
             }
             poll_fn(|cx| {
                 SLOT_WAKER.register(cx.waker());
-                if r.dier().read().ccie(0) {
+                if r.dier().read().ccie(0) && !(OR_EVENT && event_pending()) {
                     Poll::Pending
                 } else {
                     Poll::Ready(())
                 }
             })
             .await;
+            if OR_EVENT && event() {
+                self.note_event();
+                return;
+            }
             if target == at {
                 return;
             }
         }
     }
+}
+
+impl SlotTimer {
+    /// What ended the last [`wait_until`](Self::wait_until)`::<true>`.
+    #[cfg(feature = "framed-reservations")]
+    pub fn woken(&self) -> Woken {
+        self.woken
+    }
+
+    /// Notes that [`wake_bus`] ended the wait.
+    #[inline(always)]
+    fn note_event(&mut self) {
+        #[cfg(feature = "framed-reservations")]
+        {
+            self.woken = Woken::Event;
+        }
+    }
+}
+
+/// True (and taken) if [`wake_bus`] came since the last look.
+#[inline(always)]
+fn event() -> bool {
+    #[cfg(feature = "framed-reservations")]
+    return EVENT.swap(false, core::sync::atomic::Ordering::Acquire);
+    #[cfg(not(feature = "framed-reservations"))]
+    false
+}
+
+/// True if [`wake_bus`] came since the last look (left for [`event`] to take).
+#[inline(always)]
+fn event_pending() -> bool {
+    #[cfg(feature = "framed-reservations")]
+    return EVENT.load(core::sync::atomic::Ordering::Acquire);
+    #[cfg(not(feature = "framed-reservations"))]
+    false
 }
 
 /// (time driver ticks − TIM2 count) mod 2¹⁶, read between two equal readings of the clock.

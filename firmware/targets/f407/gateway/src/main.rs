@@ -187,8 +187,18 @@ async fn bus(
 ) {
     let mut tap = BusTap::new(&LINK);
     let (mut frames, mut last_frame_at) = (0u32, None::<u64>);
+    // Frame-sized reservations: a transmit-complete or a publish runs the node's short path.
+    #[cfg(feature = "framed-reservations")]
+    let mut woken = slot_timer::Woken::Timer;
     loop {
         let now = Instant::now().as_micros();
+        #[cfg(feature = "framed-reservations")]
+        if woken == slot_timer::Woken::Event {
+            tap.run(now, &mut can, |c| node.top_up(now, c));
+        } else {
+            tap.run(now, &mut can, |c| node.slot_tick(now, c));
+        }
+        #[cfg(not(feature = "framed-reservations"))]
         tap.run(now, &mut can, |c| node.slot_tick(now, c));
         while node.next_event().is_some() {}
         follower.apply(WANTED.load(Ordering::Relaxed), node);
@@ -219,7 +229,16 @@ async fn bus(
         }
         LED_INPUTS.fetch_and(STORAGE_FAULT, Ordering::Relaxed);
         LED_INPUTS.fetch_or(bits, Ordering::Relaxed);
-        timer.wait_until(node.next_slot_at(now)).await;
+        #[cfg(feature = "framed-reservations")]
+        {
+            if node.wakes_on_transmit() {
+                can.arm_transmit_wake();
+            }
+            timer.wait_until::<true>(node.next_slot_at(now)).await;
+            woken = timer.woken();
+        }
+        #[cfg(not(feature = "framed-reservations"))]
+        timer.wait_until::<false>(node.next_slot_at(now)).await;
     }
 }
 
@@ -533,7 +552,16 @@ async fn main(spawner: Spawner) {
         irq.set_priority(Priority::P1);
     }
     interrupt::TIM5.set_priority(Priority::P0);
-    let can = BxCan::new(can, pac::CAN1, 1_000_000);
+    #[allow(unused_mut)] // frame-sized reservations set its transmit wake
+    let mut can = BxCan::new(can, pac::CAN1, 1_000_000);
+    // Frame-sized reservations: the transmit interrupt and the publishes for the bus wake the
+    // bus task (`Node::wakes_on_transmit`, `Node::releases_waiting`).
+    #[cfg(feature = "framed-reservations")]
+    {
+        can.on_transmit(slot_timer::wake_bus);
+        node.wake_on_release(slot_timer::wake_bus);
+        interrupt::CAN1_TX.set_priority(Priority::P1);
+    }
     let timer = SlotTimer::new(p.TIM5);
     BUS_EXECUTOR
         .start(interrupt::TIM5)
