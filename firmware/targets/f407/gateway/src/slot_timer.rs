@@ -33,26 +33,16 @@ const MAX_AHEAD_TICKS: u64 = 0xC000_0000;
 /// The bus task waiting for the compare.
 static SLOT_WAKER: AtomicWaker = AtomicWaker::new();
 
-/// A wake of the bus task other than the compare ([`wake_bus`]) since it last looked.
+#[path = "../../../shared/bus_wake.rs"]
+mod bus_wake;
 #[cfg(feature = "framed-reservations")]
-static EVENT: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
-
-/// What ended [`SlotTimer::wait_until`]`::<true>`.
-#[cfg(feature = "framed-reservations")]
-#[derive(Clone, Copy, PartialEq, Eq)]
-pub enum Woken {
-    /// The time asked for came: the node's slot timer (`Node::slot_tick`).
-    Timer,
-    /// [`wake_bus`] before it: one of the node's frames left its mailbox, or the application
-    /// published for the bus (`Node::top_up`).
-    Event,
-}
+pub use bus_wake::Woken;
 
 /// Wakes the bus task before its time (frame-sized reservations: the transmit interrupt's and
 /// the node's release wake, `Node::wakes_on_transmit`, `Node::wake_on_release`).
 #[cfg(feature = "framed-reservations")]
 pub fn wake_bus() {
-    EVENT.store(true, core::sync::atomic::Ordering::Release);
+    bus_wake::raise();
     SLOT_WAKER.wake();
 }
 
@@ -96,7 +86,7 @@ impl SlotTimer {
         }
         let r = pac::TIM5;
         loop {
-            if OR_EVENT && event() {
+            if OR_EVENT && bus_wake::take() {
                 self.note_event();
                 return;
             }
@@ -118,14 +108,14 @@ impl SlotTimer {
             }
             poll_fn(|cx| {
                 SLOT_WAKER.register(cx.waker());
-                if r.dier().read().ccie(0) && !(OR_EVENT && event_pending()) {
+                if r.dier().read().ccie(0) && !(OR_EVENT && bus_wake::pending()) {
                     Poll::Pending
                 } else {
                     Poll::Ready(())
                 }
             })
             .await;
-            if OR_EVENT && event() {
+            if OR_EVENT && bus_wake::take() {
                 self.note_event();
                 return;
             }
@@ -151,24 +141,6 @@ impl SlotTimer {
             self.woken = Woken::Event;
         }
     }
-}
-
-/// True (and taken) if [`wake_bus`] came since the last look.
-#[inline(always)]
-fn event() -> bool {
-    #[cfg(feature = "framed-reservations")]
-    return EVENT.swap(false, core::sync::atomic::Ordering::Acquire);
-    #[cfg(not(feature = "framed-reservations"))]
-    false
-}
-
-/// True if [`wake_bus`] came since the last look (left for [`event`] to take).
-#[inline(always)]
-fn event_pending() -> bool {
-    #[cfg(feature = "framed-reservations")]
-    return EVENT.load(core::sync::atomic::Ordering::Acquire);
-    #[cfg(not(feature = "framed-reservations"))]
-    false
 }
 
 /// (time driver ticks − TIM5 count) mod 2³², read between two equal readings of the clock.
