@@ -449,7 +449,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
                         app(now_us, &mut b.node);
                         b.app_ns += NS_PER_MS;
                         self.stats.app_steps += 1;
-                        // A publish to a remote subscriber wakes a slot timer that asks for it
+                        // A publish to a remote subscriber runs the short path of a board that asks for it
                         // (once the application's own CPU time is over).
                         if mode == Mode::Tdma && b.node.wakes_on_transmit() {
                             let waiting = b.node.releases_waiting();
@@ -464,7 +464,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
             }
             for b in self.boards.iter_mut().filter(|b| b.powered && b.down_until_ns.is_none()) {
                 // A frame of its own left a mailbox (sent, or lost a one-shot arbitration):
-                // its transmit-complete interrupt runs the slot path now.
+                // its transmit-complete interrupt runs the short path now.
                 let pending = b.port.port().pending();
                 if mode == Mode::Tdma && pending < b.mailboxes && b.node.wakes_on_transmit() {
                     b.event_ns = b.event_ns.min(t);
