@@ -449,8 +449,8 @@ impl<'a, N: Runtime> Sim<'a, N> {
                         app(now_us, &mut b.node);
                         b.app_ns += NS_PER_MS;
                         self.stats.app_steps += 1;
-                        // A publish to a remote subscriber runs the short path of a board that asks for it
-                        // (once the application's own CPU time is over).
+                        // A publish to a remote subscriber runs the short path of a board
+                        // that asks for it (once the application's own CPU time is over).
                         if mode == Mode::Tdma && b.node.wakes_on_transmit() {
                             let waiting = b.node.releases_waiting();
                             if waiting > b.releases {
