@@ -147,6 +147,10 @@ struct Timed<C> {
 #[cfg(feature = "framed")]
 static QUEUED_AT: AtomicU32 = AtomicU32::new(u32::MAX);
 
+/// The frame-sized bench: SysTick when the master's sync was requested (`u32::MAX`: none).
+#[cfg(feature = "framed")]
+static SYNC_AT: AtomicU32 = AtomicU32::new(u32::MAX);
+
 impl<C: CanController> CanController for Timed<C> {
     fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
         if frame.id().laxity == Laxity::HRT && frame.id().message.0 >= 0x100 {
@@ -155,6 +159,10 @@ impl<C: CanController> CanController for Timed<C> {
         #[cfg(feature = "framed")]
         if frame.id().laxity != Laxity::HRT && QUEUED_AT.load(Ordering::Relaxed) == u32::MAX {
             QUEUED_AT.store(icount::now(), Ordering::Relaxed);
+        }
+        #[cfg(feature = "framed")]
+        if frame.id().laxity == Laxity::HRT && frame.id().message.0 < 0x100 {
+            SYNC_AT.store(icount::now(), Ordering::Relaxed);
         }
         self.inner.try_transmit(frame)
     }
@@ -329,6 +337,8 @@ fn framed(
     // The first SRT/NRT frame's request, in the calls that load one: the slot tick's (the
     // window's path), the short path's after a transmit-complete and after a publish.
     let mut queued = Span::default();
+    // The master's call to its sync's request: the sync goes first too (`framed_hrt_first`).
+    let mut sync = Span::default();
     let (mut after_transmit, mut after_publish) = (Span::default(), Span::default());
     let half = bus.now.get() + 400 * Micros::from(CYCLE.cycle_us);
     let end = half + 400 * Micros::from(CYCLE.cycle_us);
@@ -337,7 +347,14 @@ fn framed(
         if boundary.is_multiple_of(Micros::from(CYCLE.cycle_us)) {
             let _ = A_PUB.publish_with(|v| *v = boundary as u32);
         }
-        m.slot_tick(boundary, &mut bus.port(0));
+        let mut can = Timed { inner: bus.port(0), hrt_at: Cell::new(None) };
+        SYNC_AT.store(u32::MAX, Ordering::Relaxed);
+        let start = icount::now();
+        m.slot_tick(boundary, &mut can);
+        let at = SYNC_AT.load(Ordering::Relaxed);
+        if at != u32::MAX && boundary < half {
+            sync.add(start.wrapping_sub(at) & RELOAD);
+        }
         if boundary >= half {
             let publish = (boundary / step).is_multiple_of(4);
             if publish {
@@ -382,7 +399,7 @@ fn framed(
         bus.arbitrate();
         bus.now.set(boundary + step);
     }
-    if requests < 390 || after_transmit.n < 100 || after_publish.n < 100 {
+    if requests < 390 || sync.n < 390 || after_transmit.n < 100 || after_publish.n < 100 {
         let (t, p) = (after_transmit.n, after_publish.n);
         let _ = writeln!(
             out,
@@ -393,7 +410,7 @@ fn framed(
     let insn = |t: u32| (t as f64 * insn_per_tick) as u32;
     let _ = writeln!(
         out,
-        "{{\"bench\":\"framed_slot_path\",\"hrt_requests\":{},\"ticks\":{},\"to_request_min_insn\":{},\"to_request_max_insn\":{},\"slot_tick_max_insn\":{},\"queued_requests\":{},\"queued_min_insn\":{},\"queued_max_insn\":{},\"top_up_transmit_requests\":{},\"top_up_transmit_min_insn\":{},\"top_up_transmit_max_insn\":{},\"top_up_publish_requests\":{},\"top_up_publish_min_insn\":{},\"top_up_publish_max_insn\":{}}}",
+        "{{\"bench\":\"framed_slot_path\",\"hrt_requests\":{},\"ticks\":{},\"to_request_min_insn\":{},\"to_request_max_insn\":{},\"slot_tick_max_insn\":{},\"queued_requests\":{},\"queued_min_insn\":{},\"queued_max_insn\":{},\"top_up_transmit_requests\":{},\"top_up_transmit_min_insn\":{},\"top_up_transmit_max_insn\":{},\"top_up_publish_requests\":{},\"top_up_publish_min_insn\":{},\"top_up_publish_max_insn\":{},\"sync_requests\":{},\"sync_min_insn\":{},\"sync_max_insn\":{}}}",
         requests,
         ticks,
         insn(to_request_min),
@@ -407,7 +424,10 @@ fn framed(
         insn(after_transmit.max),
         after_publish.n,
         insn(after_publish.min),
-        insn(after_publish.max)
+        insn(after_publish.max),
+        sync.n,
+        insn(sync.min),
+        insn(sync.max)
     );
     debug::exit(debug::EXIT_SUCCESS);
     loop {
