@@ -71,7 +71,7 @@ def test_the_frame_sized_path_requests_the_hrt_frame_first():
     assert rc == 0 and rows and rows[-1]["bench"] == "framed_slot_path", text
     r = rows[-1]
     assert r["hrt_requests"] >= 390
-    # 1 154–1 169 measured; the grid's path is 1 624–1 724 in the same harness.
+    # 1 159–1 174 measured; the grid's path is 1 624–1 724 in the same harness.
     assert r["to_request_max_insn"] - r["to_request_min_insn"] < 50, r
     assert r["to_request_max_insn"] < slotlead.constant("CORTEX_M3_SLOT_PATH").min_instructions - 190, r
     # The short path (`Node::top_up`) after a transmit-complete or a publish: shorter than a
