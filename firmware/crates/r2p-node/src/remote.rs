@@ -168,6 +168,9 @@ impl<'a, T, const Q: usize> RemoteSubscriber<'a, T, Q> {
 impl<'a, T: Send + Sync, const Q: usize> Sink<'a, T> for RemoteSubscriber<'a, T, Q> {
     fn deliver(&self, msg: Msg<'a, T>) -> bool {
         let at = self.clock.map(|c| c());
+        // The board's wake, read under the same lock, called after it.
+        #[cfg(feature = "framed-reservations")]
+        let mut wake = None;
         // The handle is dropped after the lock (dropping takes the pool's lock).
         let refused = self.queue.lock(|q| {
             let mut q = q.borrow_mut();
@@ -178,12 +181,16 @@ impl<'a, T: Send + Sync, const Q: usize> Sink<'a, T> for RemoteSubscriber<'a, T,
                 q.missed = q.missed.wrapping_add(1);
                 return Some((msg, false));
             }
+            #[cfg(feature = "framed-reservations")]
+            {
+                wake = q.wake;
+            }
             q.msgs.push_back((msg, at)).err().map(|(m, _)| (m, false))
         });
         match refused {
             None => {
                 #[cfg(feature = "framed-reservations")]
-                if let Some(wake) = self.queue.lock(|q| q.borrow().wake) {
+                if let Some(wake) = wake {
                     wake();
                 }
                 true

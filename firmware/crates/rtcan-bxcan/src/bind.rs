@@ -7,9 +7,10 @@
 //! interrupt (`FMPIE`), which only embassy's `read` unmasks — the driver never calls it — so an
 //! image would stop hearing frames after each FIFO's first interrupt. The transmit interrupt goes
 //! to [`TransmitWake`](crate::TransmitWake): masked unless a node on frame-sized reservations
-//! arms it (crate feature `transmit-wake`; without it, [`UnusedIrq`](crate::UnusedIrq)). The status change interrupt goes to [`UnusedIrq`](crate::UnusedIrq) (the driver
-//! reads the error counters itself). embassy-stm32's `Can::new` still asks for its four
-//! handlers' bindings: the macro declares them, since none of them is needed.
+//! arms it (crate feature `transmit-wake`; without it, [`UnusedIrq`](crate::UnusedIrq)). The
+//! status change interrupt goes to [`UnusedIrq`](crate::UnusedIrq) (the driver reads the error
+//! counters itself). embassy-stm32's `Can::new` still asks for its four handlers' bindings: the
+//! macro declares them, since none of them is needed.
 
 /// Binds an image's interrupts, as `embassy_stm32::bind_interrupts!` does, with the bxCAN's four
 /// named once (module documentation). Any others the image needs follow the `;`:

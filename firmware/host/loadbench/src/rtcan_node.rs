@@ -251,7 +251,7 @@ impl<'t> RtcanNode<'t> {
     /// reservation: its HRT frame at its start; between reservations: the queue's frames for
     /// the window up to the next one. The `short` path (`Node::top_up`) only takes the
     /// controller's results (`SlotTx::settle_sent`), queues the released messages and loads;
-    /// syncs, received frames and the master's sync wait for the timer.
+    /// received frames (the master's syncs among them) and sending the sync wait for the timer.
     fn framed_tick(&mut self, now: Micros, short: bool) {
         if short {
             for done in self.slot_tx.settle_sent(now, &mut self.can).into_iter().flatten() {
