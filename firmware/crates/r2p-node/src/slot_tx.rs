@@ -238,16 +238,16 @@ impl<T: Copy> SlotTx<T> {
     /// loaded stay as they are until the slot timer's next `settle`: checking that they are
     /// still the queue's next frames with the same laxity codes (and withdrawing them to load
     /// them again when a code moved on) is ~1 100 instructions on a Cortex-M3, a third of the
-    /// path to the next frame, and a frame's place in the queue changes at a release only. A
-    /// frame past its window's latest start is the guard's to withdraw (`on_guard`, at the slot
-    /// timer), whatever wakes the node in between.
+    /// path to the next frame, and a frame's place in the queue changes at a release only.
     #[cfg(feature = "fitted-windows")]
     pub fn settle_sent<C: CanController + ?Sized>(
         &mut self,
         now: Micros,
         can: &mut C,
     ) -> Settled<T> {
-        self.settle_with(now, can, |_, _| true)
+        self.settle_with(now, can, |me, _| {
+            me.policy == FreeSlots::Merged && me.window.is_some_and(|w| now < w.end)
+        })
     }
 
     /// Takes the controller's results, and withdraws the loaded frames unless `keep` says the
