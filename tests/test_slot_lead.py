@@ -58,10 +58,12 @@ def test_a_missing_constant_is_named():
 
 
 def test_the_frame_sized_path_requests_the_hrt_frame_first():
-    """On frame-sized reservations the HRT frame is requested before the node takes its
-    received frames and runs its timers (r2p-node's `framed_hrt_first`): its path is short and
-    nearly constant, where a heartbeat handled first would start it 5 µs late every fifth
-    cycle, more than a reservation's guard bits (docs/rtcan.md, "The slot path in them")."""
+    """On frame-sized reservations the HRT frame and the master's sync are requested before
+    the node takes its received frames and runs its timers (r2p-node's `framed_first`): their
+    paths are short and nearly constant, where a heartbeat handled first would start an HRT
+    frame 5 µs late every fifth cycle, more than a reservation's guard bits, and the sync up to
+    33 µs late (docs/rtcan.md, "The slot path in them"). Each has its own lead, which r2p-node's
+    constants give."""
     out = qemu.build(profile="release", cpu="cortex-m3", image="slot-path", features=("framed",))
     try:
         rc, text = qemu.run_image(out / "slot-path", "cortex-m3")
@@ -71,9 +73,19 @@ def test_the_frame_sized_path_requests_the_hrt_frame_first():
     assert rc == 0 and rows and rows[-1]["bench"] == "framed_slot_path", text
     r = rows[-1]
     assert r["hrt_requests"] >= 390
-    # 1 159–1 174 measured; the grid's path is 1 624–1 724 in the same harness.
+    # 1 194–1 209 measured, the sync 519–534; the grid's path is 1 619–1 724 in the same harness.
     assert r["to_request_max_insn"] - r["to_request_min_insn"] < 50, r
+    assert r["sync_requests"] >= 390 and r["sync_max_insn"] - r["sync_min_insn"] < 50, r
     assert r["to_request_max_insn"] < slotlead.constant("CORTEX_M3_SLOT_PATH").min_instructions - 190, r
+    # r2p-node's constants for both (the leads `MODULE_FRAMED_LEADS`, the emulator's latencies)
+    # are the bench's, from the interrupt (~190 more): the same leads and emulated paths at
+    # 72 MHz, and never a lead longer than the path.
+    for name, key in (("CORTEX_M3_FRAMED_SLOT_PATH", "to_request"), ("CORTEX_M3_FRAMED_SYNC_PATH", "sync")):
+        c = slotlead.constant(name)
+        m = slotlead.Path(r[f"{key}_min_insn"] + 190, r[f"{key}_max_insn"] + 190)
+        assert c.min_instructions <= m.min_instructions, (name, c, m)
+        assert (c.lead_us(72_000_000), c.longest_us(72_000_000)) == \
+            (m.lead_us(72_000_000), m.longest_us(72_000_000)), (name, c, m)
     # The short path (`Node::top_up`) after a transmit-complete or a publish: shorter than a
     # whole slot tick's path to a window's frame, which also takes frames and runs timers.
     assert r["queued_requests"] > 100 and r["top_up_transmit_requests"] > 100, r

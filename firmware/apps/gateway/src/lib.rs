@@ -48,7 +48,18 @@ use r2p_node::NodeConfig;
 pub const NAME: &str = "gateway";
 
 /// The node configuration: the standby sync master (rank 1, after the PSU's 0), with the slot
-/// lead of the MCU it runs on (the F407's: `r2p_node::CORTEX_M4_SLOT_PATH.lead_us(SYSCLK_HZ)`).
-pub fn node_config(uid: [u8; 12], slot_lead_us: u32) -> NodeConfig {
-    NodeConfig { rank: Some(1), slot_lead_us, ..NodeConfig::module(uid, NAME) }
+/// leads of the MCU it runs on at `sysclk_hz`: the grid's from the F407's own slot path
+/// (`r2p_node::CORTEX_M4_SLOT_PATH`), those of frame-sized reservations from the Cortex-M3's
+/// paths (the only ones measured; the grid's two builds are within a few instructions).
+pub fn node_config(uid: [u8; 12], sysclk_hz: u32) -> NodeConfig {
+    NodeConfig {
+        rank: Some(1),
+        slot_lead_us: r2p_node::CORTEX_M4_SLOT_PATH.lead_us(sysclk_hz),
+        framed_leads: r2p_node::FramedLeads::of(
+            r2p_node::CORTEX_M3_FRAMED_SLOT_PATH,
+            r2p_node::CORTEX_M3_FRAMED_SYNC_PATH,
+            sysclk_hz,
+        ),
+        ..NodeConfig::module(uid, NAME)
+    }
 }

@@ -527,14 +527,21 @@ fn the_node_exports_status_under_the_module_name() {
     // The image's node: 10 imports (battery, the IMU's four and the mirrored topics).
     assert_eq!(crate::endpoints::IMPORTS, 10);
     let mut node: Node<'static, 4, 10, 8, 4, 64> =
-        Node::new(node_config([1; 12], 11), params).unwrap();
+        Node::new(node_config([1; 12], 168_000_000), params).unwrap();
     app.register(&mut node).unwrap();
     let mut small: Node<'static, 4, 9, 8, 4, 64> =
-        Node::new(node_config([1; 12], 11), params).unwrap();
+        Node::new(node_config([1; 12], 168_000_000), params).unwrap();
     assert!(app.register(&mut small).is_err(), "one import more than 9");
     assert_eq!(app.endpoints().status.topic.name(), STATUS_TOPIC);
     assert!(STATUS_TOPIC.starts_with(crate::NAME));
-    assert_eq!(node_config([1; 12], 11).rank, Some(1), "the standby sync master");
+    let config = node_config([1; 12], 168_000_000);
+    assert_eq!(config.rank, Some(1), "the standby sync master");
+    // The F407's leads at 168 MHz: the grid's from its own path, the frame-sized ones from the
+    // Cortex-M3's (1 384 and 709 instructions).
+    assert_eq!(
+        (config.slot_lead_us, config.framed_leads.slot_us, config.framed_leads.sync_us),
+        (10, 8, 4)
+    );
 }
 
 // ---- parameters ----

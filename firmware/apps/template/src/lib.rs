@@ -31,5 +31,9 @@ pub const NAME: &str = "template";
 
 /// The node configuration: no master rank, the modules' slot lead.
 pub fn node_config(uid: [u8; 12]) -> NodeConfig {
-    NodeConfig { slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US, ..NodeConfig::module(uid, NAME) }
+    NodeConfig {
+        slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
+        framed_leads: r2p_node::MODULE_FRAMED_LEADS,
+        ..NodeConfig::module(uid, NAME)
+    }
 }

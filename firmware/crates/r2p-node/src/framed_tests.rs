@@ -4,7 +4,10 @@
 //! bus cannot place a frame off the grid): `firmware/host/loadbench/tests/framed_positions.rs`
 //! and `framed_slot_path.rs`.
 
-use crate::node::NodeConfig;
+use rtcan::failover::Role;
+use rtcan::{Micros, SyncFrame};
+
+use crate::node::{FramedLeads, NodeConfig};
 use crate::tdma_tests::{tdma, CYCLE, CYCLE_US};
 use crate::testbus::{run_slots, Bus, TestNode};
 use crate::NoParams;
@@ -39,4 +42,43 @@ fn a_request_whose_size_is_not_its_frames_is_refused() {
         assert_eq!(grants_and_mask(&bus).0, std::vec![(stream.0, result); want], "{frames} {size}");
     }
     assert_eq!((1..64).filter(|&s| m.reservation(s).is_some()).count(), 3);
+}
+
+/// A frame-sized master loads its sync first, on a path shorter than its HRT frames' and with a
+/// lead of its own (`NodeConfig::framed_leads`, `Node::tick_time`): its slot timer asks for the
+/// sync's lead before the cycle's start, and that tick starts the cycle there, every cycle one
+/// cycle after the last; no other tick loads a sync.
+#[test]
+fn a_frame_sized_master_times_its_sync_by_the_sync_lead() {
+    let leads = FramedLeads { slot_us: 19, sync_us: 9 };
+    let bus = Bus::<1>::slotted(CYCLE);
+    let config = NodeConfig { framed_leads: leads, ..framed(1, "psu", Some(0)) };
+    let mut m = TestNode::new(config, &NoParams).unwrap();
+    run_slots(&bus, &mut [&mut m], 20 * CYCLE_US);
+    assert_eq!(m.role(), Role::Master);
+    // Its own timer from here on: each tick where it asks, the bus sending what it loaded.
+    let mut t = m.next_slot_at(bus.now.get());
+    let mut starts: std::vec::Vec<Micros> = std::vec::Vec::new();
+    while t < 40 * CYCLE_US {
+        bus.now.set(t);
+        m.slot_tick(t, &mut bus.port(0));
+        if bus.loaded(0).is_some_and(|f| SyncFrame::from_frame(&f).is_ok()) {
+            let start = t + Micros::from(leads.sync_us);
+            let cycle = m.clock().state(start);
+            assert!(matches!(cycle, rtcan::cycle::ClockState::Running(p) if p.slot == 0), "{t}");
+            starts.push(start);
+        }
+        bus.arbitrate();
+        let next = m.next_slot_at(t);
+        assert!(next > t, "the timer asks for a time after its tick: {t} → {next}");
+        t = next;
+    }
+    assert!(starts.len() >= 19, "a sync every cycle: {starts:?}");
+    for w in starts.windows(2) {
+        assert_eq!(w[1] - w[0], CYCLE_US, "cycles start a cycle apart: {starts:?}");
+    }
+    // The clock's start of each cycle is the tick's time plus the sync's lead.
+    let last = *starts.last().unwrap();
+    let rtcan::cycle::ClockState::Running(p) = m.clock().state(last) else { panic!() };
+    assert_eq!(m.clock().slot_start(p.cycle, 0), Some(last));
 }

@@ -52,7 +52,8 @@ mod tdma;
 mod topics;
 
 pub use config::{
-    NodeConfig, SlotPath, CORTEX_M3_SLOT_PATH, CORTEX_M3_TOP_UP_PATH, CORTEX_M4_SLOT_PATH,
+    FramedLeads, NodeConfig, SlotPath, CORTEX_M3_FRAMED_SLOT_PATH, CORTEX_M3_FRAMED_SYNC_PATH,
+    CORTEX_M3_SLOT_PATH, CORTEX_M3_TOP_UP_PATH, CORTEX_M4_SLOT_PATH, MODULE_FRAMED_LEADS,
     MODULE_SLOT_LEAD_US,
 };
 pub use error::NodeError;

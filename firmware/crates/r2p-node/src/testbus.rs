@@ -223,6 +223,11 @@ impl<const PORTS: usize> Bus<PORTS> {
         }
     }
 
+    /// The frame port `me` loaded first and the bus has not sent yet.
+    pub fn loaded(&self, me: usize) -> Option<Frame> {
+        self.mailboxes.borrow()[me].front().copied()
+    }
+
     pub fn port(&self, me: usize) -> Port<'_, PORTS> {
         Port { bus: self, me }
     }

@@ -199,6 +199,9 @@ struct Board<'a, N> {
     slot_path_us: u64,
     /// The same for the short path.
     top_up_us: u64,
+    /// The same on frame-sized reservations for a slot tick's HRT frame and sync, which it
+    /// loads first (`Mcu::framed_paths_us`).
+    framed_paths_us: (u64, u64),
     /// Next application step, ns.
     app_ns: u64,
     powered: bool,
@@ -289,7 +292,8 @@ impl<'a, N: Runtime> Sim<'a, N> {
     }
 
     /// Adds a board on `mcu`, whose slot path and short path take their time on it from a
-    /// call to its frame's mailbox request (`Mcu::slot_path_us`, `Mcu::top_up_path_us`).
+    /// call to its frame's mailbox request (`Mcu::slot_path_us`, `Mcu::top_up_path_us`; on
+    /// frame-sized reservations a slot tick's HRT frame and sync `Mcu::framed_paths_us`).
     pub fn add_board_on(
         &mut self,
         node: N,
@@ -311,6 +315,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
             event_ns: u64::MAX,
             slot_path_us,
             top_up_us: mcu.top_up_path_us(),
+            framed_paths_us: mcu.framed_paths_us(),
             app_ns: self.now_ns,
             powered: true,
             mailboxes: 0,
@@ -479,6 +484,8 @@ impl<'a, N: Runtime> Sim<'a, N> {
                 let short = b.wake_ns > t;
                 b.event_ns = u64::MAX;
                 b.port.set_load_latency(if short { b.top_up_us } else { b.slot_path_us });
+                let framed = mode == Mode::Tdma && !short && b.node.wakes_on_transmit();
+                b.port.set_reserved_latency(framed.then_some(b.framed_paths_us));
                 let node = &mut b.node;
                 let mut port = StalledPort::new(&mut b.port, b.stall.as_mut());
                 let mut call = |c: &mut dyn CanController| match mode {

@@ -14,7 +14,7 @@
 
 use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxResult};
 use rtcan::time_counter::{TimeCounter, TIME_COUNTER_MODULUS};
-use rtcan::{CanController, Frame, Micros};
+use rtcan::{CanController, Frame, Laxity, Micros, SyncFrame};
 
 use crate::Port;
 
@@ -33,6 +33,9 @@ pub struct BxCanPort {
     counter: TimeCounter,
     /// From the caller's clock read to the mailbox request (ns).
     load_latency_ns: u64,
+    /// The same for a reservation's first frame of firmware on frame-sized reservations,
+    /// which loads it first on a path of its own: (an HRT frame's, a sync's), ns.
+    reserved_latency_ns: Option<(u64, u64)>,
 }
 
 impl BxCanPort {
@@ -46,7 +49,7 @@ impl BxCanPort {
             (port.index() as u64).wrapping_mul(40_503).wrapping_add(1_234) % TIME_COUNTER_MODULUS;
         let counter = TimeCounter::new(bit_rate).expect("a bit rate with a whole-µs bit time");
         let bit_ns = 1_000_000_000 / u64::from(bit_rate);
-        Self { port, bit_ns, phase, counter, load_latency_ns: 0 }
+        Self { port, bit_ns, phase, counter, load_latency_ns: 0, reserved_latency_ns: None }
     }
 
     /// Frames reach their mailbox `us` after [`CanController::try_transmit`] is called: the
@@ -64,10 +67,26 @@ impl BxCanPort {
         self.load_latency_ns = us * 1_000;
     }
 
+    /// Gives HRT frames and syncs latencies of their own, `(hrt_us, sync_us)` (`None`: the load
+    /// latency, as other frames): firmware on frame-sized reservations requests them on
+    /// shorter paths than its other frames, each matched by its own slot lead.
+    pub fn set_reserved_latency(&mut self, us: Option<(u64, u64)>) {
+        self.reserved_latency_ns = us.map(|(hrt, sync)| (hrt * 1_000, sync * 1_000));
+    }
+
+    /// From the caller's clock read to `frame`'s mailbox request (ns).
+    fn latency_of(&self, frame: &Frame) -> u64 {
+        match self.reserved_latency_ns {
+            Some((_, sync)) if SyncFrame::from_frame(frame).is_ok() => sync,
+            Some((hrt, _)) if frame.id().laxity == Laxity::HRT => hrt,
+            _ => self.load_latency_ns,
+        }
+    }
+
     /// [`CanController::try_transmit`] for firmware whose CPU stalled `stalled_ns` since its
     /// clock read (its flash, on an F103): the request reaches the mailbox that much later.
     pub fn transmit_after_stall(&mut self, frame: &Frame, stalled_ns: u64) -> Result<(), TxError> {
-        self.port.transmit_after(frame, self.load_latency_ns + stalled_ns)
+        self.port.transmit_after(frame, self.latency_of(frame) + stalled_ns)
     }
 
     /// The counter's value at bus time `t_ns` (what bxCAN captures at a start of frame then).
@@ -103,7 +122,7 @@ impl BxCanPort {
 
 impl CanController for BxCanPort {
     fn try_transmit(&mut self, frame: &Frame) -> Result<(), TxError> {
-        self.port.transmit_after(frame, self.load_latency_ns)
+        self.port.transmit_after(frame, self.latency_of(frame))
     }
     fn set_tx_mode(&mut self, mode: TxMode) {
         self.port.set_tx_mode(mode);

@@ -48,6 +48,12 @@ pub struct NodeConfig {
     /// that late (a worst-case frame, 160 µs, plus a 26 µs path would not fit a 166 µs slot).
     /// 0 on the host; [`MODULE_SLOT_LEAD_US`] on the modules.
     pub slot_lead_us: u32,
+    /// The slot timer's leads on frame-sized reservations (with [`hrt_blocks`](Self::hrt_blocks)
+    /// above 0), which take the place of [`slot_lead_us`](Self::slot_lead_us) there: the paths
+    /// to an HRT frame's and to the master's sync's request are shorter than the grid's and
+    /// differ, and each must reach its mailbox within its reservation's guard bits. All 0 on
+    /// the host; [`MODULE_FRAMED_LEADS`] on the modules.
+    pub framed_leads: FramedLeads,
     /// Whether the node listens for one heartbeat period after boot, silent, before it claims
     /// a node ID: the IDs it hears in use are skipped, so a module plugged into a running robot
     /// takes a free one (docs/middleware.md, "Claiming a node ID"). On for modules
@@ -72,10 +78,10 @@ pub struct SlotPath {
 
 /// The slot path built for the F103's Cortex-M3 (thumbv7m).
 pub const CORTEX_M3_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_809, max_instructions: 1_914 };
+    SlotPath { min_instructions: 1_814, max_instructions: 1_914 };
 /// The slot path built for the F407's Cortex-M4F (thumbv7em, hard float).
 pub const CORTEX_M4_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_814, max_instructions: 1_914 };
+    SlotPath { min_instructions: 1_819, max_instructions: 1_924 };
 
 /// The short path on frame-sized reservations ([`Node::top_up`](crate::Node::top_up)), built
 /// for the F103's Cortex-M3: from its call to the window's first frame's request, 1 699–3 923
@@ -84,6 +90,39 @@ pub const CORTEX_M4_SLOT_PATH: SlotPath =
 /// instructions of this core's, so the emulator takes it for both.
 pub const CORTEX_M3_TOP_UP_PATH: SlotPath =
     SlotPath { min_instructions: 1_889, max_instructions: 4_113 };
+
+/// The frame-sized HRT frame's path built for the F103's Cortex-M3: from the slot timer's
+/// compare interrupt to the request of the HRT frame that starts the node's reservation
+/// (`framed_tx.rs`), QEMU (`slot-path --features framed`, `to_request_*_insn`) plus the
+/// interrupt's ~185 instructions as on the grid's path.
+pub const CORTEX_M3_FRAMED_SLOT_PATH: SlotPath =
+    SlotPath { min_instructions: 1_384, max_instructions: 1_394 };
+/// The frame-sized master's path to its sync's request, loaded first in its tick (before the
+/// controller's results and the received frames): QEMU (`sync_*_insn`) plus the interrupt's.
+pub const CORTEX_M3_FRAMED_SYNC_PATH: SlotPath =
+    SlotPath { min_instructions: 709, max_instructions: 724 };
+
+/// The slot timer's leads on frame-sized reservations (µs, [`NodeConfig::framed_leads`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FramedLeads {
+    /// Before every slot-timer event but the master's sync (an HRT reservation's start, a
+    /// window's opening, a grid boundary) and before the short path's.
+    pub slot_us: u32,
+    /// Before the master's sync.
+    pub sync_us: u32,
+}
+
+impl FramedLeads {
+    /// The leads of a core clocked at `sysclk_hz` whose paths are `slot` and `sync`.
+    pub const fn of(slot: SlotPath, sync: SlotPath, sysclk_hz: u32) -> Self {
+        Self { slot_us: slot.lead_us(sysclk_hz), sync_us: sync.lead_us(sysclk_hz) }
+    }
+}
+
+/// The F103 modules' leads on frame-sized reservations, from [`CORTEX_M3_FRAMED_SLOT_PATH`]
+/// and [`CORTEX_M3_FRAMED_SYNC_PATH`] at 72 MHz: 19 µs and 9 µs (the grid's is 25 µs).
+pub const MODULE_FRAMED_LEADS: FramedLeads =
+    FramedLeads::of(CORTEX_M3_FRAMED_SLOT_PATH, CORTEX_M3_FRAMED_SYNC_PATH, 72_000_000);
 
 impl SlotPath {
     /// The slot lead for a core clocked at `sysclk_hz` (µs): the shortest path at one cycle per
@@ -123,6 +162,7 @@ impl NodeConfig {
             hrt_blocks: 0,
             free_slots: FreeSlots::Merged,
             slot_lead_us: 0,
+            framed_leads: FramedLeads { slot_us: 0, sync_us: 0 },
             listen_first: false,
         }
     }
@@ -141,7 +181,7 @@ mod tests {
 
     #[test]
     fn each_mcu_leads_by_its_shortest_slot_path_rounded_down() {
-        // 1 809 / 72 = 25.1 µs; 1 814 / 168 = 10.8 µs.
+        // 1 814 / 72 = 25.2 µs; 1 819 / 168 = 10.8 µs.
         assert_eq!(MODULE_SLOT_LEAD_US, 25);
         assert_eq!(CORTEX_M4_SLOT_PATH.lead_us(168_000_000), 10);
         // Exactly on a microsecond: not rounded.
@@ -152,7 +192,7 @@ mod tests {
 
     #[test]
     fn the_emulated_path_is_the_longest_rounded_up() {
-        // 1 914 / 72 = 26.6 µs; 1 919 / 168 = 11.4 µs.
+        // 1 914 / 72 = 26.6 µs; 1 924 / 168 = 11.5 µs.
         assert_eq!(CORTEX_M3_SLOT_PATH.longest_us(72_000_000), 27);
         assert_eq!(CORTEX_M4_SLOT_PATH.longest_us(168_000_000), 12);
         let p = SlotPath { min_instructions: 145, max_instructions: 145 };

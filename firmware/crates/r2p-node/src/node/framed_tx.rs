@@ -32,6 +32,16 @@ impl<
         const MASTER: bool,
     > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF, MASTER>
 {
+    /// True if the node has frame-sized reservations (`NodeConfig::hrt_blocks` > 0).
+    #[inline(always)]
+    pub(super) fn framed_layout(&self) -> bool {
+        #[cfg(feature = "framed-reservations")]
+        if self.layout.is_some() {
+            return true;
+        }
+        false
+    }
+
     /// True if the node sends on frame-sized reservations at `now`: it has a layout and the
     /// cycle runs (without a cycle every slot is free, as on the grid).
     #[inline(always)]
@@ -86,12 +96,12 @@ impl<
     /// controller sooner: QEMU, Cortex-M3 (`slot-path --features framed`), the window's first
     /// frame is requested after 1 699–3 923 instructions, where a whole slot tick takes
     /// 2 429–3 418 (`CORTEX_M3_TOP_UP_PATH`, docs/rtcan.md). `now` is the interrupt's
-    /// time; the node acts for `now` + [`NodeConfig::slot_lead_us`](super::NodeConfig) as
+    /// time; the node acts for `now` + [`FramedLeads::slot_us`](crate::FramedLeads) as
     /// `slot_tick` does. On the slot grid (or before a cycle runs) it does nothing.
     pub fn top_up<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
         #[cfg(feature = "framed-reservations")]
         if self.layout.is_some() {
-            let now = now + Micros::from(self.config.slot_lead_us);
+            let now = now + Micros::from(self.lead_us());
             let ClockState::Running(p) = self.clock.state(now) else { return };
             for done in self.slot_tx.settle_sent(now, can).into_iter().flatten() {
                 self.on_done(done);
@@ -121,21 +131,33 @@ impl<
         false
     }
 
-    /// Between steps 1 and 2 of `slot_tick` on frame-sized reservations: if `now` is the start
-    /// of one of this node's reservations, its HRT frame goes to its mailbox before the node
-    /// takes the frames it received and runs the protocol's timers (the clock and the mask
-    /// come from syncs taken at earlier calls). A master's heartbeat taken in the same call
-    /// (every 20 ms) would otherwise come first and start the frame ~370 instructions late
-    /// (QEMU, Cortex-M3: 5 µs at 72 MHz, more than the reservation's guard bits).
+    /// Between steps 1 and 2 of `slot_tick` on frame-sized reservations: the master's sync if
+    /// it is due (step 4's, `Node::send_sync`), or this node's HRT frame if `now` is the start
+    /// of one of its reservations, goes to its mailbox before the node takes the frames it
+    /// received and runs the protocol's timers (the clock and the mask come from syncs taken
+    /// at earlier calls). Each then has a short path of steady length, which its lead
+    /// ([`FramedLeads`](crate::FramedLeads)) matches: after the received frames and the
+    /// timers the sync was requested 1 174–3 573 instructions after the call (QEMU,
+    /// Cortex-M3), a cycle starting up to 33 µs late at 72 MHz by a different amount each
+    /// time; a master's heartbeat taken in the same call (every 20 ms) would start an HRT
+    /// frame ~370 instructions late, more than the reservation's guard bits.
     #[inline(always)]
-    pub(super) fn framed_hrt_first<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
+    pub(super) fn framed_first<C: CanController + ?Sized>(
+        &mut self,
+        now: Micros,
+        sync_at: Micros,
+        can: &mut C,
+    ) {
         #[cfg(feature = "framed-reservations")]
         if self.layout.is_some() {
+            if self.send_sync(now, sync_at, can) {
+                return;
+            }
             if let ClockState::Running(p) = self.clock.state(now) {
                 self.framed_step(now, p, can, false);
             }
         }
-        let _ = (now, can);
+        let _ = (now, sync_at, can);
     }
 
     /// Loads what cycle position `p` allows at `now`: this node's HRT frame at its

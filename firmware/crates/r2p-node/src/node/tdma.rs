@@ -57,9 +57,10 @@ impl<
     /// 1. the controller's results: an SRT/NRT frame that went out leaves the queue, one that
     ///    did not stays in it with its deadline (and is loaded again with its laxity for then);
     ///    an HRT frame that did not go out is a missed occurrence;
-    /// 2. on frame-sized reservations, this node's HRT frame if its reservation starts now
-    ///    (step 5's, brought forward: `framed_tx.rs`); take received frames (syncs feed the
-    ///    [`SlotClock`] and the failover state machine);
+    /// 2. on frame-sized reservations, as master the sync if it is due, else this node's HRT
+    ///    frame if its reservation starts now (steps 4's and 5's, brought forward:
+    ///    `framed_tx.rs`); take received frames (syncs feed the [`SlotClock`] and the failover
+    ///    state machine);
     /// 3. the protocol's timers ([`tick`](Self::tick)), master takeover, HRT registrations;
     /// 4. as master, at a cycle's start: send the sync with the next cycle's reservations;
     /// 5. load this slot's frame: in slot 0 nothing (the sync's); in a reserved slot this
@@ -69,9 +70,10 @@ impl<
     ///    is free and a window of its own.
     ///
     /// `now` is the time the timer fired; the node acts for `now` + [`NodeConfig::slot_lead_us`],
-    /// the time its frames reach the controller.
+    /// the time its frames reach the controller (on frame-sized reservations + the lead of the
+    /// frame it loads first, [`NodeConfig::framed_leads`]).
     pub fn slot_tick<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
-        let now = now + Micros::from(self.config.slot_lead_us);
+        let (now, sync_at) = self.tick_time(now);
         self.start(now);
         self.program_filters(can);
         if self.slot_tx.at_guard(now) {
@@ -83,7 +85,7 @@ impl<
         for done in self.slot_tx.settle(now, can, &self.tx).into_iter().flatten() {
             self.on_done(done);
         }
-        self.framed_hrt_first(now, can);
+        self.framed_first(now, sync_at, can);
         while let Some(r) = can.try_receive() {
             self.receive::<true>(&r);
         }
@@ -93,34 +95,8 @@ impl<
         self.apply(a);
         self.register_hrt(now);
 
-        if let Some(mut m) = self.master.filter(|_| MASTER) {
-            if now >= m.next_sync {
-                let rank = self.failover.rank().map_or(0, |r| r.get());
-                let next = self.scheduler.mask(m.cycle.wrapping_add(1));
-                let sync = SyncFrame::new(m.cycle, next, m.epoch).from_rank(rank);
-                let ok = self.slot_tx.load_slotted(can, Slotted::Sync, &sync.to_frame());
-                if ok {
-                    self.hold_slotted(now, SYNC_SLOT);
-                    self.clock.on_sync(now, &sync);
-                    self.last_sync = now;
-                    // Its outcome comes from the controller (`on_done`); `syncs_sent` and the
-                    // failover count it then.
-                    self.sync_loaded = Some((now, sync));
-                }
-                let cycle_us = Micros::from(self.config.cycle.cycle_us);
-                m.cycle = m.cycle.wrapping_add(1);
-                m.next_sync += cycle_us;
-                if m.next_sync <= now {
-                    m.next_sync = now + cycle_us; // the timer was late by a cycle: restart
-                }
-                self.master = Some(m);
-                if ok {
-                    return;
-                }
-                // Not even loaded (mailboxes full, bus-off): a failed sync.
-                let a = self.failover.on_sync_sent(now, &sync, false);
-                self.apply(a);
-            }
+        if self.send_sync(now, sync_at, can) {
+            return;
         }
 
         let state = self.clock.state(now);
@@ -149,6 +125,73 @@ impl<
                 }
             }
         }
+    }
+
+    /// The time a slot tick that fired at `fired` acts for, and the time a sync it loads would
+    /// reach its mailbox: both `fired` + the slot lead ([`NodeConfig::slot_lead_us`], on
+    /// frame-sized reservations [`FramedLeads::slot_us`](crate::FramedLeads)). A frame-sized
+    /// master's sync has a path and a lead of its own ([`FramedLeads::sync_us`](crate::FramedLeads),
+    /// `next_slot_at`): the tick that fired for it acts for `fired` + that lead, so that the
+    /// cycle starts where the master times it.
+    #[inline(always)]
+    fn tick_time(&self, fired: Micros) -> (Micros, Micros) {
+        let now = fired + Micros::from(self.lead_us());
+        #[cfg(feature = "framed-reservations")]
+        if let (true, Some(m)) = (self.layout.is_some(), self.master.filter(|_| MASTER)) {
+            let sync = fired + Micros::from(self.config.framed_leads.sync_us);
+            return if sync >= m.next_sync { (sync, sync) } else { (now, sync) };
+        }
+        (now, now)
+    }
+
+    /// The slot timer's lead (µs): the grid's or, on frame-sized reservations, theirs.
+    pub(super) fn lead_us(&self) -> u32 {
+        if self.framed_layout() {
+            #[cfg(feature = "framed-reservations")]
+            return self.config.framed_leads.slot_us;
+        }
+        self.config.slot_lead_us
+    }
+
+    /// Step 4 of [`slot_tick`](Self::slot_tick) (on frame-sized reservations brought forward,
+    /// `framed_tx.rs`, and a no-op at step 4): as master, if its sync is due by `sync_at` (`tick_time`), loads it with
+    /// the next cycle's reservations and starts the cycle at `now` (the slaves start it at the
+    /// sync's start of frame, the master too once the controller reports it). True if the
+    /// sync was loaded: the tick loads nothing else.
+    pub(super) fn send_sync<C: CanController + ?Sized>(
+        &mut self,
+        now: Micros,
+        sync_at: Micros,
+        can: &mut C,
+    ) -> bool {
+        let Some(mut m) = self.master.filter(|m| MASTER && sync_at >= m.next_sync) else {
+            return false;
+        };
+        let rank = self.failover.rank().map_or(0, |r| r.get());
+        let next = self.scheduler.mask(m.cycle.wrapping_add(1));
+        let sync = SyncFrame::new(m.cycle, next, m.epoch).from_rank(rank);
+        let ok = self.slot_tx.load_slotted(can, Slotted::Sync, &sync.to_frame());
+        if ok {
+            self.hold_slotted(now, SYNC_SLOT);
+            self.clock.on_sync(now, &sync);
+            self.last_sync = now;
+            // Its outcome comes from the controller (`on_done`); `syncs_sent` and the
+            // failover count it then.
+            self.sync_loaded = Some((now, sync));
+        }
+        let cycle_us = Micros::from(self.config.cycle.cycle_us);
+        m.cycle = m.cycle.wrapping_add(1);
+        m.next_sync += cycle_us;
+        if m.next_sync <= now {
+            m.next_sync = now + cycle_us; // the timer was late by a cycle: restart
+        }
+        self.master = Some(m);
+        if !ok {
+            // Not even loaded (mailboxes full, bus-off): a failed sync.
+            let a = self.failover.on_sync_sent(now, &sync, false);
+            self.apply(a);
+        }
+        ok
     }
 
     /// The export whose HRT frame goes in slot `slot` of cycle `cycle`, and which of its
@@ -226,10 +269,19 @@ impl<
     /// When the slot timer should call [`slot_tick`](Self::slot_tick) next: the next slot
     /// boundary of the cycle as this node's clock sees it (as master: of its own cycle), or one
     /// nominal slot later while no cycle runs — or before it, the latest start of the window
-    /// of a frame the node has loaded; [`NodeConfig::slot_lead_us`] early.
+    /// of a frame the node has loaded; [`NodeConfig::slot_lead_us`] early (on frame-sized
+    /// reservations [`NodeConfig::framed_leads`]: a master's sync by the sync's own lead).
     pub fn next_slot_at(&self, now: Micros) -> Micros {
-        let lead = Micros::from(self.config.slot_lead_us);
-        self.next_boundary(now + lead).saturating_sub(lead).max(now)
+        let lead = Micros::from(self.lead_us());
+        let at = self.next_boundary(now + lead);
+        #[cfg(feature = "framed-reservations")]
+        if let (true, Some(m)) = (self.layout.is_some(), self.master.filter(|_| MASTER)) {
+            if at >= m.next_sync {
+                let sync_lead = Micros::from(self.config.framed_leads.sync_us);
+                return m.next_sync.saturating_sub(sync_lead).max(now);
+            }
+        }
+        at.saturating_sub(lead).max(now)
     }
 
     /// The next boundary (or guard) after `now`, in the time the node acts for.

@@ -25,7 +25,10 @@ use embedded_storage::nor_flash::{
     ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
 };
 use r2p_boot::layout::{FlashMap, Partition, STM32F103CB, STM32F407VG};
-use r2p_node::{SlotPath, CORTEX_M3_SLOT_PATH, CORTEX_M3_TOP_UP_PATH, CORTEX_M4_SLOT_PATH};
+use r2p_node::{
+    FramedLeads, SlotPath, CORTEX_M3_FRAMED_SLOT_PATH, CORTEX_M3_FRAMED_SYNC_PATH,
+    CORTEX_M3_SLOT_PATH, CORTEX_M3_TOP_UP_PATH, CORTEX_M4_SLOT_PATH,
+};
 use r2p_world::BoardKind;
 
 /// The MCUs the emulated boards have.
@@ -62,6 +65,22 @@ impl Mcu {
     /// How long its slot path takes in the emulator (µs): the longest at its clock.
     pub const fn slot_path_us(self) -> u64 {
         self.slot_path().longest_us(self.sysclk_hz()) as u64
+    }
+
+    /// The slot timer's leads on frame-sized reservations its firmware configures (µs): the
+    /// shortest paths to an HRT frame's and to a sync's request at its clock (the Cortex-M3's
+    /// builds, `r2p_node::CORTEX_M3_FRAMED_SLOT_PATH` and `CORTEX_M3_FRAMED_SYNC_PATH`, for
+    /// both MCUs, as for the short path below).
+    pub const fn framed_leads(self) -> FramedLeads {
+        FramedLeads::of(CORTEX_M3_FRAMED_SLOT_PATH, CORTEX_M3_FRAMED_SYNC_PATH, self.sysclk_hz())
+    }
+
+    /// How long its paths to a reservation's first frame take in the emulator on frame-sized
+    /// reservations (µs): (an HRT frame's, a sync's), the longest at its clock.
+    pub const fn framed_paths_us(self) -> (u64, u64) {
+        let hz = self.sysclk_hz();
+        let hrt = CORTEX_M3_FRAMED_SLOT_PATH.longest_us(hz) as u64;
+        (hrt, CORTEX_M3_FRAMED_SYNC_PATH.longest_us(hz) as u64)
     }
 
     /// How long its short path on frame-sized reservations takes in the emulator (µs), the

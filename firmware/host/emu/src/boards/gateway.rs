@@ -76,7 +76,7 @@ pub fn gateway(ctx: Ctx<'_>) -> Result<Booted, String> {
     let link = leak(BusLink::new());
     let mut gw = r2p_app_gateway::App::new(r2p_app_gateway::Endpoints::leak(), link);
     // The standby master: rank 1 after the PSU.
-    let config = r2p_app_gateway::node_config(ctx.module.uid.0, Mcu::F407.slot_lead_us());
+    let config = r2p_app_gateway::node_config(ctx.module.uid.0, Mcu::F407.sysclk_hz());
     let mut n = node(config, &ctx, p)?;
     // `cmd_vel` to the base controller here, or on the bus for the node that runs it.
     let cmd_local: &'static Publisher<'static, Twist2D> = match &base {

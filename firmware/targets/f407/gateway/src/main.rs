@@ -517,8 +517,7 @@ async fn main(spawner: Spawner) {
 
     // The bus.
     let app = App::new(ENDPOINTS.build(), &LINK);
-    let lead_us = r2p_node::CORTEX_M4_SLOT_PATH.lead_us(board::SYSCLK_HZ);
-    let config = r2p_app_gateway::node_config(uid, lead_us);
+    let config = r2p_app_gateway::node_config(uid, board::SYSCLK_HZ);
     let mut node = GatewayNode::new(config, &PARAMS).unwrap();
     app.register(&mut node).unwrap();
     node.set_update_sink(update::sink(regions.bank1_region3, shared_state));
