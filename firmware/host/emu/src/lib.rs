@@ -210,7 +210,16 @@ struct Board<'a, N> {
     mailboxes: usize,
     /// Released messages waiting after its last slot tick: more is a publish that wakes it.
     releases: usize,
+    /// Ticks in a row whose node asked for its next tick at or before the tick's µs
+    /// ([`STUCK_TICKS`]).
+    stuck_ticks: u32,
 }
+
+/// Ticks in a row at which a board's slot timer may ask for no later µs than its tick's before
+/// the sim stops with a panic: firmware whose timer does not move on busy-loops its MCU's
+/// timer interrupt, which the sim would crawl through a nanosecond at a time (a tick that ran
+/// late, after a stall, may ask for its own µs once or twice).
+pub const STUCK_TICKS: u32 = 1_000;
 
 impl<N> Board<'_, N> {
     /// Holds the firmware for the CPU time its flash just took.
@@ -320,6 +329,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
             powered: true,
             mailboxes: 0,
             releases: 0,
+            stuck_ticks: 0,
         });
         self.boards.len() - 1
     }
@@ -467,7 +477,8 @@ impl<'a, N: Runtime> Sim<'a, N> {
                     }
                 }
             }
-            for b in self.boards.iter_mut().filter(|b| b.powered && b.down_until_ns.is_none()) {
+            let boards = self.boards.iter_mut().enumerate();
+            for (i, b) in boards.filter(|(_, b)| b.powered && b.down_until_ns.is_none()) {
                 // A frame of its own left a mailbox (sent, or lost a one-shot arbitration):
                 // its transmit-complete interrupt runs the short path now.
                 let pending = b.port.port().pending();
@@ -503,7 +514,17 @@ impl<'a, N: Runtime> Sim<'a, N> {
                     b.releases = b.node.releases_waiting();
                 }
                 b.wake_ns = match mode {
-                    Mode::Tdma => (b.node.next_slot_at(now_us) * NS_PER_US).max(t + 1),
+                    Mode::Tdma => {
+                        let next_us = b.node.next_slot_at(now_us);
+                        b.stuck_ticks = if next_us > now_us { 0 } else { b.stuck_ticks + 1 };
+                        assert!(
+                            b.stuck_ticks < STUCK_TICKS,
+                            "board {i}: its slot timer asked {STUCK_TICKS} times in a row for \
+                             {next_us} µs at {now_us} µs, no later than its tick: the node's \
+                             `next_slot_at` does not move on (its MCU would busy-loop)"
+                        );
+                        (next_us * NS_PER_US).max(t + 1)
+                    }
                     Mode::Poll { period_us } => t + period_us.max(1) * NS_PER_US,
                 };
                 b.hold_for(t, stalled_ns);
@@ -592,4 +613,42 @@ pub fn write_candump<W: Write>(bus: &Bus, out: W, channel: &str, epoch: Duration
     }
     w.flush()?;
     Ok(w.into_inner())
+}
+
+#[cfg(test)]
+mod stuck_timer_tests {
+    use super::*;
+
+    /// A slot timer that asks for its own tick's µs again until `stuck_from_us`, then one µs on.
+    struct Timer {
+        stuck_from_us: Micros,
+    }
+
+    impl Runtime for Timer {
+        fn poll(&mut self, _: Micros, _: &mut dyn CanController) {}
+        fn slot_tick(&mut self, _: Micros, _: &mut dyn CanController) {}
+        fn next_slot_at(&self, now: Micros) -> Micros {
+            if now >= self.stuck_from_us {
+                now
+            } else {
+                now + 1
+            }
+        }
+    }
+
+    #[test]
+    fn a_slot_timer_that_never_moves_on_stops_the_sim_with_its_board() {
+        let run = |stuck_from_us| {
+            let mut sim = Sim::new(2, r2p_vbus::Config::default(), Mode::Tdma);
+            sim.add_board(Timer { stuck_from_us: u64::MAX }, 0, None);
+            sim.add_board(Timer { stuck_from_us }, 1, None);
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| sim.run_until(1_000_000)))
+        };
+        // A tick every µs is slow, not stuck.
+        assert!(run(u64::MAX).is_ok());
+        let err = run(500).expect_err("stuck from 500 µs");
+        let msg = err.downcast_ref::<String>().expect("a formatted message");
+        assert!(msg.starts_with("board 1: its slot timer asked 1000 times in a row"), "{msg}");
+        assert!(msg.contains("`next_slot_at` does not move on"), "{msg}");
+    }
 }

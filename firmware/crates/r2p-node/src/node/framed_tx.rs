@@ -202,7 +202,11 @@ impl<
         if let Some(layout) = self.layout.as_ref() {
             let (c0, c1) = self.cycle_bounds(p)?;
             let cycle = FramedCycle::new(layout, self.clock.mask(p.cycle));
-            let edge = (c0 + Micros::from(cycle.next_edge(now.saturating_sub(c0) as u32))).min(c1);
+            let edge = c0 + Micros::from(cycle.next_edge(now.saturating_sub(c0) as u32));
+            // The layout's cycle is nominal, the clock's as long as the master's runs (a µs
+            // more, say): past the layout's end, its last edge is behind and the cycle's end next
+            // (else the timer would ask for `now` again until the clock's cycle ends).
+            let edge = if edge > now { edge.min(c1) } else { c1 };
             let grid = self.clock.slot_start(p.cycle, p.slot + 1).filter(|&t| t > now);
             return Some(grid.map_or(edge, |t| t.min(edge)));
         }
