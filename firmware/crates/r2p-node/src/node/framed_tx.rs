@@ -32,16 +32,6 @@ impl<
         const MASTER: bool,
     > Node<'a, EXPORTS, IMPORTS, TXQ, RX, BUF, MASTER>
 {
-    /// True if the node has frame-sized reservations (`NodeConfig::hrt_blocks` > 0).
-    #[inline(always)]
-    pub(super) fn framed_layout(&self) -> bool {
-        #[cfg(feature = "framed-reservations")]
-        if self.layout.is_some() {
-            return true;
-        }
-        false
-    }
-
     /// True if the node sends on frame-sized reservations at `now`: it has a layout and the
     /// cycle runs (without a cycle every slot is free, as on the grid).
     #[inline(always)]

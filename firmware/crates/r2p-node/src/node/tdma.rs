@@ -136,28 +136,38 @@ impl<
     #[inline(always)]
     fn tick_time(&self, fired: Micros) -> (Micros, Micros) {
         let now = fired + Micros::from(self.lead_us());
-        #[cfg(feature = "framed-reservations")]
-        if let (true, Some(m)) = (self.layout.is_some(), self.master.filter(|_| MASTER)) {
-            let sync = fired + Micros::from(self.config.framed_leads.sync_us);
-            return if sync >= m.next_sync { (sync, sync) } else { (now, sync) };
+        match self.framed_sync() {
+            Some((next_sync, lead)) if fired + lead >= next_sync => (fired + lead, fired + lead),
+            Some((_, lead)) => (now, fired + lead),
+            None => (now, now),
         }
-        (now, now)
     }
 
     /// The slot timer's lead (µs): the grid's or, on frame-sized reservations, theirs.
     pub(super) fn lead_us(&self) -> u32 {
-        if self.framed_layout() {
-            #[cfg(feature = "framed-reservations")]
+        #[cfg(feature = "framed-reservations")]
+        if self.layout.is_some() {
             return self.config.framed_leads.slot_us;
         }
         self.config.slot_lead_us
     }
 
+    /// A frame-sized master's next sync and the sync's own lead (`FramedLeads::sync_us`);
+    /// `None` on the grid or for a node that is not master.
+    #[inline(always)]
+    fn framed_sync(&self) -> Option<(Micros, Micros)> {
+        #[cfg(feature = "framed-reservations")]
+        if let (true, Some(m)) = (self.layout.is_some(), self.master.filter(|_| MASTER)) {
+            return Some((m.next_sync, Micros::from(self.config.framed_leads.sync_us)));
+        }
+        None
+    }
+
     /// Step 4 of [`slot_tick`](Self::slot_tick) (on frame-sized reservations brought forward,
-    /// `framed_tx.rs`, and a no-op at step 4): as master, if its sync is due by `sync_at` (`tick_time`), loads it with
-    /// the next cycle's reservations and starts the cycle at `now` (the slaves start it at the
-    /// sync's start of frame, the master too once the controller reports it). True if the
-    /// sync was loaded: the tick loads nothing else.
+    /// `framed_tx.rs`, and then a no-op at step 4): as master, if its sync is due by `sync_at`
+    /// (`tick_time`), loads it with the next cycle's reservations and starts the cycle at `now`
+    /// (the slaves start it at the sync's start of frame, the master too once the controller
+    /// reports it). True if the sync was loaded: the tick loads nothing else.
     pub(super) fn send_sync<C: CanController + ?Sized>(
         &mut self,
         now: Micros,
@@ -274,14 +284,12 @@ impl<
     pub fn next_slot_at(&self, now: Micros) -> Micros {
         let lead = Micros::from(self.lead_us());
         let at = self.next_boundary(now + lead);
-        #[cfg(feature = "framed-reservations")]
-        if let (true, Some(m)) = (self.layout.is_some(), self.master.filter(|_| MASTER)) {
-            if at >= m.next_sync {
-                let sync_lead = Micros::from(self.config.framed_leads.sync_us);
-                return m.next_sync.saturating_sub(sync_lead).max(now);
+        match self.framed_sync() {
+            Some((next_sync, sync_lead)) if at >= next_sync => {
+                next_sync.saturating_sub(sync_lead).max(now)
             }
+            _ => at.saturating_sub(lead).max(now),
         }
-        at.saturating_sub(lead).max(now)
     }
 
     /// The next boundary (or guard) after `now`, in the time the node acts for.

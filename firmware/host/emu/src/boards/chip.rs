@@ -68,11 +68,10 @@ impl Mcu {
     }
 
     /// The slot timer's leads on frame-sized reservations its firmware configures (µs): the
-    /// shortest paths to an HRT frame's and to a sync's request at its clock (the Cortex-M3's
-    /// builds, `r2p_node::CORTEX_M3_FRAMED_SLOT_PATH` and `CORTEX_M3_FRAMED_SYNC_PATH`, for
-    /// both MCUs, as for the short path below).
+    /// shortest paths to an HRT frame's and to a sync's request at its clock
+    /// (`FramedLeads::at`).
     pub const fn framed_leads(self) -> FramedLeads {
-        FramedLeads::of(CORTEX_M3_FRAMED_SLOT_PATH, CORTEX_M3_FRAMED_SYNC_PATH, self.sysclk_hz())
+        FramedLeads::at(self.sysclk_hz())
     }
 
     /// How long its paths to a reservation's first frame take in the emulator on frame-sized
