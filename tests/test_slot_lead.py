@@ -27,17 +27,31 @@ def monkeypatch_module():
 def test_the_constants_give_the_measured_leads(measured, capsys):
     assert slotlead.main() == 0, capsys.readouterr().out
     out = capsys.readouterr().out
-    assert "STM32F103 (modules)" in out and " 72 MHz  25 µs     27 µs" in out
-    assert "STM32F407 (gateway)" in out and "168 MHz  10 µs     12 µs" in out
+    assert "STM32F103 (modules)  slot" in out and " 72 MHz  25 µs     27 µs" in out
+    assert "STM32F407 (gateway)  slot" in out and "168 MHz  10 µs     12 µs" in out
+    # The master's sync, loaded first in its tick: 9 µs at 72 MHz, 4 µs at 168 MHz.
+    assert " 72 MHz   9 µs     10 µs" in out and "168 MHz   4 µs      5 µs" in out, out
 
 
 def test_the_f407_path_is_measured_on_its_own_core(measured):
-    m3, m4 = measured("cortex-m3"), measured("cortex-m4")
+    m3, m4 = measured("cortex-m3")["slot"], measured("cortex-m4")["slot"]
     # The same source built for another core: not the same image, a few instructions apart
     # (equal counts happen: the paths differ by a handful of instructions either way).
     image = lambda cpu: (qemu.WORKSPACE / "target" / qemu.CORES[cpu] / "release" / "slot-path").read_bytes()
     assert image("cortex-m3") != image("cortex-m4")
     assert abs(m3.min_instructions - m4.min_instructions) < 50
+
+
+def test_the_grid_master_requests_its_sync_first(measured):
+    """A slot-grid master loads its sync before it takes its received frames and runs its
+    timers (r2p-node's `send_sync` at step 2): its path is short and steady, so every cycle
+    starts where the master times it. Loaded after them, the sync was requested 1 174–3 573
+    instructions after the call, up to 33 µs late at 72 MHz by a different amount each cycle
+    (docs/rtcan.md, "The sync lead")."""
+    for cpu in ("cortex-m3", "cortex-m4"):
+        sync, slot = measured(cpu)["sync"], measured(cpu)["slot"]
+        assert sync.max_instructions - sync.min_instructions < 50, (cpu, sync)
+        assert sync.max_instructions < slot.min_instructions - 1_000, (cpu, sync, slot)
 
 
 def test_a_stale_constant_is_caught_with_what_to_do(measured, tmp_path, monkeypatch, capsys):
@@ -73,7 +87,7 @@ def test_the_frame_sized_path_requests_the_hrt_frame_first():
     assert rc == 0 and rows and rows[-1]["bench"] == "framed_slot_path", text
     r = rows[-1]
     assert r["hrt_requests"] >= 390
-    # 1 194–1 209 measured, the sync 519–534; the grid's path is 1 619–1 724 in the same harness.
+    # 1 179–1 189 measured, the sync 524–534; the grid's path is 1 639–1 739 in the same harness.
     assert r["to_request_max_insn"] - r["to_request_min_insn"] < 50, r
     assert r["sync_requests"] >= 390 and r["sync_max_insn"] - r["sync_min_insn"] < 50, r
     assert r["to_request_max_insn"] < slotlead.constant("CORTEX_M3_SLOT_PATH").min_instructions - 190, r

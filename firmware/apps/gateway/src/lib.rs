@@ -55,6 +55,7 @@ pub fn node_config(uid: [u8; 12], sysclk_hz: u32) -> NodeConfig {
     NodeConfig {
         rank: Some(1),
         slot_lead_us: r2p_node::CORTEX_M4_SLOT_PATH.lead_us(sysclk_hz),
+        sync_lead_us: r2p_node::CORTEX_M4_SYNC_PATH.lead_us(sysclk_hz),
         framed_leads: r2p_node::FramedLeads::at(sysclk_hz),
         ..NodeConfig::module(uid, NAME)
     }

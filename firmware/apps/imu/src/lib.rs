@@ -48,6 +48,7 @@ use r2p_node::{NodeConfig, ParamStore};
 pub fn node_config(uid: [u8; 12], params: &dyn ParamStore) -> NodeConfig {
     NodeConfig {
         slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
+        sync_lead_us: r2p_node::MODULE_SYNC_LEAD_US,
         framed_leads: r2p_node::MODULE_FRAMED_LEADS,
         ..NodeConfig::module(uid, names(params).node)
     }

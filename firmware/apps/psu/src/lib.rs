@@ -42,6 +42,7 @@ pub fn node_config(uid: [u8; 12], params: &dyn ParamStore) -> NodeConfig {
     NodeConfig {
         rank: Some(0),
         slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
+        sync_lead_us: r2p_node::MODULE_SYNC_LEAD_US,
         framed_leads: r2p_node::MODULE_FRAMED_LEADS,
         ..NodeConfig::module(uid, names(params).node)
     }

@@ -27,21 +27,30 @@ pub fn tdma(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
 }
 
 r2p_testkit::suite! {
-    fn with_a_slot_lead_the_timer_fires_that_early_and_the_node_acts_for_the_boundary() {
-        // A master alone, driven as its slot timer would: at the times `next_slot_at` asks for.
-        let lead: u32 = crate::MODULE_SLOT_LEAD_US; // the modules' own
+    fn with_its_leads_the_timer_fires_that_early_and_the_node_acts_for_the_boundary() {
+        // A master alone, driven as its slot timer would: at the times `next_slot_at` asks for,
+        // with the modules' own leads: the sync's, shorter (it is loaded first in its tick),
+        // before each cycle, the slot lead before every other boundary.
+        let (lead, sync_lead) = (crate::MODULE_SLOT_LEAD_US, crate::MODULE_SYNC_LEAD_US);
+        assert!(0 < sync_lead && sync_lead < lead, "{sync_lead} µs, {lead} µs");
         let bus = Bus::<1>::slotted(CYCLE);
-        let config = NodeConfig { slot_lead_us: lead, ..tdma(1, "psu", Some(0)) };
+        let config =
+            NodeConfig { slot_lead_us: lead, sync_lead_us: sync_lead, ..tdma(1, "psu", Some(0)) };
         let mut m = TestNode::new(config, &NoParams).unwrap();
         let mut t: Micros = 0;
         let (mut ticks, mut on_grid) = (0u32, 0u32);
+        let (mut syncs, mut last_start) = (0u32, None::<Micros>);
         while t < 60_000 {
             bus.now.set(t);
+            // (The tick that takes over loads its first sync after its timers, at the slot lead.)
+            let was_master = m.role() == Role::Master;
             m.slot_tick(t, &mut bus.port(0));
+            let sync = bus.loaded(0).is_some_and(|f| rtcan::SyncFrame::from_frame(&f).is_ok());
             bus.arbitrate();
-            if m.role() == Role::Master {
-                // Every tick is `lead` before a slot boundary of the master's own cycle.
-                let acts_for = t + Micros::from(lead);
+            if was_master {
+                // Every tick is its lead before a slot boundary of the master's own cycle; the
+                // sync's tick before the cycle's start, where the sync then starts it.
+                let acts_for = t + Micros::from(if sync { sync_lead } else { lead });
                 let rtcan::cycle::ClockState::Running(p) = m.clock().state(acts_for) else {
                     panic!("the master's clock runs")
                 };
@@ -49,11 +58,19 @@ r2p_testkit::suite! {
                 if m.clock().slot_start(p.cycle, p.slot) == Some(acts_for) {
                     on_grid += 1;
                 }
+                if sync {
+                    assert_eq!(p.slot, 0, "a sync at {acts_for} µs starts its cycle");
+                    if let Some(last) = last_start {
+                        assert_eq!(acts_for - last, CYCLE_US, "cycles start a cycle apart");
+                    }
+                    (syncs, last_start) = (syncs + 1, Some(acts_for));
+                }
             }
             t = m.next_slot_at(t).max(t + 1);
         }
         assert!(ticks >= 4 * u32::from(CYCLE.slots), "{ticks} ticks as master");
-        assert_eq!(on_grid, ticks, "ticks {} µs before a boundary", lead);
+        assert_eq!(on_grid, ticks, "ticks {lead} µs (syncs {sync_lead} µs) before a boundary");
+        assert!(syncs >= 10, "a sync every cycle: {syncs}");
         // Without a lead the same node ticks on the boundaries themselves.
         let bus = Bus::<1>::slotted(CYCLE);
         let mut m = TestNode::new(tdma(1, "psu", Some(0)), &NoParams).unwrap();

@@ -55,6 +55,7 @@ pub fn tdma(n: u32, name: &'static str, rank: Option<u8>) -> NodeConfig {
         rank,
         hrt_slots: 4,
         slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
+        sync_lead_us: r2p_node::MODULE_SYNC_LEAD_US,
         framed_leads: r2p_node::MODULE_FRAMED_LEADS,
         ..NodeConfig::new(uid(n), name)
     }

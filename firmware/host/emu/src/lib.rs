@@ -199,6 +199,8 @@ struct Board<'a, N> {
     slot_path_us: u64,
     /// The same for the short path.
     top_up_us: u64,
+    /// The same for a slot-grid master's sync, which it loads first (`Mcu::sync_path_us`).
+    sync_path_us: u64,
     /// The same on frame-sized reservations for a slot tick's HRT frame and sync, which it
     /// loads first (`Mcu::framed_paths_us`).
     framed_paths_us: (u64, u64),
@@ -301,8 +303,9 @@ impl<'a, N: Runtime> Sim<'a, N> {
     }
 
     /// Adds a board on `mcu`, whose slot path and short path take their time on it from a
-    /// call to its frame's mailbox request (`Mcu::slot_path_us`, `Mcu::top_up_path_us`; on
-    /// frame-sized reservations a slot tick's HRT frame and sync `Mcu::framed_paths_us`).
+    /// call to its frame's mailbox request (`Mcu::slot_path_us`, `Mcu::top_up_path_us`; a
+    /// master's sync `Mcu::sync_path_us`; on frame-sized reservations a slot tick's HRT frame
+    /// and sync `Mcu::framed_paths_us`).
     pub fn add_board_on(
         &mut self,
         node: N,
@@ -324,6 +327,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
             event_ns: u64::MAX,
             slot_path_us,
             top_up_us: mcu.top_up_path_us(),
+            sync_path_us: mcu.sync_path_us(),
             framed_paths_us: mcu.framed_paths_us(),
             app_ns: self.now_ns,
             powered: true,
@@ -495,8 +499,13 @@ impl<'a, N: Runtime> Sim<'a, N> {
                 let short = b.wake_ns > t;
                 b.event_ns = u64::MAX;
                 b.port.set_load_latency(if short { b.top_up_us } else { b.slot_path_us });
-                let framed = mode == Mode::Tdma && !short && b.node.wakes_on_transmit();
-                b.port.set_reserved_latency(framed.then_some(b.framed_paths_us));
+                // A slot tick loads a master's sync first, on a path of its own, and on
+                // frame-sized reservations an HRT frame at its reservation's start too.
+                b.port.set_reserved_latency(match (mode, short, b.node.wakes_on_transmit()) {
+                    (Mode::Tdma, false, true) => Some(b.framed_paths_us),
+                    (Mode::Tdma, false, false) => Some((b.slot_path_us, b.sync_path_us)),
+                    _ => None,
+                });
                 let node = &mut b.node;
                 let mut port = StalledPort::new(&mut b.port, b.stall.as_mut());
                 let mut call = |c: &mut dyn CanController| match mode {

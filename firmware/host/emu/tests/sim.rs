@@ -8,13 +8,13 @@ use std::time::{Duration, Instant};
 use r2p_emu::demo::{tdma, DemoNode};
 use r2p_emu::{Mode, Sim, SLOT_PATH_US};
 use r2p_middleware::{pool_size, Class, Publisher, Subscriber, Topic};
-use r2p_node::{HrtState, ImportState, NoParams, RemotePublisher, RemoteSubscriber};
+use r2p_node::{HrtState, ImportState, NoParams, NodeConfig, RemotePublisher, RemoteSubscriber};
 use r2p_vbus::{Config, EventKind, FaultAction, FaultRule};
 use rtcan::controller::BusState;
 use rtcan::cycle::MAX_SYNC_LOSS;
 use rtcan::failover::{Role, RANK_STEP_CYCLES, TAKEOVER_BASE_CYCLES};
 use rtcan::CanController;
-use rtcan::{Frame, Laxity, Micros, SyncFrame};
+use rtcan::{CycleConfig, Frame, Laxity, Micros, SyncFrame};
 
 const CYCLE_NS: u64 = 10_000_000;
 const SLOT_NS: u64 = 250_000;
@@ -156,9 +156,73 @@ fn check_hrt_slots(sim: &Sim<'static, EmuNode>, from_ns: u64, slot: u8, jitter_n
 }
 
 fn granted(sim: &Sim<'static, EmuNode>) -> rtcan::Phase {
-    match sim.node(1).hrt_state(0) {
+    granted_to(sim, 1)
+}
+
+/// Where board `board`'s first export's HRT stream was granted.
+fn granted_to(sim: &Sim<'static, EmuNode>, board: usize) -> rtcan::Phase {
+    match sim.node(board).hrt_state(0) {
         Some(HrtState::Granted { slots }) => slots.first(),
         other => panic!("not granted: {other:?}"),
+    }
+}
+
+/// A master loads its sync first in its tick, with the sync's own lead
+/// (`NodeConfig::sync_lead_us`), and the emulated F103 takes the sync's own path to its mailbox
+/// (`Mcu::sync_path_us`): the sync starts where the master times its cycle. On the default
+/// cycle's 167 µs slots the master's slot-1 tick comes while the sync may still be on the wire,
+/// before its controller reports the sync's start of frame, so the master times its own HRT
+/// frame in slot 1 from the cycle's nominal start; it must start where the slaves, timing from
+/// that start of frame, expect it. The syncs come exactly a cycle apart.
+#[test]
+fn a_masters_own_frame_right_after_its_sync_starts_on_its_slot() {
+    static M_H: Topic<'static, u32, { pool_size(&[2], 1) }, 1> = Topic::new("setpoint", 0);
+    static M_HP: Publisher<'static, u32> =
+        Publisher::new(&M_H, Class::SyncRealTime { period_us: 20_000 });
+    static M_HO: RemoteSubscriber<'static, u32, 2> = RemoteSubscriber::new(&M_HP);
+    static S_H: Topic<'static, u32, { pool_size(&[16], 1) }, 1> = Topic::new("setpoint", 0);
+    static S_HP: Publisher<'static, u32> = Publisher::new(&S_H, Class::NonRealTime);
+    static S_HI: RemotePublisher<'static, u32> = RemotePublisher::new(&S_HP, &S_H);
+    M_H.subscribe(&M_HO).unwrap();
+
+    let config = |n, name, rank| NodeConfig { cycle: CycleConfig::DEFAULT, ..tdma(n, name, rank) };
+    let mut sim: Sim<'static, EmuNode> = Sim::new(2, Config::default(), Mode::Tdma);
+    let mut m = EmuNode::new(config(1, "psu", Some(0)), &NoParams).unwrap();
+    let mut s = EmuNode::new(config(2, "control", None), &NoParams).unwrap();
+    m.export(&M_HO).unwrap();
+    s.import(&S_HI).unwrap();
+    let mut k = 0u32;
+    let app_m = move |now: Micros, _: &mut EmuNode| {
+        if now >= 200_000 && now.is_multiple_of(20_000) {
+            M_HP.publish_with(|v| *v = k).unwrap();
+            k += 1;
+        }
+    };
+    sim.add_board(m, 0, Some(Box::new(app_m)));
+    sim.add_board(s, 1, None);
+    sim.run_until(1_000 * MS);
+
+    assert_eq!(sim.node(0).role(), Role::Master);
+    let phase = granted_to(&sim, 0);
+    assert_eq!(phase.slot, 1, "the slot right after the sync");
+    let from = 400 * MS;
+    let syncs: Vec<u64> = syncs(&sim).into_iter().map(|s| s.0).filter(|&t| t >= from).collect();
+    assert!(syncs.len() >= 59, "{} syncs", syncs.len());
+    for w in syncs.windows(2) {
+        assert_eq!(w[1] - w[0], CYCLE_NS, "syncs at {w:?} ns");
+    }
+    // Slot 1 starts 167 µs after the sync's start of frame (as the slaves stamp it, to the µs).
+    let slot_1 = u64::from(CycleConfig::DEFAULT.slot_offset_us(1)) * 1_000;
+    let hrt: Vec<_> = hrt_frames(&sim).into_iter().filter(|h| h.0 > syncs[0]).collect();
+    assert!(hrt.len() >= 29, "{} HRT frames", hrt.len());
+    for (start, _, frame) in hrt {
+        let sync = syncs.iter().rev().find(|&&s| s <= start).unwrap();
+        let late = (start - sync).checked_sub(slot_1);
+        assert!(
+            late.is_some_and(|l| l <= PATH_SLACK_NS + 1_000),
+            "HRT {frame:?} at {start} ns: {} ns after the sync's start of frame",
+            start - sync
+        );
     }
 }
 

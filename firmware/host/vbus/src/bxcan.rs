@@ -68,8 +68,9 @@ impl BxCanPort {
     }
 
     /// Gives HRT frames and syncs latencies of their own, `(hrt_us, sync_us)` (`None`: the load
-    /// latency, as other frames): firmware on frame-sized reservations requests them on
-    /// shorter paths than its other frames, each matched by its own slot lead.
+    /// latency, as other frames): the firmware's slot tick requests a master's sync (and on
+    /// frame-sized reservations an HRT frame) first, on a shorter path than its other frames,
+    /// each matched by its own slot lead.
     pub fn set_reserved_latency(&mut self, us: Option<(u64, u64)>) {
         self.reserved_latency_ns = us.map(|(hrt, sync)| (hrt * 1_000, sync * 1_000));
     }

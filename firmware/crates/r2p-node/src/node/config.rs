@@ -48,6 +48,14 @@ pub struct NodeConfig {
     /// that late (a worst-case frame, 160 µs, plus a 26 µs path would not fit a 166 µs slot).
     /// 0 on the host; [`MODULE_SLOT_LEAD_US`] on the modules.
     pub slot_lead_us: u32,
+    /// How long before its cycle's start a master's slot timer calls [`Node::slot_tick`] (µs),
+    /// which then acts for the start: the time from the timer's interrupt to the sync's mailbox
+    /// request. The sync is loaded first in its tick, on a shorter path than a slot's frame,
+    /// so that every cycle starts where the master times it (loaded after the received frames
+    /// and the timers, it started up to 33 µs late, by a different amount each cycle). 0 on
+    /// the host; [`MODULE_SYNC_LEAD_US`] on the modules. On frame-sized reservations
+    /// [`FramedLeads::sync_us`] takes its place.
+    pub sync_lead_us: u32,
     /// The slot timer's leads on frame-sized reservations (with [`hrt_blocks`](Self::hrt_blocks)
     /// above 0), which take the place of [`slot_lead_us`](Self::slot_lead_us) there: the paths
     /// to an HRT frame's and to the master's sync's request are shorter than the grid's and
@@ -78,10 +86,17 @@ pub struct SlotPath {
 
 /// The slot path built for the F103's Cortex-M3 (thumbv7m).
 pub const CORTEX_M3_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_814, max_instructions: 1_914 };
+    SlotPath { min_instructions: 1_829, max_instructions: 1_934 };
 /// The slot path built for the F407's Cortex-M4F (thumbv7em, hard float).
 pub const CORTEX_M4_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_819, max_instructions: 1_924 };
+    SlotPath { min_instructions: 1_834, max_instructions: 1_939 };
+
+/// The slot-grid master's path to its sync's request, built for the F103's Cortex-M3: the sync
+/// goes first in its tick (before the received frames and the timers), QEMU (`slot-path`,
+/// `sync_*_insn`) plus the interrupt's ~190 instructions as on the slot path.
+pub const CORTEX_M3_SYNC_PATH: SlotPath = SlotPath { min_instructions: 679, max_instructions: 694 };
+/// The same path built for the F407's Cortex-M4F.
+pub const CORTEX_M4_SYNC_PATH: SlotPath = SlotPath { min_instructions: 679, max_instructions: 694 };
 
 /// The short path on frame-sized reservations ([`Node::top_up`](crate::Node::top_up)), built
 /// for the F103's Cortex-M3: from its call to the window's first frame's request, 1 699–3 923
@@ -96,11 +111,11 @@ pub const CORTEX_M3_TOP_UP_PATH: SlotPath =
 /// (`framed_tx.rs`), QEMU (`slot-path --features framed`, `to_request_*_insn`) plus the
 /// interrupt's ~185 instructions as on the grid's path.
 pub const CORTEX_M3_FRAMED_SLOT_PATH: SlotPath =
-    SlotPath { min_instructions: 1_384, max_instructions: 1_399 };
+    SlotPath { min_instructions: 1_369, max_instructions: 1_379 };
 /// The frame-sized master's path to its sync's request, loaded first in its tick (before the
 /// controller's results and the received frames): QEMU (`sync_*_insn`) plus the interrupt's.
 pub const CORTEX_M3_FRAMED_SYNC_PATH: SlotPath =
-    SlotPath { min_instructions: 709, max_instructions: 724 };
+    SlotPath { min_instructions: 714, max_instructions: 724 };
 
 /// The slot timer's leads on frame-sized reservations (µs, [`NodeConfig::framed_leads`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -143,9 +158,13 @@ impl SlotPath {
     }
 }
 
-/// The F103 modules' slot lead: [`CORTEX_M3_SLOT_PATH`] at 72 MHz, 23.9–25.3 µs, so 23 µs. The
+/// The F103 modules' slot lead: [`CORTEX_M3_SLOT_PATH`] at 72 MHz, 25.4–26.9 µs, so 25 µs. The
 /// F407 gateway's is [`CORTEX_M4_SLOT_PATH`] at 168 MHz, 10 µs (`SlotPath::lead_us`).
 pub const MODULE_SLOT_LEAD_US: u32 = CORTEX_M3_SLOT_PATH.lead_us(72_000_000);
+
+/// The F103 modules' sync lead: [`CORTEX_M3_SYNC_PATH`] at 72 MHz. The F407 gateway's is
+/// [`CORTEX_M4_SYNC_PATH`] at 168 MHz.
+pub const MODULE_SYNC_LEAD_US: u32 = CORTEX_M3_SYNC_PATH.lead_us(72_000_000);
 
 impl NodeConfig {
     /// Defaults: heartbeat every 100 ms, subscription retried after 300 ms, reassembly timeout
@@ -166,6 +185,7 @@ impl NodeConfig {
             hrt_blocks: 0,
             free_slots: FreeSlots::Merged,
             slot_lead_us: 0,
+            sync_lead_us: 0,
             framed_leads: FramedLeads { slot_us: 0, sync_us: 0 },
             listen_first: false,
         }

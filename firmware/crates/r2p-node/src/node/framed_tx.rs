@@ -121,33 +121,20 @@ impl<
         false
     }
 
-    /// Between steps 1 and 2 of `slot_tick` on frame-sized reservations: the master's sync if
-    /// it is due (step 4's, `Node::send_sync`), or this node's HRT frame if `now` is the start
-    /// of one of its reservations, goes to its mailbox before the node takes the frames it
-    /// received and runs the protocol's timers (the clock and the mask come from syncs taken
-    /// at earlier calls). Each then has a short path of steady length, which its lead
-    /// ([`FramedLeads`](crate::FramedLeads)) matches: after the received frames and the
-    /// timers the sync was requested 1 174–3 573 instructions after the call (QEMU,
-    /// Cortex-M3), a cycle starting up to 33 µs late at 72 MHz by a different amount each
-    /// time; a master's heartbeat taken in the same call (every 20 ms) would start an HRT
-    /// frame ~370 instructions late, more than the reservation's guard bits.
+    /// Step 2 of `slot_tick` on frame-sized reservations, when no sync went: this node's HRT
+    /// frame, if `now` is the start of one of its reservations, goes to its mailbox before the
+    /// node takes the frames it received and runs the protocol's timers (the clock and the mask
+    /// come from syncs taken at earlier calls), as the master's sync does. It then has a short
+    /// path of steady length, which its lead ([`FramedLeads`](crate::FramedLeads)) matches: a
+    /// master's heartbeat taken in the same call (every 20 ms) would start it ~370
+    /// instructions late (QEMU, Cortex-M3), more than the reservation's guard bits.
     #[inline(always)]
-    pub(super) fn framed_first<C: CanController + ?Sized>(
-        &mut self,
-        now: Micros,
-        sync_at: Micros,
-        can: &mut C,
-    ) {
+    pub(super) fn framed_first<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
         #[cfg(feature = "framed-reservations")]
-        if self.layout.is_some() {
-            if self.send_sync(now, sync_at, can) {
-                return;
-            }
-            if let ClockState::Running(p) = self.clock.state(now) {
-                self.framed_step(now, p, can, false);
-            }
+        if let (true, ClockState::Running(p)) = (self.layout.is_some(), self.clock.state(now)) {
+            self.framed_step(now, p, can, false);
         }
-        let _ = (now, sync_at, can);
+        let _ = (now, can);
     }
 
     /// Loads what cycle position `p` allows at `now`: this node's HRT frame at its

@@ -57,12 +57,13 @@ impl<
     /// 1. the controller's results: an SRT/NRT frame that went out leaves the queue, one that
     ///    did not stays in it with its deadline (and is loaded again with its laxity for then);
     ///    an HRT frame that did not go out is a missed occurrence;
-    /// 2. on frame-sized reservations, as master the sync if it is due, else this node's HRT
-    ///    frame if its reservation starts now (steps 4's and 5's, brought forward:
-    ///    `framed_tx.rs`); take received frames (syncs feed the [`SlotClock`] and the failover
-    ///    state machine);
+    /// 2. as master, at a cycle's start: send the sync with the next cycle's reservations, on
+    ///    a short path of steady length with a lead of its own ([`NodeConfig::sync_lead_us`]),
+    ///    and load nothing else in this tick; else, on frame-sized reservations, this node's
+    ///    HRT frame if its reservation starts now (step 5's, brought forward: `framed_tx.rs`);
+    ///    take received frames (syncs feed the [`SlotClock`] and the failover state machine);
     /// 3. the protocol's timers ([`tick`](Self::tick)), master takeover, HRT registrations;
-    /// 4. as master, at a cycle's start: send the sync with the next cycle's reservations;
+    /// 4. as a master that took over in step 3: its first sync, as in step 2;
     /// 5. load this slot's frame: in slot 0 nothing (the sync's); in a reserved slot this
     ///    node's HRT frame if the slot is its stream's, else nothing; in a free slot the most
     ///    urgent SRT/NRT frame for the window the slot opens ([`FreeSlots`]). Without a cycle
@@ -70,8 +71,9 @@ impl<
     ///    is free and a window of its own.
     ///
     /// `now` is the time the timer fired; the node acts for `now` + [`NodeConfig::slot_lead_us`],
-    /// the time its frames reach the controller (on frame-sized reservations + the lead of the
-    /// frame it loads first, [`NodeConfig::framed_leads`]).
+    /// the time its frames reach the controller (for a master's sync + its own lead,
+    /// [`NodeConfig::sync_lead_us`]; on frame-sized reservations the leads of the frame it
+    /// loads first, [`NodeConfig::framed_leads`]).
     pub fn slot_tick<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
         let (now, sync_at) = self.tick_time(now);
         self.start(now);
@@ -85,7 +87,10 @@ impl<
         for done in self.slot_tx.settle(now, can, &self.tx).into_iter().flatten() {
             self.on_done(done);
         }
-        self.framed_first(now, sync_at, can);
+        let synced = self.send_sync(now, sync_at, can);
+        if !synced {
+            self.framed_first(now, can);
+        }
         while let Some(r) = can.try_receive() {
             self.receive::<true>(&r);
         }
@@ -95,7 +100,7 @@ impl<
         self.apply(a);
         self.register_hrt(now);
 
-        if self.send_sync(now, sync_at, can) {
+        if synced || self.send_sync(now, sync_at, can) {
             return;
         }
 
@@ -128,15 +133,16 @@ impl<
     }
 
     /// The time a slot tick that fired at `fired` acts for, and the time a sync it loads would
-    /// reach its mailbox: both `fired` + the slot lead ([`NodeConfig::slot_lead_us`], on
-    /// frame-sized reservations [`FramedLeads::slot_us`](crate::FramedLeads)). A frame-sized
-    /// master's sync has a path and a lead of its own ([`FramedLeads::sync_us`](crate::FramedLeads),
-    /// `next_slot_at`): the tick that fired for it acts for `fired` + that lead, so that the
-    /// cycle starts where the master times it.
+    /// reach its mailbox. A master's sync has a path and a lead of its own (`next_slot_at`,
+    /// [`NodeConfig::sync_lead_us`], on frame-sized reservations
+    /// [`FramedLeads::sync_us`](crate::FramedLeads)): the tick that fired for it acts for
+    /// `fired` + that lead, so that the cycle starts where the master times it. Every other
+    /// tick acts for `fired` + the slot lead ([`NodeConfig::slot_lead_us`], on frame-sized
+    /// reservations [`FramedLeads::slot_us`](crate::FramedLeads)).
     #[inline(always)]
     fn tick_time(&self, fired: Micros) -> (Micros, Micros) {
         let now = fired + Micros::from(self.lead_us());
-        match self.framed_sync() {
+        match self.master_sync() {
             Some((next_sync, lead)) if fired + lead >= next_sync => (fired + lead, fired + lead),
             Some((_, lead)) => (now, fired + lead),
             None => (now, now),
@@ -152,31 +158,44 @@ impl<
         self.config.slot_lead_us
     }
 
-    /// A frame-sized master's next sync and the sync's own lead (`FramedLeads::sync_us`);
-    /// `None` on the grid or for a node that is not master.
+    /// A master's next sync and the sync's own lead ([`NodeConfig::sync_lead_us`], on
+    /// frame-sized reservations `FramedLeads::sync_us`); `None` for a node that is not master.
     #[inline(always)]
-    fn framed_sync(&self) -> Option<(Micros, Micros)> {
+    fn master_sync(&self) -> Option<(Micros, Micros)> {
+        let m = self.master.filter(|_| MASTER)?;
         #[cfg(feature = "framed-reservations")]
-        if let (true, Some(m)) = (self.layout.is_some(), self.master.filter(|_| MASTER)) {
+        if self.layout.is_some() {
             return Some((m.next_sync, Micros::from(self.config.framed_leads.sync_us)));
         }
-        None
+        Some((m.next_sync, Micros::from(self.config.sync_lead_us)))
     }
 
-    /// Step 4 of [`slot_tick`](Self::slot_tick) (on frame-sized reservations brought forward,
-    /// `framed_tx.rs`, and then a no-op at step 4): as master, if its sync is due by `sync_at`
-    /// (`tick_time`), loads it with the next cycle's reservations and starts the cycle at `now`
+    /// Steps 2 and 4 of [`slot_tick`](Self::slot_tick): as master, if its sync is due by
+    /// `sync_at` (`tick_time`), loads it with the next cycle's reservations and starts the cycle at `now`
     /// (the slaves start it at the sync's start of frame, the master too once the controller
-    /// reports it). True if the sync was loaded: the tick loads nothing else.
+    /// reports it). True if the sync was loaded: the tick loads nothing else. The check is
+    /// inlined, the loading not: a slave's slot path pays two compares for it.
+    #[inline(always)]
     pub(super) fn send_sync<C: CanController + ?Sized>(
         &mut self,
         now: Micros,
         sync_at: Micros,
         can: &mut C,
     ) -> bool {
-        let Some(mut m) = self.master.filter(|m| MASTER && sync_at >= m.next_sync) else {
-            return false;
-        };
+        match self.master.filter(|m| MASTER && sync_at >= m.next_sync) {
+            Some(m) => self.load_sync(now, m, can),
+            None => false,
+        }
+    }
+
+    /// [`send_sync`](Self::send_sync)'s sync of cycle `m.cycle`, due.
+    #[inline(never)]
+    fn load_sync<C: CanController + ?Sized>(
+        &mut self,
+        now: Micros,
+        mut m: MasterCycle,
+        can: &mut C,
+    ) -> bool {
         let rank = self.failover.rank().map_or(0, |r| r.get());
         let next = self.scheduler.mask(m.cycle.wrapping_add(1));
         let sync = SyncFrame::new(m.cycle, next, m.epoch).from_rank(rank);
@@ -279,12 +298,12 @@ impl<
     /// When the slot timer should call [`slot_tick`](Self::slot_tick) next: the next slot
     /// boundary of the cycle as this node's clock sees it (as master: of its own cycle), or one
     /// nominal slot later while no cycle runs — or before it, the latest start of the window
-    /// of a frame the node has loaded; [`NodeConfig::slot_lead_us`] early (on frame-sized
-    /// reservations [`NodeConfig::framed_leads`]: a master's sync by the sync's own lead).
+    /// of a frame the node has loaded; [`NodeConfig::slot_lead_us`] early (a master's sync
+    /// [`NodeConfig::sync_lead_us`]; on frame-sized reservations [`NodeConfig::framed_leads`]).
     pub fn next_slot_at(&self, now: Micros) -> Micros {
         let lead = Micros::from(self.lead_us());
         let at = self.next_boundary(now + lead);
-        match self.framed_sync() {
+        match self.master_sync() {
             Some((next_sync, sync_lead)) if at >= next_sync => {
                 next_sync.saturating_sub(sync_lead).max(now)
             }

@@ -27,7 +27,8 @@ use embedded_storage::nor_flash::{
 use r2p_boot::layout::{FlashMap, Partition, STM32F103CB, STM32F407VG};
 use r2p_node::{
     FramedLeads, SlotPath, CORTEX_M3_FRAMED_SLOT_PATH, CORTEX_M3_FRAMED_SYNC_PATH,
-    CORTEX_M3_SLOT_PATH, CORTEX_M3_TOP_UP_PATH, CORTEX_M4_SLOT_PATH,
+    CORTEX_M3_SLOT_PATH, CORTEX_M3_SYNC_PATH, CORTEX_M3_TOP_UP_PATH, CORTEX_M4_SLOT_PATH,
+    CORTEX_M4_SYNC_PATH,
 };
 use r2p_world::BoardKind;
 
@@ -65,6 +66,25 @@ impl Mcu {
     /// How long its slot path takes in the emulator (µs): the longest at its clock.
     pub const fn slot_path_us(self) -> u64 {
         self.slot_path().longest_us(self.sysclk_hz()) as u64
+    }
+
+    /// A slot-grid master's path to its sync, loaded first in its tick, built for its core
+    /// (instructions, measured under QEMU).
+    pub const fn sync_path(self) -> SlotPath {
+        match self {
+            Mcu::F103 => CORTEX_M3_SYNC_PATH,
+            Mcu::F407 => CORTEX_M4_SYNC_PATH,
+        }
+    }
+
+    /// The sync lead its firmware configures (µs): the shortest sync path at its clock.
+    pub const fn sync_lead_us(self) -> u32 {
+        self.sync_path().lead_us(self.sysclk_hz())
+    }
+
+    /// How long its sync path takes in the emulator (µs): the longest at its clock.
+    pub const fn sync_path_us(self) -> u64 {
+        self.sync_path().longest_us(self.sysclk_hz()) as u64
     }
 
     /// The slot timer's leads on frame-sized reservations its firmware configures (µs): the

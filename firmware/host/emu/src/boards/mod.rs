@@ -164,6 +164,7 @@ fn node(
         name,
         cycle: ctx.cycle,
         slot_lead_us: Mcu::of(ctx.module.kind()).slot_lead_us(),
+        sync_lead_us: Mcu::of(ctx.module.kind()).sync_lead_us(),
         framed_leads: Mcu::of(ctx.module.kind()).framed_leads(),
         ..config
     };

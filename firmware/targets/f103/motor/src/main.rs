@@ -121,6 +121,7 @@ async fn main(_spawner: Spawner) {
     let ep = ENDPOINTS.build(names);
     let config = NodeConfig {
         slot_lead_us: r2p_node::MODULE_SLOT_LEAD_US,
+        sync_lead_us: r2p_node::MODULE_SYNC_LEAD_US,
         framed_leads: r2p_node::MODULE_FRAMED_LEADS,
         ..NodeConfig::module(embassy_stm32::uid::uid(), names.node)
     };

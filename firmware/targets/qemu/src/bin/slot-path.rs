@@ -1,6 +1,7 @@
 //! Cortex-M3 benchmark under QEMU (run by `scripts/bench`): instructions from the slot timer's
 //! call of `Node::slot_tick` to the HRT frame's mailbox request (`try_transmit`), the path a
-//! slot timer's compare interrupt runs before the frame can start, and of the whole call.
+//! slot timer's compare interrupt runs before the frame can start, and of the whole call; and
+//! from the master's call to its sync's request.
 //! Then the same slots as a module runs them (`module-core`'s `slot_timer`): the node in a task
 //! of an interrupt executor, the compare interrupt waking it and running the executor in the
 //! same interrupt; counted from the instruction that pends the interrupt (standing in for the
@@ -147,8 +148,7 @@ struct Timed<C> {
 #[cfg(feature = "framed")]
 static QUEUED_AT: AtomicU32 = AtomicU32::new(u32::MAX);
 
-/// The frame-sized bench: SysTick when the master's sync was requested (`u32::MAX`: none).
-#[cfg(feature = "framed")]
+/// SysTick when the master's sync was requested (`u32::MAX`: none).
 static SYNC_AT: AtomicU32 = AtomicU32::new(u32::MAX);
 
 impl<C: CanController> CanController for Timed<C> {
@@ -160,7 +160,6 @@ impl<C: CanController> CanController for Timed<C> {
         if frame.id().laxity != Laxity::HRT && QUEUED_AT.load(Ordering::Relaxed) == u32::MAX {
             QUEUED_AT.store(icount::now(), Ordering::Relaxed);
         }
-        #[cfg(feature = "framed")]
         if frame.id().laxity == Laxity::HRT && frame.id().message.0 < 0x100 {
             SYNC_AT.store(icount::now(), Ordering::Relaxed);
         }
@@ -248,17 +247,26 @@ fn main() -> ! {
     #[cfg(feature = "framed")]
     framed(bus, m, a, insn_per_tick, &mut out);
 
-    // 400 cycles: A publishes every cycle; time A's slot ticks.
+    // 400 cycles: A publishes every cycle; time A's slot ticks and the master's call to its
+    // sync's request (the sync goes first).
     let step = Micros::from(CYCLE.slot_us());
     let (mut to_request_max, mut to_request_min, mut whole_max, mut requests) =
         (0u32, u32::MAX, 0u32, 0u32);
+    let mut sync = Span::default();
     let end = bus.now.get() + 400 * Micros::from(CYCLE.cycle_us);
     while bus.now.get() < end {
         let now = bus.now.get();
         if now.is_multiple_of(Micros::from(CYCLE.cycle_us)) {
             let _ = A_PUB.publish_with(|v| *v = now as u32);
         }
-        m.slot_tick(now, &mut bus.port(0));
+        let mut can = Timed { inner: bus.port(0), hrt_at: Cell::new(None) };
+        SYNC_AT.store(u32::MAX, Ordering::Relaxed);
+        let start = icount::now();
+        m.slot_tick(now, &mut can);
+        let at = SYNC_AT.load(Ordering::Relaxed);
+        if at != u32::MAX {
+            sync.add(start.wrapping_sub(at) & RELOAD);
+        }
         let mut can = Timed { inner: bus.port(1), hrt_at: Cell::new(None) };
         let start = icount::now();
         a.slot_tick(now, &mut can);
@@ -274,8 +282,9 @@ fn main() -> ! {
         bus.arbitrate();
         bus.now.set(now + step);
     }
-    if requests < 390 {
-        let _ = writeln!(out, "slot-path: only {requests} HRT requests in 400 cycles");
+    if requests < 390 || sync.n < 390 {
+        let n = sync.n;
+        let _ = writeln!(out, "slot-path: only {requests} HRT requests, {n} syncs in 400 cycles");
         debug::exit(debug::EXIT_FAILURE);
     }
 
@@ -302,14 +311,17 @@ fn main() -> ! {
     let insn = |t: u32| (t as f64 * insn_per_tick) as u32;
     let _ = writeln!(
         out,
-        "{{\"bench\":\"cortex_m3_slot_path\",\"hrt_requests\":{},\"to_request_min_insn\":{},\"to_request_max_insn\":{},\"slot_tick_max_insn\":{},\"irq_hrt_requests\":{},\"irq_to_request_min_insn\":{},\"irq_to_request_max_insn\":{}}}",
+        "{{\"bench\":\"cortex_m3_slot_path\",\"hrt_requests\":{},\"to_request_min_insn\":{},\"to_request_max_insn\":{},\"slot_tick_max_insn\":{},\"irq_hrt_requests\":{},\"irq_to_request_min_insn\":{},\"irq_to_request_max_insn\":{},\"sync_requests\":{},\"sync_min_insn\":{},\"sync_max_insn\":{}}}",
         requests,
         insn(to_request_min),
         insn(to_request_max),
         insn(whole_max),
         irq_requests,
         insn(irq_min),
-        insn(irq_max)
+        insn(irq_max),
+        sync.n,
+        insn(sync.min),
+        insn(sync.max)
     );
     debug::exit(debug::EXIT_SUCCESS);
     loop {
@@ -435,21 +447,18 @@ fn framed(
     }
 }
 /// Shortest and longest of `n` measured paths (SysTick counts).
-#[cfg(feature = "framed")]
 struct Span {
     n: u32,
     min: u32,
     max: u32,
 }
 
-#[cfg(feature = "framed")]
 impl Default for Span {
     fn default() -> Self {
         Self { n: 0, min: u32::MAX, max: 0 }
     }
 }
 
-#[cfg(feature = "framed")]
 impl Span {
     fn add(&mut self, t: u32) {
         (self.n, self.min, self.max) = (self.n + 1, self.min.min(t), self.max.max(t));
