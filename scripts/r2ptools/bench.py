@@ -702,6 +702,10 @@ def main() -> int:
           f"over the direct call; jitter ≥ {(ihi - ilo) / 72:.1f} µs at 72 MHz from the path "
           f"(≤ {2 * (ihi - ilo) / 72:.1f} µs at 2 cycles per instruction), plus the longest "
           f"critical section and a bit time of CAN start-of-frame quantisation")
+    slo, shi = sp["sync_min_insn"], sp["sync_max_insn"]
+    print(f"the master's call to its sync's request (loaded first in its tick): {slo}–{shi} "
+          f"instructions in {sp['sync_requests']} cycles, a spread of {shi - slo}; from the interrupt "
+          f"(+{slotlead.IRQ_INSTRUCTIONS}) ≥ {(slo + slotlead.IRQ_INSTRUCTIONS) / 72:.1f} µs at 72 MHz")
 
     print("\n=== Cortex-M3 (QEMU, -icount): the IMU's estimators per step, soft float (r2p-app-imu)")
     base = fu["euler_filter_insn"]
