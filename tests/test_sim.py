@@ -2,6 +2,8 @@
 time with CAN tools joined over socketcand (python-can and the r2p CLI itself)."""
 from __future__ import annotations
 
+import json
+import math
 import time
 
 import pytest
@@ -45,6 +47,34 @@ def test_virtual_time_runs_write_identical_traces(built, tmp_path):
     log = tmp_path / "c.log"
     p = run([str(R2P), "sim", str(TRISKAR2), "--seconds", "1", "--seed", "7", "--log", str(log)], timeout=120)
     assert p.returncode == 0 and log.read_text().startswith("(1700000000."), p.stdout
+
+
+def test_timing_measures_the_cycle_in_a_trace(built, tmp_path):
+    """`r2p --trace FILE timing` on the emulated Triskar2's trace: the syncs' period and where
+    each HRT stream starts in its cycle, from the frames' end stamps and their exact lengths.
+    On the emulator every HRT frame starts 2 µs after its slot (the emulated path against the
+    lead) and every cycle is 10 ms long but the first (the new master's first sync goes at
+    the end of the tick in which it took over)."""
+    log = tmp_path / "t.log"
+    p = run([str(R2P), "sim", str(TRISKAR2), "--seconds", "3", "--log", str(log)], timeout=120)
+    assert p.returncode == 0, p.stdout
+    p = run([str(R2P), "--trace", str(log), "--json", "timing"], timeout=60)
+    assert p.returncode == 0, p.stdout
+    t = json.loads(p.stdout.splitlines()[-1])
+    assert t["syncs"] >= 290 and t["gaps"] == 0 and t["median_period_us"] == 10_000.0, t
+    assert t["period"]["min_us"] == 10_000.0 and t["period"]["max_us"] <= 10_016.0, t
+    slot_us = 10_000 / 60  # the Triskar2's cycle: 10 ms, 60 slots
+    assert len(t["hrt"]) == 3, t  # the three wheels' setpoints
+    for s in t["hrt"]:
+        o = s["offset"]
+        assert o["n"] >= 250 and o["min_us"] == o["max_us"], s
+        late = o["min_us"] - math.ceil(round(o["min_us"] / slot_us) * slot_us)
+        assert 0 <= late <= 2, s
+    text = run([str(R2P), "--trace", str(log), "timing"], timeout=60).stdout
+    assert "one every 10000.0 µs (median)" in text and "HRT 0x7F02 frame 0:" in text, text
+    # Without a trace it says what it needs.
+    p = run([str(R2P), "timing"], timeout=60)
+    assert p.returncode != 0 and "give one with --trace FILE" in p.stdout, p.stdout
 
 
 def test_python_can_sees_the_robot_within_a_second(robot):

@@ -8,7 +8,8 @@ use crate::args::{open_link, BusArgs};
 use crate::error::CliError;
 use crate::session::Session;
 use crate::{
-    echo, flash, keys, listing, magcal, monitor, param, publish, record, sim, traces, ui, update,
+    echo, flash, keys, listing, magcal, monitor, param, publish, record, sim, timing, traces, ui,
+    update,
 };
 
 const ABOUT: &str = "R2P host tool: watch and talk to an R2P robot's CAN bus";
@@ -35,6 +36,7 @@ Examples:
   r2p imu calibrate --seconds 60     # turn the robot; writes the magnetometer's calibration
   r2p --trace bus.log monitor        # offline, from a candump log or pcap
   r2p convert bus.log bus.pcap       # for Wireshark
+  r2p --trace bus.log timing         # the cycle's timing (candump -H -L can0 > bus.log)
   r2p flash motor                    # firmware/images/motor.elf through an SWD probe
   r2p ui                             # the bus in the browser: http://127.0.0.1:8023/";
 
@@ -78,6 +80,9 @@ pub enum Command {
     Replay(traces::ReplayArgs),
     /// Convert a trace between candump log and pcap (by the output's extension)
     Convert(traces::ConvertArgs),
+    /// Measure the RTCAN cycle in a trace (--trace) with hardware timestamps: how regularly
+    /// the syncs start each cycle, where each HRT stream's frames start in theirs
+    Timing(timing::TimingArgs),
     /// Run a robot file on emulated boards: in virtual time into a trace (--seconds, --log), or
     /// in real time (--realtime) serving socketcand on --socketcand's address and, with
     /// --socketcan IFACE, bridging to a kernel CAN interface
@@ -105,6 +110,7 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> Result<(), CliError> {
     match cli.command {
         Command::Convert(args) => traces::convert(&args, bus, out),
         Command::Replay(args) => traces::replay(&args, bus, out),
+        Command::Timing(args) => timing::run(&args, bus, out),
         Command::Monitor(args) => monitor::run(&args, bus, Session::new(open_link(bus)?), out),
         Command::Record(args) => record::run(&args, bus, Session::new(open_link(bus)?), out),
         Command::Nodes => listing::nodes(bus, Session::new(open_link(bus)?), out),

@@ -33,6 +33,7 @@ pub mod record;
 pub mod session;
 pub mod sim;
 pub mod socketcand_client;
+pub mod timing;
 pub mod traces;
 pub mod types;
 pub mod ui;

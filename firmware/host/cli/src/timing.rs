@@ -1,0 +1,332 @@
+//! `r2p timing`: the RTCAN cycle as a trace's timestamps show it — how regularly the master's
+//! syncs start the cycles, and where each HRT stream's frames start in theirs. On a robot this
+//! checks on silicon what the emulator and QEMU can only predict: the slot timer's leads
+//! (docs/rtcan.md, "The slot lead", "The sync lead") and the HRT streams' jitter.
+//!
+//! Each frame's start of frame comes from its stamp. A trace stamps a frame at its end (the
+//! emulator's traces; a candleLight/gs_usb adapter's hardware timestamps, `candump -H -L`) or,
+//! with `--stamped-at start`, at its start of frame. An end-stamped frame started its exact
+//! length earlier: header, data and CRC with the stuff bits its content makes
+//! (`r2p_vbus::bits`), then the tail to the end of EOF. Software timestamps (`candump` without
+//! `-H`) carry the host's latency and say little at this scale.
+
+use std::io::Write;
+
+use clap::{Args, ValueEnum};
+use r2p_canlink::Stamped;
+use r2p_vbus::bits::{stuff_count, unstuffed_bits, TAIL_BITS};
+use rtcan::{Frame, Laxity, SyncFrame};
+use serde_json::json;
+
+use crate::args::{emit, BusArgs};
+use crate::error::CliError;
+
+/// `r2p timing`'s options (the trace comes from `--trace`).
+#[derive(Args, Debug)]
+pub struct TimingArgs {
+    /// The bus's bit rate, bit/s
+    #[arg(long, value_name = "BIT/S", default_value_t = 1_000_000)]
+    pub bit_rate: u32,
+    /// Where the trace stamps each frame
+    #[arg(long, value_enum, default_value = "end")]
+    pub stamped_at: StampedAt,
+}
+
+/// Where a trace's timestamps lie in each frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum StampedAt {
+    /// At the end of the frame (the emulator's traces, gs_usb hardware timestamps)
+    End,
+    /// At its start of frame
+    Start,
+}
+
+/// The shortest and longest of some durations (ns), and how many.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Span {
+    /// How many.
+    pub n: usize,
+    /// The shortest, ns.
+    pub min: i64,
+    /// The longest, ns.
+    pub max: i64,
+}
+
+impl Span {
+    fn of(values: impl IntoIterator<Item = i64>) -> Option<Self> {
+        values.into_iter().fold(None, |s, v| {
+            Some(s.map_or(Self { n: 1, min: v, max: v }, |s: Self| Self {
+                n: s.n + 1,
+                min: s.min.min(v),
+                max: s.max.max(v),
+            }))
+        })
+    }
+}
+
+/// One HRT frame of a stream (a message ID and the fragment the frame carries) across the
+/// trace: when it starts in its cycle.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StreamTiming {
+    /// The stream's message ID (its publisher's node ID in the high byte).
+    pub message: u16,
+    /// Which frame of the message.
+    pub fragment: u8,
+    /// Its start of frame after its cycle's sync's, ns.
+    pub offset: Span,
+}
+
+/// What a trace shows of the cycle.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Timing {
+    /// Syncs in the trace.
+    pub syncs: usize,
+    /// The median time from one sync's start of frame to the next's, ns.
+    pub median_period: Option<i64>,
+    /// The times from one sync's start to the next's, ns, those within half a median of it.
+    pub period: Option<Span>,
+    /// The others: a sync missed, or a new master's first cycle.
+    pub gaps: usize,
+    /// Every HRT frame after the trace's first sync, per stream and fragment.
+    pub streams: Vec<StreamTiming>,
+}
+
+/// A frame's length from its start of frame to the end of its EOF, in bit times.
+pub fn frame_bits(raw_id: u32, data: &[u8]) -> u32 {
+    let bits = unstuffed_bits(raw_id, data);
+    bits.len() as u32 + stuff_count(&bits) + TAIL_BITS
+}
+
+/// The cycle's timing in `frames` (in time order), stamped as `args` says.
+pub fn analyse(frames: &[Stamped], args: &TimingArgs) -> Timing {
+    let bit_ns = 1e9 / f64::from(args.bit_rate.max(1));
+    let mut syncs: Vec<i64> = Vec::new();
+    let mut hrt: Vec<(u16, u8, i64)> = Vec::new();
+    for s in frames {
+        let Ok(frame) = Frame::from_raw(s.frame.id(), s.frame.data()) else { continue };
+        let stamp = s.time.as_nanos() as i64;
+        let start = match args.stamped_at {
+            StampedAt::Start => stamp,
+            StampedAt::End => {
+                stamp
+                    - (f64::from(frame_bits(s.frame.id(), s.frame.data())) * bit_ns).round() as i64
+            }
+        };
+        if SyncFrame::from_frame(&frame).is_ok() {
+            syncs.push(start);
+        } else if frame.id().laxity == Laxity::HRT {
+            let Some(&sync) = syncs.iter().rev().find(|&&t| t <= start) else { continue };
+            hrt.push((frame.id().message.0, frame.id().fragment, start - sync));
+        }
+    }
+    let periods: Vec<i64> = syncs.windows(2).map(|w| w[1] - w[0]).collect();
+    let median_period = {
+        let mut sorted = periods.clone();
+        sorted.sort_unstable();
+        sorted.get(sorted.len() / 2).copied()
+    };
+    let regular = |p: &&i64| median_period.is_some_and(|m| (**p - m).abs() <= m / 2);
+    let mut keys: Vec<(u16, u8)> = hrt.iter().map(|h| (h.0, h.1)).collect();
+    keys.sort_unstable();
+    keys.dedup();
+    let streams = keys
+        .into_iter()
+        .filter_map(|(message, fragment)| {
+            let offsets = hrt.iter().filter(|h| (h.0, h.1) == (message, fragment)).map(|h| h.2);
+            Some(StreamTiming { message, fragment, offset: Span::of(offsets)? })
+        })
+        .collect();
+    Timing {
+        syncs: syncs.len(),
+        median_period,
+        period: Span::of(periods.iter().filter(regular).copied()),
+        gaps: periods.iter().filter(|p| !regular(p)).count(),
+        streams,
+    }
+}
+
+/// Runs `r2p --trace FILE timing`.
+pub fn run(args: &TimingArgs, bus: &BusArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let Some(path) = &bus.trace else {
+        return Err(CliError::new(
+            "r2p timing reads a trace: give one with --trace FILE (a candump log with hardware \
+             timestamps, `candump -H -L can0 > bus.log`, or pcap; or `r2p sim … --log FILE`)",
+        ));
+    };
+    let (_, frames) = r2p_canlink::replay::read_trace(path)
+        .map_err(|e| CliError::new(format!("reading the trace: {e}")))?;
+    let t = analyse(&frames, args);
+    if t.syncs < 2 {
+        return Err(CliError::new(format!(
+            "{}: {} sync(s) in {} frames: no cycle to measure (is it an RTCAN bus in TDMA mode?)",
+            path.display(),
+            t.syncs,
+            frames.len()
+        )));
+    }
+    let us = |ns: i64| ns as f64 / 1e3;
+    if bus.json {
+        let span = |s: &Span| json!({"n": s.n, "min_us": us(s.min), "max_us": us(s.max)});
+        let streams: Vec<_> = t
+            .streams
+            .iter()
+            .map(|s| {
+                json!({"message": s.message, "fragment": s.fragment, "offset": span(&s.offset)})
+            })
+            .collect();
+        let line = json!({
+            "syncs": t.syncs,
+            "median_period_us": t.median_period.map(us),
+            "period": t.period.as_ref().map(span),
+            "gaps": t.gaps,
+            "hrt": streams,
+        });
+        return emit(out, &line.to_string());
+    }
+    let median = t.median_period.map_or(0.0, us);
+    let p = t.period.expect("two syncs make a period");
+    emit(
+        out,
+        &format!(
+            "syncs: {}, one every {median:.1} µs (median); from one start of frame to the next \
+             {:.1}–{:.1} µs (spread {:.1} µs); {} gap(s) (a sync missed, a new master)",
+            t.syncs,
+            us(p.min),
+            us(p.max),
+            us(p.max - p.min),
+            t.gaps
+        ),
+    )?;
+    for s in &t.streams {
+        emit(
+            out,
+            &format!(
+                "HRT 0x{:04X} frame {}: {} frames, {:.1}–{:.1} µs after their cycle's sync \
+                 (spread {:.1} µs)",
+                s.message,
+                s.fragment,
+                s.offset.n,
+                us(s.offset.min),
+                us(s.offset.max),
+                us(s.offset.max - s.offset.min)
+            ),
+        )?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Duration;
+
+    use super::*;
+
+    fn args() -> TimingArgs {
+        TimingArgs { bit_rate: 1_000_000, stamped_at: StampedAt::End }
+    }
+
+    /// The emulated demo robot for 1 s, its bus's frames stamped as its traces are.
+    fn demo() -> (Vec<Stamped>, Vec<u64>) {
+        let (mut sim, _) = r2p_emu::demo::build(1).expect("the demo, once in this process");
+        sim.run_until(1_000_000_000);
+        let starts = r2p_emu::sync_starts(sim.bus()).into_iter().map(|s| s.0).collect();
+        (r2p_emu::serve::stamped_frames(sim.bus()), starts)
+    }
+
+    #[test]
+    fn an_emulated_robots_trace_gives_its_syncs_starts_and_a_steady_cycle() {
+        let (frames, starts) = demo();
+        let t = analyse(&frames, &args());
+        // The syncs' starts of frame, from their end stamps (µs in the trace) and their bits:
+        // the bus's own, to the µs.
+        let epoch = Duration::from_secs(r2p_emu::serve::EPOCH_S).as_nanos() as i64;
+        assert_eq!(t.syncs, starts.len());
+        let ours: Vec<i64> = {
+            let bit_ns = 1_000.0;
+            frames
+                .iter()
+                .filter_map(|s| {
+                    let f = Frame::from_raw(s.frame.id(), s.frame.data()).ok()?;
+                    SyncFrame::from_frame(&f).ok()?;
+                    let bits = f64::from(frame_bits(s.frame.id(), s.frame.data()));
+                    Some(s.time.as_nanos() as i64 - (bits * bit_ns) as i64 - epoch)
+                })
+                .collect()
+        };
+        for (&o, &s) in ours.iter().zip(&starts) {
+            assert!((o - s as i64).abs() < 1_000, "start of frame {o} ns, the bus's {s} ns");
+        }
+        // The demo's 10 ms cycle. The master's first sync goes at the end of the tick in which
+        // it took over, on a longer path than its lead (10 016 µs to the second); from the
+        // second on, every sync a cycle after the last (to the stamps' µs).
+        assert_eq!(t.median_period, Some(10_000_000));
+        assert_eq!(t.period.unwrap().max, 10_016_000, "{t:?}");
+        let second = ours[1] + epoch;
+        let t = analyse(
+            &frames
+                .iter()
+                .filter(|s| s.time.as_nanos() as i64 >= second)
+                .cloned()
+                .collect::<Vec<_>>(),
+            &args(),
+        );
+        let p = t.period.unwrap();
+        assert!(p.max - p.min <= 1_000, "{p:?}");
+        assert_eq!(t.gaps, 0);
+        // Its HRT stream (the motor's setpoint, slot 1 every 2 cycles): every frame within
+        // the emulated path's 2 µs of its slot's start and the stamps' µs.
+        assert!(!t.streams.is_empty());
+        for s in &t.streams {
+            assert!(s.offset.n >= 30, "{s:?}");
+            assert!(s.offset.max - s.offset.min <= 3_000, "{s:?}");
+        }
+        // A sync stamped 5 µs late shows as a period 5 µs long and the next 5 µs short.
+        let mut late: Vec<Stamped> =
+            frames.iter().filter(|s| s.time.as_nanos() as i64 >= second).cloned().collect();
+        let i = late
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| {
+                Frame::from_raw(s.frame.id(), s.frame.data())
+                    .is_ok_and(|f| SyncFrame::from_frame(&f).is_ok())
+            })
+            .nth(50)
+            .unwrap()
+            .0;
+        late[i].time += Duration::from_micros(5);
+        let p2 = analyse(&late, &args()).period.unwrap();
+        assert_eq!((p2.min, p2.max), (p.min - 5_000, p.max + 5_000), "{p:?} → {p2:?}");
+    }
+
+    #[test]
+    fn a_start_stamped_trace_is_taken_as_it_is() {
+        let sync = |cycle: u32, at_us: u64| {
+            let f = SyncFrame::new(cycle, 0b10, false).to_frame();
+            Stamped {
+                time: Duration::from_micros(at_us),
+                frame: r2p_canlink::CanFrame::extended(f.id().to_raw(), f.payload()).unwrap(),
+            }
+        };
+        let frames = [sync(0, 1_000), sync(1, 11_000), sync(2, 21_003), sync(4, 41_003)];
+        let t = analyse(&frames, &TimingArgs { stamped_at: StampedAt::Start, ..args() });
+        assert_eq!(t.syncs, 4);
+        assert_eq!(t.median_period, Some(10_003_000));
+        assert_eq!(t.period, Some(Span { n: 2, min: 10_000_000, max: 10_003_000 }));
+        assert_eq!(t.gaps, 1, "a missing sync: 20 ms between two");
+        // Stamped at their ends, the same syncs started their own lengths earlier: the periods
+        // move by the few stuff bits their cycle counters make them differ by.
+        let ends = analyse(&frames, &args()).period.unwrap();
+        let p = t.period.unwrap();
+        assert!((ends.min - p.min).abs() <= 3_000 && (ends.max - p.max).abs() <= 3_000, "{ends:?}");
+    }
+
+    #[test]
+    fn frame_bits_count_the_stuff_bits_of_the_content() {
+        // An 8-byte frame of zeros stuffs more than one of alternating bits.
+        let zeros = frame_bits(0x0100_0000, &[0; 8]);
+        let alternating = frame_bits(0x0100_0000, &[0x55; 8]);
+        assert!(zeros > alternating, "{zeros} vs {alternating}");
+        // Never beyond the worst case rtcan reserves for (intermission included there).
+        assert!(zeros + 3 <= rtcan::cycle::frame_bits_of(0x0100_0000, 8), "{zeros}");
+    }
+}
