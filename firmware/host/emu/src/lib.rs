@@ -66,6 +66,12 @@ pub trait Runtime {
     fn top_up(&mut self, now: Micros, can: &mut dyn CanController) {
         self.slot_tick(now, can);
     }
+    /// True while the node sends the syncs ([`Node::role`]): a node that was not when its slot
+    /// tick began and loads a sync in it took over in that tick, and loads it at the tick's
+    /// end, on the slot path, not first.
+    fn is_master(&self) -> bool {
+        false
+    }
 }
 
 impl<
@@ -95,6 +101,9 @@ impl<
     fn top_up(&mut self, now: Micros, can: &mut dyn CanController) {
         Node::top_up(self, now, can);
     }
+    fn is_master(&self) -> bool {
+        Node::role(self) == rtcan::failover::Role::Master
+    }
 }
 
 impl<R: Runtime + ?Sized> Runtime for Box<R> {
@@ -115,6 +124,9 @@ impl<R: Runtime + ?Sized> Runtime for Box<R> {
     }
     fn top_up(&mut self, now: Micros, can: &mut dyn CanController) {
         (**self).top_up(now, can);
+    }
+    fn is_master(&self) -> bool {
+        (**self).is_master()
     }
 }
 
@@ -500,10 +512,14 @@ impl<'a, N: Runtime> Sim<'a, N> {
                 b.event_ns = u64::MAX;
                 b.port.set_load_latency(if short { b.top_up_us } else { b.slot_path_us });
                 // A slot tick loads a master's sync first, on a path of its own, and on
-                // frame-sized reservations an HRT frame at its reservation's start too.
+                // frame-sized reservations an HRT frame at its reservation's start too. A node
+                // that takes over in the tick loads its first sync at the tick's end.
+                let sync_us = |first| if b.node.is_master() { first } else { b.slot_path_us };
                 b.port.set_reserved_latency(match (mode, short, b.node.wakes_on_transmit()) {
-                    (Mode::Tdma, false, true) => Some(b.framed_paths_us),
-                    (Mode::Tdma, false, false) => Some((b.slot_path_us, b.sync_path_us)),
+                    (Mode::Tdma, false, true) => {
+                        Some((b.framed_paths_us.0, sync_us(b.framed_paths_us.1)))
+                    }
+                    (Mode::Tdma, false, false) => Some((b.slot_path_us, sync_us(b.sync_path_us))),
                     _ => None,
                 });
                 let node = &mut b.node;
