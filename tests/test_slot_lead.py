@@ -45,9 +45,9 @@ def test_the_f407_path_is_measured_on_its_own_core(measured):
 def test_the_grid_master_requests_its_sync_first(measured):
     """A slot-grid master loads its sync before it takes its received frames and runs its
     timers (r2p-node's `send_sync` at step 2): its path is short and steady, so every cycle
-    starts where the master times it. Loaded after them, the sync was requested 1 174–3 573
-    instructions after the call, up to 33 µs late at 72 MHz by a different amount each cycle
-    (docs/rtcan.md, "The sync lead")."""
+    starts where the master times it. Loaded after them, the sync was requested 704–3 038
+    instructions after the call, from 12 µs early to 20 µs late at 72 MHz, by a different amount
+    each cycle (docs/rtcan.md, "The sync lead")."""
     for cpu in ("cortex-m3", "cortex-m4"):
         sync, slot = measured(cpu)["sync"], measured(cpu)["slot"]
         assert sync.max_instructions - sync.min_instructions < 50, (cpu, sync)
@@ -73,7 +73,8 @@ def test_a_missing_constant_is_named():
 
 def test_the_frame_sized_path_requests_the_hrt_frame_first():
     """On frame-sized reservations the HRT frame and the master's sync are requested before
-    the node takes its received frames and runs its timers (r2p-node's `framed_first`): their
+    the node takes its received frames and runs its timers (r2p-node's `send_sync` and
+    `framed_first`): their
     paths are short and nearly constant, where a heartbeat handled first would start an HRT
     frame 5 µs late every fifth cycle, more than a reservation's guard bits, and the sync up to
     33 µs late (docs/rtcan.md, "The slot path in them"). Each has its own lead, which r2p-node's
@@ -90,13 +91,14 @@ def test_the_frame_sized_path_requests_the_hrt_frame_first():
     # 1 179–1 189 measured, the sync 524–534; the grid's path is 1 639–1 739 in the same harness.
     assert r["to_request_max_insn"] - r["to_request_min_insn"] < 50, r
     assert r["sync_requests"] >= 390 and r["sync_max_insn"] - r["sync_min_insn"] < 50, r
-    assert r["to_request_max_insn"] < slotlead.constant("CORTEX_M3_SLOT_PATH").min_instructions - 190, r
+    assert r["to_request_max_insn"] < slotlead.constant("CORTEX_M3_SLOT_PATH").min_instructions - slotlead.IRQ_INSTRUCTIONS, r
     # r2p-node's constants for both (the leads `MODULE_FRAMED_LEADS`, the emulator's latencies)
     # are the bench's, from the interrupt (~190 more): the same leads and emulated paths at
     # 72 MHz, and never a lead longer than the path.
     for name, key in (("CORTEX_M3_FRAMED_SLOT_PATH", "to_request"), ("CORTEX_M3_FRAMED_SYNC_PATH", "sync")):
         c = slotlead.constant(name)
-        m = slotlead.Path(r[f"{key}_min_insn"] + 190, r[f"{key}_max_insn"] + 190)
+        irq = slotlead.IRQ_INSTRUCTIONS
+        m = slotlead.Path(r[f"{key}_min_insn"] + irq, r[f"{key}_max_insn"] + irq)
         assert c.min_instructions <= m.min_instructions, (name, c, m)
         assert (c.lead_us(72_000_000), c.longest_us(72_000_000)) == \
             (m.lead_us(72_000_000), m.longest_us(72_000_000)), (name, c, m)
@@ -107,12 +109,12 @@ def test_the_frame_sized_path_requests_the_hrt_frame_first():
     # r2p-node's constant for it (the emulator's latency) is the bench's, from the interrupt
     # (~190 more).
     path = slotlead.constant("CORTEX_M3_TOP_UP_PATH")
-    assert abs(path.min_instructions - (r["top_up_transmit_min_insn"] + 190)) < 50, r
-    assert abs(path.max_instructions - (r["top_up_transmit_max_insn"] + 190)) < 300, r
+    assert abs(path.min_instructions - (r["top_up_transmit_min_insn"] + slotlead.IRQ_INSTRUCTIONS)) < 50, r
+    assert abs(path.max_instructions - (r["top_up_transmit_max_insn"] + slotlead.IRQ_INSTRUCTIONS)) < 300, r
     # The load bench's what-if waits this long from a wake to a node's next SRT/NRT frame: not
     # less than the shortest such path measured here, from the interrupt, at 72 MHz.
     src = (slotlead.ROOT / "firmware/host/loadbench/src/rtcan_node.rs").read_text()
     for name, key in (("TRANSMIT", "top_up_transmit"), ("RELEASE", "top_up_publish")):
         reaction_us = int(re.search(rf"pub const {name}_REACTION_US: Micros = (\d+);", src).group(1))
-        shortest = (r[f"{key}_min_insn"] + 190) / 72
+        shortest = (r[f"{key}_min_insn"] + slotlead.IRQ_INSTRUCTIONS) / 72
         assert shortest <= reaction_us < shortest + 1, (name, r)

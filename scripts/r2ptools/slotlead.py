@@ -3,9 +3,8 @@
 A node's slot timer fires `slot_lead_us` before each slot boundary, so that the HRT frame's
 mailbox request lands at the boundary (docs/rtcan.md, "The slot lead"); a master's fires
 `sync_lead_us` before each cycle's start, where its sync, loaded first in the tick, reaches its
-mailbox. The lead is the
-shortest path at one cycle per instruction on the MCU's clock (no core runs faster; flash wait
-states only add), rounded down: a frame never reaches its mailbox early. The emulator takes the
+mailbox. A lead is the shortest path at one cycle per instruction on the MCU's clock (no core
+runs faster; flash wait states only add), rounded down: a frame never reaches its mailbox early. The emulator takes the
 longest path, rounded up, from a board's tick to its frame's request. Both come from
 r2p-node's `SlotPath` constants (firmware/crates/r2p-node/src/node/config.rs); this measures
 the path again, built for each core, and says whether the constants still give the same leads.

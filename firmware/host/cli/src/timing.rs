@@ -10,6 +10,7 @@
 //! (`r2p_vbus::bits`), then the tail to the end of EOF. Software timestamps (`candump` without
 //! `-H`) carry the host's latency and say little at this scale.
 
+use std::collections::BTreeMap;
 use std::io::Write;
 
 use clap::{Args, ValueEnum};
@@ -53,14 +54,16 @@ pub struct Span {
 }
 
 impl Span {
+    fn one(v: i64) -> Self {
+        Self { n: 1, min: v, max: v }
+    }
+
+    fn with(self, v: i64) -> Self {
+        Self { n: self.n + 1, min: self.min.min(v), max: self.max.max(v) }
+    }
+
     fn of(values: impl IntoIterator<Item = i64>) -> Option<Self> {
-        values.into_iter().fold(None, |s, v| {
-            Some(s.map_or(Self { n: 1, min: v, max: v }, |s: Self| Self {
-                n: s.n + 1,
-                min: s.min.min(v),
-                max: s.max.max(v),
-            }))
-        })
+        values.into_iter().fold(None, |s, v| Some(s.map_or(Self::one(v), |s| s.with(v))))
     }
 }
 
@@ -97,26 +100,33 @@ pub fn frame_bits(raw_id: u32, data: &[u8]) -> u32 {
     bits.len() as u32 + stuff_count(&bits) + TAIL_BITS
 }
 
+/// `s`'s start of frame (ns), from its stamp as `args` says.
+pub fn start_of_frame(s: &Stamped, args: &TimingArgs) -> i64 {
+    let stamp = s.time.as_nanos() as i64;
+    match args.stamped_at {
+        StampedAt::Start => stamp,
+        StampedAt::End => {
+            let bits = f64::from(frame_bits(s.frame.id(), s.frame.data()));
+            stamp - (bits * 1e9 / f64::from(args.bit_rate.max(1))).round() as i64
+        }
+    }
+}
+
 /// The cycle's timing in `frames` (in time order), stamped as `args` says.
 pub fn analyse(frames: &[Stamped], args: &TimingArgs) -> Timing {
-    let bit_ns = 1e9 / f64::from(args.bit_rate.max(1));
     let mut syncs: Vec<i64> = Vec::new();
-    let mut hrt: Vec<(u16, u8, i64)> = Vec::new();
+    let mut streams: BTreeMap<(u16, u8), Span> = BTreeMap::new();
     for s in frames {
         let Ok(frame) = Frame::from_raw(s.frame.id(), s.frame.data()) else { continue };
-        let stamp = s.time.as_nanos() as i64;
-        let start = match args.stamped_at {
-            StampedAt::Start => stamp,
-            StampedAt::End => {
-                stamp
-                    - (f64::from(frame_bits(s.frame.id(), s.frame.data())) * bit_ns).round() as i64
-            }
-        };
+        let start = start_of_frame(s, args);
         if SyncFrame::from_frame(&frame).is_ok() {
             syncs.push(start);
         } else if frame.id().laxity == Laxity::HRT {
-            let Some(&sync) = syncs.iter().rev().find(|&&t| t <= start) else { continue };
-            hrt.push((frame.id().message.0, frame.id().fragment, start - sync));
+            // Frames do not overlap on the bus: the last sync before it is its cycle's.
+            let Some(&sync) = syncs.last().filter(|&&t| t <= start) else { continue };
+            let key = (frame.id().message.0, frame.id().fragment);
+            let offset = start - sync;
+            streams.entry(key).and_modify(|o| *o = o.with(offset)).or_insert(Span::one(offset));
         }
     }
     let periods: Vec<i64> = syncs.windows(2).map(|w| w[1] - w[0]).collect();
@@ -126,22 +136,15 @@ pub fn analyse(frames: &[Stamped], args: &TimingArgs) -> Timing {
         sorted.get(sorted.len() / 2).copied()
     };
     let regular = |p: &&i64| median_period.is_some_and(|m| (**p - m).abs() <= m / 2);
-    let mut keys: Vec<(u16, u8)> = hrt.iter().map(|h| (h.0, h.1)).collect();
-    keys.sort_unstable();
-    keys.dedup();
-    let streams = keys
-        .into_iter()
-        .filter_map(|(message, fragment)| {
-            let offsets = hrt.iter().filter(|h| (h.0, h.1) == (message, fragment)).map(|h| h.2);
-            Some(StreamTiming { message, fragment, offset: Span::of(offsets)? })
-        })
-        .collect();
     Timing {
         syncs: syncs.len(),
         median_period,
         period: Span::of(periods.iter().filter(regular).copied()),
         gaps: periods.iter().filter(|p| !regular(p)).count(),
-        streams,
+        streams: streams
+            .into_iter()
+            .map(|((message, fragment), offset)| StreamTiming { message, fragment, offset })
+            .collect(),
     }
 }
 
@@ -221,6 +224,11 @@ mod tests {
 
     use super::*;
 
+    fn is_sync(s: &Stamped) -> bool {
+        Frame::from_raw(s.frame.id(), s.frame.data())
+            .is_ok_and(|f| SyncFrame::from_frame(&f).is_ok())
+    }
+
     fn args() -> TimingArgs {
         TimingArgs { bit_rate: 1_000_000, stamped_at: StampedAt::End }
     }
@@ -241,18 +249,11 @@ mod tests {
         // the bus's own, to the µs.
         let epoch = Duration::from_secs(r2p_emu::serve::EPOCH_S).as_nanos() as i64;
         assert_eq!(t.syncs, starts.len());
-        let ours: Vec<i64> = {
-            let bit_ns = 1_000.0;
-            frames
-                .iter()
-                .filter_map(|s| {
-                    let f = Frame::from_raw(s.frame.id(), s.frame.data()).ok()?;
-                    SyncFrame::from_frame(&f).ok()?;
-                    let bits = f64::from(frame_bits(s.frame.id(), s.frame.data()));
-                    Some(s.time.as_nanos() as i64 - (bits * bit_ns) as i64 - epoch)
-                })
-                .collect()
-        };
+        let ours: Vec<i64> = frames
+            .iter()
+            .filter(|s| is_sync(s))
+            .map(|s| start_of_frame(s, &args()) - epoch)
+            .collect();
         for (&o, &s) in ours.iter().zip(&starts) {
             assert!((o - s as i64).abs() < 1_000, "start of frame {o} ns, the bus's {s} ns");
         }
@@ -272,16 +273,7 @@ mod tests {
         }
         // A sync stamped 5 µs late shows as a period 5 µs long and the next 5 µs short.
         let mut late = frames.clone();
-        let i = late
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| {
-                Frame::from_raw(s.frame.id(), s.frame.data())
-                    .is_ok_and(|f| SyncFrame::from_frame(&f).is_ok())
-            })
-            .nth(50)
-            .unwrap()
-            .0;
+        let i = late.iter().enumerate().filter(|(_, s)| is_sync(s)).nth(50).unwrap().0;
         late[i].time += Duration::from_micros(5);
         let p2 = analyse(&late, &args()).period.unwrap();
         assert_eq!((p2.min, p2.max), (9_995_000, 10_005_000), "{p:?} → {p2:?}");

@@ -207,15 +207,10 @@ struct Board<'a, N> {
     /// Next short path ([`Runtime::top_up`]: a transmit-complete or a publish), ns; `u64::MAX`:
     /// none. A slot tick due by then runs instead.
     event_ns: u64,
-    /// From a slot tick's clock read to its frames' mailbox request, µs.
-    slot_path_us: u64,
-    /// The same for the short path.
-    top_up_us: u64,
-    /// The same for a slot-grid master's sync, which it loads first (`Mcu::sync_path_us`).
-    sync_path_us: u64,
-    /// The same on frame-sized reservations for a slot tick's HRT frame and sync, which it
-    /// loads first (`Mcu::framed_paths_us`).
-    framed_paths_us: (u64, u64),
+    /// Its MCU: how long each of its firmware's paths takes from a clock read to the mailbox
+    /// request (`Mcu::slot_path_us`, `Mcu::top_up_path_us`, `Mcu::sync_path_us`,
+    /// `Mcu::framed_paths_us`).
+    mcu: Mcu,
     /// Next application step, ns.
     app_ns: u64,
     powered: bool,
@@ -325,22 +320,18 @@ impl<'a, N: Runtime> Sim<'a, N> {
         app: Option<App<'a, N>>,
         mcu: Mcu,
     ) -> usize {
-        let slot_path_us = mcu.slot_path_us();
         assert!(self.boards.iter().all(|b| b.port.port().index() != port), "port {port} taken");
         let bit_rate = self.bus.config().bit_rate;
         self.boards.push(Board {
             node,
-            port: SimPort::new(self.bus.port(port), bit_rate).with_load_latency(slot_path_us),
+            port: SimPort::new(self.bus.port(port), bit_rate).with_load_latency(mcu.slot_path_us()),
             app,
             tap: None,
             stall: None,
             down_until_ns: None,
             wake_ns: self.now_ns,
             event_ns: u64::MAX,
-            slot_path_us,
-            top_up_us: mcu.top_up_path_us(),
-            sync_path_us: mcu.sync_path_us(),
-            framed_paths_us: mcu.framed_paths_us(),
+            mcu,
             app_ns: self.now_ns,
             powered: true,
             mailboxes: 0,
@@ -510,16 +501,18 @@ impl<'a, N: Runtime> Sim<'a, N> {
                 // publish; each with its own time to the mailboxes.
                 let short = b.wake_ns > t;
                 b.event_ns = u64::MAX;
-                b.port.set_load_latency(if short { b.top_up_us } else { b.slot_path_us });
+                let (mcu, slot_path_us) = (b.mcu, b.mcu.slot_path_us());
+                b.port.set_load_latency(if short { mcu.top_up_path_us() } else { slot_path_us });
                 // A slot tick loads a master's sync first, on a path of its own, and on
                 // frame-sized reservations an HRT frame at its reservation's start too. A node
                 // that takes over in the tick loads its first sync at the tick's end.
-                let sync_us = |first| if b.node.is_master() { first } else { b.slot_path_us };
+                let sync_us = |first| if b.node.is_master() { first } else { slot_path_us };
                 b.port.set_reserved_latency(match (mode, short, b.node.wakes_on_transmit()) {
                     (Mode::Tdma, false, true) => {
-                        Some((b.framed_paths_us.0, sync_us(b.framed_paths_us.1)))
+                        let (hrt, sync) = mcu.framed_paths_us();
+                        Some((hrt, sync_us(sync)))
                     }
-                    (Mode::Tdma, false, false) => Some((b.slot_path_us, sync_us(b.sync_path_us))),
+                    (Mode::Tdma, false, false) => Some((slot_path_us, sync_us(mcu.sync_path_us()))),
                     _ => None,
                 });
                 let node = &mut b.node;

@@ -33,8 +33,8 @@ pub struct BxCanPort {
     counter: TimeCounter,
     /// From the caller's clock read to the mailbox request (ns).
     load_latency_ns: u64,
-    /// The same for a reservation's first frame of firmware on frame-sized reservations,
-    /// which loads it first on a path of its own: (an HRT frame's, a sync's), ns.
+    /// The same for the frames a slot tick loads first, each on a path of its own: (an HRT
+    /// frame's, a sync's), ns.
     reserved_latency_ns: Option<(u64, u64)>,
 }
 

@@ -205,7 +205,7 @@ mod tests {
 
     #[test]
     fn each_mcu_leads_by_its_shortest_slot_path_rounded_down() {
-        // 1 814 / 72 = 25.2 µs; 1 819 / 168 = 10.8 µs.
+        // 1 829 / 72 = 25.4 µs; 1 834 / 168 = 10.9 µs.
         assert_eq!(MODULE_SLOT_LEAD_US, 25);
         assert_eq!(CORTEX_M4_SLOT_PATH.lead_us(168_000_000), 10);
         // Exactly on a microsecond: not rounded.
@@ -216,7 +216,7 @@ mod tests {
 
     #[test]
     fn the_emulated_path_is_the_longest_rounded_up() {
-        // 1 914 / 72 = 26.6 µs; 1 924 / 168 = 11.5 µs.
+        // 1 934 / 72 = 26.9 µs; 1 939 / 168 = 11.5 µs.
         assert_eq!(CORTEX_M3_SLOT_PATH.longest_us(72_000_000), 27);
         assert_eq!(CORTEX_M4_SLOT_PATH.longest_us(168_000_000), 12);
         let p = SlotPath { min_instructions: 145, max_instructions: 145 };

@@ -349,7 +349,7 @@ fn framed(
     // The first SRT/NRT frame's request, in the calls that load one: the slot tick's (the
     // window's path), the short path's after a transmit-complete and after a publish.
     let mut queued = Span::default();
-    // The master's call to its sync's request: the sync goes first (`framed_first`).
+    // The master's call to its sync's request: the sync goes first (`Node::send_sync`).
     let mut sync = Span::default();
     let (mut after_transmit, mut after_publish) = (Span::default(), Span::default());
     let half = bus.now.get() + 400 * Micros::from(CYCLE.cycle_us);
