@@ -27,7 +27,7 @@ pub struct BusArgs {
     #[arg(long, global = true, value_name = "IFACE", conflicts_with = "trace")]
     pub socketcan: Option<String>,
     /// Read a recorded trace (candump log or pcap) instead of a live bus: for monitor, nodes,
-    /// topics, echo and ui
+    /// topics, echo, ui and timing
     #[arg(long, global = true, value_name = "FILE")]
     pub trace: Option<PathBuf>,
     /// The bus name to open on the socketcand server

@@ -25,8 +25,9 @@ use crate::error::CliError;
 /// `r2p timing`'s options (the trace comes from `--trace`).
 #[derive(Args, Debug)]
 pub struct TimingArgs {
-    /// The bus's bit rate, bit/s
-    #[arg(long, value_name = "BIT/S", default_value_t = 1_000_000)]
+    /// The bus's bit rate, bit/s (classic CAN: at most 1 000 000)
+    #[arg(long, value_name = "BIT/S", default_value_t = 1_000_000,
+          value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub bit_rate: u32,
     /// Where the trace stamps each frame
     #[arg(long, value_enum, default_value = "end")]
@@ -299,6 +300,26 @@ mod tests {
         let ends = analyse(&frames, &args()).period.unwrap();
         let p = t.period.unwrap();
         assert!((ends.min - p.min).abs() <= 3_000 && (ends.max - p.max).abs() <= 3_000, "{ends:?}");
+    }
+
+    #[test]
+    fn a_bit_rate_classic_can_cannot_have_is_refused_by_name() {
+        use clap::Parser;
+        let parse = |rate: &str| {
+            crate::cli::Cli::try_parse_from([
+                "r2p",
+                "--trace",
+                "t.log",
+                "timing",
+                "--bit-rate",
+                rate,
+            ])
+        };
+        assert!(parse("500000").is_ok());
+        for rate in ["0", "2000000"] {
+            let err = parse(rate).expect_err(rate).to_string();
+            assert!(err.contains("--bit-rate") && err.contains("1..=1000000"), "{err}");
+        }
     }
 
     #[test]
