@@ -271,6 +271,9 @@ mod tests {
         for s in &t.streams {
             assert!(s.offset.n >= 30, "{s:?}");
             assert!(s.offset.max - s.offset.min <= 3_000, "{s:?}");
+            // A slot's start (the demo's 250 µs slots) and the 2 µs, to the stamps' µs.
+            assert!(s.offset.min >= 250_000, "{s:?}");
+            assert!((s.offset.min % 250_000).abs_diff(2_000) <= 1_000, "{s:?}");
         }
         // A sync stamped 5 µs late shows as a period 5 µs long and the next 5 µs short.
         let mut late = frames.clone();
@@ -300,6 +303,74 @@ mod tests {
         let ends = analyse(&frames, &args()).period.unwrap();
         let p = t.period.unwrap();
         assert!((ends.min - p.min).abs() <= 3_000 && (ends.max - p.max).abs() <= 3_000, "{ends:?}");
+    }
+
+    /// A start-stamped frame at `at_us`: a sync of `cycle`, or else an HRT frame of `message`.
+    fn stamped(at_us: u64, cycle: u32, message: Option<u16>) -> Stamped {
+        let f = match message {
+            None => SyncFrame::new(cycle, 0b10, false).to_frame(),
+            Some(m) => {
+                let id = rtcan::FrameId {
+                    laxity: Laxity::HRT,
+                    message: rtcan::MessageId(m),
+                    fragment: 0,
+                };
+                Frame::new(id, &[1, 2, 3, 4]).unwrap()
+            }
+        };
+        Stamped {
+            time: Duration::from_micros(at_us),
+            frame: r2p_canlink::CanFrame::extended(f.id().to_raw(), f.payload()).unwrap(),
+        }
+    }
+
+    #[test]
+    fn the_median_period_is_the_middle_one() {
+        let at = [1_000, 11_000, 21_003, 41_003, 51_004];
+        let frames: Vec<_> = at.iter().zip(0..).map(|(&t, c)| stamped(t, c, None)).collect();
+        let t = analyse(&frames, &TimingArgs { stamped_at: StampedAt::Start, ..args() });
+        // Periods 10 000, 10 003, 20 000 and 10 001 µs: the median of four, the upper middle.
+        assert_eq!(t.median_period, Some(10_003_000));
+    }
+
+    /// `r2p --trace FILE timing …` on `frames` written as a candump log: its exit and output.
+    fn run_on(frames: &[Stamped], extra: &[&str]) -> (Result<(), CliError>, String) {
+        use clap::Parser;
+        let path = std::env::temp_dir().join(format!(
+            "r2p-timing-{}-{}.log",
+            std::process::id(),
+            frames.len()
+        ));
+        let mut w =
+            r2p_canlink::candump::LogWriter::new(std::fs::File::create(&path).unwrap(), "can0");
+        frames.iter().for_each(|s| w.write(s).unwrap());
+        w.flush().unwrap();
+        let mut argv = std::vec!["r2p", "--trace", path.to_str().unwrap()];
+        argv.extend(extra);
+        let mut out = Vec::new();
+        let r = crate::cli::run(crate::cli::Cli::try_parse_from(argv).unwrap(), &mut out);
+        std::fs::remove_file(&path).unwrap();
+        (r, String::from_utf8(out).unwrap())
+    }
+
+    #[test]
+    fn run_prints_the_cycle_in_microseconds_and_needs_two_syncs() {
+        let frames =
+            [stamped(1_000, 0, None), stamped(11_000, 1, None), stamped(11_169, 0, Some(0x7F02))];
+        let (r, out) = run_on(&frames, &["timing", "--stamped-at", "start"]);
+        r.unwrap();
+        assert!(out.starts_with("syncs: 2, one every 10000.0 µs (median)"), "{out}");
+        assert!(out.contains("10000.0–10000.0 µs (spread 0.0 µs); 0 gap(s)"), "{out}");
+        assert!(out.contains("HRT 0x7F02 frame 0: 1 frames, 169.0–169.0 µs"), "{out}");
+        let (r, out) = run_on(&frames, &["--json", "timing", "--stamped-at", "start"]);
+        r.unwrap();
+        let j: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+        assert_eq!(j["median_period_us"], 10_000.0);
+        assert_eq!(j["hrt"][0]["offset"]["min_us"], 169.0);
+        // One sync is no cycle: said, not a panic.
+        let (r, _) = run_on(&frames[..1], &["timing", "--stamped-at", "start"]);
+        let err = r.expect_err("one sync").to_string();
+        assert!(err.contains("1 sync(s) in 1 frames: no cycle to measure"), "{err}");
     }
 
     #[test]
