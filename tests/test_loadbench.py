@@ -152,8 +152,37 @@ def test_tables_show_ratios_against_fixed_priority(loadbench):
     (["--blocks", "0"], "hrt_blocks = 0: use 1 … 4"),
     (["--blocks", "5"], "hrt_blocks = 5: use 1 … 4"),
     (["--blocks", "two"], "not a block count"),
+    (["--laxity-drift", "64"], "give laxity code steps, 0 … 63"),
+    (["--reactions", "0,29"], "give two positive whole µs, TRANSMIT,RELEASE"),
+    (["--reactions", "27"], "give two positive whole µs, TRANSMIT,RELEASE"),
 ])
 def test_bad_arguments_are_refused_with_the_reason(loadbench, args, message):
     p = run([str(BIN), *args], cwd=FIRMWARE)
     assert p.returncode != 0
     assert message in p.stdout
+
+
+def test_what_ifs_for_the_median_goal_change_the_frame_sized_run_only_as_they_say(loadbench):
+    """docs/rtcan.md, "What the median goal would take": each what-if is reported with the
+    point, keeps every HRT frame at its reservation's start and inside it, and moves what it
+    names: exact reservations are shorter than worst-case ones; faster reactions and a laxity
+    drift shorten the frame-sized run's median SRT latency at 90 %."""
+    base = ["--loads", "0.9", "--seconds", "1", "--policies", "rtcan_framed,fixed"]
+
+    def framed(*args):
+        (point,), _ = sweep(*base, *args)
+        return point, next(r for r in point["reports"] if r["policy"] == "rtcan_framed")
+
+    p0, f0 = framed()
+    assert (p0["laxity_drift"], p0["reactions_us"], p0["hrt_exact"]) == (0, [27, 29], False)
+    for args in (["--hrt-exact"], ["--reactions", "1,1"], ["--laxity-drift", "1"]):
+        p, f = framed(*args)
+        assert f["hrt_missed"] == 0 and f["hrt_jitter_max_us"] == 0 and f["hrt_in_slot"] == 1, args
+        assert f["srt_p50_us"] < f0["srt_p50_us"], args
+    p, _ = framed("--hrt-exact")
+    assert p["hrt_exact"] is True
+    # The same streams in the same slots (the sync's, slot 0, unchanged), each no longer.
+    lengths = lambda q: {s[0]: s[2] for s in q["framed_slots"]}  # noqa: E731
+    exact, worst = lengths(p), lengths(p0)
+    assert exact.keys() == worst.keys() and exact[0] == worst[0]
+    assert all(exact[k] <= worst[k] for k in worst) and sum(exact.values()) < sum(worst.values())

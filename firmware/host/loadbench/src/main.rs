@@ -11,7 +11,7 @@ use r2p_loadbench::{point, Policy, Setup};
 use rtcan::LaxityEncoding;
 
 const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L2,...] [--policies P1,P2,...] [--mix HRT,SRT]
-                     [--laxity E:T] [--blocks K]
+                     [--laxity E:T] [--blocks K] [--laxity-drift N] [--reactions T,R] [--hrt-exact]
   --seed N        traffic seed (default 1)
   --seconds S     measured virtual time per load point (default 10)
   --loads ...     offered loads as fractions of 1 Mbit/s (default 0.10,0.15,...,0.95)
@@ -22,6 +22,13 @@ const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L
   --mix H,S       HRT and SRT shares of the offered load, NRT the rest (default 0.3,0.5)
   --laxity E:T    SRT laxity encoding, log or linear, tick T µs (default log:100)
   --blocks K      rtcan_framed: blocks of HRT reservations per cycle (default 2)
+  what-ifs for issue 22's median goal (docs/rtcan.md, \"What the median goal would take\"):
+  --laxity-drift N  rtcan_framed: laxity code steps a loaded frame may lag and stay loaded
+                  (default 0, as the node runtime)
+  --reactions T,R rtcan_framed: µs from a transmit-complete and from a release to the short
+                  path's loading (default 27,29: the node runtime's, measured under QEMU)
+  --hrt-exact     HRT payloads with no stuff bits and reservations exactly as long as their
+                  frames (both protocols' traffic)
 ";
 
 struct Args {
@@ -32,6 +39,9 @@ struct Args {
     mix: Mix,
     laxity: LaxityEncoding,
     blocks: u8,
+    laxity_drift: u8,
+    reactions_us: (u64, u64),
+    hrt_exact: bool,
 }
 
 fn parse() -> Result<Args, String> {
@@ -43,14 +53,30 @@ fn parse() -> Result<Args, String> {
         mix: Setup::new(0.5, 0).mix,
         laxity: Setup::new(0.5, 0).laxity,
         blocks: Setup::new(0.5, 0).hrt_blocks,
+        laxity_drift: Setup::new(0.5, 0).laxity_drift,
+        reactions_us: Setup::new(0.5, 0).reactions_us,
+        hrt_exact: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
         if flag == "--help" || flag == "-h" {
             return Err(String::new());
         }
-        const FLAGS: [&str; 7] =
-            ["--seed", "--seconds", "--loads", "--policies", "--mix", "--blocks", "--laxity"];
+        if flag == "--hrt-exact" {
+            a.hrt_exact = true;
+            continue;
+        }
+        const FLAGS: [&str; 9] = [
+            "--seed",
+            "--seconds",
+            "--loads",
+            "--policies",
+            "--mix",
+            "--blocks",
+            "--laxity",
+            "--laxity-drift",
+            "--reactions",
+        ];
         if !FLAGS.contains(&flag.as_str()) {
             return Err(format!("unknown option {flag}"));
         }
@@ -91,6 +117,24 @@ fn parse() -> Result<Args, String> {
                 a.mix = Mix { hrt, srt };
             }
             "--blocks" => a.blocks = value.parse().map_err(|_| bad("not a block count"))?,
+            "--laxity-drift" => {
+                a.laxity_drift = value
+                    .parse()
+                    .ok()
+                    .filter(|&n| n < 64)
+                    .ok_or(bad("give laxity code steps, 0 … 63"))?;
+            }
+            "--reactions" => {
+                let v: Vec<u64> = value
+                    .split(',')
+                    .map(|s| s.trim().parse::<u64>().ok().filter(|&us| us > 0))
+                    .collect::<Option<_>>()
+                    .ok_or(bad("give two positive whole µs, TRANSMIT,RELEASE"))?;
+                let [transmit, release] = v[..] else {
+                    return Err(bad("give two positive whole µs, TRANSMIT,RELEASE"));
+                };
+                a.reactions_us = (transmit, release);
+            }
             "--laxity" => {
                 let (kind, tick) =
                     value.split_once(':').ok_or(bad("write log:TICK or linear:TICK"))?;
@@ -131,6 +175,9 @@ fn main() -> ExitCode {
             mix: args.mix,
             laxity: args.laxity,
             hrt_blocks: args.blocks,
+            laxity_drift: args.laxity_drift,
+            reactions_us: args.reactions_us,
+            hrt_exact: args.hrt_exact,
             ..Setup::new(load, args.seed)
         };
         let t = Instant::now();
@@ -151,6 +198,9 @@ fn main() -> ExitCode {
         json["seconds"] = args.seconds.into();
         json["mix"] = serde_json::json!({ "hrt": args.mix.hrt, "srt": args.mix.srt });
         json["laxity"] = format!("{:?}", args.laxity).into();
+        json["laxity_drift"] = args.laxity_drift.into();
+        json["reactions_us"] = serde_json::json!([args.reactions_us.0, args.reactions_us.1]);
+        json["hrt_exact"] = args.hrt_exact.into();
         json["wall_s"] = wall.into();
         json["events_per_s"] = (ev as f64 / wall).round().into();
         println!("{json}");

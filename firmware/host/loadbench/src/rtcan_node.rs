@@ -127,7 +127,9 @@ impl<'t> RtcanNode<'t> {
             tx: TxQueue::new(setup.laxity),
             master,
             slot_tx: if framed {
-                SlotTx::new(&setup.cycle, free_slots).fitted(&setup.cycle)
+                SlotTx::new(&setup.cycle, free_slots)
+                    .fitted(&setup.cycle)
+                    .laxity_drift(setup.laxity_drift)
             } else {
                 SlotTx::new(&setup.cycle, free_slots)
             },
@@ -152,11 +154,11 @@ impl<'t> RtcanNode<'t> {
 
     /// The bus moved at `now` (framed what-if). If a frame of its own left a mailbox (sent, or
     /// lost a one-shot arbitration), its transmit-complete interrupt runs the short path:
-    /// [`TRANSMIT_REACTION_US`] later its next frames are loaded, as `Node::wakes_on_transmit`
+    /// [`TRANSMIT_REACTION_US`] later (`Setup::reactions_us`) its next frames are loaded, as `Node::wakes_on_transmit`
     /// asks of the firmware. Received frames wake it at no other time than its timer.
     pub fn on_bus_event(&mut self, now: Micros) {
         if self.can.port().pending() < self.mailboxes {
-            self.react_at(now + TRANSMIT_REACTION_US);
+            self.react_at(now + self.setup.reactions_us.0);
         }
         self.mailboxes = self.can.port().pending();
     }
@@ -300,7 +302,7 @@ impl<'t> RtcanNode<'t> {
         }
         // A message's release (the application's publish) wakes it too (`releases_waiting`).
         if let Some(r) = self.publishers.next_release(self.traffic) {
-            self.react_at((r + RELEASE_REACTION_US).max(now + 1));
+            self.react_at((r + self.setup.reactions_us.1).max(now + 1));
         }
         self.wake_at = self.slot_tx.next_wake(now, next);
         self.mailboxes = self.can.port().pending();

@@ -35,6 +35,19 @@ pub struct Setup {
     pub hrt_blocks: u8,
     /// SRT laxity encoding (the node runtime's default: logarithmic, 100 µs ticks).
     pub laxity: LaxityEncoding,
+    /// `rtcan_framed` (what-if): laxity code steps a loaded frame may lag and stay loaded
+    /// (`r2p_node::SlotTx::laxity_drift`; the node runtime's: 0).
+    pub laxity_drift: u8,
+    /// `rtcan_framed` (what-if): µs from one of a node's frames leaving its mailbox, and from
+    /// a message's release, to the node's short path loading its next frames (the node
+    /// runtime's as measured: [`crate::rtcan_node::TRANSMIT_REACTION_US`] and
+    /// [`crate::rtcan_node::RELEASE_REACTION_US`]).
+    pub reactions_us: (u64, u64),
+    /// What-if for both protocols' traffic: HRT payloads that need no stuff bits (0x55 …) and
+    /// frame-sized reservations as long as those frames exactly, so no reservation has slack
+    /// after its frame: the bound a layout that let HRT frames follow each other as their
+    /// lengths allow (jitter up to the stuff bits of the frames before) would approach.
+    pub hrt_exact: bool,
     /// Class shares of the offered load.
     pub mix: Mix,
     /// SRT streams per node.
@@ -66,6 +79,12 @@ impl Setup {
             hrt_slots: 15,
             hrt_blocks: 2,
             laxity: LaxityEncoding::Logarithmic { tick_us: 100 },
+            laxity_drift: 0,
+            reactions_us: (
+                crate::rtcan_node::TRANSMIT_REACTION_US,
+                crate::rtcan_node::RELEASE_REACTION_US,
+            ),
+            hrt_exact: false,
             mix: Mix { hrt: 0.3, srt: 0.5 },
             srt_streams_per_node: 4,
             srt_deadline_us: (2_000, 20_000),

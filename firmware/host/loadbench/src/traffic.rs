@@ -19,7 +19,7 @@ use r2p_vbus::FrameBits;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 use rtcan::id::SYNC_MESSAGE_IDS;
-use rtcan::layout::Layout;
+use rtcan::layout::{Layout, RESERVATION_GUARD_BITS};
 use rtcan::schedule::{next_reserved, Period, Phase, Scheduler};
 use rtcan::{fragments, Frame, FrameId, Laxity, MessageId};
 
@@ -128,6 +128,11 @@ pub struct Traffic {
     pub offered_bits: u64,
 }
 
+/// An HRT payload of `len` bytes with no run of equal bits (`Setup::hrt_exact`).
+fn hrt_payload(len: usize) -> Vec<u8> {
+    vec![0x55; len]
+}
+
 /// Bits on the wire of `payload` sent as `stream`'s message with the baseline's identifiers.
 fn wire_bits(stream: &Stream, payload: &[u8]) -> u32 {
     fragments(stream.static_id(0), payload)
@@ -185,7 +190,7 @@ impl Builder<'_> {
             let len = self.rng.random_range(HRT_BYTES.0..=HRT_BYTES.1);
             let rate_hz = 1e6 / (f64::from(cycles) * cycle_us);
             let probe = self.probe();
-            let bits = rate_hz * self.window_s() * f64::from(wire_bits(&probe, &vec![0x55; len]));
+            let bits = rate_hz * self.window_s() * f64::from(wire_bits(&probe, &hrt_payload(len)));
             if offered + bits / 2.0 > target {
                 return offered;
             }
@@ -193,7 +198,14 @@ impl Builder<'_> {
                 return offered;
             };
             let id = FrameId { laxity: Laxity::HRT, message: probe.message, fragment: 0 };
-            let needs_us = self.layout.reservation_us(id.to_raw(), len);
+            let needs_us = if self.setup.hrt_exact {
+                // As `Layout::reservation_us` times a worst case: with its guard bits, in whole µs.
+                let exact = FrameBits::of(&Frame::new(id, &hrt_payload(len)).expect("≤ 8 bytes"));
+                let bits = u64::from(exact.total() + RESERVATION_GUARD_BITS);
+                (bits * 1_000_000).div_ceil(u64::from(self.setup.cycle.bit_rate)) as u16
+            } else {
+                self.layout.reservation_us(id.to_raw(), len)
+            };
             let framed = self.layout.admit(&mut self.framed, probe.message, cycles, 1, needs_us);
             let Ok(framed) = framed.map(|s| s.first()) else {
                 self.scheduler.remove(probe.message);
@@ -265,7 +277,9 @@ impl Builder<'_> {
             let mut c = start.div_ceil(cycle_us);
             c += (u64::from(phase.offset) + p - c % p) % p;
             while c * cycle_us + slot_us < end {
-                let data = (0..self.hrt_len[s]).map(|_| self.rng.random()).collect();
+                let random = (0..self.hrt_len[s]).map(|_| self.rng.random()).collect();
+                // Drawn either way: the rest of the traffic stays the same.
+                let data = if self.setup.hrt_exact { hrt_payload(self.hrt_len[s]) } else { random };
                 self.push(s, c * cycle_us + slot_us, c as u32, data);
                 c += p;
             }

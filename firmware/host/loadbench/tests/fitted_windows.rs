@@ -87,3 +87,34 @@ fn a_frame_whose_latest_start_is_now_is_not_loaded() {
     assert!(!fitted.load_queued(0, end as rtcan::Micros, &mut port, &q));
     assert!(fitted.load_queued(0, end as rtcan::Micros + 1, &mut port, &q));
 }
+
+/// The first time after `from` at which the queue's next frame's laxity code is `steps` codes
+/// lower (more urgent) than at `from`.
+fn code_steps_later(q: &TxQueue<16>, from: rtcan::Micros, steps: u8) -> rtcan::Micros {
+    let code = |t| q.upcoming(t).next().unwrap().1.id().laxity.code();
+    (from..).find(|&t| code(t) + steps == code(from)).unwrap()
+}
+
+#[test]
+fn with_a_laxity_drift_a_loaded_frame_that_many_codes_behind_stays_in_its_mailbox() {
+    // `SlotTx::laxity_drift` (what-if): one code behind it stays loaded with a drift of 1, two
+    // codes behind it is withdrawn; without a drift (the node runtime's), one code is enough.
+    let mut q = queue();
+    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
+    let (one, two) = (code_steps_later(&q, 0, 1), code_steps_later(&q, 0, 2));
+    let end = 4_000;
+    for (drift, at, stays) in [(1, one, true), (1, two, false), (0, one, false), (0, 0, true)] {
+        // The bus stays at 0: the frame is still in its mailbox at `at`.
+        let bus = Bus::new(2, Config::default());
+        let mut port = bus.port(0);
+        let mut tx =
+            SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).laxity_drift(drift);
+        assert!(tx.load_queued(0, end, &mut port, &q));
+        let withdrawn = tx.settle(at, &mut port, &q).iter().flatten().count();
+        assert_eq!(
+            (withdrawn == 0, port.pending()),
+            (stays, usize::from(stays)),
+            "drift {drift}, {at} µs later"
+        );
+    }
+}
