@@ -165,8 +165,9 @@ def test_bad_arguments_are_refused_with_the_reason(loadbench, args, message):
 def test_what_ifs_for_the_median_goal_change_the_frame_sized_run_only_as_they_say(loadbench):
     """docs/rtcan.md, "What the median goal would take": each what-if is reported with the
     point, keeps every HRT frame at its reservation's start and inside it, and moves what it
-    names: exact reservations are shorter than worst-case ones; faster reactions and a laxity
-    drift shorten the frame-sized run's median SRT latency at 90 %."""
+    names: exact reservations are shorter than worst-case ones; faster reactions, a laxity
+    drift and staged reloads (which the interrupt loads) shorten the frame-sized run's median
+    SRT latency at 90 %."""
     base = ["--loads", "0.9", "--seconds", "1", "--policies", "rtcan_framed,fixed"]
 
     def framed(*args):
@@ -174,11 +175,15 @@ def test_what_ifs_for_the_median_goal_change_the_frame_sized_run_only_as_they_sa
         return point, next(r for r in point["reports"] if r["policy"] == "rtcan_framed")
 
     p0, f0 = framed()
-    assert (p0["laxity_drift"], p0["reactions_us"], p0["hrt_exact"]) == (0, [27, 29], False)
-    for args in (["--hrt-exact"], ["--reactions", "1,1"], ["--laxity-drift", "1"]):
+    assert (p0["laxity_drift"], p0["reactions_us"], p0["hrt_exact"], p0["staged"]) \
+        == (0, [27, 29], False, False)
+    assert f0["counters"]["staged"] == 0
+    for args in (["--hrt-exact"], ["--reactions", "1,1"], ["--laxity-drift", "1"], ["--staged"]):
         p, f = framed(*args)
         assert f["hrt_missed"] == 0 and f["hrt_jitter_max_us"] == 0 and f["hrt_in_slot"] == 1, args
         assert f["srt_p50_us"] < f0["srt_p50_us"], args
+    p, f = framed("--staged")
+    assert p["staged"] is True and f["counters"]["staged"] > 0
     p, _ = framed("--hrt-exact")
     assert p["hrt_exact"] is True
     # The same streams in the same slots (the sync's, slot 0, unchanged), each no longer.

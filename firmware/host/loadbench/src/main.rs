@@ -12,6 +12,7 @@ use rtcan::LaxityEncoding;
 
 const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L2,...] [--policies P1,P2,...] [--mix HRT,SRT]
                      [--laxity E:T] [--blocks K] [--laxity-drift N] [--reactions T,R] [--hrt-exact]
+                     [--staged]
   --seed N        traffic seed (default 1)
   --seconds S     measured virtual time per load point (default 10)
   --loads ...     offered loads as fractions of 1 Mbit/s (default 0.10,0.15,...,0.95)
@@ -29,6 +30,8 @@ const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L
                   path's loading (default 27,29: the node runtime's, measured under QEMU)
   --hrt-exact     HRT payloads with no stuff bits and reservations exactly as long as their
                   frames (both protocols' traffic)
+  --staged        rtcan_framed: frames staged for the transmit interrupt, loaded 2 µs after
+                  the node's frames have left the controller
 ";
 
 struct Args {
@@ -42,6 +45,7 @@ struct Args {
     laxity_drift: u8,
     reactions_us: (u64, u64),
     hrt_exact: bool,
+    staged: bool,
 }
 
 fn parse() -> Result<Args, String> {
@@ -56,14 +60,15 @@ fn parse() -> Result<Args, String> {
         laxity_drift: Setup::new(0.5, 0).laxity_drift,
         reactions_us: Setup::new(0.5, 0).reactions_us,
         hrt_exact: false,
+        staged: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
         if flag == "--help" || flag == "-h" {
             return Err(String::new());
         }
-        if flag == "--hrt-exact" {
-            a.hrt_exact = true;
+        if flag == "--hrt-exact" || flag == "--staged" {
+            *(if flag == "--staged" { &mut a.staged } else { &mut a.hrt_exact }) = true;
             continue;
         }
         const FLAGS: [&str; 9] = [
@@ -178,6 +183,7 @@ fn main() -> ExitCode {
             laxity_drift: args.laxity_drift,
             reactions_us: args.reactions_us,
             hrt_exact: args.hrt_exact,
+            staged: args.staged,
             ..Setup::new(load, args.seed)
         };
         let t = Instant::now();
@@ -201,6 +207,7 @@ fn main() -> ExitCode {
         json["laxity_drift"] = args.laxity_drift.into();
         json["reactions_us"] = serde_json::json!([args.reactions_us.0, args.reactions_us.1]);
         json["hrt_exact"] = args.hrt_exact.into();
+        json["staged"] = args.staged.into();
         json["wall_s"] = wall.into();
         json["events_per_s"] = (ev as f64 / wall).round().into();
         println!("{json}");

@@ -46,6 +46,8 @@ pub struct Counters {
     pub resyncs: u64,
     /// Node activations (slot ticks, or services after a bus event or release).
     pub activations: u64,
+    /// Frames the transmit interrupt loaded from those the node staged (`Setup::staged`).
+    pub staged: u64,
 }
 
 impl AddAssign for Counters {
@@ -54,6 +56,7 @@ impl AddAssign for Counters {
         self.late += o.late;
         self.overflows += o.overflows;
         self.expired += o.expired;
+        self.staged += o.staged;
         self.hrt_skipped += o.hrt_skipped;
         self.resyncs += o.resyncs;
         self.activations += o.activations;

@@ -16,7 +16,7 @@
 use std::collections::VecDeque;
 
 use r2p_emu::SimPort;
-use r2p_node::slot_tx::{Done, Slotted};
+use r2p_node::slot_tx::{Done, Slotted, Staged, QUEUED_MAX};
 use r2p_node::{FreeSlots, SlotTx};
 use rtcan::controller::{Filter, TxOutcome};
 use rtcan::cycle::{ClockState, SYNC_SLOT};
@@ -66,6 +66,11 @@ pub struct RtcanNode<'t> {
     reaction: Option<Micros>,
     /// Frames in its mailboxes after its last activation or bus event (framed what-if).
     mailboxes: usize,
+    /// The frames its last activation staged for the transmit interrupt (`SlotTx::staged`),
+    /// each with the message and fragment it carries.
+    staged: Vec<(Staged, u32, u8)>,
+    /// When its transmit interrupt loads them ([`STAGED_REACTION_US`]).
+    interrupt_at: Option<Micros>,
     /// When the node's timer fires next: the next slot boundary or a loaded frame's guard.
     wake_at: Micros,
     /// Frames this node's port sent, in order.
@@ -85,6 +90,12 @@ pub const TRANSMIT_REACTION_US: Micros = 27;
 /// The same for a message's release (a publish, `Node::releases_waiting`), whose path also
 /// queues it: `top_up_publish_min_insn`, 1 854 + 190 instructions, 29 µs.
 pub const RELEASE_REACTION_US: Micros = 29;
+
+/// What-if (`Setup::staged`): the transmit interrupt loads the staged frames this long after
+/// the controller empties: ~60 instructions to its first mailbox request (the interrupt's
+/// entry, `CAN_TSR`, one mailbox's four registers), ~1 µs at 72 MHz, inside CAN's 3-bit
+/// intermission. An estimate: the firmware's interrupt is not written yet.
+pub const STAGED_REACTION_US: Micros = 2;
 
 /// Message ID → stream index.
 fn stream_of(message: MessageId) -> usize {
@@ -130,6 +141,7 @@ impl<'t> RtcanNode<'t> {
                 SlotTx::new(&setup.cycle, free_slots)
                     .fitted(&setup.cycle)
                     .laxity_drift(setup.laxity_drift)
+                    .staging(setup.staged)
             } else {
                 SlotTx::new(&setup.cycle, free_slots)
             },
@@ -141,6 +153,8 @@ impl<'t> RtcanNode<'t> {
             framed,
             reaction: None,
             mailboxes: 0,
+            staged: Vec::new(),
+            interrupt_at: None,
             wake_at: 0,
             sent: Vec::new(),
             counters: Counters::default(),
@@ -149,7 +163,8 @@ impl<'t> RtcanNode<'t> {
 
     /// When the node's timer fires next (`Node::next_slot_at`), or it reacts to a bus event.
     pub fn next_wake(&self) -> Micros {
-        self.reaction.map_or(self.wake_at, |r| r.min(self.wake_at))
+        let wake = self.reaction.map_or(self.wake_at, |r| r.min(self.wake_at));
+        self.interrupt_at.map_or(wake, |i| i.min(wake))
     }
 
     /// The bus moved at `now` (framed what-if). If a frame of its own left a mailbox (sent, or
@@ -159,6 +174,9 @@ impl<'t> RtcanNode<'t> {
     pub fn on_bus_event(&mut self, now: Micros) {
         if self.can.port().pending() < self.mailboxes {
             self.react_at(now + self.setup.reactions_us.0);
+            if !self.staged.is_empty() && self.can.port().pending() == 0 {
+                self.interrupt_at = Some(now + STAGED_REACTION_US);
+            }
         }
         self.mailboxes = self.can.port().pending();
     }
@@ -170,6 +188,13 @@ impl<'t> RtcanNode<'t> {
 
     /// The node's timer at `now`: a loaded frame's guard, a slot boundary, or both.
     pub fn wake(&mut self, now: Micros) {
+        if self.interrupt_at.is_some_and(|i| i <= now) {
+            self.interrupt_at = None;
+            self.load_staged(now);
+            if now < self.wake_at && self.reaction.is_none_or(|r| r > now) {
+                return;
+            }
+        }
         self.counters.activations += 1;
         if self.slot_tx.at_guard(now) {
             self.slot_tx.on_guard(&mut self.can);
@@ -179,6 +204,12 @@ impl<'t> RtcanNode<'t> {
             let short = self.reaction.is_some_and(|r| r <= now) && now < self.wake_at;
             self.reaction = self.reaction.filter(|&r| r > now);
             self.framed_tick(now, short);
+            self.staged = self
+                .slot_tx
+                .staged()
+                .map(|s| (s, self.message_of(now, s.ticket)))
+                .map(|(s, (m, f))| (s, m, f))
+                .collect();
             return;
         }
         if now >= self.next_slot {
@@ -308,25 +339,60 @@ impl<'t> RtcanNode<'t> {
         self.mailboxes = self.can.port().pending();
     }
 
-    /// Records which message and fragment each newly loaded frame carries: the queue's frames
-    /// in sending order, a stream's messages in its publisher order.
-    fn note_loaded(&mut self, now: Micros) {
+    /// The transmit interrupt at `now` (`Setup::staged`): if the last frame that left the
+    /// controller was sent, loads the staged frames in order while each may still go
+    /// (`Staged::may_load`), into mailboxes whose results the node has taken (bxCAN clears a
+    /// mailbox's result when a frame is loaded into it).
+    fn load_staged(&mut self, now: Micros) {
+        let staged = std::mem::take(&mut self.staged);
+        let waiting = self.can.port().results_waiting();
+        let mut free = QUEUED_MAX.saturating_sub(self.can.port().pending() + waiting.len());
+        let mut n = 0;
+        if waiting.last() == Some(&TxOutcome::Sent) {
+            for (s, msg, fragment) in staged {
+                if free == 0 || !s.may_load(now) || self.can.try_transmit(&s.frame).is_err() {
+                    break;
+                }
+                self.loaded.push((s.ticket, msg, fragment));
+                (n, free) = (n + 1, free - 1);
+            }
+        }
+        self.slot_tx.staged_went_in(n);
+        self.counters.staged += n as u64;
+        self.mailboxes = self.can.port().pending();
+    }
+
+    /// The message and fragment of the queued frame `ticket`: the queue's frames in sending
+    /// order, a stream's messages in its publisher's order.
+    fn message_of(&self, now: Micros, ticket: Ticket) -> (u32, u8) {
         let mut nth = std::collections::HashMap::<usize, usize>::new();
-        let loaded: Vec<Ticket> = self.slot_tx.queued().map(|(t, _)| t).collect();
-        for (ticket, frame) in self.tx.upcoming(now) {
+        for (t, frame) in self.tx.upcoming(now) {
             let id = frame.id();
             let stream = stream_of(id.message);
             let k = *nth.entry(stream).or_insert(0);
+            if t == ticket {
+                let msg = self.queued[stream].get(k).copied().expect("a queued frame's message");
+                return (msg, id.fragment);
+            }
             if rtcan::fragment::is_last_frame(id.fragment) {
                 nth.insert(stream, k + 1);
             }
-            if loaded.contains(&ticket) && !self.loaded.iter().any(|l| l.0 == ticket) {
-                let msg = self.queued[stream].get(k).copied().expect("a queued frame's message");
-                self.loaded.push((ticket, msg, id.fragment));
-            }
-            if self.loaded.len() == loaded.len() {
-                break;
-            }
+        }
+        unreachable!("a loaded or staged frame is queued")
+    }
+
+    /// Records which message and fragment each newly loaded frame carries: the queue's frames
+    /// in sending order, a stream's messages in its publisher order.
+    fn note_loaded(&mut self, now: Micros) {
+        let new: Vec<Ticket> = self
+            .slot_tx
+            .queued()
+            .map(|(t, _)| t)
+            .filter(|t| !self.loaded.iter().any(|l| l.0 == *t))
+            .collect();
+        for ticket in new {
+            let (msg, fragment) = self.message_of(now, ticket);
+            self.loaded.push((ticket, msg, fragment));
         }
     }
 

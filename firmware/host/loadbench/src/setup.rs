@@ -48,6 +48,10 @@ pub struct Setup {
     /// after its frame: the bound a layout that let HRT frames follow each other as their
     /// lengths allow (jitter up to the stuff bits of the frames before) would approach.
     pub hrt_exact: bool,
+    /// `rtcan_framed` (what-if): the transmit interrupt loads the frames the node staged
+    /// (`r2p_node::SlotTx::staging`) [`crate::rtcan_node::STAGED_REACTION_US`] after the
+    /// controller empties.
+    pub staged: bool,
     /// Class shares of the offered load.
     pub mix: Mix,
     /// SRT streams per node.
@@ -85,6 +89,7 @@ impl Setup {
                 crate::rtcan_node::RELEASE_REACTION_US,
             ),
             hrt_exact: false,
+            staged: false,
             mix: Mix { hrt: 0.3, srt: 0.5 },
             srt_streams_per_node: 4,
             srt_deadline_us: (2_000, 20_000),

@@ -2,11 +2,13 @@
 //! merged window takes near its end, on the virtual bus. The frame-sized reservations of
 //! `rtcan_framed` rely on it to fill a window up to the next reservation.
 
+use r2p_node::slot_tx::Done;
 use r2p_node::{FreeSlots, SlotTx};
 use r2p_vbus::{Bus, Config, EventKind};
+use rtcan::controller::TxOutcome;
 use rtcan::cycle::frame_bits_of;
 use rtcan::id::MessageId;
-use rtcan::{CycleConfig, LaxityEncoding, TxQueue, Urgency};
+use rtcan::{CanController, CycleConfig, LaxityEncoding, TxQueue, Urgency};
 
 const CYCLE: CycleConfig = CycleConfig { bit_rate: 1_000_000, cycle_us: 5_000, slots: 30 };
 const URGENT: MessageId = MessageId(0x120);
@@ -117,4 +119,167 @@ fn with_a_laxity_drift_a_loaded_frame_that_many_codes_behind_stays_in_its_mailbo
             "drift {drift}, {at} µs later"
         );
     }
+}
+
+/// What became of the queued frames `settle` reports: their tickets and outcomes.
+fn outcomes(done: &[Done<()>]) -> Vec<(rtcan::Ticket, TxOutcome, bool)> {
+    done.iter()
+        .filter_map(|d| match *d {
+            Done::Queued { ticket, outcome, late, .. } => Some((ticket, outcome, late)),
+            Done::Slotted { .. } => None,
+        })
+        .collect()
+}
+
+#[test]
+fn a_node_whose_frames_are_still_in_the_controller_stages_what_it_would_load() {
+    // `SlotTx::staging` (what-if): a frame loaded for one window is still in the controller
+    // when the next window opens; the node cannot load behind it, so it stages the frames it
+    // would load, and the transmit interrupt loads them once the controller is empty (into
+    // the mailboxes whose results were taken). `settle` takes them as its queued frames.
+    let mut q = queue();
+    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
+    let bus = Bus::new(2, Config::default());
+    let mut port = bus.port(0);
+    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
+    assert!(tx.load_queued(0, 2_000, &mut port, &q));
+    let first = q.upcoming(0).next().unwrap().0;
+    // Released since: a two-frame message and a one-frame one.
+    q.push_message(LATER, &[2; 10], Urgency::Srt { deadline: 9_000 }).unwrap();
+    q.push_message(MessageId(0x122), &[3], Urgency::Srt { deadline: 9_500 }).unwrap();
+    // The next window, while the first frame is in the controller: nothing loads, the next
+    // three frames are staged in order, each with its own latest start.
+    let end = 4_000;
+    assert!(!tx.load_queued(20, end, &mut port, &q));
+    let staged: Vec<_> = tx.staged().collect();
+    let expected: Vec<_> = q.upcoming(20).skip(1).collect();
+    assert_eq!(staged.iter().map(|s| (s.ticket, s.frame)).collect::<Vec<_>>(), expected);
+    for s in &staged {
+        let own = u64::from(frame_bits_of(s.frame.id().to_raw(), s.frame.payload().len()));
+        assert_eq!(s.latest, end - own as rtcan::Micros);
+        assert!(s.may_load(s.latest - 1) && !s.may_load(s.latest));
+    }
+    // The node's timer fires at the loaded frame's latest start, then at the earliest staged
+    // frame's.
+    let loaded_latest = 2_000 - frame_bits_of(q.upcoming(0).next().unwrap().1.id().to_raw(), 1);
+    assert_eq!(tx.next_wake(20, 5_000), rtcan::Micros::from(loaded_latest));
+    let staged_latest = staged.iter().map(|s| s.latest).min().unwrap();
+    assert_eq!(tx.next_wake(rtcan::Micros::from(loaded_latest), 5_000), staged_latest);
+    // Without staging, nothing is staged.
+    let mut plain = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE);
+    let plain_bus = Bus::new(2, Config::default());
+    let mut plain_port = plain_bus.port(0);
+    assert!(plain.load_queued(0, 2_000, &mut plain_port, &q));
+    assert!(!plain.load_queued(20, end, &mut plain_port, &q));
+    assert_eq!(plain.staged().count(), 0);
+
+    // The first frame ends, sent; its result waits in its mailbox: two others are free.
+    bus.run_until_idle(1_000_000);
+    assert_eq!((port.pending(), port.results_waiting()), (0, vec![TxOutcome::Sent]));
+    for s in &staged[..2] {
+        port.try_transmit(&s.frame).unwrap();
+    }
+    tx.staged_went_in(2);
+    assert_eq!(tx.staged().count(), 0, "nothing staged once the interrupt loaded them");
+    bus.run_until_idle(2_000_000);
+    let done: Vec<_> = tx.settle(2_000, &mut port, &q).into_iter().flatten().collect();
+    let sent = |t| (t, TxOutcome::Sent, false);
+    assert_eq!(outcomes(&done), vec![sent(first), sent(staged[0].ticket), sent(staged[1].ticket)]);
+}
+
+#[test]
+fn a_staged_frame_the_interrupt_loaded_is_withdrawn_at_its_latest_start() {
+    // The node's timer fires there (`next_wake`); `at_guard` holds though `settle` has not
+    // taken the frame in yet, and the withdrawn frame comes back as late.
+    let mut q = queue();
+    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
+    let bus = Bus::new(2, Config::default());
+    let mut port = bus.port(0);
+    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
+    assert!(tx.load_queued(0, 200, &mut port, &q));
+    q.push_message(LATER, &[2], Urgency::Srt { deadline: 9_000 }).unwrap();
+    assert!(!tx.load_queued(20, 1_000, &mut port, &q));
+    let s = tx.staged().next().unwrap();
+    bus.run_until_idle(1_000_000);
+    // Loaded, and kept waiting (the bus is not run: another node's frames, say).
+    port.try_transmit(&s.frame).unwrap();
+    tx.staged_went_in(1);
+    assert!(!tx.at_guard(s.latest - 1));
+    assert!(tx.at_guard(s.latest));
+    tx.on_guard(&mut port);
+    let done: Vec<_> = tx.settle(s.latest, &mut port, &q).into_iter().flatten().collect();
+    assert_eq!(outcomes(&done)[1..], [(s.ticket, TxOutcome::Aborted, true)]);
+}
+
+#[test]
+fn a_staged_frame_still_in_its_mailbox_at_the_next_settle_is_the_windows_queued_frame() {
+    // `settle` takes it in: a queued frame of the window it was staged for, withdrawn at its
+    // own latest start, its result the node's.
+    let mut q = queue();
+    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
+    let bus = Bus::new(2, Config::default());
+    let mut port = bus.port(0);
+    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
+    assert!(tx.load_queued(0, 200, &mut port, &q));
+    let first = q.upcoming(0).next().unwrap().0;
+    q.push_message(LATER, &[2], Urgency::Srt { deadline: 9_000 }).unwrap();
+    assert!(!tx.load_queued(20, 1_000, &mut port, &q));
+    let s = tx.staged().next().unwrap();
+    bus.run_until_idle(1_000_000);
+    port.try_transmit(&s.frame).unwrap();
+    tx.staged_went_in(1);
+    let now = 300;
+    let done: Vec<_> = tx.settle(now, &mut port, &q).into_iter().flatten().collect();
+    assert_eq!(outcomes(&done), [(first, TxOutcome::Sent, false)]);
+    assert_eq!(tx.queued().collect::<Vec<_>>(), [(s.ticket, s.frame.id())]);
+    assert_eq!(tx.next_wake(now, 5_000), s.latest);
+    assert!(!tx.at_guard(s.latest - 1) && tx.at_guard(s.latest));
+    bus.run_until_idle(2_000_000);
+    let done: Vec<_> = tx.settle(now + 200, &mut port, &q).into_iter().flatten().collect();
+    assert_eq!(outcomes(&done), [(s.ticket, TxOutcome::Sent, false)]);
+}
+
+#[test]
+fn a_frame_whose_identifier_a_loaded_frame_has_is_not_staged() {
+    // Results name a frame by its identifier: two messages of one stream with the same
+    // deadline have the same one while the first is loaded.
+    let mut q = queue();
+    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
+    let bus = Bus::new(2, Config::default());
+    let mut port = bus.port(0);
+    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
+    assert!(tx.load_queued(0, 200, &mut port, &q));
+    q.push_message(URGENT, &[2], Urgency::Srt { deadline: 3_000 }).unwrap();
+    assert_eq!(q.upcoming(20).nth(1).unwrap().1.id(), tx.queued().next().unwrap().1);
+    assert!(!tx.load_queued(20, 1_000, &mut port, &q));
+    assert_eq!(tx.staged().count(), 0);
+}
+
+#[test]
+fn after_a_staged_frames_guard_nothing_loads_behind_it_while_it_is_on_the_wire() {
+    // The guard ran for the staged frame the interrupt loaded before `settle` took it in: it
+    // is then late and draining, as any frame withdrawn at its guard.
+    let mut q = queue();
+    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
+    let bus = Bus::new(2, Config::default());
+    let mut port = bus.port(0);
+    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
+    assert!(tx.load_queued(0, 200, &mut port, &q));
+    q.push_message(LATER, &[2; 8], Urgency::Srt { deadline: 9_000 }).unwrap();
+    q.push_message(MessageId(0x122), &[3], Urgency::Srt { deadline: 9_500 }).unwrap();
+    let end = 1_000;
+    assert!(!tx.load_queued(20, end, &mut port, &q));
+    let s = tx.staged().next().unwrap();
+    let t = bus.run_until_idle(1_000_000);
+    port.try_transmit(&s.frame).unwrap();
+    tx.staged_went_in(1);
+    // On the wire at its latest start (it started just before).
+    bus.advance_to(t + 20_000);
+    assert_eq!(port.pending(), 1);
+    tx.on_guard(&mut port);
+    let now = s.latest.max((t + 20_000) / 1_000);
+    let done: Vec<_> = tx.settle(now, &mut port, &q).into_iter().flatten().collect();
+    assert_eq!(outcomes(&done).len(), 1, "the first frame's result only: {done:?}");
+    assert_eq!(tx.queued().count(), 1, "the staged frame, still on the wire");
+    assert!(!tx.load_queued(now, end, &mut port, &q), "nothing behind a frame past its guard");
 }

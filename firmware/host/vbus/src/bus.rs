@@ -874,6 +874,13 @@ impl Port {
         lock(&self.inner).nodes[self.index].mailboxes.iter().flatten().count()
     }
 
+    /// The outcomes of finished frames whose results the driver has not taken, oldest first:
+    /// what bxCAN's `CAN_TSR` still shows (`RQCP` set, `TXOK`), one per mailbox. A mailbox
+    /// with its result waiting is empty but loading it would clear that result.
+    pub fn results_waiting(&self) -> Vec<TxOutcome> {
+        lock(&self.inner).nodes[self.index].results.iter().map(|(r, _)| r.outcome).collect()
+    }
+
     /// The bus's virtual time, ns (what this board's clock reads).
     pub fn now_ns(&self) -> u64 {
         lock(&self.inner).now
