@@ -191,3 +191,26 @@ def test_what_ifs_for_the_median_goal_change_the_frame_sized_run_only_as_they_sa
     exact, worst = lengths(p), lengths(p0)
     assert exact.keys() == worst.keys() and exact[0] == worst[0]
     assert all(exact[k] <= worst[k] for k in worst) and sum(exact.values()) < sum(worst.values())
+
+
+def test_whatif_table_gives_the_ratio_span_the_seeds_within_and_whether_the_other_goals_held():
+    from r2ptools import bench
+
+    def point(load, framed, fixed, carried=0.93, missed=(0, 0), jitter=0):
+        f = {"policy": "rtcan_framed", "srt_p50_us": framed, "hrt_missed": 0, "hrt_in_slot": 1,
+             "hrt_jitter_max_us": jitter, "srt_missed": missed[0], "utilisation": carried}
+        x = {"policy": "fixed", "srt_p50_us": fixed, "srt_missed": missed[1]}
+        return {"load": load, "reports": [f, x]}
+
+    runs = {"as now": {1: [point(0.8, 150, 100), point(0.95, 200, 100, carried=0.921)],
+                       2: [point(0.8, 140, 100), point(0.95, 210, 100)]},
+            "--staged": {1: [point(0.8, 130, 100), point(0.95, 160, 100, carried=0.919)],
+                         2: [point(0.8, 160, 100, missed=(3, 2)), point(0.95, 150, 100)]},
+            "--hrt-exact": {1: [point(0.8, 120, 100), point(0.95, 140, 100, jitter=2)],
+                            2: [point(0.8, 120, 100), point(0.95, 140, 100)]}}
+    now, staged, exact = bench.whatifs_table(runs).splitlines()[1:]
+    assert "1.40–1.50  2/2" in now and "2.00–2.10  0/2" in now
+    assert now.endswith("92.10–93.00 % | kept")
+    assert "1.30–1.60  1/2" in staged and "1.50–1.60  1/2" in staged  # 1.5 is within
+    assert staged.endswith("91.90–93.00 % | NOT kept (carried < 92 %)")
+    assert exact.endswith("| NOT kept")

@@ -319,6 +319,58 @@ def seeds_capacity(by_seed: dict[int, list[dict]]) -> str:
     return "\n".join(out)
 
 
+MEDIAN_WHATIFS = {
+    "as now": [],
+    "--staged": ["--staged"],
+    "--laxity-drift 1": ["--laxity-drift", "1"],
+    "--reactions 1,1": ["--reactions", "1,1"],
+    "--hrt-exact": ["--hrt-exact"],
+    "--staged --hrt-exact": ["--staged", "--hrt-exact"],
+    "--staged --hrt-exact --reactions 1,1": ["--staged", "--hrt-exact", "--reactions", "1,1"],
+}
+"""The frame-sized what-if's options that bear on issue 22's median goal (docs/rtcan.md, "What
+the median goal would take"): r2p-loadbench's flags per row."""
+WHATIF_LOADS = "0.8,0.85,0.9,0.95"
+
+
+def median_whatifs(seeds=SEEDS) -> dict[str, dict[int, list[dict]]]:
+    """Per what-if, per seed: the frame-sized run and fixed priority at 80–95 %."""
+    return {name: {seed: rtcan_load(["--seed", str(seed), "--loads", WHATIF_LOADS,
+                                     "--policies", "rtcan_framed,fixed", *flags])[0]
+                   for seed in seeds}
+            for name, flags in MEDIAN_WHATIFS.items()}
+
+
+def whatifs_table(runs: dict[str, dict[int, list[dict]]]) -> str:
+    """Per what-if and load: the median SRT latency's ratio to fixed priority's (min–max over
+    the seeds) and the seeds within issue 22's bound; at 95 % the share carried; and whether
+    every seed kept the other goals (0 HRT misses, 0 µs jitter, every HRT frame in its
+    reservation, no more SRT misses than fixed priority)."""
+    _, bound = GOAL_MEDIAN
+    _, share = GOAL_CARRIED
+    loads = sorted({pt["load"] for per_seed in runs.values() for pts in per_seed.values() for pt in pts})
+    out = [f"{'what-if':<38} | " + " | ".join(f"{f'{100 * x:.0f} %':>17}" for x in loads)
+           + f" | {'carried at 95 %':>15} | others"]
+    for name, per_seed in runs.items():
+        cells, carried, kept = [], [], True
+        for load in loads:
+            at = [by_policy(pt) for pts in per_seed.values() for pt in pts if pt["load"] == load]
+            ratios = [r["rtcan_framed"]["srt_p50_us"] / r["fixed"]["srt_p50_us"] for r in at]
+            within = sum(x <= bound for x in ratios)
+            cells.append(f"{min(ratios):.2f}–{max(ratios):.2f} {within:>2}/{len(ratios)}")
+            for r in at:
+                f = r["rtcan_framed"]
+                kept &= (f["hrt_missed"] == 0 and f["hrt_jitter_max_us"] == 0 and f["hrt_in_slot"] == 1
+                         and f["srt_missed"] <= r["fixed"]["srt_missed"])
+                if load == max(loads):
+                    carried.append(f["utilisation"])
+        span = f"{100 * min(carried):.2f}–{100 * max(carried):.2f} %"
+        out.append(f"{name:<38} | " + " | ".join(f"{c:>17}" for c in cells)
+                   + f" | {span:>15} | {'kept' if kept else 'NOT kept'}"
+                   + ("" if min(carried) >= share else f" (carried < {100 * share:.0f} %)"))
+    return "\n".join(out)
+
+
 def by_policy(point: dict) -> dict[str, dict]:
     return {r["policy"]: r for r in point["reports"]}
 
@@ -672,6 +724,7 @@ def main() -> int:
         hs = host()
         load_points, load_sim = rtcan_load()
         load_seeds = rtcan_seeds()
+        whatifs = median_whatifs()
         failover = rtcan_failover()
         sim_rows = triskar2()
     except (RuntimeError, subprocess.CalledProcessError) as e:
@@ -759,6 +812,10 @@ def main() -> int:
     print("\nissue 22's capacity over the same seeds: bus carried (syncs included) and median SRT "
           "latency against fixed priority's:")
     print(seeds_capacity(load_seeds))
+    print(f"\nissue 22's median goal, the frame-sized what-if's options (seeds {SEEDS.start}–"
+          f"{SEEDS.stop - 1}; docs/rtcan.md, \"What the median goal would take\"): median SRT "
+          f"latency / fixed priority's, min–max, and the seeds within {GOAL_MEDIAN[1]}:")
+    print(whatifs_table(whatifs))
     print(f"data: {write_load(load_points).relative_to(ROOT)}")
     for path in redraw_load():
         print(f"plot: {path.relative_to(ROOT)}")
