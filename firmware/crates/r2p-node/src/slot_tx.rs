@@ -55,7 +55,7 @@ pub enum FreeSlots {
 }
 
 /// A frame [`SlotTx`] stages for the transmit interrupt (module documentation), in load order.
-#[cfg(feature = "fitted-windows")]
+#[cfg(feature = "staged-reloads")]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Staged {
     /// Its entry in the transmit queue.
@@ -66,7 +66,7 @@ pub struct Staged {
     pub latest: Micros,
 }
 
-#[cfg(feature = "fitted-windows")]
+#[cfg(feature = "staged-reloads")]
 impl Staged {
     /// True if the transmit interrupt at `now` may still load it: before its latest start (the
     /// node's timer withdraws it there if the bus is busy, [`SlotTx::next_wake`]).
@@ -166,16 +166,16 @@ pub struct SlotTx<T> {
     #[cfg(feature = "fitted-windows")]
     laxity_drift: u8,
     /// Stages frames for the transmit interrupt ([`SlotTx::staging`]).
-    #[cfg(feature = "fitted-windows")]
+    #[cfg(feature = "staged-reloads")]
     stages: bool,
     /// The frames staged, in load order ([`SlotTx::staged`]).
-    #[cfg(feature = "fitted-windows")]
+    #[cfg(feature = "staged-reloads")]
     staged: [Option<Staged>; QUEUED_MAX],
     /// The end of the window they were staged for.
-    #[cfg(feature = "fitted-windows")]
+    #[cfg(feature = "staged-reloads")]
     staged_end: Micros,
     /// How many of them the interrupt loaded ([`SlotTx::staged_went_in`]), not yet taken in.
-    #[cfg(feature = "fitted-windows")]
+    #[cfg(feature = "staged-reloads")]
     staged_in: usize,
     /// The slotted frames loaded are not withdrawn before this ([`SlotTx::hold_slotted`]).
     #[cfg(feature = "fitted-windows")]
@@ -202,13 +202,13 @@ impl<T: Copy> SlotTx<T> {
             fitted: None,
             #[cfg(feature = "fitted-windows")]
             laxity_drift: 0,
-            #[cfg(feature = "fitted-windows")]
+            #[cfg(feature = "staged-reloads")]
             stages: false,
-            #[cfg(feature = "fitted-windows")]
+            #[cfg(feature = "staged-reloads")]
             staged: [None; QUEUED_MAX],
-            #[cfg(feature = "fitted-windows")]
+            #[cfg(feature = "staged-reloads")]
             staged_end: 0,
-            #[cfg(feature = "fitted-windows")]
+            #[cfg(feature = "staged-reloads")]
             staged_in: 0,
             #[cfg(feature = "fitted-windows")]
             slotted_until: 0,
@@ -249,7 +249,7 @@ impl<T: Copy> SlotTx<T> {
     /// transmit interrupt ([`staged`](Self::staged)). Measured, 16 seeds: the median SRT
     /// latency against fixed priority's 1.32–1.42 at 80 % offered load (1.42–1.53 without), the
     /// share carried at 95 % 92.03–93.30 %. The firmware's interrupt does not load them yet.
-    #[cfg(feature = "fitted-windows")]
+    #[cfg(feature = "staged-reloads")]
     pub const fn staging(mut self, on: bool) -> Self {
         self.stages = on;
         self
@@ -260,7 +260,7 @@ impl<T: Copy> SlotTx<T> {
     /// once the controller holds none of the node's frames and the last one that left was
     /// sent (a fragment of its message may be among them), each while
     /// [`may_load`](Staged::may_load), then tells [`staged_went_in`](Self::staged_went_in).
-    #[cfg(feature = "fitted-windows")]
+    #[cfg(feature = "staged-reloads")]
     pub fn staged(&self) -> impl Iterator<Item = Staged> + '_ {
         self.staged.iter().map_while(|s| *s).filter(|_| self.staged_in == 0)
     }
@@ -268,7 +268,7 @@ impl<T: Copy> SlotTx<T> {
     /// The transmit interrupt loaded the first `n` staged frames (at most as many as
     /// [`staged`](Self::staged) gave it): the next
     /// [`settle`](Self::settle) takes them among the queued frames, and their results as theirs.
-    #[cfg(feature = "fitted-windows")]
+    #[cfg(feature = "staged-reloads")]
     pub fn staged_went_in(&mut self, n: usize) {
         self.staged_in = n;
     }
@@ -281,8 +281,8 @@ impl<T: Copy> SlotTx<T> {
     /// True if a call of the slot timer at `now` is the loaded queued frame's guard (its
     /// window's latest start), not a slot boundary.
     pub fn at_guard(&self, now: Micros) -> bool {
-        #[cfg(feature = "fitted-windows")]
-        if self.went_in().any(|s| now >= s.latest && now < self.staged_end) {
+        #[cfg(feature = "staged-reloads")]
+        if self.staged_in > 0 && self.staged_due(now) {
             return true;
         }
         self.has_queued() && self.window.is_some_and(|w| now >= w.guard && now < w.end)
@@ -362,17 +362,22 @@ impl<T: Copy> SlotTx<T> {
         keep: impl FnOnce(&Self, &Settled<T>) -> bool,
     ) -> Settled<T> {
         let mut done: Settled<T> = [None; SLOTTED_MAX + QUEUED_MAX];
-        #[cfg(not(feature = "fitted-windows"))]
+        // The staged frames the interrupt loaded are queued frames now, behind those whose
+        // results wait (there is room: it loads only mailboxes whose results were taken).
+        #[cfg(feature = "staged-reloads")]
+        let staged_in = self.staged_in > 0 && self.queue_staged();
+        #[cfg(feature = "staged-reloads")]
+        if self.stages && !staged_in {
+            self.staged = [None; QUEUED_MAX];
+        }
         if !self.has_slotted() && !self.has_queued() {
             return done;
         }
-        #[cfg(feature = "fitted-windows")]
-        if !self.has_slotted() && !self.has_queued() && self.staged_in == 0 {
-            return done;
-        }
         let n = self.take_results(can, &mut done, 0);
-        #[cfg(feature = "fitted-windows")]
-        self.take_in_staged();
+        #[cfg(feature = "staged-reloads")]
+        if staged_in {
+            self.open_staged_window();
+        }
         #[cfg(not(feature = "fitted-windows"))]
         let withdraw = !keep(self, &done) || self.has_slotted();
         #[cfg(feature = "fitted-windows")]
@@ -476,15 +481,6 @@ impl<T: Copy> SlotTx<T> {
                 let late = self.late && r.outcome == TxOutcome::Aborted;
                 Done::Queued { ticket, id, outcome: r.outcome, late }
             } else {
-                // A staged frame the interrupt loaded, ended before `settle` took it in.
-                #[cfg(feature = "fitted-windows")]
-                if let Some(ticket) = self.staged_result(r.id) {
-                    let late = self.late && r.outcome == TxOutcome::Aborted;
-                    if let Some(slot) = done.get_mut(n) {
-                        *slot = Some(Done::Queued { ticket, id: r.id, outcome: r.outcome, late });
-                        n += 1;
-                    }
-                }
                 continue; // a frame of an earlier mode of use (unslotted): nothing to do
             };
             if let Some(slot) = done.get_mut(n) {
@@ -533,7 +529,8 @@ impl<T: Copy> SlotTx<T> {
     /// controller held none of the node's frames: those that fit, in order, with identifiers
     /// distinct from each other's and from the frames still loaded (results name a frame by
     /// its identifier).
-    #[cfg(feature = "fitted-windows")]
+    #[cfg(feature = "staged-reloads")]
+    #[inline(never)]
     fn stage<const N: usize>(&mut self, now: Micros, end: Micros, tx: &TxQueue<N>) {
         let mut blocked = Blocked::default();
         let mut k = 0;
@@ -558,44 +555,50 @@ impl<T: Copy> SlotTx<T> {
         self.staged_end = end;
     }
 
-    /// The staged frames the interrupt loaded and `settle` has not taken in.
-    #[cfg(feature = "fitted-windows")]
-    fn went_in(&self) -> impl Iterator<Item = Staged> + '_ {
-        self.staged.iter().take(self.staged_in).flatten().copied()
+    /// True if a staged frame the interrupt loaded, not yet taken in by `settle`, is at or past
+    /// its latest start at `now` (out of line, as the other staging steps: the slot path of a
+    /// node that does not stage pays a compare for each).
+    #[cfg(feature = "staged-reloads")]
+    #[inline(never)]
+    fn staged_due(&self, now: Micros) -> bool {
+        let mut went_in = self.staged.iter().take(self.staged_in).flatten();
+        went_in.any(|s| now >= s.latest && now < self.staged_end)
     }
 
-    /// Takes the staged frames the interrupt loaded among the queued frames (the controller
-    /// held none of the node's frames then, so they are the window's frames now); forgets the
-    /// others.
-    #[cfg(feature = "fitted-windows")]
-    fn take_in_staged(&mut self) {
+    /// `boundary`, or before it the earliest staged frame's latest start still ahead.
+    #[cfg(feature = "staged-reloads")]
+    #[inline(never)]
+    fn staged_wake(&self, now: Micros, boundary: Micros) -> Micros {
+        self.staged().map(|s| s.latest).filter(|&l| l > now).fold(boundary, Micros::min)
+    }
+
+    /// Queues the staged frames the interrupt loaded behind the frames still loaded, whose
+    /// results wait (their window's state follows once those are taken,
+    /// [`open_staged_window`](Self::open_staged_window)). True.
+    #[cfg(feature = "staged-reloads")]
+    #[inline(never)]
+    fn queue_staged(&mut self) -> bool {
+        let went_in = self.staged.iter().take(self.staged_in).flatten();
+        for (free, s) in self.queued.iter_mut().filter(|q| q.is_none()).zip(went_in) {
+            *free = Some((s.ticket, s.frame.id()));
+        }
+        true
+    }
+
+    /// The window the staged frames the interrupt loaded were staged for is the node's now:
+    /// the interrupt loaded them into an empty controller, so every frame of the window before
+    /// has ended. A guard that ran for them since withdrew those not on the wire (their
+    /// results came in `settle`); one on the wire ends inside the window, and its guard, past,
+    /// lets nothing load behind it.
+    #[cfg(feature = "staged-reloads")]
+    #[inline(never)]
+    fn open_staged_window(&mut self) {
         let n = core::mem::take(&mut self.staged_in);
         let staged = core::mem::replace(&mut self.staged, [None; QUEUED_MAX]);
-        if n == 0 {
-            return;
-        }
-        // The interrupt loaded them into an empty controller: the window they were staged for
-        // is the node's now (a guard that ran for them since has withdrawn those not on the
-        // wire: their results came first, `staged_result`; one on the wire ends inside the
-        // window, and the guard, past, lets nothing load behind it).
-        let mut guard = self.staged_end;
-        for s in staged.iter().take(n).flatten() {
-            if let Some(free) = self.queued.iter_mut().find(|q| q.is_none()) {
-                *free = Some((s.ticket, s.frame.id()));
-                guard = guard.min(s.latest);
-            }
-        }
+        let guard =
+            staged.iter().take(n).flatten().map(|s| s.latest).fold(self.staged_end, Micros::min);
         (self.late, self.draining) = (false, false);
         self.window = self.has_queued().then_some(Window { end: self.staged_end, guard });
-    }
-
-    /// The ticket of the staged frame `id` names, if the interrupt loaded it (its result came
-    /// before `settle` took it in); it is then no longer staged.
-    #[cfg(feature = "fitted-windows")]
-    fn staged_result(&mut self, id: FrameId) -> Option<Ticket> {
-        let n = self.staged_in;
-        let s = self.staged.iter_mut().take(n).find(|s| s.is_some_and(|s| s.frame.id() == id));
-        s.and_then(Option::take).map(|s| s.ticket)
     }
 
     /// The end of the window a free slot at `p` opens: the start of the next slot (`Single`),
@@ -636,13 +639,13 @@ impl<T: Copy> SlotTx<T> {
         #[cfg(feature = "fitted-windows")]
         let mut blocked = Blocked::default();
         let other_window = self.window.is_some_and(|w| w.end != end);
-        #[cfg(feature = "fitted-windows")]
-        {
+        #[cfg(feature = "staged-reloads")]
+        if self.stages {
             self.staged = [None; QUEUED_MAX];
         }
         if now >= guard || (self.has_queued() && (other_window || self.draining)) {
             // Frames of the node's are still in the controller: what would go next is staged.
-            #[cfg(feature = "fitted-windows")]
+            #[cfg(feature = "staged-reloads")]
             if self.stages && self.has_queued() && (other_window || self.draining) {
                 self.stage(now, end, tx);
             }
@@ -704,9 +707,8 @@ impl<T: Copy> SlotTx<T> {
     /// if that is still ahead.
     pub fn next_wake(&self, now: Micros, boundary: Micros) -> Micros {
         // A staged frame the interrupt may load must be withdrawn at its latest start.
-        #[cfg(feature = "fitted-windows")]
-        let boundary =
-            self.staged().map(|s| s.latest).filter(|&l| l > now).fold(boundary, Micros::min);
+        #[cfg(feature = "staged-reloads")]
+        let boundary = if self.stages { self.staged_wake(now, boundary) } else { boundary };
         match self.window {
             Some(w) if self.has_queued() && now < w.guard && w.guard < boundary => w.guard,
             _ => boundary,
