@@ -4,7 +4,7 @@
 
 use r2p_node::slot_tx::Done;
 use r2p_node::{FreeSlots, SlotTx};
-use r2p_vbus::{Bus, Config, EventKind};
+use r2p_vbus::{Bus, Config, EventKind, Port};
 use rtcan::controller::TxOutcome;
 use rtcan::cycle::frame_bits_of;
 use rtcan::id::MessageId;
@@ -131,26 +131,41 @@ fn outcomes(done: &[Done<()>]) -> Vec<(rtcan::Ticket, TxOutcome, bool)> {
         .collect()
 }
 
+/// A staging node that loaded `URGENT`'s one frame for a window ending at `first_end` and, with
+/// the messages `then` (message, payload, deadline) released since, finds it still in the
+/// controller when the window ending at `end` opens at 20 µs: it loads nothing (and stages).
+/// The bus, the node's port, the node, its queue and the first frame's ticket.
+fn staged_behind_one(
+    first_end: rtcan::Micros,
+    then: &[(MessageId, &[u8], rtcan::Micros)],
+    end: rtcan::Micros,
+) -> (Bus, Port, SlotTx<()>, TxQueue<16>, rtcan::Ticket) {
+    let mut q = queue();
+    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
+    let bus = Bus::new(2, Config::default());
+    let mut port = bus.port(0);
+    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
+    assert!(tx.load_queued(0, first_end, &mut port, &q));
+    let first = q.upcoming(0).next().unwrap().0;
+    for &(message, data, deadline) in then {
+        q.push_message(message, data, Urgency::Srt { deadline }).unwrap();
+    }
+    assert!(!tx.load_queued(20, end, &mut port, &q));
+    (bus, port, tx, q, first)
+}
+
 #[test]
 fn a_node_whose_frames_are_still_in_the_controller_stages_what_it_would_load() {
     // `SlotTx::staging` (what-if): a frame loaded for one window is still in the controller
     // when the next window opens; the node cannot load behind it, so it stages the frames it
     // would load, and the transmit interrupt loads them once the controller is empty (into
     // the mailboxes whose results were taken). `settle` takes them as its queued frames.
-    let mut q = queue();
-    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
-    let bus = Bus::new(2, Config::default());
-    let mut port = bus.port(0);
-    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
-    assert!(tx.load_queued(0, 2_000, &mut port, &q));
-    let first = q.upcoming(0).next().unwrap().0;
-    // Released since: a two-frame message and a one-frame one.
-    q.push_message(LATER, &[2; 10], Urgency::Srt { deadline: 9_000 }).unwrap();
-    q.push_message(MessageId(0x122), &[3], Urgency::Srt { deadline: 9_500 }).unwrap();
-    // The next window, while the first frame is in the controller: nothing loads, the next
-    // three frames are staged in order, each with its own latest start.
+    // Released since: a two-frame message and a one-frame one. In the next window, while the
+    // first frame is in the controller, the next three frames are staged in order, each with
+    // its own latest start.
     let end = 4_000;
-    assert!(!tx.load_queued(20, end, &mut port, &q));
+    let then: [(_, &[u8], _); 2] = [(LATER, &[2; 10], 9_000), (MessageId(0x122), &[3], 9_500)];
+    let (bus, mut port, mut tx, q, first) = staged_behind_one(2_000, &then, end);
     let staged: Vec<_> = tx.staged().collect();
     let expected: Vec<_> = q.upcoming(20).skip(1).collect();
     assert_eq!(staged.iter().map(|s| (s.ticket, s.frame)).collect::<Vec<_>>(), expected);
@@ -191,14 +206,7 @@ fn a_node_whose_frames_are_still_in_the_controller_stages_what_it_would_load() {
 fn a_staged_frame_the_interrupt_loaded_is_withdrawn_at_its_latest_start() {
     // The node's timer fires there (`next_wake`); `at_guard` holds though `settle` has not
     // taken the frame in yet, and the withdrawn frame comes back as late.
-    let mut q = queue();
-    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
-    let bus = Bus::new(2, Config::default());
-    let mut port = bus.port(0);
-    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
-    assert!(tx.load_queued(0, 200, &mut port, &q));
-    q.push_message(LATER, &[2], Urgency::Srt { deadline: 9_000 }).unwrap();
-    assert!(!tx.load_queued(20, 1_000, &mut port, &q));
+    let (bus, mut port, mut tx, q, _) = staged_behind_one(200, &[(LATER, &[2], 9_000)], 1_000);
     let s = tx.staged().next().unwrap();
     bus.run_until_idle(1_000_000);
     // Loaded, and kept waiting (the bus is not run: another node's frames, say).
@@ -215,15 +223,7 @@ fn a_staged_frame_the_interrupt_loaded_is_withdrawn_at_its_latest_start() {
 fn a_staged_frame_still_in_its_mailbox_at_the_next_settle_is_the_windows_queued_frame() {
     // `settle` takes it in: a queued frame of the window it was staged for, withdrawn at its
     // own latest start, its result the node's.
-    let mut q = queue();
-    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
-    let bus = Bus::new(2, Config::default());
-    let mut port = bus.port(0);
-    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
-    assert!(tx.load_queued(0, 200, &mut port, &q));
-    let first = q.upcoming(0).next().unwrap().0;
-    q.push_message(LATER, &[2], Urgency::Srt { deadline: 9_000 }).unwrap();
-    assert!(!tx.load_queued(20, 1_000, &mut port, &q));
+    let (bus, mut port, mut tx, q, first) = staged_behind_one(200, &[(LATER, &[2], 9_000)], 1_000);
     let s = tx.staged().next().unwrap();
     bus.run_until_idle(1_000_000);
     port.try_transmit(&s.frame).unwrap();
@@ -243,32 +243,18 @@ fn a_staged_frame_still_in_its_mailbox_at_the_next_settle_is_the_windows_queued_
 fn a_frame_whose_identifier_a_loaded_frame_has_is_not_staged() {
     // Results name a frame by its identifier: two messages of one stream with the same
     // deadline have the same one while the first is loaded.
-    let mut q = queue();
-    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
-    let bus = Bus::new(2, Config::default());
-    let mut port = bus.port(0);
-    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
-    assert!(tx.load_queued(0, 200, &mut port, &q));
-    q.push_message(URGENT, &[2], Urgency::Srt { deadline: 3_000 }).unwrap();
+    let (_bus, _port, tx, q, _) = staged_behind_one(200, &[(URGENT, &[2], 3_000)], 1_000);
     assert_eq!(q.upcoming(20).nth(1).unwrap().1.id(), tx.queued().next().unwrap().1);
-    assert!(!tx.load_queued(20, 1_000, &mut port, &q));
     assert_eq!(tx.staged().count(), 0);
 }
 
 #[test]
 fn after_a_staged_frames_guard_nothing_loads_behind_it_while_it_is_on_the_wire() {
-    // The guard ran for the staged frame the interrupt loaded before `settle` took it in: it
-    // is then late and draining, as any frame withdrawn at its guard.
-    let mut q = queue();
-    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
-    let bus = Bus::new(2, Config::default());
-    let mut port = bus.port(0);
-    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
-    assert!(tx.load_queued(0, 200, &mut port, &q));
-    q.push_message(LATER, &[2; 8], Urgency::Srt { deadline: 9_000 }).unwrap();
-    q.push_message(MessageId(0x122), &[3], Urgency::Srt { deadline: 9_500 }).unwrap();
+    // The guard ran for the staged frame the interrupt loaded before `settle` took it in; the
+    // frame was on the wire, so it stays, and its guard, past, lets nothing load behind it.
     let end = 1_000;
-    assert!(!tx.load_queued(20, end, &mut port, &q));
+    let then: [(_, &[u8], _); 2] = [(LATER, &[2; 8], 9_000), (MessageId(0x122), &[3], 9_500)];
+    let (bus, mut port, mut tx, q, _) = staged_behind_one(200, &then, end);
     let s = tx.staged().next().unwrap();
     let t = bus.run_until_idle(1_000_000);
     port.try_transmit(&s.frame).unwrap();
