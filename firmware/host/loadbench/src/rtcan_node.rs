@@ -11,7 +11,9 @@
 //! cycle's start, the sync with the next cycle's reservation mask; (5) at most one frame:
 //! nothing in slot 0, this node's HRT frame in a reserved slot of its stream, else the most
 //! urgent queued frame for the window the free slot opens. And at a loaded frame's latest
-//! start, the guard ([`SlotTx::on_guard`]).
+//! start, the guard ([`SlotTx::on_guard`]). With `Setup::staged` (what-if), bxCAN's transmit
+//! interrupt as the firmware would run it: it loads the frames the node staged
+//! (`SlotTx::staged`) once the controller is empty ([`STAGED_REACTION_US`]).
 
 use std::collections::VecDeque;
 
