@@ -365,10 +365,12 @@ impl<T: Copy> SlotTx<T> {
         // The staged frames the interrupt loaded are queued frames now, behind those whose
         // results wait (there is room: it loads only mailboxes whose results were taken).
         #[cfg(feature = "staged-reloads")]
-        let staged_in = self.staged_in > 0 && self.queue_staged();
+        let staged_in = self.staged_in > 0;
         #[cfg(feature = "staged-reloads")]
-        if self.stages && !staged_in {
-            self.staged = [None; QUEUED_MAX];
+        if staged_in {
+            self.queue_staged();
+        } else if self.stages {
+            self.staged = [None; QUEUED_MAX]; // each call stages afresh
         }
         if !self.has_slotted() && !self.has_queued() {
             return done;
@@ -532,6 +534,7 @@ impl<T: Copy> SlotTx<T> {
     #[cfg(feature = "staged-reloads")]
     #[inline(never)]
     fn stage<const N: usize>(&mut self, now: Micros, end: Micros, tx: &TxQueue<N>) {
+        self.staged = [None; QUEUED_MAX];
         let mut blocked = Blocked::default();
         let mut k = 0;
         for (ticket, frame) in tx.upcoming(now) {
@@ -574,15 +577,14 @@ impl<T: Copy> SlotTx<T> {
 
     /// Queues the staged frames the interrupt loaded behind the frames still loaded, whose
     /// results wait (their window's state follows once those are taken,
-    /// [`open_staged_window`](Self::open_staged_window)). True.
+    /// [`open_staged_window`](Self::open_staged_window)).
     #[cfg(feature = "staged-reloads")]
     #[inline(never)]
-    fn queue_staged(&mut self) -> bool {
+    fn queue_staged(&mut self) {
         let went_in = self.staged.iter().take(self.staged_in).flatten();
         for (free, s) in self.queued.iter_mut().filter(|q| q.is_none()).zip(went_in) {
             *free = Some((s.ticket, s.frame.id()));
         }
-        true
     }
 
     /// The window the staged frames the interrupt loaded were staged for is the node's now:
@@ -639,10 +641,6 @@ impl<T: Copy> SlotTx<T> {
         #[cfg(feature = "fitted-windows")]
         let mut blocked = Blocked::default();
         let other_window = self.window.is_some_and(|w| w.end != end);
-        #[cfg(feature = "staged-reloads")]
-        if self.stages {
-            self.staged = [None; QUEUED_MAX];
-        }
         if now >= guard || (self.has_queued() && (other_window || self.draining)) {
             // Frames of the node's are still in the controller: what would go next is staged.
             #[cfg(feature = "staged-reloads")]

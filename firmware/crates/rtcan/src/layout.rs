@@ -160,7 +160,13 @@ impl Layout {
 
     /// The reservation a frame with identifier `raw_id` and `len` data bytes needs, µs.
     pub fn reservation_us(&self, raw_id: u32, len: usize) -> u16 {
-        Self::us(&self.config, frame_bits_of(raw_id, len)) as u16
+        self.reservation_us_of_bits(frame_bits_of(raw_id, len))
+    }
+
+    /// The reservation a frame of `bits` bit times (intermission included) needs, µs: with the
+    /// guard, rounded up ([`Self::reservation_us`] gives it a frame's worst case).
+    pub fn reservation_us_of_bits(&self, bits: u32) -> u16 {
+        Self::us(&self.config, bits) as u16
     }
 
     /// Where `slot`'s reservation lies, if it is placed (the sync slot always is).

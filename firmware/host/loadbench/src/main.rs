@@ -67,8 +67,14 @@ fn parse() -> Result<Args, String> {
         if flag == "--help" || flag == "-h" {
             return Err(String::new());
         }
-        if flag == "--hrt-exact" || flag == "--staged" {
-            *(if flag == "--staged" { &mut a.staged } else { &mut a.hrt_exact }) = true;
+        // Switches: no value.
+        let switch = match flag.as_str() {
+            "--hrt-exact" => Some(&mut a.hrt_exact),
+            "--staged" => Some(&mut a.staged),
+            _ => None,
+        };
+        if let Some(on) = switch {
+            *on = true;
             continue;
         }
         const FLAGS: [&str; 9] = [

@@ -18,8 +18,9 @@
 use std::collections::VecDeque;
 
 use r2p_emu::SimPort;
-use r2p_node::slot_tx::{Done, Slotted, Staged, QUEUED_MAX};
+use r2p_node::slot_tx::{Done, Slotted, Staged};
 use r2p_node::{FreeSlots, SlotTx};
+use r2p_vbus::MAILBOXES;
 use rtcan::controller::{Filter, TxOutcome};
 use rtcan::cycle::{ClockState, SYNC_SLOT};
 use rtcan::framed_cycle::{FramedCycle, Moment};
@@ -171,8 +172,10 @@ impl<'t> RtcanNode<'t> {
 
     /// The bus moved at `now` (framed what-if). If a frame of its own left a mailbox (sent, or
     /// lost a one-shot arbitration), its transmit-complete interrupt runs the short path:
-    /// [`TRANSMIT_REACTION_US`] later (`Setup::reactions_us`) its next frames are loaded, as `Node::wakes_on_transmit`
-    /// asks of the firmware. Received frames wake it at no other time than its timer.
+    /// [`TRANSMIT_REACTION_US`] later (`Setup::reactions_us`) its next frames are loaded, as
+    /// `Node::wakes_on_transmit` asks of the firmware; with `Setup::staged`, the interrupt
+    /// itself loads the staged frames first if the controller is now empty. Received frames
+    /// wake it at no other time than its timer.
     pub fn on_bus_event(&mut self, now: Micros) {
         if self.can.port().pending() < self.mailboxes {
             self.react_at(now + self.setup.reactions_us.0);
@@ -206,12 +209,11 @@ impl<'t> RtcanNode<'t> {
             let short = self.reaction.is_some_and(|r| r <= now) && now < self.wake_at;
             self.reaction = self.reaction.filter(|&r| r > now);
             self.framed_tick(now, short);
-            self.staged = self
-                .slot_tx
-                .staged()
-                .map(|s| (s, self.message_of(now, s.ticket)))
-                .map(|(s, (m, f))| (s, m, f))
-                .collect();
+            let staged = self.slot_tx.staged().map(|s| {
+                let (msg, fragment) = self.message_of(now, s.ticket);
+                (s, msg, fragment)
+            });
+            self.staged = staged.collect();
             return;
         }
         if now >= self.next_slot {
@@ -348,7 +350,7 @@ impl<'t> RtcanNode<'t> {
     fn load_staged(&mut self, now: Micros) {
         let staged = std::mem::take(&mut self.staged);
         let waiting = self.can.port().results_waiting();
-        let mut free = QUEUED_MAX.saturating_sub(self.can.port().pending() + waiting.len());
+        let mut free = MAILBOXES.saturating_sub(self.can.port().pending() + waiting.len());
         let mut n = 0;
         if waiting.last() == Some(&TxOutcome::Sent) {
             for (s, msg, fragment) in staged {

@@ -19,7 +19,7 @@ use r2p_vbus::FrameBits;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 use rtcan::id::SYNC_MESSAGE_IDS;
-use rtcan::layout::{Layout, RESERVATION_GUARD_BITS};
+use rtcan::layout::Layout;
 use rtcan::schedule::{next_reserved, Period, Phase, Scheduler};
 use rtcan::{fragments, Frame, FrameId, Laxity, MessageId};
 
@@ -199,10 +199,8 @@ impl Builder<'_> {
             };
             let id = FrameId { laxity: Laxity::HRT, message: probe.message, fragment: 0 };
             let needs_us = if self.setup.hrt_exact {
-                // As `Layout::reservation_us` times a worst case: with its guard bits, in whole µs.
                 let exact = FrameBits::of(&Frame::new(id, &hrt_payload(len)).expect("≤ 8 bytes"));
-                let bits = u64::from(exact.total() + RESERVATION_GUARD_BITS);
-                (bits * 1_000_000).div_ceil(u64::from(self.setup.cycle.bit_rate)) as u16
+                self.layout.reservation_us_of_bits(exact.total())
             } else {
                 self.layout.reservation_us(id.to_raw(), len)
             };
