@@ -22,7 +22,8 @@
 
 use heapless::Deque;
 use rtcan::controller::{
-    BusState, CanController, ErrorCounters, Filter, Received, TxError, TxMode, TxOutcome, TxResult,
+    BusState, CanController, ErrorCounters, Filter, Received, StagedFrame, TxError, TxMode,
+    TxOutcome, TxResult,
 };
 use rtcan::{Frame, Micros};
 
@@ -62,6 +63,9 @@ pub struct BusTap<'l> {
     node_results: Deque<TxResult, { rtcan::controller::TX_RESULTS }>,
     loopback: Deque<Received, 4>,
     retry: Option<Loaded>,
+    /// What the node last handed the transmit interrupt (`CanController::stage`): those it
+    /// loads are the node's frames in flight.
+    staged: heapless::Vec<Frame, { rtcan::controller::TX_RESULTS }>,
 }
 
 /// The controller during one call of the node: [`CanController`] for the node.
@@ -86,6 +90,7 @@ impl<'l> BusTap<'l> {
             node_results: Deque::new(),
             loopback: Deque::new(),
             retry: None,
+            staged: heapless::Vec::new(),
         }
     }
 
@@ -255,5 +260,26 @@ impl<C: CanController + ?Sized> CanController for Tapped<'_, '_, C> {
 
     fn error_counters(&self) -> ErrorCounters {
         self.can.error_counters()
+    }
+
+    fn stage(&mut self, frames: &[StagedFrame]) {
+        self.can.stage(frames);
+        self.tap.staged =
+            frames.iter().map(|s| s.frame).take(rtcan::controller::TX_RESULTS).collect();
+    }
+
+    /// The frames the interrupt loaded are the node's in flight, loaded at the call's time.
+    fn staged_loaded(&mut self) -> usize {
+        let n = self.can.staged_loaded();
+        let tap = &mut *self.tap;
+        for &frame in tap.staged.iter().take(n) {
+            if tap.in_flight.is_full() {
+                tap.in_flight.pop_front();
+            }
+            let at = self.now;
+            let _ = tap.in_flight.push_back(Loaded { frame, owner: None, tries: 0, at, first: at });
+        }
+        tap.staged.clear();
+        n
     }
 }

@@ -22,7 +22,8 @@ use r2p_module::leds::Status;
 use r2p_node::{Node, ParamStore, RamParams};
 use r2p_socketcand::CanFrame;
 use rtcan::controller::{
-    BusState, CanController, ErrorCounters, Filter, Received, TxError, TxMode, TxOutcome, TxResult,
+    BusState, CanController, ErrorCounters, Filter, Received, StagedFrame, TxError, TxMode,
+    TxOutcome, TxResult,
 };
 use rtcan::Frame;
 
@@ -293,9 +294,18 @@ struct Scripted {
     results: VecDeque<TxResult>,
     received: VecDeque<Received>,
     filters: Vec<Filter>,
+    /// What the node staged for the transmit interrupt, and how many it loaded since.
+    staged: Vec<StagedFrame>,
+    staged_in: usize,
 }
 
 impl Scripted {
+    /// The transmit interrupt loads the staged frames.
+    fn load_staged(&mut self) {
+        self.loaded.extend(self.staged.iter().map(|s| s.frame));
+        self.staged_in = core::mem::take(&mut self.staged).len();
+    }
+
     fn finish(&mut self, outcome: TxOutcome) {
         let f = self.loaded.remove(0);
         self.results
@@ -329,6 +339,12 @@ impl CanController for Scripted {
     }
     fn error_counters(&self) -> ErrorCounters {
         ErrorCounters::default()
+    }
+    fn stage(&mut self, frames: &[StagedFrame]) {
+        self.staged = frames.to_vec();
+    }
+    fn staged_loaded(&mut self) -> usize {
+        core::mem::take(&mut self.staged_in)
     }
 }
 
@@ -386,6 +402,36 @@ fn a_client_frame_waits_for_idle_mailboxes_is_sent_looped_back_and_kept_from_the
         core::iter::from_fn(|| sub.try_next_message_pure()).map(|f| f.from).collect();
     assert_eq!(from, [BUS, 2], "the node's frame, then the client's as the client's");
     assert_eq!(link.stats.frames_from_clients.load(Relaxed), 1);
+}
+
+#[test]
+fn frames_the_transmit_interrupt_loaded_for_the_node_reach_the_clients_as_the_nodes() {
+    let link: &'static BusLink = leak(BusLink::new());
+    let mut sub = link.subscribe().unwrap();
+    let mut tap = BusTap::new(link);
+    let mut can = Scripted::default();
+    link.send(2, ext(0x1FA8_0003, &[9])).unwrap();
+    let staged = |raw, latest| StagedFrame { frame: rt(raw, &[1]), latest };
+    tap.run(0, &mut can, |c| {
+        c.try_transmit(&rt(0x0AAA_0001, &[])).unwrap();
+        c.stage(&[staged(0x0AAA_0002, 500), staged(0x0AAA_0003, 600)]);
+    });
+    assert_eq!(can.staged.len(), 2, "handed on to the controller");
+    // The node's frame goes out; the interrupt loads the staged ones at once.
+    can.finish(TxOutcome::Sent);
+    can.load_staged();
+    let took = tap.run(100, &mut can, |c| c.staged_loaded());
+    assert_eq!(took, 2);
+    assert_eq!(can.loaded.len(), 2, "the client's frame waits: the node's are in flight");
+    can.finish(TxOutcome::Sent);
+    can.finish(TxOutcome::Sent);
+    tap.run(200, &mut can, |c| while c.take_tx_result().is_some() {});
+    let seen: Vec<_> = core::iter::from_fn(|| sub.try_next_message_pure())
+        .map(|f| (f.frame.id(), f.from))
+        .collect();
+    let node = |raw: u32| (raw, BUS);
+    assert_eq!(seen, [node(0x0AAA_0001), node(0x0AAA_0002), node(0x0AAA_0003)]);
+    assert_eq!(can.loaded, [rt(0x1FA8_0003, &[9])], "the client's frame once they went");
 }
 
 #[test]

@@ -206,6 +206,9 @@ impl<
         // Frames fitted around reservations as long as their frames (`framed.rs`).
         #[cfg(feature = "framed-reservations")]
         let slot_tx = if layout.is_some() { slot_tx.fitted(&config.cycle) } else { slot_tx };
+        // ... staging for the controller's transmit interrupt what it cannot load yet.
+        #[cfg(feature = "staged-reloads")]
+        let slot_tx = slot_tx.staging(layout.is_some());
         #[cfg(not(feature = "framed-reservations"))]
         if config.hrt_blocks != 0 {
             return Err(NodeError::BadBlocks(config.hrt_blocks));

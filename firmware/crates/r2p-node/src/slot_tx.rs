@@ -37,6 +37,8 @@
 
 use rtcan::controller::{TxMode, TxOutcome};
 use rtcan::cycle::SlotPosition;
+#[cfg(feature = "staged-reloads")]
+use rtcan::StagedFrame;
 use rtcan::{CanController, CycleConfig, Frame, FrameId, Micros, SlotClock, Ticket, TxQueue};
 
 /// How a node uses the free slots of the cycle.
@@ -71,7 +73,15 @@ impl Staged {
     /// True if the transmit interrupt at `now` may still load it: before its latest start (the
     /// node's timer withdraws it there if the bus is busy, [`SlotTx::next_wake`]).
     pub fn may_load(&self, now: Micros) -> bool {
-        now < self.latest
+        StagedFrame::from(*self).may_load(now)
+    }
+}
+
+/// What the controller's transmit interrupt is handed ([`CanController::stage`]).
+#[cfg(feature = "staged-reloads")]
+impl From<Staged> for StagedFrame {
+    fn from(s: Staged) -> Self {
+        StagedFrame { frame: s.frame, latest: s.latest }
     }
 }
 
@@ -369,8 +379,9 @@ impl<T: Copy> SlotTx<T> {
         #[cfg(feature = "staged-reloads")]
         if staged_in {
             self.queue_staged();
-        } else if self.stages {
+        } else if self.stages && self.staged[0].is_some() {
             self.staged = [None; QUEUED_MAX]; // each call stages afresh
+            can.stage(&[]);
         }
         if !self.has_slotted() && !self.has_queued() {
             return done;
@@ -533,7 +544,13 @@ impl<T: Copy> SlotTx<T> {
     /// its identifier).
     #[cfg(feature = "staged-reloads")]
     #[inline(never)]
-    fn stage<const N: usize>(&mut self, now: Micros, end: Micros, tx: &TxQueue<N>) {
+    fn stage<C: CanController + ?Sized, const N: usize>(
+        &mut self,
+        now: Micros,
+        end: Micros,
+        can: &mut C,
+        tx: &TxQueue<N>,
+    ) {
         self.staged = [None; QUEUED_MAX];
         let mut blocked = Blocked::default();
         let mut k = 0;
@@ -556,6 +573,9 @@ impl<T: Copy> SlotTx<T> {
             k += 1;
         }
         self.staged_end = end;
+        let handed: heapless::Vec<StagedFrame, QUEUED_MAX> =
+            self.staged.iter().flatten().map(|&s| s.into()).collect();
+        can.stage(&handed);
     }
 
     /// True if a staged frame the interrupt loaded, not yet taken in by `settle`, is at or past
@@ -645,7 +665,7 @@ impl<T: Copy> SlotTx<T> {
             // Frames of the node's are still in the controller: what would go next is staged.
             #[cfg(feature = "staged-reloads")]
             if self.stages && self.has_queued() && (other_window || self.draining) {
-                self.stage(now, end, tx);
+                self.stage(now, end, can, tx);
             }
             return false;
         }

@@ -35,11 +35,20 @@ pub struct BxCan<'d> {
     /// time is not a whole number of µs).
     counter: Option<TimeCounter>,
     bit_rate: u32,
+    /// Staged frames the transmit interrupt loaded, booked and not yet told to the node
+    /// ([`CanController::staged_loaded`]).
+    #[cfg(feature = "staged-reloads")]
+    staged_in: usize,
 }
 
 /// `CAN_TSR` as each mailbox's status.
 fn mailbox_status(regs: pac::can::Can) -> [MailboxStatus; MAILBOXES] {
-    let tsr = regs.tsr().read();
+    status_of(regs.tsr().read())
+}
+
+/// Each mailbox's status in a `CAN_TSR` value.
+#[inline(always)]
+pub(crate) fn status_of(tsr: pac::can::regs::Tsr) -> [MailboxStatus; MAILBOXES] {
     core::array::from_fn(|i| MailboxStatus {
         empty: tsr.tme(i),
         txok: tsr.txok(i),
@@ -76,6 +85,8 @@ impl<'d> BxCan<'d> {
             foreign_frames: 0,
             counter: TimeCounter::new(bit_rate),
             bit_rate: bit_rate.max(1),
+            #[cfg(feature = "staged-reloads")]
+            staged_in: 0,
         };
         this.set_filters(&[Filter::ACCEPT_ALL]);
         this
@@ -101,10 +112,22 @@ impl<'d> BxCan<'d> {
         rx_stamp::overruns()
     }
 
+    /// Books the frames the transmit interrupt loaded since the last look as loaded, after
+    /// every frame booked before (they went in after those: into an empty controller).
+    #[cfg(feature = "staged-reloads")]
+    fn book_staged_loads(&mut self) {
+        crate::transmit_wake::take_staged_loads(|i, id| {
+            self.mailboxes.load(i, id);
+            self.staged_in += 1;
+        });
+    }
+
     /// Moves the results of mailboxes that emptied since the last look into `results`, in
     /// the order their frames were loaded, and acknowledges them (`RQCP`). A sent frame's
     /// start of frame is its `CAN_TDTxR.TIME`, extended by the counter.
     fn collect(&mut self) {
+        #[cfg(feature = "staged-reloads")]
+        self.book_staged_loads();
         let status = mailbox_status(self.regs);
         let (done, n) = self.mailboxes.take_finished(&status);
         for &(i, id) in &done[..n] {
@@ -117,6 +140,56 @@ impl<'d> BxCan<'d> {
             self.regs.tsr().write(|w| w.set_rqcp(i, true));
             self.results.push(r);
         }
+    }
+}
+
+/// Writes `frame` into transmit mailbox `i` and requests its transmission (`TXRQ`).
+#[inline(always)]
+fn write_mailbox(regs: pac::can::Can, i: usize, frame: &Frame) {
+    MailboxRegisters::of(frame).write(regs, i);
+}
+
+/// A frame as a transmit mailbox's registers, made before they are written (the transmit
+/// interrupt makes them outside its critical sections).
+#[derive(Clone, Copy)]
+pub(crate) struct MailboxRegisters {
+    tdtr: pac::can::regs::Tdtr,
+    tdlr: u32,
+    tdhr: u32,
+    tir: pac::can::regs::Tir,
+}
+
+impl MailboxRegisters {
+    /// `frame`'s registers, its transmission requested (`TXRQ`).
+    #[inline(always)]
+    pub(crate) fn of(frame: &Frame) -> Self {
+        let raw = frame.id().to_raw();
+        let mut data = [0u8; 8];
+        data[..frame.payload().len()].copy_from_slice(frame.payload());
+        let mut tdtr = pac::can::regs::Tdtr(0);
+        tdtr.set_dlc(frame.payload().len() as u8);
+        let mut tir = pac::can::regs::Tir(0);
+        tir.set_stid((raw >> 18) as u16);
+        tir.set_exid(raw & 0x3_ffff);
+        tir.set_ide(Ide::EXTENDED);
+        tir.set_rtr(Rtr::DATA);
+        tir.set_txrq(true);
+        Self {
+            tdtr,
+            tdlr: u32::from_le_bytes([data[0], data[1], data[2], data[3]]),
+            tdhr: u32::from_le_bytes([data[4], data[5], data[6], data[7]]),
+            tir,
+        }
+    }
+
+    /// Writes them into mailbox `i`, the transmission request last.
+    #[inline(always)]
+    pub(crate) fn write(&self, regs: pac::can::Can, i: usize) {
+        let mb = regs.tx(i);
+        mb.tdtr().write_value(self.tdtr);
+        mb.tdlr().write(|w| w.0 = self.tdlr);
+        mb.tdhr().write(|w| w.0 = self.tdhr);
+        mb.tir().write_value(self.tir);
     }
 }
 
@@ -153,20 +226,7 @@ impl CanController for BxCan<'_> {
         let Some(i) = self.mailboxes.free(&mailbox_status(self.regs)) else {
             return Err(TxError::MailboxesFull);
         };
-        let raw = frame.id().to_raw();
-        let mut data = [0u8; 8];
-        data[..frame.payload().len()].copy_from_slice(frame.payload());
-        let mb = self.regs.tx(i);
-        mb.tdtr().write(|w| w.set_dlc(frame.payload().len() as u8));
-        mb.tdlr().write(|w| w.0 = u32::from_le_bytes([data[0], data[1], data[2], data[3]]));
-        mb.tdhr().write(|w| w.0 = u32::from_le_bytes([data[4], data[5], data[6], data[7]]));
-        mb.tir().write(|w| {
-            w.set_stid((raw >> 18) as u16);
-            w.set_exid(raw & 0x3_ffff);
-            w.set_ide(Ide::EXTENDED);
-            w.set_rtr(Rtr::DATA);
-            w.set_txrq(true);
-        });
+        write_mailbox(self.regs, i, frame);
         self.mailboxes.load(i, frame.id());
         Ok(())
     }
@@ -254,5 +314,22 @@ impl CanController for BxCan<'_> {
     fn error_counters(&self) -> ErrorCounters {
         let esr = self.regs.esr().read();
         ErrorCounters { tx: esr.tec(), rx: esr.rec() }
+    }
+
+    /// For [`crate::TransmitWake`] to load (`staged_loads`): with the mailbox of the node's
+    /// newest frame, whose result says whether the last frame to leave was sent. It takes no
+    /// result: one that came since the node's last look keeps `RQCP` set, so the interrupt
+    /// fires when the bus task arms it.
+    #[cfg(feature = "staged-reloads")]
+    fn stage(&mut self, frames: &[rtcan::StagedFrame]) {
+        crate::transmit_wake::stage(frames, self.mailboxes.newest());
+    }
+
+    /// Books the interrupt's loads without reading the mailboxes: the node's call runs this
+    /// first, before its reservation's frame (the results follow in its `settle`).
+    #[cfg(feature = "staged-reloads")]
+    fn staged_loaded(&mut self) -> usize {
+        self.book_staged_loads();
+        core::mem::take(&mut self.staged_in)
     }
 }

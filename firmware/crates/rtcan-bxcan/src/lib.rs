@@ -23,6 +23,7 @@ pub mod filter_plan;
 pub mod mailboxes;
 pub mod results;
 pub mod rx_ring;
+pub mod staged_loads;
 pub mod stamps;
 
 #[cfg(feature = "stm32")]

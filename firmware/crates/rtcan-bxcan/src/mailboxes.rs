@@ -64,6 +64,13 @@ impl Mailboxes {
         self.next_seq = self.next_seq.wrapping_add(1);
     }
 
+    /// The mailbox of the newest frame loaded and not yet collected: the last of them to
+    /// leave, as they go in load order (`TXFP`).
+    pub fn newest(&self) -> Option<usize> {
+        let age = |i: usize| self.loaded[i].map(|(_, seq)| self.next_seq.wrapping_sub(seq));
+        (0..MAILBOXES).filter(|&i| self.loaded[i].is_some()).min_by_key(|&i| age(i))
+    }
+
     /// The mailboxes holding a frame that has not finished (what an abort asks for).
     pub fn pending(&self, status: &[MailboxStatus; MAILBOXES]) -> [bool; MAILBOXES] {
         core::array::from_fn(|i| self.loaded[i].is_some() && !status[i].empty)
@@ -167,6 +174,21 @@ mod tests {
             m.load(0, id(3));
             let (done, n) = m.take_finished(&[SENT, BUSY, EMPTY]);
             assert_eq!(&done[..n], &[(2, id(2)), (0, id(3))], "{start}");
+        }
+    }
+
+    #[test]
+    fn the_newest_frame_is_the_last_loaded_across_the_counters_wrap() {
+        for start in [0u32, u32::MAX, 7] {
+            let mut m = Mailboxes { loaded: [None; MAILBOXES], next_seq: start };
+            assert_eq!(m.newest(), None);
+            m.load(2, id(1));
+            m.load(0, id(2));
+            assert_eq!(m.newest(), Some(0), "{start}");
+            m.load(1, id(3));
+            assert_eq!(m.newest(), Some(1), "{start}");
+            m.take_finished(&[BUSY, SENT, BUSY]);
+            assert_eq!(m.newest(), Some(0), "{start}: the newest still loaded");
         }
     }
 

@@ -94,6 +94,25 @@ impl TxResult {
 /// bxCAN transmit mailbox. Older untaken results are dropped.
 pub const TX_RESULTS: usize = 3;
 
+/// A frame handed to the controller's transmit interrupt to load by itself
+/// ([`CanController::stage`]): the node could not load it because frames of its own were still
+/// in the controller, and its own next call would come too late for the arbitration that
+/// follows them (issue 22's staged reloads, docs/rtcan.md "Where the fast reaction gains").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StagedFrame {
+    /// The frame.
+    pub frame: Frame,
+    /// Its latest start in the node's µs: after it, the frame no longer fits its window.
+    pub latest: Micros,
+}
+
+impl StagedFrame {
+    /// True if the interrupt at `now` may still load it: before its latest start.
+    pub const fn may_load(&self, now: Micros) -> bool {
+        now < self.latest
+    }
+}
+
 /// A hardware acceptance filter: pass frames whose `id & mask == value & mask`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Filter {
@@ -173,4 +192,20 @@ pub trait CanController {
 
     /// The error counters.
     fn error_counters(&self) -> ErrorCounters;
+
+    /// Hands the transmit interrupt `frames` to load, in order, once the node's frames still in
+    /// the controller are gone and the last of them was sent: each into a mailbox whose result
+    /// was taken, while it [may](StagedFrame::may_load) still go. It loads them at most once;
+    /// each call replaces what the last one staged (none: nothing to load). A controller
+    /// without such an interrupt ignores them (the default): the node's next call loads them.
+    fn stage(&mut self, frames: &[StagedFrame]) {
+        let _ = frames;
+    }
+
+    /// How many of the frames last [staged](Self::stage) the interrupt loaded since, the first
+    /// ones in their order: they are in the controller now, as if the node had loaded them,
+    /// and their results come as any frame's. Never more than once per staging (0 after).
+    fn staged_loaded(&mut self) -> usize {
+        0
+    }
 }

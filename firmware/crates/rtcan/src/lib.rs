@@ -30,7 +30,7 @@ pub mod time_counter;
 pub mod transfer_crc;
 pub mod wire_bits;
 
-pub use controller::{CanController, Micros, TxMode, TxOutcome, TxResult};
+pub use controller::{CanController, Micros, StagedFrame, TxMode, TxOutcome, TxResult};
 pub use cycle::{CycleConfig, SlotClock, SyncFrame};
 pub use failover::Failover;
 pub use fragment::{fragments, Expect, Reassembler, ReassemblyStats};

@@ -35,6 +35,7 @@ use boards::Mcu;
 use r2p_canlink::candump::LogWriter;
 use r2p_canlink::{CanFrame, Stamped};
 use r2p_node::Node;
+use r2p_vbus::bxcan::STAGED_LOAD_US;
 use r2p_vbus::{Bus, Config};
 use rtcan::{CanController, Micros};
 use stalled::StalledPort;
@@ -258,6 +259,9 @@ pub struct SimStats {
     pub ticks: u64,
     /// Application steps run.
     pub app_steps: u64,
+    /// Frames the boards' transmit interrupts loaded of those their nodes staged (staged
+    /// reloads: `r2p_vbus::BxCanPort::load_staged`).
+    pub staged_loads: u64,
 }
 
 /// The world's step: called every millisecond of virtual time with the time (µs), before the
@@ -491,6 +495,14 @@ impl<'a, N: Runtime> Sim<'a, N> {
                 let pending = b.port.port().pending();
                 if mode == Mode::Tdma && pending < b.mailboxes && b.node.wakes_on_transmit() {
                     b.event_ns = b.event_ns.min(t);
+                    // With staged reloads, the interrupt first loads what the node staged if
+                    // the controller is now empty: its frames reach their mailboxes
+                    // `STAGED_LOAD_US` later, if they may still go then.
+                    if pending == 0 && b.port.has_staged() {
+                        b.port.set_load_latency(STAGED_LOAD_US);
+                        let n = b.port.load_staged(now_us + STAGED_LOAD_US);
+                        self.stats.staged_loads += n as u64;
+                    }
                 }
                 b.mailboxes = pending;
                 if b.wake_ns.min(b.event_ns) > t {

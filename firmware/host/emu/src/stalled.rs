@@ -8,7 +8,8 @@
 //! sender must wait for the answer.
 
 use rtcan::controller::{
-    BusState, CanController, ErrorCounters, Filter, Received, TxError, TxMode, TxResult,
+    BusState, CanController, ErrorCounters, Filter, Received, StagedFrame, TxError, TxMode,
+    TxResult,
 };
 use rtcan::Frame;
 
@@ -64,6 +65,12 @@ impl CanController for StalledPort<'_, '_> {
     }
     fn error_counters(&self) -> ErrorCounters {
         self.port.error_counters()
+    }
+    fn stage(&mut self, frames: &[StagedFrame]) {
+        self.port.stage(frames);
+    }
+    fn staged_loaded(&mut self) -> usize {
+        self.port.staged_loaded()
     }
 }
 

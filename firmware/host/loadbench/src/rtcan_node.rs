@@ -12,15 +12,16 @@
 //! nothing in slot 0, this node's HRT frame in a reserved slot of its stream, else the most
 //! urgent queued frame for the window the free slot opens. And at a loaded frame's latest
 //! start, the guard ([`SlotTx::on_guard`]). With `Setup::staged` (what-if), bxCAN's transmit
-//! interrupt as the firmware would run it: it loads the frames the node staged
-//! (`SlotTx::staged`) once the controller is empty ([`STAGED_REACTION_US`]).
+//! interrupt as the firmware runs it (`r2p_vbus::BxCanPort::load_staged`): it loads the frames
+//! the node staged (`SlotTx::staged`, which hands them to the controller:
+//! `CanController::stage`) once the controller is empty ([`STAGED_LOAD_US`]).
 
 use std::collections::VecDeque;
 
 use r2p_emu::SimPort;
 use r2p_node::slot_tx::{Done, Slotted, Staged};
 use r2p_node::{FreeSlots, SlotTx};
-use r2p_vbus::MAILBOXES;
+pub use r2p_vbus::bxcan::STAGED_LOAD_US;
 use rtcan::controller::{Filter, TxOutcome};
 use rtcan::cycle::{ClockState, SYNC_SLOT};
 use rtcan::framed_cycle::{FramedCycle, Moment};
@@ -72,7 +73,7 @@ pub struct RtcanNode<'t> {
     /// The frames its last activation staged for the transmit interrupt (`SlotTx::staged`),
     /// each with the message and fragment it carries.
     staged: Vec<(Staged, u32, u8)>,
-    /// When its transmit interrupt loads them ([`STAGED_REACTION_US`]).
+    /// When its transmit interrupt loads them ([`STAGED_LOAD_US`]).
     interrupt_at: Option<Micros>,
     /// When the node's timer fires next: the next slot boundary or a loaded frame's guard.
     wake_at: Micros,
@@ -93,12 +94,6 @@ pub const TRANSMIT_REACTION_US: Micros = 27;
 /// The same for a message's release (a publish, `Node::releases_waiting`), whose path also
 /// queues it: `top_up_publish_min_insn`, 1 854 + 190 instructions, 29 µs.
 pub const RELEASE_REACTION_US: Micros = 29;
-
-/// What-if (`Setup::staged`): the transmit interrupt loads the staged frames this long after
-/// the controller empties: ~60 instructions to its first mailbox request (the interrupt's
-/// entry, `CAN_TSR`, one mailbox's four registers), ~1 µs at 72 MHz, inside CAN's 3-bit
-/// intermission. An estimate: the firmware's interrupt is not written yet.
-pub const STAGED_REACTION_US: Micros = 2;
 
 /// Message ID → stream index.
 fn stream_of(message: MessageId) -> usize {
@@ -179,8 +174,8 @@ impl<'t> RtcanNode<'t> {
     pub fn on_bus_event(&mut self, now: Micros) {
         if self.can.port().pending() < self.mailboxes {
             self.react_at(now + self.setup.reactions_us.0);
-            if !self.staged.is_empty() && self.can.port().pending() == 0 {
-                self.interrupt_at = Some(now + STAGED_REACTION_US);
+            if self.can.has_staged() && self.can.port().pending() == 0 {
+                self.interrupt_at = Some(now + STAGED_LOAD_US);
             }
         }
         self.mailboxes = self.can.port().pending();
@@ -343,25 +338,14 @@ impl<'t> RtcanNode<'t> {
         self.mailboxes = self.can.port().pending();
     }
 
-    /// The transmit interrupt at `now` (`Setup::staged`): if the last frame that left the
-    /// controller was sent, loads the staged frames in order while each may still go
-    /// (`Staged::may_load`), into mailboxes whose results the node has taken (bxCAN clears a
-    /// mailbox's result when a frame is loaded into it).
+    /// The transmit interrupt at `now` (`Setup::staged`; `BxCanPort::load_staged`): the frames
+    /// it loaded are the node's loaded frames, as `Node::slot_tick` takes them in.
     fn load_staged(&mut self, now: Micros) {
+        let n = self.can.load_staged(now);
         let staged = std::mem::take(&mut self.staged);
-        let waiting = self.can.port().results_waiting();
-        let mut free = MAILBOXES.saturating_sub(self.can.port().pending() + waiting.len());
-        let mut n = 0;
-        if waiting.last() == Some(&TxOutcome::Sent) {
-            for (s, msg, fragment) in staged {
-                if free == 0 || !s.may_load(now) || self.can.try_transmit(&s.frame).is_err() {
-                    break;
-                }
-                self.loaded.push((s.ticket, msg, fragment));
-                (n, free) = (n + 1, free - 1);
-            }
-        }
-        self.slot_tx.staged_went_in(n);
+        self.loaded
+            .extend(staged.into_iter().take(n).map(|(s, msg, fragment)| (s.ticket, msg, fragment)));
+        self.slot_tx.staged_went_in(self.can.staged_loaded());
         self.counters.staged += n as u64;
         self.mailboxes = self.can.port().pending();
     }

@@ -49,7 +49,7 @@ pub struct Setup {
     /// lengths allow (jitter up to the stuff bits of the frames before) would approach.
     pub hrt_exact: bool,
     /// `rtcan_framed` (what-if): the transmit interrupt loads the frames the node staged
-    /// (`r2p_node::SlotTx::staging`) [`crate::rtcan_node::STAGED_REACTION_US`] after the
+    /// (`r2p_node::SlotTx::staging`) [`crate::rtcan_node::STAGED_LOAD_US`] after the
     /// controller empties.
     pub staged: bool,
     /// Class shares of the offered load.

@@ -12,11 +12,20 @@
 //! the same code `rtcan-bxcan` runs on the modules, turns a capture into the node's µs.
 //! Nothing here subtracts a frame's length from a timestamp on the firmware's behalf.
 
-use rtcan::controller::{BusState, ErrorCounters, Filter, Received, TxError, TxMode, TxResult};
+use rtcan::controller::{
+    BusState, ErrorCounters, Filter, Received, StagedFrame, TxError, TxMode, TxOutcome, TxResult,
+};
 use rtcan::time_counter::{TimeCounter, TIME_COUNTER_MODULUS};
 use rtcan::{CanController, Frame, Laxity, Micros, SyncFrame};
 
-use crate::Port;
+use crate::{Port, MAILBOXES};
+
+/// From the transmit-mailbox-empty interrupt's request (the bus's intermission begins) to its
+/// first staged frame's mailbox request ([`BxCanPort::load_staged`]), µs: an estimate, ~60
+/// instructions at 72 MHz (12 cycles of entry, `CAN_TSR` read, the staged frame's checks and
+/// four mailbox registers; rtcan-bxcan's `TransmitWake` with `staged-reloads`), under CAN's
+/// 3-bit intermission at 1 Mbit/s.
+pub const STAGED_LOAD_US: Micros = 2;
 
 /// Longest receive-interrupt latency the model draws, µs: the message-pending interrupt
 /// waiting behind the slot timer's (higher-priority) handler and a critical section.
@@ -36,6 +45,10 @@ pub struct BxCanPort {
     /// The same for the frames a slot tick loads first, each on a path of its own: (an HRT
     /// frame's, a sync's), ns.
     reserved_latency_ns: Option<(u64, u64)>,
+    /// What the node last handed the transmit interrupt ([`CanController::stage`]).
+    staged: Vec<StagedFrame>,
+    /// How many of them the interrupt loaded, not yet told ([`CanController::staged_loaded`]).
+    staged_loaded: usize,
 }
 
 impl BxCanPort {
@@ -49,7 +62,16 @@ impl BxCanPort {
             (port.index() as u64).wrapping_mul(40_503).wrapping_add(1_234) % TIME_COUNTER_MODULUS;
         let counter = TimeCounter::new(bit_rate).expect("a bit rate with a whole-µs bit time");
         let bit_ns = 1_000_000_000 / u64::from(bit_rate);
-        Self { port, bit_ns, phase, counter, load_latency_ns: 0, reserved_latency_ns: None }
+        Self {
+            port,
+            bit_ns,
+            phase,
+            counter,
+            load_latency_ns: 0,
+            reserved_latency_ns: None,
+            staged: Vec::new(),
+            staged_loaded: 0,
+        }
     }
 
     /// Frames reach their mailbox `us` after [`CanController::try_transmit`] is called: the
@@ -93,6 +115,35 @@ impl BxCanPort {
     /// The counter's value at bus time `t_ns` (what bxCAN captures at a start of frame then).
     fn capture_at(&self, t_ns: u64) -> u16 {
         ((t_ns / self.bit_ns + self.phase) % TIME_COUNTER_MODULUS) as u16
+    }
+
+    /// True if the node handed the transmit interrupt frames it has not loaded: an interrupt
+    /// when the controller empties loads them ([`load_staged`](Self::load_staged)).
+    pub fn has_staged(&self) -> bool {
+        !self.staged.is_empty()
+    }
+
+    /// The transmit interrupt at `now` (the node's µs), as rtcan-bxcan's `TransmitWake` runs
+    /// it with `staged-reloads`: if the node's last frame to leave the controller was sent, it
+    /// loads the staged frames in order while each [may](StagedFrame::may_load) still go, into
+    /// mailboxes whose results were taken (loading one whose result waits would clear it:
+    /// RM0008 `RQCP`). The staged frames are gone after, loaded or not. Returns how many
+    /// it loaded.
+    pub fn load_staged(&mut self, now: Micros) -> usize {
+        let staged = core::mem::take(&mut self.staged);
+        let waiting = self.port.results_waiting();
+        let mut free = MAILBOXES.saturating_sub(self.port.pending() + waiting.len());
+        let mut n = 0;
+        if waiting.last() == Some(&TxOutcome::Sent) {
+            for s in staged {
+                if free == 0 || !s.may_load(now) || self.try_transmit(&s.frame).is_err() {
+                    break;
+                }
+                (n, free) = (n + 1, free - 1);
+            }
+        }
+        self.staged_loaded = n;
+        n
     }
 
     /// The wrapped port.
@@ -156,5 +207,12 @@ impl CanController for BxCanPort {
     }
     fn error_counters(&self) -> ErrorCounters {
         self.port.error_counters()
+    }
+    /// Kept for [`BxCanPort::load_staged`], which the sim calls when its interrupt would run.
+    fn stage(&mut self, frames: &[StagedFrame]) {
+        self.staged = frames.to_vec();
+    }
+    fn staged_loaded(&mut self) -> usize {
+        core::mem::take(&mut self.staged_loaded)
     }
 }

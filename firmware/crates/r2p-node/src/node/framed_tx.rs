@@ -91,15 +91,32 @@ impl<
     pub fn top_up<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
         #[cfg(feature = "framed-reservations")]
         if self.layout.is_some() {
+            #[cfg(feature = "staged-reloads")]
+            self.take_staged_loads(can);
             let now = now + Micros::from(self.lead_us());
-            let ClockState::Running(p) = self.clock.state(now) else { return };
-            for done in self.slot_tx.settle_sent(now, can).into_iter().flatten() {
-                self.on_done(done);
+            if let ClockState::Running(p) = self.clock.state(now) {
+                for done in self.slot_tx.settle_sent(now, can).into_iter().flatten() {
+                    self.on_done(done);
+                }
+                self.drain_exports(now);
+                self.framed_step(now, p, can, true);
             }
-            self.drain_exports(now);
-            self.framed_step(now, p, can, true);
         }
         let _ = (now, can);
+    }
+
+    /// Staged reloads (feature `staged-reloads`), before a call looks at the frames it loaded:
+    /// the frames the controller's transmit interrupt loaded since the last call, of those
+    /// `SlotTx` staged for it (`CanController::stage`), are the node's loaded frames now.
+    #[cfg(feature = "staged-reloads")]
+    #[inline(always)]
+    pub(super) fn take_staged_loads<C: CanController + ?Sized>(&mut self, can: &mut C) {
+        if self.layout.is_some() {
+            let n = can.staged_loaded();
+            if n > 0 {
+                self.slot_tx.staged_went_in(n);
+            }
+        }
     }
 
     /// Step 5 of `slot_tick` on frame-sized reservations: loads this node's HRT frame at its

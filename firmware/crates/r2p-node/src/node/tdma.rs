@@ -75,6 +75,8 @@ impl<
     /// [`NodeConfig::sync_lead_us`]; on frame-sized reservations the leads of the frame it
     /// loads first, [`NodeConfig::framed_leads`]).
     pub fn slot_tick<C: CanController + ?Sized>(&mut self, now: Micros, can: &mut C) {
+        #[cfg(feature = "staged-reloads")]
+        self.take_staged_loads(can);
         let (now, sync_at) = self.tick_time(now);
         self.start(now);
         self.program_filters(can);
