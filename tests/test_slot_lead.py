@@ -118,3 +118,30 @@ def test_the_frame_sized_path_requests_the_hrt_frame_first():
         reaction_us = int(re.search(rf"pub const {name}_REACTION_US: Micros = (\d+);", src).group(1))
         shortest = (r[f"{key}_min_insn"] + slotlead.IRQ_INSTRUCTIONS) / 72
         assert shortest <= reaction_us < shortest + 1, (name, r)
+
+
+def test_staged_reloads_have_their_own_measured_paths_and_leads():
+    """With staged reloads (r2p-node's `staged-reloads`) the node stages what it cannot load,
+    hands it to the transmit interrupt, and takes that interrupt's loads first in each call: a
+    few instructions more on every frame-sized path, which move the master's sync lead at
+    72 MHz from 9 to 10 µs. r2p-node's `CORTEX_M3_STAGED_*` constants (the leads and the
+    emulator's paths of a build with the feature, `CORTEX_M3_FRAMED_PATHS`) are the bench's."""
+    out = qemu.build(profile="release", cpu="cortex-m3", image="slot-path", features=("staged",))
+    try:
+        rc, text = qemu.run_image(out / "slot-path", "cortex-m3")
+    finally:
+        qemu.build(profile="release", cpu="cortex-m3", image="slot-path")  # the grid's again
+    rows = [json.loads(l) for l in text.splitlines() if l.startswith("{")]
+    assert rc == 0 and rows and rows[-1]["bench"] == "framed_slot_path", text
+    r = rows[-1]
+    irq = slotlead.IRQ_INSTRUCTIONS
+    for name, key in (("CORTEX_M3_STAGED_SLOT_PATH", "to_request"),
+                      ("CORTEX_M3_STAGED_SYNC_PATH", "sync"),
+                      ("CORTEX_M3_STAGED_TOP_UP_PATH", "top_up_transmit")):
+        c = slotlead.constant(name)
+        m = slotlead.Path(r[f"{key}_min_insn"] + irq, r[f"{key}_max_insn"] + irq)
+        assert c == m, (name, c, m, "set the constant in firmware/crates/r2p-node/src/node/config.rs")
+    staged = slotlead.constant("CORTEX_M3_STAGED_SYNC_PATH")
+    framed = slotlead.constant("CORTEX_M3_FRAMED_SYNC_PATH")
+    assert (framed.lead_us(72_000_000), staged.lead_us(72_000_000)) == (9, 10)
+    assert slotlead.constant("CORTEX_M3_STAGED_SLOT_PATH").lead_us(72_000_000) == 19

@@ -87,10 +87,11 @@ mod unsubscribe_tests;
 mod update_tests;
 
 pub use node::{
-    Event, FramedLeads, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats, SlotPath,
-    CORTEX_M3_FRAMED_SLOT_PATH, CORTEX_M3_FRAMED_SYNC_PATH, CORTEX_M3_SLOT_PATH,
-    CORTEX_M3_SYNC_PATH, CORTEX_M3_TOP_UP_PATH, CORTEX_M4_SLOT_PATH, CORTEX_M4_SYNC_PATH,
-    MODULE_FRAMED_LEADS, MODULE_SLOT_LEAD_US, MODULE_SYNC_LEAD_US,
+    Event, FramedLeads, FramedPaths, HrtState, ImportState, Node, NodeConfig, NodeError, NodeStats,
+    SlotPath, CORTEX_M3_FRAMED_PATHS, CORTEX_M3_FRAMED_SLOT_PATH, CORTEX_M3_FRAMED_SYNC_PATH,
+    CORTEX_M3_SLOT_PATH, CORTEX_M3_STAGED_SLOT_PATH, CORTEX_M3_STAGED_SYNC_PATH,
+    CORTEX_M3_STAGED_TOP_UP_PATH, CORTEX_M3_SYNC_PATH, CORTEX_M3_TOP_UP_PATH, CORTEX_M4_SLOT_PATH,
+    CORTEX_M4_SYNC_PATH, MODULE_FRAMED_LEADS, MODULE_SLOT_LEAD_US, MODULE_SYNC_LEAD_US,
 };
 pub use params::{NoParams, Param, ParamStore, RamParams, Typed};
 pub use remote::{Export, Import, ImportError, RemotePublisher, RemoteSubscriber};

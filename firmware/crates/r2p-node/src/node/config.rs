@@ -117,6 +117,48 @@ pub const CORTEX_M3_FRAMED_SLOT_PATH: SlotPath =
 pub const CORTEX_M3_FRAMED_SYNC_PATH: SlotPath =
     SlotPath { min_instructions: 714, max_instructions: 724 };
 
+/// The frame-sized paths with staged reloads (feature `staged-reloads`): the node stages what
+/// it cannot load and hands it to the controller's transmit interrupt (`SlotTx::staging`), and
+/// takes that interrupt's loads first in each call. QEMU (`slot-path --features staged`; the
+/// harness's controller has no such interrupt, so the node's side only) plus the interrupt's
+/// ~190 instructions: the HRT frame's path 15–20 instructions longer than without, the
+/// sync's too (its lead at 72 MHz 10 µs, not 9), the short path's 20–25.
+pub const CORTEX_M3_STAGED_SLOT_PATH: SlotPath =
+    SlotPath { min_instructions: 1_384, max_instructions: 1_399 };
+/// The frame-sized master's path to its sync's request with staged reloads.
+pub const CORTEX_M3_STAGED_SYNC_PATH: SlotPath =
+    SlotPath { min_instructions: 729, max_instructions: 744 };
+/// The short path (`Node::top_up`) with staged reloads.
+pub const CORTEX_M3_STAGED_TOP_UP_PATH: SlotPath =
+    SlotPath { min_instructions: 1_904, max_instructions: 4_133 };
+
+/// The frame-sized paths of this build of the node, on the F103's Cortex-M3 (the F407 takes
+/// them too, `FramedLeads::at`): the staged ones with `staged-reloads`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FramedPaths {
+    /// To the request of the HRT frame that starts a reservation.
+    pub slot: SlotPath,
+    /// A master's to its sync's request.
+    pub sync: SlotPath,
+    /// The short path's (`Node::top_up`) to a window's first frame.
+    pub top_up: SlotPath,
+}
+
+/// [`FramedPaths`] without staged reloads.
+#[cfg(not(feature = "staged-reloads"))]
+pub const CORTEX_M3_FRAMED_PATHS: FramedPaths = FramedPaths {
+    slot: CORTEX_M3_FRAMED_SLOT_PATH,
+    sync: CORTEX_M3_FRAMED_SYNC_PATH,
+    top_up: CORTEX_M3_TOP_UP_PATH,
+};
+/// [`FramedPaths`] with staged reloads.
+#[cfg(feature = "staged-reloads")]
+pub const CORTEX_M3_FRAMED_PATHS: FramedPaths = FramedPaths {
+    slot: CORTEX_M3_STAGED_SLOT_PATH,
+    sync: CORTEX_M3_STAGED_SYNC_PATH,
+    top_up: CORTEX_M3_STAGED_TOP_UP_PATH,
+};
+
 /// The slot timer's leads on frame-sized reservations (µs, [`NodeConfig::framed_leads`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FramedLeads {
@@ -128,19 +170,19 @@ pub struct FramedLeads {
 }
 
 impl FramedLeads {
-    /// The leads of a core clocked at `sysclk_hz`, from [`CORTEX_M3_FRAMED_SLOT_PATH`] and
-    /// [`CORTEX_M3_FRAMED_SYNC_PATH`]: the only builds measured, taken for the F407 too (its
-    /// grid path is within a few instructions of the M3's, as for the short path).
+    /// The leads of a core clocked at `sysclk_hz`, from this build's
+    /// [`CORTEX_M3_FRAMED_PATHS`]: the only builds measured, taken for the F407 too (its grid
+    /// path is within a few instructions of the M3's, as for the short path).
     pub const fn at(sysclk_hz: u32) -> Self {
         Self {
-            slot_us: CORTEX_M3_FRAMED_SLOT_PATH.lead_us(sysclk_hz),
-            sync_us: CORTEX_M3_FRAMED_SYNC_PATH.lead_us(sysclk_hz),
+            slot_us: CORTEX_M3_FRAMED_PATHS.slot.lead_us(sysclk_hz),
+            sync_us: CORTEX_M3_FRAMED_PATHS.sync.lead_us(sysclk_hz),
         }
     }
 }
 
-/// The F103 modules' leads on frame-sized reservations at 72 MHz: 19 µs and 9 µs (the grid's
-/// is 25 µs).
+/// The F103 modules' leads on frame-sized reservations at 72 MHz: 19 µs and 9 µs (10 µs with
+/// staged reloads; the grid's is 25 µs).
 pub const MODULE_FRAMED_LEADS: FramedLeads = FramedLeads::at(72_000_000);
 
 impl SlotPath {

@@ -26,9 +26,8 @@ use embedded_storage::nor_flash::{
 };
 use r2p_boot::layout::{FlashMap, Partition, STM32F103CB, STM32F407VG};
 use r2p_node::{
-    FramedLeads, SlotPath, CORTEX_M3_FRAMED_SLOT_PATH, CORTEX_M3_FRAMED_SYNC_PATH,
-    CORTEX_M3_SLOT_PATH, CORTEX_M3_SYNC_PATH, CORTEX_M3_TOP_UP_PATH, CORTEX_M4_SLOT_PATH,
-    CORTEX_M4_SYNC_PATH,
+    FramedLeads, SlotPath, CORTEX_M3_FRAMED_PATHS, CORTEX_M3_SLOT_PATH, CORTEX_M3_SYNC_PATH,
+    CORTEX_M4_SLOT_PATH, CORTEX_M4_SYNC_PATH,
 };
 use r2p_world::BoardKind;
 
@@ -98,14 +97,14 @@ impl Mcu {
     /// reservations (µs): (an HRT frame's, a sync's), the longest at its clock.
     pub const fn framed_paths_us(self) -> (u64, u64) {
         let hz = self.sysclk_hz();
-        let hrt = CORTEX_M3_FRAMED_SLOT_PATH.longest_us(hz) as u64;
-        (hrt, CORTEX_M3_FRAMED_SYNC_PATH.longest_us(hz) as u64)
+        let hrt = CORTEX_M3_FRAMED_PATHS.slot.longest_us(hz) as u64;
+        (hrt, CORTEX_M3_FRAMED_PATHS.sync.longest_us(hz) as u64)
     }
 
     /// How long its short path on frame-sized reservations takes in the emulator (µs), the
-    /// longest at its clock (`r2p_node::CORTEX_M3_TOP_UP_PATH`, `Node::top_up`).
+    /// longest at its clock (`r2p_node::CORTEX_M3_FRAMED_PATHS`, `Node::top_up`).
     pub const fn top_up_path_us(self) -> u64 {
-        CORTEX_M3_TOP_UP_PATH.longest_us(self.sysclk_hz()) as u64
+        CORTEX_M3_FRAMED_PATHS.top_up.longest_us(self.sysclk_hz()) as u64
     }
 }
 
