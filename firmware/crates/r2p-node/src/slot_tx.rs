@@ -29,11 +29,12 @@
 //! guard.
 //!
 //! A fitted window may also *stage* frames for the transmit interrupt ([`SlotTx::staging`],
-//! what-if): when the node cannot load because frames of its own are still in the controller
-//! (withdrawn and on the wire, or loaded for the window before), it leaves the frames it would
-//! load, and the interrupt loads them as soon as the controller is empty, inside CAN's 3-bit
-//! intermission, where the node's short path would come ~27 µs later and lose the arbitration
-//! that follows (docs/rtcan.md, "Where the fast reaction gains").
+//! feature `staged-reloads`): when the node cannot load because frames of its own are still in
+//! the controller (withdrawn and on the wire, or loaded for the window before), it hands the
+//! frames it would load to the controller (`CanController::stage`), whose transmit interrupt
+//! loads them as soon as the controller is empty, inside CAN's 3-bit intermission, where the
+//! node's short path would come ~27 µs later and lose the arbitration that follows
+//! (docs/rtcan.md, "Where the fast reaction gains", "Staged reloads on the module").
 
 use rtcan::controller::{TxMode, TxOutcome};
 use rtcan::cycle::SlotPosition;
@@ -254,19 +255,21 @@ impl<T: Copy> SlotTx<T> {
         self
     }
 
-    /// What-if (`r2p-loadbench --staged`; module documentation): in a fitted window, when frames
+    /// Staged reloads (module documentation; the node turns them on with frame-sized
+    /// reservations, `r2p-loadbench --staged` measures them): in a fitted window, when frames
     /// of the node's are still in the controller, stage the frames it would load for the
-    /// transmit interrupt ([`staged`](Self::staged)). Measured, 16 seeds: the median SRT
-    /// latency against fixed priority's 1.32–1.42 at 80 % offered load (1.42–1.53 without), the
-    /// share carried at 95 % 92.03–93.30 %. The firmware's interrupt does not load them yet.
+    /// transmit interrupt ([`staged`](Self::staged)), handed to the controller as they are
+    /// staged and taken back when dropped. Measured, 16 seeds: the median SRT latency against
+    /// fixed priority's 1.32–1.42 at 80 % offered load (1.42–1.53 without), the share carried
+    /// at 95 % 92.03–93.30 %.
     #[cfg(feature = "staged-reloads")]
     pub const fn staging(mut self, on: bool) -> Self {
         self.stages = on;
         self
     }
 
-    /// The frames staged for the transmit interrupt, in load order: what the node hands the
-    /// interrupt after each call, replacing what it handed before. The interrupt loads them
+    /// The frames staged for the transmit interrupt, in load order: what the node handed the
+    /// controller (`CanController::stage`), replacing what it handed before. The interrupt loads them
     /// once the controller holds none of the node's frames and the last one that left was
     /// sent (a fragment of its message may be among them), each while
     /// [`may_load`](Staged::may_load), then tells [`staged_went_in`](Self::staged_went_in).

@@ -30,8 +30,9 @@ const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L
                   path's loading (default 27,29: the node runtime's, measured under QEMU)
   --hrt-exact     HRT payloads with no stuff bits and reservations exactly as long as their
                   frames (both protocols' traffic)
-  --staged        rtcan_framed: frames staged for the transmit interrupt, loaded 2 µs after
-                  the node's frames have left the controller
+  --staged        rtcan_framed: staged reloads (r2p-node's `staged-reloads`): frames staged for
+                  the transmit interrupt, loaded 2 µs after the node's frames have left the
+                  controller
 ";
 
 struct Args {

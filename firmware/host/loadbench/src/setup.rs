@@ -48,9 +48,10 @@ pub struct Setup {
     /// after its frame: the bound a layout that let HRT frames follow each other as their
     /// lengths allow (jitter up to the stuff bits of the frames before) would approach.
     pub hrt_exact: bool,
-    /// `rtcan_framed` (what-if): the transmit interrupt loads the frames the node staged
-    /// (`r2p_node::SlotTx::staging`) [`crate::rtcan_node::STAGED_LOAD_US`] after the
-    /// controller empties.
+    /// `rtcan_framed` with staged reloads (r2p-node's and rtcan-bxcan's `staged-reloads`): the
+    /// transmit interrupt loads the frames the node staged (`r2p_node::SlotTx::staging`)
+    /// [`crate::rtcan_node::STAGED_LOAD_US`] after the controller empties
+    /// (`r2p_vbus::BxCanPort::load_staged`).
     pub staged: bool,
     /// Class shares of the offered load.
     pub mix: Mix,

@@ -269,3 +269,39 @@ fn after_a_staged_frames_guard_nothing_loads_behind_it_while_it_is_on_the_wire()
     assert_eq!(tx.queued().count(), 1, "the staged frame, still on the wire");
     assert!(!tx.load_queued(now, end, &mut port, &q), "nothing behind a frame past its guard");
 }
+
+#[test]
+fn the_controller_holds_what_the_node_staged_and_nothing_once_the_node_drops_it() {
+    // `SlotTx` hands each staging to the controller's transmit interrupt
+    // (`CanController::stage`) and takes it back when the next call drops it: else the
+    // interrupt would load frames the node no longer counts as staged (they would go out twice).
+    let mut q = queue();
+    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
+    let bus = Bus::new(2, Config::default());
+    let mut port = r2p_vbus::BxCanPort::new(bus.port(0), CYCLE.bit_rate);
+    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
+    assert!(tx.load_queued(0, 2_000, &mut port, &q));
+    q.push_message(LATER, &[2], Urgency::Srt { deadline: 9_000 }).unwrap();
+    assert!(!tx.load_queued(20, 4_000, &mut port, &q));
+    assert_eq!(tx.staged().count(), 1);
+    assert!(port.has_staged(), "handed to the interrupt");
+    // The next call, its frame still waiting for the bus: it drops the staging, and so does
+    // the controller; the interrupt then loads nothing.
+    tx.settle(40, &mut port, &q);
+    assert_eq!(tx.staged().count(), 0);
+    assert!(!port.has_staged(), "taken back from the interrupt");
+    bus.run_until_idle(1_000_000);
+    assert_eq!(port.load_staged(100), 0);
+    // Not dropped, the interrupt loads it once the frame before has gone.
+    let mut q = queue();
+    q.push_message(URGENT, &[1], Urgency::Srt { deadline: 3_000 }).unwrap();
+    let mut tx = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE).staging(true);
+    let bus = Bus::new(2, Config::default());
+    let mut port = r2p_vbus::BxCanPort::new(bus.port(0), CYCLE.bit_rate);
+    assert!(tx.load_queued(0, 2_000, &mut port, &q));
+    q.push_message(LATER, &[2], Urgency::Srt { deadline: 9_000 }).unwrap();
+    assert!(!tx.load_queued(20, 4_000, &mut port, &q));
+    bus.run_until_idle(1_000_000);
+    assert_eq!(port.load_staged(100), 1);
+    assert_eq!(port.staged_loaded(), 1);
+}
