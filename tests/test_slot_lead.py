@@ -71,6 +71,19 @@ def test_a_missing_constant_is_named():
         slotlead.constant("CORTEX_M7_SLOT_PATH")
 
 
+def framed_slot_path(feature: str) -> dict:
+    """The slot-path bench's frame-sized row, built with the QEMU workspace's `feature`
+    (`framed`, `staged`); the grid's image is built again after."""
+    out = qemu.build(profile="release", cpu="cortex-m3", image="slot-path", features=(feature,))
+    try:
+        rc, text = qemu.run_image(out / "slot-path", "cortex-m3")
+    finally:
+        qemu.build(profile="release", cpu="cortex-m3", image="slot-path")  # the grid's again
+    rows = [json.loads(l) for l in text.splitlines() if l.startswith("{")]
+    assert rc == 0 and rows and rows[-1]["bench"] == "framed_slot_path", text
+    return rows[-1]
+
+
 def test_the_frame_sized_path_requests_the_hrt_frame_first():
     """On frame-sized reservations the HRT frame and the master's sync are requested before
     the node takes its received frames and runs its timers (r2p-node's `send_sync` and
@@ -79,14 +92,7 @@ def test_the_frame_sized_path_requests_the_hrt_frame_first():
     frame 5 µs late every fifth cycle, more than a reservation's guard bits, and the sync up to
     33 µs late (docs/rtcan.md, "The slot path in them"). Each has its own lead, which r2p-node's
     constants give."""
-    out = qemu.build(profile="release", cpu="cortex-m3", image="slot-path", features=("framed",))
-    try:
-        rc, text = qemu.run_image(out / "slot-path", "cortex-m3")
-    finally:
-        qemu.build(profile="release", cpu="cortex-m3", image="slot-path")  # the grid's again
-    rows = [json.loads(l) for l in text.splitlines() if l.startswith("{")]
-    assert rc == 0 and rows and rows[-1]["bench"] == "framed_slot_path", text
-    r = rows[-1]
+    r = framed_slot_path("framed")
     assert r["hrt_requests"] >= 390
     # 1 179–1 189 measured, the sync 524–534; the grid's path is 1 639–1 739 in the same harness.
     assert r["to_request_max_insn"] - r["to_request_min_insn"] < 50, r
@@ -126,14 +132,7 @@ def test_staged_reloads_have_their_own_measured_paths_and_leads():
     few instructions more on every frame-sized path, which move the master's sync lead at
     72 MHz from 9 to 10 µs. r2p-node's `CORTEX_M3_STAGED_*` constants (the leads and the
     emulator's paths of a build with the feature, `CORTEX_M3_FRAMED_PATHS`) are the bench's."""
-    out = qemu.build(profile="release", cpu="cortex-m3", image="slot-path", features=("staged",))
-    try:
-        rc, text = qemu.run_image(out / "slot-path", "cortex-m3")
-    finally:
-        qemu.build(profile="release", cpu="cortex-m3", image="slot-path")  # the grid's again
-    rows = [json.loads(l) for l in text.splitlines() if l.startswith("{")]
-    assert rc == 0 and rows and rows[-1]["bench"] == "framed_slot_path", text
-    r = rows[-1]
+    r = framed_slot_path("staged")
     irq = slotlead.IRQ_INSTRUCTIONS
     for name, key in (("CORTEX_M3_STAGED_SLOT_PATH", "to_request"),
                       ("CORTEX_M3_STAGED_SYNC_PATH", "sync"),
