@@ -113,10 +113,11 @@ impl<'d> BxCan<'d> {
     }
 
     /// Books the frames the transmit interrupt loaded since the last look as loaded, after
-    /// every frame booked before (they went in after those: into an empty controller).
+    /// every frame booked before (they went in after those: into an empty controller); with
+    /// `stop`, an interrupt under way stops (`CanController::staged_loaded`).
     #[cfg(feature = "staged-reloads")]
-    fn book_staged_loads(&mut self) {
-        crate::transmit_wake::take_staged_loads(|i, id| {
+    fn book_staged_loads(&mut self, stop: bool) {
+        crate::transmit_wake::take_staged_loads(stop, |i, id| {
             self.mailboxes.load(i, id);
             self.staged_in += 1;
         });
@@ -127,7 +128,7 @@ impl<'d> BxCan<'d> {
     /// start of frame is its `CAN_TDTxR.TIME`, extended by the counter.
     fn collect(&mut self) {
         #[cfg(feature = "staged-reloads")]
-        self.book_staged_loads();
+        self.book_staged_loads(false);
         let status = mailbox_status(self.regs);
         let (done, n) = self.mailboxes.take_finished(&status);
         for &(i, id) in &done[..n] {
@@ -325,11 +326,12 @@ impl CanController for BxCan<'_> {
         crate::transmit_wake::stage(frames, self.mailboxes.newest());
     }
 
-    /// Books the interrupt's loads without reading the mailboxes: the node's call runs this
-    /// first, before its reservation's frame (the results follow in its `settle`).
+    /// Books the interrupt's loads without reading the mailboxes, and stops an interrupt under
+    /// way: the node's call runs this first, before its reservation's frame (the results
+    /// follow in its `settle`), and an interrupt it preempted must load nothing after.
     #[cfg(feature = "staged-reloads")]
     fn staged_loaded(&mut self) -> usize {
-        self.book_staged_loads();
+        self.book_staged_loads(true);
         core::mem::take(&mut self.staged_in)
     }
 }

@@ -20,9 +20,11 @@
 //! frame's four mailbox registers and its booking — and the rest (the clock, the free mailbox,
 //! the registers' values) runs between them, so it holds a reservation's frame back by one
 //! mailbox's writes at most, as the receive interrupt holds it back by one frame's push. Every
-//! call of the bus task on frame-sized reservations takes the loads first
-//! ([`StagedLoads::take_loaded`]), which ends the staging: an interrupt it preempted loads
-//! nothing after, so the node never misses a frame the interrupt loaded.
+//! call of the node on frame-sized reservations takes the loads first and stops an interrupt
+//! under way ([`StagedLoads::stop_interrupt`]): an interrupt it preempted loads nothing after,
+//! so the node never misses a frame the interrupt loaded. The driver takes the loads whenever it looks at the
+//! mailboxes ([`StagedLoads::take_loaded`]) without ending the staging: the gateway's bus tap
+//! looks after the node's call, before the interrupt may run.
 
 use core::cell::RefCell;
 
@@ -42,12 +44,20 @@ pub struct StagedLoads {
     generation: u32,
     /// What the interrupt loaded, not yet booked by the driver: (mailbox, identifier).
     loaded: [Option<(usize, FrameId)>; MAILBOXES],
+    /// The interrupt is loading (between its decision and its end).
+    under_way: bool,
 }
 
 impl StagedLoads {
     /// Nothing staged.
     pub const fn new() -> Self {
-        Self { frames: [None; MAILBOXES], newest: None, generation: 0, loaded: [None; MAILBOXES] }
+        Self {
+            frames: [None; MAILBOXES],
+            newest: None,
+            generation: 0,
+            loaded: [None; MAILBOXES],
+            under_way: false,
+        }
     }
 
     /// Replaces the staged frames with `frames` (the first [`MAILBOXES`]); `newest` is the
@@ -63,12 +73,21 @@ impl StagedLoads {
         self.frames[0].is_some()
     }
 
-    /// Takes what the interrupt loaded since the last call, in load order, and ends the
-    /// staging: an interrupt under way loads nothing more of it.
+    /// Takes what the interrupt loaded since the last call, in load order (the driver books
+    /// them before it reads the mailboxes).
     pub fn take_loaded(&mut self) -> impl Iterator<Item = (usize, FrameId)> {
-        self.frames = [None; MAILBOXES];
-        self.generation = self.generation.wrapping_add(1);
         core::mem::take(&mut self.loaded).into_iter().map_while(|l| l)
+    }
+
+    /// The node's call begins (`CanController::staged_loaded`): an interrupt it preempted
+    /// loads nothing more (the staging ends). A staging no interrupt has started on stands: the
+    /// node keeps or drops it itself (`SlotTx`).
+    pub fn stop_interrupt(&mut self) {
+        if self.under_way {
+            self.frames = [None; MAILBOXES];
+            self.generation = self.generation.wrapping_add(1);
+            self.under_way = false;
+        }
     }
 
     /// The staging to load, if the module's rule allows it on `CAN_TSR` (`status`,
@@ -88,12 +107,11 @@ impl StagedLoads {
         (generation == self.generation).then(|| self.frames[k]).flatten()
     }
 
-    /// If staging `generation` still stands: `write`s its frame `k` (`id`) into `mailbox` and
+    /// If staging `generation` still stands: `write`s its frame (`id`) into `mailbox` and
     /// books it.
     fn commit(
         &mut self,
         generation: u32,
-        k: usize,
         (mailbox, id): (usize, FrameId),
         write: impl FnOnce(),
     ) -> bool {
@@ -101,7 +119,9 @@ impl StagedLoads {
             return false;
         }
         write();
-        self.loaded[k] = Some((mailbox, id));
+        if let Some(free) = self.loaded.iter_mut().find(|l| l.is_none()) {
+            *free = Some((mailbox, id));
+        }
         true
     }
 
@@ -109,6 +129,7 @@ impl StagedLoads {
     fn finish(&mut self, generation: u32) {
         if generation == self.generation {
             self.frames = [None; MAILBOXES];
+            self.under_way = false;
         }
     }
 }
@@ -128,8 +149,9 @@ pub fn load_staged<R>(
     let start = critical_section::with(|cs| {
         let mut s = staged.borrow_ref_mut(cs);
         let generation = s.start(status, results_waiting);
-        if generation.is_none() {
-            s.frames = [None; MAILBOXES]; // once per staging
+        match generation {
+            Some(_) => s.under_way = true,
+            None => s.frames = [None; MAILBOXES], // once per staging
         }
         generation
     });
@@ -147,7 +169,7 @@ pub fn load_staged<R>(
         let registers = compose(&s.frame);
         let committed = critical_section::with(|cs| {
             let write = || write(i, &registers);
-            staged.borrow_ref_mut(cs).commit(generation, k, (i, s.frame.id()), write)
+            staged.borrow_ref_mut(cs).commit(generation, (i, s.frame.id()), write)
         });
         if !committed {
             break;
@@ -189,8 +211,15 @@ mod tests {
         critical_section::with(|cs| s.borrow_ref(cs).any())
     }
 
+    /// What the node's call takes first (`staged_loaded`): the loads, and an interrupt under
+    /// way stops.
     fn booked(s: &Mutex<RefCell<StagedLoads>>) -> Vec<(usize, FrameId)> {
-        critical_section::with(|cs| s.borrow_ref_mut(cs).take_loaded().collect())
+        critical_section::with(|cs| {
+            let mut s = s.borrow_ref_mut(cs);
+            let loads = s.take_loaded().collect();
+            s.stop_interrupt();
+            loads
+        })
     }
 
     /// The interrupt at `now`: the mailboxes written, in order.
@@ -276,6 +305,29 @@ mod tests {
     }
 
     #[test]
+    fn the_driver_books_the_loads_without_ending_the_staging() {
+        // The gateway's bus tap takes the controller's results after the node's call, which
+        // staged: the staging stands for the interrupt that follows.
+        let frames = staged(500);
+        let s = shared(&frames, Some(0));
+        assert_eq!(critical_section::with(|cs| s.borrow_ref_mut(cs).take_loaded().count()), 0);
+        assert!(any(&s));
+        let written = interrupt(&s, [SENT, EMPTY, EMPTY], [true, false, false], 100);
+        assert_eq!(written.len(), 2);
+        assert_eq!(booked(&s).len(), 2);
+    }
+
+    #[test]
+    fn a_staging_no_interrupt_started_on_stands_when_the_node_looks() {
+        // The node's call at a loaded frame's guard keeps its staging (`SlotTx`): so does the
+        // controller, for the interrupt when the frame on the wire ends.
+        let s = shared(&staged(500), Some(0));
+        assert_eq!(booked(&s), []);
+        assert!(any(&s));
+        assert_eq!(interrupt(&s, [SENT, EMPTY, EMPTY], [true, false, false], 100).len(), 2);
+    }
+
+    #[test]
     fn an_interrupt_the_bus_task_preempted_loads_nothing_after_it_took_the_loads() {
         let frames = staged(500);
         for restage in [false, true] {
@@ -300,6 +352,7 @@ mod tests {
             assert_eq!((n, written.into_inner()), (1, std::vec![(1, frames[0].frame)]));
             assert_eq!(any(&s), restage, "a new staging stands");
             assert_eq!(booked(&s), []);
+            assert_eq!(any(&s), restage, "and still stands at the node's next look");
         }
     }
 }

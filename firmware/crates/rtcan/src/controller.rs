@@ -204,7 +204,8 @@ pub trait CanController {
 
     /// How many of the frames last [staged](Self::stage) the interrupt loaded since, the first
     /// ones in their order: they are in the controller now, as if the node had loaded them,
-    /// and their results come as any frame's. Never more than once per staging (0 after).
+    /// and their results come as any frame's. Never more than once per staging (0 after). The
+    /// node asks first in each call: an interrupt it found loading loads nothing more.
     fn staged_loaded(&mut self) -> usize {
         0
     }
