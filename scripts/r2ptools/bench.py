@@ -322,6 +322,7 @@ def seeds_capacity(by_seed: dict[int, list[dict]]) -> str:
 MEDIAN_WHATIFS = {
     "as now": [],
     "--staged": ["--staged"],
+    "--staged --reactions 27,1": ["--staged", "--reactions", "27,1"],
     "--laxity-drift 1": ["--laxity-drift", "1"],
     "--reactions 1,1": ["--reactions", "1,1"],
     "--hrt-exact": ["--hrt-exact"],
