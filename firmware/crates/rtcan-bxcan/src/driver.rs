@@ -144,12 +144,6 @@ impl<'d> BxCan<'d> {
     }
 }
 
-/// Writes `frame` into transmit mailbox `i` and requests its transmission (`TXRQ`).
-#[inline(always)]
-fn write_mailbox(regs: pac::can::Can, i: usize, frame: &Frame) {
-    MailboxRegisters::of(frame).write(regs, i);
-}
-
 /// A frame as a transmit mailbox's registers, made before they are written (the transmit
 /// interrupt makes them outside its critical sections).
 #[derive(Clone, Copy)]
@@ -227,7 +221,7 @@ impl CanController for BxCan<'_> {
         let Some(i) = self.mailboxes.free(&mailbox_status(self.regs)) else {
             return Err(TxError::MailboxesFull);
         };
-        write_mailbox(self.regs, i, frame);
+        MailboxRegisters::of(frame).write(self.regs, i);
         self.mailboxes.load(i, frame.id());
         Ok(())
     }

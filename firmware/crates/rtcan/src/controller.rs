@@ -210,3 +210,49 @@ pub trait CanController {
         0
     }
 }
+
+#[cfg(any(test, feature = "selftest"))]
+pub(crate) mod tests {
+    use super::*;
+    use crate::{Laxity, MessageId};
+
+    /// A controller with the contract's required methods only: no transmit interrupt.
+    struct NoInterrupt;
+
+    impl CanController for NoInterrupt {
+        fn try_transmit(&mut self, _: &Frame) -> Result<(), TxError> {
+            Err(TxError::MailboxesFull)
+        }
+        fn set_tx_mode(&mut self, _: TxMode) {}
+        fn take_tx_result(&mut self) -> Option<TxResult> {
+            None
+        }
+        fn try_receive(&mut self) -> Option<Received> {
+            None
+        }
+        fn set_filters(&mut self, _: &[Filter]) {}
+        fn abort_pending(&mut self) -> usize {
+            0
+        }
+        fn bus_state(&self) -> BusState {
+            BusState::ErrorActive
+        }
+        fn error_counters(&self) -> ErrorCounters {
+            ErrorCounters::default()
+        }
+    }
+
+    r2p_testkit::suite! {
+        fn a_controller_without_a_transmit_interrupt_loads_nothing_it_is_handed() {
+            // The node then loads its staged frames itself at its next call: a controller that
+            // claimed loads would make it count frames that never went into a mailbox.
+            let id = FrameId::new(Laxity::NRT, MessageId(0x100), 0).unwrap();
+            let frame = Frame::new(id, &[1]).unwrap();
+            let mut can = NoInterrupt;
+            can.stage(&[StagedFrame { frame, latest: 100 }]);
+            assert_eq!(can.staged_loaded(), 0);
+            let staged = StagedFrame { frame, latest: 100 };
+            assert!(staged.may_load(99) && !staged.may_load(100));
+        }
+    }
+}

@@ -59,5 +59,6 @@ pub mod selftest {
         crate::filter_banks::tests::SUITE,
         crate::wire_bits::tests::SUITE,
         crate::time_counter::tests::SUITE,
+        crate::controller::tests::SUITE,
     ];
 }

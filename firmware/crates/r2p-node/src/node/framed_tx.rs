@@ -94,13 +94,12 @@ impl<
             #[cfg(feature = "staged-reloads")]
             self.take_staged_loads(can);
             let now = now + Micros::from(self.lead_us());
-            if let ClockState::Running(p) = self.clock.state(now) {
-                for done in self.slot_tx.settle_sent(now, can).into_iter().flatten() {
-                    self.on_done(done);
-                }
-                self.drain_exports(now);
-                self.framed_step(now, p, can, true);
+            let ClockState::Running(p) = self.clock.state(now) else { return };
+            for done in self.slot_tx.settle_sent(now, can).into_iter().flatten() {
+                self.on_done(done);
             }
+            self.drain_exports(now);
+            self.framed_step(now, p, can, true);
         }
         let _ = (now, can);
     }
