@@ -278,12 +278,14 @@ impl<T: Copy> SlotTx<T> {
         self.staged.iter().map_while(|s| *s).filter(|_| self.staged_in == 0)
     }
 
-    /// The transmit interrupt loaded the first `n` staged frames (at most as many as
-    /// [`staged`](Self::staged) gave it): the next
+    /// The transmit interrupt loaded `n` more of the staged frames, the first ones (in all at
+    /// most as many as [`staged`](Self::staged) gave it): the next
     /// [`settle`](Self::settle) takes them among the queued frames, and their results as theirs.
+    /// A call that ends before its `settle` (at a guard) keeps them for the next call's, which
+    /// finds no new loads (`n` = 0: the interrupt loads once per staging).
     #[cfg(feature = "staged-reloads")]
     pub fn staged_went_in(&mut self, n: usize) {
-        self.staged_in = n;
+        self.staged_in += n;
     }
 
     /// The free-slot policy.

@@ -27,6 +27,7 @@ pub mod periph;
 pub mod robot;
 pub mod serve;
 mod stalled;
+mod transmit_irq;
 
 use std::io::{self, Write};
 use std::time::Duration;
@@ -39,6 +40,7 @@ use r2p_vbus::bxcan::STAGED_LOAD_US;
 use r2p_vbus::{Bus, Config};
 use rtcan::{CanController, Micros};
 use stalled::StalledPort;
+use transmit_irq::TransmitIrq;
 
 /// Nanoseconds per microsecond.
 const NS_PER_US: u64 = 1_000;
@@ -218,6 +220,8 @@ struct Board<'a, N> {
     /// Frames in its mailboxes when the sim last looked: one fewer is its transmit-complete
     /// interrupt ([`Runtime::wakes_on_transmit`]).
     mailboxes: usize,
+    /// That interrupt's mask: it waits for the end of the call it woke.
+    transmit_irq: TransmitIrq,
     /// Released messages waiting after its last slot tick: more is a publish that wakes it.
     releases: usize,
     /// Ticks in a row whose node asked for its next tick at or before the tick's µs
@@ -262,6 +266,9 @@ pub struct SimStats {
     /// Frames the boards' transmit interrupts loaded of those their nodes staged (staged
     /// reloads: `r2p_vbus::BxCanPort::load_staged`).
     pub staged_loads: u64,
+    /// Transmit interrupts that waited for the end of the bus task's call (the interrupt
+    /// masks itself until then): a frame of the node's ended while it ran.
+    pub deferred_transmit_irqs: u64,
 }
 
 /// The world's step: called every millisecond of virtual time with the time (µs), before the
@@ -339,6 +346,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
             app_ns: self.now_ns,
             powered: true,
             mailboxes: 0,
+            transmit_irq: TransmitIrq::default(),
             releases: 0,
             stuck_ticks: 0,
         });
@@ -428,6 +436,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
         b.wake_ns = b.wake_ns.max(self.now_ns);
         if !on {
             b.event_ns = u64::MAX; // its interrupts went with its power
+            b.transmit_irq = TransmitIrq::default();
         }
         b.app_ns = b.app_ns.max(self.now_ns);
     }
@@ -439,7 +448,8 @@ impl<'a, N: Runtime> Sim<'a, N> {
             .iter()
             .filter(|b| b.powered)
             .flat_map(|b| {
-                [b.wake_ns.min(b.event_ns), if b.app.is_some() { b.app_ns } else { u64::MAX }]
+                let app = if b.app.is_some() { b.app_ns } else { u64::MAX };
+                [b.wake_ns.min(b.event_ns), app, b.transmit_irq.due_ns().unwrap_or(u64::MAX)]
             })
             .fold(bus, u64::min)
             .min(if self.world.is_some() { self.world_ns } else { u64::MAX })
@@ -491,14 +501,18 @@ impl<'a, N: Runtime> Sim<'a, N> {
             let boards = self.boards.iter_mut().enumerate();
             for (i, b) in boards.filter(|(_, b)| b.powered && b.down_until_ns.is_none()) {
                 // A frame of its own left a mailbox (sent, or lost a one-shot arbitration):
-                // its transmit-complete interrupt runs the short path now.
+                // its transmit-complete interrupt runs the short path now, or at the end of
+                // the call it last woke (it masks itself until then).
                 let pending = b.port.port().pending();
-                if mode == Mode::Tdma && pending < b.mailboxes && b.node.wakes_on_transmit() {
+                let wakes = mode == Mode::Tdma && b.node.wakes_on_transmit();
+                let deferred = b.transmit_irq.deferred;
+                if wakes && b.transmit_irq.fires(t, pending < b.mailboxes) {
+                    self.stats.deferred_transmit_irqs += b.transmit_irq.deferred - deferred;
                     b.event_ns = b.event_ns.min(t);
-                    // With staged reloads, the interrupt first loads what the node staged if
-                    // the controller is now empty: its frames reach their mailboxes
-                    // `STAGED_LOAD_US` later, if they may still go then.
-                    if pending == 0 && b.port.has_staged() {
+                    // With staged reloads, the interrupt first runs the firmware's staged
+                    // loads: if the controller is empty, the frames the node staged reach
+                    // their mailboxes `STAGED_LOAD_US` later, if they may still go then.
+                    if b.port.has_staged() {
                         b.port.set_load_latency(STAGED_LOAD_US);
                         let n = b.port.load_staged(now_us + STAGED_LOAD_US);
                         self.stats.staged_loads += n as u64;
@@ -514,7 +528,9 @@ impl<'a, N: Runtime> Sim<'a, N> {
                 let short = b.wake_ns > t;
                 b.event_ns = u64::MAX;
                 let (mcu, slot_path_us) = (b.mcu, b.mcu.slot_path_us());
-                b.port.set_load_latency(if short { mcu.top_up_path_us() } else { slot_path_us });
+                let path_us = if short { mcu.top_up_path_us() } else { slot_path_us };
+                b.port.set_load_latency(path_us);
+                b.transmit_irq.on_call(t, path_us * NS_PER_US);
                 // A slot tick loads a master's sync first, on a path of its own, and on
                 // frame-sized reservations an HRT frame at its reservation's start too. A node
                 // that takes over in the tick loads its first sync at the tick's end.
@@ -570,6 +586,7 @@ impl<'a, N: Runtime> Sim<'a, N> {
                         let up = t + r.down_ns.max(1);
                         (b.down_until_ns, b.wake_ns, b.app_ns) = (Some(up), up, up);
                         b.event_ns = u64::MAX;
+                        b.transmit_irq = TransmitIrq::default();
                     }
                 }
             }

@@ -169,12 +169,14 @@ impl<'t> RtcanNode<'t> {
     /// lost a one-shot arbitration), its transmit-complete interrupt runs the short path:
     /// [`TRANSMIT_REACTION_US`] later (`Setup::reactions_us`) its next frames are loaded, as
     /// `Node::wakes_on_transmit` asks of the firmware; with `Setup::staged`, the interrupt
-    /// itself loads the staged frames first if the controller is now empty. Received frames
-    /// wake it at no other time than its timer.
+    /// itself runs the staged loads first (which load only if the controller is now empty).
+    /// Received frames wake it at no other time than its timer. (The interrupt's mask until
+    /// the call it woke ends needs no model here: that call is one instant at the window's
+    /// end, and sees every frame that left the controller in the window.)
     pub fn on_bus_event(&mut self, now: Micros) {
         if self.can.port().pending() < self.mailboxes {
             self.react_at(now + self.setup.reactions_us.0);
-            if self.can.has_staged() && self.can.port().pending() == 0 {
+            if self.can.has_staged() {
                 self.interrupt_at = Some(now + STAGED_LOAD_US);
             }
         }

@@ -180,6 +180,8 @@ fn a_node_whose_frames_are_still_in_the_controller_stages_what_it_would_load() {
     assert_eq!(tx.next_wake(20, 5_000), rtcan::Micros::from(loaded_latest));
     let staged_latest = staged.iter().map(|s| s.latest).min().unwrap();
     assert_eq!(tx.next_wake(rtcan::Micros::from(loaded_latest), 5_000), staged_latest);
+    // At that guard the timer moves on (a timer asked for the µs it fires in fires again).
+    assert!(tx.next_wake(staged_latest, 5_000) > staged_latest);
     // Without staging, nothing is staged.
     let mut plain = SlotTx::<()>::new(&CYCLE, FreeSlots::Merged).fitted(&CYCLE);
     let plain_bus = Bus::new(2, Config::default());
@@ -214,7 +216,11 @@ fn a_staged_frame_the_interrupt_loaded_is_withdrawn_at_its_latest_start() {
     tx.staged_went_in(1);
     assert!(!tx.at_guard(s.latest - 1));
     assert!(tx.at_guard(s.latest));
+    assert!(!tx.at_guard(1_000), "the window's end is the next reservation's, no guard");
     tx.on_guard(&mut port);
+    // That call ends at the guard (`Node::slot_tick` off a boundary); the next one finds no
+    // new loads, and its `settle` takes the withdrawn frame's result as the node's.
+    tx.staged_went_in(0);
     let done: Vec<_> = tx.settle(s.latest, &mut port, &q).into_iter().flatten().collect();
     assert_eq!(outcomes(&done)[1..], [(s.ticket, TxOutcome::Aborted, true)]);
 }

@@ -218,9 +218,19 @@ struct Node {
     sending: bool,
     tx_mode: TxMode,
     tx_order: TxOrder,
-    /// Results of finished frames not taken yet, oldest first (at most `TX_RESULTS`), with a
-    /// sent frame's start of frame (ns).
-    results: VecDeque<(TxResult, Option<u64>)>,
+    /// Results of finished frames not taken yet, oldest first (at most `TX_RESULTS`).
+    results: VecDeque<Finished>,
+}
+
+/// A finished frame's result, not taken yet.
+#[derive(Clone, Copy, Debug)]
+struct Finished {
+    result: TxResult,
+    /// A sent frame's start of frame (ns).
+    sof_ns: Option<u64>,
+    /// The mailbox it left, and its load's sequence number.
+    mailbox: usize,
+    seq: u64,
 }
 
 impl Node {
@@ -265,7 +275,8 @@ impl Node {
         if self.results.len() == TX_RESULTS {
             self.results.pop_front();
         }
-        self.results.push_back((TxResult::new(m.frame.id(), outcome), sof_ns));
+        let result = TxResult::new(m.frame.id(), outcome);
+        self.results.push_back(Finished { result, sof_ns, mailbox: i, seq });
         true
     }
 
@@ -878,7 +889,45 @@ impl Port {
     /// what bxCAN's `CAN_TSR` still shows (`RQCP` set, `TXOK`), one per mailbox. A mailbox
     /// with its result waiting is empty but loading it would clear that result.
     pub fn results_waiting(&self) -> Vec<TxOutcome> {
-        lock(&self.inner).nodes[self.index].results.iter().map(|(r, _)| r.outcome).collect()
+        lock(&self.inner).nodes[self.index].results.iter().map(|f| f.result.outcome).collect()
+    }
+
+    /// Per mailbox, what a bxCAN-like controller's status register shows: whether it holds a
+    /// frame, and the outcome of the last frame that left it if its result was not taken
+    /// (bxCAN's `TME`, and `RQCP` with `TXOK`/`ALST`/`TERR`).
+    pub fn mailboxes(&self) -> [(bool, Option<TxOutcome>); MAILBOXES] {
+        let g = lock(&self.inner);
+        let n = &g.nodes[self.index];
+        core::array::from_fn(|i| {
+            let last = n.results.iter().rev().find(|f| f.mailbox == i);
+            (n.mailboxes[i].is_some(), last.map(|f| f.result.outcome))
+        })
+    }
+
+    /// The mailbox of the newest frame loaded whose result was not taken: the last of them to
+    /// leave in load order (what a driver's bookkeeping knows).
+    pub fn newest_held(&self) -> Option<usize> {
+        let g = lock(&self.inner);
+        let n = &g.nodes[self.index];
+        let held = n.mailboxes.iter().enumerate().filter_map(|(i, m)| m.map(|m| (m.seq, i)));
+        held.chain(n.results.iter().map(|f| (f.seq, f.mailbox))).max().map(|(_, i)| i)
+    }
+
+    /// Writes `frame` into mailbox `i`, requesting the bus `delay_ns` from now, as firmware
+    /// writing the mailbox's registers does: nothing if the mailbox holds a frame (bxCAN
+    /// write-protects a pending mailbox), and the result of the frame that last left it is
+    /// gone (setting `TXRQ` clears `RQCP`, RM0008 §24.9.2). Returns whether it loaded.
+    pub fn load_mailbox(&self, i: usize, frame: &Frame, delay_ns: u64) -> bool {
+        let mut g = lock(&self.inner);
+        let (now, seq) = (g.now, g.seq);
+        let n = &mut g.nodes[self.index];
+        if n.mailboxes[i].is_some() {
+            return false;
+        }
+        n.results.retain(|f| f.mailbox != i);
+        n.mailboxes[i] = Some(Mailbox { frame: *frame, loaded_at: now + delay_ns, seq });
+        g.seq += 1;
+        true
     }
 
     /// The bus's virtual time, ns (what this board's clock reads).
@@ -915,7 +964,7 @@ impl Port {
     /// The oldest finished frame's result with, if it was sent, its start of frame on the bus
     /// (ns): what a controller that timestamps transmissions captures.
     pub fn take_tx_result_with_start(&mut self) -> Option<(TxResult, Option<u64>)> {
-        lock(&self.inner).nodes[self.index].results.pop_front()
+        lock(&self.inner).nodes[self.index].results.pop_front().map(|f| (f.result, f.sof_ns))
     }
 
     /// Sets the order in which the port's mailboxes go out (kept across power cycles, like

@@ -12,13 +12,18 @@
 //! the same code `rtcan-bxcan` runs on the modules, turns a capture into the node's µs.
 //! Nothing here subtracts a frame's length from a timestamp on the firmware's behalf.
 
+use core::cell::RefCell;
+
+use critical_section::Mutex;
 use rtcan::controller::{
     BusState, ErrorCounters, Filter, Received, StagedFrame, TxError, TxMode, TxOutcome, TxResult,
 };
 use rtcan::time_counter::{TimeCounter, TIME_COUNTER_MODULUS};
 use rtcan::{CanController, Frame, Laxity, Micros, SyncFrame};
+use rtcan_bxcan::mailboxes::MailboxStatus;
+use rtcan_bxcan::staged_loads::{self, StagedLoads};
 
-use crate::{Port, MAILBOXES};
+use crate::Port;
 
 /// From the transmit-mailbox-empty interrupt's request (the bus's intermission begins) to its
 /// first staged frame's mailbox request ([`BxCanPort::load_staged`]), µs: an estimate, ~60
@@ -45,10 +50,10 @@ pub struct BxCanPort {
     /// The same for the frames a slot tick loads first, each on a path of its own: (an HRT
     /// frame's, a sync's), ns.
     reserved_latency_ns: Option<(u64, u64)>,
-    /// What the node last handed the transmit interrupt ([`CanController::stage`]).
-    staged: Vec<StagedFrame>,
-    /// How many of them the interrupt loaded, not yet told ([`CanController::staged_loaded`]).
-    staged_loaded: usize,
+    /// What the node handed the transmit interrupt ([`CanController::stage`]) and what the
+    /// interrupt loaded of it, as the firmware's driver keeps them (`rtcan-bxcan`'s
+    /// `TransmitWake`).
+    staged: Mutex<RefCell<StagedLoads>>,
 }
 
 impl BxCanPort {
@@ -69,8 +74,7 @@ impl BxCanPort {
             counter,
             load_latency_ns: 0,
             reserved_latency_ns: None,
-            staged: Vec::new(),
-            staged_loaded: 0,
+            staged: Mutex::new(RefCell::new(StagedLoads::new())),
         }
     }
 
@@ -117,33 +121,39 @@ impl BxCanPort {
         ((t_ns / self.bit_ns + self.phase) % TIME_COUNTER_MODULUS) as u16
     }
 
-    /// True if the node handed the transmit interrupt frames it has not loaded: an interrupt
-    /// when the controller empties loads them ([`load_staged`](Self::load_staged)).
+    /// True if the node handed the transmit interrupt frames that no interrupt has run on yet
+    /// ([`load_staged`](Self::load_staged) loads them if the controller is empty, and drops
+    /// them either way).
     pub fn has_staged(&self) -> bool {
-        !self.staged.is_empty()
+        critical_section::with(|cs| self.staged.borrow_ref(cs).any())
     }
 
-    /// The transmit interrupt at `now` (the node's µs), as rtcan-bxcan's `TransmitWake` runs
-    /// it with `staged-reloads`: if the node's last frame to leave the controller was sent, it
-    /// loads the staged frames in order while each [may](StagedFrame::may_load) still go, into
-    /// mailboxes whose results were taken (loading one whose result waits would clear it:
-    /// RM0008 `RQCP`). The staged frames are gone after, loaded or not. Returns how many
-    /// it loaded.
+    /// The transmit interrupt at `now` (the node's µs) with `staged-reloads`: the firmware's
+    /// own rule and steps (`rtcan_bxcan::staged_loads::load_staged`, as `TransmitWake` runs
+    /// them) on this port's mailboxes read as `CAN_TSR`. The staged frames are gone after,
+    /// loaded or not. Returns how many it loaded.
     pub fn load_staged(&mut self, now: Micros) -> usize {
-        let staged = core::mem::take(&mut self.staged);
-        let waiting = self.port.results_waiting();
-        let mut free = MAILBOXES.saturating_sub(self.port.pending() + waiting.len());
-        let mut n = 0;
-        if waiting.last() == Some(&TxOutcome::Sent) {
-            for s in staged {
-                if free == 0 || !s.may_load(now) || self.try_transmit(&s.frame).is_err() {
-                    break;
-                }
-                (n, free) = (n + 1, free - 1);
-            }
-        }
-        self.staged_loaded = n;
-        n
+        let (status, waiting) = self.transmit_status();
+        let port = &self.port;
+        let write = |i, frame: &Frame| {
+            // The rule loads empty mailboxes only; a write into a pending one would be lost.
+            let loaded = port.load_mailbox(i, frame, self.latency_of(frame));
+            debug_assert!(loaded, "mailbox {i} was empty when the interrupt decided");
+        };
+        staged_loads::load_staged(&self.staged, &status, &waiting, || now, |f| *f, write)
+    }
+
+    /// The port's mailboxes as bxCAN's `CAN_TSR` shows them: each one's `TME`,
+    /// `TXOK`/`ALST`/`TERR`, and `RQCP` (a result not taken).
+    pub fn transmit_status(&self) -> ([MailboxStatus; crate::MAILBOXES], [bool; crate::MAILBOXES]) {
+        let boxes = self.port.mailboxes();
+        let status = boxes.map(|(held, last)| MailboxStatus {
+            empty: !held,
+            txok: last == Some(TxOutcome::Sent),
+            alst: last == Some(TxOutcome::LostArbitration),
+            terr: last == Some(TxOutcome::Error),
+        });
+        (status, boxes.map(|(_, last)| last.is_some()))
     }
 
     /// The wrapped port.
@@ -208,11 +218,19 @@ impl CanController for BxCanPort {
     fn error_counters(&self) -> ErrorCounters {
         self.port.error_counters()
     }
-    /// Kept for [`BxCanPort::load_staged`], which the sim calls when its interrupt would run.
+    /// Kept for [`BxCanPort::load_staged`], which the sim calls when its interrupt would run,
+    /// with the mailbox of the node's newest frame (as the driver's `BxCan::stage`).
     fn stage(&mut self, frames: &[StagedFrame]) {
-        self.staged = frames.to_vec();
+        let newest = self.port.newest_held();
+        critical_section::with(|cs| self.staged.borrow_ref_mut(cs).stage(frames, newest));
     }
+    /// As the driver's: the interrupt's loads, and an interrupt under way stops.
     fn staged_loaded(&mut self) -> usize {
-        core::mem::take(&mut self.staged_loaded)
+        critical_section::with(|cs| {
+            let mut staged = self.staged.borrow_ref_mut(cs);
+            let loaded = staged.take_loaded().count();
+            staged.stop_interrupt();
+            loaded
+        })
     }
 }
