@@ -12,7 +12,7 @@ use rtcan::LaxityEncoding;
 
 const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L2,...] [--policies P1,P2,...] [--mix HRT,SRT]
                      [--laxity E:T] [--blocks K] [--laxity-drift N] [--reactions T,R] [--hrt-exact]
-                     [--staged]
+                     [--staged] [--hrt-follow]
   --seed N        traffic seed (default 1)
   --seconds S     measured virtual time per load point (default 10)
   --loads ...     offered loads as fractions of 1 Mbit/s (default 0.10,0.15,...,0.95)
@@ -33,6 +33,9 @@ const USAGE: &str = "usage: r2p-loadbench [--seed N] [--seconds S] [--loads L1,L
   --staged        rtcan_framed: staged reloads (r2p-node's `staged-reloads`): frames staged for
                   the transmit interrupt, loaded 2 µs after the node's frames have left the
                   controller
+  --hrt-follow    rtcan_framed: an HRT frame whose reservation follows another's is loaded
+                  10 µs after that one's start and goes at its actual end (bounded start
+                  jitter: early by the stuff bits the frames before it did not need)
 ";
 
 struct Args {
@@ -47,6 +50,7 @@ struct Args {
     reactions_us: (u64, u64),
     hrt_exact: bool,
     staged: bool,
+    hrt_follow: bool,
 }
 
 fn parse() -> Result<Args, String> {
@@ -62,6 +66,7 @@ fn parse() -> Result<Args, String> {
         reactions_us: Setup::new(0.5, 0).reactions_us,
         hrt_exact: false,
         staged: false,
+        hrt_follow: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -72,6 +77,7 @@ fn parse() -> Result<Args, String> {
         let switch = match flag.as_str() {
             "--hrt-exact" => Some(&mut a.hrt_exact),
             "--staged" => Some(&mut a.staged),
+            "--hrt-follow" => Some(&mut a.hrt_follow),
             _ => None,
         };
         if let Some(on) = switch {
@@ -191,6 +197,7 @@ fn main() -> ExitCode {
             reactions_us: args.reactions_us,
             hrt_exact: args.hrt_exact,
             staged: args.staged,
+            hrt_follow: args.hrt_follow,
             ..Setup::new(load, args.seed)
         };
         let t = Instant::now();
@@ -215,6 +222,7 @@ fn main() -> ExitCode {
         json["reactions_us"] = serde_json::json!([args.reactions_us.0, args.reactions_us.1]);
         json["hrt_exact"] = args.hrt_exact.into();
         json["staged"] = args.staged.into();
+        json["hrt_follow"] = args.hrt_follow.into();
         json["wall_s"] = wall.into();
         json["events_per_s"] = (ev as f64 / wall).round().into();
         println!("{json}");

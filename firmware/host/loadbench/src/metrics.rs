@@ -68,6 +68,9 @@ pub struct Report {
     pub hrt_on_time: f64,
     /// RTCAN: share sent entirely inside their reserved slot (fixed priority: none).
     pub hrt_in_slot: Option<f64>,
+    /// RTCAN: share that ended by their reserved slot's end, wherever they started (with
+    /// `Setup::hrt_follow` they start early; fixed priority: none).
+    pub hrt_ended_in_slot: Option<f64>,
     /// Largest |start of frame − nominal start| (slot start, or the frame-sized reservation's;
     /// release for fixed priority).
     pub hrt_jitter_max_us: f64,
@@ -113,7 +116,7 @@ pub fn report(setup: &Setup, traffic: &Traffic, run: &Run) -> Report {
     let slotted = run.policy != crate::run::Policy::Fixed;
     let cycle_us = setup.cycle.cycle_us;
 
-    let (mut hrt, mut hrt_missed, mut in_slot) = (0u64, 0u64, 0u64);
+    let (mut hrt, mut hrt_missed, mut in_slot, mut ended_in_slot) = (0u64, 0u64, 0u64, 0u64);
     let mut jitter = Vec::new();
     let (mut srt, mut srt_missed) = (0u64, 0u64);
     let mut latency = Vec::new();
@@ -137,6 +140,7 @@ pub fn report(setup: &Setup, traffic: &Traffic, run: &Run) -> Report {
                     };
                     jitter.push(d.first_start_ns.abs_diff(due_ns) as f64 / 1e3);
                     in_slot += u64::from(d.first_start_ns >= due_ns && d.end_ns <= end_us * 1_000);
+                    ended_in_slot += u64::from(d.end_ns <= end_us * 1_000);
                 }
             }
             Kind::Srt { .. } => {
@@ -162,6 +166,7 @@ pub fn report(setup: &Setup, traffic: &Traffic, run: &Run) -> Report {
         hrt_missed,
         hrt_on_time: ratio(hrt - hrt_missed, hrt),
         hrt_in_slot: slotted.then(|| ratio(in_slot, hrt)),
+        hrt_ended_in_slot: slotted.then(|| ratio(ended_in_slot, hrt)),
         hrt_jitter_max_us: jitter.last().copied().unwrap_or(0.0),
         hrt_jitter_p99_us: quantile(&jitter, 0.99).unwrap_or(0.0),
         srt_messages: srt,

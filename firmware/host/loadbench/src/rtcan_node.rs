@@ -24,7 +24,7 @@ use r2p_node::{FreeSlots, SlotTx};
 pub use r2p_vbus::bxcan::STAGED_LOAD_US;
 use rtcan::controller::{Filter, TxOutcome};
 use rtcan::cycle::{ClockState, SYNC_SLOT};
-use rtcan::framed_cycle::{FramedCycle, Moment};
+use rtcan::framed_cycle::{FramedCycle, Moment, FOLLOW_US};
 use rtcan::id::{EXTENDED_ID_MAX, MESSAGE_ID_SHIFT, SYNC_MESSAGE_IDS};
 use rtcan::schedule::occurs;
 use rtcan::{
@@ -326,6 +326,20 @@ impl<'t> RtcanNode<'t> {
                     }
                 }
             }
+            if self.setup.hrt_follow {
+                for (slot, load_at, end_us) in self.follow_loads(p.cycle) {
+                    let at = c0 + Micros::from(load_at);
+                    if now == at {
+                        // Loaded while the frame before is on the wire: kept until its own
+                        // reservation's end (`SlotTx::hold_slotted`, as the node runtime does
+                        // with free frames behind it).
+                        self.slot_tx.hold_slotted(c0 + Micros::from(end_us));
+                        self.send_hrt(p.cycle, slot);
+                    } else if at > now {
+                        next = next.min(at);
+                    }
+                }
+            }
             // As `Node::next_slot_at` on frame-sized reservations: the next edge, or the next
             // grid boundary (where the node tops its window up).
             let grid = self.clock.slot_start(p.cycle, p.slot + 1).filter(|&g| g > now);
@@ -447,6 +461,32 @@ impl<'t> RtcanNode<'t> {
             queued[stream_of(missed.message)].pop_front();
             counters.expired += 1;
         });
+    }
+
+    /// `Setup::hrt_follow`: this node's HRT slots in `cycle` whose reservation starts where
+    /// another reservation of the cycle (the sync's too) ends, each with the instant to load
+    /// its frame, µs into the cycle: [`FOLLOW_US`] after that reservation's start, when its
+    /// frame is on the wire; and its own reservation's end.
+    fn follow_loads(&self, cycle: u32) -> Vec<(u8, u32, u32)> {
+        let layout = &self.traffic.layout;
+        let announced = (self.clock.mask(cycle) | 1 << SYNC_SLOT) & layout.placed();
+        let ends = |q: u8| layout.span(q).map(|s| (s.start_us, s.start_us + s.len_us));
+        let mut loads = Vec::new();
+        for (s, _) in &self.hrt {
+            let Kind::Hrt { framed, .. } = self.traffic.streams[usize::from(*s)].kind else {
+                continue;
+            };
+            // Announced: reserved this cycle (`send_hrt` finds whether a message is due).
+            let Some((start, end)) = ends(framed.slot) else { continue };
+            if announced & 1 << framed.slot == 0 {
+                continue;
+            }
+            let before = (0..64u8).filter(|&q| announced & 1 << q != 0 && q != framed.slot);
+            if let Some((prev, _)) = before.filter_map(ends).find(|&(_, end)| end == start) {
+                loads.push((framed.slot, u32::from(prev) + FOLLOW_US, u32::from(end)));
+            }
+        }
+        loads
     }
 
     /// Loads this node's HRT frame if slot `slot` of cycle `cycle` is one of its streams'.

@@ -53,6 +53,13 @@ pub struct Setup {
     /// [`crate::rtcan_node::STAGED_LOAD_US`] after the controller empties
     /// (`r2p_vbus::BxCanPort::load_staged`).
     pub staged: bool,
+    /// `rtcan_framed` what-if: HRT frames follow each other as their actual lengths allow. A
+    /// node whose HRT reservation starts where another's ends loads its frame
+    /// [`rtcan::framed_cycle::FOLLOW_US`] after that one's start, when that frame is on the
+    /// wire: it goes at that frame's actual end, early by the stuff bits the frames before it
+    /// in the run did not need (a bounded start jitter), and still ends by its own
+    /// reservation's end.
+    pub hrt_follow: bool,
     /// Class shares of the offered load.
     pub mix: Mix,
     /// SRT streams per node.
@@ -91,6 +98,7 @@ impl Setup {
             ),
             hrt_exact: false,
             staged: false,
+            hrt_follow: false,
             mix: Mix { hrt: 0.3, srt: 0.5 },
             srt_streams_per_node: 4,
             srt_deadline_us: (2_000, 20_000),

@@ -335,6 +335,41 @@ fn frame_sized_reservations_keep_hrt_frames_on_time_and_strictly_periodic() {
 }
 
 #[test]
+fn hrt_frames_that_follow_go_early_inside_their_run_and_end_inside_their_reservation() {
+    // `Setup::hrt_follow` (what-if): an HRT frame whose reservation starts where another ends
+    // is loaded while that one is on the wire and goes at its actual end. It starts early (by
+    // the stuff bits the frames before it in the run did not need), never before its run's
+    // first reservation, and still ends by its own reservation's end: 0 misses.
+    let setup = Setup { hrt_follow: true, ..short(0.95, 8, 500_000) };
+    let traffic = Traffic::generate(&setup).unwrap();
+    let r = run(&setup, &traffic, Policy::RtcanFramed);
+    let report = r2p_loadbench::metrics::report(&setup, &traffic, &r);
+    assert_eq!((report.hrt_missed, report.hrt_ended_in_slot), (0, Some(1.0)));
+    let due = r.reservations.as_ref().expect("framed runs report their reservations");
+    let cycle_us = u64::from(setup.cycle.cycle_us);
+    let (mut early, mut hrt) = (0, 0);
+    for (i, (m, d)) in traffic.messages.iter().zip(deliveries(&traffic, &r)).enumerate() {
+        let Kind::Hrt { .. } = traffic.streams[usize::from(m.stream)].kind else { continue };
+        let (start, end) = (d.first_start_ns / 1_000, d.end_ns / 1_000);
+        // The run of reservations back to back that ends with this one, this cycle.
+        let (c, mut run_start) = (due[i].0 / cycle_us, due[i].0 % cycle_us);
+        let mask = traffic.framed_mask(c as u32) | 1;
+        let announced = traffic.layout.iter().filter(|&(slot, _)| mask & 1 << slot != 0);
+        let spans: Vec<(u64, u64)> =
+            announced.map(|(_, s)| (u64::from(s.start_us), u64::from(s.end_us()))).collect();
+        while let Some(&(before, _)) = spans.iter().find(|&&(_, e)| e == run_start) {
+            run_start = before;
+        }
+        assert!(start <= due[i].0 && end <= due[i].1, "message {i}: {start}–{end} in {:?}", due[i]);
+        assert!(start >= c * cycle_us + run_start, "message {i} at {start}, before its run");
+        early += u64::from(start < due[i].0);
+        hrt += 1;
+    }
+    assert!(early * 2 > hrt, "{early} of {hrt} HRT frames went early");
+    assert!(report.hrt_jitter_max_us > 20.0, "{report:?}");
+}
+
+#[test]
 fn framed_windows_end_before_every_reservation_and_carry_past_the_grids_ceiling() {
     let setup = short(0.95, 6, 500_000);
     let traffic = Traffic::generate(&setup).unwrap();
