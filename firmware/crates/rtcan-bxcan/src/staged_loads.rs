@@ -21,9 +21,9 @@
 //! the registers' values) runs between them, so it holds a reservation's frame back by one
 //! mailbox's writes at most, as the receive interrupt holds it back by one frame's push. Every
 //! call of the node on frame-sized reservations takes the loads first and stops an interrupt
-//! under way ([`StagedLoads::stop_interrupt`]): an interrupt it preempted loads nothing after,
-//! so the node never misses a frame the interrupt loaded. The driver takes the loads whenever it looks at the
-//! mailboxes ([`StagedLoads::take_loaded`]) without ending the staging: the gateway's bus tap
+//! under way ([`StagedLoads::take_loaded`] with `node_call`): an interrupt it preempted loads
+//! nothing after, so the node never misses a frame the interrupt loaded. The driver's other
+//! looks at the mailboxes take the loads without ending the staging: the gateway's bus tap
 //! looks after the node's call, before the interrupt may run.
 
 use core::cell::RefCell;
@@ -74,15 +74,19 @@ impl StagedLoads {
     }
 
     /// Takes what the interrupt loaded since the last call, in load order (the driver books
-    /// them before it reads the mailboxes).
-    pub fn take_loaded(&mut self) -> impl Iterator<Item = (usize, FrameId)> {
+    /// them before it reads the mailboxes). With `node_call` (the node's call begins:
+    /// `CanController::staged_loaded`) an interrupt it preempted loads nothing more (the
+    /// staging ends); a staging no interrupt has started on stands either way: the node keeps
+    /// or drops it itself (`SlotTx`).
+    pub fn take_loaded(&mut self, node_call: bool) -> impl Iterator<Item = (usize, FrameId)> {
+        if node_call {
+            self.stop_interrupt();
+        }
         core::mem::take(&mut self.loaded).into_iter().map_while(|l| l)
     }
 
-    /// The node's call begins (`CanController::staged_loaded`): an interrupt it preempted
-    /// loads nothing more (the staging ends). A staging no interrupt has started on stands: the
-    /// node keeps or drops it itself (`SlotTx`).
-    pub fn stop_interrupt(&mut self) {
+    /// Ends the staging if an interrupt is loading it.
+    fn stop_interrupt(&mut self) {
         if self.under_way {
             self.frames = [None; MAILBOXES];
             self.generation = self.generation.wrapping_add(1);
@@ -214,12 +218,7 @@ mod tests {
     /// What the node's call takes first (`staged_loaded`): the loads, and an interrupt under
     /// way stops.
     fn booked(s: &Mutex<RefCell<StagedLoads>>) -> Vec<(usize, FrameId)> {
-        critical_section::with(|cs| {
-            let mut s = s.borrow_ref_mut(cs);
-            let loads = s.take_loaded().collect();
-            s.stop_interrupt();
-            loads
-        })
+        critical_section::with(|cs| s.borrow_ref_mut(cs).take_loaded(true).collect())
     }
 
     /// The interrupt at `now`: the mailboxes written, in order.
@@ -310,7 +309,7 @@ mod tests {
         // staged: the staging stands for the interrupt that follows.
         let frames = staged(500);
         let s = shared(&frames, Some(0));
-        assert_eq!(critical_section::with(|cs| s.borrow_ref_mut(cs).take_loaded().count()), 0);
+        assert_eq!(critical_section::with(|cs| s.borrow_ref_mut(cs).take_loaded(false).count()), 0);
         assert!(any(&s));
         let written = interrupt(&s, [SENT, EMPTY, EMPTY], [true, false, false], 100);
         assert_eq!(written.len(), 2);

@@ -68,15 +68,11 @@ pub(crate) fn stage(frames: &[rtcan::StagedFrame], newest: Option<usize>) {
 
 /// Books what the interrupt loaded since the last call: `book(mailbox, identifier)` in load
 /// order (`BxCan`'s collect, before it reads the mailboxes); with `stop`, an interrupt under
-/// way stops too (the node's call begins: `StagedLoads::stop_interrupt`).
+/// way stops too (the node's call begins: `StagedLoads::take_loaded`).
 #[cfg(feature = "staged-reloads")]
 pub(crate) fn take_staged_loads(stop: bool, mut book: impl FnMut(usize, rtcan::FrameId)) {
     critical_section::with(|cs| {
-        let mut staged = STAGED.borrow_ref_mut(cs);
-        staged.take_loaded().for_each(|(i, id)| book(i, id));
-        if stop {
-            staged.stop_interrupt();
-        }
+        STAGED.borrow_ref_mut(cs).take_loaded(stop).for_each(|(i, id)| book(i, id));
     });
 }
 

@@ -226,11 +226,6 @@ impl CanController for BxCanPort {
     }
     /// As the driver's: the interrupt's loads, and an interrupt under way stops.
     fn staged_loaded(&mut self) -> usize {
-        critical_section::with(|cs| {
-            let mut staged = self.staged.borrow_ref_mut(cs);
-            let loaded = staged.take_loaded().count();
-            staged.stop_interrupt();
-            loaded
-        })
+        critical_section::with(|cs| self.staged.borrow_ref_mut(cs).take_loaded(true).count())
     }
 }
